@@ -1,0 +1,33 @@
+# Two commands on a fresh machine (each makes .venv by itself):
+#   make run    open the explorer on the embedded synthetic talker
+#   make test   run the whole test suite (GUI tests under a virtual X server when one is installed)
+PY      ?= python3
+VENV    := .venv
+BIN     := $(VENV)/bin
+STAMP   := $(VENV)/.installed
+
+.PHONY: run test venv bench clean
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[test,scale]'
+	touch $(STAMP)
+
+venv: $(STAMP)
+
+run: $(STAMP)
+	$(BIN)/lipspace explore
+
+test: $(STAMP)
+	@if [ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null 2>&1; then \
+		xvfb-run -a -s "-screen 0 1600x1200x24" $(BIN)/python -m pytest -q $(PYTEST_ARGS); \
+	else \
+		$(BIN)/python -m pytest -q $(PYTEST_ARGS); \
+	fi
+
+bench: $(STAMP)
+	for b in benchmarks/bench_*.py; do $(BIN)/python $$b || exit 1; done
+
+clean:
+	rm -rf $(VENV) .pytest_cache

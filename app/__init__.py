@@ -1,0 +1,1 @@
+"""Lipspace application: the Qt/VTK explorer and the ``lipspace`` command line."""

@@ -1,0 +1,73 @@
+"""Helpers shared by subcommands: loading inputs, progress bars."""
+from __future__ import annotations
+
+import contextlib
+import sys
+from pathlib import Path
+
+from engine.progress import Cancelled
+
+__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg"]
+
+
+@contextlib.contextmanager
+def progress_bar(*, disable: bool | None = None):
+    """Yield a ``progress(stage, done, total)`` callable drawing tqdm bars on stderr.
+
+    One bar per stage. Ctrl-C raised inside the engine surfaces as :class:`Cancelled`
+    so the command stops cleanly and writes nothing.
+    """
+    from tqdm.auto import tqdm
+
+    bars = {}
+
+    def progress(stage, done, total):
+        bar = bars.get(stage)
+        if bar is None:
+            for b in bars.values():
+                b.close()
+            bar = bars[stage] = tqdm(total=max(total, 1), desc=stage, unit="", leave=True,
+                                     file=sys.stderr, disable=disable, dynamic_ncols=True)
+        bar.total = max(total, 1)
+        bar.n = done
+        bar.refresh()
+
+    try:
+        yield progress
+    except KeyboardInterrupt:
+        raise Cancelled("interrupted") from None
+    finally:
+        for b in bars.values():
+            b.close()
+
+
+def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None):
+    """A corpus from a native file, or the synthetic talker when ``path`` is None."""
+    from app.cli import CliError
+    from engine.corpus import Corpus, CorpusError
+
+    if path is None:
+        from engine.synthetic import load_synthetic
+
+        return load_synthetic(preset=synthetic_preset, progress=progress)
+    p = Path(path)
+    if not p.exists():
+        raise CliError(f"{p}: no such file")
+    try:
+        return Corpus.load(p)
+    except CorpusError as exc:
+        raise CliError(str(exc)) from None
+
+
+def load_manifold_arg(path):
+    """A fitted manifold from a file written by ``lipspace build``."""
+    from app.cli import CliError
+    from engine.manifold import Manifold, ManifoldFileError
+
+    p = Path(path)
+    if not p.exists():
+        raise CliError(f"{p}: no such manifold file (make one with 'lipspace build')")
+    try:
+        return Manifold.load(p)
+    except ManifoldFileError as exc:
+        raise CliError(str(exc)) from None

@@ -1,0 +1,50 @@
+"""``lipspace build``: corpus (or the synthetic talker) -> manifold file."""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from app.cli._common import load_corpus_arg, progress_bar
+
+PRESETS = ("small", "default", "paper")
+
+
+def add_arguments(p):
+    p.add_argument("corpus", nargs="?", help="native corpus file (.npz); omit for the synthetic talker")
+    p.add_argument("--preset", choices=PRESETS, default="default",
+                   help="synthetic talker preset when no corpus is given (default: %(default)s)")
+    p.add_argument("-o", "--output", required=True, help="manifold file to write (.npz)")
+    p.add_argument("--variance", type=float, default=0.99, help="shape variance kept (default: %(default)s)")
+    p.add_argument("--embedding-dims", type=int, default=10, help="dimensions of Y (default: %(default)s)")
+    p.add_argument("--method", choices=("pca", "mds"), default="pca", help="embedding method (default: %(default)s)")
+    p.add_argument("--landmarks", type=int, default=None, help="landmark embedding with this many landmarks")
+    p.add_argument("--states", type=int, default=None, help="K, the number of states (default: about N/30)")
+    p.add_argument("--neighbors", type=int, default=20, help="tangent-frame neighbourhood (default: %(default)s)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+def run(args) -> int:
+    from app.cli import CliError
+    from engine.manifold import Manifold
+
+    out = Path(args.output)
+    if out.suffix != ".npz":
+        raise CliError(f"{out}: the manifold file must end in .npz")
+    t0 = time.perf_counter()
+    with progress_bar(disable=True if args.quiet else None) as progress:
+        corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress)
+        try:
+            manifold = Manifold(variance=args.variance, n_embedding=args.embedding_dims,
+                                embedding_method=args.method, n_landmarks=args.landmarks,
+                                n_states=args.states, n_neighbors=args.neighbors,
+                                random_state=args.seed).fit(corpus, progress=progress)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+    manifold.save(out)
+    s = manifold.summary()
+    print(f"wrote {out}: {s['frames']} frames, {s['shape_components']} shape components, "
+          f"Y {s['embedding_dims']}-D (first 3 hold {100 * s['Y_first3_recovered']:.1f}% of recovered variance), "
+          f"K={s['n_states']} states, {time.perf_counter() - t0:.1f} s", file=sys.stdout)
+    return 0

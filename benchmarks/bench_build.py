@@ -1,0 +1,76 @@
+"""Benchmark: build the manifold on the synthetic talker and print wall time and peak memory per stage.
+
+Usage: python benchmarks/bench_build.py [--preset paper|default|small] [--method pca|mds] [--landmarks L]
+
+Target (issue 2): the paper-scale preset (28,833 x 12,784) builds in well under a minute
+on two cores with a few GB of memory.
+"""
+from __future__ import annotations
+
+import argparse
+import resource
+import time
+import tracemalloc
+
+import numpy as np
+
+
+def _rss_mb():
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def stage(name, fn, rows):
+    tracemalloc.start()
+    tracemalloc.reset_peak()
+    t = time.perf_counter()
+    out = fn()
+    dt = time.perf_counter() - t
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    rows.append((name, dt, peak / 2**20))
+    print(f"{name:<22} {dt:8.2f} s   peak traced {peak / 2**20:9.1f} MiB   process max RSS {_rss_mb():9.1f} MiB",
+          flush=True)
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--preset", default="paper")
+    ap.add_argument("--method", default="pca")
+    ap.add_argument("--landmarks", type=int, default=None)
+    args = ap.parse_args()
+
+    from engine.dynamics import DynamicFeatures, velocities
+    from engine.embedding import Embedding
+    from engine.shape import ShapeSpace
+    from engine.states import StateGraph
+    from engine.synthetic import load_synthetic
+    from engine.tangent import TangentFrames
+
+    rows = []
+    corpus = stage("corpus (cache/generate)", lambda: load_synthetic(preset=args.preset), rows)
+    print(f"corpus: {corpus.n_frames} frames x {corpus.frames.shape[1]} coordinates "
+          f"({corpus.n_points} points), {corpus.frames.nbytes / 2**20:.0f} MiB float32")
+    t0 = time.perf_counter()
+    shape = stage("shape space X", lambda: ShapeSpace().fit(corpus.frames), rows)
+    Fx = stage("project F^x", lambda: shape.transform(corpus.frames), rows)
+    b = corpus.bounds
+    G = stage("dynamic features G",
+              lambda: DynamicFeatures().fit(Fx, b).transform(Fx, b), rows)
+    emb = stage(f"embedding Y ({args.method})",
+                lambda: Embedding(method=args.method, n_landmarks=args.landmarks).fit(G), rows)
+    Fy = emb.embedding_
+    Fxv = velocities(Fx, b)
+    stage("tangent frames", lambda: TangentFrames().fit(Fy, Fx, Fxv, b), rows)
+    stage("state graph", lambda: StateGraph().fit(Fy, b), rows)
+    total = time.perf_counter() - t0
+    print(f"\nshape: {shape.n_components_} components hold {100 * shape.recovered_ratio_[shape.n_components_ - 1]:.2f}%"
+          f"; Y first 3 dims hold {100 * emb.recovered_ratio_[2]:.1f}% of recovered variance; "
+          f"{emb.n_passes_} passes over D")
+    print(f"TOTAL build (excluding corpus generation): {total:.2f} s; max traced peak "
+          f"{max(r[2] for r in rows[1:]):.0f} MiB; process max RSS {_rss_mb():.0f} MiB")
+    print(f"(numpy {np.__version__})")
+
+
+if __name__ == "__main__":
+    main()

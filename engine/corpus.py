@@ -1,0 +1,372 @@
+"""The corpus: frames of lip geometry, utterances and their phone alignments.
+
+A :class:`Corpus` is the input to everything in the engine. Frames never connect
+across utterance boundaries: no velocity, transition or path crosses one.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from engine._atomic import atomic_write
+
+__all__ = ["CorpusError", "PhoneInterval", "Utterance", "Corpus"]
+
+FORMAT_VERSION = 1
+
+
+class CorpusError(ValueError):
+    """Raised when corpus data is malformed; the message names what and where."""
+
+
+@dataclass(frozen=True)
+class PhoneInterval:
+    """One phone of an alignment, times in seconds from the utterance start."""
+
+    start: float
+    end: float
+    label: str
+
+    @property
+    def mid(self) -> float:
+        return 0.5 * (self.start + self.end)
+
+
+@dataclass(frozen=True)
+class Utterance:
+    """A contiguous frame range ``[start, stop)`` of the corpus.
+
+    Parameters
+    ----------
+    id : str
+        Unique name of the utterance.
+    start, stop : int
+        Frame range in the corpus (``stop`` exclusive).
+    phones : tuple of PhoneInterval
+        Sorted, non-overlapping phone intervals, seconds from the utterance start.
+    audio : str or None
+        Path of a WAV file holding the utterance's audio, if any.
+    text : str
+        Orthographic text, if known.
+    """
+
+    id: str
+    start: int
+    stop: int
+    phones: tuple[PhoneInterval, ...] = ()
+    audio: str | None = None
+    text: str = ""
+
+    @property
+    def n_frames(self) -> int:
+        return self.stop - self.start
+
+
+def _as_phones(phones) -> tuple[PhoneInterval, ...]:
+    out = []
+    for p in phones:
+        if isinstance(p, PhoneInterval):
+            out.append(p)
+        else:
+            s, e, lab = p
+            out.append(PhoneInterval(float(s), float(e), str(lab)))
+    return tuple(out)
+
+
+@dataclass
+class Corpus:
+    """Frames of lip geometry with utterances and phone alignments.
+
+    Parameters
+    ----------
+    frames : ndarray of shape (n_frames, dims * n_points)
+        One row per frame, coordinates interleaved per point (x0, y0, z0, x1, ...).
+        Stored as float32.
+    rate : float
+        Frame rate in Hz (the paper: 60).
+    utterances : sequence of Utterance
+        Contiguous, non-overlapping frame ranges covering the frames in order.
+    dims : {2, 3}
+        Coordinates per point.
+    faces : ndarray of shape (n_faces, 3) or None
+        Triangles over the points, for drawing a mesh.
+    point_names : sequence of str or None
+        One name per point (markers, sensors).
+    latent : dict of str to ndarray of shape (n_frames,)
+        Ground-truth per-frame signals (the synthetic talker's articulatory controls).
+    name : str
+        Human-readable name of the corpus.
+    """
+
+    frames: np.ndarray
+    rate: float
+    utterances: list[Utterance]
+    dims: int = 3
+    faces: np.ndarray | None = None
+    point_names: list[str] | None = None
+    latent: dict[str, np.ndarray] = field(default_factory=dict)
+    name: str = "corpus"
+
+    def __post_init__(self):
+        self.frames = np.asarray(self.frames, dtype=np.float32)
+        self.utterances = [replace(u, phones=_as_phones(u.phones)) for u in self.utterances]
+        self.rate = float(self.rate)
+        if self.faces is not None:
+            self.faces = np.asarray(self.faces, dtype=np.int64)
+        if self.point_names is not None:
+            self.point_names = [str(n) for n in self.point_names]
+        self.latent = {k: np.asarray(v) for k, v in self.latent.items()}
+        self.validate()
+
+    # ------------------------------------------------------------------ checks
+    def validate(self) -> None:
+        """Check every invariant; raise :class:`CorpusError` naming the fault."""
+        F = self.frames
+        if F.ndim != 2:
+            raise CorpusError(f"{self.name}: frames must be 2-D (n_frames, dims*n_points), got shape {F.shape}")
+        if self.dims not in (2, 3):
+            raise CorpusError(f"{self.name}: dims must be 2 or 3, got {self.dims}")
+        if F.shape[1] == 0 or F.shape[1] % self.dims:
+            raise CorpusError(
+                f"{self.name}: frames have {F.shape[1]} columns, not a positive multiple of dims={self.dims}"
+            )
+        if F.shape[0] < 2:
+            raise CorpusError(f"{self.name}: need at least 2 frames, got {F.shape[0]}")
+        if not np.isfinite(self.rate) or self.rate <= 0:
+            raise CorpusError(f"{self.name}: rate must be a positive number of Hz, got {self.rate}")
+        bad = ~np.isfinite(F)
+        if bad.any():
+            i, j = np.argwhere(bad)[0]
+            raise CorpusError(
+                f"{self.name}: frame {i} column {j} is {F[i, j]} (NaN/inf); "
+                f"{int(bad.any(axis=1).sum())} frames are not finite. Interpolate or drop them before building."
+            )
+        if not self.utterances:
+            raise CorpusError(f"{self.name}: no utterances; every frame must belong to one")
+        expected = 0
+        seen = set()
+        for u in self.utterances:
+            if u.id in seen:
+                raise CorpusError(f"{self.name}: utterance id {u.id!r} appears twice")
+            seen.add(u.id)
+            if u.stop <= u.start:
+                raise CorpusError(f"{self.name}: utterance {u.id!r} is empty (frames {u.start}..{u.stop})")
+            if u.start != expected:
+                raise CorpusError(
+                    f"{self.name}: utterance {u.id!r} starts at frame {u.start}, expected {expected} "
+                    "(utterances must be contiguous, in order, covering all frames)"
+                )
+            expected = u.stop
+            dur = u.n_frames / self.rate
+            prev_end = -np.inf
+            for k, p in enumerate(u.phones):
+                where = f"{self.name}: utterance {u.id!r} phone {k} ({p.label!r} {p.start:.4f}-{p.end:.4f} s)"
+                if not (np.isfinite(p.start) and np.isfinite(p.end)):
+                    raise CorpusError(f"{where}: times must be finite")
+                if not p.label:
+                    raise CorpusError(f"{where}: empty label")
+                if p.end <= p.start:
+                    raise CorpusError(f"{where}: end is not after start")
+                if p.start < prev_end - 1e-9:
+                    raise CorpusError(
+                        f"{where}: starts before the previous phone ends at {prev_end:.4f} s "
+                        "(intervals must be sorted and not overlap)"
+                    )
+                tol = 0.5 / self.rate + 1e-9
+                if p.start < -1e-9 or p.end > dur + tol:
+                    raise CorpusError(
+                        f"{where}: lies outside the utterance (0-{dur:.4f} s, {u.n_frames} frames at {self.rate:g} Hz)"
+                    )
+                prev_end = p.end
+        if expected != F.shape[0]:
+            raise CorpusError(
+                f"{self.name}: utterances cover {expected} frames but frames has {F.shape[0]} rows"
+            )
+        if self.faces is not None:
+            f = self.faces
+            if f.ndim != 2 or f.shape[1] != 3:
+                raise CorpusError(f"{self.name}: faces must be (n_faces, 3), got {f.shape}")
+            if f.size and (f.min() < 0 or f.max() >= self.n_points):
+                raise CorpusError(
+                    f"{self.name}: faces index points {f.min()}..{f.max()} but there are {self.n_points} points"
+                )
+        if self.point_names is not None and len(self.point_names) != self.n_points:
+            raise CorpusError(
+                f"{self.name}: {len(self.point_names)} point names for {self.n_points} points"
+            )
+        for k, v in self.latent.items():
+            if v.shape[0] != F.shape[0]:
+                raise CorpusError(f"{self.name}: latent {k!r} has {v.shape[0]} rows, frames have {F.shape[0]}")
+
+    # -------------------------------------------------------------- properties
+    @property
+    def n_frames(self) -> int:
+        return self.frames.shape[0]
+
+    @property
+    def n_points(self) -> int:
+        return self.frames.shape[1] // self.dims
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """Utterance frame ranges, ndarray of shape (n_utterances, 2): ``[start, stop)``."""
+        return np.array([[u.start, u.stop] for u in self.utterances], dtype=np.int64).reshape(-1, 2)
+
+    @property
+    def utterance_index(self) -> np.ndarray:
+        """Utterance number of every frame, ndarray of shape (n_frames,)."""
+        b = self.bounds
+        return np.repeat(np.arange(len(b)), b[:, 1] - b[:, 0])
+
+    @property
+    def duration(self) -> float:
+        return self.n_frames / self.rate
+
+    def utterance(self, uid: str) -> Utterance:
+        for u in self.utterances:
+            if u.id == uid:
+                return u
+        raise KeyError(f"no utterance {uid!r} in {self.name}; known: {[u.id for u in self.utterances[:5]]}...")
+
+    def points(self, i: int) -> np.ndarray:
+        """Frame ``i`` as points, ndarray of shape (n_points, 3) (z = 0 for 2-D data)."""
+        return frame_points(self.frames[i], self.dims)
+
+    def time_to_frame(self, u: Utterance, t: float) -> int:
+        """Corpus frame index nearest to time ``t`` (s) inside utterance ``u``, clipped to it."""
+        return int(np.clip(u.start + int(round(t * self.rate)), u.start, u.stop - 1))
+
+    def phone_table(self):
+        """All phones with their mid-point frames.
+
+        Returns
+        -------
+        mid_frames : ndarray of shape (n_phones,) int
+        labels : ndarray of shape (n_phones,) str
+        utterance : ndarray of shape (n_phones,) int, utterance number
+        start_frames, end_frames : ndarray of shape (n_phones,) int
+        """
+        mids, labs, utt, st, en = [], [], [], [], []
+        for k, u in enumerate(self.utterances):
+            for p in u.phones:
+                mids.append(self.time_to_frame(u, p.mid))
+                st.append(self.time_to_frame(u, p.start))
+                en.append(self.time_to_frame(u, p.end))
+                labs.append(p.label)
+                utt.append(k)
+        return (
+            np.array(mids, dtype=np.int64),
+            np.array(labs, dtype=str),
+            np.array(utt, dtype=np.int64),
+            np.array(st, dtype=np.int64),
+            np.array(en, dtype=np.int64),
+        )
+
+    def subset(self, ids) -> "Corpus":
+        """A new corpus holding only the utterances named in ``ids`` (in corpus order)."""
+        ids = set(ids)
+        keep = [u for u in self.utterances if u.id in ids]
+        if not keep:
+            raise CorpusError(f"{self.name}: none of the utterances {sorted(ids)[:5]} exist")
+        rows = np.concatenate([np.arange(u.start, u.stop) for u in keep])
+        out, pos = [], 0
+        for u in keep:
+            out.append(replace(u, start=pos, stop=pos + u.n_frames))
+            pos += u.n_frames
+        return Corpus(
+            frames=self.frames[rows], rate=self.rate, utterances=out, dims=self.dims, faces=self.faces,
+            point_names=self.point_names, latent={k: v[rows] for k, v in self.latent.items()}, name=self.name,
+        )
+
+    # -------------------------------------------------------------- file i/o
+    def to_arrays(self, *, include_frames: bool = True) -> dict[str, np.ndarray]:
+        """Flat dict of arrays for ``np.savez`` (no pickled objects)."""
+        phones = [(k, p.start, p.end, p.label) for k, u in enumerate(self.utterances) for p in u.phones]
+        d = {
+            "corpus_version": np.array(FORMAT_VERSION),
+            "corpus_rate": np.array(self.rate),
+            "corpus_dims": np.array(self.dims),
+            "corpus_name": np.array(self.name),
+            "corpus_n_frames": np.array(self.n_frames),
+            "corpus_n_columns": np.array(self.frames.shape[1]),
+            "corpus_utt_ids": np.array([u.id for u in self.utterances], dtype=str),
+            "corpus_utt_bounds": self.bounds,
+            "corpus_utt_audio": np.array([u.audio or "" for u in self.utterances], dtype=str),
+            "corpus_utt_text": np.array([u.text for u in self.utterances], dtype=str),
+            "corpus_phone_utt": np.array([p[0] for p in phones], dtype=np.int64),
+            "corpus_phone_times": np.array([[p[1], p[2]] for p in phones], dtype=np.float64).reshape(-1, 2),
+            "corpus_phone_labels": np.array([p[3] for p in phones], dtype=str),
+        }
+        if include_frames:
+            d["corpus_frames"] = self.frames
+        if self.faces is not None:
+            d["corpus_faces"] = self.faces
+        if self.point_names is not None:
+            d["corpus_point_names"] = np.array(self.point_names, dtype=str)
+        for k, v in self.latent.items():
+            d[f"corpus_latent_{k}"] = v
+        return d
+
+    @classmethod
+    def from_arrays(cls, d, *, frames=None, source: str = "<arrays>") -> "Corpus":
+        """Inverse of :meth:`to_arrays`; ``frames`` overrides the stored frames."""
+        try:
+            version = int(d["corpus_version"])
+            if version > FORMAT_VERSION:
+                raise CorpusError(f"{source}: corpus format {version} is newer than this Lipspace ({FORMAT_VERSION})")
+            if frames is None:
+                frames = d["corpus_frames"]
+            bounds = d["corpus_utt_bounds"]
+            ids = d["corpus_utt_ids"]
+            audio = d["corpus_utt_audio"]
+            text = d["corpus_utt_text"]
+            p_utt = d["corpus_phone_utt"]
+            p_t = d["corpus_phone_times"]
+            p_lab = d["corpus_phone_labels"]
+            keys = list(d.keys())
+            latent = {k[len("corpus_latent_"):]: d[k] for k in keys if k.startswith("corpus_latent_")}
+            faces = d["corpus_faces"] if "corpus_faces" in keys else None
+            names = list(d["corpus_point_names"]) if "corpus_point_names" in keys else None
+            rate, dims, name = float(d["corpus_rate"]), int(d["corpus_dims"]), str(d["corpus_name"])
+        except KeyError as exc:
+            raise CorpusError(f"{source}: not a Lipspace corpus file (missing {exc.args[0]!r})") from None
+        utts = []
+        for k, (b, uid) in enumerate(zip(bounds, ids)):
+            sel = p_utt == k
+            phones = tuple(PhoneInterval(float(s), float(e), str(lab)) for (s, e), lab in zip(p_t[sel], p_lab[sel]))
+            utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, str(audio[k]) or None, str(text[k])))
+        return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
+                   latent=latent, name=name)
+
+    def save(self, path) -> Path:
+        """Write the native corpus file (``.npz``) atomically."""
+        path = Path(path)
+        with atomic_write(path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **self.to_arrays())
+        return path
+
+    @classmethod
+    def load(cls, path) -> "Corpus":
+        """Read a native corpus file written by :meth:`save`."""
+        path = Path(path)
+        if not path.exists():
+            raise FileNotFoundError(f"{path}: no such corpus file")
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                return cls.from_arrays({k: z[k] for k in z.files}, source=str(path))
+        except (OSError, ValueError) as exc:
+            if isinstance(exc, CorpusError):
+                raise
+            raise CorpusError(f"{path}: cannot read as a Lipspace corpus (.npz): {exc}") from None
+
+
+def frame_points(row: np.ndarray, dims: int) -> np.ndarray:
+    """Reshape one frame (or (n, dims*V) frames) to points with 3 coordinates (z = 0 for 2-D)."""
+    row = np.asarray(row)
+    pts = row.reshape(*row.shape[:-1], -1, dims)
+    if dims == 2:
+        pts = np.concatenate([pts, np.zeros(pts.shape[:-1] + (1,), pts.dtype)], axis=-1)
+    return pts

@@ -1,0 +1,202 @@
+"""Shape space X: PCA of the frames about the mean frame (paper section 3.1).
+
+The paper fits PCA with EM (Roweis 1997) because F is 28,833 x 12,784. Here a
+randomized range finder with implicit centring plays that role: it only ever
+multiplies F (block by block) by thin matrices, so neither a dense covariance
+(C x C) nor a centred copy of F is formed.
+"""
+from __future__ import annotations
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
+
+from engine.progress import ProgressFn, report
+
+__all__ = ["ShapeSpace"]
+
+
+def _row_blocks(n: int, block: int):
+    for s in range(0, n, block):
+        yield slice(s, min(n, s + block))
+
+
+class ShapeSpace(BaseEstimator):
+    """PCA shape space of lip frames.
+
+    Parameters
+    ----------
+    max_components : int, default=100
+        Components computed (the paper: 100). Clipped to ``min(N, C) - 1``.
+    variance : float in (0, 1], default=0.99
+        Keep the smallest ``m`` whose components hold this fraction of the variance
+        of the components computed (the paper: 30 components hold 99%).
+    n_iter : int, default=3
+        Power iterations of the randomized range finder.
+    block_size : int, default=4096
+        Rows of F multiplied at once (memory is ``block_size * C`` floats).
+    random_state : int, default=0
+
+    Attributes
+    ----------
+    mean_ : ndarray of shape (C,)
+    components_ : ndarray of shape (m, C)
+        Orthonormal rows. Component 1 is oriented so that its positive direction
+        spreads the points apart (opening); the others have their largest loading positive.
+    explained_variance_ : ndarray of shape (m,)
+    explained_variance_ratio_ : ndarray of shape (m,)
+        Fraction of the *total* variance of F per kept component.
+    scree_ : ndarray of shape (n_computed,)
+        Fraction of the total variance per computed component (the scree).
+    recovered_ratio_ : ndarray of shape (n_computed,)
+        Cumulative fraction of the variance of the computed components.
+    total_variance_ : float
+    n_components_ : int
+    """
+
+    def __init__(self, *, max_components=100, variance=0.99, n_iter=3, block_size=4096, random_state=0):
+        self.max_components = max_components
+        self.variance = variance
+        self.n_iter = n_iter
+        self.block_size = block_size
+        self.random_state = random_state
+
+    def _validate(self, F):
+        F = np.asarray(F)
+        if F.ndim != 2:
+            raise ValueError(f"frames must be 2-D (n_frames, n_coordinates), got shape {F.shape}")
+        if F.shape[0] < 3:
+            raise ValueError(f"need at least 3 frames to fit a shape space, got {F.shape[0]}")
+        if not (0 < float(self.variance) <= 1):
+            raise ValueError(f"variance must be in (0, 1], got {self.variance}; e.g. 0.99 keeps 99%")
+        if int(self.max_components) < 1:
+            raise ValueError(f"max_components must be >= 1, got {self.max_components}")
+        if not np.isfinite(F).all():
+            bad = int(np.argwhere(~np.isfinite(F))[0, 0])
+            raise ValueError(f"frame {bad} holds NaN or inf; clean the corpus before fitting")
+        return F
+
+    def fit(self, F, *, progress: ProgressFn = None):
+        """Fit the shape space.
+
+        Parameters
+        ----------
+        F : ndarray of shape (N, C)
+        progress : callable, optional
+            ``progress(stage, done, total)``; raise :class:`engine.progress.Cancelled` to stop.
+        """
+        F = self._validate(F)
+        N, C = F.shape
+        rng = np.random.default_rng(self.random_state)
+        k = int(min(self.max_components, N - 1, C))
+        p = min(10, min(N, C) - k)
+        block = max(1, int(self.block_size))
+        mean = np.zeros(C, dtype=np.float64)
+        for sl in _row_blocks(N, block):
+            mean += F[sl].sum(axis=0, dtype=np.float64)
+        mean /= N
+        mean32 = mean.astype(np.float32)
+        total_steps = 2 * self.n_iter + 3
+        step = 0
+
+        def A_mat(X):  # (F - 1 mu^T) @ X, X (C, r)
+            X = X.astype(np.float32)
+            out = np.empty((N, X.shape[1]), dtype=np.float32)
+            mx = mean32 @ X
+            for sl in _row_blocks(N, block):
+                out[sl] = F[sl] @ X - mx
+            return out
+
+        def At_mat(Y):  # (F - 1 mu^T)^T @ Y, Y (N, r)
+            Y = Y.astype(np.float32)
+            out = np.zeros((C, Y.shape[1]), dtype=np.float32)
+            for sl in _row_blocks(N, block):
+                out += F[sl].T @ Y[sl]
+            out -= np.outer(mean32, Y.sum(axis=0))
+            return out
+
+        Q = A_mat(rng.standard_normal((C, k + p)).astype(np.float32))
+        step += 1
+        report(progress, "shape space", step, total_steps)
+        Q, _ = np.linalg.qr(Q)
+        for _ in range(self.n_iter):
+            Z, _ = np.linalg.qr(At_mat(Q))
+            step += 1
+            report(progress, "shape space", step, total_steps)
+            Q, _ = np.linalg.qr(A_mat(Z))
+            step += 1
+            report(progress, "shape space", step, total_steps)
+        B = At_mat(Q).T  # (k+p, C)
+        step += 1
+        report(progress, "shape space", step, total_steps)
+        _, s, Vt = np.linalg.svd(B.astype(np.float64), full_matrices=False)
+        s, Vt = s[:k], Vt[:k]
+        total = 0.0
+        for sl in _row_blocks(N, block):
+            total += float(((F[sl] - mean32).astype(np.float64) ** 2).sum())
+        step += 1
+        report(progress, "shape space", step, total_steps)
+        ev = s**2 / (N - 1)
+        total_var = total / (N - 1)
+        scree = ev / total_var if total_var > 0 else np.zeros_like(ev)
+        cum = np.cumsum(ev) / ev.sum() if ev.sum() > 0 else np.ones_like(ev)
+        m = int(np.searchsorted(cum, float(self.variance) - 1e-12) + 1)
+        m = max(1, min(m, k))
+        Vt = self._orient(Vt, mean)
+        self.mean_ = mean32
+        self.components_ = Vt[:m].astype(np.float32)
+        self.explained_variance_ = ev[:m]
+        self.explained_variance_ratio_ = scree[:m]
+        self.scree_ = scree
+        self.recovered_ratio_ = cum
+        self.total_variance_ = total_var
+        self.n_components_ = m
+        return self
+
+    @staticmethod
+    def _orient(Vt, mean):
+        Vt = Vt.copy()
+        big = np.argmax(np.abs(Vt), axis=1)
+        Vt *= np.sign(Vt[np.arange(len(Vt)), big])[:, None]
+        # component 1: positive = points spread apart (opening). Derivative of the summed
+        # squared distance of points from their centroid along the component.
+        for dims in (3, 2):
+            if mean.size % dims == 0:
+                break
+        P = mean.reshape(-1, dims)
+        c = Vt[0].reshape(-1, dims)
+        grow = float(((P - P.mean(0)) * (c - c.mean(0))).sum())
+        if grow < 0:
+            Vt[0] = -Vt[0]
+        return Vt
+
+    def transform(self, F):
+        """Project frames: ndarray (n, C) -> F^x, ndarray (n, m) float32."""
+        check_is_fitted(self, "components_")
+        F = np.asarray(F, dtype=np.float32)
+        if F.ndim != 2 or F.shape[1] != self.mean_.shape[0]:
+            raise ValueError(f"frames must have shape (n, {self.mean_.shape[0]}), got {F.shape}")
+        out = np.empty((F.shape[0], self.n_components_), dtype=np.float32)
+        for sl in _row_blocks(F.shape[0], max(1, int(self.block_size))):
+            out[sl] = (F[sl] - self.mean_) @ self.components_.T
+        return out
+
+    def inverse_transform(self, Fx):
+        """Reconstruct frames: F^x (n, m') with m' <= m -> F (n, C) = mean + F^x X^T."""
+        check_is_fitted(self, "components_")
+        Fx = np.atleast_2d(np.asarray(Fx, dtype=np.float32))
+        m = Fx.shape[1]
+        if m > self.n_components_:
+            raise ValueError(f"F^x has {m} columns but the shape space has {self.n_components_} components")
+        return self.mean_ + Fx @ self.components_[:m]
+
+    def component_deformation(self, index: int, amount_sd: float = 2.0):
+        """Frame of the mean shape moved ``amount_sd`` standard deviations along one component.
+
+        Returns ndarray of shape (C,).
+        """
+        check_is_fitted(self, "components_")
+        if not 0 <= index < self.n_components_:
+            raise ValueError(f"component {index} out of range 0..{self.n_components_ - 1}")
+        sd = float(np.sqrt(self.explained_variance_[index]))
+        return self.mean_ + amount_sd * sd * self.components_[index]

@@ -1,0 +1,39 @@
+"""Shared fixtures: the small synthetic corpus and its manifold, built once per session."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED_DATA = REPO.parent / "shared" / "data"
+
+
+def pytest_configure(config):
+    # never write into the user's real cache from tests
+    if "LIPSPACE_CACHE_DIR" not in os.environ:
+        import tempfile
+
+        os.environ["LIPSPACE_CACHE_DIR"] = tempfile.mkdtemp(prefix="lipspace-test-cache-")
+
+
+@pytest.fixture(scope="session")
+def small_corpus():
+    from engine.synthetic import load_synthetic
+
+    return load_synthetic(preset="small")
+
+
+@pytest.fixture(scope="session")
+def small_manifold(small_corpus):
+    from engine.manifold import Manifold
+
+    return Manifold().fit(small_corpus)
+
+
+@pytest.fixture(scope="session")
+def shared_data():
+    if not SHARED_DATA.is_dir():
+        pytest.skip(f"real sample data not found at {SHARED_DATA} (../shared/data beside the project)")
+    return SHARED_DATA
