@@ -357,10 +357,12 @@ class Corpus:
         try:
             with np.load(path, allow_pickle=False) as z:
                 return cls.from_arrays({k: z[k] for k in z.files}, source=str(path))
-        except (OSError, ValueError) as exc:
-            if isinstance(exc, CorpusError):
-                raise
-            raise CorpusError(f"{path}: cannot read as a Lipspace corpus (.npz): {exc}") from None
+        except CorpusError:
+            raise
+        except Exception as exc:  # BadZipFile, EOFError, KeyError, OSError, ValueError ...
+            raise CorpusError(
+                f"{path}: cannot read as a Lipspace corpus (.npz): {type(exc).__name__}: {exc}"
+            ) from None
 
 
 def frame_points(row: np.ndarray, dims: int) -> np.ndarray:

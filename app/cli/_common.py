@@ -54,7 +54,15 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None):
     if not p.exists():
         raise CliError(f"{p}: no such file")
     try:
-        return Corpus.load(p)
+        if p.suffix.lower() == ".npz":
+            return Corpus.load(p)
+        # Any foreign format the importers know (Haskins .mat, MOCHA .ema, C3D, ...).
+        from engine.io import ImportFormatError, read_corpus
+
+        try:
+            return read_corpus(p)
+        except ImportFormatError as exc:
+            raise CliError(f"{exc} (convert it first with 'lipspace import')") from None
     except CorpusError as exc:
         raise CliError(str(exc)) from None
 
