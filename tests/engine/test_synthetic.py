@@ -1,0 +1,253 @@
+"""The synthetic talker, its lip surface and the corpus cache."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine.corpus import Corpus
+from engine.lipmodel import CONTROL_NAMES, LipModel
+from engine.phonetics import PAPER_COUNTS, PAUSE, PHONES
+from engine.progress import Cancelled
+from engine.synthetic import PHONE_GESTURES, SyntheticTalker, load_synthetic
+
+
+@pytest.fixture
+def tmp_cache(tmp_path, monkeypatch):
+    d = tmp_path / "cache"
+    monkeypatch.setenv("LIPSPACE_CACHE_DIR", str(d))
+    return d
+
+
+@pytest.fixture(scope="module")
+def small():
+    """The small preset, generated here (not from any cache)."""
+    return SyntheticTalker(preset="small").generate()
+
+
+def _controls(**kw):
+    c = np.zeros((1, 6))
+    for k, v in kw.items():
+        c[0, CONTROL_NAMES.index(k)] = v
+    return c
+
+
+# ----------------------------------------------------------------- lip model
+def test_paper_resolution_point_count():
+    lip = LipModel("paper")
+    assert abs(lip.n_points - 4261) <= 5
+    assert abs(3 * lip.n_points - 12784) <= 15
+
+
+@pytest.mark.parametrize("res, lo, hi", [("small", 100, 300), ("default", 500, 1000)])
+def test_resolutions(res, lo, hi):
+    lip = LipModel(res)
+    assert lo <= lip.n_points <= hi
+    assert lip.rest_vertices.shape == (lip.n_points, 3)
+    assert np.isfinite(lip.rest_vertices).all()
+    assert lip.faces.min() == 0 and lip.faces.max() == lip.n_points - 1
+    assert len(lip.point_names) == len(set(lip.point_names)) == lip.n_points
+    V, F = lip.rest_vertices, lip.faces
+    normals = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    assert (normals[:, 2] > 0).mean() > 0.9  # the surface faces forward (+z)
+
+
+def test_lip_model_rejects_bad_input():
+    with pytest.raises(ValueError, match="resolution"):
+        LipModel("huge")
+    with pytest.raises(ValueError, match="shape"):
+        LipModel("small").deform(np.zeros((3, 5)))
+
+
+def test_deformations_are_physically_sensible():
+    lip = LipModel("default")
+    rest = lip.deform(_controls()).reshape(-1, 3)
+    moves = {k: lip.deform(_controls(**{k: 1.0})).reshape(-1, 3) - rest for k in CONTROL_NAMES}
+    size = {k: np.linalg.norm(v) for k, v in moves.items()}
+    assert max(size, key=size.get) == "jaw"  # the largest motion
+    n = lip.rows * lip.cols
+    up, lo = slice(0, n), slice(n, 2 * n)
+    assert moves["jaw"][lo, 1].mean() < -5 and abs(moves["jaw"][up, 1].mean()) < 2
+    corner = np.argmax(np.abs(rest[:n, 0]) * (np.abs(rest[:n, 0]) < 26))
+    assert abs((rest + moves["round"])[corner, 0]) < abs(rest[corner, 0]) - 2   # narrows
+    assert abs((rest + moves["spread"])[corner, 0]) > abs(rest[corner, 0]) + 1  # widens
+    assert moves["round"][:, 2].max() > 3                                      # protrudes
+    mid_lo = lip.midline[1]
+    assert moves["labiodental"][mid_lo, 2] < -2 and moves["labiodental"][mid_lo, 1] > 0  # up and back
+    ap = lip.aperture(np.vstack([_controls(), _controls(jaw=1.0), _controls(closure=1.0),
+                                 _controls(jaw=1.0, closure=1.0), _controls(labiodental=1.0)]))
+    assert ap[1] > 15 and ap[0] > 1
+    assert ap[2] < 0.01 and ap[3] < 0.01  # contact, whatever the jaw does
+    assert 0.5 < ap[4] < 4
+
+
+def test_aperture_is_the_geometric_inner_lip_distance():
+    lip = LipModel("small")
+    rng = np.random.default_rng(0)
+    c = rng.random((50, 6))
+    P = lip.deform(c).reshape(50, -1, 3)
+    u, l = lip.midline
+    np.testing.assert_allclose(lip.aperture(c), P[:, u, 1] - P[:, l, 1], atol=1e-4)
+    assert (lip.aperture(c) >= 0).all()
+    # lips never pass through each other anywhere along the contour
+    n = lip.rows * lip.cols
+    assert (P[:, :lip.cols, 1] - P[:, n:n + lip.cols, 1] >= -1e-4).all()
+
+
+# -------------------------------------------------------------- the talker
+def test_every_phone_has_articulatory_targets():
+    assert set(PHONES) <= set(PHONE_GESTURES)
+    for p, gestures in PHONE_GESTURES.items():
+        for g in gestures:
+            assert len(g.target) == 6 and all(0 <= t <= 1 for t in g.target)
+
+
+def test_small_corpus_shape_and_alignment(small):
+    c = small
+    assert isinstance(c, Corpus)
+    c.validate()
+    assert c.rate == 60.0 and c.n_frames == 4500 and 100 <= c.n_points <= 300
+    assert c.faces is not None and c.point_names is not None
+    assert set(c.latent) == set(CONTROL_NAMES) | {"aperture"}
+    assert all(v.shape == (c.n_frames,) and np.isfinite(v).all() for v in c.latent.values())
+    assert c.utterances[0].id == "s0001" and len(c.utterances) >= 10
+    for u in c.utterances:
+        assert u.phones[0].label == PAUSE and u.phones[-1].label == PAUSE
+        assert u.phones[0].start == 0.0
+        assert u.phones[-1].end == pytest.approx(u.n_frames / c.rate)
+        assert u.text.endswith(".") and len(u.text.split()) >= 1
+    assert c.frames.dtype == np.float32
+
+
+def test_phone_frequencies_are_plausible(small):
+    _, labels, *_ = small.phone_table()
+    speech = labels[labels != PAUSE]
+    assert len(speech) / small.duration > 7  # phones per second of read speech
+    present = set(speech)
+    assert len(present & set(PAPER_COUNTS)) >= 36
+    counts = np.array([(speech == p).sum() for p in PAPER_COUNTS], float)
+    assert np.corrcoef(counts, list(PAPER_COUNTS.values()))[0, 1] > 0.8
+
+
+def test_determinism_and_seed():
+    a = SyntheticTalker(preset="small", n_sentences=3, seed=5).generate()
+    b = SyntheticTalker(preset="small", n_sentences=3, seed=5).generate()
+    np.testing.assert_array_equal(a.frames, b.frames)
+    assert [u.phones for u in a.utterances] == [u.phones for u in b.utterances]
+    c = SyntheticTalker(preset="small", n_sentences=3, seed=6).generate()
+    assert a.utterances[0].text != c.utterances[0].text or not np.array_equal(a.frames[:100], c.frames[:100])
+    assert len(a.utterances) == 3
+
+
+def test_exact_duration_and_resolution_override():
+    c = SyntheticTalker(preset="small", duration=10.0, resolution=(4, 7), rate=50.0).generate()
+    assert c.n_frames == 500 and c.n_points == 56 and c.rate == 50.0
+
+
+def test_aperture_closed_for_bilabials_open_for_open_vowels(small):
+    mids, labels, *_ = small.phone_table()
+    ap = small.latent["aperture"]
+    closed = np.median(ap[mids[np.isin(labels, ["p", "b", "m"])]])
+    opened = np.median(ap[mids[np.isin(labels, ["aa", "ae"])]])
+    assert closed < 1.5 and opened > 6 and opened > 5 * closed
+
+
+def _velocity(corpus, name):
+    x = corpus.latent[name]
+    v = np.zeros_like(x)
+    for s, e in corpus.bounds:  # central differences inside each utterance
+        v[s:e] = np.gradient(x[s:e]) if e - s > 1 else 0.0
+    return v
+
+
+def test_m_closes_while_p_b_open(small):
+    """The paper's Fig. 4: /m/ mid-points in the closing phase, /p b/ in the opening one."""
+    mids, labels, *_ = small.phone_table()
+    v = _velocity(small, "aperture")
+    m = v[mids[labels == "m"]]
+    pb = v[mids[np.isin(labels, ["p", "b"])]]
+    assert len(m) >= 10 and len(pb) >= 10
+    assert (m < 0).mean() > 0.65
+    assert (pb > 0).mean() > 0.65
+
+
+def test_first_principal_component_is_jaw_opening(small):
+    F = (small.frames - small.frames.mean(0)).astype(np.float64)
+    _, S, Vt = np.linalg.svd(F.T @ F)  # (3V, 3V) is small here; same right vectors as SVD of F
+    assert S[0] / S.sum() > 0.3
+    assert abs(np.corrcoef(F @ Vt[0], small.latent["jaw"])[0, 1]) > 0.8
+
+
+def test_controls_are_smooth_and_bounded(small):
+    for name in CONTROL_NAMES:
+        x = small.latent[name]
+        assert x.min() >= 0 and x.max() <= 1
+        # second-order dynamics: frame-to-frame steps are small
+        assert np.abs(np.diff(x)).max() < 0.35
+
+
+def test_progress_and_cancel():
+    stages = []
+    SyntheticTalker(preset="small", n_sentences=2).generate(progress=lambda s, d, t: stages.append(s))
+    assert {"sentences", "articulation", "geometry"} <= set(stages)
+
+    def cancel(stage, done, total):
+        if stage == "geometry":
+            raise Cancelled
+
+    with pytest.raises(Cancelled):
+        SyntheticTalker(preset="small", n_sentences=2).generate(progress=cancel)
+
+
+def test_bad_parameters_are_rejected():
+    with pytest.raises(ValueError, match="preset"):
+        SyntheticTalker(preset="huge").generate()
+    with pytest.raises(ValueError, match="rate"):
+        SyntheticTalker(preset="small", rate=-1.0).generate()
+    with pytest.raises(ValueError, match="n_sentences"):
+        SyntheticTalker(preset="small", n_sentences=0).generate()
+
+
+# ------------------------------------------------------------------ cache
+def test_cache_hit_returns_identical_corpus(tmp_cache):
+    stages = []
+    a = load_synthetic(preset="small", n_sentences=3, progress=lambda s, d, t: stages.append(s))
+    files = list(tmp_cache.glob("*.npz"))
+    assert len(files) == 1 and "geometry" in stages
+    stages.clear()
+    b = load_synthetic(preset="small", n_sentences=3, progress=lambda s, d, t: stages.append(s))
+    assert "geometry" not in stages  # loaded, not regenerated
+    np.testing.assert_array_equal(a.frames, b.frames)
+    assert [u.phones for u in a.utterances] == [u.phones for u in b.utterances]
+    assert [u.text for u in a.utterances] == [u.text for u in b.utterances]
+    for k in a.latent:
+        np.testing.assert_array_equal(a.latent[k], b.latent[k])
+    np.testing.assert_array_equal(a.faces, b.faces)
+    # other parameters, other file
+    load_synthetic(preset="small", n_sentences=3, seed=1)
+    assert len(list(tmp_cache.glob("*.npz"))) == 2
+
+
+def test_cache_dir_argument_and_damaged_file(tmp_path, tmp_cache):
+    d = tmp_path / "elsewhere"
+    a = load_synthetic(preset="small", n_sentences=2, cache_dir=d)
+    (f,) = d.glob("*.npz")
+    assert not tmp_cache.exists() or not list(tmp_cache.glob("*.npz"))
+    f.write_bytes(b"not a corpus")
+    b = load_synthetic(preset="small", n_sentences=2, cache_dir=d)  # regenerated
+    np.testing.assert_array_equal(a.frames, b.frames)
+    assert Corpus.load(f).n_frames == a.n_frames
+
+
+# ------------------------------------------- the corpus through the engine
+def test_manifold_of_the_small_corpus_is_paper_like(small_manifold):
+    """Shape component 1 is opening, opening velocity is one of the first three
+    embedding axes, and the engine sees /p b/ opening and /m/ closing (Fig. 4)."""
+    m = small_manifold
+    corpus = m.corpus_
+    assert abs(np.corrcoef(m.Fx_[:, 0], corpus.latent["jaw"])[0, 1]) > 0.8
+    r_vel = [abs(np.corrcoef(m.Fy_[:, k], m.Fxv_[:, 0])[0, 1]) for k in range(3)]
+    assert max(r_vel) > 0.8
+    mids, labels, *_ = corpus.phone_table()
+    v = m.Fxv_[:, 0]
+    assert (v[mids[np.isin(labels, ["p", "b"])]] > 0).mean() > 0.75
+    assert (v[mids[labels == "m"]] < 0).mean() > 0.6
