@@ -1,0 +1,165 @@
+"""One entry point for every corpus format: :func:`read_corpus` picks the reader."""
+from __future__ import annotations
+
+import inspect
+from dataclasses import replace
+from pathlib import Path
+
+from engine.io.errors import ImportFormatError
+
+__all__ = ["read_corpus", "detect_format", "FORMATS", "FORMAT_ALIASES"]
+
+#: format name -> (module, reader function, one-line description)
+FORMATS = {
+    "ema": ("engine.io.ema", "read_ema", "MOCHA-TIMIT EMA: EST Track (binary/ASCII) or ASCII table, 2-D"),
+    "mview": ("engine.io.mview", "read_mview", "Haskins / MVIEW .mat EMA structs, 3-D"),
+    "c3d": ("engine.io.markers", "read_c3d", "C3D motion-capture markers, 3-D"),
+    "mesh": ("engine.io.mesh", "read_mesh_sequence", "OBJ/PLY mesh sequence, one file per frame (needs rate)"),
+    "csv": ("engine.io.landmarks", "read_csv_landmarks", "CSV landmark tracks (OpenFace, named or long)"),
+    "npy": ("engine.io.mesh", "read_vertex_array", "NumPy vertex array (n, V, 3) + template mesh (needs rate)"),
+    "npz": ("engine.corpus", "Corpus.load", "Lipspace native corpus file"),
+}
+FORMAT_ALIASES = {"mocha": "ema", "est": "ema", "haskins": "mview", "mat": "mview", "obj": "mesh", "ply": "mesh",
+                  "openface": "csv", "tsv": "csv", "vocaset": "npy", "native": "npz"}
+_EXT = {".ema": "ema", ".mat": "mview", ".c3d": "c3d", ".obj": "mesh", ".ply": "mesh", ".csv": "csv",
+        ".tsv": "csv", ".txt": "csv", ".npy": "npy", ".npz": "npz"}
+_ALIGN_EXT = (".textgrid", ".lab", ".phn")
+
+
+def detect_format(path) -> str:
+    """The format name for ``path``: by extension, else by the file's first bytes."""
+    if isinstance(path, (list, tuple)):
+        if not path:
+            raise ValueError("no input files given")
+        return detect_format(path[0])
+    s = str(path)
+    p = Path(s)
+    if any(c in s for c in "*?["):
+        return "mesh"
+    if p.is_dir():
+        return "mesh"
+    suf = p.suffix.lower()
+    if suf in _ALIGN_EXT:
+        raise ImportFormatError(p, "is a phone alignment, not lip data; read it with read_alignment or pass it as "
+                                "alignment= (--alignment) with the data file")
+    if suf in _EXT:
+        return _EXT[suf]
+    if not p.exists():
+        raise FileNotFoundError(f"{p}: no such file or directory")
+    with open(p, "rb") as fh:
+        head = fh.read(512)
+    if head.lstrip()[:8] == b"EST_File":
+        return "ema"
+    if head.startswith(b"MATLAB 5.0"):
+        return "mview"
+    if head.startswith(b"ply"):
+        return "mesh"
+    if head.startswith(b"\x93NUMPY"):
+        return "npy"
+    if head.startswith(b"PK\x03\x04"):
+        return "npz"
+    if len(head) >= 2 and head[1] == 0x50:
+        return "c3d"
+    raise ImportFormatError(p, f"cannot tell the format from the name or the first bytes {head[:16]!r}; pass "
+                            f"format= one of {sorted(FORMATS)}")
+
+
+def _reader(fmt):
+    import importlib
+
+    if fmt == "npz":
+        return _read_native
+    mod, fn, _ = FORMATS[fmt]
+    return getattr(importlib.import_module(mod), fn)
+
+
+def _read_native(path, rate=None, alignment=None, tier=None):
+    from engine.corpus import Corpus
+    from engine.io._util import check_rate, fit_phones
+    from engine.io.alignment import resolve_alignment
+
+    import numpy as np
+
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such corpus file")
+    # Corpus.load's reading, with our own file handle: np.load leaks its handle when the zip is damaged
+    try:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+    except Exception as exc:  # BadZipFile, EOFError, zlib.error, ValueError, ...
+        raise ImportFormatError(path, f"cannot read as a Lipspace corpus (.npz): {type(exc).__name__}: {exc}") \
+            from None
+    c = Corpus.from_arrays(arrays, source=str(path))
+    check_rate(path, c.rate, rate)
+    if alignment is None or alignment is False:
+        return c
+    if len(c.utterances) != 1:
+        raise ImportFormatError(path, f"holds {len(c.utterances)} utterances; an alignment can only be given for "
+                                "a corpus of one utterance")
+    phones, _ = resolve_alignment(path, alignment, tier=tier)
+    u = c.utterances[0]
+    return replace(c, utterances=[replace(u, phones=fit_phones(phones, u.n_frames, c.rate))])
+
+
+def read_corpus(path, *, format: str | None = None, rate: float | None = None, alignment=None, **kw):
+    """Read any supported foreign format (or several files) into a :class:`Corpus`.
+
+    Parameters
+    ----------
+    path : str, Path, or sequence of them
+        A file, a directory or glob of mesh frames, or several files (read with the same
+        options and joined by :func:`engine.io.concat`, one utterance each).
+    format : str, optional
+        One of :data:`FORMATS` (or an alias in :data:`FORMAT_ALIASES`); by default from the
+        extension, else from the first bytes.
+    rate : float, optional
+        Frame rate (Hz) of inputs that carry no timing (mesh sequences, ``.npy``, CSV
+        without a time column). For formats with their own rate it must agree; to change
+        the rate use :func:`engine.io.resample`.
+    alignment : None, False, path or sequence of PhoneInterval
+        None: the file's own phones or a ``<stem>.TextGrid`` / ``.lab`` beside it; False:
+        none; a path: that TextGrid / label file.
+    **kw
+        Reader options (``sensors``, ``markers``, ``points``, ``template``, ``tier``,
+        ``fill_gaps``, ``space``, ``scale`` ...; see each reader).
+
+    Returns
+    -------
+    Corpus
+
+    Raises
+    ------
+    ImportFormatError
+        Bad file content, naming the file and the line or frame.
+    FileNotFoundError
+        A missing input.
+    """
+    if isinstance(path, (list, tuple)) and not path:
+        raise ValueError("read_corpus: no input files given")
+    fmt = (format or detect_format(path)).lower()
+    fmt = FORMAT_ALIASES.get(fmt, fmt)
+    if fmt not in FORMATS:
+        raise ValueError(f"format={format!r} is not known; expected one of {sorted(FORMATS)} "
+                         f"(or {sorted(FORMAT_ALIASES)})")
+    if isinstance(path, (list, tuple)) and fmt != "mesh":  # several files: one utterance each
+        from engine.io.combine import concat
+
+        paths = list(path)
+        if isinstance(alignment, (list, tuple)) and len(alignment) == len(paths) and \
+                all(isinstance(a, (str, Path)) for a in alignment):
+            aligns = list(alignment)
+        elif len(paths) > 1 and isinstance(alignment, (str, Path)):
+            raise ValueError(f"one alignment file for {len(paths)} inputs; give one per input or let each input "
+                             "find its own <stem>.TextGrid / .lab")
+        else:
+            aligns = [alignment] * len(paths)
+        parts = [read_corpus(p, format=fmt, rate=rate, alignment=a, **kw) for p, a in zip(paths, aligns)]
+        return concat(parts)
+    fn = _reader(fmt)
+    params = inspect.signature(fn).parameters
+    unknown = sorted(set(kw) - set(params))
+    if unknown:
+        takes = sorted(n for n, p in params.items() if p.kind == p.KEYWORD_ONLY or n in ("rate", "alignment", "tier"))
+        raise TypeError(f"format {fmt!r} takes no option(s) {unknown}; it takes {takes}")
+    return fn(path, rate=rate, alignment=alignment, **kw)

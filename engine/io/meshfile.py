@@ -1,0 +1,339 @@
+"""Single mesh files: Wavefront OBJ and Stanford PLY (ASCII and binary), read and written
+with numpy only.
+
+Readers return ``(vertices (V, 3) float64, faces (F, 3) int64 or None)``; polygons are
+split into triangle fans. Writers write atomically.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from engine._atomic import atomic_write
+from engine.io._util import decode_text, read_bytes
+from engine.io.errors import ImportFormatError
+
+__all__ = ["read_obj", "read_ply", "read_mesh", "write_obj", "write_ply", "write_mesh"]
+
+_PLY_TYPES = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
+    "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+}
+
+
+def _fan(poly):
+    return [(poly[0], poly[k], poly[k + 1]) for k in range(1, len(poly) - 1)]
+
+
+# ---------------------------------------------------------------------------- OBJ
+def _read_obj_fast(lines):
+    """Vectorised read of the common layout ('v x y z' lines, then 'f a b c' lines); None if not that."""
+    vi = [i for i, s in enumerate(lines) if s[:2] == "v "]
+    fi = [i for i, s in enumerate(lines) if s[:2] == "f "]
+    if not vi or (fi and fi[0] < vi[-1]):
+        return None
+    fl = [lines[i] for i in fi]
+    if any(len(s.split()) != 4 or "/" in s for s in fl):
+        return None  # polygons or v/vt/vn indices: the line-by-line reader
+    try:
+        V = np.loadtxt([lines[i] for i in vi], usecols=(1, 2, 3), dtype=np.float64, ndmin=2, comments=None)
+        F = np.loadtxt(fl, usecols=(1, 2, 3), dtype=np.int64, ndmin=2, comments=None) - 1 if fl else None
+    except (ValueError, OverflowError):
+        return None  # the line-by-line reader names the bad line
+    if F is not None and (F.min() < 0 or F.max() >= len(V)):
+        return None
+    return V, F
+
+
+def read_obj(path):
+    """Vertices and triangles of a Wavefront OBJ file (``v`` and ``f`` records; others ignored).
+
+    Returns
+    -------
+    vertices : ndarray of shape (V, 3) float64
+    faces : ndarray of shape (F, 3) int64 (0-based), or None when the file has no faces
+    """
+    lines = decode_text(read_bytes(path), path).split("\n")
+    fast = _read_obj_fast(lines)
+    if fast is not None:
+        return fast
+    verts, faces = [], []
+    for i, raw in enumerate(lines, start=1):
+        if raw[:2] == "v " or raw[:2] == "v\t":
+            tok = raw.split()
+            if len(tok) < 4:
+                raise ImportFormatError(path, f"vertex record {raw.strip()[:60]!r}; expected 'v x y z'", line=i)
+            try:
+                verts.append((float(tok[1]), float(tok[2]), float(tok[3])))
+            except ValueError:
+                raise ImportFormatError(path, f"vertex record {raw.strip()[:60]!r}; expected three numbers",
+                                        line=i) from None
+        elif raw[:2] == "f " or raw[:2] == "f\t":
+            tok = raw.split()[1:]
+            if len(tok) < 3:
+                raise ImportFormatError(path, f"face record with {len(tok)} vertices; expected at least 3", line=i)
+            poly = []
+            for t in tok:
+                try:
+                    k = int(t.split("/", 1)[0])
+                except ValueError:
+                    raise ImportFormatError(path, f"face vertex {t[:30]!r}; expected an index like 5, 5/2 or "
+                                            "5//1", line=i) from None
+                k = k - 1 if k > 0 else len(verts) + k  # OBJ: 1-based, negative = relative
+                if not 0 <= k < len(verts):
+                    raise ImportFormatError(path, f"face vertex {t!r} refers to vertex {k + 1}; only "
+                                            f"{len(verts)} vertices are defined so far", line=i)
+                poly.append(k)
+            faces.extend(_fan(poly))
+    if not verts:
+        raise ImportFormatError(path, "holds no vertices; expected 'v x y z' records (an OBJ mesh)")
+    V = np.asarray(verts, dtype=np.float64)
+    return V, (np.asarray(faces, dtype=np.int64) if faces else None)
+
+
+# ---------------------------------------------------------------------------- PLY
+def _ply_header(data: bytes, path):
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise ImportFormatError(path, f"starts with {data[:12]!r}; expected 'ply' ... 'end_header' (a PLY file)",
+                                line=1)
+    nl = data.find(b"\n", end)
+    body = len(data) if nl < 0 else nl + 1
+    lines = decode_text(data[:end], path).split("\n")
+    fmt, elements = None, []
+    for i, raw in enumerate(lines[1:], start=2):
+        tok = raw.split()
+        if not tok or tok[0] in ("comment", "obj_info"):
+            continue
+        if tok[0] == "format":
+            if len(tok) < 2 or tok[1] not in ("ascii", "binary_little_endian", "binary_big_endian"):
+                raise ImportFormatError(path, f"{raw.strip()[:60]!r}; expected 'format ascii|binary_little_endian|"
+                                        "binary_big_endian 1.0'", line=i)
+            fmt = tok[1]
+        elif tok[0] == "element":
+            try:
+                n = int(tok[2])
+                if n < 0:
+                    raise ValueError
+            except (IndexError, ValueError):
+                raise ImportFormatError(path, f"{raw.strip()[:60]!r}; expected 'element <name> <count>'",
+                                        line=i) from None
+            elements.append({"name": tok[1], "count": n, "props": [], "line": i})
+        elif tok[0] == "property":
+            if not elements:
+                raise ImportFormatError(path, "property before any element", line=i)
+            if len(tok) == 5 and tok[1] == "list" and tok[2] in _PLY_TYPES and tok[3] in _PLY_TYPES:
+                elements[-1]["props"].append((tok[4], _PLY_TYPES[tok[2]], _PLY_TYPES[tok[3]]))
+            elif len(tok) == 3 and tok[1] in _PLY_TYPES:
+                elements[-1]["props"].append((tok[2], _PLY_TYPES[tok[1]], None))
+            else:
+                raise ImportFormatError(path, f"{raw.strip()[:60]!r}; expected 'property <type> <name>' or "
+                                        "'property list <count type> <index type> <name>'", line=i)
+        else:
+            raise ImportFormatError(path, f"unknown header line {raw.strip()[:60]!r}", line=i)
+    if fmt is None:
+        raise ImportFormatError(path, "the header has no 'format' line")
+    return fmt, elements, body, len(lines) + 1
+
+
+def _read_binary_element(el, buf, pos, endian, path):
+    n, props = el["count"], el["props"]
+    if all(p[2] is None for p in props):
+        dt = np.dtype([(f"p{k}", endian + p[1]) for k, p in enumerate(props)])
+        if pos + n * dt.itemsize > len(buf):
+            raise ImportFormatError(path, f"element {el['name']!r}: the data ends before its {n} rows "
+                                    f"({n * dt.itemsize} bytes from byte {pos}); truncated file?")
+        rec = np.frombuffer(buf, dtype=dt, count=n, offset=pos)
+        with np.errstate(invalid="ignore", over="ignore"):  # NaN payloads are caught later as non-finite
+            cols = {p[0]: rec[f"p{k}"].astype(np.float64) for k, p in enumerate(props)}
+        return cols, pos + n * dt.itemsize
+    if len(props) == 1 and n > 0:  # e.g. faces: one list; fast path when every row has the same length
+        name, ct, it = props[0]
+        ct_, it_ = np.dtype(endian + ct), np.dtype(endian + it)
+        if pos + ct_.itemsize <= len(buf):
+            k = int(np.frombuffer(buf, ct_, 1, pos)[0])
+            dt = np.dtype([("n", ct_), ("i", it_, (max(k, 1),))])
+            if k > 0 and pos + n * dt.itemsize <= len(buf):
+                rec = np.frombuffer(buf, dtype=dt, count=n, offset=pos)
+                if (rec["n"] == k).all():
+                    return {name: rec["i"].astype(np.int64)}, pos + n * dt.itemsize
+    cols = {p[0]: [] for p in props}
+    for r in range(n):
+        for name, ct, it in props:
+            t = np.dtype(endian + ct)
+            if pos + t.itemsize > len(buf):
+                raise ImportFormatError(path, f"element {el['name']!r} row {r}: the data ends at byte {pos}; "
+                                        "truncated file?")
+            v = np.frombuffer(buf, t, 1, pos)[0]
+            pos += t.itemsize
+            if it is None:
+                cols[name].append(float(v))
+                continue
+            k, t2 = int(v), np.dtype(endian + it)
+            if k < 0 or pos + k * t2.itemsize > len(buf):
+                raise ImportFormatError(path, f"element {el['name']!r} row {r}: a list of {k} items does not fit "
+                                        f"in the {len(buf) - pos} bytes left; truncated file?")
+            cols[name].append(np.frombuffer(buf, t2, k, pos).astype(np.int64))
+            pos += k * t2.itemsize
+    return cols, pos
+
+
+def _read_ascii_element(el, lines, li, first_line, path):
+    n, props = el["count"], el["props"]
+    if li + n > len(lines):
+        raise ImportFormatError(path, f"element {el['name']!r} declares {n} rows but only {len(lines) - li} "
+                                "lines follow; truncated file?", line=first_line + len(lines))
+    rows = [lines[li + r].split() for r in range(n)]
+    try:  # fast paths: scalar-only rows, or one list of constant length (faces)
+        if n and all(p[2] is None for p in props) and all(len(t) == len(props) for t in rows):
+            arr = np.array(rows, dtype=np.float64)
+            return {p[0]: arr[:, k] for k, p in enumerate(props)}, li + n
+        if n and len(props) == 1 and props[0][2] is not None:
+            k = int(rows[0][0])
+            if k > 0 and all(len(t) == k + 1 and t[0] == rows[0][0] for t in rows):
+                return {props[0][0]: np.array([t[1:] for t in rows], dtype=np.int64)}, li + n
+    except (ValueError, OverflowError, IndexError):
+        pass  # the row-by-row reader below names the bad line
+    cols = {p[0]: [] for p in props}
+    for r in range(n):
+        tok, j = rows[r], 0
+        where = dict(line=first_line + li + r)
+        try:
+            for name, ct, it in props:
+                if it is None:
+                    cols[name].append(float(tok[j]))
+                    j += 1
+                else:
+                    k = int(tok[j])
+                    if k < 0 or j + 1 + k > len(tok):
+                        raise IndexError
+                    cols[name].append(np.array([int(t) for t in tok[j + 1:j + 1 + k]], np.int64))
+                    j += 1 + k
+        except (IndexError, ValueError):
+            raise ImportFormatError(path, f"element {el['name']!r} row {r}: {lines[li + r].strip()[:60]!r}; "
+                                    f"expected values for {[p[0] for p in props]}", **where) from None
+    return cols, li + n
+
+
+def read_ply(path):
+    """Vertices and triangles of a PLY file (ASCII, binary little- or big-endian).
+
+    Returns
+    -------
+    vertices : ndarray of shape (V, 3) float64
+    faces : ndarray of shape (F, 3) int64, or None when the file has no faces
+    """
+    data = read_bytes(path)
+    fmt, elements, body, body_line = _ply_header(data, path)
+    got = {}
+    if fmt == "ascii":
+        lines = [s for s in decode_text(data[body:], path).split("\n") if s.strip()]
+        li = 0
+        for el in elements:
+            got[el["name"]], li = _read_ascii_element(el, lines, li, body_line, path)
+    else:
+        endian = "<" if fmt == "binary_little_endian" else ">"
+        pos = body
+        for el in elements:
+            got[el["name"]], pos = _read_binary_element(el, data, pos, endian, path)
+    v = got.get("vertex")
+    if v is None or not {"x", "y", "z"} <= set(v):
+        raise ImportFormatError(path, "has no 'vertex' element with x, y, z properties; expected a PLY mesh "
+                                "or point cloud")
+    V = np.column_stack([np.asarray(v[a], np.float64) for a in "xyz"]).reshape(-1, 3)
+    if V.shape[0] == 0:
+        raise ImportFormatError(path, "has 0 vertices; expected at least one")
+    faces = None
+    f = got.get("face")
+    if f:
+        key = "vertex_indices" if "vertex_indices" in f else ("vertex_index" if "vertex_index" in f else None)
+        if key is None:
+            raise ImportFormatError(path, f"the face element has {list(f)}; expected a 'vertex_indices' list")
+        lists = f[key]
+        tris = []
+        if isinstance(lists, np.ndarray):
+            if lists.shape[1] < 3:
+                raise ImportFormatError(path, f"faces have {lists.shape[1]} vertices; expected at least 3")
+            tris = np.concatenate([lists[:, [0, k, k + 1]] for k in range(1, lists.shape[1] - 1)])
+        else:
+            for r, poly in enumerate(lists):
+                if len(poly) < 3:
+                    raise ImportFormatError(path, f"face {r} has {len(poly)} vertices; expected at least 3")
+                tris.extend(_fan(list(poly)))
+            tris = np.asarray(tris, np.int64).reshape(-1, 3)
+        if tris.size and (tris.min() < 0 or tris.max() >= V.shape[0]):
+            r = int(np.flatnonzero((tris < 0).any(1) | (tris >= V.shape[0]).any(1))[0])
+            raise ImportFormatError(path, f"triangle {r} indexes vertex {tris[r].tolist()}; there are {V.shape[0]}")
+        faces = tris if len(tris) else None
+    return V, faces
+
+
+def read_mesh(path):
+    """:func:`read_obj` or :func:`read_ply` by content (``ply`` magic) or extension."""
+    p = Path(path)
+    with open(p, "rb") as fh:
+        head = fh.read(3)
+    return read_ply(p) if head == b"ply" or p.suffix.lower() == ".ply" else read_obj(p)
+
+
+# ---------------------------------------------------------------------------- writers
+def _check(vertices, faces):
+    V = np.asarray(vertices, dtype=np.float64)
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise ValueError(f"vertices must be (V, 3), got {V.shape}")
+    F = None
+    if faces is not None:
+        F = np.asarray(faces, dtype=np.int64)
+        if F.ndim != 2 or F.shape[1] != 3 or (F.size and (F.min() < 0 or F.max() >= V.shape[0])):
+            raise ValueError(f"faces must be (F, 3) indices < {V.shape[0]}, got shape {F.shape}")
+    return V, F
+
+
+def write_obj(path, vertices, faces=None, *, precision: int = 9) -> Path:
+    """Write an OBJ file (``v`` records, ``f`` records when ``faces`` is given), atomically."""
+    V, F = _check(vertices, faces)
+    fmt = f"%.{precision}g"
+    with atomic_write(path) as tmp:
+        with open(tmp, "w", encoding="ascii") as fh:
+            fh.write("# written by Lipspace\n")
+            fh.write((f"v {fmt} {fmt} {fmt}\n" * len(V)) % tuple(V.ravel().tolist()))
+            if F is not None and len(F):
+                fh.write(("f %d %d %d\n" * len(F)) % tuple((F + 1).ravel().tolist()))
+    return Path(path)
+
+
+def write_ply(path, vertices, faces=None, *, binary: bool = False, precision: int = 9) -> Path:
+    """Write a PLY file (float32 vertices, int32 triangle lists), ASCII or little-endian binary, atomically."""
+    V, F = _check(vertices, faces)
+    head = ["ply", f"format {'binary_little_endian' if binary else 'ascii'} 1.0", "comment written by Lipspace",
+            f"element vertex {len(V)}", "property float x", "property float y", "property float z"]
+    if F is not None:
+        head += [f"element face {len(F)}", "property list uchar int vertex_indices"]
+    head.append("end_header")
+    with atomic_write(path) as tmp:
+        with open(tmp, "wb") as fh:
+            fh.write(("\n".join(head) + "\n").encode("ascii"))
+            if binary:
+                fh.write(V.astype("<f4").tobytes())
+                if F is not None:
+                    rec = np.empty(len(F), dtype=[("n", "u1"), ("i", "<i4", (3,))])
+                    rec["n"], rec["i"] = 3, F
+                    fh.write(rec.tobytes())
+            else:
+                fmt = f"%.{precision}g"
+                text = (f"{fmt} {fmt} {fmt}\n" * len(V)) % tuple(V.ravel().tolist())
+                if F is not None:
+                    text += ("3 %d %d %d\n" * len(F)) % tuple(F.ravel().tolist())
+                fh.write(text.encode("ascii"))
+    return Path(path)
+
+
+def write_mesh(path, vertices, faces=None, **kw) -> Path:
+    """:func:`write_ply` for ``.ply`` paths, else :func:`write_obj`."""
+    if Path(path).suffix.lower() == ".ply":
+        return write_ply(path, vertices, faces, **kw)
+    kw.pop("binary", None)
+    return write_obj(path, vertices, faces, **kw)
+
