@@ -1,0 +1,135 @@
+"""``lipspace synthesize``: phones, a TextGrid, text or a corpus utterance -> trajectory and mesh files.
+
+The manifold comes from ``--manifold FILE`` (written by ``lipspace build``) or is
+fitted on the synthetic talker (``--preset``). Targets:
+
+``--phones "p 0.08 ax 0.1 ..."``  labels and durations (s); any phone set the corpus's labels normalise to
+``--textgrid FILE``              a Praat TextGrid (or HTK/MOCHA .lab) phone tier
+``--text "..."``                 English text through the pronouncing dictionary and the duration model
+``--utterance ID``               a corpus utterance's own phone mid-points (oracle targets, as the paper's Fig. 3)
+
+Outputs: ``-o traj.csv`` / ``-o traj.npy`` (``--values`` frames, fx or fy) and
+``--mesh-dir DIR`` (one OBJ/PLY per frame), each written atomically.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+PRESETS = ("small", "default", "paper")
+METHODS = ("manifold", "linear", "cubic", "unitselection")
+VALUES = ("frames", "fx", "fy")
+
+
+def add_arguments(p):
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--phones", metavar='"P DUR ..."', help='phone labels with durations in seconds, e.g. "p 0.08 ax 0.1"')
+    src.add_argument("--textgrid", metavar="FILE", help="Praat TextGrid (or .lab) phone alignment")
+    src.add_argument("--text", metavar='"TEXT"', help="English text (words; [p h o n e s] in brackets for others)")
+    src.add_argument("--utterance", metavar="ID", help="a corpus utterance: its own phone mid-points as targets")
+    p.add_argument("--manifold", metavar="FILE", help="manifold file from 'lipspace build' (default: fit the "
+                                                     "synthetic talker)")
+    p.add_argument("--preset", choices=PRESETS, default="default",
+                   help="synthetic talker preset without --manifold (default: %(default)s)")
+    p.add_argument("--method", choices=METHODS, default="manifold", help="synthesis method (default: %(default)s)")
+    p.add_argument("--strict", action="store_true",
+                   help="manifold method: fail when a target cannot be reached in time (default: undershoot and warn)")
+    p.add_argument("--candidates", type=int, default=8,
+                   help="manifold method: candidate states per phone (default: %(default)s)")
+    p.add_argument("--inverse-dims", type=int, default=None,
+                   help="manifold method: dims of F^y used by the Y -> X inverse map (default: 3, the paper's)")
+    p.add_argument("--tier", default=None, help="TextGrid tier holding the phones (default: found by name)")
+    p.add_argument("--tempo", type=float, default=1.0, help="--text: speaking-rate factor (default: %(default)s)")
+    p.add_argument("-o", "--output", metavar="TRAJ.csv|TRAJ.npy", help="write the trajectory (CSV or NPY)")
+    p.add_argument("--values", choices=VALUES, default="frames",
+                   help="what -o holds: lip frames, shape coordinates F^x or manifold coordinates F^y "
+                        "(default: %(default)s)")
+    p.add_argument("--mesh-dir", metavar="DIR", help="write one mesh file per frame into DIR")
+    p.add_argument("--mesh-format", choices=("obj", "ply"), default="obj", help="mesh file format (default: obj)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+def _manifold(args):
+    from app.cli import CliError
+    from app.cli._common import load_corpus_arg, load_manifold_arg, progress_bar
+    from engine.manifold import Manifold
+
+    if args.manifold:
+        return load_manifold_arg(args.manifold)
+    with progress_bar(disable=True if args.quiet else None) as progress:
+        corpus = load_corpus_arg(None, synthetic_preset=args.preset, progress=progress)
+        try:
+            return Manifold().fit(corpus, progress=progress)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+
+
+def _targets(args, manifold):
+    from engine import targets as T
+
+    if args.phones is not None:
+        return T.targets_from_phones(manifold, args.phones)
+    if args.textgrid is not None:
+        if not Path(args.textgrid).exists():
+            raise FileNotFoundError(f"{args.textgrid}: no such TextGrid file")
+        return T.targets_from_textgrid(manifold, args.textgrid, tier=args.tier)
+    if args.text is not None:
+        from engine.phonetics import DurationModel
+
+        return T.targets_from_text(manifold, args.text, duration_model=DurationModel(tempo=args.tempo))
+    return T.targets_from_utterance(manifold, args.utterance, on_collision="merge")
+
+
+def _synthesizer(args, manifold):
+    from engine.synthesis import make_synthesizer
+
+    if args.method == "manifold":
+        return make_synthesizer("manifold", manifold, strict=args.strict, n_candidates=args.candidates,
+                                inverse_dims=args.inverse_dims)
+    return make_synthesizer(args.method, manifold)
+
+
+def run(args) -> int:
+    from app.cli import CliError
+
+    out = Path(args.output) if args.output else None
+    if out is not None and out.suffix.lower() not in (".csv", ".npy"):
+        raise CliError(f"{out}: the trajectory file must end in .csv or .npy")
+    if args.values == "fy" and args.method != "manifold":
+        raise CliError(f"--values fy needs --method manifold (the {args.method} method moves in X, not Y)")
+    manifold = _manifold(args)
+    try:
+        targets = _targets(args, manifold)
+        traj = _synthesizer(args, manifold).synthesize(targets)
+    except (ValueError, FileNotFoundError) as exc:
+        raise CliError(str(exc)) from None
+    for w in traj.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    frames = traj.frames(manifold)
+    c = manifold.corpus_
+    print(f"{traj.method}: {traj.n_frames} frames ({traj.n_frames / targets.rate:.2f} s at {targets.rate:g} Hz) "
+          f"through {len(targets.targets)} targets from {targets.source}: "
+          f"{' '.join(t.label or '?' for t in targets.targets[:30])}{' ...' if len(targets.targets) > 30 else ''}")
+    if out is not None:
+        from engine.io.export import corpus_columns, write_trajectory_csv, write_trajectory_npy
+
+        if args.values == "frames":
+            values, cols = frames, corpus_columns(c)
+        elif args.values == "fx":
+            values, cols = traj.Fx, [f"x{k + 1}" for k in range(traj.Fx.shape[1])]
+        else:
+            values, cols = traj.Fy, [f"y{k + 1}" for k in range(traj.Fy.shape[1])]
+        if out.suffix.lower() == ".csv":
+            write_trajectory_csv(out, values, times=traj.times, columns=cols)
+        else:
+            write_trajectory_npy(out, values)
+        print(f"wrote {out} ({values.shape[0]} x {values.shape[1]} {args.values})")
+    if args.mesh_dir:
+        from engine.io.export import write_mesh_sequence
+
+        try:
+            files = write_mesh_sequence(args.mesh_dir, frames, faces=c.faces, dims=c.dims, format=args.mesh_format)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+        print(f"wrote {len(files)} {args.mesh_format.upper()} files to {args.mesh_dir}")
+    return 0

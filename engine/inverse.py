@@ -1,0 +1,312 @@
+"""Inverse map Y -> X: barycentric interpolation over a Delaunay tetrahedralisation (paper 4.2).
+
+There is no closed-form map back from the embedding, because Y is built from
+distances only. The paper tetrahedralises F^y (first 3 dims) and maps a point
+inside the tetrahedron Delta_ijkl to the barycentric combination of F^x at its four
+vertices, the weights being ratios of sub-volumes. scipy's simplex ``transform``
+gives the same weights (barycentric coordinates are exactly those volume ratios).
+
+Details the paper leaves open, fixed here:
+
+* **Duplicates.** Frames with identical F^y (first ``n_dims`` coordinates) become one
+  vertex whose value is the mean of their F^x; when their F^x agree (as they must
+  when the full F^y agree) that is exactly each frame's own F^x.
+  ``duplicate_spread_`` reports the largest disagreement.
+* **Every training frame maps to its own F^x.** Qhull may leave near-coincident
+  points out of the triangulation ("coplanar" points); a query equal to a training
+  point (within ``1e-9`` of the data's extent) therefore returns that point's value
+  directly, so the map reproduces every training frame to numerical precision.
+* **Outside the hull** (and inside simplices Qhull left degenerate): the point is
+  mapped through the nearest simplex -- among the simplices around its 8 nearest
+  vertices, the one whose smallest barycentric coordinate is largest -- with its
+  weights clipped to >= 0 and renormalised. Never zeros; ``transform(...,
+  return_outside=True)`` says which points were outside the hull.
+* **Degenerate input.** If F^y spans fewer than ``n_dims`` affine dimensions the
+  map works in the subspace they span (a segment in 1-D, a single value in 0-D).
+* **Saving.** Fitted attributes are arrays only; the triangulation is rebuilt from
+  ``points_`` on first use after loading (Qhull is deterministic for the same input
+  and options).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import ConvexHull, Delaunay, cKDTree
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
+
+__all__ = ["InverseMap"]
+
+#: Qhull options: scipy's defaults for <= 4-D ("Qt" is always added by scipy)
+QHULL_OPTIONS = "Qbb Qc Qz Q12"
+#: relative tolerance (of the data's extent) for "same point" and "inside"
+_REL_TOL = 1e-9
+#: nearest vertices whose simplices are searched for points Qhull cannot locate
+_N_NEAREST = 8
+
+
+class InverseMap(BaseEstimator):
+    """Piecewise-linear map from the embedding Y back to the shape space X (or to frames).
+
+    Parameters
+    ----------
+    n_dims : int, default=3
+        Leading coordinates of F^y that are tetrahedralised (the paper: 3).
+
+    Attributes
+    ----------
+    origin_ : ndarray of shape (n_dims,)
+        Centre of the fitted points.
+    basis_ : ndarray of shape (n_dims, rank_)
+        Orthonormal basis of the affine subspace the points span (identity when they
+        span all ``n_dims`` dimensions).
+    rank_ : int
+        Affine dimension of the fitted points (``n_dims`` unless degenerate).
+    points_ : ndarray of shape (n_unique, rank_), float64
+        Distinct fitted points in subspace coordinates.
+    values_ : ndarray of shape (n_unique, m)
+        Value (F^x or F) at each distinct point.
+    point_index_ : ndarray of shape (n_samples,)
+        Row of ``points_`` of every fitted sample.
+    simplices_ : ndarray of shape (n_simplices, rank_ + 1), int32
+        Vertex indices (rows of ``points_``) of the triangulation (empty when ``rank_ < 2``).
+    n_duplicates_ : int
+        Samples that shared their point with an earlier sample.
+    duplicate_spread_ : float
+        Largest distance between a duplicate sample's value and its vertex value.
+    n_dropped_ : int
+        Distinct points Qhull did not use as vertices (served by exact lookup).
+    tolerance_ : float
+        Distance below which a query counts as a fitted point or as inside the hull.
+    """
+
+    def __init__(self, *, n_dims=3):
+        self.n_dims = n_dims
+
+    # ------------------------------------------------------------------ fitting
+    def fit(self, Fy, Fx):
+        """Triangulate ``Fy[:, :n_dims]`` and attach ``Fx``.
+
+        Parameters
+        ----------
+        Fy : ndarray of shape (N, k), k >= n_dims
+            Embedding coordinates of the training frames.
+        Fx : ndarray of shape (N, m)
+            Values to interpolate (shape coordinates F^x, or the frames F).
+
+        Returns
+        -------
+        self
+        """
+        d = int(self.n_dims)
+        if d < 1:
+            raise ValueError(f"n_dims must be >= 1, got {self.n_dims}")
+        Y = self._check_Y(Fy, d, what="Fy")
+        V = np.asarray(Fx)
+        if V.ndim == 1:
+            V = V[:, None]
+        if V.ndim != 2 or V.shape[0] != Y.shape[0]:
+            raise ValueError(f"Fx must be (N, m) with N = {Y.shape[0]} rows like Fy, got shape {V.shape}")
+        if V.shape[0] == 0:
+            raise ValueError("cannot fit an inverse map to zero frames")
+        if not np.isfinite(V).all():
+            bad = int(np.argwhere(~np.isfinite(V))[0, 0])
+            raise ValueError(f"Fx row {bad} holds NaN or inf")
+        out_dtype = V.dtype if V.dtype in (np.float32, np.float64) else np.float64
+
+        uniq, first, inverse = np.unique(Y, axis=0, return_index=True, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        n_u = uniq.shape[0]
+        counts = np.bincount(inverse, minlength=n_u)
+        sums = np.zeros((n_u, V.shape[1]), dtype=np.float64)
+        np.add.at(sums, inverse, V.astype(np.float64))
+        vals = sums / counts[:, None]
+        spread = 0.0
+        if n_u < Y.shape[0]:
+            dup = counts[inverse] > 1
+            spread = float(np.linalg.norm(V[dup].astype(np.float64) - vals[inverse[dup]], axis=1).max())
+
+        origin = uniq.mean(axis=0)
+        C = uniq - origin
+        extent = float(np.abs(C).max()) if C.size else 0.0
+        tol = _REL_TOL * max(extent, 1e-300)
+        if n_u > 1:
+            _, s, Vt = np.linalg.svd(C, full_matrices=False)
+            rank = int((s > 1e-9 * s[0]).sum()) if s[0] > 0 else 0
+        else:
+            rank, Vt = 0, np.eye(d)
+        basis = np.eye(d) if rank == d else Vt[:rank].T.copy()
+        P = C @ basis  # (n_u, rank)
+        if rank >= 2 and n_u < rank + 1:
+            raise ValueError(f"{n_u} distinct points cannot span {rank} dimensions")
+
+        self.origin_ = origin
+        self.basis_ = basis
+        self.rank_ = rank
+        self.points_ = np.ascontiguousarray(P)
+        self.values_ = vals.astype(out_dtype)
+        self.point_index_ = inverse.astype(np.int64)
+        self.n_duplicates_ = int(Y.shape[0] - n_u)
+        self.duplicate_spread_ = spread
+        self.tolerance_ = tol
+        self._reset_cache()
+        if rank >= 2:
+            tri = self._triangulation()
+            self.simplices_ = tri.simplices.astype(np.int32)
+            used = np.zeros(n_u, dtype=bool)
+            used[tri.simplices.ravel()] = True
+            self.n_dropped_ = int((~used).sum())
+        else:
+            self.simplices_ = np.zeros((0, rank + 1), dtype=np.int32)
+            self.n_dropped_ = 0
+        return self
+
+    @staticmethod
+    def _check_Y(Y, d, *, what="Y"):
+        Y = np.asarray(Y, dtype=np.float64)
+        if Y.ndim == 1 and d == 1:
+            Y = Y[:, None]
+        if Y.ndim != 2 or Y.shape[1] < d:
+            raise ValueError(f"{what} must be 2-D with at least n_dims={d} columns, got shape {Y.shape}")
+        Y = Y[:, :d]
+        if not np.isfinite(Y).all():
+            bad = int(np.argwhere(~np.isfinite(Y))[0, 0])
+            raise ValueError(f"{what} row {bad} holds NaN or inf")
+        return Y
+
+    # ------------------------------------------------------------ lazy caches
+    def _reset_cache(self):
+        self._tri = None
+        self._tree = None
+        self._hull = None
+        self._incidence = None
+
+    def _triangulation(self) -> Delaunay:
+        if getattr(self, "_tri", None) is None:
+            self._tri = Delaunay(self.points_, qhull_options=QHULL_OPTIONS)
+        return self._tri
+
+    def _kdtree(self) -> cKDTree:
+        if getattr(self, "_tree", None) is None:
+            self._tree = cKDTree(self.points_)
+        return self._tree
+
+    def _vertex_simplices(self):
+        """CSR incidence vertex -> simplices: (indptr (n_u+1,), simplex ids)."""
+        if getattr(self, "_incidence", None) is None:
+            S = self._triangulation().simplices
+            flat = S.ravel()
+            order = np.argsort(flat, kind="stable")
+            indptr = np.zeros(self.points_.shape[0] + 1, dtype=np.int64)
+            np.cumsum(np.bincount(flat, minlength=self.points_.shape[0]), out=indptr[1:])
+            self._incidence = (indptr, order // S.shape[1])
+        return self._incidence
+
+    def _outside_hull(self, P):
+        if getattr(self, "_hull", None) is None:
+            self._hull = ConvexHull(self.points_).equations
+        eq = self._hull
+        return (P @ eq[:, :-1].T + eq[:, -1]).max(axis=1) > self.tolerance_
+
+    # ---------------------------------------------------------------- mapping
+    def transform(self, Y, *, return_outside=False):
+        """Map embedding points to values.
+
+        Parameters
+        ----------
+        Y : ndarray of shape (n, k), k >= n_dims
+            Points in the embedding; only the first ``n_dims`` columns are used.
+        return_outside : bool, default=False
+            Also return which points lay outside the convex hull of the fitted points.
+
+        Returns
+        -------
+        X : ndarray of shape (n, m)
+            Interpolated values (dtype of the fitted values).
+        outside : ndarray of shape (n,), bool
+            Only with ``return_outside=True``.
+        """
+        check_is_fitted(self, "values_")
+        Y = self._check_Y(Y, int(self.n_dims))
+        P = (Y - self.origin_) @ self.basis_
+        n = P.shape[0]
+        out = np.empty((n, self.values_.shape[1]), dtype=np.float64)
+        outside = np.zeros(n, dtype=bool)
+        if n == 0:
+            return (out.astype(self.values_.dtype), outside) if return_outside else out.astype(self.values_.dtype)
+        if self.rank_ == 0:
+            out[:] = self.values_[0]
+            outside = np.linalg.norm(Y - self.origin_, axis=1) > self.tolerance_
+        elif self.rank_ == 1:
+            out, outside = self._transform_1d(P[:, 0])
+        else:
+            out, outside = self._transform_nd(P)
+        # points off the subspace of a degenerate fit are outside too
+        if self.rank_ < int(self.n_dims) and self.rank_ > 0:
+            resid = (Y - self.origin_) - P @ self.basis_.T
+            outside |= np.linalg.norm(resid, axis=1) > self.tolerance_
+        # exact lookup: a query at a fitted point returns that point's own value
+        dist, idx = self._kdtree().query(P, k=1, distance_upper_bound=self.tolerance_)
+        hit = np.isfinite(dist)
+        out[hit] = self.values_[idx[hit]]
+        out = out.astype(self.values_.dtype, copy=False)
+        return (out, outside) if return_outside else out
+
+    def _transform_1d(self, p):
+        x = self.points_[:, 0]
+        order = np.argsort(x)
+        xs, vs = x[order], self.values_[order].astype(np.float64)
+        pc = np.clip(p, xs[0], xs[-1])
+        j = np.clip(np.searchsorted(xs, pc, side="right") - 1, 0, len(xs) - 2)
+        w = (pc - xs[j]) / (xs[j + 1] - xs[j])
+        out = (1 - w)[:, None] * vs[j] + w[:, None] * vs[j + 1]
+        outside = (p < xs[0] - self.tolerance_) | (p > xs[-1] + self.tolerance_)
+        return out, outside
+
+    def _transform_nd(self, P):
+        tri = self._triangulation()
+        r = self.rank_
+        s = tri.find_simplex(P)
+        n = P.shape[0]
+        W = np.zeros((n, r + 1))
+        verts = np.zeros((n, r + 1), dtype=np.int64)
+        found = s >= 0
+        if found.any():
+            T = tri.transform[s[found]]
+            b = np.einsum("nij,nj->ni", T[:, :r, :], P[found] - T[:, r, :])
+            W[found] = np.column_stack([b, 1.0 - b.sum(axis=1)])
+            verts[found] = tri.simplices[s[found]]
+        lost = np.flatnonzero(~found)
+        outside = np.zeros(n, dtype=bool)
+        if lost.size:
+            w_l, v_l = self._nearest_simplex(P[lost])
+            W[lost], verts[lost] = w_l, v_l
+            outside[lost] = self._outside_hull(P[lost])
+        out = np.einsum("nk,nkm->nm", W, self.values_[verts].astype(np.float64))
+        return out, outside
+
+    def _nearest_simplex(self, P):
+        """Clamped barycentric weights in the best simplex around each point's nearest vertices."""
+        tri = self._triangulation()
+        r = self.rank_
+        indptr, simp = self._vertex_simplices()
+        k = min(_N_NEAREST, self.points_.shape[0])
+        _, nn = self._kdtree().query(P, k=k)
+        nn = nn.reshape(P.shape[0], k)
+        W = np.zeros((P.shape[0], r + 1))
+        V = np.zeros((P.shape[0], r + 1), dtype=np.int64)
+        Tall = tri.transform
+        for i in range(P.shape[0]):
+            cand = np.unique(np.concatenate([simp[indptr[v]:indptr[v + 1]] for v in nn[i]]))
+            T = Tall[cand]
+            ok = np.isfinite(T).all(axis=(1, 2))
+            if not ok.any():  # every nearby simplex degenerate: nearest vertex value
+                W[i, 0], V[i, 0] = 1.0, nn[i, 0]
+                continue
+            cand, T = cand[ok], T[ok]
+            b = np.einsum("cij,j->ci", T[:, :r, :], P[i]) - np.einsum("cij,cj->ci", T[:, :r, :], T[:, r, :])
+            c = np.column_stack([b, 1.0 - b.sum(axis=1)])
+            best = int(np.argmax(c.min(axis=1)))
+            w = np.clip(c[best], 0.0, None)
+            W[i] = w / w.sum()
+            V[i] = tri.simplices[cand[best]]
+        return W, V
