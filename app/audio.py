@@ -1,0 +1,73 @@
+"""Audio playback of an utterance, guarded so a machine without sound never fails.
+
+QtMultimedia (PySide6-Addons) needs system libraries (PulseAudio/ALSA) and an
+output device; when either is missing :class:`AudioPlayer` reports
+``available == False`` with a reason and every call is a no-op.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = ["AudioPlayer", "resolve_audio_path"]
+
+
+def resolve_audio_path(audio, corpus_source=None) -> Path | None:
+    """The audio file of an utterance, or None when it has none or it is missing.
+
+    Relative paths are taken relative to the corpus file's folder (``corpus_source``).
+    """
+    if not audio:
+        return None
+    p = Path(audio)
+    if not p.is_absolute() and corpus_source:
+        p = Path(corpus_source).resolve().parent / p
+    return p if p.is_file() else None
+
+
+class AudioPlayer:
+    """Plays WAV files through QtMultimedia when a device exists; otherwise does nothing.
+
+    Attributes
+    ----------
+    available : bool
+    reason : str
+        Why audio is unavailable ('' when it is available).
+    """
+
+    def __init__(self, parent=None):
+        self.available = False
+        self.reason = ""
+        self._player = self._output = None
+        try:
+            from PySide6.QtMultimedia import QAudioOutput, QMediaDevices, QMediaPlayer
+        except ImportError as exc:  # missing libpulse / Addons
+            self.reason = f"QtMultimedia cannot load ({exc})"
+            return
+        try:
+            if not QMediaDevices.audioOutputs():
+                self.reason = "no audio output device"
+                return
+            self._output = QAudioOutput(parent)
+            self._player = QMediaPlayer(parent)
+            self._player.setAudioOutput(self._output)
+        except Exception as exc:  # noqa: BLE001 - any backend failure means no sound, not a crash
+            self.reason = f"audio backend failed ({exc})"
+            self._player = self._output = None
+            return
+        self.available = True
+
+    def play(self, path, start_s: float = 0.0, rate: float = 1.0) -> bool:
+        """Start playing ``path`` from ``start_s`` seconds; returns whether sound started."""
+        if not self.available or path is None:
+            return False
+        from PySide6.QtCore import QUrl
+
+        self._player.setSource(QUrl.fromLocalFile(str(Path(path).resolve())))
+        self._player.setPlaybackRate(float(rate))
+        self._player.setPosition(int(1000 * start_s))
+        self._player.play()
+        return True
+
+    def stop(self) -> None:
+        if self.available:
+            self._player.stop()

@@ -1,0 +1,110 @@
+"""``lipspace figures``: render the paper's figure set in batch (no display needed)."""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+FORMATS = ("png", "svg", "pdf")
+
+
+def add_arguments(p):
+    from app.cli.build import PRESETS as BUILD_PRESETS
+
+    p.add_argument("manifold", nargs="?",
+                   help="manifold file from 'lipspace build' (a corpus file is fitted first); "
+                        "omit to build on the synthetic talker")
+    p.add_argument("-o", "--outdir", required=True, help="directory to write the figures into")
+    p.add_argument("--format", dest="formats", action="append", choices=FORMATS,
+                   help="output format, repeatable (default: png)")
+    p.add_argument("--only", default=None,
+                   help="comma-separated figure names (default: all): " + ",".join(_names()))
+    p.add_argument("--utterance", default=None,
+                   help="utterance id for the example trajectory (fig2a) and regenerated utterance (fig3)")
+    p.add_argument("--preset", choices=BUILD_PRESETS, default="default",
+                   help="synthetic talker preset when no file is given (default: %(default)s)")
+    p.add_argument("--dpi", type=float, default=200, help="PNG resolution (default: %(default)s)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+def _names():
+    from app.figures import FIGURES
+
+    return list(FIGURES)
+
+
+def _parse_only(only):
+    from app.cli import CliError
+    from app.figures import FIGURES
+
+    if only is None:
+        return list(FIGURES)
+    names = [n.strip() for n in only.split(",") if n.strip()]
+    bad = [n for n in names if n not in FIGURES]
+    if bad or not names:
+        raise CliError(f"--only {only!r}: unknown figure(s) {', '.join(bad) or '(none given)'}; "
+                       f"choose from {', '.join(FIGURES)}")
+    return list(dict.fromkeys(names))
+
+
+def _load(path, preset, progress):
+    """A fitted manifold from a manifold file, a corpus file (fitted here) or the synthetic talker."""
+    import numpy as np
+
+    from app.cli import CliError
+    from app.cli._common import load_corpus_arg, load_manifold_arg
+    from engine.manifold import Manifold
+
+    if path is not None:
+        p = Path(path)
+        if not p.exists():
+            raise CliError(f"{p}: no such file (give a manifold from 'lipspace build' or a corpus .npz)")
+        try:
+            with np.load(p, allow_pickle=False) as z:
+                is_corpus = "corpus_version" in z.files and "manifold_version" not in z.files
+        except (OSError, ValueError) as exc:
+            raise CliError(f"{p}: not a Lipspace manifold or corpus file ({exc})") from None
+        if not is_corpus:
+            return load_manifold_arg(p)
+    corpus = load_corpus_arg(path, synthetic_preset=preset, progress=progress)
+    try:
+        return Manifold().fit(corpus, progress=progress)
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
+
+
+def run(args) -> int:
+    from app.cli import CliError
+    from app.cli._common import progress_bar
+    from app.figures import UTTERANCE_FIGURES, make_figure, save_figure
+
+    names = _parse_only(args.only)
+    formats = list(dict.fromkeys(args.formats or ["png"]))
+    outdir = Path(args.outdir)
+    if outdir.exists() and not outdir.is_dir():
+        raise CliError(f"{outdir}: exists and is not a directory")
+    t0 = time.perf_counter()
+    written, failed = [], []
+    with progress_bar(disable=True if args.quiet else None) as progress:
+        manifold = _load(args.manifold, args.preset, progress)
+        if args.utterance is not None:
+            ids = [u.id for u in manifold.corpus_.utterances]
+            if args.utterance not in ids:
+                raise CliError(f"--utterance {args.utterance!r}: no such utterance in {manifold.corpus_.name} "
+                               f"(e.g. {', '.join(ids[:5])})")
+        total = len(names)
+        progress("figures", 0, total)
+        for k, name in enumerate(names):
+            opts = {"utterance": args.utterance} if name in UTTERANCE_FIGURES and args.utterance else {}
+            try:
+                fig = make_figure(name, manifold, **opts)
+                for fmt in formats:
+                    written.append(save_figure(fig, outdir / f"{name}.{fmt}", dpi=args.dpi))
+            except (ValueError, ImportError, RuntimeError, LookupError) as exc:
+                failed.append((name, f"{type(exc).__name__}: {exc}"))
+            progress("figures", k + 1, total)
+    for name, msg in failed:
+        print(f"lipspace figures: {name} failed: {msg}", file=sys.stderr)
+    print(f"wrote {len(written)} file(s) to {outdir} ({', '.join(formats)}; "
+          f"{len(names) - len(failed)}/{len(names)} figures) in {time.perf_counter() - t0:.1f} s")
+    return 1 if failed else 0

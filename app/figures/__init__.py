@@ -1,0 +1,78 @@
+"""The paper's figure set, rendered with matplotlib (Agg) from a fitted manifold.
+
+Each figure is ``make_<name>(manifold, **opts) -> matplotlib.figure.Figure``; the
+figure carries a ``lipspace`` dict attribute with the numbers it shows (seed
+states, chosen utterance, errors...). :data:`FIGURES` maps names to functions in
+paper order; :func:`export_figure` renders one and saves it atomically as PNG, SVG
+or PDF. 3-D views of the GUI are saved with :func:`save_plotter_image` (PNG) and
+:func:`save_plotter_vector` (SVG/PDF/EPS through VTK's gl2ps).
+
+No pyplot: every figure owns an Agg canvas, so this works without a display and
+never disturbs a Qt event loop.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from app.figures.clusters import make_fig4
+from app.figures.export import (FIGURE_FORMATS, VECTOR_3D_FORMATS, VectorExportUnavailable, save_figure,
+                                save_plotter_image, save_plotter_vector, vector_export_available)
+from app.figures.manifold import make_classes, make_fig2a, make_fig2b
+from app.figures.shape import make_fig1a, make_fig1b, make_fig2c, make_scree
+from app.figures.synthesis import make_fig3
+
+__all__ = ["FIGURES", "DESCRIPTIONS", "UTTERANCE_FIGURES", "make_figure", "export_figure", "save_figure", "save_plotter_image",
+           "save_plotter_vector", "vector_export_available", "VectorExportUnavailable", "FIGURE_FORMATS",
+           "VECTOR_3D_FORMATS", "make_fig1a", "make_fig1b", "make_fig2a", "make_fig2b", "make_fig2c",
+           "make_fig3", "make_fig4", "make_scree", "make_classes"]
+
+#: name -> figure function, in the paper's order, extras last
+FIGURES = {
+    "fig1a": make_fig1a,
+    "fig1b": make_fig1b,
+    "fig2a": make_fig2a,
+    "fig2b": make_fig2b,
+    "fig2c": make_fig2c,
+    "fig3": make_fig3,
+    "fig4": make_fig4,
+    "scree": make_scree,
+    "classes": make_classes,
+}
+
+#: name -> one-line description (menus, ``lipspace figures --help``)
+DESCRIPTIONS = {
+    "fig1a": "first two principal components of X as lip shapes, coloured by displacement",
+    "fig1b": "residual variance vs number of components, X blue, Y red",
+    "fig2a": "the manifold in the first three dims of Y: density, S, V, s_i, v_i, a trajectory",
+    "fig2b": "directed hop distances from an opening, a zero-velocity and a closing state",
+    "fig2c": "lip shapes indexed by increasing S",
+    "fig3": "an utterance's trajectory regenerated through its phone mid-points (red) vs original (black)",
+    "fig4": "bilabial clusters /b/ /p/ /m/ with 2-s.d. ellipses and the zero-velocity plane",
+    "scree": "scree of X and Y (per component and cumulative)",
+    "classes": "proportions of the four tangent classes and where they lie",
+}
+
+#: figures that take ``utterance=`` (the GUI and the command line pass the chosen one)
+UTTERANCE_FIGURES = ("fig2a", "fig3")
+
+
+def make_figure(name: str, manifold, **opts):
+    """Render figure ``name`` (a key of :data:`FIGURES`) from a fitted manifold."""
+    try:
+        fn = FIGURES[name]
+    except KeyError:
+        raise ValueError(f"no figure {name!r}; choose from {', '.join(FIGURES)}") from None
+    return fn(manifold, **opts)
+
+
+def export_figure(name: str, manifold, path, *, dpi: float = 200, **opts) -> Path:
+    """Render figure ``name`` and save it to ``path`` (.png/.svg/.pdf by suffix), atomically.
+
+    ``opts`` go to the figure function. Returns the path written. The figure is
+    rendered before the file is opened, so a failing figure never touches ``path``.
+    """
+    from app.figures.export import _suffix
+
+    _suffix(path, FIGURE_FORMATS, "a figure")
+    fig = make_figure(name, manifold, **opts)
+    return save_figure(fig, path, dpi=dpi)

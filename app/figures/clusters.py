@@ -1,0 +1,141 @@
+"""Paper fig. 4: bilabial phone clusters on the manifold."""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib import patheffects
+
+from app.figures._style import below, new_figure, require_fitted, sv_basis, y3
+
+__all__ = ["make_fig4", "PHONE_COLOURS", "ellipse_points"]
+
+#: the paper's colours: /b/ red, /p/ green, /m/ yellow
+PHONE_COLOURS = {"b": "red", "p": "green", "m": "yellow"}
+_OUTLINE = [patheffects.withStroke(linewidth=2.6, foreground="0.15")]
+
+
+def ellipse_points(mean, cov, n_sd: float = 2.0, n_points: int = 100) -> np.ndarray:
+    """Outline (n_points, 2) of the ellipse at Mahalanobis distance ``n_sd`` of a 2-D Gaussian."""
+    w, V = np.linalg.eigh(np.asarray(cov, dtype=np.float64))
+    L = V * np.sqrt(np.clip(w, 0.0, None))
+    t = np.linspace(0.0, 2 * np.pi, int(n_points), endpoint=False)
+    return np.asarray(mean, dtype=np.float64) + float(n_sd) * np.column_stack([np.cos(t), np.sin(t)]) @ L.T
+
+
+def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd: float = 2.0,
+              min_count: int = 3, width: float = 6.5, height: float = 5.2):
+    """Fig. 4: mid-points of /b/ (red), /p/ (green), /m/ (yellow) with 2-s.d. ellipses.
+
+    Each phone's mid-point frames (:class:`engine.clusters.PhoneClusters`; labels are
+    matched through :func:`engine.phonesets.normalize`, so ``B``/``P``/``M`` of an
+    ARPAbet corpus are found), their ``n_sd`` ellipse and their mean (square).
+    Phones the corpus lacks (or has fewer than ``min_count`` mid-points of) are
+    skipped with a note on the figure.
+
+    Parameters
+    ----------
+    phones : sequence of str, default=("b", "p", "m")
+    colours : sequence of colours, optional
+        One per phone; default :data:`PHONE_COLOURS` (the paper's), else matplotlib's cycle.
+    axes : "sv" or (int, int), default="sv"
+        ``"sv"``: the plane of the global shape S (x) and velocity V (y) directions,
+        where the zero-velocity plane is the dotted line v = 0 and the opening half of
+        the cycle lies above it; ellipses are the clusters' 3-D Gaussians projected
+        onto that plane. A pair of Y dims (0-based) shows those dims, with
+        :meth:`PhoneClusters.ellipse` and the plane's trace.
+    """
+    require_fitted(manifold, "tangent_")
+    from engine.clusters import PhoneClusters
+
+    tan = manifold.tangent_
+    pc = PhoneClusters.from_manifold(manifold, n_dims=min(3, manifold.Fy_.shape[1]), min_count=min_count)
+    if colours is None:
+        cycle = ["C0", "C1", "C4", "C5", "C6", "C8", "C9"]
+        colours = [PHONE_COLOURS.get(str(p).lower(), cycle[k % len(cycle)]) for k, p in enumerate(phones)]
+    if len(colours) != len(phones):
+        raise ValueError(f"{len(colours)} colours for {len(phones)} phones; give one colour per phone")
+    sv = isinstance(axes, str)
+    if sv and axes != "sv":
+        raise ValueError(f"axes={axes!r}: use 'sv' or a pair of Y dims such as (0, 1)")
+    Y = y3(manifold)
+    if sv:
+        o, S, V = sv_basis(tan)
+        B = np.vstack([S, V])                                   # (2, 3)
+    else:
+        a, b = (int(v) for v in axes)
+        if not (0 <= a < 3 and 0 <= b < 3 and a != b):
+            raise ValueError(f"axes={tuple(axes)}: need two different Y dims in 0..2")
+    fig = new_figure(width, height)
+    ax = fig.subplots()
+    found, missing = {}, []
+    for phone, col in zip(phones, colours):
+        try:
+            i = pc.index(phone)
+        except ValueError:
+            missing.append(phone)
+            continue
+        idx = pc.members(phone)
+        if sv:
+            pts = (Y[idx] - o) @ B.T
+            mean = B @ (pc.means_[i] - o)
+            cov = B @ pc.covariances_[i] @ B.T
+            ell = ellipse_points(mean, cov, n_sd)
+        else:
+            pts = Y[idx][:, [a, b]]
+            mean = pc.means_[i][[a, b]]
+            ell = pc.ellipse(phone, axes=(a, b), n_sd=n_sd)
+        frac = float(pc.opening_fraction_[i])
+        label = f"/{pc.phones_[i]}/  n={len(idx)}, {100 * frac:.0f}% opening side"
+        sc = ax.scatter(pts[:, 0], pts[:, 1], s=22, color=col, edgecolors="0.15", linewidths=0.4,
+                        label=label, zorder=3)
+        sc.set_gid(f"fig4:points:{phone}")
+        closed = np.vstack([ell, ell[:1]])
+        line, = ax.plot(closed[:, 0], closed[:, 1], "-", color=col, lw=1.6, zorder=4,
+                        path_effects=_OUTLINE if col in ("yellow", "y", "#ffff00") else None)
+        line.set_gid(f"fig4:ellipse:{phone}")
+        sq, = ax.plot(*mean, "s", ms=10, mfc=col, mec="k", mew=1.2, zorder=5)
+        sq.set_gid(f"fig4:mean:{phone}")
+        found[phone] = {"label": pc.phones_[i], "count": int(len(idx)), "opening_fraction": frac,
+                        "mean": np.asarray(mean), "cov": None if not sv else cov}
+    if sv:
+        zl = ax.axhline(0.0, color="k", ls=":", lw=1.3, label="zero-velocity plane")
+        ax.set_xlabel("shape S")
+        ax.set_ylabel("velocity V (opening > 0)")
+    else:
+        from app.figures._style import plane_trace
+
+        zl = plane_trace(ax, tan, (a, b), Y[np.concatenate([pc.members(p) for p in found])] if found else Y)
+        ax.set_xlabel(f"$Y_{a + 1}$")
+        ax.set_ylabel(f"$Y_{b + 1}$")
+        ax.autoscale(True)
+        ax.relim()
+        ax.autoscale_view()
+    if zl is not None:
+        zl.set_gid("fig4:zero-velocity")
+    ax.legend(frameon=False, fontsize=8, loc="best")
+    names = ", ".join(f"/{p}/" for p in phones)
+    ax.set_title(f"Clusters of {names} mid-points ({n_sd:g} s.d. ellipses, squares: means)", fontsize=10)
+    notes = []
+    if missing:
+        notes.append("not in this corpus (or fewer than "
+                     f"{min_count} mid-points): " + ", ".join(f"/{p}/" for p in missing))
+    sep = _separation_note(pc, [p for p in phones if p in found])
+    if sep:
+        notes.append(sep)
+    if notes:
+        txt = below(ax, "\n".join(notes))
+        txt.set_gid("fig4:note")
+    fig.lipspace.update(found=found, missing=missing)
+    return fig
+
+
+def _separation_note(pc, phones) -> str:
+    """Bhattacharyya separations with dynamics (Y) and shape only (X) for each pair."""
+    parts = []
+    for k, p in enumerate(phones):
+        for q in phones[k + 1:]:
+            try:
+                y, x = pc.separation(p, q, "y"), pc.separation(p, q, "x")
+            except ValueError:
+                continue
+            parts.append(f"/{p}/–/{q}/ Y {y:.2f}, X {x:.2f}")
+    return ("Bhattacharyya separation: " + "; ".join(parts)) if parts else ""

@@ -1,0 +1,195 @@
+"""Figures of the shape space X and the variance of X and Y (paper figs 1a, 1b, 2c; scree)."""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.colors import Normalize
+
+from app.figures._style import (CMAP, draw_shape, new_figure, require_fitted, sv_basis, shape_points, y3)
+
+__all__ = ["make_fig1a", "make_fig1b", "make_fig2c", "make_scree"]
+
+#: colours of fig 1b: X blue, Y red (the paper's)
+X_COLOUR = "blue"
+Y_COLOUR = "red"
+#: the mean shape (no displacement) is drawn in neutral grey
+MEAN_COLOUR = "0.72"
+#: floor of the log axis of residual variance
+RESIDUAL_FLOOR = 1e-6
+
+
+def make_fig1a(manifold, *, components=(0, 1), n_sd: float = 2.0, view=None, width: float = 7.5):
+    """Fig. 1(a): principal components of X as lip shapes, coloured by displacement.
+
+    One row per component: the mean shape moved −n_sd and +n_sd standard deviations
+    along it, drawn in front view, each point (or triangle) coloured by its distance
+    from the mean shape, blue (none) → red (largest, shared scale); the mean shape
+    itself between them in grey.
+
+    Parameters
+    ----------
+    manifold : engine.manifold.Manifold
+        Fitted.
+    components : sequence of int, default=(0, 1)
+        Zero-based component indices (the paper shows the first two).
+    n_sd : float, default=2.0
+    view : (int, int) or None
+        Coordinate axes (horizontal, vertical) of the front view; None picks them
+        from the spread of the mean shape (see :func:`app.figures._style.front_view`).
+    width : float
+        Figure width in inches.
+    """
+    require_fitted(manifold, "shape_")
+    shape, corpus = manifold.shape_, manifold.corpus_
+    comps = [int(c) for c in components if 0 <= int(c) < shape.n_components_]
+    if not comps:
+        raise ValueError(f"components {list(components)} out of range: the shape space has "
+                         f"{shape.n_components_} components (0..{shape.n_components_ - 1})")
+    mean_pts = shape_points(manifold, shape.mean_)
+    offsets = (-n_sd, 0.0, n_sd)
+    shapes = {(c, a): shape_points(manifold, shape.component_deformation(c, a) if a else shape.mean_)
+              for c in comps for a in offsets}
+    disp = {k: np.linalg.norm(p - mean_pts, axis=1) for k, p in shapes.items()}
+    vmax = max(float(d.max()) for d in disp.values()) or 1.0
+    norm = Normalize(0.0, vmax)
+    fig = new_figure(width, 2.1 * len(comps) + 0.6)
+    axs = fig.subplots(len(comps), 3, squeeze=False)
+    for r, c in enumerate(comps):
+        pct = 100 * float(shape.explained_variance_ratio_[c])
+        for k, a in enumerate(offsets):
+            ax = axs[r, k]
+            draw_shape(ax, shapes[(c, a)], dims=corpus.dims, faces=corpus.faces,
+                       values=disp[(c, a)] if a else None, norm=norm, color=MEAN_COLOUR, view=view,
+                       gid=f"fig1a:pc{c + 1}:{a:+g}")
+            ax.set_title("mean" if a == 0 else f"{a:+g} s.d.", fontsize=9)
+            if k == 0:
+                ax.set_ylabel(f"PC{c + 1} ({pct:.1f}%)", fontsize=10)
+        # equal limits within a row so the deformation reads
+        xl = np.array([axs[r, k].get_xlim() for k in range(3)])
+        yl = np.array([axs[r, k].get_ylim() for k in range(3)])
+        for k in range(3):
+            axs[r, k].set_xlim(xl[:, 0].min(), xl[:, 1].max())
+            axs[r, k].set_ylim(yl[:, 0].min(), yl[:, 1].max())
+    sm = _mappable(norm)
+    fig.colorbar(sm, ax=axs, shrink=0.8, label="displacement from the mean shape (data units)")
+    fig.suptitle(f"Principal components of X (mean ± {n_sd:g} s.d.)", fontsize=11)
+    fig.lipspace.update(components=comps, n_sd=n_sd, max_displacement=vmax)
+    return fig
+
+
+def _mappable(norm, cmap=CMAP):
+    from matplotlib.cm import ScalarMappable
+
+    sm = ScalarMappable(norm=norm, cmap=cmap)
+    sm.set_array([])
+    return sm
+
+
+def residuals(ratio) -> np.ndarray:
+    """Residual variance ``1 - cumsum(ratio)`` with the leading 0-component value 1.
+
+    Clipped below at :data:`RESIDUAL_FLOOR` for the log axis; non-increasing.
+    Returns ndarray of shape (len(ratio) + 1,).
+    """
+    ratio = np.clip(np.asarray(ratio, dtype=np.float64), 0.0, None)
+    res = 1.0 - np.concatenate([[0.0], np.cumsum(ratio)])
+    return np.maximum(np.minimum.accumulate(res), RESIDUAL_FLOOR)
+
+
+def make_fig1b(manifold, *, max_components: int | None = 30, width: float = 5.0, height: float = 3.6):
+    """Fig. 1(b): residual variance vs number of components, X blue, Y red (log y).
+
+    X uses ``shape_.scree_`` (fraction of the total variance of F per computed
+    component), Y ``embedding_.explained_variance_ratio_`` (fraction of the total
+    variance of the centred distance matrix).
+
+    Parameters
+    ----------
+    max_components : int or None, default=30
+        Components shown (None: all computed).
+    """
+    require_fitted(manifold, "shape_", "embedding_")
+    rx = residuals(manifold.shape_.scree_)
+    ry = residuals(manifold.embedding_.explained_variance_ratio_)
+    if max_components is not None:
+        rx, ry = rx[: max_components + 1], ry[: max_components + 1]
+    fig = new_figure(width, height)
+    ax = fig.subplots()
+    lx, = ax.semilogy(np.arange(len(rx)), rx, "-o", color=X_COLOUR, ms=3, label="X (shape PCA)")
+    ly, = ax.semilogy(np.arange(len(ry)), ry, "-o", color=Y_COLOUR, ms=3, label="Y (speech task space)")
+    lx.set_gid("fig1b:X")
+    ly.set_gid("fig1b:Y")
+    ax.set_xlabel("number of components")
+    ax.set_ylabel("residual variance (fraction)")
+    ax.set_xlim(0, max(len(rx), len(ry)) - 1)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(frameon=False)
+    k3 = min(3, len(ry) - 1)
+    ax.set_title(f"Residual variance: first {k3} dims of Y leave {100 * ry[k3]:.1f}%", fontsize=10)
+    fig.lipspace.update(residual_X=rx, residual_Y=ry)
+    return fig
+
+
+def make_fig2c(manifold, *, n_shapes: int = 7, quantiles=(0.03, 0.97), view=None, width: float = 9.0):
+    """Fig. 2(c): lip shapes indexed by increasing S, the global shape direction.
+
+    Frames are ordered by their projection on S (about the plane point). For each of
+    ``n_shapes`` evenly spaced quantiles in ``quantiles`` the shape drawn is the mean
+    F^x of the frames in that quantile bin, reconstructed to the lip points
+    (``shape_.inverse_transform``): an honest average of real frames, no inverse map.
+    """
+    require_fitted(manifold, "shape_", "tangent_")
+    if n_shapes < 2:
+        raise ValueError(f"n_shapes must be >= 2, got {n_shapes}")
+    corpus = manifold.corpus_
+    o, S, _ = sv_basis(manifold.tangent_)
+    t = (y3(manifold) - o) @ S
+    edges = np.quantile(t, np.linspace(quantiles[0], quantiles[1], n_shapes + 1))
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    fig = new_figure(width, 1.9)
+    axs = fig.subplots(1, n_shapes, squeeze=False)[0]
+    used = []
+    for k, ax in enumerate(axs):
+        sel = (t >= edges[k]) & (t <= edges[k + 1])
+        if not sel.any():
+            sel = np.abs(t - centres[k]) == np.abs(t - centres[k]).min()
+        fx = np.asarray(manifold.Fx_, dtype=np.float64)[sel].mean(axis=0, keepdims=True)
+        pts = shape_points(manifold, manifold.shape_.inverse_transform(fx)[0])
+        draw_shape(ax, pts, dims=corpus.dims, faces=corpus.faces, view=view, gid=f"fig2c:shape{k}")
+        ax.set_title(f"S = {centres[k]:.2f}", fontsize=8)
+        used.append(int(sel.sum()))
+    xl = np.array([ax.get_xlim() for ax in axs])
+    yl = np.array([ax.get_ylim() for ax in axs])
+    for ax in axs:
+        ax.set_xlim(xl[:, 0].min(), xl[:, 1].max())
+        ax.set_ylim(yl[:, 0].min(), yl[:, 1].max())
+    fig.suptitle("Lip shapes indexed by increasing S (mean of the frames in each bin)", fontsize=10)
+    fig.lipspace.update(s_values=centres, frames_per_shape=used)
+    return fig
+
+
+def make_scree(manifold, *, max_components: int | None = 30, width: float = 8.0, height: float = 3.2):
+    """Scree of X and Y: explained-variance ratio per component with its cumulative sum."""
+    require_fitted(manifold, "shape_", "embedding_")
+    sx = np.asarray(manifold.shape_.scree_, dtype=np.float64)
+    sy = np.asarray(manifold.embedding_.explained_variance_ratio_, dtype=np.float64)
+    if max_components is not None:
+        sx, sy = sx[:max_components], sy[:max_components]
+    fig = new_figure(width, height)
+    axs = fig.subplots(1, 2)
+    m = int(manifold.shape_.n_components_)
+    for ax, r, col, name in ((axs[0], sx, "blue", "X (shape PCA)"), (axs[1], sy, "red", "Y (speech task space)")):
+        n = np.arange(1, len(r) + 1)
+        bars = ax.bar(n, 100 * r, color=col, alpha=0.55, label="per component")
+        for patch in bars:
+            patch.set_gid(f"scree:{name[0]}")
+        ax.plot(n, 100 * np.cumsum(r), "-o", color=col, ms=3, label="cumulative")
+        ax.set_ylim(0, 100)
+        ax.set_xlabel("component")
+        ax.set_ylabel("% of variance")
+        ax.set_title(name, fontsize=10)
+        ax.grid(True, axis="y", alpha=0.3)
+        ax.legend(frameon=False, fontsize=8, loc="center right")
+    if m <= len(sx):
+        axs[0].axvline(m + 0.5, color="k", ls="--", lw=0.8)
+        axs[0].annotate(f"{m} kept", xy=(m + 0.5, 50), xytext=(4, 0), textcoords="offset points", fontsize=8)
+    return fig

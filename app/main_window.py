@@ -1,0 +1,357 @@
+"""The explorer's main window: the manifold view in the centre, the other views docked around it.
+
+Every view observes one :class:`app.state.AppState`; the window only wires menus,
+loading (in a worker thread with a progress dialog), sessions and exports.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+from PySide6 import QtCore, QtGui, QtWidgets
+
+from app.state import AppState
+
+__all__ = ["MainWindow", "launch", "export_trajectory", "trajectory_table"]
+
+TRAJECTORY_FILTERS = "CSV table (*.csv);;NumPy array (*.npy);;OBJ mesh sequence (*.obj);;PLY mesh sequence (*.ply)"
+
+
+# ============================================================================ exports (no Qt)
+def trajectory_table(traj) -> tuple[np.ndarray, list[str]]:
+    """The columns a trajectory exports to CSV/NPY: Y1..Y3 (embedding) then X1..Xm (shape).
+
+    Returns (values (n, 3 + m) float32, column names).
+    """
+    Y = np.asarray(traj.Y, np.float32)[:, :3]
+    Fx = np.zeros((len(Y), 0), np.float32) if traj.Fx is None else np.asarray(traj.Fx, np.float32)
+    cols = [f"Y{k + 1}" for k in range(Y.shape[1])] + [f"X{k + 1}" for k in range(Fx.shape[1])]
+    return np.hstack([Y, Fx]), cols
+
+
+def export_trajectory(manifold, traj, path) -> list[Path]:
+    """Write a trajectory by suffix: ``.csv`` (time, Y1-3, X1-m), ``.npy`` (the same columns
+    without time), ``.obj`` / ``.ply`` (lip mesh sequence: ``<stem>_00000.obj`` ... in a
+    folder ``<stem>/`` beside ``path``). Returns the files written.
+    """
+    from app.views.lip_view import lip_frames
+    from engine.io.export import write_mesh_sequence, write_trajectory_csv, write_trajectory_npy
+
+    path = Path(path)
+    suf = path.suffix.lower()
+    if suf == ".csv":
+        values, cols = trajectory_table(traj)
+        return [write_trajectory_csv(path, values, rate=traj.rate, columns=cols)]
+    if suf == ".npy":
+        return [write_trajectory_npy(path, trajectory_table(traj)[0])]
+    if suf in (".obj", ".ply"):
+        frames = lip_frames(manifold, traj)
+        c = manifold.corpus_
+        return write_mesh_sequence(path.with_suffix(""), frames, faces=c.faces, dims=c.dims, format=suf[1:],
+                                   prefix=path.stem, clear=True)
+    raise ValueError(f"{path}: cannot export a trajectory as {suf or 'a file without a suffix'!r}; "
+                     "use .csv, .npy, .obj or .ply")
+
+
+# ============================================================================ the window
+class MainWindow(QtWidgets.QMainWindow):
+    """Docked views over one :class:`AppState`.
+
+    Parameters
+    ----------
+    manifold : engine.manifold.Manifold or None
+        Shown at once when given; otherwise use :meth:`open_source`.
+    state : AppState, optional
+    source : dict, optional
+        Where ``manifold`` came from (``path``, ``preset``), for session files.
+    """
+
+    def __init__(self, manifold=None, *, state: AppState | None = None, source: dict | None = None):
+        super().__init__()
+        from app.views import ClustersPanel, LipView, ManifoldView, ScreePanel, TrajectoryEditor
+
+        self.state = state or AppState()
+        self.setWindowTitle("Lipspace")
+        self.resize(1400, 900)
+        self._runner = None
+        self._pending_session = None
+        self.last_dir = str(Path.cwd())
+
+        self.manifold_view = ManifoldView(self.state, self)
+        self.setCentralWidget(self.manifold_view)
+        self.lip_view = LipView(self.state)
+        self.editor = TrajectoryEditor(self.state)
+        self.clusters = ClustersPanel(self.state)
+        self.scree = ScreePanel(self.state)
+        self.docks = {}
+        for key, title, widget, area in (
+                ("lips", "Lips", self.lip_view, QtCore.Qt.DockWidgetArea.RightDockWidgetArea),
+                ("clusters", "Phone clusters", self.clusters, QtCore.Qt.DockWidgetArea.RightDockWidgetArea),
+                ("scree", "Scree and components", self.scree, QtCore.Qt.DockWidgetArea.RightDockWidgetArea),
+                ("editor", "Trajectory editor", self.editor, QtCore.Qt.DockWidgetArea.BottomDockWidgetArea)):
+            dock = QtWidgets.QDockWidget(title, self)
+            dock.setObjectName(f"dock_{key}")
+            dock.setWidget(widget)
+            self.addDockWidget(area, dock)
+            self.docks[key] = dock
+        self.tabifyDockWidget(self.docks["clusters"], self.docks["scree"])
+        self.docks["clusters"].raise_()
+        self.resizeDocks([self.docks["lips"]], [480], QtCore.Qt.Orientation.Horizontal)
+        self.resizeDocks([self.docks["lips"], self.docks["clusters"]], [420, 380], QtCore.Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["editor"]], [170], QtCore.Qt.Orientation.Vertical)
+
+        self.summary_label = QtWidgets.QLabel("no manifold loaded")
+        self.statusBar().addPermanentWidget(self.summary_label)
+        self._make_menus()
+        self.state.events.manifold.connect(self._on_manifold)
+        if manifold is not None:
+            self.set_manifold(manifold, source=source)
+
+    # ------------------------------------------------------------------ menus
+    def _make_menus(self):
+        mb = self.menuBar()
+        f = mb.addMenu("&File")
+        self._act(f, "&Open corpus or manifold…", self.open_dialog, QtGui.QKeySequence.StandardKey.Open)
+        syn = f.addMenu("Open synthetic talker")
+        for preset in ("small", "default", "paper"):
+            self._act(syn, preset, lambda _=False, p=preset: self.open_source(None, preset=p))
+        f.addSeparator()
+        self._act(f, "&Save session…", self.save_session_dialog, QtGui.QKeySequence.StandardKey.Save)
+        self._act(f, "Open s&ession…", self.open_session_dialog)
+        f.addSeparator()
+        exp = f.addMenu("Export &figure")
+        self._act(exp, "Manifold view (PNG, SVG, PDF)…", lambda: self.export_view_dialog("manifold"))
+        self._act(exp, "Lip view (PNG, SVG, PDF)…", lambda: self.export_view_dialog("lips"))
+        exp.addSeparator()
+        try:
+            from app.figures import DESCRIPTIONS, FIGURES
+        except ImportError:
+            FIGURES, DESCRIPTIONS = {}, {}
+        for name in FIGURES:
+            a = self._act(exp, f"{name}: {DESCRIPTIONS.get(name, '')[:60]}…",
+                          lambda _=False, n=name: self.export_figure_dialog(n))
+            a.setToolTip(DESCRIPTIONS.get(name, ""))
+        self._act(f, "Export &trajectory (CSV, NPY, OBJ, PLY)…", self.export_trajectory_dialog)
+        self._act(f, "Export &cluster table (CSV)…", self.export_clusters_dialog)
+        f.addSeparator()
+        self._act(f, "&Quit", self.close, QtGui.QKeySequence.StandardKey.Quit)
+        v = mb.addMenu("&View")
+        for key, dock in self.docks.items():
+            v.addAction(dock.toggleViewAction())
+        v.addSeparator()
+        self._act(v, "Reset 3-D cameras", self.reset_cameras)
+        h = mb.addMenu("&Help")
+        self._act(h, "&About Lipspace", self._about)
+
+    def _act(self, menu, text, slot, shortcut=None):
+        a = QtGui.QAction(text, self)
+        if shortcut is not None:
+            a.setShortcut(shortcut)
+        a.triggered.connect(slot)
+        menu.addAction(a)
+        return a
+
+    # ------------------------------------------------------------------ data
+    def set_manifold(self, manifold, *, source: dict | None = None) -> None:
+        self.state.set_manifold(manifold, source=source)
+
+    def _on_manifold(self, m):
+        if m is None:
+            self.summary_label.setText("no manifold loaded")
+            return
+        s = m.summary()
+        self.summary_label.setText(
+            f"{s['corpus']}: {s['frames']} frames, {s['utterances']} utterances, {s['points']} points · "
+            f"X {s['shape_components']} comp. ({100 * s['shape_variance_kept']:.1f}%) · Y {s['embedding_dims']}-D, "
+            f"first 3 hold {100 * s['Y_first3_recovered']:.0f}% · K={s['n_states']} states")
+        src = self.state.source
+        name = Path(src["path"]).name if src.get("path") else f"synthetic talker ({src.get('preset', 'default')})"
+        self.setWindowTitle(f"Lipspace — {name}")
+
+    def open_source(self, path=None, *, preset: str = "default", session: dict | None = None):
+        """Load a manifold / corpus file (or the synthetic talker) in a worker; returns the runner."""
+        from app.cli.explore import load_source
+        from app.workers import run_task
+
+        self._pending_session = session
+        what = Path(path).name if path else f"the synthetic talker ({preset})"
+        self.statusBar().showMessage(f"loading {what}…")
+        self._runner = run_task(lambda progress: load_source(path, preset, progress), parent=self,
+                                title=f"Loading {what}", on_done=self._on_loaded, on_error=self._on_load_error,
+                                on_cancel=lambda: self.statusBar().showMessage("loading cancelled", 5000))
+        return self._runner
+
+    def _on_loaded(self, result):
+        manifold, source = result
+        self.set_manifold(manifold, source=source)
+        self.statusBar().showMessage("ready", 3000)
+        if self._pending_session is not None:
+            d, self._pending_session = self._pending_session, None
+            self.apply_session(d)
+
+    def _on_load_error(self, message, _tb):
+        self.statusBar().showMessage("loading failed", 5000)
+        QtWidgets.QMessageBox.critical(self, "Lipspace", f"Could not load: {message}")
+
+    def open_dialog(self):
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Open corpus or manifold", self.last_dir,
+                                                        "Lipspace files (*.npz);;All files (*)")
+        if path:
+            self.last_dir = str(Path(path).parent)
+            self.open_source(path)
+
+    # ------------------------------------------------------------------ sessions
+    def cameras(self) -> dict:
+        return {"manifold": self.manifold_view.camera(), "lips": self.lip_view.camera()}
+
+    def save_session(self, path) -> Path:
+        from app.session import save_session
+
+        return save_session(self.state, path, cameras=self.cameras(), extra={"editor": self.editor.settings()})
+
+    def apply_session(self, d: dict) -> None:
+        """Restore selection, modes, phones, editor settings and cameras from a loaded session."""
+        from app.session import apply_session
+
+        apply_session(self.state, d)
+        self.editor.apply_settings(d.get("extra", {}).get("editor", {}))
+        cams = d.get("cameras", {})
+        if "manifold" in cams:
+            self.manifold_view.set_camera(cams["manifold"])
+        if "lips" in cams:
+            self.lip_view.set_camera(cams["lips"])
+
+    def open_session(self, path):
+        """Open a session file: reload its source if it differs from what is shown, then restore it."""
+        from app.session import load_session
+
+        d = load_session(path)
+        src, cur = d.get("source", {}), self.state.source
+        same = self.state.manifold is not None and src.get("path") == cur.get("path") and (
+            src.get("path") is not None or src.get("preset") == cur.get("preset"))
+        if same:
+            self.apply_session(d)
+            return None
+        return self.open_source(src.get("path"), preset=src.get("preset", "default"), session=d)
+
+    def save_session_dialog(self):
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save session", self.last_dir,
+                                                        "Lipspace session (*.lipspace.json *.json)")
+        if path:
+            if not path.endswith(".json"):
+                path += ".lipspace.json"
+            self._report(lambda: self.save_session(path), f"session saved to {path}")
+
+    def open_session_dialog(self):
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Open session", self.last_dir,
+                                                        "Lipspace session (*.json);;All files (*)")
+        if path:
+            self._report(lambda: self.open_session(path), f"session {Path(path).name} opened")
+
+    def _report(self, fn, ok_message):
+        try:
+            fn()
+        except (ValueError, OSError, RuntimeError) as exc:
+            QtWidgets.QMessageBox.critical(self, "Lipspace", str(exc))
+            return False
+        self.statusBar().showMessage(ok_message, 5000)
+        return True
+
+    # ------------------------------------------------------------------ exports
+    def export_view(self, which: str, path) -> Path:
+        """Save the manifold or lip view as PNG (raster) or SVG/PDF (vector, via VTK's gl2ps)."""
+        from app.figures import save_plotter_image, save_plotter_vector
+
+        plotter = {"manifold": self.manifold_view.plotter, "lips": self.lip_view.plotter}[which]
+        if Path(path).suffix.lower() == ".png":
+            return save_plotter_image(plotter, path)
+        return save_plotter_vector(plotter, path)
+
+    def export_view_dialog(self, which):
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, f"Export {which} view", self.last_dir,
+                                                        "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)")
+        if path:
+            self._report(lambda: self.export_view(which, path), f"wrote {path}")
+
+    def export_figure_dialog(self, name):
+        if self.state.manifold is None:
+            return
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, f"Export figure {name}",
+                                                        str(Path(self.last_dir) / f"{name}.png"),
+                                                        "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)")
+        if not path:
+            return
+        from app.figures import UTTERANCE_FIGURES, export_figure
+        from app.workers import run_task
+
+        m = self.state.manifold
+        opts = {"utterance": self.state.utterance} if (name in UTTERANCE_FIGURES and self.state.utterance) else {}
+        run_task(lambda progress: export_figure(name, m, path, **opts), parent=self, title=f"Rendering {name}",
+                 on_done=lambda p: self.statusBar().showMessage(f"wrote {p}", 5000))
+
+    def current_trajectory(self):
+        """The trajectory File > Export writes: the synthetic one if any, else the original."""
+        return self.state.synthetic if self.state.synthetic is not None else self.state.original
+
+    def export_trajectory_dialog(self):
+        traj = self.current_trajectory()
+        if traj is None:
+            QtWidgets.QMessageBox.information(self, "Lipspace", "No trajectory to export: choose an utterance or "
+                                                               "synthesise one in the trajectory editor.")
+            return
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, f"Export trajectory ({traj.label})", self.last_dir,
+                                                        TRAJECTORY_FILTERS)
+        if path:
+            self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}")
+
+    def export_clusters(self, path) -> Path:
+        from engine.io.export import write_table_csv
+
+        return write_table_csv(path, self.clusters.table_rows())
+
+    def export_clusters_dialog(self):
+        if self.state.manifold is None:
+            return
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export cluster table", self.last_dir,
+                                                        "CSV table (*.csv)")
+        if path:
+            self._report(lambda: self.export_clusters(path), f"wrote {path}")
+
+    # ------------------------------------------------------------------ misc
+    def reset_cameras(self):
+        self.manifold_view.plotter.reset_camera()
+        self.manifold_view.plotter.render()
+        self.lip_view.plotter.view_xy()
+        self.lip_view.plotter.reset_camera()
+        self.lip_view.plotter.render()
+
+    def _about(self):
+        QtWidgets.QMessageBox.about(
+            self, "About Lipspace",
+            "Lipspace explores the visual speech manifold (Edge, Hilton & Jackson): lip shape and velocity "
+            "in one low-dimensional space.\n\nClick a point to select its state and colour its future (or past) "
+            "hemisphere by hop distance; Shift-click a second point for the minimum-distance path.")
+
+    def closeEvent(self, event):
+        from app.workers import cancel_all
+
+        cancel_all()
+        for view in (self.manifold_view, self.lip_view, self.editor, self.clusters, self.scree):
+            view.close_view()
+        super().closeEvent(event)
+
+
+def launch(path=None, preset: str = "default", session: dict | None = None) -> int:
+    """Open the explorer on ``path`` (or the synthetic talker ``preset``) and run the event loop."""
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
+    app.setApplicationName("Lipspace")
+    win = MainWindow()
+    win.show()
+    if session is not None and path is None and session.get("source", {}).get("path"):
+        path = session["source"]["path"]
+        preset = session["source"].get("preset", preset)
+    elif session is not None and path is None:
+        preset = session.get("source", {}).get("preset", preset)
+    win.open_source(path, preset=preset, session=session)
+    return int(app.exec())

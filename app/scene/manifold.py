@@ -1,0 +1,310 @@
+"""Scene elements of the manifold view: points, plane, directions, trajectories, paths, ellipsoids.
+
+Colours follow the paper's figures: original trajectories black, generated ones
+red; density and similarity run blue -> red (see :mod:`app.state`).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+
+from app.scene.handles import Handle
+
+__all__ = ["PointsHandle", "LocalFrameHandle", "PolylineHandle", "add_manifold_points", "add_zero_velocity_plane",
+           "add_global_axes", "add_local_frame", "add_point_markers", "add_trajectory", "add_state_path",
+           "add_cluster_ellipsoids",
+           "add_marker", "MarkerHandle", "scene_scale", "to_rgb8", "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR",
+           "S_COLOUR", "V_COLOUR", "NORMAL_COLOUR", "PLANE_COLOUR"]
+
+ORIGINAL_COLOUR = (0.0, 0.0, 0.0)
+SYNTHETIC_COLOUR = (1.0, 0.0, 0.0)
+PATH_COLOUR = (1.0, 0.5, 0.0)
+S_COLOUR = (0.0, 0.39, 0.0)        # dark green, as in the figure set
+V_COLOUR = (0.545, 0.0, 0.545)     # dark magenta
+NORMAL_COLOUR = (0.1, 0.45, 0.85)
+PLANE_COLOUR = (0.55, 0.55, 0.6)
+
+
+def _xyz(a, what, n=None):
+    a = np.asarray(a, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] < 3:
+        raise ValueError(f"{what} must have shape (n, 3) (extra columns ignored), got {a.shape}")
+    if n is not None and a.shape[0] < n:
+        raise ValueError(f"{what} needs at least {n} rows, got {a.shape[0]}")
+    return np.ascontiguousarray(a[:, :3])
+
+
+def _vec(v, what):
+    v = np.asarray(v, dtype=np.float64).reshape(-1)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise ValueError(f"{what} must be 3 finite numbers, got {v!r}")
+    return v
+
+
+def scene_scale(Fy3) -> float:
+    """A length for glyphs: the largest extent of the point cloud (1 if degenerate)."""
+    Y = _xyz(Fy3, "Fy3")
+    ext = float((Y.max(0) - Y.min(0)).max()) if len(Y) else 0.0
+    return ext if ext > 0 else 1.0
+
+
+def to_rgb8(rgb) -> np.ndarray:
+    """Float RGB in [0, 1] (n, 3) -> uint8 (n, 3)."""
+    rgb = np.asarray(rgb)
+    if rgb.dtype == np.uint8:
+        return rgb
+    return np.clip(np.rint(np.asarray(rgb, np.float64) * 255), 0, 255).astype(np.uint8)
+
+
+class PointsHandle(Handle):
+    """The manifold's point cloud; colours change in place.
+
+    ``mesh.point_data["rgb"]`` holds the shown colours (uint8) and
+    ``mesh.point_data["value"]`` the scalar they encode (NaN = no value, e.g. an
+    unreachable state), so tests and tools can read what is drawn.
+    """
+
+    def set_colors(self, rgb, values=None) -> None:
+        rgb8 = to_rgb8(rgb)
+        n = self.mesh.n_points
+        if rgb8.shape != (n, 3):
+            raise ValueError(f"colours must have shape ({n}, 3), got {rgb8.shape}")
+        self.mesh.point_data["rgb"][:] = rgb8
+        v = np.full(n, np.nan, np.float32) if values is None else np.asarray(values, np.float32)
+        if v.shape != (n,):
+            raise ValueError(f"values must have shape ({n},), got {v.shape}")
+        self.mesh.point_data["value"][:] = v
+        self.mesh.Modified()
+
+    @property
+    def rgb(self) -> np.ndarray:
+        return np.asarray(self.mesh.point_data["rgb"])
+
+    @property
+    def values(self) -> np.ndarray:
+        return np.asarray(self.mesh.point_data["value"])
+
+
+def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: float = 6.0,
+                        name: str = "manifold_points") -> PointsHandle:
+    """Draw F^y as points coloured per point.
+
+    Parameters
+    ----------
+    plotter : pyvista plotter
+    Fy3 : ndarray of shape (N, >=3)
+        Only the first three columns are drawn.
+    rgb : ndarray of shape (N, 3), float in [0, 1] or uint8, optional (default grey)
+    values : ndarray of shape (N,), optional
+        The scalar the colours encode.
+    """
+    Y = _xyz(Fy3, "Fy3", 1)
+    mesh = pv.PolyData(Y.astype(np.float32))
+    n = len(Y)
+    mesh.point_data["rgb"] = np.full((n, 3), 160, np.uint8) if rgb is None else np.zeros((n, 3), np.uint8)
+    mesh.point_data["value"] = np.full(n, np.nan, np.float32)
+    actor = plotter.add_mesh(mesh, scalars="rgb", rgb=True, point_size=point_size, render_points_as_spheres=True,
+                             name=name, pickable=True, show_scalar_bar=False, reset_camera=False, render=False)
+    h = PointsHandle(plotter, mesh, actor)
+    if rgb is not None:
+        h.set_colors(rgb, values)
+    return h
+
+
+def add_point_markers(plotter, Y, color, *, point_size: float = 8.0, name: str = "markers") -> Handle:
+    """Plain points of one colour (e.g. a phone's cluster members), not pickable."""
+    mesh = pv.PolyData(_xyz(Y, "points", 1).astype(np.float32))
+    actor = plotter.add_mesh(mesh, color=color, point_size=point_size, render_points_as_spheres=True, name=name,
+                             pickable=False, reset_camera=False, render=False)
+    return Handle(plotter, mesh, actor)
+
+
+def add_zero_velocity_plane(plotter, point, normal, size: float, *, color=PLANE_COLOUR, opacity: float = 0.18,
+                            name: str = "zero_velocity_plane") -> Handle:
+    """The zero-velocity plane through ``point`` with unit ``normal`` (the global V), ``size`` wide."""
+    point, normal = _vec(point, "plane point"), _vec(normal, "plane normal")
+    if np.linalg.norm(normal) == 0:
+        raise ValueError("plane normal must be non-zero")
+    plane = pv.Plane(center=point, direction=normal, i_size=float(size), j_size=float(size),
+                     i_resolution=8, j_resolution=8)
+    actor = plotter.add_mesh(plane, color=color, opacity=opacity, show_edges=True, edge_color=(0.4, 0.4, 0.45),
+                             line_width=1, name=name, pickable=False, reset_camera=False, render=False)
+    return Handle(plotter, plane, actor)
+
+
+def _arrow(start, direction, length):
+    d = _vec(direction, "direction")
+    nd = np.linalg.norm(d)
+    if nd == 0 or length <= 0:
+        return pv.PolyData(np.asarray([start], np.float32))
+    return pv.Arrow(start=_vec(start, "arrow start"), direction=d / nd, scale=float(length),
+                    tip_length=0.25, tip_radius=0.08, shaft_radius=0.025)
+
+
+def add_global_axes(plotter, origin, S, V, length: float, *, labels: bool = True) -> dict:
+    """Arrows for the global shape direction S (green) and velocity direction V (magenta).
+
+    Returns dict ``{"S": Handle, "V": Handle}``.
+    """
+    out = {}
+    for key, vec, col in (("S", S, S_COLOUR), ("V", V, V_COLOUR)):
+        mesh = _arrow(origin, vec, length)
+        actor = plotter.add_mesh(mesh, color=col, name=f"global_{key}", pickable=False, reset_camera=False,
+                                 render=False, smooth_shading=True)
+        out[key] = Handle(plotter, mesh, actor)
+    if labels:
+        o = _vec(origin, "origin")
+        tips = np.array([o + 1.08 * length * _vec(S, "S") / max(np.linalg.norm(S), 1e-12),
+                         o + 1.08 * length * _vec(V, "V") / max(np.linalg.norm(V), 1e-12)])
+        out["labels"] = plotter.add_point_labels(tips, ["S", "V"], font_size=14, text_color="black",
+                                                 shape=None, show_points=False, name="global_axes_labels",
+                                                 always_visible=True, pickable=False, reset_camera=False, render=False)
+    return out
+
+
+class LocalFrameHandle:
+    """The local frame (s_i, v_i, normal) at one point; :meth:`update` moves it in place."""
+
+    COLOURS = {"s": (0.2, 0.75, 0.2), "v": (0.85, 0.2, 0.85), "normal": NORMAL_COLOUR}
+
+    def __init__(self, plotter, length: float):
+        self.plotter = plotter
+        self.length = float(length)
+        self.parts = {}
+        for key, col in self.COLOURS.items():
+            mesh = pv.PolyData(np.zeros((1, 3), np.float32))
+            actor = plotter.add_mesh(mesh, color=col, name=f"local_{key}", pickable=False, reset_camera=False,
+                                     render=False)
+            self.parts[key] = Handle(plotter, mesh, actor)
+        self.set_visible(False)
+
+    def update(self, point, s, v, normal) -> None:
+        for key, vec in (("s", s), ("v", v), ("normal", normal)):
+            self.parts[key].replace_geometry(_arrow(point, vec, self.length))
+        self.set_visible(True)
+
+    def set_visible(self, visible: bool) -> None:
+        for h in self.parts.values():
+            h.set_visible(visible)
+
+    @property
+    def visible(self) -> bool:
+        return all(h.visible for h in self.parts.values())
+
+
+def add_local_frame(plotter, point=None, s=None, v=None, normal=None, *, length: float = 1.0) -> LocalFrameHandle:
+    """Arrows for a frame's local shape s_i (light green), velocity v_i (pink) and normal (blue).
+
+    Created hidden when ``point`` is None; call ``handle.update(point, s, v, normal)``.
+    """
+    h = LocalFrameHandle(plotter, length)
+    if point is not None:
+        h.update(point, s, v, normal)
+    return h
+
+
+class PolylineHandle(Handle):
+    """A polyline (trajectory or state path); :meth:`update` redraws it in place."""
+
+    def __init__(self, plotter, mesh, actor, *, node_radius: float = 0.0):
+        super().__init__(plotter, mesh, actor)
+        self.node_radius = float(node_radius)
+        self.points = np.zeros((0, 3))
+
+    def update(self, Y) -> None:
+        Y = _xyz(Y, "polyline points") if Y is not None and len(Y) else np.zeros((0, 3))
+        self.points = Y
+        self.replace_geometry(_polyline(Y, self.node_radius))
+        self.set_visible(len(Y) > 0)
+
+
+def _polyline(Y, node_radius=0.0):
+    if len(Y) == 0:
+        return pv.PolyData(np.zeros((1, 3), np.float32))
+    line = pv.lines_from_points(Y) if len(Y) > 1 else pv.PolyData(Y)
+    if node_radius > 0:
+        nodes = pv.PolyData(Y).glyph(geom=pv.Sphere(radius=node_radius, theta_resolution=10, phi_resolution=10),
+                                     scale=False, orient=False)
+        line = line.merge(nodes).extract_surface(algorithm=None) if len(Y) > 1 else nodes
+    return line
+
+
+def add_trajectory(plotter, Y, color=ORIGINAL_COLOUR, *, line_width: float = 5.0, name: str = "trajectory",
+                   markers=None, marker_radius: float = 0.0) -> PolylineHandle:
+    """A trajectory through ``Y`` (n, >=3) as a tube-rendered polyline.
+
+    The paper draws the original trajectory black and the generated one red
+    (:data:`ORIGINAL_COLOUR`, :data:`SYNTHETIC_COLOUR`). ``markers`` (indices into
+    ``Y``, e.g. phone mid-points) are drawn as spheres of ``marker_radius``.
+    """
+    mesh = pv.PolyData(np.zeros((1, 3), np.float32))
+    actor = plotter.add_mesh(mesh, color=color, line_width=line_width, render_lines_as_tubes=True, name=name,
+                             pickable=False, reset_camera=False, render=False)
+    h = PolylineHandle(plotter, mesh, actor)
+    h.update(Y)
+    if markers is not None and marker_radius > 0 and len(h.points):
+        idx = np.asarray(markers, dtype=int)
+        idx = idx[(idx >= 0) & (idx < len(h.points))]
+        glyphs = pv.PolyData(h.points[idx]).glyph(geom=pv.Sphere(radius=marker_radius), scale=False, orient=False)
+        h.markers = Handle(plotter, glyphs, plotter.add_mesh(glyphs, color=color, name=f"{name}_markers",
+                                                               pickable=False, reset_camera=False, render=False))
+    return h
+
+
+def add_state_path(plotter, centroids, path=None, *, color=PATH_COLOUR, node_radius: float = 0.0,
+                   line_width: float = 5.0, name: str = "state_path") -> PolylineHandle:
+    """The minimum-distance state path as a polyline over state centroids.
+
+    Parameters
+    ----------
+    centroids : ndarray of shape (K, >=3)
+    path : sequence of int or None
+        States along the path (None: hidden until ``handle.update(centroids[path])``).
+    """
+    C = _xyz(centroids, "centroids")
+    mesh = pv.PolyData(np.zeros((1, 3), np.float32))
+    actor = plotter.add_mesh(mesh, color=color, line_width=line_width, render_lines_as_tubes=True, name=name,
+                             pickable=False, reset_camera=False, render=False)
+    h = PolylineHandle(plotter, mesh, actor, node_radius=node_radius)
+    h.update(C[np.asarray(path, dtype=int)] if path is not None else None)
+    return h
+
+
+def add_cluster_ellipsoids(plotter, vertices, faces, color, *, opacity: float = 0.35,
+                           name: str = "ellipsoid") -> Handle:
+    """A phone cluster's 2-s.d. ellipsoid from ``(vertices (M, 3), faces (F, 3))``."""
+    V = _xyz(vertices, "ellipsoid vertices", 4)
+    Fc = np.asarray(faces, dtype=np.int64)
+    if Fc.ndim != 2 or Fc.shape[1] != 3 or (Fc.size and (Fc.min() < 0 or Fc.max() >= len(V))):
+        raise ValueError(f"faces must be (F, 3) indices into {len(V)} vertices, got shape {Fc.shape}")
+    mesh = pv.PolyData(V, np.hstack([np.full((len(Fc), 1), 3, np.int64), Fc]).ravel())
+    actor = plotter.add_mesh(mesh, color=color, opacity=opacity, smooth_shading=True, name=name, pickable=False,
+                             reset_camera=False, render=False)
+    return Handle(plotter, mesh, actor)
+
+
+class MarkerHandle(Handle):
+    """A sphere marking one point; :meth:`move` puts it elsewhere in place."""
+
+    def __init__(self, plotter, mesh, actor, radius):
+        super().__init__(plotter, mesh, actor)
+        self.radius = float(radius)
+        self.center = None
+
+    def move(self, center) -> None:
+        self.center = _vec(center, "center")
+        self.replace_geometry(pv.Sphere(radius=self.radius, center=self.center))
+        self.set_visible(True)
+
+
+def add_marker(plotter, center=None, radius: float = 1.0, *, color=(1.0, 1.0, 0.0),
+               name: str = "marker") -> MarkerHandle:
+    """A sphere marking one point (the selected frame), hidden while ``center`` is None."""
+    mesh = pv.Sphere(radius=radius)
+    actor = plotter.add_mesh(mesh, color=color, name=name, pickable=False, reset_camera=False, render=False)
+    h = MarkerHandle(plotter, mesh, actor, radius)
+    if center is None:
+        h.set_visible(False)
+    else:
+        h.move(center)
+    return h

@@ -1,0 +1,595 @@
+"""The explorer's one shared application state, free of Qt and VTK.
+
+Every view observes an :class:`AppState` and changes it through its methods; views
+never call each other. Selections are indices (frames, states), never actors. Each
+field has an :class:`Event` in ``state.events`` that fires with the new value when
+the value changes. Derived data (hop distances, point colours, density, the
+minimum-distance path) are pure functions of the manifold and the state, below.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Event", "AppState", "TrajectoryData", "Coloring", "HEMISPHERES", "COLOR_MODES",
+           "CLASS_COLOURS", "CLASS_LABELS", "UNREACHABLE_RGB", "knn_density", "frame_phones",
+           "hop_distances", "hop_distance_scalars", "hop_distance_colors", "point_colors",
+           "state_path", "categorical_palette", "phone_palette", "ellipsoid_colors", "cluster_table",
+           "original_trajectory"]
+
+HEMISPHERES = ("future", "past", "off")
+COLOR_MODES = ("density", "class", "phone", "utterance", "distance")
+
+#: the four tangent classes (engine.tangent classes_ 0..3), as in the figure set
+CLASS_COLOURS = ((0.839, 0.153, 0.157), (1.0, 0.596, 0.588), (0.122, 0.310, 0.706), (0.561, 0.722, 1.0))
+CLASS_LABELS = ("opening / accelerating", "opening / decelerating", "closing / accelerating",
+                "closing / decelerating")
+#: frames with no value (unreachable state, no phone, no forward step)
+UNREACHABLE_RGB = (0.69, 0.69, 0.69)
+#: paper: density and similarity run blue (low / far) -> red (high / near)
+DENSITY_CMAP = "jet"
+DISTANCE_CMAP = "jet_r"
+
+
+class Event:
+    """A minimal signal: ``connect(callback)``, ``disconnect(callback)``, ``emit(*args)``.
+
+    Callbacks run in connection order. An exception raised by a callback propagates
+    out of :meth:`emit` (nothing is swallowed), so a broken view fails loudly.
+    """
+
+    def __init__(self, name: str = ""):
+        self.name = name
+        self._callbacks: list = []
+
+    def connect(self, callback):
+        """Call ``callback(*args)`` on every emit; returns ``callback`` (usable as a decorator)."""
+        if not callable(callback):
+            raise TypeError(f"event {self.name!r}: connect expects a callable, got {callback!r}")
+        if callback not in self._callbacks:
+            self._callbacks.append(callback)
+        return callback
+
+    def disconnect(self, callback) -> None:
+        """Stop calling ``callback``; raises ValueError if it was not connected."""
+        try:
+            self._callbacks.remove(callback)
+        except ValueError:
+            raise ValueError(f"event {self.name!r}: {callback!r} is not connected") from None
+
+    def emit(self, *args) -> None:
+        for cb in list(self._callbacks):
+            cb(*args)
+
+    def __len__(self) -> int:
+        return len(self._callbacks)
+
+
+class _Events:
+    """Namespace of the state's events, one per observable field."""
+
+    NAMES = ("manifold", "frame", "state", "target", "path", "hemisphere", "color_mode", "path_mode",
+             "utterance", "trajectory", "visible_phones", "playback", "playing", "component")
+
+    def __init__(self):
+        for n in self.NAMES:
+            setattr(self, n, Event(n))
+
+
+@dataclass(frozen=True)
+class TrajectoryData:
+    """A lip trajectory in the embedding and in the shape space.
+
+    Parameters
+    ----------
+    Y : ndarray of shape (n, k)
+        Positions in F^y (the first 3 columns are drawn).
+    Fx : ndarray of shape (n, m) or None
+        Shape coordinates, for the lip view (None: not available).
+    frames : ndarray of shape (n,) int or None
+        Corpus frame indices, for an original (captured) trajectory.
+    label : str
+        Utterance id or synthesis method.
+    rate : float
+        Frames per second.
+    """
+
+    Y: np.ndarray
+    Fx: np.ndarray | None = None
+    frames: np.ndarray | None = None
+    label: str = ""
+    rate: float = 60.0
+    extra: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return int(np.asarray(self.Y).shape[0])
+
+
+def original_trajectory(manifold, uid: str) -> TrajectoryData:
+    """The captured trajectory of utterance ``uid``: its rows of F^y and F^x."""
+    c = manifold.corpus_
+    u = c.utterance(uid)
+    idx = np.arange(u.start, u.stop)
+    return TrajectoryData(Y=manifold.Fy_[idx], Fx=manifold.Fx_[idx], frames=idx, label=u.id, rate=c.rate)
+
+
+class AppState:
+    """What the user has selected and how things are shown; observed by every view.
+
+    Parameters
+    ----------
+    manifold : engine.manifold.Manifold or None
+        The fitted manifold the indices refer to.
+
+    Attributes
+    ----------
+    frame, state, target : int or None
+        Selected frame, its state, and the second (target) state of the path.
+    path : ndarray of int or None
+        Minimum-distance state path from ``state`` to ``target`` (None: none or unreachable).
+    hemisphere : {"future", "past", "off"}
+    color_mode : {"density", "class", "phone", "utterance", "distance"}
+    path_mode : bool
+        When True, a click while a state is selected sets the target instead.
+    utterance : str or None
+    original, synthetic : TrajectoryData or None
+    visible_phones : frozenset of str
+        Phones whose cluster ellipsoids are shown.
+    playback : int or None
+        Index into the trajectories being played (None: show the selection).
+    playing : bool
+        Whether playback runs (the lip view's timer advances ``playback``).
+    component : int or None
+        Shape component shown as a deformation in the lip view.
+    source : dict
+        Where the manifold came from (``path``, ``preset``), for sessions.
+    """
+
+    def __init__(self, manifold=None):
+        self.events = _Events()
+        self.manifold = manifold
+        self.source: dict = {"path": None, "preset": "default"}
+        self.frame = self.state = self.target = None
+        self.path = None
+        self.hemisphere = "future"
+        self.color_mode = "density"
+        self.path_mode = False
+        self.utterance = None
+        self.original = self.synthetic = None
+        self.visible_phones = frozenset()
+        self.playback = None
+        self.playing = False
+        self.component = None
+        self._density = None
+        self._phones = None
+        self._clusters = None
+
+    # ----------------------------------------------------------- manifold
+    def set_manifold(self, manifold, *, source: dict | None = None) -> None:
+        """Replace the manifold; clears every index-based selection."""
+        self.manifold = manifold
+        if source is not None:
+            self.source = dict(source)
+        self._density = self._phones = self._clusters = None
+        self.frame = self.state = self.target = self.path = None
+        self.utterance = self.original = self.synthetic = self.playback = self.component = None
+        self.playing = False
+        self.visible_phones = frozenset()
+        self.events.manifold.emit(manifold)
+
+    def _require(self):
+        if self.manifold is None:
+            raise RuntimeError("no manifold is loaded; open a corpus or manifold first")
+        return self.manifold
+
+    @property
+    def n_frames(self) -> int:
+        return int(self._require().Fy_.shape[0])
+
+    @property
+    def n_states(self) -> int:
+        return int(self._require().states_.centroids_.shape[0])
+
+    @property
+    def density(self) -> np.ndarray:
+        """k-NN log density of every frame in F^y, computed once per manifold."""
+        if self._density is None:
+            self._density = knn_density(self._require().Fy_)
+        return self._density
+
+    @property
+    def phones(self) -> np.ndarray:
+        """Phone label of every frame ('' outside phones), computed once per manifold."""
+        if self._phones is None:
+            self._phones = frame_phones(self._require().corpus_)
+        return self._phones
+
+    @property
+    def clusters(self):
+        """The manifold's :class:`engine.clusters.PhoneClusters`, fitted once per manifold."""
+        if self._clusters is None:
+            from engine.clusters import PhoneClusters
+
+            self._clusters = PhoneClusters.from_manifold(self._require())
+        return self._clusters
+
+    def cluster_rows(self) -> list[dict]:
+        """The phone table of the clusters panel (see :func:`cluster_table`)."""
+        return cluster_table(self.clusters)
+
+    # ---------------------------------------------------------- selection
+    def _check_index(self, value, limit, what):
+        if value is None:
+            return None
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+            raise TypeError(f"{what} must be an int index, got {value!r}")
+        value = int(value)
+        if not 0 <= value < limit:
+            raise IndexError(f"{what} {value} out of range 0..{limit - 1}")
+        return value
+
+    def select_frame(self, i, *, as_target: bool | None = None) -> None:
+        """Select frame ``i`` and its state.
+
+        With ``as_target=True`` (or ``as_target=None`` while :attr:`path_mode` is on and a
+        state is already selected) the frame's state becomes the path target instead,
+        keeping the current selection. ``i=None`` clears the selection.
+        """
+        if i is None:
+            self.clear_selection()
+            return
+        i = self._check_index(i, self.n_frames, "frame")
+        s = int(self.manifold.states_.labels_[i])
+        if as_target is None:
+            as_target = self.path_mode and self.state is not None
+        if as_target and self.state is not None:
+            self.set_target(s)
+            return
+        self._set("frame", i)
+        self._set_state(s)
+
+    def select_state(self, s, *, as_target: bool = False) -> None:
+        """Select state ``s`` directly (no particular frame), or make it the path target."""
+        s = self._check_index(s, self.n_states, "state")
+        if as_target and self.state is not None:
+            self.set_target(s)
+            return
+        self._set("frame", None)
+        self._set_state(s)
+
+    def _set_state(self, s) -> None:
+        changed = s != self.state
+        self._set("state", s)
+        if changed or self.target is not None:
+            self._set("target", None)
+            self._update_path()
+        if s is not None and self.hemisphere != "off" and self.color_mode != "distance":
+            self.set_color_mode("distance")
+
+    def set_target(self, s) -> None:
+        """Set the path target state (None clears it) and recompute the path."""
+        s = self._check_index(s, self.n_states, "target state")
+        self._set("target", s)
+        self._update_path()
+
+    def clear_selection(self) -> None:
+        self._set("frame", None)
+        self._set("state", None)
+        self._set("target", None)
+        self._update_path()
+
+    def _update_path(self) -> None:
+        new = None
+        if self.state is not None and self.target is not None:
+            new = state_path(self.manifold, self.state, self.target)
+        old = self.path
+        if (old is None) != (new is None) or (new is not None and not np.array_equal(old, new)):
+            self.path = new
+            self.events.path.emit(new)
+
+    # -------------------------------------------------------------- modes
+    def set_hemisphere(self, mode: str) -> None:
+        if mode not in HEMISPHERES:
+            raise ValueError(f"hemisphere must be one of {HEMISPHERES}, got {mode!r}")
+        self._set("hemisphere", mode)
+        if mode != "off" and self.state is not None and self.color_mode != "distance":
+            self.set_color_mode("distance")
+
+    def set_color_mode(self, mode: str) -> None:
+        if mode not in COLOR_MODES:
+            raise ValueError(f"colour mode must be one of {COLOR_MODES}, got {mode!r}")
+        self._set("color_mode", mode)
+
+    def set_path_mode(self, on: bool) -> None:
+        self._set("path_mode", bool(on))
+
+    # ----------------------------------------------------- trajectories
+    def set_utterance(self, uid) -> None:
+        """Make ``uid`` the current utterance and its captured trajectory the original."""
+        if uid is None:
+            self._set("utterance", None)
+            self.set_trajectories(original=None, synthetic=None)
+            return
+        traj = original_trajectory(self._require(), uid)  # raises KeyError with known ids
+        self._set("utterance", uid)
+        self.set_trajectories(original=traj, synthetic=None)
+
+    def set_trajectories(self, *, original=..., synthetic=...) -> None:
+        """Set the original and/or synthetic trajectory (omit one to keep it)."""
+        if original is not ...:
+            self.original = original
+        if synthetic is not ...:
+            self.synthetic = synthetic
+        self.set_playing(False)
+        self._set("playback", None)
+        self.events.trajectory.emit(self.original, self.synthetic)
+
+    @property
+    def n_playback(self) -> int:
+        """Frames of the longer of the original and synthetic trajectories (0: none)."""
+        return max([len(t) for t in (self.original, self.synthetic) if t is not None], default=0)
+
+    def set_playback(self, k) -> None:
+        """Current playback index into the trajectories (None: show the selection)."""
+        if k is not None:
+            if self.n_playback == 0:
+                raise RuntimeError("nothing to play: choose an utterance or synthesise a trajectory first")
+            k = self._check_index(k, self.n_playback, "playback frame")
+        self._set("playback", k)
+
+    def set_playing(self, on: bool) -> None:
+        """Start or stop playback (starting with nothing to play is refused quietly)."""
+        on = bool(on) and self.n_playback > 0
+        self._set("playing", on)
+
+    # ------------------------------------------------------------ phones
+    def set_visible_phones(self, labels) -> None:
+        labels = frozenset(str(x) for x in labels)
+        self._set("visible_phones", labels)
+
+    def set_phone_visible(self, label: str, visible: bool) -> None:
+        cur = set(self.visible_phones)
+        (cur.add if visible else cur.discard)(str(label))
+        self.set_visible_phones(cur)
+
+    def set_component(self, index) -> None:
+        """Shape component shown as a deformation (None: show the selection instead)."""
+        if index is not None:
+            index = self._check_index(index, int(self._require().shape_.n_components_), "shape component")
+        self._set("component", index)
+
+    # -------------------------------------------------------------- util
+    def _set(self, name, value) -> None:
+        old = getattr(self, name)
+        same = old is value or (type(old) is type(value) and old == value)
+        if not same:
+            setattr(self, name, value)
+            getattr(self.events, name).emit(value)
+
+
+# ======================================================================== derived data
+def knn_density(Y, k: int = 10, n_dims: int = 3) -> np.ndarray:
+    """Log k-nearest-neighbour density of each point in the first ``n_dims`` dims of ``Y``.
+
+    ``log(k / (N * V_d * r_k^d))`` with r_k the distance to the k-th neighbour.
+
+    Parameters
+    ----------
+    Y : ndarray of shape (N, >=n_dims)
+    k : int, default=10
+
+    Returns
+    -------
+    ndarray of shape (N,) float32
+    """
+    from scipy.spatial import cKDTree
+    from scipy.special import gammaln
+
+    Y = np.asarray(Y, dtype=np.float64)[:, :n_dims]
+    N, d = Y.shape
+    if N < 2:
+        return np.zeros(N, dtype=np.float32)
+    k = int(min(max(k, 1), N - 1))
+    r, _ = cKDTree(Y).query(Y, k=k + 1)
+    rk = np.maximum(r[:, -1], np.finfo(np.float64).tiny ** (1.0 / d))
+    log_vd = (d / 2) * np.log(np.pi) - gammaln(d / 2 + 1)
+    return (np.log(k / N) - log_vd - d * np.log(rk)).astype(np.float32)
+
+
+def frame_phones(corpus) -> np.ndarray:
+    """Phone label of every corpus frame; '' where no phone covers it.
+
+    Returns ndarray of shape (N,) of str.
+    """
+    out = np.full(corpus.n_frames, "", dtype=object)
+    for u in corpus.utterances:
+        for p in u.phones:
+            a = corpus.time_to_frame(u, p.start)
+            b = corpus.time_to_frame(u, p.end)
+            out[a:max(b, a + 1)] = p.label
+    return out.astype(str)
+
+
+def hop_distances(manifold, state: int, hemisphere: str) -> np.ndarray:
+    """Directed hop distance of every state from ``state`` (future) or to it (past).
+
+    Returns ndarray of shape (K,) float, inf where unreachable. ``hemisphere="off"``
+    gives 0 at ``state`` and inf elsewhere.
+    """
+    g = manifold.states_
+    if hemisphere == "future":
+        return np.asarray(g.future(state), dtype=np.float64)
+    if hemisphere == "past":
+        return np.asarray(g.past(state), dtype=np.float64)
+    if hemisphere == "off":
+        d = np.full(g.centroids_.shape[0], np.inf)
+        d[state] = 0.0
+        return d
+    raise ValueError(f"hemisphere must be one of {HEMISPHERES}, got {hemisphere!r}")
+
+
+def hop_distance_scalars(state_distances, labels) -> np.ndarray:
+    """Per-frame hop distance from per-state distances: NaN where unreachable.
+
+    Parameters
+    ----------
+    state_distances : ndarray of shape (K,), inf = unreachable
+    labels : ndarray of shape (N,) int, the state of each frame
+
+    Returns
+    -------
+    ndarray of shape (N,) float32
+    """
+    d = np.asarray(state_distances, dtype=np.float64)[np.asarray(labels)]
+    d[~np.isfinite(d)] = np.nan
+    return d.astype(np.float32)
+
+
+def _map(values, cmap: str, clim) -> np.ndarray:
+    from matplotlib import colormaps
+
+    lo, hi = clim
+    t = (np.asarray(values, dtype=np.float64) - lo) / (hi - lo if hi > lo else 1.0)
+    rgb = colormaps[cmap](np.clip(np.nan_to_num(t, nan=0.0), 0, 1))[:, :3]
+    rgb[~np.isfinite(values)] = UNREACHABLE_RGB
+    return rgb.astype(np.float32)
+
+
+def hop_distance_colors(state_distances, labels, cmap: str = DISTANCE_CMAP):
+    """RGB of every frame by hop distance (red near, blue far, grey unreachable).
+
+    Returns
+    -------
+    rgb : ndarray of shape (N, 3) float32 in [0, 1]
+    values : ndarray of shape (N,) float32, NaN where unreachable
+    clim : (float, float)
+    """
+    values = hop_distance_scalars(state_distances, labels)
+    finite = values[np.isfinite(values)]
+    clim = (0.0, float(max(finite.max(), 1.0)) if finite.size else 1.0)
+    return _map(values, cmap, clim), values, clim
+
+
+def categorical_palette(n: int) -> np.ndarray:
+    """``n`` distinguishable RGB colours, shape (n, 3).
+
+    tab20, tab20b and tab20c, each reordered so that consecutive colours differ in hue
+    (tab20 stores light/dark pairs side by side), cycled when ``n`` exceeds 60.
+    """
+    from matplotlib import colormaps
+
+    parts = []
+    for name, step in (("tab20", 2), ("tab20b", 4), ("tab20c", 4)):
+        c = np.asarray(colormaps[name].colors)[:, :3]
+        parts.append(np.concatenate([c[k::step] for k in range(step)]))
+    base = np.concatenate(parts)
+    return np.asarray(base[np.arange(n) % len(base)], dtype=np.float32)
+
+
+@dataclass
+class Coloring:
+    """How to colour the manifold's points.
+
+    Attributes
+    ----------
+    rgb : ndarray of shape (N, 3) float32 in [0, 1]
+    values : ndarray of shape (N,) float32 or None
+        The scalar shown (density, hop distance), NaN = no value; None for categories.
+    cmap : str or None
+        Colour map of ``values``.
+    clim : (float, float) or None
+    title : str
+    legend : list of (str, (r, g, b))
+        Category colours (class, phone); empty for scalars.
+    """
+
+    rgb: np.ndarray
+    values: np.ndarray | None = None
+    cmap: str | None = None
+    clim: tuple | None = None
+    title: str = ""
+    legend: list = field(default_factory=list)
+
+
+def point_colors(mode: str, manifold, state: AppState | None = None) -> Coloring:
+    """Colours of every frame of ``manifold`` for colour mode ``mode``.
+
+    ``state`` supplies the selection (distance mode), the current utterance
+    (utterance mode highlights it) and the cached density / phones.
+    """
+    if state is None:
+        state = AppState(manifold)
+    N = manifold.Fy_.shape[0]
+    if mode == "density":
+        v = state.density
+        clim = (float(np.percentile(v, 2)), float(np.percentile(v, 98)))
+        return Coloring(_map(v, DENSITY_CMAP, clim), v, DENSITY_CMAP, clim, "log density")
+    if mode == "distance":
+        if state.state is None:
+            v = np.full(N, np.nan, dtype=np.float32)
+            return Coloring(_map(v, DISTANCE_CMAP, (0, 1)), v, DISTANCE_CMAP, (0.0, 1.0),
+                            "hop distance (click a point)")
+        dist = hop_distances(manifold, state.state, state.hemisphere)
+        rgb, v, clim = hop_distance_colors(dist, manifold.states_.labels_)
+        return Coloring(rgb, v, DISTANCE_CMAP, clim, f"{state.hemisphere} hops")
+    if mode == "class":
+        cls = np.asarray(manifold.tangent_.classes_)
+        pal = np.vstack([np.asarray(CLASS_COLOURS, np.float32), np.asarray(UNREACHABLE_RGB, np.float32)])
+        rgb = pal[np.where(cls < 0, 4, cls)]
+        return Coloring(rgb, None, None, None, "tangent class",
+                        [(n, CLASS_COLOURS[i]) for i, n in enumerate(CLASS_LABELS)])
+    if mode == "phone":
+        lut = phone_palette(state)
+        names = list(lut)
+        codes = np.searchsorted(np.array(names + ["\uffff"]), state.phones)  # "" sorts before every label
+        pal = np.vstack([np.asarray(list(lut.values()), np.float32).reshape(-1, 3),
+                         np.asarray(UNREACHABLE_RGB, np.float32)])
+        known = np.isin(state.phones, names)
+        rgb = pal[np.where(known, codes, len(names))]
+        return Coloring(rgb, None, None, None, "phone", [(n, tuple(lut[n])) for n in names])
+    if mode == "utterance":
+        uidx = manifold.corpus_.utterance_index
+        rgb = categorical_palette(int(uidx.max()) + 1)[uidx] if N else np.zeros((0, 3), np.float32)
+        if state.utterance is not None:
+            k = [u.id for u in manifold.corpus_.utterances].index(state.utterance)
+            rgb = rgb * 0.25 + 0.75 * np.asarray(UNREACHABLE_RGB, np.float32)
+            rgb[uidx == k] = (0.0, 0.0, 0.0)
+        return Coloring(rgb.astype(np.float32), None, None, None, "utterance")
+    raise ValueError(f"colour mode must be one of {COLOR_MODES}, got {mode!r}")
+
+
+def cluster_table(clusters) -> list[dict]:
+    """Rows of the phone table from fitted PhoneClusters, most frequent phone first.
+
+    Keys as :meth:`engine.clusters.PhoneClusters.table`: phone, count, opening_fraction,
+    lipreading_class, nearest_y, separation_y, separation_x (Bhattacharyya distances), ...
+    """
+    return sorted(clusters.table(), key=lambda r: (-r["count"], r["phone"]))
+
+
+#: ellipsoid colours, in phone-label order of the visible set (paper Fig. 4: red, green, yellow)
+ELLIPSOID_COLOURS = ((0.84, 0.15, 0.16), (0.17, 0.63, 0.17), (0.95, 0.8, 0.0), (0.12, 0.47, 0.71),
+                     (0.58, 0.4, 0.74), (1.0, 0.5, 0.05), (0.09, 0.75, 0.81), (0.89, 0.47, 0.76))
+
+
+def ellipsoid_colors(visible) -> dict:
+    """Colour of each visible phone's ellipsoid: high-contrast colours in label order."""
+    names = sorted(visible)
+    return {n: ELLIPSOID_COLOURS[i % len(ELLIPSOID_COLOURS)] for i, n in enumerate(names)}
+
+
+def phone_palette(state) -> dict:
+    """Colour of each phone label (sorted labels, :func:`categorical_palette`), shared by all views."""
+    names = sorted(set(state.phones.tolist()) - {""})
+    return {n: tuple(float(c) for c in col) for n, col in zip(names, categorical_palette(len(names)))}
+
+
+def state_path(manifold, a: int, b: int):
+    """Minimum-distance state path a -> b (ndarray of int), or None when b is unreachable."""
+    from engine.states import UnreachableError
+
+    try:
+        return np.asarray(manifold.states_.min_path(int(a), int(b)), dtype=np.int64)
+    except UnreachableError:
+        return None

@@ -1,0 +1,8 @@
+"""Qt views of the explorer; each observes one :class:`app.state.AppState` and never calls another view."""
+from app.views.clusters_panel import ClustersPanel
+from app.views.lip_view import LipView
+from app.views.manifold_view import ManifoldView
+from app.views.scree_panel import ScreePanel
+from app.views.trajectory_editor import PhoneTimeline, TrajectoryEditor
+
+__all__ = ["ManifoldView", "LipView", "TrajectoryEditor", "PhoneTimeline", "ClustersPanel", "ScreePanel"]

@@ -1,0 +1,136 @@
+"""Clusters panel: the phone table (counts, opening-side fraction, separation) with ellipsoid toggles.
+
+Numbers come from :class:`engine.clusters.PhoneClusters` (built once per manifold
+and cached on the state); ticking a phone shows its 2-s.d. ellipsoid in the
+manifold view, in the phone's colour.
+"""
+from __future__ import annotations
+
+import numpy as np
+from PySide6 import QtCore, QtGui, QtWidgets
+
+from app.views._common import blocked
+
+__all__ = ["ClustersPanel", "COLUMNS"]
+
+#: (key in the row dict, header, tooltip)
+COLUMNS = (
+    ("phone", "Phone", "phone label (the corpus's own set)"),
+    ("count", "Count", "phone instances (mid-point frames), as the paper's Table 1"),
+    ("opening_fraction", "Opening", "fraction of mid-points on the opening side of the zero-velocity plane"),
+    ("lipreading_class", "Lip class", "protected / invisible / normal (the unit-selection paper's classes)"),
+    ("nearest_y", "Nearest (Y)", "the closest other phone with dynamics (in Y)"),
+    ("separation_y", "Sep. Y", "Bhattacharyya distance to the nearest phone in Y (shape + velocity)"),
+    ("separation_x", "Sep. X", "Bhattacharyya distance to the same phone in X (shape only)"),
+)
+
+
+def _swatch(rgb) -> "QtGui.QIcon":
+    pm = QtGui.QPixmap(12, 12)
+    pm.fill(QtGui.QColor.fromRgbF(*[float(c) for c in rgb]))
+    return QtGui.QIcon(pm)
+
+
+class ClustersPanel(QtWidgets.QWidget):
+    """Phone table bound to an :class:`app.state.AppState`."""
+
+    def __init__(self, state, parent=None):
+        super().__init__(parent)
+        self.state = state
+        self.rows: list[dict] = []
+        self.table = QtWidgets.QTableWidget(0, len(COLUMNS))
+        self.table.setHorizontalHeaderLabels([h for _k, h, _t in COLUMNS])
+        for j, (_k, _h, tip) in enumerate(COLUMNS):
+            self.table.horizontalHeaderItem(j).setToolTip(tip)
+        self.table.verticalHeader().setVisible(False)
+        self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
+        self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectionBehavior.SelectRows)
+        self.table.setSortingEnabled(True)
+        self.table.horizontalHeader().setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
+        self.note = QtWidgets.QLabel("")
+        self.note.setWordWrap(True)
+        self.none_btn = QtWidgets.QPushButton("Hide all")
+        row = QtWidgets.QHBoxLayout()
+        row.addWidget(self.note, 1)
+        row.addWidget(self.none_btn)
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.setContentsMargins(2, 2, 2, 2)
+        lay.addWidget(self.table, 1)
+        lay.addLayout(row)
+        self.table.itemChanged.connect(self._on_item)
+        self.none_btn.clicked.connect(lambda: state.set_visible_phones(()))
+        ev = state.events
+        self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.visible_phones, self._sync_checks)]
+        for event, cb in self._connections:
+            event.connect(cb)
+        self.rebuild()
+
+    def table_rows(self) -> list[dict]:
+        """The table as rows of dicts (what File > Export cluster table writes)."""
+        return [dict(r) for r in self.rows]
+
+    def rebuild(self) -> None:
+        m = self.state.manifold
+        self.rows = []
+        if m is not None:
+            try:
+                self.rows = self.state.cluster_rows()
+                self.note.setText("Tick a phone to show its 2-s.d. ellipsoid in the manifold view. Separations are "
+                                  "Bhattacharyya distances (0 = identical clusters) in Y (with dynamics) and X "
+                                  "(shape only), from the phone's nearest neighbour in Y.")
+            except (ImportError, ValueError) as exc:
+                self.note.setText(f"phone clusters unavailable: {exc}")
+        from app.state import phone_palette
+
+        palette = phone_palette(self.state) if m is not None else {}
+        self._palette = palette
+        with blocked(self.table):
+            self.table.setSortingEnabled(False)
+            self.table.setRowCount(len(self.rows))
+            for i, r in enumerate(self.rows):
+                for j, (key, _h, _t) in enumerate(COLUMNS):
+                    v = r.get(key)
+                    item = QtWidgets.QTableWidgetItem()
+                    if isinstance(v, (float, np.floating)):
+                        item.setData(QtCore.Qt.ItemDataRole.DisplayRole, round(float(v), 3))
+                    elif isinstance(v, (int, np.integer)):
+                        item.setData(QtCore.Qt.ItemDataRole.DisplayRole, int(v))
+                    else:
+                        item.setText("" if v is None else str(v))
+                    if key == "phone":
+                        item.setFlags(item.flags() | QtCore.Qt.ItemFlag.ItemIsUserCheckable)
+                        item.setCheckState(QtCore.Qt.CheckState.Checked if v in self.state.visible_phones
+                                           else QtCore.Qt.CheckState.Unchecked)
+                        col = palette.get(v)
+                        if col is not None:
+                            item.setIcon(_swatch(col))
+                    self.table.setItem(i, j, item)
+            self.table.setSortingEnabled(True)
+            self.table.sortItems(1, QtCore.Qt.SortOrder.DescendingOrder)  # most frequent first (Table 1)
+
+    def _on_item(self, item):
+        if item.column() != 0:
+            return
+        self.state.set_phone_visible(item.text(), item.checkState() == QtCore.Qt.CheckState.Checked)
+
+    def _sync_checks(self, visible):
+        """Tick the visible phones; their swatch shows the ellipsoid colour, the others the phone colour."""
+        from app.state import ellipsoid_colors
+
+        ell = ellipsoid_colors(visible)
+        with blocked(self.table):
+            for i in range(self.table.rowCount()):
+                it = self.table.item(i, 0)
+                if it is not None:
+                    on = it.text() in visible
+                    it.setCheckState(QtCore.Qt.CheckState.Checked if on else QtCore.Qt.CheckState.Unchecked)
+                    col = ell[it.text()] if on else getattr(self, "_palette", {}).get(it.text())
+                    if col is not None:
+                        it.setIcon(_swatch(col))
+
+    def close_view(self) -> None:
+        for event, cb in self._connections:
+            try:
+                event.disconnect(cb)
+            except ValueError:
+                pass

@@ -1,0 +1,245 @@
+"""The lip view: the lips of the selected frame or state, component deformations and playback.
+
+* A selected frame shows its captured geometry; a selected state (no frame) shows
+  its centroid mapped back through the inverse map (Y -> F^x -> F).
+* A shape component chosen in the scree panel shows the mean shape -2 s.d. (left)
+  and +2 s.d. (right).
+* Playback shows the original trajectory (left, grey-pink) and the synthetic one
+  (right, red) side by side, at the corpus rate, with the utterance's audio when it
+  has any and a sound device exists.
+"""
+from __future__ import annotations
+
+import numpy as np
+from PySide6 import QtCore, QtWidgets
+
+from app import scene
+from app.audio import AudioPlayer, resolve_audio_path
+from app.views._common import RenderScheduler, camera_of, close_plotter, make_plotter, set_camera
+
+__all__ = ["LipView", "lip_frames"]
+
+MAIN_COLOUR = (0.86, 0.55, 0.55)
+SYNTH_COLOUR = (0.95, 0.15, 0.1)
+SPEEDS = (("1×", 1.0), ("½×", 0.5), ("¼×", 0.25))
+
+
+def lip_frames(manifold, traj) -> np.ndarray:
+    """Frames (n, C) of a trajectory: captured rows for originals, F^x mapped back otherwise."""
+    if traj.frames is not None:
+        return np.asarray(manifold.corpus_.frames[np.asarray(traj.frames)])
+    if traj.Fx is not None:
+        return np.asarray(manifold.shape_.inverse_transform(traj.Fx))
+    Fx = manifold.inverse_map.transform(np.asarray(traj.Y)[:, :manifold.inverse_map.n_dims])
+    return np.asarray(manifold.shape_.inverse_transform(Fx))
+
+
+class LipView(QtWidgets.QWidget):
+    """Lip mesh (or markers) bound to an :class:`app.state.AppState`."""
+
+    def __init__(self, state, parent=None):
+        super().__init__(parent)
+        self.state = state
+        self.main = self.second = None
+        self._frames = {"original": None, "synthetic": None}
+        self.audio = AudioPlayer(self)
+        self.timer = QtCore.QTimer(self)
+        self.timer.timeout.connect(self._tick)
+
+        self.play_btn = QtWidgets.QPushButton("Play")
+        self.play_btn.setCheckable(True)
+        self.play_btn.setToolTip("Play the original and synthetic trajectories side by side")
+        self.stop_btn = QtWidgets.QPushButton("Stop")
+        self.speed_box = QtWidgets.QComboBox()
+        for label, v in SPEEDS:
+            self.speed_box.addItem(label, v)
+        self.slider = QtWidgets.QSlider(QtCore.Qt.Orientation.Horizontal)
+        self.slider.setEnabled(False)
+        self.caption = QtWidgets.QLabel("")
+        self.caption.setWordWrap(True)
+        bar = QtWidgets.QHBoxLayout()
+        bar.setContentsMargins(4, 2, 4, 2)
+        for w in (self.play_btn, self.stop_btn, self.speed_box):
+            bar.addWidget(w)
+        bar.addWidget(self.slider, 1)
+        self.plotter = make_plotter(self)
+        self.renderer = RenderScheduler(self.plotter)
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.setSpacing(0)
+        lay.addWidget(self.plotter.interactor, 1)
+        lay.addLayout(bar)
+        lay.addWidget(self.caption)
+
+        self.play_btn.toggled.connect(state.set_playing)
+        self.stop_btn.clicked.connect(self._stop)
+        self.slider.valueChanged.connect(self._on_slider)
+        ev = state.events
+        self._connections = [
+            (ev.manifold, lambda _m: self.rebuild()),
+            (ev.frame, lambda _f: self.refresh()),
+            (ev.state, lambda _s: self.refresh()),
+            (ev.component, lambda _c: self.refresh()),
+            (ev.trajectory, lambda *_: self._on_trajectories()),
+            (ev.playback, lambda _k: self.refresh()),
+            (ev.playing, self._on_playing),
+        ]
+        for event, cb in self._connections:
+            event.connect(cb)
+        if state.manifold is not None:
+            self.rebuild()
+
+    # ------------------------------------------------------------------ build
+    def rebuild(self) -> None:
+        p = self.plotter
+        p.clear_actors()
+        self.main = self.second = None
+        m = self.state.manifold
+        if m is None:
+            self.renderer.request()
+            return
+        c = m.corpus_
+        mean = self._points(m.shape_.mean_)
+        ext = mean.max(0) - mean.min(0)
+        self.offset = np.array([1.25 * max(float(ext[0]), 1e-6), 0.0, 0.0])
+        self.main = scene.add_lips(p, mean, c.faces, color=MAIN_COLOUR, name="lips_main")
+        self.second = scene.add_lips(p, mean, c.faces, color=SYNTH_COLOUR, offset=self.offset, name="lips_second")
+        self.second.set_visible(False)
+        self._on_trajectories(render=False)
+        # the lips face the viewer: look along -z (the capture's depth axis), y up
+        p.view_xy(render=False)
+        p.reset_camera(render=False)
+        p.camera_set = True
+        self.refresh()
+
+    def _points(self, row) -> np.ndarray:
+        from engine.corpus import frame_points
+
+        return frame_points(np.asarray(row, np.float32), self.state.manifold.corpus_.dims)
+
+    # ---------------------------------------------------------------- refresh
+    def refresh(self, render=True) -> None:
+        """Show what the state selects (playback > component > frame > state > mean)."""
+        s, m = self.state, self.state.manifold
+        if m is None or self.main is None:
+            return
+        second, second_colour = None, SYNTH_COLOUR
+        if s.playback is not None and (self._frames["original"] is not None or self._frames["synthetic"] is not None):
+            k = s.playback
+            fo, fs = self._frames["original"], self._frames["synthetic"]
+            main = fo[min(k, len(fo) - 1)] if fo is not None else fs[min(k, len(fs) - 1)]
+            if fo is not None and fs is not None:
+                second = fs[min(k, len(fs) - 1)]
+            t = k / (s.original or s.synthetic).rate
+            text = f"playback frame {k + 1}/{s.n_playback} ({t:.2f} s)"
+            if second is not None:
+                text += ": original (left), " + (s.synthetic.label or "synthetic") + " (right, red)"
+            self.slider.blockSignals(True)
+            self.slider.setValue(k)
+            self.slider.blockSignals(False)
+        elif s.component is not None:
+            i = s.component
+            main = m.shape_.component_deformation(i, -2.0)
+            second = m.shape_.component_deformation(i, 2.0)
+            second_colour = MAIN_COLOUR
+            text = f"shape component {i + 1}: mean −2 s.d. (left), +2 s.d. (right)"
+        elif s.frame is not None:
+            main = m.corpus_.frames[s.frame]
+            text = f"frame {s.frame} (captured)"
+        elif s.state is not None:
+            Fx = m.inverse_map.transform(m.states_.centroids_[[s.state]][:, :m.inverse_map.n_dims])
+            main = m.shape_.inverse_transform(Fx)[0]
+            text = f"state {s.state} (centroid through the inverse map)"
+        else:
+            main = m.shape_.mean_
+            text = "mean shape"
+        self.main.update(self._points(main))
+        if second is not None:
+            self.second.update(self._points(second))
+            self.second.actor.prop.color = second_colour
+        if self.second.visible != (second is not None):  # frame one mesh or both, once per change
+            self.second.set_visible(second is not None)
+            self.plotter.reset_camera(render=False)
+        self.caption.setText(text)
+        if render:
+            self.renderer.request()
+
+    def _on_trajectories(self, render=True):
+        m = self.state.manifold
+        self._frames = {k: (None if getattr(self.state, k) is None else lip_frames(m, getattr(self.state, k)))
+                        for k in ("original", "synthetic")}
+        n = self.state.n_playback
+        self.slider.blockSignals(True)
+        self.slider.setRange(0, max(n - 1, 0))
+        self.slider.setValue(0)
+        self.slider.setEnabled(n > 0)
+        self.slider.blockSignals(False)
+        self.play_btn.setEnabled(n > 0)
+        if render:
+            self.refresh()
+
+    # --------------------------------------------------------------- playback
+    @property
+    def speed(self) -> float:
+        return float(self.speed_box.currentData())
+
+    def _on_playing(self, on: bool) -> None:
+        self.play_btn.blockSignals(True)
+        self.play_btn.setChecked(on)
+        self.play_btn.setText("Pause" if on else "Play")
+        self.play_btn.blockSignals(False)
+        s = self.state
+        if on:
+            if s.playback is None or s.playback >= s.n_playback - 1:
+                s.set_playback(0)
+            rate = (s.original or s.synthetic).rate
+            self.timer.start(max(1, int(round(1000.0 / (rate * self.speed)))))
+            self._start_audio()
+        else:
+            self.timer.stop()
+            self.audio.stop()
+
+    def _start_audio(self):
+        s = self.state
+        if s.original is None or s.utterance is None:
+            return
+        c = s.manifold.corpus_
+        u = c.utterance(s.utterance)
+        path = resolve_audio_path(u.audio, s.source.get("path"))
+        if path is not None:
+            self.audio.play(path, start_s=(s.playback or 0) / c.rate, rate=self.speed)
+
+    def _tick(self):
+        s = self.state
+        k = (s.playback if s.playback is not None else -1) + 1
+        if k >= s.n_playback:
+            s.set_playing(False)
+            return
+        s.set_playback(k)
+
+    def _stop(self):
+        self.state.set_playing(False)
+        self.state.set_playback(None)
+
+    def _on_slider(self, v):
+        if self.state.n_playback:
+            self.state.set_playing(False)
+            self.state.set_playback(int(v))
+
+    # ---------------------------------------------------------------- misc
+    def camera(self) -> list:
+        return camera_of(self.plotter)
+
+    def set_camera(self, cam) -> None:
+        set_camera(self.plotter, cam)
+
+    def close_view(self) -> None:
+        self.timer.stop()
+        self.audio.stop()
+        for event, cb in self._connections:
+            try:
+                event.disconnect(cb)
+            except ValueError:
+                pass
+        self.renderer.stop()
+        close_plotter(self.plotter)

@@ -1,0 +1,113 @@
+"""Scree panel: explained variance of X and Y, and each X component as a lip deformation."""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+from matplotlib.figure import Figure
+from PySide6 import QtWidgets
+
+from app.views._common import blocked
+
+__all__ = ["ScreePanel", "scree_series"]
+
+MAX_SHOWN = 30
+
+
+def scree_series(manifold) -> dict:
+    """The numbers the panel plots: per-component and cumulative explained variance of X and Y.
+
+    Returns dict with ``x``, ``x_cum`` (from ``shape_.scree_``, of the total variance of F)
+    and ``y``, ``y_cum`` (from ``embedding_.explained_variance_ratio_``), each ndarray.
+    """
+    x = np.asarray(manifold.shape_.scree_, dtype=np.float64)
+    y = np.asarray(manifold.embedding_.explained_variance_ratio_, dtype=np.float64)
+    return {"x": x, "x_cum": np.cumsum(x), "y": y, "y_cum": np.cumsum(y)}
+
+
+class ScreePanel(QtWidgets.QWidget):
+    """Scree of X (blue) and Y (red), paper fig. 1(b) style, with a component chooser."""
+
+    def __init__(self, state, parent=None):
+        super().__init__(parent)
+        self.state = state
+        self.figure = Figure(figsize=(4, 3))
+        self.figure.subplots_adjust(left=0.16, right=0.97, bottom=0.2, top=0.95)
+        self.canvas = FigureCanvasQTAgg(self.figure)
+        self.canvas.mpl_connect("resize_event", lambda _e: self._fit_layout())
+        self.show_box = QtWidgets.QCheckBox("Show X component")
+        self.show_box.setToolTip("Show the component as the mean lip shape −2 s.d. and +2 s.d. in the lip view")
+        self.spin = QtWidgets.QSpinBox()
+        self.spin.setMinimum(1)
+        self.readout = QtWidgets.QLabel("")
+        row = QtWidgets.QHBoxLayout()
+        row.addWidget(self.show_box)
+        row.addWidget(self.spin)
+        row.addWidget(self.readout, 1)
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.setContentsMargins(2, 2, 2, 2)
+        lay.addWidget(self.canvas, 1)
+        lay.addLayout(row)
+        self.show_box.toggled.connect(lambda _on: self._push())
+        self.spin.valueChanged.connect(lambda _v: self._push())
+        ev = state.events
+        self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.component, self._on_component)]
+        for event, cb in self._connections:
+            event.connect(cb)
+        self.rebuild()
+
+    def rebuild(self) -> None:
+        m = self.state.manifold
+        self.figure.clear()
+        if m is None:
+            self.canvas.draw_idle()
+            return
+        d = scree_series(m)
+        ax = self.figure.add_subplot(111)
+        nx, ny = min(MAX_SHOWN, d["x"].size), d["y"].size
+        ax.plot(np.arange(1, nx + 1), 100 * (1 - d["x_cum"][:nx]), "o-", color="tab:blue", ms=3,
+                label="X residual (shape)")
+        ax.plot(np.arange(1, ny + 1), 100 * (1 - d["y_cum"]), "s-", color="tab:red", ms=3,
+                label="Y residual (shape + velocity)")
+        ax.set_xlabel("components")
+        ax.set_ylabel("residual variance (%)")
+        ax.set_ylim(bottom=0)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, frameon=False)
+        self._fit_layout()
+        self.canvas.draw_idle()
+        n = int(m.shape_.n_components_)
+        with blocked(self.spin):
+            self.spin.setMaximum(n)
+        self.spin.setSuffix(f" / {n}")
+        self._on_component(self.state.component)
+
+    def _fit_layout(self):
+        """Tight margins for the current size (skipped while the panel is hidden or tiny)."""
+        w, h = self.canvas.get_width_height()
+        if self.figure.axes and w > 150 and h > 120:
+            self.figure.tight_layout(pad=0.5)
+
+    def _push(self):
+        if self.state.manifold is None:
+            return
+        self.state.set_component(self.spin.value() - 1 if self.show_box.isChecked() else None)
+
+    def _on_component(self, i):
+        with blocked(self.show_box, self.spin):
+            self.show_box.setChecked(i is not None)
+            if i is not None:
+                self.spin.setValue(i + 1)
+        m = self.state.manifold
+        if m is None:
+            self.readout.setText("")
+            return
+        k = self.spin.value() - 1
+        ratio = float(m.shape_.scree_[k]) if k < len(m.shape_.scree_) else float("nan")
+        self.readout.setText(f"X{k + 1}: {100 * ratio:.1f}% of the variance")
+
+    def close_view(self) -> None:
+        for event, cb in self._connections:
+            try:
+                event.disconnect(cb)
+            except ValueError:
+                pass

@@ -1,0 +1,195 @@
+"""Long work off the GUI thread: a QThread worker with progress and cancel.
+
+``task(progress)`` runs in a worker thread; ``progress(stage, done, total)`` is the
+engine's progress callback: it forwards to the GUI through a queued signal and
+raises :class:`engine.progress.Cancelled` once the user has pressed Cancel, which
+unwinds the engine cleanly. Results and errors come back on the GUI thread.
+"""
+from __future__ import annotations
+
+import threading
+import traceback
+
+from PySide6 import QtCore, QtWidgets
+
+from engine.progress import Cancelled
+
+__all__ = ["Worker", "TaskRunner", "run_task", "run_blocking", "cancel_all"]
+
+
+class Worker(QtCore.QObject):
+    """Runs ``task(progress)`` once in its thread; emits progress / done / failed / cancelled."""
+
+    progress = QtCore.Signal(str, int, int)
+    done = QtCore.Signal(object)
+    failed = QtCore.Signal(str, str)  # message, traceback
+    cancelled = QtCore.Signal()
+
+    def __init__(self, task):
+        super().__init__()
+        self.task = task
+        self._cancel = threading.Event()
+
+    def cancel(self) -> None:
+        """Ask the task to stop at its next progress report."""
+        self._cancel.set()
+
+    @property
+    def cancel_requested(self) -> bool:
+        return self._cancel.is_set()
+
+    def report(self, stage, done, total) -> None:
+        """The progress callback handed to the engine (runs in the worker thread)."""
+        if self._cancel.is_set():
+            raise Cancelled("cancelled by the user")
+        self.progress.emit(str(stage), int(done), int(total))
+
+    @QtCore.Slot()
+    def run(self) -> None:
+        try:
+            result = self.task(self.report)
+        except Cancelled:
+            self.cancelled.emit()
+        except Exception as exc:  # noqa: BLE001 - shown to the user, with the traceback
+            self.failed.emit(f"{type(exc).__name__}: {exc}", traceback.format_exc())
+        else:
+            if self._cancel.is_set():
+                self.cancelled.emit()
+            else:
+                self.done.emit(result)
+
+
+class TaskRunner(QtCore.QObject):
+    """Owns one worker thread and (optionally) a progress dialog for it.
+
+    Signals ``finished(result)``, ``failed(message, traceback)``, ``cancelled()`` are
+    emitted on the GUI thread. Keep a reference until one of them fires.
+    """
+
+    finished = QtCore.Signal(object)
+    failed = QtCore.Signal(str, str)
+    cancelled = QtCore.Signal()
+
+    def __init__(self, task, *, parent=None, title: str = "Working", dialog: bool = True):
+        super().__init__(parent)
+        self.result = None
+        self.error = None
+        self.state = "running"
+        self.worker = Worker(task)
+        self.thread = QtCore.QThread()
+        self.worker.moveToThread(self.thread)
+        self.thread.started.connect(self.worker.run)
+        self.worker.done.connect(self._on_done)
+        self.worker.failed.connect(self._on_failed)
+        self.worker.cancelled.connect(self._on_cancelled)
+        self.dialog = None
+        if dialog:
+            self.dialog = QtWidgets.QProgressDialog(title, "Cancel", 0, 0, parent if isinstance(
+                parent, QtWidgets.QWidget) else None)
+            self.dialog.setWindowTitle("Lipspace")
+            self.dialog.setMinimumDuration(300)
+            self.dialog.setAutoClose(False)
+            self.dialog.setAutoReset(False)
+            self.dialog.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
+            self.dialog.canceled.connect(self.cancel)
+            self.worker.progress.connect(self._on_progress)
+
+    def start(self) -> "TaskRunner":
+        self.thread.start()
+        return self
+
+    def cancel(self) -> None:
+        self.worker.cancel()
+        if self.dialog is not None:
+            self.dialog.setLabelText("Cancelling…")
+
+    def _on_progress(self, stage, done, total):
+        d = self.dialog
+        if d is None or self.worker.cancel_requested:
+            return
+        d.setMaximum(max(total, 1))
+        d.setValue(min(done, max(total, 1)))
+        d.setLabelText(f"{stage}: {done}/{total}" if total > 1 else stage)
+
+    def _finish(self, state):
+        self.state = state
+        self.thread.quit()
+        self.thread.wait()
+        if self.dialog is not None:
+            self.dialog.close()
+
+    def _on_done(self, result):
+        self.result = result
+        self._finish("done")
+        self.finished.emit(result)
+
+    def _on_failed(self, message, tb):
+        self.error = (message, tb)
+        self._finish("failed")
+        self.failed.emit(message, tb)
+
+    def _on_cancelled(self):
+        self._finish("cancelled")
+        self.cancelled.emit()
+
+    def wait(self, timeout_ms: int | None = None) -> bool:
+        """Process events until the task ends (for scripts and tests); returns True if it ended."""
+        timer = QtCore.QElapsedTimer()
+        timer.start()
+        app = QtWidgets.QApplication.instance()
+        while self.state == "running":
+            app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 50)
+            if timeout_ms is not None and timer.elapsed() > timeout_ms:
+                return False
+        return True
+
+
+def run_task(task, *, parent=None, title: str = "Working", on_done=None, on_error=None, on_cancel=None,
+             dialog: bool = True) -> TaskRunner:
+    """Start ``task(progress)`` in a worker thread with a progress dialog; returns the runner.
+
+    ``on_done(result)``, ``on_error(message, traceback)`` and ``on_cancel()`` run on the
+    GUI thread. Without ``on_error`` a failure is shown in a message box.
+    """
+    runner = TaskRunner(task, parent=parent, title=title, dialog=dialog)
+    if on_done is not None:
+        runner.finished.connect(on_done)
+    if on_error is not None:
+        runner.failed.connect(on_error)
+    else:
+        runner.failed.connect(lambda msg, _tb: QtWidgets.QMessageBox.critical(
+            parent if isinstance(parent, QtWidgets.QWidget) else None, "Lipspace", msg))
+    if on_cancel is not None:
+        runner.cancelled.connect(on_cancel)
+    # keep the runner alive while it runs
+    _RUNNING.add(runner)
+    for sig in (runner.finished, runner.failed, runner.cancelled):
+        sig.connect(lambda *_a, r=runner: _RUNNING.discard(r))
+    return runner.start()
+
+
+_RUNNING: set = set()
+
+
+def cancel_all(timeout_ms: int = 5000) -> None:
+    """Cancel every task started by :func:`run_task` and wait for their threads (on quit)."""
+    for r in list(_RUNNING):
+        r.cancel()
+    for r in list(_RUNNING):
+        r.thread.quit()
+        r.thread.wait(timeout_ms)
+
+
+def run_blocking(task, *, parent=None, title: str = "Working"):
+    """Run ``task(progress)`` in a worker with a progress dialog and wait for it (GUI responsive).
+
+    Returns the result; raises :class:`Cancelled` if the user cancelled and
+    RuntimeError with the task's message if it failed.
+    """
+    runner = TaskRunner(task, parent=parent, title=title).start()
+    runner.wait()
+    if runner.state == "cancelled":
+        raise Cancelled("cancelled by the user")
+    if runner.state == "failed":
+        raise RuntimeError(runner.error[0])
+    return runner.result

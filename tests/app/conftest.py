@@ -1,0 +1,79 @@
+"""GUI test support: a display for tests marked ``gui`` (an X server, or Xvfb started here).
+
+Qt's QtInteractor needs a real X display (QT_QPA_PLATFORM=offscreen does not work
+with VTK's OpenGL widget). When DISPLAY is unset and ``Xvfb`` is installed, one
+server is started for the whole run and stopped at exit; otherwise ``gui`` tests
+are skipped with the reason.
+"""
+from __future__ import annotations
+
+import atexit
+import os
+import shutil
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+_XVFB = {"proc": None, "error": None}
+
+
+def _start_xvfb() -> str | None:
+    """Start Xvfb on a free display; returns the DISPLAY string or None (reason in _XVFB)."""
+    exe = shutil.which("Xvfb")
+    if exe is None:
+        _XVFB["error"] = ("no display (DISPLAY unset) and Xvfb is not installed; install xvfb or run "
+                          "'xvfb-run -a python -m pytest'")
+        return None
+    for n in range(97, 140):
+        if Path(f"/tmp/.X{n}-lock").exists() or Path(f"/tmp/.X11-unix/X{n}").exists():
+            continue
+        proc = subprocess.Popen([exe, f":{n}", "-screen", "0", "1600x1200x24", "-nolisten", "tcp"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        for _ in range(100):
+            if Path(f"/tmp/.X11-unix/X{n}").exists():
+                _XVFB["proc"] = proc
+                atexit.register(_stop_xvfb)
+                return f":{n}"
+            if proc.poll() is not None:
+                break
+            time.sleep(0.05)
+        if proc.poll() is None:
+            proc.terminate()
+            proc.wait(5)
+    _XVFB["error"] = "could not start Xvfb on any display :97..:139"
+    return None
+
+
+def _stop_xvfb():
+    proc = _XVFB["proc"]
+    if proc is not None and proc.poll() is None:
+        proc.terminate()
+        try:
+            proc.wait(5)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+def ensure_display() -> str | None:
+    """A usable DISPLAY (the existing one or a started Xvfb); None with the reason in _XVFB['error']."""
+    if os.environ.get("DISPLAY"):
+        return os.environ["DISPLAY"]
+    if _XVFB["error"] is not None:
+        return None
+    d = _start_xvfb()
+    if d is not None:
+        os.environ["DISPLAY"] = d
+    return d
+
+
+def pytest_runtest_setup(item):
+    if item.get_closest_marker("gui") is not None and ensure_display() is None:
+        pytest.skip(f"GUI test needs a display: {_XVFB['error']}")
+
+
+@pytest.fixture(scope="session")
+def app_manifold(small_manifold):
+    """The small synthetic manifold shared by the app tests (built once per session)."""
+    return small_manifold

@@ -1,0 +1,386 @@
+"""The explorer window on the small synthetic manifold (needs a display: Xvfb is started if absent)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture(scope="module")
+def window(qapp, app_manifold):
+    from app.main_window import MainWindow
+
+    w = MainWindow(app_manifold, source={"path": None, "preset": "small"})
+    w.resize(1300, 850)
+    w.show()
+    for _ in range(5):
+        qapp.processEvents()
+    yield w
+    w.close()
+
+
+@pytest.fixture
+def win(window, qapp):
+    """The shared window, its state reset for each test (the full rebuild is tested once, at creation)."""
+    s = window.state
+    s.set_playing(False)
+    s.set_utterance(None)
+    s.clear_selection()
+    s.set_visible_phones(())
+    s.set_component(None)
+    s.set_path_mode(False)
+    s.set_hemisphere("future")
+    s.set_color_mode("density")
+    qapp.processEvents()
+    return window
+
+
+def _points(manifold, row):
+    from engine.corpus import frame_points
+
+    return frame_points(np.asarray(row, np.float32), manifold.corpus_.dims)
+
+
+def _front_frame(view, Y):
+    """A frame whose point is nearest the camera (never hidden behind another)."""
+    cam = np.array(view.plotter.camera.position)
+    return int(np.argmin(np.linalg.norm(Y - cam, axis=1)))
+
+
+def _red_pixels(plotter):
+    plotter.render()
+    img = plotter.screenshot()
+    return int(((img[..., 0] > 200) & (img[..., 1] < 60) & (img[..., 2] < 60)).sum())
+
+
+def test_window_opens_with_every_view(win, app_manifold):
+    m = app_manifold
+    N = m.Fy_.shape[0]
+    assert "synthetic talker (small)" in win.windowTitle()
+    assert f"{N} frames" in win.summary_label.text()
+    assert win.manifold_view.handles["points"].mesh.n_points == N
+    assert win.lip_view.main.mesh.n_points == m.corpus_.n_points
+    assert set(win.docks) == {"lips", "clusters", "scree", "editor"}
+    assert win.editor.utt_box.count() == len(m.corpus_.utterances)
+    img = win.manifold_view.plotter.screenshot()
+    assert img.std() > 5  # not blank
+    grab = win.grab().toImage()
+    assert grab.width() > 1000 and grab.height() > 700
+
+
+def test_click_selects_frame_colours_hemisphere_and_links_lips(win, qtbot, app_manifold):
+    from PySide6 import QtCore
+
+    from app.scene import pick_display_point
+
+    m, view, s = app_manifold, win.manifold_view, win.state
+    Y = np.asarray(m.Fy_[:, :3], np.float64)
+    before = win.lip_view.main.points.copy()
+    i = _front_frame(view, Y)
+    x, y = pick_display_point(view.plotter, Y[i])
+    # a real mouse click on the VTK widget (Qt y runs down, VTK display y up from the window's bottom row)
+    widget = view.plotter.interactor
+    ratio = widget.devicePixelRatioF()
+    height = view.plotter.render_window.GetSize()[1]
+    pos = QtCore.QPoint(int(round(x / ratio)), int(round((height - 1 - y) / ratio)))
+    qtbot.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, pos=pos)
+    if s.frame is None:  # some VTK builds drop synthetic Qt clicks; pick through VTK's picker instead
+        view.picker.pick(x, y)
+    assert s.frame is not None and np.allclose(Y[s.frame], Y[i])
+    assert s.state == int(m.states_.labels_[s.frame]) and s.color_mode == "distance"
+    values = view.handles["points"].values
+    mine = m.states_.labels_ == s.state
+    assert np.all(values[mine] == 0)
+    future = m.states_.future(s.state)[m.states_.labels_]
+    assert np.array_equal(np.isnan(values), ~np.isfinite(future))
+    np.testing.assert_allclose(values[~np.isnan(values)], future[np.isfinite(future)])
+    rgb = view.handles["points"].rgb
+    assert np.all(rgb[mine][:, 0] > 100) and np.all(rgb[mine][:, 2] < 40)  # hop 0 = red
+    # linked lip view shows the captured frame
+    np.testing.assert_allclose(win.lip_view.main.points, _points(m, m.corpus_.frames[s.frame]), atol=1e-5)
+    assert not np.allclose(win.lip_view.main.points, before)
+    assert view.handles["local"].visible and view.handles["marker"].visible
+    # past hemisphere recolours from the same state
+    s.set_hemisphere("past")
+    past = m.states_.past(s.state)[m.states_.labels_]
+    np.testing.assert_allclose(np.nan_to_num(view.handles["points"].values, nan=-1),
+                               np.nan_to_num(np.where(np.isfinite(past), past, np.nan), nan=-1))
+    # shift-click on a far state draws the minimum-distance path over centroids
+    d = m.states_.future(s.state)
+    far = int(np.flatnonzero(np.isfinite(d) & (d == np.nanmax(np.where(np.isfinite(d), d, np.nan))))[0])
+    j = int(np.flatnonzero(m.states_.labels_ == far)[0])
+    view._on_pick(j, Y[j], True)
+    assert s.target == far and s.path is not None
+    path = view.handles["path"]
+    assert path.visible
+    np.testing.assert_allclose(path.points, m.states_.centroids_[s.path][:, :3], atol=1e-9)
+    assert f"{len(s.path) - 1} hops" in view.info.text()
+
+
+def test_synthesise_typed_text_draws_red_trajectory(win, qtbot, app_manifold):
+    m, view, s, ed = app_manifold, win.manifold_view, win.state, win.editor
+    ed.set_method("manifold")
+    assert ed.set_text("bob may bake a pie", source="text")
+    assert len(ed.targets.targets) >= 5
+    ed.synthesize()
+    qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)
+    syn = view.handles["synthetic"]
+    assert syn.visible and syn.mesh.n_points == len(s.synthetic) == ed.targets.n_frames
+    hidden = [view.handles[k] for k in ("points", "plane", "marker")]
+    try:
+        for h in hidden:
+            h.set_visible(False)
+        view._bar.SetVisibility(False)  # the colour bar's red end
+        assert _red_pixels(view.plotter) > 30  # the synthetic trajectory is red
+        syn.set_visible(False)
+        assert _red_pixels(view.plotter) == 0  # and nothing else is
+    finally:
+        for h in hidden:
+            h.set_visible(True)
+        view._bar.SetVisibility(True)
+        syn.set_visible(True)
+    # playback without an original shows the synthetic lips alone
+    s.set_playback(5)
+    expect = m.shape_.inverse_transform(s.synthetic.Fx[5:6])[0]
+    np.testing.assert_allclose(win.lip_view.main.points, _points(m, expect), atol=1e-4)
+    assert not win.lip_view.second.visible
+
+
+def test_utterance_synthesis_reports_error_and_plays_side_by_side(win, qtbot, app_manifold):
+    m, s, ed = app_manifold, win.state, win.editor
+    u = m.corpus_.utterances[1]
+    ed.set_source("utterance")
+    ed.utt_box.setCurrentIndex(1)
+    assert ed.load()
+    assert s.utterance == u.id and win.manifold_view.handles["original"].visible
+    ed.set_method("linear")
+    ed.synthesize()
+    qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)
+    assert "RMSE(X)" in ed.readout.text()
+    err = ed.last_error
+    direct = np.sqrt(np.mean((np.asarray(s.synthetic.Fx, np.float64) - m.Fx_[u.start:u.stop]) ** 2))
+    assert err["rmse_x"] == pytest.approx(direct, rel=1e-6) and err["rmse_x"] > 0
+    s.set_playback(10)
+    np.testing.assert_allclose(win.lip_view.main.points, _points(m, m.corpus_.frames[u.start + 10]), atol=1e-5)
+    assert win.lip_view.second.visible
+    syn10 = _points(m, m.shape_.inverse_transform(s.synthetic.Fx[10:11])[0])
+    np.testing.assert_allclose(win.lip_view.second.points, syn10, atol=1e-4)
+    # playing advances the frame on the timer and stops at the end
+    s.set_playback(len(s.original) - 3)
+    s.set_playing(True)
+    qtbot.waitUntil(lambda: not s.playing, timeout=5000)
+    assert s.playback == len(s.original) - 1
+
+
+def test_dragging_a_target_moves_its_frame(win, qtbot):
+    from PySide6 import QtCore
+
+    ed = win.editor
+    assert ed.set_text("m 0.2 aa 0.3 p 0.2", source="phones")
+    tl = ed.timeline
+    tl.resize(600, 80)
+    f0 = ed.targets.targets[1].frame
+    start = QtCore.QPoint(int(tl.marker_x(1)), int(tl.marker_y()))
+    qtbot.mousePress(tl, QtCore.Qt.MouseButton.LeftButton, pos=start)
+    qtbot.mouseMove(tl, start + QtCore.QPoint(40, 0))
+    qtbot.mouseRelease(tl, QtCore.Qt.MouseButton.LeftButton, pos=start + QtCore.QPoint(40, 0))
+    f1 = ed.targets.targets[1].frame
+    assert f1 > f0 and f1 < ed.targets.targets[2].frame
+
+
+TEXTGRID = """File type = "ooTextFile"
+Object class = "TextGrid"
+
+xmin = 0
+xmax = 0.9
+tiers? <exists>
+size = 1
+item []:
+    item [1]:
+        class = "IntervalTier"
+        name = "phones"
+        xmin = 0
+        xmax = 0.9
+        intervals: size = 3
+        intervals [1]:
+            xmin = 0
+            xmax = 0.25
+            text = "m"
+        intervals [2]:
+            xmin = 0.25
+            xmax = 0.6
+            text = "aa"
+        intervals [3]:
+            xmin = 0.6
+            xmax = 0.9
+            text = "p"
+"""
+
+
+def test_textgrid_input_and_bad_input(win, tmp_path):
+    ed = win.editor
+    tg = tmp_path / "mop.TextGrid"
+    tg.write_text(TEXTGRID)
+    assert ed.set_text(str(tg), source="textgrid")
+    assert [t.label for t in ed.targets.targets] == ["m", "aa", "p"]
+    assert ed.targets.n_frames == round(0.9 * win.state.manifold.corpus_.rate)
+    assert not ed.set_text("zz 0.1 qq 0.2", source="phones")  # unknown phones: said, not raised
+    assert "does not occur" in ed.readout.text()
+    assert ed.targets.labels == ["m", "aa", "p"]  # the last good targets stay
+
+
+def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
+    from app.main_window import export_trajectory, trajectory_table
+    from engine import targets as T
+    from engine.io.meshfile import read_obj
+    from app.views.lip_view import lip_frames
+    from app.views.trajectory_editor import synthesize_targets
+
+    m, s = app_manifold, win.state
+    u = m.corpus_.utterances[0]
+    s.set_utterance(u.id)
+    data, _ = synthesize_targets(m, T.targets_from_utterance(m, u.id, on_collision="merge"), "manifold")
+    s.set_trajectories(synthetic=data)
+    traj = win.current_trajectory()
+    assert traj is s.synthetic
+    values, cols = trajectory_table(traj)
+    export_trajectory(m, traj, tmp_path / "t.csv")
+    back = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1)
+    header = (tmp_path / "t.csv").read_text().splitlines()[0].split(",")
+    assert header == ["time", *cols]
+    np.testing.assert_allclose(back[:, 1:], values, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(back[:, 0], np.arange(len(traj)) / traj.rate, atol=1e-6)
+    export_trajectory(m, traj, tmp_path / "t.npy")
+    np.testing.assert_array_equal(np.load(tmp_path / "t.npy"), values)
+    files = export_trajectory(m, traj, tmp_path / "seq.obj")
+    assert len(files) == len(traj)
+    V, F = read_obj(files[3])
+    np.testing.assert_allclose(V, _points(m, lip_frames(m, traj)[3]), atol=1e-5)
+    with pytest.raises(ValueError, match="cannot export"):
+        export_trajectory(m, traj, tmp_path / "t.txt")
+    # the 3-D views as figures
+    png = win.export_view("manifold", tmp_path / "view.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    from app.figures import vector_export_available
+
+    if vector_export_available():
+        svg = win.export_view("lips", tmp_path / "lips.svg")
+        assert b"<svg" in svg.read_bytes()[:2000]
+    # session: save, disturb, reopen -> same selection, colour mode and camera
+    s.set_hemisphere("past")
+    s.select_frame(400)
+    s.set_color_mode("class")
+    cam = win.manifold_view.camera()
+    path = win.save_session(tmp_path / "view.lipspace.json")
+    s.set_manifold(m, source={"path": None, "preset": "small"})
+    win.manifold_view.plotter.camera.azimuth = 40
+    assert win.open_session(path) is None  # same source: applied at once
+    assert (s.frame, s.color_mode, s.hemisphere, s.utterance) == (400, "class", "past", u.id)
+    np.testing.assert_allclose(win.manifold_view.camera(), cam, atol=1e-6)
+    assert win.manifold_view.color_box.currentData() == "class"
+
+
+def test_scree_panel_and_component_deformation(win, app_manifold):
+    from app.views.scree_panel import scree_series
+
+    m, s, sc = app_manifold, win.state, win.scree
+    lines = sc.figure.axes[0].get_lines()
+    d = scree_series(m)
+    np.testing.assert_allclose(lines[1].get_ydata(), 100 * (1 - d["y_cum"]))
+    sc.spin.setValue(2)
+    sc.show_box.setChecked(True)
+    assert s.component == 1
+    np.testing.assert_allclose(win.lip_view.main.points, _points(m, m.shape_.component_deformation(1, -2.0)),
+                               atol=1e-4)
+    np.testing.assert_allclose(win.lip_view.second.points, _points(m, m.shape_.component_deformation(1, 2.0)),
+                               atol=1e-4)
+    assert "component 2" in win.lip_view.caption.text()
+
+
+def test_worker_reports_progress_cancels_and_fails(qapp, qtbot):
+    from app.workers import TaskRunner, run_blocking
+    from engine.progress import Cancelled
+
+    seen = []
+
+    def slow(progress):
+        for k in range(10 ** 6):
+            progress("step", k, 10 ** 6)
+            if k == 3:
+                seen.append("running")
+            import time
+
+            time.sleep(0.002)
+        return "never"
+
+    r = TaskRunner(slow, dialog=False).start()
+    r.worker.progress.connect(lambda st, d, t: seen.append(d))
+    qtbot.waitUntil(lambda: "running" in seen, timeout=5000)
+    r.cancel()
+    assert r.wait(10000) and r.state == "cancelled"
+    r2 = TaskRunner(lambda p: 1 / 0, dialog=False).start()
+    assert r2.wait(10000) and r2.state == "failed" and "ZeroDivisionError" in r2.error[0]
+    assert run_blocking(lambda p: (p("x", 1, 1), 42)[1]) == 42
+    with pytest.raises(Cancelled):
+        run_blocking(lambda p: (_ for _ in ()).throw(Cancelled("stop")))
+
+
+def test_audio_is_guarded(qapp, tmp_path):
+    from app.audio import AudioPlayer, resolve_audio_path
+
+    a = AudioPlayer()
+    assert a.available or a.reason  # either it plays, or it says why not
+    assert a.play(None) is False
+    a.stop()
+    wav = tmp_path / "u.wav"
+    wav.write_bytes(b"RIFF")
+    assert resolve_audio_path("u.wav", tmp_path / "corpus.npz") == wav
+    assert resolve_audio_path("missing.wav", tmp_path / "corpus.npz") is None
+    assert resolve_audio_path(None) is None
+
+
+def test_clusters_panel_shows_ellipsoids_and_exports_table(win, tmp_path, app_manifold):
+    import csv
+
+    from PySide6 import QtCore
+
+    panel, view, s = win.clusters, win.manifold_view, win.state
+    rows = panel.table_rows()
+    assert rows and panel.table.rowCount() == len(rows)
+    counts = [r["count"] for r in rows]
+    assert counts == sorted(counts, reverse=True)
+    ph = rows[0]["phone"]
+    item = next(panel.table.item(i, 0) for i in range(panel.table.rowCount()) if panel.table.item(i, 0).text() == ph)
+    item.setCheckState(QtCore.Qt.CheckState.Checked)  # the user ticks the phone
+    assert s.visible_phones == {ph}
+    e = view.ellipsoids[ph]
+    verts, _faces = s.clusters.ellipsoid(ph)
+    assert e.visible and e.mesh.n_points == len(verts)
+    np.testing.assert_allclose(e.mesh.points.mean(0), np.asarray(verts).mean(0), rtol=1e-4, atol=1e-4)
+    panel.none_btn.click()
+    assert not e.visible and item.checkState() == QtCore.Qt.CheckState.Unchecked
+    out = win.export_clusters(tmp_path / "clusters.csv")
+    with open(out, newline="") as fh:
+        back = list(csv.DictReader(fh))
+    assert [r["phone"] for r in back] == [r["phone"] for r in rows]
+    assert [int(r["count"]) for r in back] == counts
+
+
+def test_open_session_reloads_its_source_in_the_worker(win, qtbot, tmp_path, app_manifold):
+    """Last test: it replaces the window's manifold by a loaded copy."""
+    import json
+
+    mfile = app_manifold.save(tmp_path / "m.npz")
+    sess = tmp_path / "s.lipspace.json"
+    sess.write_text(json.dumps({"lipspace_session": 1, "source": {"path": str(mfile), "preset": "default"},
+                                "selection": {"frame": 50, "state": None, "target": None},
+                                "color_mode": "class", "hemisphere": "past"}))
+    runner = win.open_session(sess)
+    assert runner is not None  # another source: loaded in the worker, then the session applied
+    qtbot.waitUntil(lambda: runner.state != "running", timeout=30000)
+    s = win.state
+    assert runner.state == "done" and s.source["path"] == str(mfile.resolve())
+    assert (s.frame, s.color_mode, s.hemisphere) == (50, "class", "past")
+    assert "m.npz" in win.windowTitle()
+    np.testing.assert_array_equal(s.manifold.Fy_, app_manifold.Fy_)

@@ -1,0 +1,272 @@
+"""AppState, its events and the derived colourings: pure Python, no display."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.state import (COLOR_MODES, UNREACHABLE_RGB, AppState, Event, frame_phones, hop_distance_colors,
+                       hop_distance_scalars, hop_distances, knn_density, original_trajectory, phone_palette,
+                       point_colors)
+
+
+# ----------------------------------------------------------------------------- Event
+def test_event_calls_in_order_and_disconnects():
+    ev, got = Event("x"), []
+    a = ev.connect(lambda v: got.append(("a", v)))
+    ev.connect(lambda v: got.append(("b", v)))
+    ev.emit(1)
+    ev.disconnect(a)
+    ev.emit(2)
+    assert got == [("a", 1), ("b", 1), ("b", 2)]
+    with pytest.raises(ValueError, match="not connected"):
+        ev.disconnect(a)
+    with pytest.raises(TypeError):
+        ev.connect(3)
+
+
+def test_event_propagates_callback_exceptions():
+    ev, got = Event("boom"), []
+
+    def bad(_v):
+        raise RuntimeError("view broke")
+
+    ev.connect(bad)
+    ev.connect(got.append)
+    with pytest.raises(RuntimeError, match="view broke"):
+        ev.emit(5)
+    assert got == []  # nothing after the failing callback ran silently
+
+
+# ----------------------------------------------------------------------------- selection
+def _record(state, *names):
+    log = []
+    for n in names:
+        getattr(state.events, n).connect(lambda *v, n=n: log.append((n, v[0] if len(v) == 1 else v)))
+    return log
+
+
+def test_select_frame_sets_state_and_switches_to_distance(app_manifold):
+    s = AppState(app_manifold)
+    log = _record(s, "frame", "state", "color_mode")
+    s.select_frame(123)
+    lab = int(app_manifold.states_.labels_[123])
+    assert (s.frame, s.state) == (123, lab)
+    assert ("frame", 123) in log and ("state", lab) in log
+    assert s.color_mode == "distance"  # clicking colours the hemisphere
+    log.clear()
+    s.select_frame(123)  # no change, no events
+    assert log == []
+    s.set_color_mode("class")
+    s.set_hemisphere("off")
+    s.select_frame(5)
+    assert s.color_mode == "class"  # hemisphere off: the colouring is left alone
+
+
+def test_select_frame_validates(app_manifold):
+    s = AppState(app_manifold)
+    with pytest.raises(IndexError, match="out of range"):
+        s.select_frame(app_manifold.Fy_.shape[0])
+    with pytest.raises(TypeError):
+        s.select_frame(1.5)
+    with pytest.raises(ValueError, match="hemisphere"):
+        s.set_hemisphere("both")
+    with pytest.raises(ValueError, match="colour mode"):
+        s.set_color_mode("rainbow")
+    with pytest.raises(RuntimeError, match="no manifold"):
+        AppState().select_frame(0)
+
+
+def _reachable_pair(m):
+    g = m.states_
+    for a in range(g.centroids_.shape[0]):
+        d = g.future(a)
+        far = np.flatnonzero(np.isfinite(d) & (d >= 3))
+        if far.size:
+            return a, int(far[0]), d
+    pytest.skip("no pair of states 3+ hops apart")
+
+
+def test_path_mode_second_click_sets_target_and_path(app_manifold):
+    m = app_manifold
+    a, b, d = _reachable_pair(m)
+    fa = int(np.flatnonzero(m.states_.labels_ == a)[0])
+    fb = int(np.flatnonzero(m.states_.labels_ == b)[0])
+    s = AppState(m)
+    paths = _record(s, "path")
+    s.set_path_mode(True)
+    s.select_frame(fa)
+    assert s.target is None
+    s.select_frame(fb)  # path mode: the second click is the target
+    assert (s.frame, s.state, s.target) == (fa, a, b)
+    assert s.path[0] == a and s.path[-1] == b and len(s.path) - 1 == int(d[b])
+    assert len(paths) == 1 and np.array_equal(paths[0][1], s.path)
+    # every step is an edge of the graph
+    A = m.states_.adjacency_
+    assert all(A[i, j] for i, j in zip(s.path[:-1], s.path[1:]))
+    # a plain (non-path) selection of a new source clears target and path
+    s.set_path_mode(False)
+    s.select_frame(fb)
+    assert s.target is None and s.path is None
+
+
+def test_shift_click_overrides_path_mode(app_manifold):
+    m = app_manifold
+    a, b, _ = _reachable_pair(m)
+    s = AppState(m)
+    s.select_state(a)
+    assert s.frame is None and s.state == a
+    s.select_frame(int(np.flatnonzero(m.states_.labels_ == b)[0]), as_target=True)
+    assert s.target == b and s.state == a
+
+
+def test_hemisphere_off_marks_only_the_selected_state(app_manifold):
+    m = app_manifold
+    s = AppState(m)
+    s.set_hemisphere("off")
+    s.select_frame(50)
+    c = point_colors("distance", m, s)
+    mine = m.states_.labels_ == s.state
+    assert np.all(c.values[mine] == 0) and np.isnan(c.values[~mine]).all()
+    np.testing.assert_allclose(c.rgb[~mine][0], UNREACHABLE_RGB, atol=1e-6)
+
+
+def test_utterance_trajectory_and_playback(app_manifold):
+    m = app_manifold
+    u = m.corpus_.utterances[2]
+    s = AppState(m)
+    log = _record(s, "trajectory", "playing", "playback")
+    with pytest.raises(RuntimeError, match="nothing to play"):
+        s.set_playback(0)
+    s.set_utterance(u.id)
+    assert s.original.label == u.id and len(s.original) == u.n_frames
+    assert np.array_equal(s.original.frames, np.arange(u.start, u.stop))
+    assert np.array_equal(s.original.Y, m.Fy_[u.start:u.stop])
+    s.set_playing(True)
+    s.set_playback(4)
+    assert s.playing and s.playback == 4
+    with pytest.raises(IndexError):
+        s.set_playback(u.n_frames)
+    s.set_utterance(None)  # clears trajectories, stops playback
+    assert s.original is None and not s.playing and s.playback is None
+    assert [n for n, _ in log].count("trajectory") == 2
+    with pytest.raises(KeyError):
+        s.set_utterance("no-such-utterance")
+
+
+def test_set_manifold_clears_selection(app_manifold):
+    s = AppState(app_manifold)
+    s.select_frame(3)
+    s.set_visible_phones(["m"])
+    s.set_manifold(app_manifold, source={"path": None, "preset": "small"})
+    assert (s.frame, s.state, s.target, s.path) == (None, None, None, None)
+    assert s.visible_phones == frozenset() and s.source["preset"] == "small"
+
+
+def test_visible_phones_and_component(app_manifold):
+    s = AppState(app_manifold)
+    log = _record(s, "visible_phones", "component")
+    s.set_phone_visible("m", True)
+    s.set_phone_visible("p", True)
+    s.set_phone_visible("m", False)
+    assert s.visible_phones == {"p"}
+    s.set_component(0)
+    with pytest.raises(IndexError):
+        s.set_component(int(app_manifold.shape_.n_components_))
+    assert log[-1] == ("component", 0) and len(log) == 4
+
+
+# ----------------------------------------------------------------------------- derived data
+def test_hop_distance_scalars_and_colours():
+    dist = np.array([0.0, 1.0, 4.0, np.inf])
+    labels = np.array([0, 0, 1, 2, 3, 3])
+    v = hop_distance_scalars(dist, labels)
+    np.testing.assert_array_equal(v[:4], [0, 0, 1, 4])
+    assert np.isnan(v[4:]).all()
+    rgb, values, clim = hop_distance_colors(dist, labels)
+    assert clim == (0.0, 4.0)
+    np.testing.assert_allclose(rgb[4], UNREACHABLE_RGB, atol=1e-6)
+    assert rgb[0][0] > 0.4 and rgb[0][2] < 0.1  # distance 0 is red (paper: most similar = red)
+    assert rgb[3][2] > 0.4 and rgb[3][0] < 0.1  # farthest is blue
+
+
+def test_point_colors_distance_marks_selected_state_and_unreachable(app_manifold):
+    m = app_manifold
+    s = AppState(m)
+    s.select_frame(200)
+    c = point_colors("distance", m, s)
+    mine = m.states_.labels_ == s.state
+    assert np.all(c.values[mine] == 0)
+    d = hop_distances(m, s.state, "future")
+    unreach = ~np.isfinite(d[m.states_.labels_])
+    assert np.array_equal(np.isnan(c.values), unreach)
+    np.testing.assert_allclose(c.rgb[unreach], np.broadcast_to(UNREACHABLE_RGB, (unreach.sum(), 3)), atol=1e-6)
+    s.set_hemisphere("past")
+    cp = point_colors("distance", m, s)
+    np.testing.assert_array_equal(np.nan_to_num(cp.values, nan=-1),
+                                  np.nan_to_num(hop_distance_scalars(m.states_.past(s.state), m.states_.labels_),
+                                                nan=-1))
+
+
+def test_point_colors_every_mode(app_manifold):
+    m = app_manifold
+    s = AppState(m)
+    s.set_utterance(m.corpus_.utterances[0].id)
+    N = m.Fy_.shape[0]
+    for mode in COLOR_MODES:
+        c = point_colors(mode, m, s)
+        assert c.rgb.shape == (N, 3) and c.rgb.dtype == np.float32
+        assert np.all((c.rgb >= 0) & (c.rgb <= 1))
+    cls = point_colors("class", m, s)
+    k = m.tangent_.classes_
+    for a in range(4):  # one colour per class
+        assert len(np.unique(cls.rgb[k == a], axis=0)) == 1
+    utt = point_colors("utterance", m, s)
+    u = m.corpus_.utterances[0]
+    assert np.all(utt.rgb[u.start:u.stop] == 0)  # the current utterance in black
+    ph = point_colors("phone", m, s)
+    pal = phone_palette(s)
+    f = int(np.flatnonzero(s.phones != "")[0])
+    np.testing.assert_allclose(ph.rgb[f], pal[s.phones[f]], atol=1e-6)
+    dens = point_colors("density", m, s)
+    assert dens.values.shape == (N,) and np.isfinite(dens.values).all()
+    with pytest.raises(ValueError):
+        point_colors("bogus", m, s)
+
+
+def test_knn_density_is_higher_in_a_dense_cluster():
+    rng = np.random.default_rng(0)
+    Y = np.vstack([rng.normal(0, 0.1, (200, 3)), rng.normal(5, 2.0, (200, 3))])
+    d = knn_density(Y, k=8)
+    assert d.shape == (400,) and d.dtype == np.float32
+    assert np.median(d[:200]) > np.median(d[200:]) + 3
+
+
+def test_frame_phones_cover_the_alignment(app_manifold):
+    c = app_manifold.corpus_
+    ph = frame_phones(c)
+    u = c.utterances[0]
+    p = u.phones[len(u.phones) // 2]
+    assert ph[c.time_to_frame(u, p.mid)] == p.label
+    assert ph.shape == (c.n_frames,)
+
+
+def test_original_trajectory_rows(app_manifold):
+    m = app_manifold
+    u = m.corpus_.utterances[1]
+    t = original_trajectory(m, u.id)
+    np.testing.assert_array_equal(t.Fx, m.Fx_[u.start:u.stop])
+    assert t.rate == m.corpus_.rate
+
+
+def test_state_picking_session_and_explore_cli_are_qt_free():
+    import subprocess
+    import sys
+
+    code = ("import sys, app.state, app.picking, app.session, app.cli.explore\n"
+            "gui = ('PySide6', 'vtkmodules', 'pyvista', 'pyvistaqt')\n"
+            "bad = sorted(m for m in sys.modules if m.split('.')[0] in gui)\n"
+            "print(','.join(bad))\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       cwd=str(__import__("pathlib").Path(__file__).resolve().parents[2]))
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == ""

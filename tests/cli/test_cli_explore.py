@@ -1,0 +1,101 @@
+"""``lipspace explore`` without opening a window: display check, inputs, loading and the cache."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import argparse
+
+from app.cli import CliError
+from app.cli import explore
+from app.cli.explore import EXIT_NO_DISPLAY, cached_manifold_path, has_display, load_source, source_kind
+from engine.progress import Cancelled
+
+
+def run_explore(argv):
+    p = argparse.ArgumentParser(prog="lipspace explore")
+    explore.add_arguments(p)
+    return explore.run(p.parse_args(argv))
+
+
+@pytest.fixture
+def no_display(monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr("sys.platform", "linux")
+
+
+@pytest.mark.parametrize("argv", [[], ["--preset", "small"], ["m.npz", "--session", "s.json"]])
+def test_no_display_explains_and_exits_3(no_display, capsys, argv):
+    assert run_explore(argv) == EXIT_NO_DISPLAY
+    err = capsys.readouterr().err
+    assert "needs a display" in err and "xvfb-run -a lipspace explore" in err
+    for cmd in ("lipspace build -o m.npz", "lipspace info m.npz", "lipspace figures m.npz -o figs/",
+                "lipspace clusters", "lipspace synthesize", "lipspace evaluate"):
+        assert cmd in err
+
+
+def test_has_display():
+    assert has_display({"DISPLAY": ":1"}, "linux")
+    assert has_display({"WAYLAND_DISPLAY": "wayland-0"}, "linux")
+    assert not has_display({}, "linux")
+    assert has_display({}, "win32") and has_display({}, "darwin")
+
+
+def test_bad_file_is_a_user_error(monkeypatch, tmp_path):
+    monkeypatch.setenv("DISPLAY", ":0")  # inputs are checked before any window is opened
+    with pytest.raises(CliError, match="no such file"):
+        run_explore([str(tmp_path / "missing.npz")])
+    junk = tmp_path / "junk.npz"
+    junk.write_bytes(b"not a zip")
+    with pytest.raises(CliError, match="not a Lipspace"):
+        run_explore([str(junk)])
+    bad_session = tmp_path / "s.json"
+    bad_session.write_text("{}")
+    with pytest.raises(CliError, match="not a Lipspace session"):
+        run_explore(["--session", str(bad_session)])
+
+
+def test_cache_path_follows_env(monkeypatch, tmp_path):
+    monkeypatch.setenv("LIPSPACE_CACHE_DIR", str(tmp_path))
+    p = cached_manifold_path("small")
+    assert p.parent.parent == tmp_path and "small" in p.name and p.suffix == ".npz"
+    assert cached_manifold_path("paper") != p
+    with pytest.raises(ValueError, match="preset"):
+        cached_manifold_path("huge")
+
+
+def test_load_source_manifold_corpus_and_cache(small_manifold, small_corpus, monkeypatch, tmp_path):
+    monkeypatch.setenv("LIPSPACE_CACHE_DIR", str(tmp_path / "cache"))
+    mpath = small_manifold.save(tmp_path / "m.npz")
+    assert source_kind(mpath) == "manifold"
+    m, src = load_source(mpath)
+    assert src["kind"] == "manifold" and src["path"] == str(mpath.resolve())
+    np.testing.assert_array_equal(m.Fy_, small_manifold.Fy_)
+    # the synthetic talker comes from the cache when the cache holds it
+    small_manifold.save(cached_manifold_path("small"))
+    stages = []
+    m2, src2 = load_source(None, "small", lambda st, d, t: stages.append(st))
+    assert src2 == {"path": None, "preset": "small", "kind": "synthetic"}
+    assert stages and set(stages) == {"loading cached manifold"}
+    np.testing.assert_array_equal(m2.Fy_, small_manifold.Fy_)
+    # a corpus file is fitted (a few utterances keep it quick); cancelling stops the fit
+    cpath = small_corpus.subset([u.id for u in small_corpus.utterances[:5]]).save(tmp_path / "c.npz")
+    assert source_kind(cpath) == "corpus"
+    m3, src3 = load_source(cpath)
+    assert src3["kind"] == "corpus" and m3.Fy_.shape[0] == sum(u.n_frames for u in small_corpus.utterances[:5])
+
+    def cancel(*_a):
+        raise Cancelled("stop")
+
+    with pytest.raises(Cancelled):
+        load_source(cpath, progress=cancel)
+    with pytest.raises(ValueError, match="no such file"):
+        source_kind(tmp_path / "nope.npz")
+
+
+def test_lipspace_alone_is_explore(no_display, capsys):
+    from app.cli import main
+
+    assert main([]) == EXIT_NO_DISPLAY
+    assert "xvfb-run -a lipspace explore" in capsys.readouterr().err

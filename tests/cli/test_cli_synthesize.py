@@ -1,0 +1,101 @@
+import csv
+
+import numpy as np
+import pytest
+
+from app.cli import main
+
+
+@pytest.fixture(scope="module")
+def mfile(small_manifold, tmp_path_factory):
+    return small_manifold.save(tmp_path_factory.mktemp("synth") / "m.npz")
+
+
+def test_phones_to_csv_and_obj_meshes(mfile, small_manifold, tmp_path, capsys):
+    out = tmp_path / "traj.csv"
+    meshes = tmp_path / "mesh"
+    assert main(["synthesize", "--manifold", str(mfile), "--phones", "sil 0.15 m 0.08 aa 0.12 p 0.08 sil 0.15",
+                 "-o", str(out), "--mesh-dir", str(meshes)]) == 0
+    text = capsys.readouterr().out
+    assert "manifold: 35 frames" in text and "wrote 35 OBJ files" in text
+    rows = list(csv.reader(out.read_text().splitlines()))
+    c = small_manifold.corpus_
+    assert rows[0][0] == "time" and len(rows[0]) == 1 + c.frames.shape[1]
+    assert len(rows) == 1 + 35
+    vals = np.array(rows[1:], dtype=float)
+    np.testing.assert_allclose(np.diff(vals[:, 0]), 1 / 60, atol=1e-6)
+    objs = sorted(meshes.glob("*.obj"))
+    assert len(objs) == 35
+    verts = [ln for ln in objs[0].read_text().splitlines() if ln.startswith("v ")]
+    assert len(verts) == c.n_points
+
+
+def test_utterance_npy_values_and_methods(mfile, small_manifold, tmp_path):
+    u = small_manifold.corpus_.utterances[2]
+    for method in ("linear", "cubic", "unitselection", "manifold"):
+        out = tmp_path / f"{method}.npy"
+        assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--method", method,
+                     "--values", "fx", "-o", str(out)]) == 0
+        X = np.load(out)
+        assert X.shape == (u.n_frames, small_manifold.Fx_.shape[1]) and np.isfinite(X).all()
+    fy = tmp_path / "fy.npy"
+    assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--values", "fy", "-o", str(fy)]) == 0
+    assert np.load(fy).shape == (u.n_frames, 3)
+
+
+def test_text_and_textgrid_inputs_with_ply(mfile, tmp_path, capsys):
+    assert main(["synthesize", "--manifold", str(mfile), "--text", "a map", "--mesh-dir", str(tmp_path / "m"),
+                 "--mesh-format", "ply"]) == 0
+    assert sorted((tmp_path / "m").glob("*.ply"))
+    tg = tmp_path / "x.TextGrid"
+    tg.write_text(
+        'File type = "ooTextFile"\nObject class = "TextGrid"\n\nxmin = 0\nxmax = 0.3\ntiers? <exists>\nsize = 1\n'
+        'item []:\n    item [1]:\n        class = "IntervalTier"\n        name = "phones"\n        xmin = 0\n'
+        '        xmax = 0.3\n        intervals: size = 2\n        intervals [1]:\n            xmin = 0\n'
+        '            xmax = 0.1\n            text = "F"\n        intervals [2]:\n            xmin = 0.1\n'
+        '            xmax = 0.3\n            text = "IY1"\n', encoding="utf-8")
+    capsys.readouterr()
+    assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(tg), "--method", "linear"]) == 0
+    assert "linear: 18 frames" in capsys.readouterr().out
+
+
+def test_bad_inputs_fail_cleanly(mfile, tmp_path, capsys):
+    assert main(["synthesize", "--manifold", str(mfile), "--phones", "p 0.1 qx 0.1", "-o", str(tmp_path / "a.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "'qx'" in err and "known phones" in err
+    assert not (tmp_path / "a.csv").exists()
+    assert main(["synthesize", "--manifold", str(mfile), "--phones", "p 0.1 aa", "-o", str(tmp_path / "a.csv")]) == 2
+    assert "label/duration pairs" in capsys.readouterr().err
+    assert main(["synthesize", "--manifold", str(mfile), "--utterance", "nope"]) == 2
+    assert "no utterance 'nope'" in capsys.readouterr().err
+    assert main(["synthesize", "--manifold", str(mfile), "--phones", "p 0.1", "-o", str(tmp_path / "a.txt")]) == 2
+    assert "must end in .csv or .npy" in capsys.readouterr().err
+    assert main(["synthesize", "--manifold", str(mfile), "--phones", "p 0.1", "--method", "linear",
+                 "--values", "fy", "-o", str(tmp_path / "a.npy")]) == 2
+    assert "--values fy needs --method manifold" in capsys.readouterr().err
+    assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(tmp_path / "none.TextGrid")]) == 2
+    assert "no such TextGrid" in capsys.readouterr().err
+    assert main(["synthesize", "--manifold", str(tmp_path / "missing.npz"), "--phones", "p 0.1"]) == 2
+
+
+def test_evaluate_prints_the_table(small_corpus, tmp_path, capsys):
+    ids = [u.id for u in small_corpus.utterances]
+    path = small_corpus.subset(ids[:7]).save(tmp_path / "c.npz")
+    csv_out = tmp_path / "table.csv"
+    assert main(["evaluate", str(path), "--test-ids", ids[3], "--methods", "manifold,linear,unitselection", "-q",
+                 "--csv", str(csv_out)]) == 0
+    out = capsys.readouterr().out
+    assert "1 test utterance(s), 6 training" in out
+    for m in ("manifold", "linear", "unitselection"):
+        assert any(line.startswith(m) for line in out.splitlines())
+    rows = list(csv.DictReader(csv_out.read_text().splitlines()))
+    assert [r["method"] for r in rows] == ["manifold", "linear", "unitselection"]
+    assert all(float(r["rmse_x"]) > 0 for r in rows)
+    assert main(["evaluate", str(path), "--methods", "manifold,magic", "-q"]) == 2
+    assert "unknown method(s) magic" in capsys.readouterr().err
+
+
+def test_evaluate_on_the_haskins_pair(shared_data, capsys):
+    assert main(["evaluate", "--haskins", "--methods", "linear,manifold", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "1 test utterance(s), 1 training" in out and "linear" in out
