@@ -185,7 +185,11 @@ class MainWindow(QtWidgets.QMainWindow):
     def _on_loaded(self, result):
         manifold, source = result
         self.set_manifold(manifold, source=source)
-        self.statusBar().showMessage("ready", 3000)
+        warned = getattr(self._runner, "warnings", None)
+        if warned:  # e.g. a disconnected state graph: keep it on screen, not "ready"
+            self.statusBar().showMessage(f"loaded with a warning: {warned[-1]}", 30000)
+        else:
+            self.statusBar().showMessage("ready", 3000)
         if self._pending_session is not None:
             d, self._pending_session = self._pending_session, None
             self.apply_session(d)

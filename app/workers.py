@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import threading
 import traceback
+import warnings
 
 from PySide6 import QtCore, QtWidgets
 
@@ -24,6 +25,7 @@ class Worker(QtCore.QObject):
     done = QtCore.Signal(object)
     failed = QtCore.Signal(str, str)  # message, traceback
     cancelled = QtCore.Signal()
+    warned = QtCore.Signal(str)  # an engine warning about the user's data
 
     def __init__(self, task):
         super().__init__()
@@ -47,7 +49,18 @@ class Worker(QtCore.QObject):
     @QtCore.Slot()
     def run(self) -> None:
         try:
-            result = self.task(self.report)
+            with warnings.catch_warnings(record=True) as caught:
+                from engine.states import StateGraphConnectivityWarning
+
+                # warnings about the data go to the window; every other filter (pytest's
+                # "error" included) still applies
+                warnings.simplefilter("always", StateGraphConnectivityWarning)
+                result = self.task(self.report)
+            for w in caught:
+                if issubclass(w.category, StateGraphConnectivityWarning):
+                    self.warned.emit(str(w.message))
+                else:
+                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         except Cancelled:
             self.cancelled.emit()
         except Exception as exc:  # noqa: BLE001 - shown to the user, with the traceback
@@ -69,6 +82,7 @@ class TaskRunner(QtCore.QObject):
     finished = QtCore.Signal(object)
     failed = QtCore.Signal(str, str)
     cancelled = QtCore.Signal()
+    warned = QtCore.Signal(str)
 
     def __init__(self, task, *, parent=None, title: str = "Working", dialog: bool = True):
         super().__init__(parent)
@@ -82,6 +96,8 @@ class TaskRunner(QtCore.QObject):
         self.worker.done.connect(self._on_done)
         self.worker.failed.connect(self._on_failed)
         self.worker.cancelled.connect(self._on_cancelled)
+        self.warnings: list[str] = []
+        self.worker.warned.connect(self._on_warned)
         self.dialog = None
         if dialog:
             self.dialog = QtWidgets.QProgressDialog(title, "Cancel", 0, 0, parent if isinstance(
@@ -110,6 +126,10 @@ class TaskRunner(QtCore.QObject):
         d.setMaximum(max(total, 1))
         d.setValue(min(done, max(total, 1)))
         d.setLabelText(f"{stage}: {done}/{total}" if total > 1 else stage)
+
+    def _on_warned(self, message):
+        self.warnings.append(message)
+        self.warned.emit(message)
 
     def _finish(self, state):
         self.state = state
@@ -161,6 +181,8 @@ def run_task(task, *, parent=None, title: str = "Working", on_done=None, on_erro
             parent if isinstance(parent, QtWidgets.QWidget) else None, "Lipspace", msg))
     if on_cancel is not None:
         runner.cancelled.connect(on_cancel)
+    if isinstance(parent, QtWidgets.QMainWindow):
+        runner.warned.connect(lambda msg: parent.statusBar().showMessage(f"warning: {msg}", 15000))
     # keep the runner alive while it runs
     _RUNNING.add(runner)
     for sig in (runner.finished, runner.failed, runner.cancelled):

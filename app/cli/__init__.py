@@ -7,8 +7,10 @@ and ``run(args) -> int``. Modules are imported only when their subcommand runs, 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import sys
+import warnings
 
 from engine.progress import Cancelled
 
@@ -48,13 +50,40 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args._run(args) or 0)
+        with _engine_warnings_to_stderr(args.command):
+            return int(args._run(args) or 0)
     except (Cancelled, KeyboardInterrupt):
         print("lipspace: interrupted; nothing was written.", file=sys.stderr)
         return 130
     except CliError as exc:
         print(f"lipspace {args.command}: error: {exc}", file=sys.stderr)
         return 2
+
+
+@contextlib.contextmanager
+def _engine_warnings_to_stderr(command):
+    """Print the engine's own warnings (e.g. a disconnected state graph) as one clean line each.
+
+    They tell the user something about their data, so the command goes on; other
+    libraries' warnings keep Python's default handling.
+    """
+    def show(message, category, filename, lineno, file=None, line=None):
+        if category.__module__.startswith("engine"):
+            print(f"lipspace {command}: warning: {message}", file=sys.stderr)
+        else:
+            _default_show(message, category, filename, lineno, file, line)
+
+    _default_show = warnings.showwarning
+    with warnings.catch_warnings():
+        for name in _ENGINE_WARNINGS:
+            module, cls = name.rsplit(".", 1)
+            warnings.simplefilter("always", getattr(importlib.import_module(module), cls))
+        warnings.showwarning = show
+        yield
+
+
+#: Warnings the engine raises about the user's data, shown by the CLI as plain lines.
+_ENGINE_WARNINGS = ("engine.states.StateGraphConnectivityWarning",)
 
 
 class CliError(Exception):

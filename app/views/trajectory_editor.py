@@ -59,23 +59,19 @@ def synthesize_targets(manifold, targets, method: str, synthesizers: dict | None
 
 
 def trajectory_error(manifold, synthetic, original) -> dict:
-    """Error of a synthetic trajectory against the captured original of the same length.
+    """Error of a synthetic trajectory against the captured original, as ``lipspace evaluate`` scores it.
 
-    Returns dict: ``rmse_x`` (RMSE over F^x coordinates), ``mean_point``, ``max_point``
-    (per-point Euclidean error in the corpus's units, mean and max over frames and points),
-    ``n`` frames compared.
+    The first ``n = min(len(synthetic), len(original))`` frames are compared through
+    :func:`engine.evaluation.trajectory_errors`, so the editor's readout and the
+    evaluation table are the same numbers. Returns its dict: ``rmse_x`` (root mean
+    square over frames of the Euclidean error in X), ``mean_point_error`` and
+    ``max_point_error`` (per-point Euclidean error in the corpus's units), ``frames``.
     """
-    n = min(len(synthetic), len(original))
-    Xs = np.asarray(synthetic.Fx[:n], np.float64)
-    Xo = np.asarray(original.Fx[:n], np.float64)
-    rmse = float(np.sqrt(np.mean((Xs - Xo) ** 2)))
-    from engine.corpus import frame_points
+    from engine.evaluation import trajectory_errors
 
-    d = manifold.corpus_.dims
-    Fs = frame_points(np.asarray(manifold.shape_.inverse_transform(Xs), np.float64), d)
-    Fo = frame_points(np.asarray(manifold.corpus_.frames[np.asarray(original.frames[:n])], np.float64), d)
-    err = np.linalg.norm(Fs - Fo, axis=-1)
-    return {"rmse_x": rmse, "mean_point": float(err.mean()), "max_point": float(err.max()), "n": int(n)}
+    n = min(len(synthetic), len(original))
+    frames = manifold.corpus_.frames[np.asarray(original.frames[:n])]
+    return trajectory_errors(manifold, np.asarray(synthetic.Fx[:n]), frames)
 
 
 # ============================================================================ timeline widget
@@ -407,8 +403,8 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.state.set_trajectories(synthetic=data)
         text = f"{data.label}: {len(data)} frames"
         if err is not None:
-            text += (f"; error vs original: RMSE(X) {err['rmse_x']:.4g}, per-point mean {err['mean_point']:.3g} "
-                     f"/ max {err['max_point']:.3g} (corpus units)")
+            text += (f"; error vs original: RMSE(X) {err['rmse_x']:.4g}, per-point mean {err['mean_point_error']:.3g} "
+                     f"/ max {err['max_point_error']:.3g} (corpus units)")
         warns = data.extra.get("warnings") or []
         if warns:
             text += f"; {len(warns)} warning(s): {warns[0]}"

@@ -159,8 +159,10 @@ def test_utterance_synthesis_reports_error_and_plays_side_by_side(win, qtbot, ap
     qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)
     assert "RMSE(X)" in ed.readout.text()
     err = ed.last_error
-    direct = np.sqrt(np.mean((np.asarray(s.synthetic.Fx, np.float64) - m.Fx_[u.start:u.stop]) ** 2))
-    assert err["rmse_x"] == pytest.approx(direct, rel=1e-6) and err["rmse_x"] > 0
+    # the same measure as `lipspace evaluate`: RMS over frames of the Euclidean error in X
+    direct = np.sqrt(np.mean(np.sum((np.asarray(s.synthetic.Fx, np.float64) - m.Fx_[u.start:u.stop]) ** 2, axis=1)))
+    assert err["rmse_x"] == pytest.approx(direct, rel=1e-4) and err["rmse_x"] > 0
+    assert err["frames"] == u.stop - u.start and 0 < err["mean_point_error"] <= err["max_point_error"]
     s.set_playback(10)
     np.testing.assert_allclose(win.lip_view.main.points, _points(m, m.corpus_.frames[u.start + 10]), atol=1e-5)
     assert win.lip_view.second.visible
@@ -365,6 +367,24 @@ def test_clusters_panel_shows_ellipsoids_and_exports_table(win, tmp_path, app_ma
         back = list(csv.DictReader(fh))
     assert [r["phone"] for r in back] == [r["phone"] for r in rows]
     assert [int(r["count"]) for r in back] == counts
+
+
+def test_worker_shows_engine_warnings_in_the_status_bar(win, qtbot):
+    import warnings
+
+    from app.workers import run_task
+    from engine.states import StateGraphConnectivityWarning
+
+    def task(progress):
+        progress("fitting", 1, 1)
+        warnings.warn("the state graph is not strongly connected: 2 components", StateGraphConnectivityWarning)
+        return 7
+
+    runner = run_task(task, parent=win, dialog=False)
+    qtbot.waitUntil(lambda: runner.state != "running", timeout=10000)
+    assert runner.state == "done" and runner.result == 7  # a warning about the data never fails the task
+    assert runner.warnings == ["the state graph is not strongly connected: 2 components"]
+    assert "not strongly connected" in win.statusBar().currentMessage()
 
 
 def test_open_session_reloads_its_source_in_the_worker(win, qtbot, tmp_path, app_manifold):
