@@ -11,7 +11,33 @@ import json
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["dump_estimator", "load_estimator"]
+__all__ = ["dump_estimator", "load_estimator", "read_npz", "NpzReadError"]
+
+
+class NpzReadError(ValueError):
+    """A file that is not a readable (pickle-free) ``.npz`` archive."""
+
+
+def read_npz(path, *, keys_only: bool = False):
+    """Every array of the ``.npz`` file ``path`` as a dict (or only the set of its names).
+
+    The file is opened here and always closed, also when it is empty, truncated or not
+    a zip archive at all (numpy leaks its own handle in those cases).
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    NpzReadError
+        Anything else that stops the read, with the file name and the reason.
+    """
+    try:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+            return set(z.files) if keys_only else {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise
+    except Exception as exc:  # BadZipFile, EOFError, OSError, ValueError (pickled data) ...
+        raise NpzReadError(f"{path}: not a readable .npz file ({type(exc).__name__}: {exc})") from None
 
 
 def _fitted_names(obj):

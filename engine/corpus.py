@@ -354,9 +354,10 @@ class Corpus:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(f"{path}: no such corpus file")
+        from engine._persist import read_npz
+
         try:
-            with np.load(path, allow_pickle=False) as z:
-                return cls.from_arrays({k: z[k] for k in z.files}, source=str(path))
+            return cls.from_arrays(read_npz(path), source=str(path))
         except CorpusError:
             raise
         except Exception as exc:  # BadZipFile, EOFError, KeyError, OSError, ValueError ...

@@ -14,7 +14,7 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from engine._atomic import atomic_write
-from engine._persist import dump_estimator, load_estimator
+from engine._persist import NpzReadError, dump_estimator, load_estimator, read_npz
 from engine.corpus import Corpus, CorpusError
 from engine.dynamics import DynamicFeatures, velocities
 from engine.embedding import Embedding
@@ -211,12 +211,11 @@ class Manifold(BaseEstimator):
         classes = {"shape": ShapeSpace, "dynamics": DynamicFeatures, "embedding": Embedding,
                    "tangent": TangentFrames, "states": StateGraph}
         try:
-            with np.load(path, allow_pickle=False) as z:
-                d = {k: z[k] for k in z.files}
+            d = read_npz(path)
         except FileNotFoundError:
             raise ManifoldFileError(f"{path}: no such manifold file") from None
-        except (OSError, ValueError) as exc:
-            raise ManifoldFileError(f"{path}: not a readable .npz manifold file ({exc})") from None
+        except NpzReadError as exc:
+            raise ManifoldFileError(str(exc).replace(".npz file", ".npz manifold file", 1)) from None
         if "manifold_version" not in d:
             hint = " (it is a corpus file: build it with 'lipspace build')" if "corpus_version" in d else ""
             raise ManifoldFileError(f"{path}: not a Lipspace manifold file{hint}")

@@ -33,8 +33,10 @@ These commands work without a display:
     lipspace info m.npz               summarise a manifold or corpus file
     lipspace figures m.npz -o figs/   render the paper's figures (PNG/SVG/PDF)
     lipspace clusters m.npz           phone cluster statistics table
-    lipspace synthesize m.npz ...     synthesise a lip trajectory from phones, a TextGrid or text
-    lipspace evaluate m.npz           held-out synthesis error, every method
+    lipspace synthesize --manifold m.npz --text "bob meets mum" -o t.csv
+                                      synthesise a lip trajectory from text, phones or a TextGrid
+    lipspace evaluate [corpus.npz]    held-out synthesis error of every method (synthetic talker
+                                      without a corpus)
 """
 
 
@@ -78,16 +80,15 @@ def cached_manifold_path(preset: str) -> Path:
 
 def source_kind(path) -> str:
     """``"manifold"`` or ``"corpus"`` for a Lipspace .npz file; ValueError naming the file otherwise."""
-    import numpy as np
-
     p = Path(path)
     if not p.exists():
         raise ValueError(f"{p}: no such file (give a manifold from 'lipspace build' or a corpus .npz)")
+    from engine._persist import NpzReadError, read_npz
+
     try:
-        with np.load(p, allow_pickle=False) as z:
-            files = set(z.files)
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{p}: not a Lipspace manifold or corpus file ({exc})") from None
+        files = read_npz(p, keys_only=True)
+    except NpzReadError as exc:
+        raise ValueError(f"{exc}: not a Lipspace manifold or corpus; give a manifold from 'lipspace build' or a corpus .npz") from None
     if "manifold_version" in files:
         return "manifold"
     if "corpus_version" in files:

@@ -49,8 +49,6 @@ def _parse_only(only):
 
 def _load(path, preset, progress):
     """A fitted manifold from a manifold file, a corpus file (fitted here) or the synthetic talker."""
-    import numpy as np
-
     from app.cli import CliError
     from app.cli._common import load_corpus_arg, load_manifold_arg
     from engine.manifold import Manifold
@@ -59,11 +57,13 @@ def _load(path, preset, progress):
         p = Path(path)
         if not p.exists():
             raise CliError(f"{p}: no such file (give a manifold from 'lipspace build' or a corpus .npz)")
+        from engine._persist import NpzReadError, read_npz
+
         try:
-            with np.load(p, allow_pickle=False) as z:
-                is_corpus = "corpus_version" in z.files and "manifold_version" not in z.files
-        except (OSError, ValueError) as exc:
-            raise CliError(f"{p}: not a Lipspace manifold or corpus file ({exc})") from None
+            keys = read_npz(p, keys_only=True)
+        except NpzReadError as exc:
+            raise CliError(f"{exc}: not a Lipspace manifold or corpus; give a manifold from 'lipspace build' or a corpus .npz") from None
+        is_corpus = "corpus_version" in keys and "manifold_version" not in keys
         if not is_corpus:
             return load_manifold_arg(p)
     corpus = load_corpus_arg(path, synthetic_preset=preset, progress=progress)

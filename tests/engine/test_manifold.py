@@ -73,3 +73,24 @@ def test_fit_can_be_cancelled(small_corpus):
     with pytest.raises(Cancelled):
         m.fit(small_corpus, progress=progress)
     assert "shape space" in calls and not hasattr(m, "Fy_")
+
+
+@pytest.mark.parametrize("content", [b"", b"PK\x03\x04 truncated zip", bytes(range(256)) * 4],
+                         ids=["empty", "truncated-zip", "random-bytes"])
+def test_damaged_files_give_the_documented_errors(tmp_path, small_manifold, content):
+    from app.cli import main
+    from engine.corpus import Corpus, CorpusError
+
+    bad = tmp_path / "damaged.npz"
+    bad.write_bytes(content)
+    with pytest.raises(ManifoldFileError, match=r"damaged.npz: not a readable .npz manifold file"):
+        Manifold.load(bad)
+    with pytest.raises(CorpusError, match="damaged.npz: cannot read as a Lipspace corpus"):
+        Corpus.load(bad)
+    # a half-written manifold (the first bytes of a real one) is refused the same way
+    good = small_manifold.save(tmp_path / "good.npz")
+    half = tmp_path / "half.npz"
+    half.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    with pytest.raises(ManifoldFileError, match="half.npz"):
+        Manifold.load(half)
+    assert main(["info", str(bad)]) == 2
