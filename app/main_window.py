@@ -199,8 +199,9 @@ class MainWindow(QtWidgets.QMainWindow):
         QtWidgets.QMessageBox.critical(self, "Lipspace", f"Could not load: {message}")
 
     def open_dialog(self):
-        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Open corpus or manifold", self.last_dir,
-                                                        "Lipspace files (*.npz);;All files (*)")
+        path, _ = QtWidgets.QFileDialog.getOpenFileName(
+            self, "Open corpus or manifold", self.last_dir,
+            "Lipspace files (*.npz);;Motion data (*.mat *.ema *.c3d *.csv *.npy);;All files (*)")
         if path:
             self.last_dir = str(Path(path).parent)
             self.open_source(path)

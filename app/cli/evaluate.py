@@ -3,7 +3,10 @@
 Whole utterances are held out, the manifold is fitted on the rest, and each held-out
 utterance is resynthesised from its phones by every method and compared with the
 real lips (RMSE in X, mean and max per-point error in the corpus's units,
-correlation of the first three shape components).
+correlation of the first three shape components, and RMSE Y3: the error in the first
+three dimensions of the manifold Y, where the paper's Fig. 3 draws its trajectories --
+the manifold method's state path before the inverse map, every X-space method's
+trajectory projected out-of-sample, against the held-out utterance's own projection).
 
 Input: corpus files in any importable format (several are joined, one utterance
 each), ``--haskins`` (the two Haskins IEEE samples beside the project), or nothing

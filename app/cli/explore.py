@@ -79,16 +79,30 @@ def cached_manifold_path(preset: str) -> Path:
 
 
 def source_kind(path) -> str:
-    """``"manifold"`` or ``"corpus"`` for a Lipspace .npz file; ValueError naming the file otherwise."""
-    p = Path(path)
-    if not p.exists():
-        raise ValueError(f"{p}: no such file (give a manifold from 'lipspace build' or a corpus .npz)")
+    """What ``path`` holds: ``"manifold"`` or ``"corpus"`` (Lipspace .npz) or ``"foreign"``.
+
+    ``"foreign"`` is any format the importers read (Haskins .mat, MOCHA .ema, C3D, ...);
+    it is fitted after import. ValueError naming the file for anything else.
+    """
     from engine._persist import NpzReadError, read_npz
 
+    p = Path(path)
+    if not p.exists():
+        raise ValueError(f"{p}: no such file (give a manifold from 'lipspace build', a corpus .npz "
+                         "or a data file 'lipspace import' reads)")
+    if p.suffix.lower() != ".npz":
+        from engine.io import ImportFormatError, detect_format
+
+        try:
+            detect_format(p)
+        except ImportFormatError as exc:
+            raise ValueError(str(exc)) from None
+        return "foreign"
     try:
         files = read_npz(p, keys_only=True)
     except NpzReadError as exc:
-        raise ValueError(f"{exc}: not a Lipspace manifold or corpus; give a manifold from 'lipspace build' or a corpus .npz") from None
+        raise ValueError(f"{exc}: not a Lipspace manifold or corpus; give a manifold from 'lipspace build' "
+                         "or a corpus .npz") from None
     if "manifold_version" in files:
         return "manifold"
     if "corpus_version" in files:
@@ -123,9 +137,14 @@ def load_source(path=None, preset: str = "default", progress=None, *, use_cache:
             m = Manifold.load(path)
             report(progress, "loading manifold", 1, 1)
             return m, src
-        from engine.corpus import Corpus
+        if kind == "foreign":
+            from engine.io import read_corpus
 
-        corpus = Corpus.load(path)
+            corpus = read_corpus(path)
+        else:
+            from engine.corpus import Corpus
+
+            corpus = Corpus.load(path)
         return Manifold().fit(corpus, progress=progress), src
     src = {"path": None, "preset": preset, "kind": "synthetic"}
     cached = cached_manifold_path(preset)

@@ -54,18 +54,14 @@ def _load(path, preset, progress):
     from engine.manifold import Manifold
 
     if path is not None:
-        p = Path(path)
-        if not p.exists():
-            raise CliError(f"{p}: no such file (give a manifold from 'lipspace build' or a corpus .npz)")
-        from engine._persist import NpzReadError, read_npz
+        from app.cli.explore import source_kind
 
         try:
-            keys = read_npz(p, keys_only=True)
-        except NpzReadError as exc:
-            raise CliError(f"{exc}: not a Lipspace manifold or corpus; give a manifold from 'lipspace build' or a corpus .npz") from None
-        is_corpus = "corpus_version" in keys and "manifold_version" not in keys
-        if not is_corpus:
-            return load_manifold_arg(p)
+            kind = source_kind(path)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+        if kind == "manifold":
+            return load_manifold_arg(path)
     corpus = load_corpus_arg(path, synthetic_preset=preset, progress=progress)
     try:
         return Manifold().fit(corpus, progress=progress)

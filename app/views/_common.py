@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
-__all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter"]
+__all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all"]
 
 
 @contextmanager
@@ -81,3 +81,20 @@ class RenderScheduler:
     def stop(self) -> None:
         self._timer.stop()
         self.pending = False
+
+
+def connect_all(connections) -> list:
+    """Connect each ``(event, callback)`` pair of a view to the state; returns the list."""
+    connections = list(connections)
+    for event, cb in connections:
+        event.connect(cb)
+    return connections
+
+
+def disconnect_all(connections) -> None:
+    """Undo :func:`connect_all` (pairs already gone are skipped)."""
+    for event, cb in connections:
+        try:
+            event.disconnect(cb)
+        except ValueError:
+            pass

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.views._common import blocked
+from app.views._common import blocked, connect_all, disconnect_all
 
 __all__ = ["ClustersPanel", "COLUMNS"]
 
@@ -61,8 +61,7 @@ class ClustersPanel(QtWidgets.QWidget):
         self.none_btn.clicked.connect(lambda: state.set_visible_phones(()))
         ev = state.events
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.visible_phones, self._sync_checks)]
-        for event, cb in self._connections:
-            event.connect(cb)
+        connect_all(self._connections)
         self.rebuild()
 
     def table_rows(self) -> list[dict]:
@@ -129,8 +128,4 @@ class ClustersPanel(QtWidgets.QWidget):
                         it.setIcon(_swatch(col))
 
     def close_view(self) -> None:
-        for event, cb in self._connections:
-            try:
-                event.disconnect(cb)
-            except ValueError:
-                pass
+        disconnect_all(self._connections)

@@ -15,7 +15,8 @@ from PySide6 import QtCore, QtWidgets
 
 from app import scene
 from app.audio import AudioPlayer, resolve_audio_path
-from app.views._common import RenderScheduler, camera_of, close_plotter, make_plotter, set_camera
+from app.views._common import (camera_of, close_plotter, connect_all, disconnect_all,
+                               make_plotter, RenderScheduler, set_camera)
 
 __all__ = ["LipView", "lip_frames"]
 
@@ -84,8 +85,7 @@ class LipView(QtWidgets.QWidget):
             (ev.playback, lambda _k: self.refresh()),
             (ev.playing, self._on_playing),
         ]
-        for event, cb in self._connections:
-            event.connect(cb)
+        connect_all(self._connections)
         if state.manifold is not None:
             self.rebuild()
 
@@ -236,10 +236,6 @@ class LipView(QtWidgets.QWidget):
     def close_view(self) -> None:
         self.timer.stop()
         self.audio.stop()
-        for event, cb in self._connections:
-            try:
-                event.disconnect(cb)
-            except ValueError:
-                pass
+        disconnect_all(self._connections)
         self.renderer.stop()
         close_plotter(self.plotter)

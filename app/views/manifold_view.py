@@ -14,7 +14,8 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from app import scene
 from app.picking import PointLocator, handle_pick
 from app.state import COLOR_MODES, HEMISPHERES, point_colors
-from app.views._common import RenderScheduler, blocked, camera_of, close_plotter, make_plotter, set_camera
+from app.views._common import (blocked, camera_of, close_plotter, connect_all,
+                               disconnect_all, make_plotter, RenderScheduler, set_camera)
 
 __all__ = ["ManifoldView", "axes_origin"]
 
@@ -115,8 +116,7 @@ class ManifoldView(QtWidgets.QWidget):
             (ev.playback, lambda _k: self._on_playback()),
             (ev.visible_phones, lambda _v: self._on_phones()),
         ]
-        for event, cb in self._connections:
-            event.connect(cb)
+        connect_all(self._connections)
         if state.manifold is not None:
             self.rebuild()
 
@@ -364,11 +364,7 @@ class ManifoldView(QtWidgets.QWidget):
         set_camera(self.plotter, cam)
 
     def close_view(self) -> None:
-        for event, cb in self._connections:
-            try:
-                event.disconnect(cb)
-            except ValueError:
-                pass
+        disconnect_all(self._connections)
         if self.picker is not None:
             self.picker.remove()
         self.renderer.stop()

@@ -6,7 +6,7 @@ from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
 from PySide6 import QtWidgets
 
-from app.views._common import blocked
+from app.views._common import blocked, connect_all, disconnect_all
 
 __all__ = ["ScreePanel", "scree_series"]
 
@@ -51,8 +51,7 @@ class ScreePanel(QtWidgets.QWidget):
         self.spin.valueChanged.connect(lambda _v: self._push())
         ev = state.events
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.component, self._on_component)]
-        for event, cb in self._connections:
-            event.connect(cb)
+        connect_all(self._connections)
         self.rebuild()
 
     def rebuild(self) -> None:
@@ -106,8 +105,4 @@ class ScreePanel(QtWidgets.QWidget):
         self.readout.setText(f"X{k + 1}: {100 * ratio:.1f}% of the variance")
 
     def close_view(self) -> None:
-        for event, cb in self._connections:
-            try:
-                event.disconnect(cb)
-            except ValueError:
-                pass
+        disconnect_all(self._connections)

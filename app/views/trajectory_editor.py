@@ -15,6 +15,7 @@ import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.state import TrajectoryData
+from app.views._common import connect_all, disconnect_all
 
 __all__ = ["TrajectoryEditor", "PhoneTimeline", "synthesize_targets", "trajectory_error", "move_target"]
 
@@ -246,8 +247,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
         ev = state.events
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.playback, self.timeline.set_cursor),
                              (ev.utterance, self._on_utterance)]
-        for event, cb in self._connections:
-            event.connect(cb)
+        connect_all(self._connections)
         self._fill_methods()
         self.rebuild()
 
@@ -429,8 +429,4 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.oracle_box.setChecked(bool(d.get("oracle", True)))
 
     def close_view(self) -> None:
-        for event, cb in self._connections:
-            try:
-                event.disconnect(cb)
-            except ValueError:
-                pass
+        disconnect_all(self._connections)

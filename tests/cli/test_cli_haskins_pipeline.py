@@ -80,3 +80,18 @@ def test_synthesize_a_real_utterance_and_a_phone_string(built, tmp_path, capsys)
     assert main(["synthesize", "--manifold", str(mfile), "--phones", phones, "-o", str(out2), "-q"]) == 0
     rows = list(csv.reader(out2.read_text().splitlines()))
     assert rows[0][0] == "time" and len(rows) - 1 == round(0.4 * m.corpus_.rate)
+
+
+def test_explorer_and_figures_open_a_foreign_file_directly(haskins_files, tmp_path):
+    from app.cli.explore import load_source, source_kind
+
+    mat = haskins_files[0]
+    assert source_kind(mat) == "foreign"
+    m, src = load_source(mat, use_cache=False)
+    assert src["kind"] == "foreign" and len(m.corpus_.utterances) == 1 and m.corpus_.rate == pytest.approx(100.0)
+    assert main(["figures", mat, "-o", str(tmp_path / "figs"), "--only", "scree", "-q"]) == 0
+    assert [p.name for p in (tmp_path / "figs").glob("*.png")]
+    lab = tmp_path / "x.lab"
+    lab.write_text("0 0.1 sil\n")
+    with pytest.raises(ValueError, match="phone alignment, not lip data"):
+        source_kind(lab)
