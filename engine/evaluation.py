@@ -21,7 +21,16 @@ utterance (outside that span every method merely holds a target):
   the reconstructed frame and the real frame, in the corpus's units, averaged over
   points and frames / largest;
 * ``corr_1..3`` -- Pearson correlation of the first three X components, synthetic
-  against real, over all compared frames.
+  against real, over all compared frames;
+* ``rmse_y`` -- root mean square over frames of the Euclidean error in the first three
+  dimensions of Y, the manifold the paper draws (its Fig. 3, where it claims the
+  manifold path beats direct interpolation of the phone targets). The truth is the
+  held-out utterance's own out-of-sample F^y (:meth:`Manifold.project`). A method that
+  moves in Y (``manifold``, ``manifold-phones``) is scored on its state-centroid path,
+  *before* the inverse map; a method that moves in X (interpolation, unit selection) has
+  its whole synthetic X trajectory projected out-of-sample through the same fitted
+  pipeline (velocities inside the utterance -> dynamic features -> embedding), see
+  :func:`project_x`. Units are those of Y (scaled dynamic features), not the corpus's.
 
 Only utterances every requested method could synthesise are scored (so the rows
 compare like with like); failures are counted per method.
@@ -35,13 +44,15 @@ import numpy as np
 from engine.progress import ProgressFn, report
 
 __all__ = ["evaluate", "EvaluationResult", "EVALUATION_METHODS", "DEFAULT_METHODS", "split_utterances",
-           "trajectory_errors"]
+           "trajectory_errors", "project_x", "trajectory_y"]
 
 EVALUATION_METHODS = ("manifold", "linear", "cubic", "unitselection", "manifold-phones", "linear-phones",
                       "cubic-phones")
 DEFAULT_METHODS = ("manifold", "linear", "cubic", "unitselection")
 _COLUMNS = ("method", "utterances", "frames", "rmse_x", "mean_point_error", "max_point_error",
-            "corr_1", "corr_2", "corr_3", "failures", "missed_targets")
+            "corr_1", "corr_2", "corr_3", "rmse_y", "failures", "missed_targets")
+#: dimensions of Y scored by ``rmse_y``: the 3-D manifold of the paper's figures
+Y_DIMS = 3
 
 
 @dataclass
@@ -55,7 +66,7 @@ class EvaluationResult:
     test_ids, train_ids : list of str
     n_train_frames : int
     per_utterance : list of dict
-        ``{"utterance", "method", "frames", "rmse_x", "mean_point_error"}`` per scored pair.
+        ``{"utterance", "method", "frames", "rmse_x", "mean_point_error", "rmse_y"}`` per scored pair.
     failures : dict of str to list of str
         Method -> messages of the utterances it could not synthesise.
     corpus : str
@@ -81,17 +92,19 @@ class EvaluationResult:
 
     def format(self) -> str:
         """The table as aligned text."""
-        head = ["method", "utts", "frames", "RMSE X", "mean pt err", "max pt err", "r1", "r2", "r3", "failed",
-                "missed"]
+        head = ["method", "utts", "frames", "RMSE X", "mean pt err", "max pt err", "r1", "r2", "r3", "RMSE Y3",
+                "failed", "missed"]
         lines = []
         for r in self.rows:
             lines.append([r["method"], str(r["utterances"]), str(r["frames"]), _f(r["rmse_x"]),
                           _f(r["mean_point_error"]), _f(r["max_point_error"]), _f(r["corr_1"], 3),
-                          _f(r["corr_2"], 3), _f(r["corr_3"], 3), str(r["failures"]), str(r["missed_targets"])])
+                          _f(r["corr_2"], 3), _f(r["corr_3"], 3), _f(r["rmse_y"]), str(r["failures"]),
+                          str(r["missed_targets"])])
         w = [max(len(h), *(len(x[i]) for x in lines)) if lines else len(h) for i, h in enumerate(head)]
         fmt = lambda row: "  ".join(s.rjust(w[i]) if i else s.ljust(w[i]) for i, s in enumerate(row))  # noqa: E731
         out = [f"held-out synthesis on {self.corpus}: {len(self.test_ids)} test utterance(s), "
-               f"{len(self.train_ids)} training ({self.n_train_frames} frames); errors in corpus units",
+               f"{len(self.train_ids)} training ({self.n_train_frames} frames); errors in corpus units, "
+               f"except RMSE Y3: first {Y_DIMS} dims of the manifold Y (its own units)",
                fmt(head), fmt(["-" * x for x in w])]
         out += [fmt(x) for x in lines]
         for m, msgs in self.failures.items():
@@ -135,6 +148,54 @@ def trajectory_errors(manifold, Fx_hat, frames) -> dict:
     err_x, err_p, _ = _error_arrays(manifold, Fx_hat, frames, dims)
     return {"rmse_x": float(np.sqrt((err_x ** 2).mean())), "mean_point_error": float(err_p.mean()),
             "max_point_error": float(err_p.max()), "frames": int(err_x.size)}
+
+
+def project_x(manifold, Fx) -> np.ndarray:
+    """Out-of-sample F^y of one utterance-long trajectory given in X.
+
+    The fitted manifold's own pipeline without its shape stage: velocities inside the
+    trajectory (one utterance), the fitted dynamic features, the embedding's
+    out-of-sample transform. ``project_x(m, m.shape_.transform(F))`` is ``m.project(F)``.
+
+    Parameters
+    ----------
+    manifold : Manifold
+        Fitted.
+    Fx : ndarray of shape (n, m)
+        Shape coordinates of consecutive frames of one utterance.
+
+    Returns
+    -------
+    ndarray of shape (n, n_embedding), float32
+    """
+    Fx = np.atleast_2d(np.asarray(Fx, dtype=np.float32))
+    G = manifold.dynamics_.transform(Fx, np.array([[0, Fx.shape[0]]]))
+    return manifold.embedding_.transform(G)
+
+
+def trajectory_y(manifold, trajectory, dims=Y_DIMS) -> np.ndarray:
+    """A synthetic trajectory in the first ``dims`` dimensions of Y, frame by frame.
+
+    A trajectory that moves in Y (the manifold method) is its own path: the state
+    centroids, before any inverse map (if the states were clustered in fewer than
+    ``dims`` dimensions, each state's mean F^y over its members stands in). Any other
+    (it moves in X) is projected out-of-sample with :func:`project_x`.
+
+    Returns
+    -------
+    ndarray of shape (n, dims), float64
+    """
+    dims = min(int(dims), manifold.Fy_.shape[1])
+    if trajectory.Fy is not None and trajectory.Fy.shape[1] >= dims:
+        return np.asarray(trajectory.Fy[:, :dims], dtype=np.float64)
+    if trajectory.Fy is not None and trajectory.states is not None:
+        lab = np.asarray(manifold.states_.labels_)
+        K = int(manifold.states_.centroids_.shape[0])
+        n = np.maximum(np.bincount(lab, minlength=K), 1)
+        Fy = np.asarray(manifold.Fy_[:, :dims], dtype=np.float64)
+        means = np.stack([np.bincount(lab, weights=Fy[:, j], minlength=K) for j in range(dims)], 1) / n[:, None]
+        return means[np.asarray(trajectory.states)]
+    return project_x(manifold, trajectory.Fx)[:, :dims].astype(np.float64)
 
 
 def _f(v, nd=4):
@@ -228,7 +289,7 @@ def evaluate(corpus, *, manifold_factory=None, test_fraction=0.1, test_ids=None,
         manifold = manifold_factory(train)
     synths = _synthesizers(manifold, methods, synthesizer_params or {})
     dims = corpus.dims
-    acc = {m: {"sq": 0.0, "n": 0, "pt_sum": 0.0, "pt_n": 0, "pt_max": 0.0, "hat": [], "true": [], "utts": 0,
+    acc = {m: {"sq": 0.0, "sq_y": 0.0, "n": 0, "pt_sum": 0.0, "pt_n": 0, "pt_max": 0.0, "hat": [], "true": [], "utts": 0,
                "missed": 0} for m in methods}
     failures = {m: [] for m in methods}
     per_utt = []
@@ -252,11 +313,14 @@ def evaluate(corpus, *, manifold_factory=None, test_fraction=0.1, test_ids=None,
                 failures[m].append(f"{uid}: {exc}")
         if len(results) < len(methods):
             continue  # score only utterances every method could synthesise
+        Y_true = manifold.project(F)[lo:hi, :Y_DIMS].astype(np.float64)
         for m, tr in results.items():
             Xh = tr.Fx[lo:hi].astype(np.float64)
             err, pe, X_true = _error_arrays(manifold, tr.Fx[lo:hi], F[lo:hi], dims)
+            err_y = np.linalg.norm(trajectory_y(manifold, tr)[lo:hi] - Y_true, axis=1)
             a = acc[m]
             a["sq"] += float((err ** 2).sum())
+            a["sq_y"] += float((err_y ** 2).sum())
             a["n"] += hi - lo
             a["pt_sum"] += float(pe.sum())
             a["pt_n"] += pe.size
@@ -266,7 +330,8 @@ def evaluate(corpus, *, manifold_factory=None, test_fraction=0.1, test_ids=None,
             a["utts"] += 1
             a["missed"] += sum(1 for w in tr.warnings if "unreachable" in w or "no path" in w)
             per_utt.append({"utterance": uid, "method": m, "frames": hi - lo,
-                            "rmse_x": float(np.sqrt((err ** 2).mean())), "mean_point_error": float(pe.mean())})
+                            "rmse_x": float(np.sqrt((err ** 2).mean())), "mean_point_error": float(pe.mean()),
+                            "rmse_y": float(np.sqrt((err_y ** 2).mean()))})
     report(progress, "evaluation", len(test), len(test))
     rows = []
     for m in methods:
@@ -276,12 +341,12 @@ def evaluate(corpus, *, manifold_factory=None, test_fraction=0.1, test_ids=None,
         if a["n"]:
             H, T = np.vstack(a["hat"]), np.vstack(a["true"])
             row.update(rmse_x=float(np.sqrt(a["sq"] / a["n"])), mean_point_error=a["pt_sum"] / a["pt_n"],
-                       max_point_error=a["pt_max"])
+                       max_point_error=a["pt_max"], rmse_y=float(np.sqrt(a["sq_y"] / a["n"])))
             for c in range(3):
                 row[f"corr_{c + 1}"] = _corr(H[:, c], T[:, c]) if c < H.shape[1] else float("nan")
         else:
             row.update(rmse_x=float("nan"), mean_point_error=float("nan"), max_point_error=float("nan"),
-                       corr_1=float("nan"), corr_2=float("nan"), corr_3=float("nan"))
+                       rmse_y=float("nan"), corr_1=float("nan"), corr_2=float("nan"), corr_3=float("nan"))
         rows.append({c: row[c] for c in _COLUMNS})
     return EvaluationResult(rows=rows, test_ids=test, train_ids=train_ids, n_train_frames=train.n_frames,
                             per_utterance=per_utt, failures=failures, corpus=corpus.name)

@@ -86,11 +86,13 @@ def test_evaluate_prints_the_table(small_corpus, tmp_path, capsys):
                  "--csv", str(csv_out)]) == 0
     out = capsys.readouterr().out
     assert "1 test utterance(s), 6 training" in out
+    head = next(line for line in out.splitlines() if line.startswith("method"))
+    assert "RMSE X" in head and "RMSE Y3" in head and "first 3 dims of the manifold Y" in out
     for m in ("manifold", "linear", "unitselection"):
         assert any(line.startswith(m) for line in out.splitlines())
     rows = list(csv.DictReader(csv_out.read_text().splitlines()))
     assert [r["method"] for r in rows] == ["manifold", "linear", "unitselection"]
-    assert all(float(r["rmse_x"]) > 0 for r in rows)
+    assert all(float(r["rmse_x"]) > 0 and float(r["rmse_y"]) > 0 for r in rows)
     assert main(["evaluate", str(path), "--methods", "manifold,magic", "-q"]) == 2
     assert "unknown method(s) magic" in capsys.readouterr().err
 

@@ -21,7 +21,7 @@ def test_table_has_one_sane_row_per_method(result, small_corpus):
         n_frames = n_frames or r["frames"]
         assert r["frames"] == n_frames > 0  # every method scored on the same frames
         assert 0 < r["mean_point_error"] <= r["max_point_error"]
-        assert r["rmse_x"] > 0
+        assert r["rmse_x"] > 0 and r["rmse_y"] > 0
         for c in ("corr_1", "corr_2", "corr_3"):
             assert -1 <= r[c] <= 1
     # oracle targets carry more information than phone labels alone
@@ -30,7 +30,7 @@ def test_table_has_one_sane_row_per_method(result, small_corpus):
     text = result.format()
     for m in METHODS:
         assert m in text
-    assert "RMSE X" in text and f"{len(result.test_ids)} test utterance" in text
+    assert "RMSE X" in text and "RMSE Y3" in text and f"{len(result.test_ids)} test utterance" in text
     assert set(result.test_ids).isdisjoint(result.train_ids)
     assert len(result.train_ids) + len(result.test_ids) == len(small_corpus.utterances)
 
@@ -40,6 +40,10 @@ def test_per_utterance_errors_add_up(result):
     assert len(per) == len(result.test_ids)
     total = sum(p["rmse_x"] ** 2 * p["frames"] for p in per) / sum(p["frames"] for p in per)
     assert np.sqrt(total) == pytest.approx(result.row("linear")["rmse_x"], rel=1e-6)
+    for m in METHODS:
+        per = [p for p in result.per_utterance if p["method"] == m]
+        total_y = sum(p["rmse_y"] ** 2 * p["frames"] for p in per) / sum(p["frames"] for p in per)
+        assert np.sqrt(total_y) == pytest.approx(result.row(m)["rmse_y"], rel=1e-6)
 
 
 @pytest.mark.xfail(strict=True, reason=(
@@ -49,6 +53,50 @@ def test_paper_claim_manifold_path_beats_direct_interpolation(result):
     man, lin = result.row("manifold")["rmse_x"], result.row("linear")["rmse_x"]
     print(f"held-out RMSE in X from oracle phone mid-points: manifold {man:.3f}, linear {lin:.3f}")
     assert man < lin
+
+
+def test_paper_claim_in_y_manifold_path_beats_direct_interpolation(result):
+    """The paper's Fig. 3 space: the first 3 dims of Y, the manifold path before the inverse map.
+
+    Linear interpolation of the oracle F^x targets is projected into Y out-of-sample
+    through the manifold's own pipeline and compared, like the manifold's state-centroid
+    path, with the held-out utterance's own projected F^y. Measured (synthetic small,
+    these 4 held-out utterances): manifold 4.29 vs linear 4.43 in Y; 10.9 vs 2.93 in X.
+    A narrow margin, not a uniform one: per utterance it holds on 2 of 4, and over five
+    random 20 % splits on 4 of 5; the CLI's default 10 % split loses, 5.00 vs 4.79. On the
+    default preset it holds on all 14 held-out utterances, 7.61 vs 11.25 (see docs/DECISIONS.md).
+    """
+    man, lin = result.row("manifold"), result.row("linear")
+    print(f"held-out RMSE from oracle phone mid-points, first 3 dims of Y: manifold {man['rmse_y']:.3f}, "
+          f"linear {lin['rmse_y']:.3f}; in X: manifold {man['rmse_x']:.3f}, linear {lin['rmse_x']:.3f}")
+    assert man["rmse_y"] < lin["rmse_y"]
+
+
+def test_trajectories_in_y(small_manifold):
+    from engine.evaluation import project_x, trajectory_y
+    from engine.synthesis import InterpolationSynthesizer, ManifoldSynthesizer, Trajectory
+    from engine.targets import targets_from_utterance
+
+    m = small_manifold
+    u = m.corpus_.utterances[1]
+    F = m.corpus_.frames[u.start:u.stop]
+    # X -> Y is the manifold's own out-of-sample pipeline minus its shape stage
+    np.testing.assert_allclose(project_x(m, m.shape_.transform(F)), m.project(F), rtol=1e-4, atol=1e-3)
+    # a training utterance's own X projects onto its in-sample F^y (velocities inside the utterance)
+    np.testing.assert_allclose(project_x(m, m.Fx_[u.start:u.stop]), m.Fy_[u.start:u.stop], rtol=1e-3,
+                               atol=1e-3 * float(np.abs(m.Fy_).max()))
+    tg = targets_from_utterance(m, u.id)
+    man = ManifoldSynthesizer().fit(m).synthesize(tg)
+    Ym = trajectory_y(m, man)
+    assert Ym.shape == (u.n_frames, 3)
+    np.testing.assert_allclose(Ym, m.states_.centroids_[man.states][:, :3], rtol=1e-6)  # before the inverse map
+    lin = InterpolationSynthesizer(kind="linear").fit(m).synthesize(tg)
+    np.testing.assert_allclose(trajectory_y(m, lin), project_x(m, lin.Fx)[:, :3], rtol=1e-6)
+    # states clustered in fewer dims than scored: each state's mean F^y stands in
+    lab = m.states_.labels_
+    two = Trajectory(times=man.times, Fx=man.Fx, Fy=man.Fy[:, :2], method="manifold", states=man.states)
+    means = np.stack([m.Fy_[lab == k, :3].mean(0) for k in man.states])
+    np.testing.assert_allclose(trajectory_y(m, two), means, rtol=1e-4, atol=1e-4)
 
 
 def test_split_and_argument_errors(small_corpus):
