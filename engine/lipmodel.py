@@ -13,14 +13,19 @@ the face). The lips meet at y = 0 at rest.
 
 The controls, each about 0..1 (see :data:`CONTROL_NAMES`):
 
-``jaw``          jaw opening: the lower lip and chin go down (up to ~16 mm at the lower
-                 lip) and back; the largest motion of the surface.
+``jaw``          jaw opening: the lower lip and chin go down (up to ~14.4 mm) and back,
+                 the upper lip goes up a little (~3.6 mm); the largest motion of the
+                 surface.
 ``round``        rounding / protrusion: the mouth narrows (corners move in by ~16 %) and
-                 the lips push forward (~4.5 mm) and thicken.
+                 the lips push forward (~3.5 mm) and thicken.
 ``spread``       spreading: the corners move out (~8 %) and back, the lips thin.
-``raise``        upper-lip raise: the upper lip goes up (~4 mm) and everts.
+``raise``        upper-lip raise: the upper lip goes up (~3.4 mm either side of the
+                 philtrum, half that on the midline) and everts.
 ``closure``      bilabial closure: the lips meet and press together (contact, then
-                 compression that thins the vermilion), whatever the jaw does.
+                 compression that thins the vermilion), whatever the jaw does. The lips
+                 share the closing as they share the opening (lower lip 80 %, upper
+                 20 %), and the skin below the lower lip follows its rise, fading to
+                 nothing at the chin.
 ``labiodental``  the lower lip moves up and back under the upper teeth (/f v/).
 
 The inner-lip gap is kept non-negative with a soft contact (a softplus of width
@@ -54,9 +59,12 @@ _GR = 4.0          # upper-lip raise
 _KC = 3.0          # compression depth of full closure
 _WR = 0.16         # mouth narrowing by full rounding (fraction of the width)
 _WSP = 0.08        # mouth widening by full spreading
-_PR = 4.5          # protrusion by full rounding
+_PR = 3.5          # protrusion by full rounding
 _EPS = 0.3         # soft-contact width
-_UP_SHARE = 0.65   # share of the gap on the upper lip's side of the contact line
+_JU = 0.2          # share of the opening (and of the closing) carried by the upper lip
+_VR = 0.08         # vermilion thickening (eversion) by full rounding
+_VS = 0.08         # vermilion thinning by full spreading
+_RMID = 0.5        # upper-lip raise on the midline relative to its lateral peak
 
 
 def _smoothstep(t):
@@ -104,6 +112,7 @@ class LipModel:
         x, t = self._x, self._t
         ax = np.abs(x) / _W
         self._e = np.clip(1.0 - ax ** 2, 0.0, None) ** 0.6                  # opening shape (cols,)
+        self._er = self._e * (_RMID + (1 - _RMID) * 2.0 * ax)               # upper-lip raise profile (cols,)
         self._m = 1.0 / (1.0 + np.exp((np.abs(x) - _W) / 3.0))              # mouth weight (cols,)
         self._jb = np.exp(-(np.clip(np.abs(x) - 0.8 * _W, 0, None) / 10.0) ** 2)  # jaw footprint
         self._vt = 0.35 + 0.65 * np.clip(1.0 - ax ** 2, 0.0, None) ** 0.5    # vermilion taper (cols,)
@@ -134,19 +143,21 @@ class LipModel:
 
     # -------------------------------------------------------------- deformation
     def _inner(self, c):
-        """Inner-contour heights and compression per column, each (n, cols)."""
+        """Inner-contour heights, compression and the lower lip's rise towards contact
+        (relative to where the jaw alone puts it), each (n, cols)."""
         jaw, rnd, spr, rai, clo, lab = (c[:, k:k + 1] for k in range(6))
         e = self._e[None, :]
-        up_nom = e * (0.5 * _G0 + 0.12 * _GJ * jaw + _GR * rai + 1.5 * lab)
-        low_nom = -e * (0.5 * _G0 + 0.88 * _GJ * jaw)
+        up_nom = e * (0.5 * _G0 + _JU * _GJ * jaw + 1.5 * lab) + _GR * self._er[None, :] * rai
+        low_nom = -e * (0.5 * _G0 + (1 - _JU) * _GJ * jaw)
         low_nom = (1 - lab) * low_nom + lab * (up_nom - 2.0 * e)
         g_nom = up_nom - low_nom
-        yc = low_nom + (1 - _UP_SHARE) * g_nom
+        yc = low_nom + (1 - _JU) * g_nom
         g_raw = g_nom * (1 - clo) - clo * _KC * e
         eps = _EPS * e + 1e-3
         g = eps * np.logaddexp(0.0, g_raw / eps)
         comp = g - g_raw                                   # >= 0, ~0 when the lips are apart
-        return yc + _UP_SHARE * g, yc - (1 - _UP_SHARE) * g, comp
+        low = yc - (1 - _JU) * g
+        return yc + _JU * g, low, comp, low - low_nom
 
     def aperture(self, controls) -> np.ndarray:
         """Vertical distance between the inner lips on the midline (mm), shape (n,).
@@ -156,7 +167,7 @@ class LipModel:
         """
         c = self._check(controls)
         mid = self.cols // 2
-        up, low, _ = self._inner(c[:, :6])
+        up, low, _, _ = self._inner(c[:, :6])
         return (up[:, mid] - low[:, mid]).astype(np.float64)
 
     def _check(self, controls) -> np.ndarray:
@@ -175,24 +186,24 @@ class LipModel:
     # _FIELDS. _assemble() is the readable elementwise formula; since it is linear in the
     # fields, probing it with unit fields once gives a coefficient tensor A (cols, K, 6*rows)
     # and deform() is then one batched matrix product per block of frames.
-    _FIELDS = ("one", "x", "up_in", "low_in", "comp", "vfac", "jaw", "round", "spread", "raise", "labiodental")
+    _FIELDS = ("one", "x", "up_in", "low_in", "comp", "vfac", "jaw", "round", "spread", "raise", "labiodental", "rise")
 
     def _fields(self, c):
         """Fields (n, K, cols) of controls ``c`` (n, 6)."""
         n = c.shape[0]
         jaw, rnd, spr, rai, clo, lab = (c[:, k:k + 1] for k in range(6))
-        up_in, low_in, comp = self._inner(c)
-        wscale = 1.0 - _WR * rnd + _WSP * spr - 0.06 * jaw
+        up_in, low_in, comp, rise = self._inner(c)
+        wscale = 1.0 - _WR * rnd + _WSP * spr
         fx = self._x[None, :] * (1.0 + (wscale - 1.0) * self._m[None, :])
-        vfac = 1.0 + 0.15 * rnd - 0.15 * spr
+        vfac = 1.0 + _VR * rnd - _VS * spr
         F = np.empty((n, len(self._FIELDS), self.cols))
-        for k, f in enumerate((1.0, fx, up_in, low_in, comp, vfac, jaw, rnd, spr, rai, lab)):
+        for k, f in enumerate((1.0, fx, up_in, low_in, comp, vfac, jaw, rnd, spr, rai, lab, rise)):
             F[:, k, :] = f
         return F
 
     def _assemble(self, F):
         """Points (n, 2, rows, cols, 3) from fields (n, K, cols); elementwise, linear in F."""
-        one, fx, up_in, low_in, comp, vfac, jaw, rnd, spr, rai, lab = (F[:, k, None, :] for k in range(F.shape[1]))
+        one, fx, up_in, low_in, comp, vfac, jaw, rnd, spr, rai, lab, rise = (F[:, k, None, :] for k in range(F.shape[1]))
         x = self._x[None, None, :]
         m = self._m[None, None, :]
         tv, ts = self._tv[None, :, None], self._ts[None, :, None]
@@ -207,11 +218,13 @@ class LipModel:
         out[:, 0, ..., 1] = fol * (up_in + _HV[0] * vt * tv * (vfac - 0.12 * comp) + _HS[0] * ts * one) \
             + (1 - fol) * (y_rest * one + 0.15 * _GR * rai * m)
         out[:, 0, ..., 2] = z_common + (rai + 0.4 * comp) * prot * m
-        # lower lip: the lip follows its inner contour, the chin follows the jaw rigidly
-        jaw_drop = 0.88 * _GJ * jaw * self._jb[None, None, :]
+        # lower lip: the lip follows its inner contour, the chin follows the jaw rigidly; the
+        # skin between them also takes the lip's own rise towards contact (mentalis), fading
+        # linearly to nothing at the chin
+        jaw_drop = (1 - _JU) * _GJ * jaw * self._jb[None, None, :]
         out[:, 1, ..., 0] = fx
         out[:, 1, ..., 1] = fol * (low_in - _HV[1] * vt * tv * (vfac - 0.12 * comp - 0.3 * lab) - _HS[1] * ts * one) \
-            + (1 - fol) * (-(_HV[1] * vt * tv + _HS[1] * ts) * one - jaw_drop)
+            + (1 - fol) * (-(_HV[1] * vt * tv + _HS[1] * ts) * one - jaw_drop + (1 - ts) * rise)
         out[:, 1, ..., 2] = z_common + 0.4 * comp * prot * m - 0.25 * jaw_drop * (0.3 + 0.7 * ts) \
             - 5.0 * lab * (1.0 - tv) * fol * m
         return out

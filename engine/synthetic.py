@@ -44,7 +44,7 @@ from engine.progress import report
 __all__ = ["GENERATOR_VERSION", "PRESETS", "SyntheticTalker", "load_synthetic", "cache_folder", "phone_gestures"]
 
 #: Bumped whenever the generated corpus changes for the same parameters (cache key).
-GENERATOR_VERSION = 2
+GENERATOR_VERSION = 3
 
 #: Preset: seconds of speech (frames = seconds * rate) and lip-surface resolution.
 PRESETS = {
@@ -57,7 +57,7 @@ PRESETS = {
 # control order: jaw, round, spread, raise, closure, labiodental
 _J, _R, _S, _U, _C, _L = range(6)
 #: Time to reach 63 % of a step (s) per control; natural frequency w = 2.146 / T63.
-T63 = np.array([0.060, 0.080, 0.070, 0.065, 0.035, 0.045])
+T63 = np.array([0.060, 0.080, 0.070, 0.065, 0.060, 0.045])
 _WINDOW = 8  # gestures either side of a sample that contribute to its blend
 _TIMING_SD = 0.08  # s.d. of a gesture's timing, as a fraction of its phone's duration
 _SHAPE = np.array([1.5, 1.5, 1.5, 1.5, 2.0, 2.0])  # dominance exponent c per control
@@ -131,12 +131,14 @@ PHONE_GESTURES = {
     "ea": _vowel((0.5, 0.0, 0.3, 0.2), (0.38, 0.05, 0.1, 0.1)),
     "ua": _vowel((0.3, 0.55, 0.0, 0.1), (0.38, 0.05, 0.1, 0.1)),
     # bilabial plosives: closure peaks early and releases fast (the burst)
-    **dict.fromkeys(("p", "b"), _cons(jaw=(0.12, 1.0), rnd=(0.1, 0.1), spr=(0.1, 0.1), rai=(0.0, 0.3),
+    # (all bilabials are made with the jaw raised, with a dominant jaw target, so the jaw
+    # does much of the closing as in real speech instead of the lips alone)
+    **dict.fromkeys(("p", "b"), _cons(jaw=(0.02, 2.5), rnd=(0.1, 0.1), spr=(0.1, 0.1), rai=(0.0, 0.3),
                                       clo=(1.0, _PROTECT), frac=0.3,
                                       before=_with(_W0, _C, (0.45, 0.01)), after=_with(_W0, _C, (0.2, 0.004)))),
     # bilabial nasal: closure approached through the phone and reached late; the jaw
     # keeps rising past the phone's end, so the whole lip-jaw complex is still closing
-    "m": _cons(jaw=(0.12, 2.0), rnd=(0.1, 0.1), spr=(0.1, 0.1), rai=(0.0, 0.3), clo=(1.0, _PROTECT),
+    "m": _cons(jaw=(0.02, 2.5), rnd=(0.1, 0.1), spr=(0.1, 0.1), rai=(0.0, 0.3), clo=(1.0, _PROTECT),
                frac=0.75, jaw_frac=1.3, before=_with(_W0, _C, (0.5, 0.01)), after=_with(_W0, _C, (0.45, 0.02))),
     **dict.fromkeys(("f", "v"), _cons(jaw=(0.12, 0.6), rai=(0.25, 0.5), lab=(1.0, _PROTECT), frac=0.45,
                                       before=_with(_W0, _L, (0.4, 0.01)), after=_with(_W0, _L, (0.35, 0.01)))),
@@ -151,7 +153,7 @@ PHONE_GESTURES = {
     **dict.fromkeys(("k", "g", "ng"), _cons(jaw=(0.25, 0.3))),
     "hh": _cons(jaw=(0.3, 0.1), rnd=(0.1, 0.05), spr=(0.1, 0.05), rai=(0.1, 0.05), clo=(0.0, 0.3), lab=(0.0, 0.3)),
     # pause: lips lightly together, jaw almost closed
-    PAUSE: _cons(jaw=(0.04, 1.0), rnd=(0.05, 0.6), spr=(0.1, 0.6), rai=(0.05, 0.6), clo=(0.7, 1.5), lab=(0.0, 1.0)),
+    PAUSE: _cons(jaw=(0.02, 1.5), rnd=(0.05, 0.6), spr=(0.1, 0.6), rai=(0.05, 0.6), clo=(0.7, 1.5), lab=(0.0, 1.0)),
 }
 
 

@@ -175,6 +175,8 @@ def test_first_principal_component_is_jaw_opening(small):
     _, S, Vt = np.linalg.svd(F.T @ F)  # (3V, 3V) is small here; same right vectors as SVD of F
     assert S[0] / S.sum() > 0.3
     assert abs(np.corrcoef(F @ Vt[0], small.latent["jaw"])[0, 1]) > 0.8
+    # ... and it is lip opening: jaw and lips open and close together, as in real speech
+    assert abs(np.corrcoef(F @ Vt[0], small.latent["aperture"])[0, 1]) > 0.98
 
 
 def test_controls_are_smooth_and_bounded(small):
