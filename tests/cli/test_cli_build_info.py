@@ -44,3 +44,24 @@ def test_cli_errors_are_clean(tmp_path, capsys):
     assert main(["build", str(bad), "-o", str(tmp_path / "m.npz"), "-q"]) == 2
     assert "not a Lipspace corpus" in capsys.readouterr().err
     assert not (tmp_path / "m.npz").exists()
+
+
+def test_ctrl_c_stops_build_cleanly_and_writes_nothing(tmp_path):
+    """A real SIGINT to `lipspace build` mid-fit: exit 130, one line, no traceback, no file."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "m.npz"
+    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "build", "--preset", "default", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
+    time.sleep(3.0)  # generating the talker or fitting: either way mid-work
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    err_head = err[-2000:]
+    assert proc.returncode == 130, err_head
+    assert "interrupted; nothing was written" in err and "Traceback" not in err, err_head
+    assert not out.exists() and not list(tmp_path.glob(".*part*"))
