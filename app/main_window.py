@@ -185,7 +185,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _on_loaded(self, result):
         manifold, source = result
         self.set_manifold(manifold, source=source)
-        warned = getattr(self._runner, "warnings", None)
+        warned = self._runner.warnings
         if warned:  # e.g. a disconnected state graph: keep it on screen, not "ready"
             self.statusBar().showMessage(f"loaded with a warning: {warned[-1]}", 30000)
         else:

@@ -13,6 +13,7 @@ import warnings
 
 from PySide6 import QtCore, QtWidgets
 
+from engine.corpus import CorpusWarning
 from engine.progress import Cancelled
 
 __all__ = ["Worker", "TaskRunner", "run_task", "run_blocking", "cancel_all"]
@@ -50,14 +51,12 @@ class Worker(QtCore.QObject):
     def run(self) -> None:
         try:
             with warnings.catch_warnings(record=True) as caught:
-                from engine.states import StateGraphConnectivityWarning
-
                 # warnings about the data go to the window; every other filter (pytest's
                 # "error" included) still applies
-                warnings.simplefilter("always", StateGraphConnectivityWarning)
+                warnings.simplefilter("always", CorpusWarning)
                 result = self.task(self.report)
             for w in caught:
-                if issubclass(w.category, StateGraphConnectivityWarning):
+                if issubclass(w.category, CorpusWarning):
                     self.warned.emit(str(w.message))
                 else:
                     warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)

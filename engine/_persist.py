@@ -15,7 +15,14 @@ __all__ = ["dump_estimator", "load_estimator", "read_npz", "NpzReadError"]
 
 
 class NpzReadError(ValueError):
-    """A file that is not a readable (pickle-free) ``.npz`` archive."""
+    """A file that is not a readable (pickle-free) ``.npz`` archive.
+
+    ``path`` is the file and ``reason`` what stopped the read (exception type and text).
+    """
+
+    def __init__(self, path, reason: str):
+        super().__init__(f"{path}: not a readable .npz file ({reason})")
+        self.path, self.reason = path, reason
 
 
 def read_npz(path, *, keys_only: bool = False):
@@ -37,7 +44,7 @@ def read_npz(path, *, keys_only: bool = False):
     except FileNotFoundError:
         raise
     except Exception as exc:  # BadZipFile, EOFError, OSError, ValueError (pickled data) ...
-        raise NpzReadError(f"{path}: not a readable .npz file ({type(exc).__name__}: {exc})") from None
+        raise NpzReadError(path, f"{type(exc).__name__}: {exc}") from None
 
 
 def _fitted_names(obj):

@@ -12,13 +12,22 @@ import numpy as np
 
 from engine._atomic import atomic_write
 
-__all__ = ["CorpusError", "PhoneInterval", "Utterance", "Corpus"]
+__all__ = ["CorpusError", "CorpusWarning", "PhoneInterval", "Utterance", "Corpus"]
 
 FORMAT_VERSION = 1
 
 
 class CorpusError(ValueError):
     """Raised when corpus data is malformed; the message names what and where."""
+
+
+class CorpusWarning(UserWarning):
+    """Something about the user's data that the results depend on; the work goes on.
+
+    Base class of the engine's warnings about data (e.g. a disconnected state graph).
+    The command line prints them as one plain line and the window shows them in its
+    status bar.
+    """
 
 
 @dataclass(frozen=True)
@@ -354,16 +363,17 @@ class Corpus:
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(f"{path}: no such corpus file")
-        from engine._persist import read_npz
+        from engine._persist import NpzReadError, read_npz
 
         try:
             return cls.from_arrays(read_npz(path), source=str(path))
         except CorpusError:
             raise
-        except Exception as exc:  # BadZipFile, EOFError, KeyError, OSError, ValueError ...
-            raise CorpusError(
-                f"{path}: cannot read as a Lipspace corpus (.npz): {type(exc).__name__}: {exc}"
-            ) from None
+        except NpzReadError as exc:
+            reason = exc.reason
+        except Exception as exc:  # arrays of the wrong shape or type
+            reason = f"{type(exc).__name__}: {exc}"
+        raise CorpusError(f"{path}: cannot read as a Lipspace corpus (.npz): {reason}")
 
 
 def frame_points(row: np.ndarray, dims: int) -> np.ndarray:

@@ -215,7 +215,7 @@ class Manifold(BaseEstimator):
         except FileNotFoundError:
             raise ManifoldFileError(f"{path}: no such manifold file") from None
         except NpzReadError as exc:
-            raise ManifoldFileError(str(exc).replace(".npz file", ".npz manifold file", 1)) from None
+            raise ManifoldFileError(f"{path}: not a readable .npz manifold file ({exc.reason})") from None
         if "manifold_version" not in d:
             hint = " (it is a corpus file: build it with 'lipspace build')" if "corpus_version" in d else ""
             raise ManifoldFileError(f"{path}: not a Lipspace manifold file{hint}")

@@ -23,6 +23,7 @@ from sklearn.cluster import KMeans, MiniBatchKMeans
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils.validation import check_is_fitted
 
+from engine.corpus import CorpusWarning
 from engine.dynamics import check_bounds
 from engine.progress import ProgressFn, report
 
@@ -40,7 +41,7 @@ class UnreachableError(ValueError):
     """No directed path joins two states."""
 
 
-class StateGraphConnectivityWarning(UserWarning):
+class StateGraphConnectivityWarning(CorpusWarning):
     """The state graph is not strongly connected: some distances are infinite."""
 
 

@@ -67,23 +67,19 @@ def _engine_warnings_to_stderr(command):
     They tell the user something about their data, so the command goes on; other
     libraries' warnings keep Python's default handling.
     """
+    from engine.corpus import CorpusWarning
+
     def show(message, category, filename, lineno, file=None, line=None):
-        if category.__module__.startswith("engine"):
+        if issubclass(category, CorpusWarning):
             print(f"lipspace {command}: warning: {message}", file=sys.stderr)
         else:
             _default_show(message, category, filename, lineno, file, line)
 
     _default_show = warnings.showwarning
     with warnings.catch_warnings():
-        for name in _ENGINE_WARNINGS:
-            module, cls = name.rsplit(".", 1)
-            warnings.simplefilter("always", getattr(importlib.import_module(module), cls))
+        warnings.simplefilter("always", CorpusWarning)
         warnings.showwarning = show
         yield
-
-
-#: Warnings the engine raises about the user's data, shown by the CLI as plain lines.
-_ENGINE_WARNINGS = ("engine.states.StateGraphConnectivityWarning",)
 
 
 class CliError(Exception):

@@ -79,13 +79,8 @@ def save_plotter_image(plotter, path, *, scale: int = 1, transparent: bool = Fal
     scale = int(scale)
     if scale < 1:
         raise ValueError(f"scale must be a positive integer, got {scale}; 1 keeps the window size")
-    if getattr(plotter, "render_window", None) is None:
-        raise ValueError("this plotter is closed; save the view before closing it")
-    with atomic_write(path) as tmp:
-        plotter.screenshot(str(tmp), transparent_background=transparent, scale=scale, return_img=False)
-        if not tmp.exists() or tmp.stat().st_size == 0:
-            raise OSError(f"{path}: the renderer produced no image")
-    return Path(path)
+    return _write_view(plotter, path, lambda tmp: plotter.screenshot(
+        str(tmp), transparent_background=transparent, scale=scale, return_img=False), "the renderer produced no image")
 
 
 def vector_export_available() -> bool:
@@ -119,11 +114,17 @@ def save_plotter_vector(plotter, path, *, title: str = "Lipspace") -> Path:
             f"{path}: this VTK build has no gl2ps exporter (vtkmodules.vtkIOExportGL2PS), so 3-D views "
             f"cannot be saved as {suf}; save the view as PNG instead (save_plotter_image), or install a "
             "VTK wheel built with gl2ps (the standard PyPI 'vtk' wheels are)")
+    # gl2ps writes <prefix><suffix>; the temporary name keeps the suffix, so it writes tmp itself
+    return _write_view(plotter, path, lambda tmp: plotter.save_graphic(str(tmp), title=title, raster=True,
+                                                                       painter=True), "the gl2ps exporter wrote nothing")
+
+
+def _write_view(plotter, path, write, empty_message: str) -> Path:
+    """Run ``write(tmp)`` for an open plotter through an atomic write; an empty result is an OSError."""
     if getattr(plotter, "render_window", None) is None:
         raise ValueError("this plotter is closed; save the view before closing it")
     with atomic_write(path) as tmp:
-        # gl2ps writes <prefix><suffix>; the temporary name keeps the suffix, so it writes tmp itself
-        plotter.save_graphic(str(tmp), title=title, raster=True, painter=True)
+        write(tmp)
         if not tmp.exists() or tmp.stat().st_size == 0:
-            raise OSError(f"{path}: the gl2ps exporter wrote nothing")
+            raise OSError(f"{path}: {empty_message}")
     return Path(path)

@@ -74,22 +74,18 @@ def _reader(fmt):
 
 
 def _read_native(path, rate=None, alignment=None, tier=None):
+    from engine._persist import NpzReadError, read_npz
     from engine.corpus import Corpus
     from engine.io._util import check_rate, fit_phones
     from engine.io.alignment import resolve_alignment
 
-    import numpy as np
-
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such corpus file")
-    # Corpus.load's reading, with our own file handle: np.load leaks its handle when the zip is damaged
     try:
-        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-    except Exception as exc:  # BadZipFile, EOFError, zlib.error, ValueError, ...
-        raise ImportFormatError(path, f"cannot read as a Lipspace corpus (.npz): {type(exc).__name__}: {exc}") \
-            from None
+        arrays = read_npz(path)
+    except NpzReadError as exc:
+        raise ImportFormatError(path, f"cannot read as a Lipspace corpus (.npz): {exc.reason}") from None
     c = Corpus.from_arrays(arrays, source=str(path))
     check_rate(path, c.rate, rate)
     if alignment is None or alignment is False:
