@@ -1,0 +1,219 @@
+"""glTF 2.0 export of a lip trajectory as a morph-target animation (``.glb`` / ``.gltf``).
+
+The shape space X is linear, ``F = mean + F^x X^T`` (:class:`engine.shape.ShapeSpace`),
+and so is a glTF morph: ``position = base + sum_k w_k * target_k``. The file therefore
+holds the trajectory exactly, in a form animation tools play directly:
+
+* one mesh whose base (``POSITION``) is the mean lip shape, ``(V, 3)`` float32;
+* one morph target per shape component (``X1``, ``X2``, ...: the rows of X as point
+  displacements, named in ``mesh.extras.targetNames``, which Blender turns into shape
+  key names);
+* one animation whose sampler runs over the frame times ``k / rate`` (seconds) and whose
+  output is F^x frame by frame (the morph weights), with ``LINEAR`` or ``STEP``
+  interpolation.
+
+With faces the primitive is a triangle list; without them (a marker set) it is a
+``POINTS`` primitive, which glTF viewers draw as points and Blender imports as loose
+vertices that carry the shape keys. No normals are stored: the standard tells viewers
+to compute flat normals, which follow the deformed surface, whereas stored base normals
+would not move with the morph. The lip surface is an open sheet, so the material is
+double-sided. 2-D points get z = 0. Coordinates are written unchanged (in the corpus's
+own unit); the node's uniform ``scale`` (e.g. 0.001 for millimetres) maps them to
+glTF's metres. Audio is not part of glTF 2.0: a sidecar file name can be recorded in
+``scene.extras["audio"]``.
+
+Written with the maintained ``pygltflib`` library, atomically.
+"""
+from __future__ import annotations
+
+import base64
+from pathlib import Path
+
+import numpy as np
+
+from engine._atomic import atomic_write
+
+__all__ = ["write_gltf_morph", "INTERPOLATIONS"]
+
+INTERPOLATIONS = ("LINEAR", "STEP")
+_FLOAT, _UINT16, _UINT32 = 5126, 5123, 5125
+_ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
+_POINTS, _TRIANGLES = 0, 4
+LIP_COLOUR = (0.86, 0.45, 0.45, 1.0)
+
+
+def _points3(a, dims, what):
+    """(..., dims * V) -> (..., V, 3) float32 (z = 0 for 2-D)."""
+    from engine.corpus import frame_points
+
+    return np.ascontiguousarray(frame_points(np.asarray(a, np.float32), dims), dtype=np.float32)
+
+
+def _check(mean, components, weights, rate, faces, dims, interpolation, scale):
+    if dims not in (2, 3):
+        raise ValueError(f"dims={dims!r}; expected 2 or 3 coordinates per point")
+    mean = np.asarray(mean, np.float32).ravel()
+    C = mean.size
+    if C == 0 or C % dims:
+        raise ValueError(f"the mean shape has {C} values, not a positive multiple of dims={dims}")
+    components = np.atleast_2d(np.asarray(components, np.float32))
+    if components.ndim != 2 or components.shape[1] != C:
+        raise ValueError(f"components must have shape (m, {C}) to match the mean shape, got {components.shape}")
+    weights = np.asarray(weights, np.float32)
+    if weights.ndim != 2 or weights.shape[1] != components.shape[0]:
+        raise ValueError(f"weights (F^x) must have shape (n_frames, {components.shape[0]}) for "
+                         f"{components.shape[0]} components, got {weights.shape}")
+    if weights.shape[0] < 1:
+        raise ValueError("the trajectory has no frames; nothing to animate")
+    if not np.isfinite(mean).all():
+        raise ValueError("the mean shape holds NaN or infinite values; glTF needs finite numbers")
+    for a, what in ((components, "components"), (weights, "weights (F^x)")):
+        bad = np.flatnonzero(~np.isfinite(a).all(axis=1))
+        if bad.size:
+            raise ValueError(f"{what} row {int(bad[0])} holds NaN or infinite values; glTF needs finite numbers")
+    if not (np.isfinite(rate) and rate > 0):
+        raise ValueError(f"rate={rate!r}; the frame rate must be a positive number of frames per second")
+    if interpolation not in INTERPOLATIONS:
+        raise ValueError(f"interpolation={interpolation!r}; expected one of {INTERPOLATIONS}")
+    if not (np.isfinite(scale) and scale > 0):
+        raise ValueError(f"scale={scale!r}; the node scale must be a positive number (e.g. 0.001 for mm)")
+    V = C // dims
+    if faces is not None and len(faces):
+        faces = np.asarray(faces)
+        if faces.ndim != 2 or faces.shape[1] != 3 or faces.min() < 0 or faces.max() >= V:
+            raise ValueError(f"faces must be (F, 3) indices into {V} points, got shape {faces.shape}"
+                             + (f" with indices {faces.min()}..{faces.max()}" if faces.size else ""))
+    else:
+        faces = None
+    return mean, components, weights, faces
+
+
+class _Blob:
+    """The one binary buffer: 4-byte aligned views, one accessor each."""
+
+    def __init__(self, gltf):
+        self.gltf = gltf
+        self.parts = []
+        self.size = 0
+
+    def add(self, arr, *, type_, component, target=None, minmax=False, name=None):
+        import pygltflib as g
+
+        data = np.ascontiguousarray(arr).tobytes()
+        pad = -self.size % 4
+        if pad:
+            self.parts.append(b"\0" * pad)
+            self.size += pad
+        view = g.BufferView(buffer=0, byteOffset=self.size, byteLength=len(data), target=target)
+        self.parts.append(data)
+        self.size += len(data)
+        self.gltf.bufferViews.append(view)
+        width = {"SCALAR": 1, "VEC3": 3}[type_]
+        flat = np.asarray(arr).reshape(-1, width)
+        acc = g.Accessor(bufferView=len(self.gltf.bufferViews) - 1, componentType=component, count=int(flat.shape[0]),
+                         type=type_, name=name)
+        if minmax:
+            acc.min = [float(v) for v in flat.min(axis=0)]
+            acc.max = [float(v) for v in flat.max(axis=0)]
+        self.gltf.accessors.append(acc)
+        return len(self.gltf.accessors) - 1
+
+    def bytes(self):
+        return b"".join(self.parts)
+
+
+def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None, dims: int = 3,
+                     target_names=None, interpolation: str = "LINEAR", scale: float = 1.0,
+                     audio: str | None = None, name: str = "lips", extras: dict | None = None) -> Path:
+    """Write a lip trajectory as a glTF 2.0 morph-target animation.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.glb`` (binary, one file) or ``.gltf`` (JSON with the buffer embedded as a data URI).
+    mean : array of shape (C,)
+        Base shape (the mean lip shape), ``C = dims * V``.
+    components : array of shape (m, C)
+        Morph targets: the shape components (rows of X), as displacements.
+    weights : array of shape (n_frames, m)
+        F^x per frame: the animated morph weights.
+    rate : float
+        Frames per second; frame ``k`` is keyed at ``k / rate`` seconds.
+    faces : array of shape (F, 3) int, optional
+        Triangles; without them the points are written as a ``POINTS`` primitive.
+    dims : {2, 3}
+        Coordinates per point in ``mean`` / ``components``.
+    target_names : sequence of str, optional
+        One name per component (default ``X1 .. Xm``).
+    interpolation : {"LINEAR", "STEP"}
+        Between keyed frames.
+    scale : float
+        Uniform scale of the node (coordinates themselves are written unchanged).
+    audio : str, optional
+        File name of a sidecar audio file, recorded in ``scene.extras["audio"]``.
+    name : str
+        Name of the node, mesh and animation.
+    extras : dict, optional
+        JSON-serialisable values added to ``scene.extras`` (e.g. the corpus rate, source).
+
+    Returns
+    -------
+    Path
+        ``path``, written atomically.
+    """
+    import pygltflib as g
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".glb", ".gltf"):
+        raise ValueError(f"{path}: a glTF file must end in .glb (binary) or .gltf (JSON)")
+    mean, components, weights, faces = _check(mean, components, weights, rate, faces, dims, interpolation, scale)
+    m, n = components.shape[0], weights.shape[0]
+    names = [f"X{k + 1}" for k in range(m)] if target_names is None else [str(s) for s in target_names]
+    if len(names) != m:
+        raise ValueError(f"{len(names)} target names for {m} components")
+    base = _points3(mean, dims, "mean")
+    V = base.shape[0]
+
+    gltf = g.GLTF2(asset=g.Asset(generator="lipspace (pygltflib)", version="2.0"))
+    blob = _Blob(gltf)
+    pos = blob.add(base, type_="VEC3", component=_FLOAT, target=_ARRAY_BUFFER, minmax=True, name="mean shape")
+    targets = []
+    for k in range(m):
+        d = _points3(components[k], dims, f"component {k + 1}")
+        targets.append(g.Attributes(POSITION=blob.add(d, type_="VEC3", component=_FLOAT, target=_ARRAY_BUFFER,
+                                                      minmax=True, name=names[k])))
+    prim = g.Primitive(attributes=g.Attributes(POSITION=pos), targets=targets, material=0,
+                       mode=_TRIANGLES if faces is not None else _POINTS)
+    if faces is not None:
+        idx = faces.astype(np.uint16 if V <= 65535 else np.uint32).ravel()
+        prim.indices = blob.add(idx, type_="SCALAR", component=_UINT16 if idx.dtype == np.uint16 else _UINT32,
+                                target=_ELEMENT_ARRAY_BUFFER, name="faces")
+    times = (np.arange(n, dtype=np.float64) / float(rate)).astype(np.float32)
+    t_acc = blob.add(times, type_="SCALAR", component=_FLOAT, minmax=True, name="time (s)")
+    w_acc = blob.add(weights.ravel(), type_="SCALAR", component=_FLOAT, name="F^x")
+
+    gltf.materials.append(g.Material(name="lip", doubleSided=True, pbrMetallicRoughness=g.PbrMetallicRoughness(
+        baseColorFactor=list(LIP_COLOUR), metallicFactor=0.0, roughnessFactor=0.6)))
+    gltf.meshes.append(g.Mesh(name=name, primitives=[prim], weights=[0.0] * m, extras={"targetNames": names}))
+    gltf.nodes.append(g.Node(name=name, mesh=0, scale=None if scale == 1.0 else [float(scale)] * 3))
+    scene_extras = dict(extras or {})
+    scene_extras.update({"rate": float(rate), "frames": int(n)})
+    if audio:
+        scene_extras["audio"] = str(audio)
+    gltf.scenes.append(g.Scene(name=name, nodes=[0], extras=scene_extras))
+    gltf.scene = 0
+    gltf.animations.append(g.Animation(
+        name=name, samplers=[g.AnimationSampler(input=t_acc, output=w_acc, interpolation=interpolation)],
+        channels=[g.AnimationChannel(sampler=0, target=g.AnimationChannelTarget(node=0, path="weights"))]))
+    data = blob.bytes()
+    gltf.buffers.append(g.Buffer(byteLength=len(data)))
+    with atomic_write(path) as tmp:
+        if suffix == ".glb":
+            gltf.set_binary_blob(data)
+            if not gltf.save_binary(str(tmp)):
+                raise OSError(f"{path}: pygltflib could not write the binary glTF")
+        else:
+            gltf.buffers[0].uri = "data:application/octet-stream;base64," + base64.b64encode(data).decode("ascii")
+            gltf.save_json(str(tmp))
+    return path
