@@ -26,6 +26,11 @@ Details the paper leaves open, fixed here:
 * **Saving.** Fitted attributes are arrays only; the triangulation is rebuilt from
   ``points_`` on first use after loading (Qhull is deterministic for the same input
   and options).
+* **Cold start.** scipy computes the barycentric transform of every simplex (one small
+  LAPACK factorisation each, ~188k of them on the default talker) the first time a
+  point is located. Under a loaded OpenBLAS that took 10-60 s. The transforms are
+  computed here instead, all at once, by closed-form 2x2 / 3x3 inverses in numpy
+  (``barycentric_transforms``), and handed to the triangulation before its first use.
 """
 from __future__ import annotations
 
@@ -34,7 +39,7 @@ from scipy.spatial import ConvexHull, Delaunay, cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-__all__ = ["InverseMap"]
+__all__ = ["InverseMap", "barycentric_transforms"]
 
 #: Qhull options: scipy's defaults for <= 4-D ("Qt" is always added by scipy)
 QHULL_OPTIONS = "Qbb Qc Qz Q12"
@@ -42,6 +47,62 @@ QHULL_OPTIONS = "Qbb Qc Qz Q12"
 _REL_TOL = 1e-9
 #: nearest vertices whose simplices are searched for points Qhull cannot locate
 _N_NEAREST = 8
+#: simplices whose reciprocal condition number is below this are degenerate (scipy's limit)
+_RCOND_LIMIT = 1000 * np.finfo(np.float64).eps
+
+
+def barycentric_transforms(points, simplices):
+    """Barycentric transforms of all simplices at once, as scipy's ``Delaunay.transform``.
+
+    For simplex ``s`` with vertices ``v_0 .. v_r``, ``T[s, :r]`` is the inverse of the
+    matrix whose columns are ``v_j - v_r`` and ``T[s, r] = v_r``, so the barycentric
+    coordinates of ``x`` are ``c = T[s, :r] @ (x - T[s, r])`` and ``1 - sum(c)``.
+    Simplices whose reciprocal 1-norm condition number is below ``1000 * eps`` get NaN,
+    as scipy marks them.
+
+    Parameters
+    ----------
+    points : ndarray of shape (n_points, r)
+    simplices : ndarray of shape (n_simplices, r + 1), int
+
+    Returns
+    -------
+    T : ndarray of shape (n_simplices, r + 1, r), float64
+    """
+    P = np.asarray(points, dtype=np.float64)
+    S = np.asarray(simplices)
+    r = P.shape[1]
+    if S.ndim != 2 or S.shape[1] != r + 1:
+        raise ValueError(f"simplices must be (n, {r + 1}) for {r}-D points, got shape {S.shape}")
+    V = P[S]  # (n, r+1, r)
+    last = V[:, r, :]
+    A = np.swapaxes(V[:, :r, :] - last[:, None, :], 1, 2)  # columns v_j - v_r
+    if r == 2:
+        a, b, c, d = A[:, 0, 0], A[:, 0, 1], A[:, 1, 0], A[:, 1, 1]
+        det = a * d - b * c
+        adj = np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], 1)
+    elif r == 3:
+        c0, c1, c2 = A[:, :, 0], A[:, :, 1], A[:, :, 2]
+        # rows of the adjugate are the cross products of pairs of columns
+        adj = np.stack([np.cross(c1, c2), np.cross(c2, c0), np.cross(c0, c1)], 1)
+        det = np.einsum("ij,ij->i", c0, adj[:, 0])
+    else:
+        det = np.linalg.det(A)
+        adj = None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if adj is not None:
+            inv = adj / det[:, None, None]
+        else:
+            ok = det != 0
+            inv = np.full_like(A, np.nan)
+            inv[ok] = np.linalg.inv(A[ok])
+        rcond = 1.0 / (np.abs(A).sum(axis=1).max(axis=1) * np.abs(inv).sum(axis=1).max(axis=1))
+    bad = ~(np.isfinite(rcond) & (rcond >= _RCOND_LIMIT) & (det != 0))
+    T = np.empty((S.shape[0], r + 1, r), dtype=np.float64)
+    T[:, :r, :] = inv
+    T[:, r, :] = last
+    T[bad] = np.nan
+    return T
 
 
 class InverseMap(BaseEstimator):
@@ -182,7 +243,10 @@ class InverseMap(BaseEstimator):
 
     def _triangulation(self) -> Delaunay:
         if getattr(self, "_tri", None) is None:
-            self._tri = Delaunay(self.points_, qhull_options=QHULL_OPTIONS)
+            tri = Delaunay(self.points_, qhull_options=QHULL_OPTIONS)
+            # scipy would otherwise factorise every simplex one by one on first use
+            tri._transform = barycentric_transforms(tri.points, tri.simplices)
+            self._tri = tri
         return self._tri
 
     def _kdtree(self) -> cKDTree:

@@ -127,3 +127,45 @@ def test_manifold_inverse_map_reproduces_training_frames(small_manifold):
     np.testing.assert_allclose(im.transform(m.Fy_[idx]), m.Fx_[idx], rtol=0, atol=1e-5 * np.abs(m.Fx_).max())
     frames = m.shape_.inverse_transform(im.transform(m.Fy_[idx]))
     np.testing.assert_allclose(frames, m.shape_.inverse_transform(m.Fx_[idx]), atol=1e-4 * np.abs(frames).max())
+
+
+@pytest.mark.parametrize("r", [2, 3, 4])
+def test_batch_barycentric_transforms_match_scipy(r):
+    """The batch transforms equal scipy's per-simplex ones, NaN where scipy says degenerate."""
+    from scipy.spatial import Delaunay
+
+    from engine.inverse import barycentric_transforms
+
+    rng = np.random.default_rng(r)
+    P = rng.standard_normal((1500, r))
+    # a regular grid block makes cospherical / flat simplices Qhull keeps with "Qz Q12"
+    g = np.stack(np.meshgrid(*[np.arange(4.0)] * r, indexing="ij"), -1).reshape(-1, r)
+    P = np.vstack([P, g * 0.3 + 3.0])
+    tri = Delaunay(P, qhull_options="Qbb Qc Qz Q12")
+    ref = tri.transform
+    T = barycentric_transforms(tri.points, tri.simplices)
+    assert T.shape == ref.shape
+    ok = np.isfinite(ref).all(axis=(1, 2))
+    # the same simplices are degenerate (scipy estimates the condition number, we compute it)
+    assert np.array_equal(ok, np.isfinite(T).all(axis=(1, 2)))
+    np.testing.assert_allclose(T[ok], ref[ok], rtol=1e-9, atol=1e-9 * np.abs(ref[ok]).max())
+
+
+def test_flat_simplex_transform_is_nan():
+    from engine.inverse import barycentric_transforms
+
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0, 0, 1.0]])
+    T = barycentric_transforms(pts, np.array([[0, 1, 2, 3], [0, 1, 2, 4]]))
+    assert np.isnan(T[0]).all() and np.isfinite(T[1]).all()
+    c = T[1, :3] @ (np.array([0.2, 0.2, 0.2]) - T[1, 3])
+    np.testing.assert_allclose(np.r_[c, 1 - c.sum()], [0.4, 0.2, 0.2, 0.2], atol=1e-12)
+
+
+def test_triangulation_uses_batch_transforms():
+    Y, X = _cloud(500)
+    im = InverseMap().fit(Y, X)
+    tri = im._triangulation()
+    assert tri._transform is not None  # handed over before scipy's lazy per-simplex path
+    from engine.inverse import barycentric_transforms
+
+    np.testing.assert_array_equal(tri.transform, barycentric_transforms(tri.points, tri.simplices))
