@@ -8,6 +8,15 @@ three dimensions of the manifold Y, where the paper's Fig. 3 draws its trajector
 the manifold method's state path before the inverse map, every X-space method's
 trajectory projected out-of-sample, against the held-out utterance's own projection).
 
+Default: the two equal-information protocols of :mod:`engine.protocols` -- ``states``
+(every method gets the target states) and ``oracle`` (every method gets the oracle X at
+the targets and their states) -- with the mean-frame baseline, RMSE in X and in Y3
+(every trajectory through the same projection), the lip-vertex error (LVE), paired
+per-utterance statistics against the manifold, and a verdict line per measure saying
+where the manifold loses. ``--state-dims``, the smoothing and k are chosen on a
+validation split of the training utterances unless given. ``--methods`` prints the
+older per-method table (:func:`engine.evaluation.evaluate`) instead.
+
 Input: corpus files in any importable format (several are joined, one utterance
 each), ``--haskins`` (the two Haskins IEEE samples beside the project), or nothing
 (the synthetic talker, ``--preset``).
@@ -32,14 +41,27 @@ def add_arguments(p):
     p.add_argument("--test-fraction", type=float, default=0.1,
                    help="fraction of utterances held out, at least one (default: %(default)s)")
     p.add_argument("--test-ids", default=None, metavar="ID,ID,...", help="hold out exactly these utterances")
-    p.add_argument("--methods", default=",".join(DEFAULT_METHODS), metavar="M,M,...",
-                   help=f"comma-separated, from: {', '.join(EVALUATION_METHODS)} (default: %(default)s)")
+    p.add_argument("--methods", default=None, metavar="M,M,...",
+                   help=f"print the older per-method table instead of the protocols, for these methods: "
+                        f"{', '.join(EVALUATION_METHODS)} (e.g. {','.join(DEFAULT_METHODS)})")
     p.add_argument("--states", type=int, default=None, help="K of the state graph (default: about N/30)")
-    p.add_argument("--state-dims", type=int, default=3, help="dims of Y clustered into states (default: 3)")
+    p.add_argument("--state-dims", type=int, default=None,
+                   help="dims of Y clustered into states (default: chosen on a validation split of the "
+                        "training utterances; 3 for the --methods table)")
+    p.add_argument("--smoothing", type=float, default=None, metavar="FRAMES",
+                   help="protocols: Gaussian smoothing of the manifold paths in frames (default: validated)")
+    p.add_argument("--neighbors", type=int, default=None,
+                   help="protocols: k of the local-linear inverse (default: validated)")
+    p.add_argument("--speaker-norm", action="store_true",
+                   help="subtract each speaker's mean frame first (on by default with --haskins: one speaker "
+                        "per file, named by the file name's first field)")
     p.add_argument("--inverse-dims", type=int, default=None,
-                   help="manifold methods: dims of the Y -> X inverse map (default: the manifold's, 3)")
+                   help="--methods table: dims of the Y -> X inverse map (default: the manifold's, 3)")
     p.add_argument("--seed", type=int, default=0, help="seed of the split and the manifold (default: 0)")
-    p.add_argument("--csv", metavar="OUT.csv", default=None, help="also write the table as CSV")
+    p.add_argument("--csv", metavar="OUT.csv", default=None,
+                   help="also write the table as CSV (protocols: protocol, method, utterance, rmse_x, rmse_y, "
+                        "lve; one row per utterance and an ALL row per method)")
+    p.add_argument("--markdown", metavar="OUT.md", default=None, help="protocols: also write the tables as Markdown")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -68,6 +90,9 @@ def _corpus(args, progress):
 def run(args) -> int:
     from app.cli import CliError
     from app.cli._common import progress_bar
+
+    if args.methods is None:
+        return _run_protocols(args)
     from engine.evaluation import EVALUATION_METHODS, evaluate
     from engine.manifold import Manifold
 
@@ -81,7 +106,7 @@ def run(args) -> int:
         corpus = _corpus(args, progress)
 
         def factory(train):
-            return Manifold(n_states=args.states, state_dims=args.state_dims, random_state=args.seed).fit(
+            return Manifold(n_states=args.states, state_dims=args.state_dims or 3, random_state=args.seed).fit(
                 train, progress=progress)
 
         try:
@@ -96,4 +121,78 @@ def run(args) -> int:
 
         write_table_csv(args.csv, result.table())
         print(f"wrote {args.csv}")
+    return 0
+
+
+def haskins_speaker(utterance) -> str:
+    """Speaker of a Haskins IEEE file: the first field of its name (``F01_B01_S01_R01_N`` -> ``F01``)."""
+    return utterance.speaker or utterance.id.split("_")[0]
+
+
+def _settings(args, manifold, progress):
+    """Validated settings, overridden by whatever the command line fixes."""
+    from engine.protocols import PROTOCOLS, STATE_DIM_CANDIDATES, select_settings
+
+    dims = (args.state_dims,) if args.state_dims is not None else STATE_DIM_CANDIDATES
+    kw = {"state_dims": dims, "random_state": args.seed, "progress": progress, "n_states": args.states}
+    if args.smoothing is not None:
+        kw["sigmas"] = (float(args.smoothing),)
+    if args.neighbors is not None:
+        kw["neighbors"] = (int(args.neighbors),)
+    s = select_settings(manifold, **kw)
+    if len(s["validation"]) == 0:  # too few utterances to validate: the command line's values win
+        if args.smoothing is not None:
+            s["sigma"] = {f"{p}/{m}": float(args.smoothing) for p in PROTOCOLS for m in ("manifold", "manifold-ll")}
+        if args.neighbors is not None:
+            s["n_neighbors"] = int(args.neighbors)
+    return s
+
+
+def _run_protocols(args) -> int:
+    from app.cli import CliError
+    from app.cli._common import progress_bar
+    from engine.manifold import Manifold
+    from engine.protocols import evaluate_protocols, normalise_speakers
+
+    for name in ("smoothing", "neighbors", "state_dims", "states"):
+        v = getattr(args, name)
+        if v is not None and v < (0 if name == "smoothing" else 1):
+            raise CliError(f"--{name.replace('_', '-')} must be {'>= 0' if name == 'smoothing' else '>= 1'}, got {v}")
+    test_ids = [s.strip() for s in args.test_ids.split(",") if s.strip()] if args.test_ids else None
+    with progress_bar(disable=True if args.quiet else None) as progress:
+        corpus = _corpus(args, progress)
+        notes = []
+        if args.speaker_norm or args.haskins:
+            try:
+                corpus, means = normalise_speakers(corpus, haskins_speaker if args.haskins else None)
+            except ValueError as exc:
+                raise CliError(str(exc)) from None
+            notes.append(f"per-speaker mean frame removed ({', '.join(means)}); errors are the same in "
+                         f"either frame of reference")
+
+        def factory(train):
+            return Manifold(n_states=args.states, random_state=args.seed).fit(train, progress=progress)
+
+        try:
+            result = evaluate_protocols(
+                corpus, manifold_factory=factory, test_fraction=args.test_fraction, test_ids=test_ids,
+                random_state=args.seed, progress=progress,
+                settings_factory=lambda m: _settings(args, m, progress))
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+        result.notes.extend(notes)
+    print(result.format())
+    if args.csv:
+        from engine.io.export import write_table_csv
+        from engine.protocol_report import CSV_COLUMNS
+
+        write_table_csv(args.csv, result.csv_rows(), columns=CSV_COLUMNS)
+        print(f"wrote {args.csv}")
+    if args.markdown:
+        from engine._atomic import atomic_write
+
+        with atomic_write(args.markdown) as tmp:
+            with open(tmp, "w", encoding="utf-8") as fh:
+                fh.write(result.markdown() + "\n")
+        print(f"wrote {args.markdown}")
     return 0

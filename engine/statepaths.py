@@ -1,0 +1,197 @@
+"""State paths in a d-dimensional state space and every trajectory built from timed targets.
+
+The synthesis of the paper (4.1) in any number of dimensions of Y, with its X taken
+from the states, and the baselines that get the same information:
+
+:class:`StateModel`
+    K-means states of the first ``state_dims`` of F^y (an :class:`engine.states.StateGraph`),
+    the observed transitions between them, each state's mean F^x and mean velocity
+    (:class:`engine.inverse_local.StateMeanInverse`) and a local-linear inverse
+    (:class:`engine.inverse_local.LocalLinearInverse`) in the same dims.
+:meth:`StateModel.path`
+    The maximum-probability state path of exactly each gap's length between the
+    target states (Viterbi, as :class:`engine.synthesis.ManifoldSynthesizer`; a gap no
+    path bridges in time ends at the reachable state nearest the target, as its
+    ``strict=False``).
+:meth:`StateModel.path_x`
+    X of a path: ``"state-mean"`` (each state's mean F^x, then a Gaussian smoothing of
+    ``sigma`` frames) or ``"local-linear"`` (the path of state centroids smoothed in Y,
+    then mapped through the local-linear inverse).
+:func:`anchor`
+    A trajectory pulled onto given X at the target frames: the residuals at the targets
+    are interpolated linearly over the frames between them and added.
+:func:`interpolate_targets`
+    Direct interpolation of target X: ``"linear"``, ``"pchip"`` (shape-preserving
+    monotone cubic) or ``"hermite"`` (cubic Hermite with given velocities).
+
+Every trajectory holds the first target before it and the last after it.
+"""
+from __future__ import annotations
+
+import warnings as _warnings
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+
+from engine.inverse_local import LocalLinearInverse, StateMeanInverse
+
+__all__ = ["StateModel", "anchor", "interpolate_targets", "smooth", "INTERPOLATIONS", "PATH_INVERSES"]
+
+INTERPOLATIONS = ("linear", "pchip", "hermite")
+PATH_INVERSES = ("state-mean", "local-linear")
+
+
+def smooth(A, sigma) -> np.ndarray:
+    """Gaussian smoothing along frames (axis 0) with s.d. ``sigma`` frames (0: unchanged)."""
+    A = np.asarray(A, dtype=np.float64)
+    if float(sigma) < 0:
+        raise ValueError(f"smoothing sigma must be >= 0 frames, got {sigma}")
+    if float(sigma) == 0 or A.shape[0] < 2:
+        return A
+    return gaussian_filter1d(A, float(sigma), axis=0, mode="nearest")
+
+
+def anchor(X, frames, X_targets) -> np.ndarray:
+    """``X`` (n, m) plus the linearly interpolated residuals ``X_targets - X[frames]``.
+
+    Equals ``X_targets`` at the target frames; outside the first and last target the
+    nearest residual is held.
+    """
+    X = np.asarray(X, dtype=np.float64)
+    f = np.asarray(frames, dtype=np.int64)
+    R = np.asarray(X_targets, dtype=np.float64) - X[f]
+    t = np.arange(X.shape[0], dtype=np.float64)
+    return X + np.column_stack([np.interp(t, f, R[:, j]) for j in range(X.shape[1])])
+
+
+def interpolate_targets(kind, frames, X_targets, n_frames, velocities=None) -> np.ndarray:
+    """Trajectory (n_frames, m) through target X at ``frames`` by ``kind`` in :data:`INTERPOLATIONS`.
+
+    ``velocities`` (T, m), in X per frame, is required by ``"hermite"``. With one
+    target, or two for ``"pchip"``, every kind is constant / linear.
+    """
+    from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
+
+    if kind not in INTERPOLATIONS:
+        raise ValueError(f"unknown interpolation {kind!r}; choose from {', '.join(INTERPOLATIONS)}")
+    f = np.asarray(frames, dtype=np.float64)
+    Xt = np.asarray(X_targets, dtype=np.float64)
+    t = np.clip(np.arange(int(n_frames), dtype=np.float64), f[0], f[-1])
+    if f.size == 1:
+        return np.repeat(Xt[:1], t.size, axis=0)
+    if kind == "linear" or (kind == "pchip" and f.size < 3):
+        return np.column_stack([np.interp(t, f, Xt[:, j]) for j in range(Xt.shape[1])])
+    if kind == "pchip":
+        return PchipInterpolator(f, Xt, axis=0)(t)
+    if velocities is None:
+        raise ValueError("hermite interpolation needs a velocity per target")
+    return CubicHermiteSpline(f, Xt, np.asarray(velocities, dtype=np.float64), axis=0)(t)
+
+
+class StateModel:
+    """States of the first ``state_dims`` of F^y with their transitions and inverse maps.
+
+    Parameters
+    ----------
+    state_dims : int
+        Dimensions of F^y clustered (K-means).
+    n_states : int or None
+        K (None: :func:`engine.states.default_n_states` of the frames).
+    n_neighbors : int
+        k of the local-linear inverse.
+    random_state : int
+
+    Use ``fit(Fy, Fx, Fxv, bounds)``; the frames given are the only ones the model
+    sees (a validation split passes its fitting part).
+
+    Attributes
+    ----------
+    graph_ : StateGraph
+    inverse_ : StateMeanInverse
+        Mean F^x and F^x' per state.
+    local_ : LocalLinearInverse
+    state_y_ : ndarray of shape (K, state_dims)
+        Mean F^y (first ``state_dims``) per state.
+    connectivity_warnings_ : list of str
+        Warnings of the state graph (e.g. not strongly connected), kept, not raised.
+    """
+
+    def __init__(self, *, state_dims=5, n_states=None, n_neighbors=40, random_state=0):
+        self.state_dims = state_dims
+        self.n_states = n_states
+        self.n_neighbors = n_neighbors
+        self.random_state = random_state
+
+    def fit(self, Fy, Fx, Fxv, bounds):
+        from engine.states import StateGraph, default_n_states
+        from engine.synthesis import MaxProductGraph, log_transitions, observed_transitions
+
+        Fy = np.asarray(Fy)
+        d = int(self.state_dims)
+        if not 1 <= d <= Fy.shape[1]:
+            raise ValueError(f"state_dims must be in 1..{Fy.shape[1]} (the dims of F^y), got {self.state_dims}")
+        K = default_n_states(Fy.shape[0]) if self.n_states is None else int(self.n_states)
+        with _warnings.catch_warnings(record=True) as caught:
+            _warnings.simplefilter("always")
+            self.graph_ = StateGraph(n_states=K, n_dims=d, random_state=self.random_state).fit(Fy, bounds)
+        self.connectivity_warnings_ = [str(w.message) for w in caught]
+        lab = self.graph_.labels_
+        K = self.graph_.centroids_.shape[0]
+        self.inverse_ = StateMeanInverse().fit(lab, Fx, Fxv, n_states=K)
+        self.state_y_ = StateMeanInverse().fit(lab, np.asarray(Fy, np.float64)[:, :d], n_states=K).means_
+        k = min(int(self.n_neighbors), Fy.shape[0])
+        self.local_ = LocalLinearInverse(n_neighbors=max(k, d + 2), n_dims=d).fit(Fy, Fx)
+        self._graph = MaxProductGraph(log_transitions(observed_transitions(self.graph_)))
+        return self
+
+    @property
+    def n_states_(self) -> int:
+        return int(self.graph_.centroids_.shape[0])
+
+    def predict(self, Y) -> np.ndarray:
+        """Nearest state of each point (n, >= state_dims) -> (n,) int."""
+        return self.graph_.predict(Y).astype(np.int64)
+
+    def path(self, frames, states, n_frames):
+        """Viterbi state path through ``states`` at ``frames``, held outside them.
+
+        Returns
+        -------
+        path : ndarray of shape (n_frames,) int
+        missed : int
+            Gaps that could not reach their target state in exactly their length.
+        """
+        g = self._graph
+        f = np.asarray(frames, dtype=np.int64)
+        s = [int(x) for x in states]
+        path = np.empty(int(n_frames), dtype=np.int64)
+        path[: f[0] + 1] = s[0]
+        cur, missed = s[0], 0
+        for i in range(len(f) - 1):
+            n = int(f[i + 1] - f[i] + 1)
+            scores, hist = g.viterbi(cur, n)
+            end = s[i + 1]
+            if not np.isfinite(scores[end]):
+                missed += 1
+                ok = np.flatnonzero(np.isfinite(scores))
+                if ok.size == 0:
+                    seg = np.full(n, cur)
+                    seg[-1] = end
+                    path[f[i]: f[i + 1] + 1] = seg
+                    cur = end
+                    continue
+                c = self.state_y_
+                end = int(ok[np.argmin(np.linalg.norm(c[ok] - c[end], axis=1))])
+            seg = g.backtrack(hist, end)
+            path[f[i]: f[i + 1] + 1] = seg
+            cur = int(seg[-1])
+        path[f[-1]:] = path[f[-1]]
+        return path, missed
+
+    def path_x(self, path, *, how="state-mean", sigma=0.0) -> np.ndarray:
+        """X (n, m) of a state path by ``how`` in :data:`PATH_INVERSES`, smoothed by ``sigma`` frames."""
+        if how == "state-mean":
+            return smooth(self.inverse_.transform(path), sigma)
+        if how == "local-linear":
+            return self.local_.transform(smooth(self.state_y_[np.asarray(path)], sigma))
+        raise ValueError(f"unknown path inverse {how!r}; choose from {', '.join(PATH_INVERSES)}")

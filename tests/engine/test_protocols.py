@@ -1,0 +1,205 @@
+"""Equal-information protocols, the d-dim state paths, the inverse maps beside Delaunay, paired statistics."""
+import csv
+
+import numpy as np
+import pytest
+
+from engine.inverse_local import LocalLinearInverse, StateMeanInverse, select_neighbors
+from engine.paired import paired_comparison
+from engine.protocols import PROTOCOL_METHODS, evaluate_protocols, normalise_speakers, select_settings
+from engine.statepaths import StateModel, anchor, interpolate_targets
+
+#: a reduced candidate grid keeps the test fast; the generator of docs/RESULTS.md uses the full one
+GRID = {"state_dims": (3, 5), "sigmas": (0.0, 2.0), "neighbors": (20, 40)}
+
+
+@pytest.fixture(scope="module")
+def split(small_corpus):
+    ids = [u.id for u in small_corpus.utterances]
+    return ids[2::5]
+
+
+@pytest.fixture(scope="module")
+def result(small_corpus, split):
+    return evaluate_protocols(small_corpus, test_ids=split, n_boot=500,
+                              settings_factory=lambda m: select_settings(m, **GRID))
+
+
+# ------------------------------------------------------------------ statistics
+def test_paired_comparison_sign_test_and_bootstrap():
+    ref = np.arange(10.0)
+    c = paired_comparison(ref, ref + 1.0, n_boot=200)
+    assert (c.n, c.wins, c.losses) == (10, 10, 0)
+    assert c.mean_diff == pytest.approx(1.0) and c.ci_low == pytest.approx(1.0) and c.ci_high == pytest.approx(1.0)
+    assert c.p_sign == pytest.approx(2 * 0.5 ** 10)
+    rng = np.random.default_rng(1)
+    d = rng.normal(0.5, 1.0, 40)
+    c = paired_comparison(np.zeros(40), d, n_boot=2000)
+    assert c.ci_low < d.mean() < c.ci_high and c.wins == int((d > 0).sum())
+    # ties are dropped from the sign test; one utterance gives no interval
+    c = paired_comparison([1.0, 2.0, 3.0], [1.0, 2.0, 4.0])
+    assert (c.wins, c.losses, c.p_sign) == (1, 0, 1.0)
+    assert np.isnan(paired_comparison([1.0], [2.0]).ci_low)
+    with pytest.raises(ValueError, match="one error per utterance"):
+        paired_comparison([1.0, 2.0], [1.0])
+    with pytest.raises(ValueError, match="finite"):
+        paired_comparison([1.0, np.nan], [1.0, 2.0])
+
+
+# ------------------------------------------------------------------ inverse maps
+def test_local_linear_inverse_is_exact_on_affine_data_and_validates_k():
+    rng = np.random.default_rng(0)
+    Y = rng.normal(size=(800, 6))
+    A = rng.normal(size=(5, 4))
+    X = Y[:, :5] @ A + 3.0
+    q = rng.normal(size=(50, 6)) * 0.5
+    ll = LocalLinearInverse(n_neighbors=20, n_dims=5, ridge=0.0).fit(Y, X)
+    np.testing.assert_allclose(ll.transform(q), q[:, :5] @ A + 3.0, atol=1e-8)
+    # a curved map: local-linear beats the plain k-NN mean by a wide margin (recovery check)
+    curve = lambda Z: np.column_stack([3 * Z[:, 0] + np.sin(Z[:, 1]), Z[:, 1] ** 2])  # noqa: E731
+    Xc, truth = curve(Y), curve(q)
+    ll = LocalLinearInverse(n_neighbors=40, n_dims=2).fit(Y[:300], Xc[:300])
+    idx = ll._tree.query(q[:, :2], k=40)[1]
+    knn = Xc[:300][idx].mean(axis=1)  # measured: local-linear 0.065, k-NN mean 0.119
+    e_ll, e_knn = (float(np.sqrt(((a - truth) ** 2).mean())) for a in (ll.transform(q), knn))
+    assert e_ll < 0.6 * e_knn, f"local-linear {e_ll:.3f} vs k-NN mean {e_knn:.3f}"
+    k, errs = select_neighbors(Y[:600], Xc[:600], Y[600:], Xc[600:], n_dims=2, candidates=(5, 20, 80, 10_000))
+    assert set(errs) == {5, 20, 80} and k == min(errs, key=errs.get)
+    with pytest.raises(ValueError, match="n_neighbors must be in"):
+        LocalLinearInverse(n_neighbors=3, n_dims=5).fit(Y, X)
+    with pytest.raises(ValueError, match="at least 5 columns"):
+        LocalLinearInverse(n_neighbors=20, n_dims=5).fit(Y[:, :3], X)
+
+
+def test_state_mean_inverse():
+    lab = np.array([0, 0, 2, 2, 2])
+    X = np.arange(10.0).reshape(5, 2)
+    s = StateMeanInverse().fit(lab, X, -X, n_states=4)
+    np.testing.assert_allclose(s.transform([0, 2]), [[1, 2], [6, 7]])
+    np.testing.assert_allclose(s.velocity_means_[2], [-6, -7])
+    np.testing.assert_allclose(s.means_[1], X.mean(0))  # a state without frames: the overall mean
+    assert s.counts_.tolist() == [2, 0, 3, 0]
+    with pytest.raises(ValueError, match=r"state indices must be in 0\.\.3"):
+        s.transform([4])
+
+
+# ------------------------------------------------------------------ trajectories
+def test_interpolations_and_anchoring_pass_through_the_targets():
+    f = np.array([2, 7, 15, 20])
+    Xt = np.array([[0.0, 1.0], [2.0, -1.0], [1.0, 0.0], [3.0, 3.0]])
+    V = np.array([[0.1, 0.0], [0.0, 0.2], [-0.3, 0.0], [0.0, 0.0]])
+    for kind in ("linear", "pchip", "hermite"):
+        out = interpolate_targets(kind, f, Xt, 25, V)
+        np.testing.assert_allclose(out[f], Xt, atol=1e-12)
+        np.testing.assert_allclose(out[:3], np.repeat(Xt[:1], 3, 0))  # first target held before it
+        np.testing.assert_allclose(out[20:], np.repeat(Xt[-1:], 5, 0))
+    from scipy.interpolate import CubicHermiteSpline
+
+    h = CubicHermiteSpline(f, Xt, V, axis=0)
+    np.testing.assert_allclose(h.derivative()(f), V, atol=1e-12)  # the state velocities are honoured
+    X = np.sin(np.arange(25.0))[:, None] * np.ones(2)
+    A = anchor(X, f, Xt)
+    np.testing.assert_allclose(A[f], Xt, atol=1e-12)
+    with pytest.raises(ValueError, match="velocity per target"):
+        interpolate_targets("hermite", f, Xt, 25)
+
+
+def test_state_paths_follow_observed_transitions(small_manifold):
+    m = small_manifold
+    sm = StateModel(state_dims=5, n_neighbors=20).fit(m.Fy_, m.Fx_, m.Fxv_, m.corpus_.bounds)
+    u = m.corpus_.utterances[4]
+    f = np.array([3, 20, 40, 70])
+    st = sm.predict(m.Fy_[u.start + f])
+    path, missed = sm.path(f, st, u.n_frames)
+    assert path.shape == (u.n_frames,) and missed == 0
+    np.testing.assert_array_equal(path[f], st)  # a training utterance's own gaps are bridgeable in time
+    C = sm.graph_.counts_.toarray()
+    assert all(C[a, b] > 0 for a, b in zip(path[:-1], path[1:]))
+    X = sm.path_x(path, how="state-mean", sigma=0.0)
+    np.testing.assert_allclose(X, sm.inverse_.means_[path])
+    assert sm.path_x(path, how="local-linear", sigma=2.0).shape == (u.n_frames, m.Fx_.shape[1])
+    with pytest.raises(ValueError, match="state_dims must be in"):
+        StateModel(state_dims=11).fit(m.Fy_, m.Fx_, m.Fxv_, m.corpus_.bounds)
+
+
+# ------------------------------------------------------------------ the evaluation
+def test_protocol_tables(result, split, small_corpus, tmp_path):
+    for p, methods in PROTOCOL_METHODS.items():
+        rows = [r for r in result.rows if r["protocol"] == p]
+        assert [r["method"] for r in rows] == list(methods)
+        assert len({r["frames"] for r in rows}) == 1  # every method on the same frames
+        for r in rows:
+            assert r["utterances"] == len(split) and r["rmse_x"] > 0 and r["rmse_y"] > 0 and r["lve"] > 0
+        # pooled rows are the per-utterance rows pooled over frames
+        for m in methods:
+            per = [x for x in result.per_utterance if x["protocol"] == p and x["method"] == m]
+            n = sum(x["frames"] for x in per)
+            assert np.sqrt(sum(x["rmse_x"] ** 2 * x["frames"] for x in per) / n) == pytest.approx(
+                result.row(p, m)["rmse_x"], rel=1e-9)
+            assert sum(x["lve"] * x["frames"] for x in per) / n == pytest.approx(result.row(p, m)["lve"], rel=1e-9)
+        # the mean frame is the floor every method must clear on this talker
+        floor = result.row(p, "mean-frame")
+        for m in methods[:-1]:
+            assert result.row(p, m)["rmse_x"] < floor["rmse_x"], (p, m)
+    # more information never hurts: the oracle protocol beats the states protocol, method by method
+    for m in ("manifold", "linear", "pchip", "hermite"):
+        assert result.row("oracle", m)["rmse_x"] < result.row("states", m)["rmse_x"], m
+    # settings come from training utterances only
+    s = result.settings
+    assert s["val_ids"] and set(s["val_ids"]) <= set(result.train_ids) and not set(s["val_ids"]) & set(split)
+    assert s["state_dims"] in GRID["state_dims"] and s["n_neighbors"] in GRID["neighbors"]
+    text = result.format()
+    for p in PROTOCOL_METHODS:
+        assert f"protocol {p!r}" in text and "verdict X: manifold" in text
+    md = result.markdown(title="small")
+    assert "| method | RMSE X | RMSE Y3 | LVE |" in md and "Protocol `oracle`" in md
+    rows = result.csv_rows()
+    assert list(rows[0]) == ["protocol", "method", "utterance", "rmse_x", "rmse_y", "lve"]
+    assert sum(r["utterance"] == "ALL" for r in rows) == len(result.rows)
+    assert {x["map"] for x in result.inverse_rows} >= {"delaunay-3d (paper)", "local-linear-3d"}
+
+
+def test_verdicts_say_where_the_manifold_loses(result):
+    for p in PROTOCOL_METHODS:
+        for meas in ("rmse_x", "rmse_y", "lve"):
+            ref = result.row(p, "manifold")[meas]
+            losers = [r["method"] for r in result.rows if r["protocol"] == p and r[meas] < ref]
+            v = result.verdict(p, meas)
+            assert ("LOSES" in v) == bool(losers), v
+            assert all(m in v for m in losers)
+
+
+def test_every_method_is_scored_in_y_through_the_same_projection(result, small_corpus, split):
+    """Recompute one method's Y error by hand: its X trajectory through project_x, nothing else."""
+    from engine.evaluation import project_x
+    from engine.manifold import Manifold
+
+    m = Manifold().fit(small_corpus.subset(result.train_ids))
+    uid = split[0]
+    u = small_corpus.utterance(uid)
+    F = small_corpus.frames[u.start:u.stop]
+    from engine.targets import targets_from_utterance
+
+    tg = targets_from_utterance(m, uid, corpus=small_corpus, on_collision="merge")
+    Xo = np.array([t.x for t in tg.targets])
+    X = interpolate_targets("linear", tg.frames, Xo, u.n_frames)
+    lo, hi = tg.frames[0], tg.frames[-1] + 1
+    ey = np.linalg.norm(project_x(m, X)[lo:hi, :3] - m.project(F)[lo:hi, :3], axis=1)
+    row = next(x for x in result.per_utterance if (x["protocol"], x["method"], x["utterance"]) == ("oracle", "linear", uid))
+    assert row["rmse_y"] == pytest.approx(float(np.sqrt((ey ** 2).mean())), rel=1e-4)
+
+
+def test_normalise_speakers(small_corpus):
+    from dataclasses import replace
+
+    ids = [u.id for u in small_corpus.utterances][:4]
+    c = small_corpus.subset(ids)
+    with pytest.raises(ValueError, match="names no speaker"):
+        normalise_speakers(c)
+    c = replace(c, utterances=[replace(u, speaker="A" if k < 2 else "B") for k, u in enumerate(c.utterances)])
+    n, means = normalise_speakers(c)
+    assert set(means) == {"A", "B"}
+    a = np.concatenate([n.frames[u.start:u.stop] for u in n.utterances[:2]])
+    np.testing.assert_allclose(a.mean(0), 0.0, atol=1e-3)
+    np.testing.assert_allclose(n.frames[: c.utterances[0].n_frames] + means["A"], c.frames[: c.utterances[0].n_frames],
+                               atol=1e-3)
