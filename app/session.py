@@ -84,6 +84,16 @@ def load_session(path) -> dict:
         if v is not None and (not isinstance(v, int) or isinstance(v, bool) or v < 0):
             raise SessionError(f"{path}: selection {k} must be a non-negative integer or null, got {v!r}")
     d.setdefault("source", {"path": None, "preset": "default"})
+    src = d["source"]
+    if not isinstance(src, dict):
+        raise SessionError(f"{path}: field 'source' must be an object, got {type(src).__name__}")
+    if src.get("path") is not None:  # only a data file the user chose; never opened to be checked
+        from engine._validate import FieldError, check_source_path
+
+        try:
+            src["path"] = str(check_source_path(src["path"], source=path))
+        except FieldError as exc:
+            raise SessionError(str(exc)) from None
     d.setdefault("cameras", {})
     d.setdefault("extra", {})
     d.setdefault("visible_phones", [])

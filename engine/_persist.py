@@ -7,6 +7,7 @@ numpy scalars, strings, lists of str, ``scipy.sparse`` matrices or None.
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import scipy.sparse as sp
@@ -25,11 +26,21 @@ class NpzReadError(ValueError):
         self.path, self.reason = path, reason
 
 
+#: total uncompressed size allowed per .npz file: this many times the file size ...
+MAX_EXPANSION = 64
+#: ... plus this much (small archives of zeros compress very well)
+EXPANSION_SLACK = 64 * 2**20
+
+
 def read_npz(path, *, keys_only: bool = False):
     """Every array of the ``.npz`` file ``path`` as a dict (or only the set of its names).
 
     The file is opened here and always closed, also when it is empty, truncated or not
-    a zip archive at all (numpy leaks its own handle in those cases).
+    a zip archive at all (numpy leaks its own handle in those cases). Nothing large is
+    allocated before it is checked: only regular files are opened; the members'
+    uncompressed sizes may total at most ``MAX_EXPANSION`` times the file size plus
+    ``EXPANSION_SLACK`` (a zip bomb is refused before it is inflated); every array's
+    header must declare no more bytes than its member holds; object arrays are refused.
 
     Raises
     ------
@@ -38,13 +49,53 @@ def read_npz(path, *, keys_only: bool = False):
     NpzReadError
         Anything else that stops the read, with the file name and the reason.
     """
+    import zipfile
+
+    from engine._validate import check_regular_file
+
     try:
-        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
-            return set(z.files) if keys_only else {k: z[k] for k in z.files}
+        check_regular_file(path, ".npz file")
     except FileNotFoundError:
         raise
+    except (OSError, ValueError) as exc:
+        raise NpzReadError(path, str(exc).removeprefix(f"{path}: ")) from None
+    try:
+        with open(path, "rb") as fh, zipfile.ZipFile(fh) as zf:
+            infos = [i for i in zf.infolist() if i.filename.endswith(".npy")]
+            names = {i.filename[:-4] for i in infos}
+            if keys_only:
+                return names
+            size = os.fstat(fh.fileno()).st_size
+            total = sum(i.file_size for i in infos)
+            cap = MAX_EXPANSION * size + EXPANSION_SLACK
+            if total > cap:
+                raise NpzReadError(path, f"its arrays would inflate to {total / 2**20:.0f} MiB from a "
+                                         f"{size / 2**20:.1f} MiB file (limit {cap / 2**20:.0f} MiB); "
+                                         "refused as a decompression bomb")
+            return {i.filename[:-4]: _read_member(zf, i) for i in infos}
+    except (FileNotFoundError, NpzReadError):
+        raise
+    except MemoryError:
+        raise NpzReadError(path, "not enough memory to load its arrays") from None
     except Exception as exc:  # BadZipFile, EOFError, OSError, ValueError (pickled data) ...
         raise NpzReadError(path, f"{type(exc).__name__}: {exc}") from None
+
+
+def _read_member(zf, info):
+    """One ``.npy`` member, its header checked against the member's size first."""
+    fmt = np.lib.format
+    with zf.open(info) as f:
+        version = fmt.read_magic(f)
+        shape, fortran, dtype = (fmt.read_array_header_1_0(f) if version == (1, 0)
+                                 else fmt.read_array_header_2_0(f))
+        if dtype.hasobject:
+            raise ValueError(f"array {info.filename[:-4]!r} holds Python objects (pickled data), refused")
+        need = int(np.prod(shape, dtype=object)) * dtype.itemsize
+        if need > info.file_size:
+            raise ValueError(f"array {info.filename[:-4]!r} declares shape {shape} ({need} bytes) but its "
+                             f"member holds {info.file_size} bytes")
+    with zf.open(info) as f:
+        return fmt.read_array(f, allow_pickle=False)
 
 
 def _fitted_names(obj):
@@ -92,32 +143,91 @@ def dump_estimator(obj, prefix: str) -> dict:
     return out
 
 
-def load_estimator(cls, d, prefix: str):
-    """Rebuild an estimator of class ``cls`` from :func:`dump_estimator` output."""
+_SCALAR = {"int": "int", "float": "float", "bool": "bool", "str": "str"}
+_KNOWN_KINDS = ("none", "csr", "strlist", "str", "bool", "int", "float", "array")
+
+
+def load_estimator(cls, d, prefix: str, *, source="<arrays>", schema=None, dims=None):
+    """Rebuild an estimator of class ``cls`` from :func:`dump_estimator` output, checked.
+
+    Parameters
+    ----------
+    cls : type
+    d : mapping of str to ndarray
+        The arrays of the file.
+    prefix : str
+    source : str or Path
+        The file, for messages.
+    schema : dict or None
+        ``{attribute: spec}`` of the fitted attributes the caller relies on; a spec is a
+        dict with ``kind`` (as saved: "array", "csr", "int", "float", "bool", "str",
+        "strlist"), and for arrays ``dtype`` ("float", "int", "bool"), ``shape`` (symbols
+        as in :func:`engine._validate.check_array`), ``low``/``high`` (value range; a
+        str ``high`` is a symbol), ``none=True`` if None is allowed. Every attribute in
+        the schema must be present; attributes outside it are checked generically
+        (plain dtype, finite).
+    dims : dict or None
+        Symbol table shared with the caller's other checks (updated in place).
+
+    Raises
+    ------
+    engine._validate.FieldError
+        A missing or malformed field, naming the file and the field.
+    """
+    from engine._validate import FieldError, check_array, check_csr, check_scalar, parse_params
+
+    dims = {} if dims is None else dims
+    schema = schema or {}
+    if f"{prefix}/__params__" not in d or f"{prefix}/__kinds__" not in d:
+        raise FieldError(source, f"{prefix}/__params__", f"no saved {cls.__name__} in this file")
+    params = check_scalar(d, f"{prefix}/__params__", source=source, kind="str")
+    obj = parse_params(cls, params, source=source, field=f"{prefix}/__params__")
+    kinds_text = check_scalar(d, f"{prefix}/__kinds__", source=source, kind="str")
     try:
-        params = json.loads(str(d[f"{prefix}/__params__"]))
-        kinds = json.loads(str(d[f"{prefix}/__kinds__"]))
-    except KeyError:
-        raise ValueError(f"no saved {cls.__name__} under {prefix!r} in this file") from None
-    obj = cls(**params)
-    for name, kind in kinds.items():
-        key = f"{prefix}/{name}"
+        kinds = json.loads(kinds_text)
+    except ValueError as exc:
+        raise FieldError(source, f"{prefix}/__kinds__", f"not valid JSON ({exc})") from None
+    if not isinstance(kinds, dict) or not all(isinstance(v, str) for v in kinds.values()):
+        raise FieldError(source, f"{prefix}/__kinds__", "expected a JSON object of attribute kinds")
+    missing = sorted(set(schema) - set(kinds))
+    if missing:
+        raise FieldError(source, f"{prefix}/__kinds__", f"fitted attribute(s) {missing} missing")
+    order = [n for n in schema if n in kinds] + [n for n in kinds if n not in schema]
+    for name in order:  # the schema's order: symbols are bound before ranges use them
+        kind, key = kinds[name], f"{prefix}/{name}"
+        if not (name.isidentifier() and name.endswith("_") and not name.startswith("_")):
+            raise FieldError(source, key, "not a fitted-attribute name")
+        if kind not in _KNOWN_KINDS:
+            raise FieldError(source, key, f"unknown kind {kind!r}; expected one of {_KNOWN_KINDS}")
+        spec = schema.get(name, {})
+        want = spec.get("kind")
+        if want is not None and kind != want and not (kind == "none" and spec.get("none")):
+            raise FieldError(source, key, f"expected a saved {want}, got {kind}")
         if kind == "none":
             val = None
         elif kind == "csr":
-            val = sp.csr_matrix((d[key + ".data"], d[key + ".indices"], d[key + ".indptr"]),
-                               shape=tuple(int(s) for s in d[key + ".shape"]))
+            data, ind, ptr, shape = check_csr(d, key, source=source, shape=spec.get("shape", ("_r", "_c")),
+                                              dims=dims if spec else {}, kind=spec.get("dtype", "number"),
+                                              low=spec.get("low"))
+            import scipy.sparse as sp
+
+            val = sp.csr_matrix((data, ind, ptr), shape=shape)
         elif kind == "strlist":
-            val = [str(s) for s in d[key]]
-        elif kind == "str":
-            val = str(d[key])
-        elif kind == "bool":
-            val = bool(d[key])
-        elif kind == "int":
-            val = int(d[key])
-        elif kind == "float":
-            val = float(d[key])
+            val = [str(s) for s in check_array(d, key, source=source, kind="str", shape=("_n",), dims={})]
+        elif kind in _SCALAR:
+            val = check_scalar(d, key, source=source, kind=_SCALAR[kind], low=spec.get("low"),
+                               high=_high(spec, dims))
         else:
-            val = np.asarray(d[key])
+            val = check_array(d, key, source=source, kind=spec.get("dtype", "number"), shape=spec.get("shape"),
+                              dims=dims, low=spec.get("low"), high=_high(spec, dims))
+            if val.dtype.kind not in "fiub":
+                raise FieldError(source, key, f"expected a numeric array, got {val.dtype}")
         setattr(obj, name, val)
     return obj
+
+
+def _high(spec, dims):
+    high = spec.get("high")
+    if isinstance(high, str):
+        return dims[high]  # a schema lists the attribute binding a symbol before its users
+    return high

@@ -53,6 +53,10 @@ class Manifold(BaseEstimator):
     n_neighbors : int, default=20
         Neighbourhood size of the local tangent frames.
     random_state : int, default=0
+    speaker_normalisation : {"auto", "mean", "mean+scale", "none"}, default="auto"
+        Per-speaker normalisation of the frames before the shape space
+        (:func:`engine.registration.normalise_speakers`; "auto": "mean" when the
+        utterances name two or more speakers). ``corpus_`` holds the normalised frames.
 
     Attributes
     ----------
@@ -74,7 +78,8 @@ class Manifold(BaseEstimator):
     """
 
     def __init__(self, *, variance=0.99, max_components=100, n_embedding=10, embedding_method="pca",
-                 n_landmarks=None, n_states=None, state_dims=3, n_neighbors=20, random_state=0):
+                 n_landmarks=None, n_states=None, state_dims=3, n_neighbors=20, random_state=0,
+                 speaker_normalisation="auto"):
         self.variance = variance
         self.max_components = max_components
         self.n_embedding = n_embedding
@@ -84,6 +89,7 @@ class Manifold(BaseEstimator):
         self.state_dims = state_dims
         self.n_neighbors = n_neighbors
         self.random_state = random_state
+        self.speaker_normalisation = speaker_normalisation
 
     # ------------------------------------------------------------------ fitting
     def fit(self, corpus: Corpus, *, progress: ProgressFn = None):
@@ -93,6 +99,10 @@ class Manifold(BaseEstimator):
 
         if not isinstance(corpus, Corpus):
             raise TypeError(f"fit expects an engine.corpus.Corpus, got {type(corpus).__name__}")
+        from engine.kinematics import lip_aperture
+        from engine.registration import normalise_speakers, warn_if_split
+
+        corpus = normalise_speakers(corpus, mode=self.speaker_normalisation)
         N = corpus.n_frames
         if N < max(12, self.n_embedding + 2):
             raise ValueError(f"{corpus.name}: {N} frames are too few to build a manifold "
@@ -122,7 +132,7 @@ class Manifold(BaseEstimator):
         t = time.perf_counter()
         report(progress, "tangent frames", 0, 1)
         tangent = TangentFrames(n_neighbors=self.n_neighbors, n_dims=min(3, self.n_embedding)).fit(
-            Fy, Fx, Fxv, bounds)
+            Fy, Fx, Fxv, bounds, opening=lip_aperture(corpus))  # "opening" = the lips part, when known
         report(progress, "tangent frames", 1, 1)
         timings["tangent"] = time.perf_counter() - t
 
@@ -130,6 +140,7 @@ class Manifold(BaseEstimator):
         states = StateGraph(n_states=self.n_states, n_dims=min(self.state_dims, self.n_embedding),
                             random_state=self.random_state).fit(Fy, bounds, progress=progress)
         timings["states"] = time.perf_counter() - t
+        warn_if_split(states, corpus)  # names speakers / recordings when the graph splits along them
 
         self.corpus_ = corpus
         self.shape_, self.dynamics_, self.embedding_ = shape, dyn, emb
@@ -203,13 +214,18 @@ class Manifold(BaseEstimator):
 
     @classmethod
     def load(cls, path) -> "Manifold":
-        """Read a manifold written by :meth:`save`, without refitting."""
-        from engine.states import StateGraph
-        from engine.tangent import TangentFrames
+        """Read a manifold written by :meth:`save`, without refitting.
+
+        Every array is checked before use (see ``engine._validate``): dtypes, shapes
+        that fit together (N frames, m shape components, k embedding dims, L reference
+        points, K states), finiteness, index ranges (state labels < K, CSR indices
+        within the matrix), and the saved parameters are parsed against each
+        estimator's own parameters (unknown keys refused). Any fault raises
+        :class:`ManifoldFileError` naming the file and the field.
+        """
+        from engine._validate import FieldError
 
         path = Path(path)
-        classes = {"shape": ShapeSpace, "dynamics": DynamicFeatures, "embedding": Embedding,
-                   "tangent": TangentFrames, "states": StateGraph}
         try:
             d = read_npz(path)
         except FileNotFoundError:
@@ -219,21 +235,123 @@ class Manifold(BaseEstimator):
         if "manifold_version" not in d:
             hint = " (it is a corpus file: build it with 'lipspace build')" if "corpus_version" in d else ""
             raise ManifoldFileError(f"{path}: not a Lipspace manifold file{hint}")
-        version = int(d["manifold_version"])
-        if version > FILE_VERSION:
-            raise ManifoldFileError(f"{path}: manifold format {version} is newer than this Lipspace "
-                                    f"({FILE_VERSION}); upgrade Lipspace")
-        self = cls(**json.loads(str(d["manifold_params"])))
         try:
-            for name, attr in cls._PARTS.items():
-                setattr(self, attr, load_estimator(classes[name], d, name))
-            self.Fx_, self.Fxv_, self.G_, self.Fy_ = d["Fx"], d["Fxv"], d["G"], d["Fy"]
-            frames = None if "corpus_frames" in d else self.shape_.inverse_transform(self.Fx_)
-            self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path))
-        except (KeyError, ValueError, TypeError) as exc:
-            if isinstance(exc, CorpusError):
-                raise ManifoldFileError(str(exc)) from None
-            raise ManifoldFileError(f"{path}: damaged manifold file ({exc})") from None
-        self.timings_ = json.loads(str(d["manifold_timings"]))
+            return cls._from_arrays(d, path)
+        except FieldError as exc:
+            raise ManifoldFileError(str(exc)) from None
+        except CorpusError as exc:
+            msg = str(exc)
+            raise ManifoldFileError(msg if msg.startswith(str(path)) else f"{path}: corpus part: {msg}") from None
+
+    @classmethod
+    def _from_arrays(cls, d, path) -> "Manifold":
+        from engine._validate import FieldError, check_array, check_scalar, parse_params
+        from engine.states import StateGraph
+        from engine.tangent import TangentFrames
+
+        version = check_scalar(d, "manifold_version", source=path, kind="int")
+        if version > FILE_VERSION or version < 1:
+            raise FieldError(path, "manifold_version", f"format {version} is not one this Lipspace reads "
+                                                       f"(1..{FILE_VERSION}); upgrade Lipspace")
+        self = parse_params(cls, check_scalar(d, "manifold_params", source=path, kind="str"),
+                            source=path, field="manifold_params")
+        dims = {}
+        self.Fx_ = check_array(d, "Fx", source=path, shape=("N", "m"), dims=dims)
+        self.Fxv_ = check_array(d, "Fxv", source=path, shape=("N", "m"), dims=dims)
+        self.G_ = check_array(d, "G", source=path, shape=("N", "2m"), dims=dims)
+        self.Fy_ = check_array(d, "Fy", source=path, shape=("N", "k"), dims=dims)
+        classes = {"shape": ShapeSpace, "dynamics": DynamicFeatures, "embedding": Embedding,
+                   "tangent": TangentFrames, "states": StateGraph}
+        for name, attr in cls._PARTS.items():
+            setattr(self, attr, load_estimator(classes[name], d, name, source=path, schema=_SCHEMA[name],
+                                               dims=dims))
+        _check_consistency(self, dims, path)
+        frames = None
+        if "corpus_frames" in d:
+            check_array(d, "corpus_frames", source=path, shape=("N", "C"), dims=dims)
+        else:
+            frames = self.shape_.inverse_transform(self.Fx_)
+        self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path))
+        self.timings_ = _parse_timings(check_scalar(d, "manifold_timings", source=path, kind="str"), path)
         self._inverse = None
         return self
+
+
+#: fitted attributes each part must hold (see engine._persist.load_estimator for the spec)
+_F, _I, _B = "float", "int", "bool"
+_SCHEMA = {
+    "shape": {"mean_": dict(kind="array", dtype=_F, shape=("C",)),
+              "components_": dict(kind="array", dtype=_F, shape=("m", "C")),
+              "explained_variance_": dict(kind="array", dtype=_F, shape=("m",)),
+              "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("m",)),
+              "scree_": dict(kind="array", dtype=_F, shape=("M",)),
+              "recovered_ratio_": dict(kind="array", dtype=_F, shape=("M",)),
+              "n_components_": dict(kind="int", low=1)},
+    "dynamics": {"mean_": dict(kind="array", dtype=_F, shape=("m",)),
+                 "velocity_mean_": dict(kind="array", dtype=_F, shape=("m",)),
+                 "alpha_": dict(kind="float"), "beta_": dict(kind="float")},
+    "embedding": {"embedding_": dict(kind="array", dtype=_F, shape=("N", "k")),
+                  "reference_": dict(kind="array", dtype=_F, shape=("L", "2m")),
+                  "components_": dict(kind="array", dtype=_F, shape=("k", "L")),
+                  "center_": dict(kind="array", dtype=_F, shape=("L",)),
+                  "explained_variance_": dict(kind="array", dtype=_F, shape=("k",)),
+                  "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
+                  "recovered_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
+                  "landmarks_": dict(kind="array", dtype=_I, shape=("L",), low=0, high="N", none=True)},
+    "tangent": {"plane_point_": dict(kind="array", dtype=_F, shape=("t",)),
+                "plane_normal_": dict(kind="array", dtype=_F, shape=("t",)),
+                "S_": dict(kind="array", dtype=_F, shape=("t",)),
+                "s_": dict(kind="array", dtype=_F, shape=("N", "t")),
+                "v_": dict(kind="array", dtype=_F, shape=("N", "t")),
+                "normal_": dict(kind="array", dtype=_F, shape=("N", "t")),
+                "step_": dict(kind="array", dtype=_F, shape=("N", "t")),
+                "opening_": dict(kind="array", dtype=_B, shape=("N",)),
+                "accelerating_": dict(kind="array", dtype=_B, shape=("N",)),
+                "classes_": dict(kind="array", dtype=_I, shape=("N",), low=-1, high=4)},
+    "states": {"centroids_": dict(kind="array", dtype=_F, shape=("K", "d")),
+               "labels_": dict(kind="array", dtype=_I, shape=("N",), low=0, high="K"),
+               "counts_": dict(kind="csr", dtype=_I, shape=("K", "K"), low=0),
+               "adjacency_": dict(kind="csr", dtype="number", shape=("K", "K")),
+               "transition_": dict(kind="csr", dtype=_F, shape=("K", "K"), low=0),
+               "n_scc_": dict(kind="int", low=1),
+               "scc_labels_": dict(kind="array", dtype=_I, shape=("K",), low=0),
+               "largest_scc_": dict(kind="int", low=0)},
+}
+
+
+def _check_consistency(m, dims, path):
+    """Relations between parts that shapes alone do not express."""
+    from engine._validate import FieldError
+
+    if m.shape_.n_components_ != dims["m"]:
+        raise FieldError(path, "shape/n_components_", f"{m.shape_.n_components_} but F^x has {dims['m']} columns")
+    if m.n_embedding != dims["k"]:
+        raise FieldError(path, "manifold_params.n_embedding", f"{m.n_embedding} but F^y has {dims['k']} columns")
+    if m.embedding_method != m.embedding_.method or m.embedding_.method not in ("pca", "mds"):
+        raise FieldError(path, "embedding/__params__.method",
+                         f"{m.embedding_.method!r} (manifold says {m.embedding_method!r}); expected 'pca' or 'mds'")
+    if dims["L"] < 1 or dims["K"] < 1 or dims["N"] < 2:
+        raise FieldError(path, "Fy", f"{dims['N']} frames, {dims['L']} reference points, {dims['K']} states: "
+                                     "too few to be a fitted manifold")
+    if dims["t"] > dims["k"] or dims["d"] > dims["k"]:
+        raise FieldError(path, "tangent/plane_normal_", f"{dims['t']}-D tangent frames / {dims['d']}-D states "
+                                                        f"in a {dims['k']}-D embedding")
+    st = m.states_
+    if st.scc_labels_.size and st.scc_labels_.max() >= st.n_scc_:
+        raise FieldError(path, "states/scc_labels_", f"value {st.scc_labels_.max()} is out of range "
+                                                     f"(n_scc_={st.n_scc_})")
+    if st.largest_scc_ >= st.n_scc_:
+        raise FieldError(path, "states/largest_scc_", f"{st.largest_scc_} is out of range (n_scc_={st.n_scc_})")
+
+
+def _parse_timings(text, path) -> dict:
+    from engine._validate import FieldError
+
+    try:
+        t = json.loads(text)
+    except ValueError as exc:
+        raise FieldError(path, "manifold_timings", f"not valid JSON ({exc})") from None
+    if not isinstance(t, dict) or not all(isinstance(k, str) and isinstance(v, (int, float))
+                                          and not isinstance(v, bool) and np.isfinite(v) for k, v in t.items()):
+        raise FieldError(path, "manifold_timings", "expected a JSON object of stage name -> seconds")
+    return {k: float(v) for k, v in t.items()}

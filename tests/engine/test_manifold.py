@@ -94,3 +94,145 @@ def test_damaged_files_give_the_documented_errors(tmp_path, small_manifold, cont
     with pytest.raises(ManifoldFileError, match="half.npz"):
         Manifold.load(half)
     assert main(["info", str(bad)]) == 2
+
+
+# ---------------------------------------------------------------- validated loader (issue 16)
+@pytest.fixture(scope="module")
+def saved_arrays(small_manifold, tmp_path_factory):
+    from engine._persist import read_npz
+
+    path = small_manifold.save(tmp_path_factory.mktemp("m") / "m.npz")
+    return read_npz(path)
+
+
+def _set(key, fn):
+    return lambda d: d.__setitem__(key, fn(d[key]))
+
+
+def _json(key, text):
+    return lambda d: d.__setitem__(key, np.array(text))
+
+
+# each case: how the file is damaged, and the field the error must name
+DAMAGE = {
+    "csr-indices-out-of-range": (_set("states/adjacency_.indices", lambda a: a + 10**6), "adjacency_.indices"),
+    "csr-indptr-decreasing": (_set("states/transition_.indptr", lambda a: a[::-1].copy()), "transition_.indptr"),
+    "csr-shape-not-K": (_set("states/counts_.shape", lambda a: a + 1), "counts_.shape"),
+    "labels-not-below-K": (_set("states/labels_", lambda a: a + 1000), "states/labels_"),
+    "centroids-fewer-than-labels": (_set("states/centroids_", lambda a: a[:-3]), "states/labels_"),
+    "components-wrong-width": (_set("shape/components_", lambda a: a[:, :-1]), "shape/components_"),
+    "embedding-components-vs-Fy": (_set("embedding/components_", lambda a: a[:-1]), "embedding/components_"),
+    "nan-in-Fy": (_set("Fy", lambda a: np.where(np.arange(a.size).reshape(a.shape) == 7, np.nan, a)), "Fy"),
+    "Fx-float-as-str": (_set("Fx", lambda a: a.astype(str)), "Fx"),
+    "params-bad-json": (_json("manifold_params", "{bad"), "manifold_params"),
+    "params-a-list": (_json("manifold_params", "[1, 2]"), "manifold_params"),
+    "params-unknown-key": (_json("manifold_params", '{"foo": 1}'), "manifold_params"),
+    "params-wrong-type": (_json("manifold_params", '{"n_states": "x"}'), "manifold_params.n_states"),
+    "params-vs-arrays": (_json("manifold_params", '{"n_embedding": 3}'), "n_embedding"),
+    "estimator-params-unknown": (_json("embedding/__params__", '{"zzz": 3}'), "embedding/__params__"),
+    "kinds-unknown": (_json("states/__kinds__", '{"labels_": "pickle"}'), "states/__kinds__"),
+    "timings-bad-json": (_json("manifold_timings", "{{"), "manifold_timings"),
+    "timings-a-list": (_json("manifold_timings", "[]"), "manifold_timings"),
+    "version-not-int": (_json("manifold_version", "one"), "manifold_version"),
+    "version-float": (lambda d: d.__setitem__("manifold_version", np.array(1.5)), "manifold_version"),
+    "scc-label-out-of-range": (_set("states/scc_labels_", lambda a: a + 99), "scc_labels_"),
+    "phone-utterance-out-of-range": (_set("corpus_phone_utt", lambda a: a + 10**4), "corpus_phone_utt"),
+    "bounds-1d": (_set("corpus_utt_bounds", lambda a: a[:, 0].copy()), "corpus_utt_bounds"),
+    "frames-missing-Fx-short": (lambda d: (d.pop("corpus_frames"), d.__setitem__("Fx", d["Fx"][:-5])), "Fxv"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(DAMAGE))
+def test_damaged_manifold_is_refused_naming_the_field(saved_arrays, tmp_path, case):
+    damage, field = DAMAGE[case]
+    d = {k: v.copy() for k, v in saved_arrays.items()}
+    damage(d)
+    path = tmp_path / "bad.npz"
+    with open(path, "wb") as fh:
+        np.savez(fh, **d)
+    with pytest.raises(ManifoldFileError) as err:
+        Manifold.load(path)
+    msg = str(err.value)
+    assert msg.startswith(str(path)) and field in msg and "\n" not in msg, msg
+
+
+def test_out_of_range_csr_gives_exit_2_not_a_segfault(saved_arrays, tmp_path):
+    """It used to crash `lipspace info` with SIGSEGV inside scipy's dijkstra."""
+    import subprocess
+    import sys
+
+    d = dict(saved_arrays)
+    d["states/adjacency_.indices"] = d["states/adjacency_.indices"] + 10**6
+    path = tmp_path / "bad.npz"
+    with open(path, "wb") as fh:
+        np.savez(fh, **d)
+    r = subprocess.run([sys.executable, "-m", "app.cli", "info", str(path)], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 2, r.stderr[-2000:]
+    assert r.stderr.startswith("lipspace info: error:") and "adjacency_.indices" in r.stderr
+    assert "Traceback" not in r.stderr
+
+
+def test_zip_bomb_is_refused_before_inflating(tmp_path):
+    import zipfile
+
+    path = tmp_path / "bomb.npz"
+    header = np.lib.format
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        with zf.open("manifold_version.npy", "w", force_zip64=True) as f:
+            header.write_array_header_1_0(f, {"descr": "<f8", "fortran_order": False, "shape": (2**25,)})
+            chunk = bytes(2**20)
+            for _ in range(2**28 // 2**20):  # 256 MiB of zeros in a ~0.3 MiB file
+                f.write(chunk)
+    assert path.stat().st_size < 4 * 2**20
+    with pytest.raises(ManifoldFileError, match="decompression bomb"):
+        Manifold.load(path)
+
+
+def test_array_header_larger_than_its_member_is_refused(tmp_path):
+    import zipfile
+
+    path = tmp_path / "liar.npz"
+    with zipfile.ZipFile(path, "w") as zf:
+        with zf.open("Fx.npy", "w") as f:
+            np.lib.format.write_array_header_1_0(f, {"descr": "<f8", "fortran_order": False,
+                                                     "shape": (10**6, 10**6)})
+    with pytest.raises(ManifoldFileError, match="declares shape"):
+        Manifold.load(path)
+
+
+def test_fifo_is_refused_without_blocking(tmp_path):
+    import os
+
+    fifo = tmp_path / "pipe.npz"
+    os.mkfifo(fifo)
+    with pytest.raises(ManifoldFileError, match="not a regular file"):
+        Manifold.load(fifo)
+
+
+@pytest.mark.parametrize("value", [["x.npz"], 3, "/etc/passwd", "../../../../etc/passwd", "dir.npz", "pipe.npz",
+                                   "absent.npz"])
+def test_session_source_must_be_a_regular_data_file(tmp_path, value):
+    import json
+    import os
+
+    from app.session import SessionError, load_session
+
+    (tmp_path / "dir.npz").mkdir()
+    os.mkfifo(tmp_path / "pipe.npz")
+    s = tmp_path / "s.json"
+    s.write_text(json.dumps({"lipspace_session": 1, "source": {"path": value}}))
+    with pytest.raises(SessionError, match="source.path") as err:
+        load_session(s)
+    assert "root:" not in str(err.value)  # nothing of the named file is shown
+
+
+def test_session_source_accepts_a_data_file(tmp_path, small_corpus):
+    import json
+
+    from app.session import load_session
+
+    small_corpus.save(tmp_path / "c.npz")
+    s = tmp_path / "s.json"
+    s.write_text(json.dumps({"lipspace_session": 1, "source": {"path": "c.npz"}}))
+    assert load_session(s)["source"]["path"] == str((tmp_path / "c.npz").resolve())
