@@ -321,6 +321,12 @@ class Corpus:
     @classmethod
     def from_arrays(cls, d, *, frames=None, source: str = "<arrays>") -> "Corpus":
         """Inverse of :meth:`to_arrays`; ``frames`` overrides the stored frames."""
+        from engine._validate import FieldError, check_corpus_arrays
+
+        try:  # dtypes, shapes and index ranges checked before anything is built from them
+            check_corpus_arrays(d, source=source, frames_given=frames is not None)
+        except FieldError as exc:
+            raise CorpusError(str(exc)) from None
         try:
             version = int(d["corpus_version"])
             if version > FORMAT_VERSION:
