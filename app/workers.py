@@ -4,6 +4,13 @@
 engine's progress callback: it forwards to the GUI through a queued signal and
 raises :class:`engine.progress.Cancelled` once the user has pressed Cancel, which
 unwinds the engine cleanly. Results and errors come back on the GUI thread.
+
+Engine warnings about the user's data (:class:`engine.corpus.CorpusWarning`) raised in
+a worker thread go to that worker's ``warned`` signal through :data:`WARNINGS`, one
+process-wide ``warnings.showwarning`` that dispatches by thread id. Nothing enters or
+leaves ``warnings.catch_warnings`` in a worker thread: that context manager swaps
+process-global state (before Python 3.14), so one thread's block would capture, or
+restore over, another thread's warnings.
 """
 from __future__ import annotations
 
@@ -16,7 +23,78 @@ from PySide6 import QtCore, QtWidgets
 from engine.corpus import CorpusWarning
 from engine.progress import Cancelled
 
-__all__ = ["Worker", "TaskRunner", "run_task", "run_blocking", "cancel_all"]
+__all__ = ["Worker", "TaskRunner", "run_task", "run_blocking", "cancel_all", "WarningRouter", "WARNINGS"]
+
+
+class WarningRouter:
+    """Routes data warnings raised in registered threads to a per-thread callback.
+
+    :meth:`install` (on the GUI thread) makes :meth:`showwarning` the process's
+    ``warnings.showwarning``, wrapping whatever was there, and puts an ``"always"``
+    filter for :class:`CorpusWarning` first, so a data warning is never turned into an
+    error or deduplicated away before it reaches the window. A worker thread
+    registers itself with :meth:`route` for the duration of its task: a
+    ``CorpusWarning`` raised in that thread calls its callback (which emits a queued Qt
+    signal); every other warning, and every warning of any other thread (the GUI
+    thread included), goes to the wrapped ``showwarning`` unchanged. Warnings raised in
+    threads the engine itself starts are not routed (they go to the wrapped handler).
+    """
+
+    def __init__(self):
+        self._routes: dict[int, object] = {}
+        self._lock = threading.Lock()
+        self._previous = None
+
+    def install(self) -> None:
+        """Install (or re-install) the dispatcher; idempotent. Call on the GUI thread.
+
+        Called whenever a task starts, because a ``catch_warnings`` block that was
+        entered before the install (a test harness, the CLI wrapper) restores the old
+        handler and filters when it exits.
+        """
+        if warnings.showwarning != self.showwarning:
+            self._previous = warnings.showwarning
+            warnings.showwarning = self.showwarning
+        first = warnings.filters[0] if warnings.filters else None
+        if first is None or first[0] != "always" or first[2] is not CorpusWarning or first[1] or first[3]:
+            warnings.filterwarnings("always", category=CorpusWarning)
+
+    @property
+    def installed(self) -> bool:
+        return warnings.showwarning == self.showwarning
+
+    def route(self, callback):
+        """Context manager: data warnings of the calling thread go to ``callback(message)``."""
+        return _Route(self, threading.get_ident(), callback)
+
+    def showwarning(self, message, category, filename, lineno, file=None, line=None):
+        callback = self._routes.get(threading.get_ident())
+        if callback is not None and issubclass(category, CorpusWarning):
+            callback(str(message))
+            return
+        previous = self._previous or warnings._showwarning_orig
+        previous(message, category, filename, lineno, file, line)
+
+
+class _Route:
+    def __init__(self, router, ident, callback):
+        self.router, self.ident, self.callback = router, ident, callback
+
+    def __enter__(self):
+        with self.router._lock:
+            if self.ident in self.router._routes:
+                raise RuntimeError(f"thread {self.ident} already routes its warnings to a task")
+            self.router._routes[self.ident] = self.callback
+        return self
+
+    def __exit__(self, *_exc):
+        with self.router._lock:
+            self.router._routes.pop(self.ident, None)
+        return False
+
+
+#: the process's one router (see :class:`WarningRouter`)
+WARNINGS = WarningRouter()
 
 
 class Worker(QtCore.QObject):
@@ -50,16 +128,10 @@ class Worker(QtCore.QObject):
     @QtCore.Slot()
     def run(self) -> None:
         try:
-            with warnings.catch_warnings(record=True) as caught:
-                # warnings about the data go to the window; every other filter (pytest's
-                # "error" included) still applies
-                warnings.simplefilter("always", CorpusWarning)
+            # data warnings of this thread go to the window (WARNINGS, installed by the
+            # runner on the GUI thread); every other warning keeps the process's handling
+            with WARNINGS.route(self.warned.emit):
                 result = self.task(self.report)
-            for w in caught:
-                if issubclass(w.category, CorpusWarning):
-                    self.warned.emit(str(w.message))
-                else:
-                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         except Cancelled:
             self.cancelled.emit()
         except Exception as exc:  # noqa: BLE001 - shown to the user, with the traceback
@@ -110,6 +182,7 @@ class TaskRunner(QtCore.QObject):
             self.worker.progress.connect(self._on_progress)
 
     def start(self) -> "TaskRunner":
+        WARNINGS.install()
         self.thread.start()
         return self
 

@@ -1,0 +1,113 @@
+"""Warnings from worker threads reach their own task and window, never another thread's.
+
+``warnings.catch_warnings`` swaps process-global state (before Python 3.14), so the
+workers route data warnings through one ``showwarning`` that dispatches by thread id
+(:data:`app.workers.WARNINGS`). These tests make two threads warn at the same time
+and check each warning arrives where it belongs.
+"""
+from __future__ import annotations
+
+import threading
+import time
+import warnings
+
+import pytest
+
+from engine.corpus import CorpusWarning
+
+N_WARNINGS = 150
+
+
+def _recorder(into: list):
+    def show(message, category, filename, lineno, file=None, line=None):
+        into.append((str(message), category))
+    return show
+
+
+def _warn_loop(tag: str, order: list, n: int = N_WARNINGS, category=CorpusWarning):
+    for k in range(n):
+        order.append((tag, k))
+        warnings.warn(f"{tag} {k}", category)
+        time.sleep(0.0005)  # let the other thread run in between
+
+
+def test_router_dispatches_by_thread_without_qt(monkeypatch):
+    from app.workers import WarningRouter
+
+    main_seen: list = []
+    monkeypatch.setattr(warnings, "showwarning", _recorder(main_seen))
+    router = WarningRouter()
+    router.install()
+    assert router.installed and warnings.filters[0][:3:2] == ("always", CorpusWarning)
+    router.install()  # idempotent: does not wrap itself
+    assert router._previous is not router.showwarning
+    routed: list = []
+    order: list = []
+    start = threading.Barrier(2)
+
+    def worker():
+        with router.route(routed.append):
+            start.wait(10)
+            _warn_loop("worker", order)
+        warnings.warn("worker after its task", CorpusWarning)  # no longer routed
+
+    t = threading.Thread(target=worker)
+    t.start()
+    start.wait(10)
+    _warn_loop("main", order)
+    t.join(10)
+    assert routed == [f"worker {k}" for k in range(N_WARNINGS)]
+    unrouted = [m for m, _c in main_seen]
+    assert [m for m in unrouted if m.startswith("main")] == [f"main {k}" for k in range(N_WARNINGS)]
+    assert [m for m in unrouted if not m.startswith("main")] == ["worker after its task"]
+    tags = [tag for tag, _k in order]
+    first_main, last_worker = tags.index("main"), len(tags) - 1 - tags[::-1].index("worker")
+    assert first_main < last_worker  # the two threads really warned at the same time
+    with pytest.raises(RuntimeError, match="already routes"):
+        with router.route(routed.append), router.route(routed.append):
+            pass
+
+
+@pytest.mark.gui
+def test_worker_warning_reaches_the_status_bar_while_the_gui_thread_warns(qapp, qtbot, monkeypatch):
+    from app.main_window import MainWindow
+    from app.workers import run_task
+
+    main_seen: list = []
+    monkeypatch.setattr(warnings, "showwarning", _recorder(main_seen))  # the process's handler at app start
+    win = MainWindow()
+    qtbot.addWidget(win)
+    order: list = []
+    start = threading.Barrier(2)
+
+    def task(progress):
+        progress("working", 0, 1)
+        start.wait(10)
+        _warn_loop("worker", order)
+        return "done"
+
+    runner = run_task(task, parent=win, dialog=False)
+    start.wait(10)
+    _warn_loop("main", order)  # the GUI thread warns while the worker does
+    qtbot.waitUntil(lambda: runner.state != "running", timeout=20000)
+    qtbot.waitUntil(lambda: len(runner.warnings) == N_WARNINGS, timeout=5000)
+    assert runner.state == "done" and runner.result == "done"  # a data warning never fails the task
+    assert runner.warnings == [f"worker {k}" for k in range(N_WARNINGS)]  # all, in order, none of main's
+    assert win.statusBar().currentMessage() == f"warning: worker {N_WARNINGS - 1}"
+    assert main_seen == [(f"main {k}", CorpusWarning) for k in range(N_WARNINGS)]  # not swallowed, not misrouted
+    tags = [tag for tag, _k in order]
+    assert tags.index("main") < len(tags) - 1 - tags[::-1].index("worker")  # they overlapped
+
+
+@pytest.mark.gui
+def test_other_warnings_in_a_worker_keep_the_process_filters(qapp, qtbot):
+    from app.workers import TaskRunner
+
+    def task(progress):
+        warnings.warn("not about the data", RuntimeWarning)
+        return 1
+
+    # pytest runs with filterwarnings=error: a non-data warning still raises in the worker
+    r = TaskRunner(task, dialog=False).start()
+    assert r.wait(10000) and r.state == "failed" and "RuntimeWarning: not about the data" in r.error[0]
+    assert r.warnings == []
