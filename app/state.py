@@ -8,6 +8,8 @@ minimum-distance path) are pure functions of the manifold and the state, below.
 """
 from __future__ import annotations
 
+import functools
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -67,7 +69,12 @@ class Event:
 
 
 class _Events:
-    """Namespace of the state's events, one per observable field."""
+    """Namespace of the state's events: one per observable field, and ``changed``.
+
+    ``changed`` fires once per user action with the frozenset of the field names that
+    action changed (after every field event of that action), so a view that depends on
+    several fields redraws once (see :meth:`AppState.batch`).
+    """
 
     NAMES = ("manifold", "frame", "state", "target", "path", "hemisphere", "color_mode", "path_mode",
              "utterance", "trajectory", "visible_phones", "playback", "playing", "component")
@@ -75,6 +82,18 @@ class _Events:
     def __init__(self):
         for n in self.NAMES:
             setattr(self, n, Event(n))
+        self.changed = Event("changed")
+
+
+def _batched(method):
+    """Run a public mutator of :class:`AppState` as one batch (one ``changed`` emission)."""
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        with self.batch():
+            return method(self, *args, **kwargs)
+
+    return wrapper
 
 
 @dataclass(frozen=True)
@@ -164,8 +183,55 @@ class AppState:
         self._density = None
         self._phones = None
         self._clusters = None
+        self._batch_depth = 0
+        self._pending: dict = {}  # field name -> None, in order of first change (a batch's events)
+
+    # ------------------------------------------------------------- events
+    @contextmanager
+    def batch(self):
+        """Group changes into one action: events are held and sent once when the outermost batch ends.
+
+        Inside ``with state.batch():`` each changed field's event fires once (with its final
+        value, in order of first change) when the block ends, then ``events.changed`` fires
+        once with the names of every changed field. Every public mutator runs as a batch,
+        so one click (frame, state, target, path, colour mode) reaches each view as one
+        ``changed`` event. Batches nest; events are flushed even when the block raises.
+        """
+        self._batch_depth += 1
+        try:
+            yield self
+        finally:
+            self._batch_depth -= 1
+            if self._batch_depth == 0:
+                self._flush()
+
+    def _emit(self, name: str) -> None:
+        """Announce that field ``name`` changed (held while a batch is open)."""
+        self._pending.setdefault(name, None)
+        if self._batch_depth == 0:
+            self._flush()
+
+    def _flush(self) -> None:
+        changed: dict = {}
+        self._batch_depth += 1  # changes made by observers join this flush
+        try:
+            while self._pending:
+                names, self._pending = list(self._pending), {}
+                for name in names:
+                    changed.setdefault(name, None)
+                    ev = getattr(self.events, name)
+                    if name == "trajectory":
+                        ev.emit(self.original, self.synthetic)
+                    else:
+                        ev.emit(getattr(self, name))
+        finally:
+            self._batch_depth -= 1
+            self._pending = {}
+        if changed:
+            self.events.changed.emit(frozenset(changed))
 
     # ----------------------------------------------------------- manifold
+    @_batched
     def set_manifold(self, manifold, *, source: dict | None = None) -> None:
         """Replace the manifold; clears every index-based selection."""
         self.manifold = manifold
@@ -176,7 +242,7 @@ class AppState:
         self.utterance = self.original = self.synthetic = self.playback = self.component = None
         self.playing = False
         self.visible_phones = frozenset()
-        self.events.manifold.emit(manifold)
+        self._emit("manifold")
 
     def _require(self):
         if self.manifold is None:
@@ -229,6 +295,7 @@ class AppState:
             raise IndexError(f"{what} {value} out of range 0..{limit - 1}")
         return value
 
+    @_batched
     def select_frame(self, i, *, as_target: bool | None = None) -> None:
         """Select frame ``i`` and its state.
 
@@ -249,6 +316,7 @@ class AppState:
         self._set("frame", i)
         self._set_state(s)
 
+    @_batched
     def select_state(self, s, *, as_target: bool = False) -> None:
         """Select state ``s`` directly (no particular frame), or make it the path target."""
         s = self._check_index(s, self.n_states, "state")
@@ -267,12 +335,14 @@ class AppState:
         if s is not None and self.hemisphere != "off" and self.color_mode != "distance":
             self.set_color_mode("distance")
 
+    @_batched
     def set_target(self, s) -> None:
         """Set the path target state (None clears it) and recompute the path."""
         s = self._check_index(s, self.n_states, "target state")
         self._set("target", s)
         self._update_path()
 
+    @_batched
     def clear_selection(self) -> None:
         self._set("frame", None)
         self._set("state", None)
@@ -286,9 +356,10 @@ class AppState:
         old = self.path
         if (old is None) != (new is None) or (new is not None and not np.array_equal(old, new)):
             self.path = new
-            self.events.path.emit(new)
+            self._emit("path")
 
     # -------------------------------------------------------------- modes
+    @_batched
     def set_hemisphere(self, mode: str) -> None:
         if mode not in HEMISPHERES:
             raise ValueError(f"hemisphere must be one of {HEMISPHERES}, got {mode!r}")
@@ -296,15 +367,18 @@ class AppState:
         if mode != "off" and self.state is not None and self.color_mode != "distance":
             self.set_color_mode("distance")
 
+    @_batched
     def set_color_mode(self, mode: str) -> None:
         if mode not in COLOR_MODES:
             raise ValueError(f"colour mode must be one of {COLOR_MODES}, got {mode!r}")
         self._set("color_mode", mode)
 
+    @_batched
     def set_path_mode(self, on: bool) -> None:
         self._set("path_mode", bool(on))
 
     # ----------------------------------------------------- trajectories
+    @_batched
     def set_utterance(self, uid) -> None:
         """Make ``uid`` the current utterance and its captured trajectory the original."""
         if uid is None:
@@ -315,6 +389,7 @@ class AppState:
         self._set("utterance", uid)
         self.set_trajectories(original=traj, synthetic=None)
 
+    @_batched
     def set_trajectories(self, *, original=..., synthetic=...) -> None:
         """Set the original and/or synthetic trajectory (omit one to keep it)."""
         if original is not ...:
@@ -323,13 +398,14 @@ class AppState:
             self.synthetic = synthetic
         self.set_playing(False)
         self._set("playback", None)
-        self.events.trajectory.emit(self.original, self.synthetic)
+        self._emit("trajectory")
 
     @property
     def n_playback(self) -> int:
         """Frames of the longer of the original and synthetic trajectories (0: none)."""
         return max([len(t) for t in (self.original, self.synthetic) if t is not None], default=0)
 
+    @_batched
     def set_playback(self, k) -> None:
         """Current playback index into the trajectories (None: show the selection)."""
         if k is not None:
@@ -338,21 +414,25 @@ class AppState:
             k = self._check_index(k, self.n_playback, "playback frame")
         self._set("playback", k)
 
+    @_batched
     def set_playing(self, on: bool) -> None:
         """Start or stop playback (starting with nothing to play is refused quietly)."""
         on = bool(on) and self.n_playback > 0
         self._set("playing", on)
 
     # ------------------------------------------------------------ phones
+    @_batched
     def set_visible_phones(self, labels) -> None:
         labels = frozenset(str(x) for x in labels)
         self._set("visible_phones", labels)
 
+    @_batched
     def set_phone_visible(self, label: str, visible: bool) -> None:
         cur = set(self.visible_phones)
         (cur.add if visible else cur.discard)(str(label))
         self.set_visible_phones(cur)
 
+    @_batched
     def set_component(self, index) -> None:
         """Shape component shown as a deformation (None: show the selection instead)."""
         if index is not None:
@@ -365,7 +445,7 @@ class AppState:
         same = old is value or (type(old) is type(value) and old == value)
         if not same:
             setattr(self, name, value)
-            getattr(self.events, name).emit(value)
+            self._emit(name)
 
 
 # ======================================================================== derived data

@@ -162,26 +162,65 @@ def add_global_axes(plotter, origin, S, V, length: float, *, labels: bool = True
     return out
 
 
+def _placement(point, direction, length):
+    """A 4x4 matrix that maps the unit arrow along +x to ``length`` along ``direction`` from ``point``."""
+    d = _vec(direction, "direction")
+    d = d / np.linalg.norm(d)
+    helper = np.eye(3)[int(np.argmin(np.abs(d)))]  # the axis least parallel to d
+    u = np.cross(d, helper)
+    u /= np.linalg.norm(u)
+    w = np.cross(d, u)
+    M = np.eye(4)
+    M[:3, :3] = float(length) * np.column_stack([d, u, w])
+    M[:3, 3] = _vec(point, "arrow start")
+    return M
+
+
 class LocalFrameHandle:
-    """The local frame (s_i, v_i, normal) at one point; :meth:`update` moves it in place."""
+    """The local frame (s_i, v_i, normal) at one point; :meth:`update` moves it in place.
+
+    Each arrow is one unit arrow built once; a click only changes its actor's user
+    matrix (position, direction, length), so no geometry is rebuilt or re-uploaded.
+    """
 
     COLOURS = {"s": (0.2, 0.75, 0.2), "v": (0.85, 0.2, 0.85), "normal": NORMAL_COLOUR}
 
     def __init__(self, plotter, length: float):
+        from vtkmodules.vtkCommonMath import vtkMatrix4x4
+
         self.plotter = plotter
         self.length = float(length)
         self.parts = {}
+        self._matrices = {}
         for key, col in self.COLOURS.items():
-            mesh = pv.PolyData(np.zeros((1, 3), np.float32))
+            mesh = _arrow((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 1.0)
             actor = plotter.add_mesh(mesh, color=col, name=f"local_{key}", pickable=False, reset_camera=False,
                                      render=False)
+            self._matrices[key] = vtkMatrix4x4()
+            actor.SetUserMatrix(self._matrices[key])
             self.parts[key] = Handle(plotter, mesh, actor)
         self.set_visible(False)
 
     def update(self, point, s, v, normal) -> None:
+        point = _vec(point, "frame point")
+        shown = {}
         for key, vec in (("s", s), ("v", v), ("normal", normal)):
-            self.parts[key].replace_geometry(_arrow(point, vec, self.length))
-        self.set_visible(True)
+            vec = _vec(vec, f"local {key}")
+            shown[key] = bool(np.linalg.norm(vec) > 0 and self.length > 0)
+            if shown[key]:
+                M = _placement(point, vec, self.length)
+                mat = self._matrices[key]
+                for r in range(4):
+                    for c in range(4):
+                        mat.SetElement(r, c, float(M[r, c]))
+                mat.Modified()
+                self.parts[key].actor.Modified()
+        for key, on in shown.items():
+            self.parts[key].set_visible(on)
+
+    def bounds(self, key) -> tuple:
+        """World bounds of one drawn arrow (its unit geometry under its matrix)."""
+        return tuple(self.parts[key].actor.GetBounds())
 
     def set_visible(self, visible: bool) -> None:
         for h in self.parts.values():
@@ -284,7 +323,11 @@ def add_cluster_ellipsoids(plotter, vertices, faces, color, *, opacity: float = 
 
 
 class MarkerHandle(Handle):
-    """A sphere marking one point; :meth:`move` puts it elsewhere in place."""
+    """A sphere marking one point; :meth:`move` puts it elsewhere in place.
+
+    The sphere is built once around the origin and moved by its actor's position, so
+    following a playing trajectory costs no geometry rebuild.
+    """
 
     def __init__(self, plotter, mesh, actor, radius):
         super().__init__(plotter, mesh, actor)
@@ -293,14 +336,14 @@ class MarkerHandle(Handle):
 
     def move(self, center) -> None:
         self.center = _vec(center, "center")
-        self.replace_geometry(pv.Sphere(radius=self.radius, center=self.center))
+        self.actor.SetPosition(*self.center)
         self.set_visible(True)
 
 
 def add_marker(plotter, center=None, radius: float = 1.0, *, color=(1.0, 1.0, 0.0),
                name: str = "marker") -> MarkerHandle:
     """A sphere marking one point (the selected frame), hidden while ``center`` is None."""
-    mesh = pv.Sphere(radius=radius)
+    mesh = pv.Sphere(radius=radius, center=(0.0, 0.0, 0.0))
     actor = plotter.add_mesh(mesh, color=color, name=name, pickable=False, reset_camera=False, render=False)
     h = MarkerHandle(plotter, mesh, actor, radius)
     if center is None:

@@ -4,6 +4,10 @@ pyvista's own left-click picking fires on every button press, so rotating the vi
 would select points. :class:`ClickPicker` watches press and release, picks only
 when the mouse did not move, restricts the picker to one actor and reports the
 picked point id, its position and whether Shift was held.
+
+A click also keeps the camera style from rendering on button release (it renders
+whenever an interaction ends, though a click moved nothing): the selection the
+click makes asks for the one render it needs, so a click costs one frame, not two.
 """
 from __future__ import annotations
 
@@ -48,16 +52,42 @@ class ClickPicker:
         self.picker.AddPickList(actor)
         self._press = None
         self._observers = []
+        self._style_observers = []
+        self._muted = False
         iren = getattr(plotter, "iren", None)
         if iren is not None and getattr(iren, "interactor", None) is not None:
             self._observers = [iren.add_observer("LeftButtonPressEvent", self._on_press),
                                iren.add_observer("LeftButtonReleaseEvent", self._on_release)]
+            style = iren.interactor.GetInteractorStyle()
+            # Only a style that already hands its release events to observers (pyvista's capture
+            # styles) may get more: on a plain VTK style, any observer replaces OnLeftButtonUp.
+            if style is not None and style.HasObserver("LeftButtonReleaseEvent"):
+                self._style = style
+                self._style_observers = [style.AddObserver("LeftButtonReleaseEvent", self._mute, 10.0),
+                                         style.AddObserver("LeftButtonReleaseEvent", self._unmute, -10.0)]
 
     def _interactor(self):
         return self.plotter.iren.interactor  # the vtkRenderWindowInteractor (observers get the style)
 
     def _on_press(self, _obj, _event):
         self._press = tuple(self._interactor().GetEventPosition())
+
+    def _is_click(self) -> bool:
+        if self._press is None:
+            return False
+        pos = tuple(self._interactor().GetEventPosition())
+        return max(abs(pos[0] - self._press[0]), abs(pos[1] - self._press[1])) <= self.max_move
+
+    def _mute(self, _obj, _event):
+        """Before the style ends its interaction: no render for a click."""
+        if self._is_click():
+            self._interactor().EnableRenderOff()
+            self._muted = True
+
+    def _unmute(self, _obj, _event):
+        if self._muted:
+            self._muted = False
+            self._interactor().EnableRenderOn()
 
     def _on_release(self, _obj, _event):
         iren = self._interactor()
@@ -81,7 +111,9 @@ class ClickPicker:
         if iren is not None:
             for obs in self._observers:
                 iren.remove_observer(obs)
-        self._observers = []
+        for obs in self._style_observers:
+            self._style.RemoveObserver(obs)
+        self._observers, self._style_observers = [], []
 
 
 def enable_click_picking(plotter, actor, callback, **kw) -> ClickPicker:

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
-__all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all"]
+__all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all",
+           "RenderScheduler"]
 
 
 @contextmanager
@@ -21,8 +22,10 @@ def make_plotter(parent):
     """A pyvistaqt QtInteractor with the explorer's look (white background, paper style)."""
     from pyvistaqt import QtInteractor
 
-    # no auto-update timer: views render on demand (RenderScheduler), so an idle window costs nothing
-    plotter = QtInteractor(parent, auto_update=False)
+    # no auto-update timer: views render on demand (RenderScheduler), so an idle window costs nothing.
+    # No multisampling: with software OpenGL (Mesa llvmpipe) 4x MSAA costs 20-40 % of every frame
+    # (docs/DECISIONS.md, "GUI frame budget"); points are drawn as shaded spheres, which need none.
+    plotter = QtInteractor(parent, auto_update=False, multi_samples=0)
     plotter.set_background("white")
     return plotter
 
@@ -53,8 +56,21 @@ def close_plotter(plotter) -> None:
 class RenderScheduler:
     """Coalesce render requests: many state events in one pass give one render.
 
-    ``request()`` schedules ``plotter.render()`` on the next turn of the Qt event
-    loop; ``flush()`` renders now if one is pending.
+    ``request()`` schedules one repaint of the plotter's widget on the next turn of the
+    Qt event loop. The widget's ``paintGL`` renders the scene exactly once (calling
+    ``plotter.render()`` instead would render twice: once into VTK's framebuffer, and
+    again in the ``paintGL`` its frame event schedules), and Qt composes every widget
+    painted in the same turn into one window update. ``request(min_interval_s=...)``
+    throttles: the render waits until that long after the previous one (the manifold
+    view follows playback this way while the lip view renders every frame).
+    ``flush(sync=True)`` renders and composes now.
+
+    Attributes
+    ----------
+    n_renders : int
+        Renders requested of the widget so far (flushes that found a request pending).
+    last_flush : float
+        ``time.perf_counter()`` of the last flush (0 before any).
     """
 
     def __init__(self, plotter):
@@ -62,21 +78,44 @@ class RenderScheduler:
 
         self.plotter = plotter
         self.pending = False
+        self.n_renders = 0
+        self.last_flush = 0.0
         self._timer = QtCore.QTimer()
         self._timer.setSingleShot(True)
         self._timer.setInterval(0)
         self._timer.timeout.connect(self.flush)
 
-    def request(self) -> None:
-        if not self.pending:
-            self.pending = True
-            self._timer.start()
+    def request(self, *, min_interval_s: float = 0.0) -> None:
+        """Ask for one render soon (no sooner than ``min_interval_s`` after the previous flush)."""
+        import time
 
-    def flush(self) -> None:
+        wait_ms = 0
+        if min_interval_s > 0:
+            wait_ms = max(0, int(round(1000 * (self.last_flush + min_interval_s - time.perf_counter()))))
         if self.pending:
-            self.pending = False
-            if not getattr(self.plotter, "_lipspace_closed", False):
-                self.plotter.render()
+            if wait_ms == 0 and self._timer.remainingTime() > 0:
+                self._timer.start(0)  # an unthrottled request overtakes a throttled one
+            return
+        self.pending = True
+        self._timer.start(wait_ms)
+
+    def flush(self, *, sync: bool = False) -> None:
+        """Render now if a request is pending (``sync``: paint and compose before returning)."""
+        import time
+
+        if not self.pending:
+            return
+        self.pending = False
+        self._timer.stop()
+        if getattr(self.plotter, "_lipspace_closed", False):
+            return
+        self.n_renders += 1
+        self.last_flush = time.perf_counter()
+        widget = self.plotter.interactor
+        if sync:
+            widget.repaint()
+        else:
+            widget.update()
 
     def stop(self) -> None:
         self._timer.stop()

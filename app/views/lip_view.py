@@ -6,7 +6,11 @@
   and +2 s.d. (right).
 * Playback shows the original trajectory (left, grey-pink) and the synthetic one
   (right, red) side by side, at the corpus rate, with the utterance's audio when it
-  has any and a sound device exists.
+  has any and a sound device exists. The frame shown comes from elapsed time
+  (:class:`app.playback.PlaybackClock`), not from counting timer ticks: when a frame
+  takes longer to draw than the frame period, the frames in between are dropped and
+  playback stays in step with the clock. Each frame is painted at once (only this
+  view; the manifold view follows at a lower rate).
 """
 from __future__ import annotations
 
@@ -15,6 +19,7 @@ from PySide6 import QtCore, QtWidgets
 
 from app import scene
 from app.audio import AudioPlayer, resolve_audio_path
+from app.playback import PlaybackClock
 from app.views._common import (camera_of, close_plotter, connect_all, disconnect_all,
                                make_plotter, RenderScheduler, set_camera)
 
@@ -44,7 +49,9 @@ class LipView(QtWidgets.QWidget):
         self.main = self.second = None
         self._frames = {"original": None, "synthetic": None}
         self.audio = AudioPlayer(self)
+        self.clock = None  # a PlaybackClock while playing
         self.timer = QtCore.QTimer(self)
+        self.timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
         self.timer.timeout.connect(self._tick)
 
         self.play_btn = QtWidgets.QPushButton("Play")
@@ -75,16 +82,8 @@ class LipView(QtWidgets.QWidget):
         self.play_btn.toggled.connect(state.set_playing)
         self.stop_btn.clicked.connect(self._stop)
         self.slider.valueChanged.connect(self._on_slider)
-        ev = state.events
-        self._connections = [
-            (ev.manifold, lambda _m: self.rebuild()),
-            (ev.frame, lambda _f: self.refresh()),
-            (ev.state, lambda _s: self.refresh()),
-            (ev.component, lambda _c: self.refresh()),
-            (ev.trajectory, lambda *_: self._on_trajectories()),
-            (ev.playback, lambda _k: self.refresh()),
-            (ev.playing, self._on_playing),
-        ]
+        self.speed_box.currentIndexChanged.connect(lambda _i: self._restart_clock())
+        self._connections = [(state.events.changed, self._on_changed)]
         connect_all(self._connections)
         if state.manifold is not None:
             self.rebuild()
@@ -118,6 +117,18 @@ class LipView(QtWidgets.QWidget):
         return frame_points(np.asarray(row, np.float32), self.state.manifold.corpus_.dims)
 
     # ---------------------------------------------------------------- refresh
+    def _on_changed(self, names) -> None:
+        """One action's changed fields (``events.changed``): at most one refresh and one render."""
+        if "manifold" in names:
+            self.rebuild()
+            return
+        if "trajectory" in names:
+            self._on_trajectories(render=False)
+        if names & {"frame", "state", "component", "playback", "trajectory"}:
+            self.refresh()
+        if "playing" in names:
+            self._on_playing(self.state.playing)
+
     def refresh(self, render=True) -> None:
         """Show what the state selects (playback > component > frame > state > mean)."""
         s, m = self.state, self.state.manifold
@@ -192,12 +203,26 @@ class LipView(QtWidgets.QWidget):
         if on:
             if s.playback is None or s.playback >= s.n_playback - 1:
                 s.set_playback(0)
-            rate = (s.original or s.synthetic).rate
-            self.timer.start(max(1, int(round(1000.0 / (rate * self.speed)))))
+            self._restart_clock()
             self._start_audio()
         else:
             self.timer.stop()
+            self.clock = None
             self.audio.stop()
+
+    def _restart_clock(self) -> None:
+        """(Re)start the playback clock at the shown frame (on play, or when the speed changes)."""
+        s = self.state
+        if not s.playing:
+            return
+        rate = (s.original or s.synthetic).rate
+        old = self.clock
+        self.clock = PlaybackClock(rate, s.n_playback, speed=self.speed)
+        if old is not None:
+            self.clock.latency_s = old.latency_s
+        self.clock.start(s.playback or 0)
+        # tick at the frame period; each tick shows the frame the clock says is due
+        self.timer.start(max(1, int(1000.0 / (rate * self.speed))))
 
     def _start_audio(self):
         s = self.state
@@ -210,12 +235,22 @@ class LipView(QtWidgets.QWidget):
             self.audio.play(path, start_s=(s.playback or 0) / c.rate, rate=self.speed)
 
     def _tick(self):
-        s = self.state
-        k = (s.playback if s.playback is not None else -1) + 1
-        if k >= s.n_playback:
-            s.set_playing(False)
+        """Show the frame due now (dropping those whose time has passed), painted at once."""
+        s, clock = self.state, self.clock
+        if clock is None or not s.playing:
             return
+        k = clock.frame()
+        if k is None:  # the clock is past the end: show the last frame and stop
+            with s.batch():
+                s.set_playback(s.n_playback - 1)
+                s.set_playing(False)
+            return
+        if k == s.playback:
+            return
+        chosen = clock.clock()
         s.set_playback(k)
+        self.renderer.flush(sync=True)
+        clock.shown(chosen, clock.clock())
 
     def _stop(self):
         self.state.set_playing(False)
@@ -235,6 +270,7 @@ class LipView(QtWidgets.QWidget):
 
     def close_view(self) -> None:
         self.timer.stop()
+        self.clock = None
         self.audio.stop()
         disconnect_all(self._connections)
         self.renderer.stop()

@@ -102,20 +102,13 @@ class ManifoldView(QtWidgets.QWidget):
         esc.activated.connect(state.clear_selection)
 
         ev = state.events
+        # one handler for everything one action changes: a click (frame, state, target, path,
+        # colour mode) recolours at most once and asks for one render
         self._connections = [
-            (ev.manifold, lambda _m: self.rebuild()),
-            (ev.color_mode, lambda _m: self._on_mode()),
-            (ev.hemisphere, lambda _m: self._on_mode()),
+            (ev.changed, self._on_changed),
             (ev.path_mode, lambda on: self._sync_box(self.path_box, on)),
-            (ev.state, lambda _s: self._on_selection()),
-            (ev.frame, lambda _f: self._on_selection()),
-            (ev.target, lambda _t: self._on_selection()),
-            (ev.path, lambda _p: self._on_path()),
-            (ev.utterance, lambda _u: self._recolor() if state.color_mode == "utterance" else None),
-            (ev.trajectory, lambda *_: self._on_trajectories()),
-            (ev.playback, lambda _k: self._on_playback()),
-            (ev.visible_phones, lambda _v: self._on_phones()),
         ]
+        self.n_recolors = 0
         connect_all(self._connections)
         if state.manifold is not None:
             self.rebuild()
@@ -159,7 +152,7 @@ class ManifoldView(QtWidgets.QWidget):
         with blocked(self.path_box):
             self.path_box.setChecked(self.state.path_mode)
         self._on_mode(render=False)
-        self._on_selection(render=False)
+        self._on_selection(render=False, recolor=False)  # _on_mode has coloured the points
         self._on_path(render=False)
         self._on_trajectories(render=False)
         self._on_phones(render=False)
@@ -217,16 +210,51 @@ class ManifoldView(QtWidgets.QWidget):
                 axes["labels"].SetVisibility(on)
             self.renderer.request()
 
-    def _on_mode(self, render=True):
+    def _on_changed(self, names) -> None:
+        """Bring the view up to date with one action's changed fields (``events.changed``)."""
+        if "manifold" in names:
+            self.rebuild()
+            return
+        if "points" not in self.handles:
+            return
+        s = self.state
+        selection = bool(names & {"frame", "state", "target"})
+        recolor = (bool(names & {"color_mode", "hemisphere"})
+                   or (s.color_mode == "distance" and "state" in names)
+                   or (s.color_mode == "utterance" and "utterance" in names))
+        if names & {"color_mode", "hemisphere"}:
+            self._sync_mode_boxes()
+        if selection:
+            self._on_selection(render=False, recolor=False)
+        if "path" in names:
+            self._on_path(render=False)
+        if "trajectory" in names:
+            self._on_trajectories(render=False)
+        if "visible_phones" in names:
+            self._on_phones(render=False)
+        if recolor:
+            self._recolor(render=False)
+        elif selection or "path" in names:
+            self._update_info()
+        if recolor or selection or names & {"path", "trajectory", "visible_phones"}:
+            self.renderer.request()
+        elif names & {"playback", "playing"}:
+            self._on_playback()
+
+    def _sync_mode_boxes(self):
         with blocked(self.color_box, self.hemi_box):
             self.color_box.setCurrentIndex(COLOR_MODES.index(self.state.color_mode))
             self.hemi_box.setCurrentIndex(HEMISPHERES.index(self.state.hemisphere))
+
+    def _on_mode(self, render=True):
+        self._sync_mode_boxes()
         self._recolor(render=render)
 
     def _recolor(self, render=True):
         if "points" not in self.handles:
             return
         c = point_colors(self.state.color_mode, self.state.manifold, self.state)
+        self.n_recolors += 1
         self.coloring = c
         self.handles["points"].set_colors(c.rgb, c.values)
         bar = self._bar
@@ -252,7 +280,7 @@ class ManifoldView(QtWidgets.QWidget):
         if render:
             self.renderer.request()
 
-    def _on_selection(self, render=True):
+    def _on_selection(self, render=True, recolor=True):
         if "points" not in self.handles:
             return
         s, m, h = self.state, self.state.manifold, self.handles
@@ -272,7 +300,7 @@ class ManifoldView(QtWidgets.QWidget):
             h["target"].move(m.states_.centroids_[s.target, :3])
         else:
             h["target"].set_visible(False)
-        if s.color_mode == "distance":
+        if recolor and s.color_mode == "distance":
             self._recolor(render=False)
         self._update_info()
         if render:
@@ -320,7 +348,12 @@ class ManifoldView(QtWidgets.QWidget):
         if render:
             self.renderer.request()
 
+    #: while playing, the manifold view renders the moving markers at most this often: the lip
+    #: view gets the frame budget (a manifold frame costs several lip frames in software GL)
+    PLAYBACK_RENDER_INTERVAL_S = 0.5
+
     def _on_playback(self, render=True):
+        """Move the playback markers (actor positions only: the cloud is never recoloured)."""
         if "play_o" not in self.handles:
             return
         k = self.state.playback
@@ -330,7 +363,7 @@ class ManifoldView(QtWidgets.QWidget):
             else:
                 self.handles[key].move(np.asarray(traj.Y)[min(k, len(traj) - 1), :3])
         if render:
-            self.renderer.request()
+            self.renderer.request(min_interval_s=self.PLAYBACK_RENDER_INTERVAL_S if self.state.playing else 0.0)
 
     def _on_phones(self, render=True):
         if "points" not in self.handles:

@@ -83,8 +83,19 @@ def test_trajectory_plane_axes_frame_path(plotter):
     assert axes["S"].mesh.bounds[1] == pytest.approx(2.0, rel=1e-3)
     local = scene.add_local_frame(plotter, length=1.0)
     assert not local.visible
+    arrows = {k: (h.actor, h.mesh) for k, h in local.parts.items()}
     local.update([1, 1, 1], [0, 1, 0], [1, 0, 0], [0, 0, 1])
-    assert local.visible and local.parts["s"].mesh.bounds[3] == pytest.approx(2.0, rel=1e-3)
+    assert local.visible and local.bounds("s")[3] == pytest.approx(2.0, rel=1e-3)  # from y=1, length 1 along +y
+    assert local.bounds("v")[1] == pytest.approx(2.0, rel=1e-3) and local.bounds("normal")[5] == pytest.approx(
+        2.0, rel=1e-3)
+    local.update([0, 0, 0], [0, -3, 0], [0, 0, 0], [0, 0, 1])  # moved in place; a zero direction is hidden
+    assert local.bounds("s")[2] == pytest.approx(-1.0, rel=1e-3) and not local.parts["v"].visible
+    assert all(local.parts[k].actor is a and local.parts[k].mesh is m for k, (a, m) in arrows.items())
+    marker = scene.add_marker(plotter, None, 0.1)
+    actor = marker.actor
+    marker.move([3, 4, 5])
+    assert marker.visible and marker.actor is actor
+    np.testing.assert_allclose(np.reshape(actor.GetBounds(), (3, 2)).mean(1), [3, 4, 5], atol=1e-3)
     C = rng.normal(size=(20, 3))
     path = scene.add_state_path(plotter, C, [3, 7, 9], node_radius=0.05)
     assert path.visible and np.array_equal(path.points, C[[3, 7, 9]])
