@@ -59,6 +59,9 @@ class Utterance:
         Path of a WAV file holding the utterance's audio, if any.
     text : str
         Orthographic text, if known.
+    speaker : str
+        Who spoke it ("" = unknown). Multi-speaker corpora are normalised per speaker
+        before the shape space (:mod:`engine.registration`).
     """
 
     id: str
@@ -67,6 +70,7 @@ class Utterance:
     phones: tuple[PhoneInterval, ...] = ()
     audio: str | None = None
     text: str = ""
+    speaker: str = ""
 
     @property
     def n_frames(self) -> int:
@@ -107,6 +111,14 @@ class Corpus:
         Ground-truth per-frame signals (the synthetic talker's articulatory controls).
     name : str
         Human-readable name of the corpus.
+    point_roles : sequence of str or None
+        One role per point from :data:`engine.layouts.ROLES` ("" = none): which points
+        are upper / lower lip, mouth corners, jaw, reference (head) or tongue sensors.
+        With upper and lower lip known, "opening" means the lip aperture grows.
+    registration : str
+        How head motion / position was removed, in words ("" = none was applied).
+    history : list of str
+        Processing steps applied on import (resampling, registration, ...), in order.
     """
 
     frames: np.ndarray
@@ -117,6 +129,9 @@ class Corpus:
     point_names: list[str] | None = None
     latent: dict[str, np.ndarray] = field(default_factory=dict)
     name: str = "corpus"
+    point_roles: list[str] | None = None
+    registration: str = ""
+    history: list[str] = field(default_factory=list)
 
     def __post_init__(self):
         self.frames = np.asarray(self.frames, dtype=np.float32)
@@ -126,6 +141,10 @@ class Corpus:
             self.faces = np.asarray(self.faces, dtype=np.int64)
         if self.point_names is not None:
             self.point_names = [str(n) for n in self.point_names]
+        if self.point_roles is not None:
+            self.point_roles = [str(r) for r in self.point_roles]
+        self.registration = str(self.registration)
+        self.history = [str(h) for h in self.history]
         self.latent = {k: np.asarray(v) for k, v in self.latent.items()}
         self.validate()
 
@@ -205,6 +224,14 @@ class Corpus:
             raise CorpusError(
                 f"{self.name}: {len(self.point_names)} point names for {self.n_points} points"
             )
+        if self.point_roles is not None:
+            if len(self.point_roles) != self.n_points:
+                raise CorpusError(f"{self.name}: {len(self.point_roles)} point roles for {self.n_points} points")
+            from engine.layouts import ROLES
+
+            bad_roles = sorted({r for r in self.point_roles if r and r not in ROLES})
+            if bad_roles:
+                raise CorpusError(f"{self.name}: unknown point role(s) {bad_roles}; expected one of {list(ROLES)}")
         for k, v in self.latent.items():
             if v.shape[0] != F.shape[0]:
                 raise CorpusError(f"{self.name}: latent {k!r} has {v.shape[0]} rows, frames have {F.shape[0]}")
@@ -232,6 +259,17 @@ class Corpus:
     @property
     def duration(self) -> float:
         return self.n_frames / self.rate
+
+    @property
+    def speakers(self) -> list[str]:
+        """Distinct speakers in utterance order ("" = unknown)."""
+        return list(dict.fromkeys(u.speaker for u in self.utterances))
+
+    def role_points(self, role: str) -> np.ndarray:
+        """Indices of the points with ``role`` (empty when roles are unknown)."""
+        if self.point_roles is None:
+            return np.zeros(0, np.int64)
+        return np.array([i for i, r in enumerate(self.point_roles) if r == role], dtype=np.int64)
 
     def utterance(self, uid: str) -> Utterance:
         for u in self.utterances:
@@ -287,6 +325,7 @@ class Corpus:
         return Corpus(
             frames=self.frames[rows], rate=self.rate, utterances=out, dims=self.dims, faces=self.faces,
             point_names=self.point_names, latent={k: v[rows] for k, v in self.latent.items()}, name=self.name,
+            point_roles=self.point_roles, registration=self.registration, history=list(self.history),
         )
 
     # -------------------------------------------------------------- file i/o
@@ -304,6 +343,9 @@ class Corpus:
             "corpus_utt_bounds": self.bounds,
             "corpus_utt_audio": np.array([u.audio or "" for u in self.utterances], dtype=str),
             "corpus_utt_text": np.array([u.text for u in self.utterances], dtype=str),
+            "corpus_utt_speaker": np.array([u.speaker for u in self.utterances], dtype=str),
+            "corpus_registration": np.array(self.registration),
+            "corpus_history": np.array(self.history, dtype=str).reshape(-1),
             "corpus_phone_utt": np.array([p[0] for p in phones], dtype=np.int64),
             "corpus_phone_times": np.array([[p[1], p[2]] for p in phones], dtype=np.float64).reshape(-1, 2),
             "corpus_phone_labels": np.array([p[3] for p in phones], dtype=str),
@@ -314,6 +356,8 @@ class Corpus:
             d["corpus_faces"] = self.faces
         if self.point_names is not None:
             d["corpus_point_names"] = np.array(self.point_names, dtype=str)
+        if self.point_roles is not None:
+            d["corpus_point_roles"] = np.array(self.point_roles, dtype=str)
         for k, v in self.latent.items():
             d[f"corpus_latent_{k}"] = v
         return d
@@ -344,6 +388,10 @@ class Corpus:
             latent = {k[len("corpus_latent_"):]: d[k] for k in keys if k.startswith("corpus_latent_")}
             faces = d["corpus_faces"] if "corpus_faces" in keys else None
             names = list(d["corpus_point_names"]) if "corpus_point_names" in keys else None
+            roles = list(d["corpus_point_roles"]) if "corpus_point_roles" in keys else None
+            speaker = d["corpus_utt_speaker"] if "corpus_utt_speaker" in keys else [""] * len(ids)
+            registration = str(d["corpus_registration"]) if "corpus_registration" in keys else ""
+            history = [str(h) for h in d["corpus_history"]] if "corpus_history" in keys else []
             rate, dims, name = float(d["corpus_rate"]), int(d["corpus_dims"]), str(d["corpus_name"])
         except KeyError as exc:
             raise CorpusError(f"{source}: not a Lipspace corpus file (missing {exc.args[0]!r})") from None
@@ -351,9 +399,10 @@ class Corpus:
         for k, (b, uid) in enumerate(zip(bounds, ids)):
             sel = p_utt == k
             phones = tuple(PhoneInterval(float(s), float(e), str(lab)) for (s, e), lab in zip(p_t[sel], p_lab[sel]))
-            utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, str(audio[k]) or None, str(text[k])))
+            utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, str(audio[k]) or None, str(text[k]),
+                                  str(speaker[k])))
         return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
-                   latent=latent, name=name)
+                   latent=latent, name=name, point_roles=roles, registration=registration, history=history)
 
     def save(self, path) -> Path:
         """Write the native corpus file (``.npz``) atomically."""

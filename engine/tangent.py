@@ -20,7 +20,10 @@ z_i = F^y_i - F^y_{i+1}; we use the forward step so that the signs read directly
 
 Sign convention: **+F^x_1 is opening** (``engine.shape`` orients component 1 so that
 its positive direction spreads the lip points apart). Nothing here can check that;
-inputs whose first shape component points toward closing give mirrored classes.
+inputs whose first shape component points toward closing, or is not opening at all
+(a rigid shift, tongue movement), give wrong classes. When the lip aperture is known
+(the corpus names upper and lower lip points), pass it as ``opening`` to ``fit``: it
+then defines opening instead (:class:`engine.manifold.Manifold` does so).
 """
 from __future__ import annotations
 
@@ -118,6 +121,8 @@ class TangentFrames(BaseEstimator):
         3 closing/decelerating, -1 (``NO_STEP``) at the last frame of each utterance.
     n_degenerate_ : int
         Frames whose s_i, v_i or normal needed a fallback (see Notes).
+    opening_source_ : str
+        What defined opening: ``"lip aperture"`` (``opening`` given to fit) or ``"F^x_1"``.
 
     Notes
     -----
@@ -182,7 +187,7 @@ class TangentFrames(BaseEstimator):
         return np.ascontiguousarray(Y)
 
     # -------------------------------------------------------------------- fit
-    def fit(self, Fy, Fx, Fxv, bounds):
+    def fit(self, Fy, Fx, Fxv, bounds, opening=None):
         """Fit the plane, the global and local directions and classify every frame.
 
         Parameters
@@ -195,6 +200,12 @@ class TangentFrames(BaseEstimator):
             Their velocities F^x' (column 0 = opening velocity).
         bounds : ndarray of shape (U, 2)
             Utterance ``[start, stop)`` frame ranges (``Corpus.bounds``).
+        opening : ndarray of shape (N,), optional
+            A measured opening signal, the lip aperture (:func:`engine.kinematics.lip_aperture`).
+            When given it replaces F^x_1 (and its velocity replaces F^x'_1) as the
+            reference of S, V, s_i, v_i and so of the classes: "opening" then means the
+            lips part, whatever the first shape component is. ``opening_source_`` says
+            which was used.
 
         Returns
         -------
@@ -207,6 +218,15 @@ class TangentFrames(BaseEstimator):
         Fxv = _finite_2d("F^x'", Fxv, N)
         v1 = np.asarray(Fxv[:, 0], dtype=np.float64)
         b = check_bounds(bounds, N)
+        source = "F^x_1"
+        if opening is not None:
+            op = np.asarray(opening, dtype=np.float64).reshape(-1)
+            if op.shape[0] != N or not np.isfinite(op).all():
+                raise ValueError(f"opening must be {N} finite values (one per frame of F^y), got shape {op.shape}")
+            from engine.dynamics import velocities
+
+            x1, v1 = op, velocities(op[:, None], b)[:, 0]
+            source = "lip aperture"
         k = int(self.n_neighbors)
         if N <= k:
             raise ValueError(f"n_neighbors={k} needs more than {k} frames, got {N}; lower n_neighbors")
@@ -231,6 +251,7 @@ class TangentFrames(BaseEstimator):
         self.s_, self.v_, self.normal_, self.step_ = s, v, nrm, step
         self.opening_, self.accelerating_, self.classes_ = opening, accel, classes
         self.n_degenerate_ = int(n_bad)
+        self.opening_source_ = source
         return self
 
     def _zero_velocity_plane(self, Y, Fxv, v1):

@@ -21,6 +21,9 @@ def add_arguments(p):
     p.add_argument("--landmarks", type=int, default=None, help="landmark embedding with this many landmarks")
     p.add_argument("--states", type=int, default=None, help="K, the number of states (default: about N/30)")
     p.add_argument("--neighbors", type=int, default=20, help="tangent-frame neighbourhood (default: %(default)s)")
+    p.add_argument("--speaker-norm", choices=("auto", "mean", "mean+scale", "none"), default="auto",
+                   help="per-speaker normalisation before the shape space: each speaker's mean frame removed "
+                        "(and spread scaled); auto = mean when utterances name 2+ speakers (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
@@ -39,7 +42,8 @@ def run(args) -> int:
             manifold = Manifold(variance=args.variance, n_embedding=args.embedding_dims,
                                 embedding_method=args.method, n_landmarks=args.landmarks,
                                 n_states=args.states, n_neighbors=args.neighbors,
-                                random_state=args.seed).fit(corpus, progress=progress)
+                                random_state=args.seed, speaker_normalisation=args.speaker_norm).fit(
+                corpus, progress=progress)
         except ValueError as exc:
             raise CliError(str(exc)) from None
     manifold.save(out)

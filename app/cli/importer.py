@@ -6,7 +6,10 @@ from dataclasses import replace
 from pathlib import Path
 
 #: which reader option ``--points`` sets, per format
-_POINT_OPTION = {"ema": "sensors", "mview": "sensors", "c3d": "markers", "csv": "points"}
+_POINT_OPTION = {"ema": "sensors", "mview": "sensors", "c3d": "markers", "csv": "points", "matrix": "points",
+                 "pos": "points", "wave": "points"}
+#: the analysis rate: the paper's 60 Hz (see docs/DECISIONS.md, "Real recordings")
+ANALYSIS_RATE = 60.0
 
 
 def add_arguments(p):
@@ -24,11 +27,26 @@ def add_arguments(p):
     p.add_argument("--tier", default=None, help="TextGrid tier holding the phones (default: 'phones' or similar)")
     p.add_argument("--rate", type=float, default=None, metavar="HZ",
                    help="frame rate of inputs without timing (mesh frames, .npy, CSV without a time column)")
-    p.add_argument("--resample", type=float, default=None, metavar="HZ",
-                   help="resample the result to this frame rate (anti-aliased, per utterance)")
+    p.add_argument("--resample", "--analysis-rate", dest="resample", default=f"{ANALYSIS_RATE:g}", metavar="HZ",
+                   help="analysis frame rate: the result is resampled to it with an anti-aliasing filter, per "
+                        "utterance (default: %(default)s Hz, the paper's rate; 'native' keeps the file's rate)")
     p.add_argument("--points", default=None, metavar="LIST",
-                   help="comma-separated sensors / markers / landmarks to keep, or 'all' (EMA, MVIEW) or 'lips' "
-                        "(OpenFace); default: lips and jaw for EMA, every point otherwise")
+                   help="comma-separated sensors / markers / landmarks to keep, or 'all' (EMA, MVIEW, layouts) or "
+                        "'lips' (OpenFace, layouts); default: lips and jaw for EMA, lip, jaw and reference "
+                        "sensors with a layout, every point otherwise")
+    p.add_argument("--layout", default=None, metavar="NAME_OR_FILE",
+                   help="read a plain numeric matrix (.mat variable, .npy, CSV/TSV without names, .pos, NDI Wave "
+                        "TSV) through a sensor layout: ema7x6, ema7x7, ag500, ag501, wave, or a layout file "
+                        "(see README, 'Sensor layouts')")
+    p.add_argument("--variable", default=None, metavar="NAME", help="with --layout: the .mat variable to read")
+    p.add_argument("--register", default="auto", choices=("auto", "rigid", "utterance", "speaker", "none"),
+                   help="remove head motion / recording offsets: rigid (Procrustes to the layout's reference "
+                        "sensors), utterance or speaker centring, none; auto = rigid with 3+ reference sensors, "
+                        "else utterance centring for several inputs (default: %(default)s)")
+    spk = p.add_mutually_exclusive_group()
+    spk.add_argument("--speaker", default=None, metavar="NAME", help="speaker of every input")
+    spk.add_argument("--speaker-from", choices=("dir", "prefix"), default=None,
+                     help="speaker of each input from its directory name or its file name up to the first '_'")
     p.add_argument("--template", default=None, metavar="MESH", help="template OBJ/PLY giving faces for .npy input")
     p.add_argument("--audio-dir", default=None, metavar="DIR",
                    help="MVIEW .mat input: write each file's AUDIO to DIR/<stem>.wav and link it")
@@ -45,6 +63,14 @@ def _options(args, fmt):
         kw["fill_gaps"] = False
     if args.template is not None:
         kw["template"] = args.template
+    if args.layout is not None:
+        kw["layout"] = args.layout
+    if args.variable is not None:
+        if args.layout is None:
+            from app.cli import CliError
+
+            raise CliError("--variable needs --layout (it names the .mat variable holding a plain matrix)")
+        kw["variable"] = args.variable
     if args.points is not None:
         opt = _POINT_OPTION.get(fmt)
         if opt is None:
@@ -57,12 +83,14 @@ def _options(args, fmt):
 
 
 def summary(corpus) -> str:
-    """One line: frames, points, rate, utterances, phones."""
+    """One line: frames, points, rate, utterances, speakers, phones."""
     n_ph = sum(len(u.phones) for u in corpus.utterances)
+    spk = [s for s in corpus.speakers if s]
+    spk_txt = f"{len(spk)} speaker{'s' * (len(spk) != 1)}, " if spk else ""
     labels = {p.label for u in corpus.utterances for p in u.phones}
     return (f"{corpus.n_frames} frames, {corpus.n_points} point{'s' * (corpus.n_points != 1)} ({corpus.dims}-D), "
             f"{corpus.rate:g} Hz, "
-            f"{len(corpus.utterances)} utterance{'s' * (len(corpus.utterances) != 1)}, "
+            f"{len(corpus.utterances)} utterance{'s' * (len(corpus.utterances) != 1)}, {spk_txt}"
             f"{n_ph} phones ({len(labels)} labels), {corpus.duration:.2f} s")
 
 
@@ -71,14 +99,23 @@ def run(args) -> int:
     from engine.corpus import CorpusError
     from engine.io import ImportFormatError, concat, read_corpus, resample, write_audio
     from engine.io.dispatch import FORMAT_ALIASES, detect_format
+    from engine.registration import register
 
     out = Path(args.output)
     if out.suffix != ".npz":
         raise CliError(f"{out}: the corpus file must end in .npz")
     inputs = args.inputs
+    rate_out = None
+    if str(args.resample).lower() not in ("native", "none"):
+        try:
+            rate_out = float(args.resample)
+        except ValueError:
+            raise CliError(f"--resample {args.resample!r}: expected a rate in Hz or 'native'") from None
     try:
-        fmt = args.format or detect_format(inputs[0])
+        fmt = args.format or ("matrix" if args.layout is not None else detect_format(inputs[0]))
         fmt = FORMAT_ALIASES.get(fmt, fmt)
+        if args.layout is not None and fmt not in ("matrix", "pos", "wave"):
+            raise CliError(f"--layout applies to plain matrices, .pos and NDI Wave files, not to {fmt!r} input")
         alignment = args.alignment
         if alignment is not None and alignment.lower() == "none":
             alignment = False
@@ -94,14 +131,37 @@ def run(args) -> int:
             if args.audio_dir and fmt == "mview":
                 wav = write_audio(src, Path(args.audio_dir) / (Path(src).stem + ".wav"))
                 c = replace(c, utterances=[replace(u, audio=str(wav)) for u in c.utterances])
+            speaker = args.speaker or _speaker_of(src if len(g) == 1 else g[0], args.speaker_from)
+            if speaker:
+                c = replace(c, utterances=[replace(u, speaker=speaker) for u in c.utterances])
             parts.append(c)
         corpus = parts[0] if len(parts) == 1 else concat(parts)
-        if args.resample is not None:
-            corpus = resample(corpus, args.resample)
+        corpus = register(corpus, method=args.register)
+        if rate_out is not None and abs(rate_out - corpus.rate) > 1e-9 * corpus.rate:
+            corpus = resample(corpus, rate_out)
         if args.name:
             corpus = replace(corpus, name=args.name)
     except (ImportFormatError, CorpusError, FileNotFoundError, ValueError, TypeError) as exc:
         raise CliError(str(exc)) from None
     corpus.save(out)
+    # what was done to the data, on stderr (stdout keeps the one summary line)
+    for note in corpus.history:
+        if not note.startswith("read "):
+            print(f"lipspace import: {note}", file=sys.stderr)
+    if corpus.point_roles is not None:
+        print("lipspace import: roles " + ", ".join(f"{n}={r or '-'}" for n, r in
+                                                    zip(corpus.point_names or [], corpus.point_roles)), file=sys.stderr)
+    if not corpus.registration:
+        print("lipspace import: registration: none (no reference sensors and one utterance, or --register none)",
+              file=sys.stderr)
     print(f"wrote {out}: {summary(corpus)}", file=sys.stdout)
     return 0
+
+
+def _speaker_of(path, how) -> str:
+    if how is None:
+        return ""
+    p = Path(str(path))
+    if how == "dir":
+        return p.resolve().parent.name
+    return p.stem.split("_", 1)[0]

@@ -20,7 +20,58 @@ def _corpus_lines(c):
         f"points      {c.n_points} ({c.dims}-D){', mesh with %d faces' % len(c.faces) if c.faces is not None else ''}",
         f"phones      {len(labels)} intervals, {len(uniq)} labels" + (f"; most frequent: {top}" if top else ""),
         f"latent      {', '.join(sorted(c.latent)) or '-'}",
-    ]
+    ] + _recording_lines(c)
+
+
+def _recording_lines(c):
+    """Speakers, sensor roles, registration and import history of a corpus."""
+    spk = [s for s in c.speakers if s]
+    lines = []
+    if spk:
+        lines.append(f"speakers    {len(spk)}: {', '.join(spk[:12])}{' ...' if len(spk) > 12 else ''}")
+    if c.point_roles is not None:
+        lines.append("roles       " + ", ".join(f"{n}={r or '-'}" for n, r in zip(c.point_names or [], c.point_roles)))
+    lines.append(f"registration {c.registration or 'none'}")
+    lines += [f"history     {h}" for h in c.history if not h.startswith("read ")]
+    return lines
+
+
+def _opening_lines(m):
+    """How "opening" is defined and how well the opening class follows the lip aperture."""
+    import warnings
+
+    from engine.kinematics import AGREEMENT_WARN_BELOW, lip_aperture, opening_agreement
+
+    c = m.corpus_
+    source = getattr(m.tangent_, "opening_source_", "F^x_1")
+    ap = lip_aperture(c)
+    if ap is None:
+        return [f"opening     defined by {source} (the corpus names no upper_lip / lower_lip points, so the "
+                "aperture cannot be checked; import with --layout to name them)"]
+    agree = opening_agreement(m.tangent_.opening_, ap, c.bounds)
+    lines = [f"opening     defined by {source}; agreement of the opening class with the lip aperture "
+             f"increasing: {100 * agree:.1f}% of moving frames"]
+    if not agree >= AGREEMENT_WARN_BELOW:
+        causes = []
+        if source != "lip aperture":
+            causes.append("opening follows the first shape component, not the aperture (rebuild: the layout's "
+                          "upper/lower lip roles make the aperture the reference)")
+        if (c.point_roles or []) and "tongue" in c.point_roles:
+            n_t = c.point_roles.count("tongue")
+            causes.append(f"{n_t} tongue sensor{'s' * (n_t != 1)} in the shape space (import with --points to "
+                          "keep the lip sensors only)")
+        if not c.registration:
+            causes.append("no registration (import with --register utterance, or rigid with reference sensors)")
+        if len([s for s in c.speakers if s]) > 1 and getattr(m, "speaker_normalisation", "auto") == "none":
+            causes.append("several speakers without per-speaker normalisation (build --speaker-norm mean)")
+        if not causes:
+            causes.append("the embedding's first 3 dims may not hold the opening movement (try --embedding-dims)")
+        from engine.corpus import CorpusWarning
+
+        warnings.warn(CorpusWarning(f"the opening class agrees with the lip aperture velocity on only "
+                                    f"{100 * agree:.1f}% of moving frames (expected >= "
+                                    f"{100 * AGREEMENT_WARN_BELOW:.0f}%); likely cause: {'; '.join(causes)}"))
+    return lines
 
 
 def run(args) -> int:
@@ -57,6 +108,7 @@ def run(args) -> int:
           f"(per dim {', '.join(f'{100 * v:.1f}' for v in np.diff(np.r_[0, rr])[:5])}%)")
     props = m.tangent_.class_proportions()
     print("classes     " + "; ".join(f"{name} {100 * v:.1f}%" for name, v in props.items()))
+    print("\n".join(_opening_lines(m)))
     print("state graph " + m.states_.connectivity_report().replace("\n", "\n            "))
     if m.timings_:
         print("fit time    " + ", ".join(f"{k} {v:.2f} s" for k, v in m.timings_.items()))

@@ -70,5 +70,10 @@ def concat(corpora, *, name: str | None = None) -> Corpus:
     latent = {k: np.concatenate([c.latent[k] for c in corpora]) for k in sorted(keys)}
     if name is None:
         name = a.name if len(corpora) == 1 else f"{a.name}+{len(corpora) - 1}"
+    roles = a.point_roles if all(c.point_roles == a.point_roles for c in corpora) else None
+    regs = list(dict.fromkeys(c.registration for c in corpora))
+    registration = regs[0] if len(regs) == 1 else "; ".join(r or "none" for r in regs)
+    history = list(dict.fromkeys(h for c in corpora for h in c.history))
     return Corpus(frames=np.concatenate([c.frames for c in corpora], axis=0), rate=a.rate, utterances=utts,
-                  dims=a.dims, faces=faces, point_names=names, latent=latent, name=name)
+                  dims=a.dims, faces=faces, point_names=names, latent=latent, name=name, point_roles=roles,
+                  registration=registration, history=history)

@@ -18,11 +18,15 @@ FORMATS = {
     "csv": ("engine.io.landmarks", "read_csv_landmarks", "CSV landmark tracks (OpenFace, named or long)"),
     "npy": ("engine.io.mesh", "read_vertex_array", "NumPy vertex array (n, V, 3) + template mesh (needs rate)"),
     "npz": ("engine.corpus", "Corpus.load", "Lipspace native corpus file"),
+    "matrix": ("engine.io.matrix", "read_matrix", "plain numeric matrix (.mat variable, .npy, CSV/TSV without "
+               "names, AG500/AG501 .pos, NDI Wave TSV) read through a sensor layout (layout=)"),
+    "pos": ("engine.io.articulograph", "read_pos", "Carstens AG500 / AG501 .pos binary"),
+    "wave": ("engine.io.articulograph", "read_wave", "NDI Wave TSV export"),
 }
 FORMAT_ALIASES = {"mocha": "ema", "est": "ema", "haskins": "mview", "mat": "mview", "obj": "mesh", "ply": "mesh",
                   "openface": "csv", "tsv": "csv", "vocaset": "npy", "native": "npz"}
 _EXT = {".ema": "ema", ".mat": "mview", ".c3d": "c3d", ".obj": "mesh", ".ply": "mesh", ".csv": "csv",
-        ".tsv": "csv", ".txt": "csv", ".npy": "npy", ".npz": "npz"}
+        ".tsv": "csv", ".txt": "csv", ".npy": "npy", ".npz": "npz", ".pos": "pos"}
 _ALIGN_EXT = (".textgrid", ".lab", ".phn")
 
 
@@ -56,6 +60,8 @@ def detect_format(path) -> str:
         return "mesh"
     if head.startswith(b"\x93NUMPY"):
         return "npy"
+    if head.startswith(b"AG50xDATA"):
+        return "pos"
     if head.startswith(b"PK\x03\x04"):
         return "npz"
     if len(head) >= 2 and head[1] == 0x50:
@@ -133,6 +139,8 @@ def read_corpus(path, *, format: str | None = None, rate: float | None = None, a
     """
     if isinstance(path, (list, tuple)) and not path:
         raise ValueError("read_corpus: no input files given")
+    if kw.get("layout") is not None and format is None:
+        format = "matrix"
     fmt = (format or detect_format(path)).lower()
     fmt = FORMAT_ALIASES.get(fmt, fmt)
     if fmt not in FORMATS:
@@ -158,4 +166,11 @@ def read_corpus(path, *, format: str | None = None, rate: float | None = None, a
     if unknown:
         takes = sorted(n for n, p in params.items() if p.kind == p.KEYWORD_ONLY or n in ("rate", "alignment", "tier"))
         raise TypeError(f"format {fmt!r} takes no option(s) {unknown}; it takes {takes}")
-    return fn(path, rate=rate, alignment=alignment, **kw)
+    c = fn(path, rate=rate, alignment=alignment, **kw)
+    if c.point_roles is None and c.point_names:  # conventional sensor names (UL, LL, ML, JAW, REF, TT ...)
+        from engine.layouts import guess_roles
+
+        roles = guess_roles(c.point_names)
+        if any(roles):
+            c.point_roles = roles
+    return c

@@ -38,6 +38,10 @@ def _load_struct(path) -> MatStruct:
     if key is None:
         raise ImportFormatError(path, f"holds variables {names[:8]}; expected one MVIEW struct array named {want!r}")
     s = m[key]
+    if isinstance(s, np.ndarray) and s.ndim == 2 and np.issubdtype(s.dtype, np.number):
+        raise ImportFormatError(path, f"variable {key!r} is a plain {s.shape[0]} x {s.shape[1]} numeric matrix, "
+                                "not an MVIEW struct array; read it with a sensor layout: layout= "
+                                "(lipspace import --layout ema7x6 | ema7x7 | LAYOUT_FILE --rate HZ)")
     fields = s.fields if isinstance(s, MatStruct) else []
     for f in ("NAME", "SRATE", "SIGNAL"):
         if f not in fields:

@@ -8,7 +8,7 @@ import numpy as np
 
 from engine.corpus import Corpus, CorpusError
 
-__all__ = ["resample", "resampled_length"]
+__all__ = ["resample", "resampled_length", "how"]
 
 #: largest up/down factor used for polyphase resampling; other ratios use filter + interpolation
 MAX_FACTOR = 1000
@@ -88,7 +88,9 @@ def resample(corpus: Corpus, rate: float, *, progress=None) -> Corpus:
     if abs(rate - old) <= 1e-9 * old:
         return Corpus(frames=corpus.frames.copy(), rate=old, utterances=list(corpus.utterances), dims=corpus.dims,
                       faces=corpus.faces, point_names=corpus.point_names,
-                      latent={k: v.copy() for k, v in corpus.latent.items()}, name=corpus.name)
+                      latent={k: v.copy() for k, v in corpus.latent.items()}, name=corpus.name,
+                      point_roles=corpus.point_roles, registration=corpus.registration,
+                      history=list(corpus.history))
     blocks, utts, lat = [], [], {k: [] for k in corpus.latent}
     pos = 0
     total = len(corpus.utterances)
@@ -123,4 +125,15 @@ def resample(corpus: Corpus, rate: float, *, progress=None) -> Corpus:
                           "expected at least 2 (choose a higher rate)")
     return Corpus(frames=frames, rate=rate, utterances=utts, dims=corpus.dims, faces=corpus.faces,
                   point_names=corpus.point_names, latent={k: np.concatenate(v) for k, v in lat.items()},
-                  name=corpus.name)
+                  name=corpus.name, point_roles=corpus.point_roles, registration=corpus.registration,
+                  history=list(corpus.history) + [f"resampled {old:g} -> {rate:g} Hz ({how(old, rate)})"])
+
+
+def how(old: float, new: float) -> str:
+    """The filter :func:`resample` uses between two rates, in words."""
+    ud = _ratio(old, new)
+    if ud is not None:
+        return f"polyphase x{ud[0]}/{ud[1]}, Kaiser-windowed anti-aliasing FIR"
+    if new < old:
+        return "8th-order zero-phase Butterworth anti-aliasing low-pass at 0.9 x the new Nyquist, linear interpolation"
+    return "linear interpolation (upsampling)"

@@ -53,7 +53,7 @@ def test_import_both_haskins_files_with_audio(tmp_path, capsys):
     out = tmp_path / "h.npz"
     assert run([*files, "-o", str(out), "--audio-dir", str(tmp_path / "wav")]) == 0
     c = Corpus.load(out)
-    assert len(c.utterances) == 2 and c.rate == 100 and c.dims == 3 and c.point_names[:2] == ["UL", "LL"]
+    assert len(c.utterances) == 2 and c.rate == 60 and c.dims == 3  # the default analysis rate and c.point_names[:2] == ["UL", "LL"]
     for u in c.utterances:
         assert Path(u.audio).is_file() and Path(u.audio).stem == u.id
     assert "2 utterances" in capsys.readouterr().out
@@ -81,7 +81,8 @@ def test_import_mesh_directory_with_alignment_and_rate(tmp_path, capsys):
     tg.write_text('File type = "ooTextFile"\nObject class = "TextGrid"\n\n0\n0.4\n<exists>\n1\n"IntervalTier"\n'
                   '"phones"\n0\n0.4\n2\n0\n0.2\n"m"\n0.2\n0.4\n"a"\n')
     out = tmp_path / "c.npz"
-    assert run([str(tmp_path / "frames"), "--rate", "50", "--alignment", str(tg), "-o", str(out)]) == 0
+    assert run([str(tmp_path / "frames"), "--rate", "50", "--alignment", str(tg), "-o", str(out),
+                "--resample", "native"]) == 0
     c = Corpus.load(out)
     assert c.n_frames == 20 and c.rate == 50 and c.faces.shape == (2, 3)
     assert [p.label for p in c.utterances[0].phones] == ["m", "a"]
@@ -96,7 +97,7 @@ def test_import_est_with_points_and_no_fill(tmp_path, capsys):
     valid[5] = False
     src = write_est_track(tmp_path / "s.ema", t, v, ["ul_x", "ul_y", "ll_x", "ll_y"], valid=valid)
     out = tmp_path / "s.npz"
-    assert run([str(src), "--points", "ll", "-o", str(out), "--name", "demo"]) == 0
+    assert run([str(src), "--points", "ll", "-o", str(out), "--name", "demo", "--resample", "native"]) == 0
     c = Corpus.load(out)
     assert c.point_names == ["LL"] and c.name == "demo" and c.rate == 250
     assert run([str(src), "--no-fill", "--points", "UL,LL", "-o", str(out)]) == 2

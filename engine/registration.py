@@ -1,0 +1,242 @@
+"""Registration: head motion, recording offsets and speakers removed before the shape space.
+
+Three things make lip coordinates differ that are not lip movement:
+
+* **head motion** within a recording — removed by rigid (Procrustes / Kabsch)
+  alignment of every frame's *reference* (head) sensors to their mean configuration,
+  the same rotation and translation applied to every point (:func:`register`,
+  ``method="rigid"``), when the corpus has at least three reference sensors;
+* **offsets between recordings** (the head sits elsewhere in the field each time) —
+  without reference sensors, each utterance (``"utterance"``) or each speaker
+  (``"speaker"``) is translated so that its mean lip centroid is at the corpus mean;
+  an explicit choice the corpus records in ``Corpus.registration``;
+* **speakers** — different anatomy and sensor placement: :func:`normalise_speakers`
+  subtracts each speaker's mean frame (optionally divides by its spread) and adds the
+  pooled mean back, so the shape space models movement, not who is speaking
+  (``Manifold(speaker_normalisation=...)``).
+
+:func:`explain_split` names the cause when the state graph falls apart along speakers
+or recordings; :class:`engine.manifold.Manifold` warns with it.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+
+from engine.corpus import Corpus, CorpusError, CorpusWarning
+
+__all__ = ["register", "normalise_speakers", "explain_split", "warn_if_split", "REGISTRATION_METHODS", "SPEAKER_MODES",
+           "RegistrationSplitWarning"]
+
+REGISTRATION_METHODS = ("auto", "rigid", "utterance", "speaker", "none")
+SPEAKER_MODES = ("auto", "mean", "mean+scale", "none")
+#: a component "belongs" to a speaker / recording when this fraction of its frames comes from it
+_DOMINANT = 0.9
+
+
+class RegistrationSplitWarning(CorpusWarning):
+    """The state graph splits along speakers or recordings (a registration / normalisation problem)."""
+
+
+def _points(corpus):
+    if corpus.dims != 3:
+        raise CorpusError(f"{corpus.name}: rigid registration needs 3-D points, the corpus is {corpus.dims}-D")
+    return corpus.frames.reshape(corpus.n_frames, -1, 3).astype(np.float64)
+
+
+def _kabsch(A, B):
+    """Rotations R (n, 3, 3) and translations t (n, 3) with R @ A[i] + t ~ B, for A (n, k, 3), B (k, 3)."""
+    ca = A.mean(axis=1, keepdims=True)
+    cb = B.mean(axis=0)
+    H = np.einsum("nki,kj->nij", A - ca, B - cb)
+    U, _, Vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(np.einsum("nij,njk->nik", U, Vt)))
+    D = np.broadcast_to(np.eye(3), H.shape).copy()
+    D[:, 2, 2] = d
+    R = np.einsum("nji,njk,nlk->nil", Vt, D, U)  # V D U^T
+    t = cb - np.einsum("nij,nj->ni", R, ca[:, 0])
+    return R, t
+
+
+def register(corpus: Corpus, *, method: str = "auto", drop_reference: bool = True) -> Corpus:
+    """Remove head motion / recording offsets; the corpus records what was done.
+
+    Parameters
+    ----------
+    corpus : Corpus
+    method : {"auto", "rigid", "utterance", "speaker", "none"}
+        ``rigid``: per-frame Procrustes alignment of the reference sensors (role
+        ``reference``, at least 3) to their mean configuration; ``utterance`` /
+        ``speaker``: translate each utterance / speaker so that its mean lip centroid is
+        the corpus's; ``auto``: rigid with 3 or more reference sensors, else utterance
+        centring when there are several utterances, else none.
+    drop_reference : bool, default=True
+        After rigid registration, leave the reference sensors out (they no longer move).
+
+    Returns
+    -------
+    Corpus
+        A new corpus; ``registration`` says what was done, ``history`` gets a line.
+    """
+    if method not in REGISTRATION_METHODS:
+        raise ValueError(f"registration method {method!r}; expected one of {', '.join(REGISTRATION_METHODS)}")
+    ref = corpus.role_points("reference")
+    if method == "auto":
+        method = "rigid" if ref.size >= 3 else ("utterance" if len(corpus.utterances) > 1 else "none")
+    if method == "none":
+        return corpus
+    P = _points(corpus) if method == "rigid" else None
+    if method == "rigid":
+        if ref.size < 3:
+            names = corpus.point_names or []
+            raise CorpusError(f"{corpus.name}: rigid registration needs at least 3 reference sensors, the corpus has "
+                              f"{ref.size} ({', '.join(names[i] for i in ref) or 'none'}); mark head sensors with "
+                              "the role 'reference' in the layout, or choose method='utterance' or 'speaker'")
+        A = P[:, ref]
+        template = A[0] - A[0].mean(axis=0)
+        for _ in range(2):  # template = mean aligned reference configuration
+            R, t = _kabsch(A, template)
+            aligned = np.einsum("nij,nkj->nki", R, A) + t[:, None]
+            template = aligned.mean(axis=0)
+            template -= template.mean(axis=0)
+        R, t = _kabsch(A, template)
+        resid = np.einsum("nij,nkj->nki", R, A) + t[:, None] - template
+        rms = float(np.sqrt((resid ** 2).sum(axis=2).mean()))
+        Q = np.einsum("nij,nkj->nki", R, P) + t[:, None]
+        names = corpus.point_names or [f"p{i}" for i in range(corpus.n_points)]
+        keep = [i for i in range(corpus.n_points) if not (drop_reference and i in set(ref.tolist()))]
+        if not keep:
+            raise CorpusError(f"{corpus.name}: every point is a reference sensor; nothing is left to model")
+        desc = (f"rigid (Procrustes) to reference sensors {', '.join(names[i] for i in ref)}, "
+                f"residual {rms:.3g} rms{', reference sensors dropped' if drop_reference else ''}")
+        roles = [corpus.point_roles[i] for i in keep] if corpus.point_roles is not None else None
+        return replace(corpus, frames=Q[:, keep].reshape(corpus.n_frames, -1).astype(np.float32),
+                       point_names=[names[i] for i in keep] if corpus.point_names is not None else None,
+                       point_roles=roles, faces=None if len(keep) < corpus.n_points else corpus.faces,
+                       registration=desc, history=list(corpus.history) + [f"registration: {desc}"])
+    F = corpus.frames.astype(np.float64).reshape(corpus.n_frames, -1, corpus.dims)
+    from engine.layouts import LIP_ROLES
+
+    lips = [i for i, r in enumerate(corpus.point_roles or []) if r in LIP_ROLES] or list(range(corpus.n_points))
+    centroid = F[:, lips].mean(axis=1)  # (N, dims)
+    target = centroid.mean(axis=0)
+    if method == "utterance":
+        groups = [np.arange(u.start, u.stop) for u in corpus.utterances]
+    else:
+        spk = np.array([u.speaker for u in corpus.utterances])
+        idx = corpus.utterance_index
+        groups = [np.flatnonzero(spk[idx] == s) for s in dict.fromkeys(spk)]
+    shifts = []
+    for g in groups:
+        d = target - centroid[g].mean(axis=0)
+        F[g] += d
+        shifts.append(float(np.linalg.norm(d)))
+    what = "utterance" if method == "utterance" else "speaker"
+    desc = (f"{what} centring (no reference sensors): each {what}'s mean lip centroid moved to the corpus mean; "
+            f"shifts median {np.median(shifts):.3g}, max {max(shifts):.3g}")
+    return replace(corpus, frames=F.reshape(corpus.n_frames, -1).astype(np.float32), registration=desc,
+                   history=list(corpus.history) + [f"registration: {desc}"])
+
+
+def normalise_speakers(corpus: Corpus, *, mode: str = "auto") -> Corpus:
+    """Per-speaker normalisation before the shape space.
+
+    Parameters
+    ----------
+    corpus : Corpus
+    mode : {"auto", "mean", "mean+scale", "none"}
+        ``mean``: subtract each speaker's mean frame and add the pooled mean frame back;
+        ``mean+scale``: also scale each speaker's deviations to the pooled RMS spread;
+        ``auto``: ``mean`` when utterances name two or more speakers, else nothing.
+
+    Returns
+    -------
+    Corpus
+        The input itself when nothing is done, else a new corpus (``history`` says so).
+    """
+    if mode not in SPEAKER_MODES:
+        raise ValueError(f"speaker normalisation {mode!r}; expected one of {', '.join(SPEAKER_MODES)}")
+    speakers = corpus.speakers
+    if mode == "none" or (mode == "auto" and len(speakers) < 2):
+        return corpus
+    if mode == "auto":
+        mode = "mean"
+    F = corpus.frames.astype(np.float64)
+    grand = F.mean(axis=0)
+    spk = np.array([u.speaker for u in corpus.utterances])[corpus.utterance_index]
+    dev = {}
+    for s in speakers:
+        g = spk == s
+        F[g] -= F[g].mean(axis=0)
+        dev[s] = float(np.sqrt((F[g] ** 2).mean()))
+    if mode == "mean+scale":
+        pooled = float(np.sqrt((F ** 2).mean()))
+        for s in speakers:
+            if dev[s] > 0:
+                F[spk == s] *= pooled / dev[s]
+    F += grand
+    names = ", ".join(s or "(unnamed)" for s in speakers)
+    note = f"speaker normalisation {mode} over {len(speakers)} speakers ({names})"
+    return replace(corpus, frames=F.astype(np.float32), history=list(corpus.history) + [note])
+
+
+def explain_split(states, corpus: Corpus) -> str | None:
+    """Why the state graph is split, when its pieces follow speakers or recordings.
+
+    Looks at the weakly connected components of the state graph (or, when it has
+    one, its strongly connected components) holding at least 5% of the frames; when
+    each is dominated (90%) by one speaker, or by one utterance, returns a sentence
+    naming that and the fix; else None.
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    n_weak, weak = connected_components(states.adjacency_, directed=True, connection="weak")
+    comp = weak if n_weak > 1 else np.asarray(states.scc_labels_)
+    if comp.max() < 1:
+        return None
+    frame_comp = comp[np.asarray(states.labels_)]
+    N = len(frame_comp)
+    big = [c for c in np.unique(frame_comp) if np.mean(frame_comp == c) >= 0.05]
+    if len(big) < 2:
+        return None
+    kind = "islands (no transitions between them)" if n_weak > 1 else "strongly connected components"
+    utt = corpus.utterance_index
+    share = ", ".join(f"{100 * np.mean(frame_comp == c):.0f}%" for c in big)
+    spk_of = np.array([u.speaker for u in corpus.utterances])[utt]
+    if len(set(spk_of)) >= 2:
+        dom = []
+        for c in big:
+            vals, cnt = np.unique(spk_of[frame_comp == c], return_counts=True)
+            dom.append((str(vals[cnt.argmax()]), cnt.max() / cnt.sum()))
+        if all(f >= _DOMINANT for _, f in dom) and len({d for d, _ in dom}) == len(dom):
+            parts = ", ".join(f"one holds speaker {d} ({100 * f:.0f}% of its frames)" for d, f in dom)
+            return (f"the state graph splits into {len(big)} {kind} (holding {share} of the frames) along speakers: "
+                    f"{parts}. Cause: speaker differences dominate the shape space. Fix: normalise per speaker "
+                    "(build --speaker-norm mean) and register the recordings (import --register)")
+    # recordings: utterances do not straddle the pieces
+    purity = np.empty(len(corpus.utterances))
+    for k, u in enumerate(corpus.utterances):
+        _, cnt = np.unique(frame_comp[u.start:u.stop], return_counts=True)
+        purity[k] = cnt.max() / cnt.sum()
+    w = corpus.bounds[:, 1] - corpus.bounds[:, 0]
+    if float(np.average(purity, weights=w)) >= _DOMINANT:
+        per = []
+        for c in big:
+            ids = [u.id for u in corpus.utterances if np.mean(frame_comp[u.start:u.stop] == c) >= 0.5]
+            per.append(f"{len(ids)} utterance{'s' * (len(ids) != 1)} ({', '.join(ids[:3])}{' ...' if len(ids) > 3 else ''})")
+        return (f"the state graph splits into {len(big)} {kind} (holding {share} of the frames) along recordings: "
+                f"each utterance lies in one piece: {'; '.join(per)}. Cause: offsets between recordings or "
+                "speakers dominate the shape space. Fix: register the recordings (import --register utterance, "
+                "or rigid with reference sensors in the layout); name the speakers (import --speaker / "
+                "--speaker-from) so that the build normalises per speaker")
+    return None
+
+
+def warn_if_split(states, corpus: Corpus) -> str | None:
+    """Warn (:class:`RegistrationSplitWarning`) with :func:`explain_split`'s sentence, if any; returns it."""
+    msg = explain_split(states, corpus)
+    if msg:
+        warnings.warn(msg, RegistrationSplitWarning, stacklevel=3)
+    return msg
