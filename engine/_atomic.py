@@ -14,10 +14,15 @@ def atomic_write(path):
     """Yield a temporary path beside ``path``; on success rename it over ``path``.
 
     The temporary file keeps ``path``'s suffix so writers that look at the extension
-    (numpy, matplotlib, VTK) behave as for the real name. On any exception the
+    (numpy, matplotlib, VTK) behave as for the real name. Before the rename the file's
+    data is flushed to disk (fsync), and after it the directory entry too, so a power
+    loss leaves either the old or the new file, never an empty one. On any exception
+    (also KeyboardInterrupt, which the command line raises for SIGTERM/SIGHUP) the
     temporary file is removed and ``path`` is left untouched.
     """
     path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: is a directory; give a file name to write")
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".part" + path.suffix, dir=path.parent)
     os.close(fd)
@@ -27,15 +32,39 @@ def atomic_write(path):
         # mkstemp creates the file 0600; give the result the mode a plain open() would.
         with contextlib.suppress(OSError):
             os.chmod(tmp, 0o666 & ~_umask())
+        _fsync(tmp)
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
         raise
+    _fsync(path.parent, directory=True)
+
+
+def _fsync(p, *, directory: bool = False) -> None:
+    """Flush ``p``'s data (or a directory's entries) to disk; a no-op where unsupported."""
+    try:
+        fd = os.open(p, os.O_RDONLY | (getattr(os, "O_DIRECTORY", 0) if directory else 0))
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:  # some file systems (and Windows directories) cannot
+        pass
+    finally:
+        os.close(fd)
 
 
 def _umask() -> int:
-    mask = os.umask(0)
+    """The process umask, read without changing it where the OS allows (Linux /proc)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0)  # elsewhere: the classic read-by-setting, briefly process-wide
     os.umask(mask)
     return mask
 

@@ -8,9 +8,15 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import importlib
+import os
+import signal
+import stat
 import sys
+import threading
 import warnings
+from pathlib import Path
 
 from engine.progress import Cancelled
 
@@ -26,6 +32,7 @@ SUBCOMMANDS = {
     "clusters": ("app.cli.clusters", "phone cluster statistics table"),
     "figures": ("app.cli.figures", "render the paper's figure set in batch"),
     "import": ("app.cli.importer", "convert a foreign corpus format to the native corpus file"),
+    "render": ("app.cli.render", "render a synthesised utterance as an MP4 video with its audio"),
 }
 
 
@@ -43,21 +50,113 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: arguments naming files a command writes / directories it writes into
+OUTPUT_FILE_ARGS = ("output", "csv", "markdown")
+OUTPUT_DIR_ARGS = ("outdir", "mesh_dir")
+
+
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] not in SUBCOMMANDS and argv[0] not in ("-h", "--help"):
         argv = ["explore", *argv]
     parser = build_parser()
     args = parser.parse_args(argv)
+    caught = []
+    with _signals_as_interrupt(caught):
+        try:
+            _check_paths(args)
+            with _engine_warnings_to_stderr(args.command):
+                return int(args._run(args) or 0)
+        except (Cancelled, KeyboardInterrupt):
+            what = f"stopped by {caught[-1]}" if caught else "interrupted"
+            print(f"lipspace: {what}; nothing was written.", file=sys.stderr)
+            return 128 + (caught_signum(caught) or 2)
+        except CliError as exc:
+            print(f"lipspace {args.command}: error: {exc}", file=sys.stderr)
+            return 2
+        except MemoryError as exc:
+            size = f" ({exc})" if str(exc) else ""
+            print(f"lipspace {args.command}: error: out of memory{size}. Use a smaller input: for 'build', "
+                  "--landmarks 2000 (a landmark embedding), or import at a lower --resample rate.", file=sys.stderr)
+            return 2
+        except BrokenPipeError:  # the reader went away (lipspace info | head): not an error
+            with contextlib.suppress(OSError):
+                sys.stdout = open(os.devnull, "w")  # noqa: SIM115 (keep Python from failing at exit)
+            return 0
+        except OSError as exc:  # disk full, permission denied, a directory where a file was expected ...
+            print(f"lipspace {args.command}: error: {_os_error_text(exc)}", file=sys.stderr)
+            return 2
+
+
+def _os_error_text(exc: OSError) -> str:
+    text = exc.strerror or str(exc)
+    name = exc.filename if exc.filename is not None else ""
+    if not exc.strerror:
+        return str(exc)
+    hint = " (the disk is full: free space or write elsewhere)" if exc.errno == errno.ENOSPC else ""
+    return f"{name}: {text}{hint}" if name else f"{text}{hint}"
+
+
+def caught_signum(caught) -> int | None:
+    return {"SIGTERM": signal.SIGTERM, "SIGHUP": signal.SIGHUP}.get(caught[-1]) if caught else None
+
+
+@contextlib.contextmanager
+def _signals_as_interrupt(caught: list):
+    """SIGTERM and SIGHUP stop a command the way Ctrl-C does: temp files are removed,
+    nothing half-written stays, one line is printed. Only in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        caught.append(signal.Signals(signum).name)
+        raise KeyboardInterrupt
+
+    old = {}
+    for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        if sig is not None:
+            old[sig] = signal.signal(sig, handler)
     try:
-        with _engine_warnings_to_stderr(args.command):
-            return int(args._run(args) or 0)
-    except (Cancelled, KeyboardInterrupt):
-        print("lipspace: interrupted; nothing was written.", file=sys.stderr)
-        return 130
-    except CliError as exc:
-        print(f"lipspace {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        yield
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)
+
+
+def _check_paths(args) -> None:
+    """Refuse before any work: an output that is one of the command's inputs (it would
+    be destroyed), a file output naming a directory (or the reverse), and inputs that
+    are not regular files or directories (a FIFO would block forever)."""
+    outputs, inputs = [], []
+    for name, value in vars(args).items():
+        if name.startswith("_") or value is None or isinstance(value, bool):
+            continue
+        values = value if isinstance(value, list) else [value]
+        if not all(isinstance(v, str) for v in values):
+            continue
+        if name in OUTPUT_FILE_ARGS or name in OUTPUT_DIR_ARGS:
+            outputs += [(name, Path(v)) for v in values]
+        else:
+            inputs += [(name, Path(v)) for v in values]
+    for name, p in inputs:
+        try:
+            st = os.stat(p)
+        except (OSError, ValueError):
+            continue  # not a path (a phone string, a preset) or missing: the command says so
+        if not (stat.S_ISREG(st.st_mode) or stat.S_ISDIR(st.st_mode)):
+            raise CliError(f"{p}: not a regular file (a pipe, socket or device); give a file on disk")
+    for name, p in outputs:
+        opt = "--" + name.replace("_", "-")
+        if name in OUTPUT_FILE_ARGS and p.is_dir():
+            raise CliError(f"{opt} {p}: is a directory; give a file name")
+        if name in OUTPUT_DIR_ARGS and p.exists() and not p.is_dir():
+            raise CliError(f"{opt} {p}: exists and is not a directory")
+        for iname, q in inputs:
+            with contextlib.suppress(OSError, ValueError):
+                if p.exists() and q.exists() and os.path.samefile(p, q):
+                    raise CliError(f"{opt} {p} is also the input ({iname}); writing it would destroy the input. "
+                                   "Choose another output file")
 
 
 @contextlib.contextmanager

@@ -125,11 +125,13 @@ def run(args) -> int:
             write_trajectory_npy(out, values)
         print(f"wrote {out} ({values.shape[0]} x {values.shape[1]} {args.values})")
     if args.mesh_dir:
+        from app.cli._common import output_directory
         from engine.io.export import write_mesh_sequence
 
-        try:
-            files = write_mesh_sequence(args.mesh_dir, frames, faces=c.faces, dims=c.dims, format=args.mesh_format)
-        except ValueError as exc:
-            raise CliError(str(exc)) from None
+        with output_directory(args.mesh_dir, pattern=f"frame_*.{args.mesh_format}") as tmp:  # all or nothing
+            try:
+                files = write_mesh_sequence(tmp, frames, faces=c.faces, dims=c.dims, format=args.mesh_format)
+            except ValueError as exc:
+                raise CliError(str(exc)) from None
         print(f"wrote {len(files)} {args.mesh_format.upper()} files to {args.mesh_dir}")
     return 0

@@ -65,3 +65,119 @@ def test_ctrl_c_stops_build_cleanly_and_writes_nothing(tmp_path):
     assert proc.returncode == 130, err_head
     assert "interrupted; nothing was written" in err and "Traceback" not in err, err_head
     assert not out.exists() and not list(tmp_path.glob(".*part*"))
+
+
+# ------------------------------------------------------------------ no data loss (issue 16)
+def _digest(p):
+    import hashlib
+
+    return hashlib.sha256(p.read_bytes()).hexdigest()
+
+
+def test_build_refuses_to_overwrite_its_own_input(tmp_path, small_corpus, capsys):
+    """`build corpus.npz -o corpus.npz` used to replace the corpus by a manifold without frames."""
+    c = small_corpus.save(tmp_path / "corpus.npz")
+    (tmp_path / "link.npz").symlink_to(c)
+    before = _digest(c)
+    for out in (c, tmp_path / "link.npz"):
+        assert main(["build", str(c), "-o", str(out), "-q"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "is also the input" in err, err
+    assert _digest(c) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["corpus.npz", "link.npz"]
+
+
+def test_outputs_of_the_wrong_kind_are_one_line_errors(tmp_path, built, capsys):
+    (tmp_path / "afile").write_text("x")
+    cases = [["build", "-o", str(tmp_path), "-q"],
+             ["synthesize", "--manifold", str(built), "--phones", "p 0.1 aa 0.2", "--mesh-dir",
+              str(tmp_path / "afile"), "-q"],
+             ["synthesize", "--manifold", str(built), "--phones", "p 0.1 aa 0.2", "-o", str(tmp_path), "-q"]]
+    for argv in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert err.startswith(f"lipspace {argv[0]}: error:") and err.count("\n") == 1, err
+
+
+def test_fifo_input_is_refused_without_blocking(tmp_path, capsys):
+    import os
+
+    fifo = tmp_path / "pipe.npz"
+    os.mkfifo(fifo)
+    for argv in (["info", str(fifo)], ["build", str(fifo), "-o", str(tmp_path / "m.npz"), "-q"]):
+        assert main(argv) == 2
+        assert "not a regular file" in capsys.readouterr().err
+    assert not (tmp_path / "m.npz").exists()
+
+
+def test_disk_full_is_one_line_and_leaves_no_file(tmp_path, built, capsys, monkeypatch):
+    import errno
+
+    def full(fh, arr, **kw):
+        fh.write(b"\x93NUMPY partial")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(np, "save", full)
+    out = tmp_path / "t.npy"
+    assert main(["synthesize", "--manifold", str(built), "--phones", "p 0.1 aa 0.2", "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "No space left on device" in err and "disk is full" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_memory_error_is_one_line_with_a_hint(tmp_path, small_corpus, capsys, monkeypatch):
+    from engine.manifold import Manifold
+
+    def oom(self, corpus, progress=None):
+        raise MemoryError("Unable to allocate 15.6 GiB for an array with shape (461000, 4540) and data type float64")
+
+    monkeypatch.setattr(Manifold, "fit", oom)
+    c = small_corpus.save(tmp_path / "c.npz")
+    assert main(["build", str(c), "-o", str(tmp_path / "m.npz"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "15.6 GiB" in err and "--landmarks" in err and "--resample" in err
+
+
+def test_interrupted_mesh_export_leaves_nothing(tmp_path, built, capsys, monkeypatch):
+    """Ctrl-C part-way through --mesh-dir used to leave frame files while saying nothing was written."""
+    import engine.io.export as export
+
+    real, calls = export.write_obj, []
+
+    def interrupted(*a, **kw):
+        calls.append(1)
+        if len(calls) == 4:
+            raise KeyboardInterrupt
+        return real(*a, **kw)
+
+    monkeypatch.setattr(export, "write_obj", interrupted)
+    mesh = tmp_path / "meshes"
+    argv = ["synthesize", "--manifold", str(built), "--phones", "p 0.1 aa 0.2 m 0.1", "--mesh-dir", str(mesh), "-q"]
+    assert main(argv) == 130
+    assert "nothing was written" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+    monkeypatch.setattr(export, "write_obj", real)
+    assert main(argv) == 0
+    assert len(list(mesh.iterdir())) > 4 and list(tmp_path.iterdir()) == [mesh]
+
+
+@pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP"])
+def test_sigterm_and_sighup_stop_build_like_ctrl_c(tmp_path, signame):
+    """They used to kill the process and leave 130-190 MB hidden .part files."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "m.npz"
+    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "build", "--preset", "default", "-o", str(out), "-q"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
+    time.sleep(2.5)
+    assert proc.poll() is None, proc.communicate()
+    sig = getattr(signal, signame)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + sig, err[-2000:]
+    assert f"stopped by {signame}; nothing was written" in err and "Traceback" not in err, err[-2000:]
+    assert list(tmp_path.iterdir()) == []
