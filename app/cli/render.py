@@ -65,6 +65,21 @@ def add_arguments(p):
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
+def _with_synthesize_defaults(args):
+    """Give ``args`` every option of ``lipspace synthesize`` it lacks, at that option's default,
+    so the target and synthesizer helpers shared with it read what they expect."""
+    import argparse
+
+    from app.cli import synthesize
+
+    sp = argparse.ArgumentParser(add_help=False)
+    synthesize.add_arguments(sp)
+    for action in sp._actions:
+        if action.dest != argparse.SUPPRESS and not hasattr(args, action.dest):
+            setattr(args, action.dest, action.default)
+    return args
+
+
 def _trajectory(args, manifold):
     """(frames, F^y path or None, label) of what is rendered."""
     from app.cli import CliError
@@ -121,6 +136,7 @@ def run(args) -> int:
     from app.cli.synthesize import _manifold
     from app.export.video import render_video
 
+    args = _with_synthesize_defaults(args)
     out = Path(args.output)
     if out.suffix.lower() != ".mp4":
         raise CliError(f"{out}: the video file must end in .mp4")
