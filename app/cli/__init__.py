@@ -76,8 +76,8 @@ def main(argv=None) -> int:
             return 2
         except MemoryError as exc:
             size = f" ({exc})" if str(exc) else ""
-            print(f"lipspace {args.command}: error: out of memory{size}. Use a smaller input: for 'build', "
-                  "--landmarks 2000 (a landmark embedding), or import at a lower --resample rate.", file=sys.stderr)
+            print(f"lipspace {args.command}: error: out of memory{size}. "
+                  f"{MEMORY_HINTS.get(args.command, MEMORY_HINTS['build'])}", file=sys.stderr)
             return 2
         except BrokenPipeError:  # the reader went away (lipspace info | head): not an error
             with contextlib.suppress(OSError):
@@ -86,6 +86,15 @@ def main(argv=None) -> int:
         except OSError as exc:  # disk full, permission denied, a directory where a file was expected ...
             print(f"lipspace {args.command}: error: {_os_error_text(exc)}", file=sys.stderr)
             return 2
+
+
+MEMORY_HINTS = {
+    "build": "Use a landmark embedding (--landmarks 2000) or a corpus imported at a lower rate "
+             "('lipspace import --resample 30').",
+    "import": "Import fewer files at once, or at a lower --resample rate.",
+    "figures": "Use a lower --dpi or fewer figures (--only).",
+    "synthesize": "Use fewer inverse-map dimensions (--inverse-dims 3) or shorter input.",
+}
 
 
 def _os_error_text(exc: OSError) -> str:

@@ -8,6 +8,10 @@ from pathlib import Path
 FORMATS = ("png", "svg", "pdf")
 
 
+#: highest --dpi: a full-page figure at 1200 dpi is already ~60 megapixels
+MAX_DPI = 1200
+
+
 def add_arguments(p):
     from app.cli.build import PRESETS as BUILD_PRESETS
 
@@ -77,6 +81,8 @@ def run(args) -> int:
     names = _parse_only(args.only)
     formats = list(dict.fromkeys(args.formats or ["png"]))
     outdir = Path(args.outdir)
+    if not 10 <= args.dpi <= MAX_DPI:  # 100000 dpi asked for terabytes of pixels
+        raise CliError(f"--dpi {args.dpi:g}: must be from 10 to at most {MAX_DPI} (print quality is 300-600)")
     if outdir.exists() and not outdir.is_dir():
         raise CliError(f"{outdir}: exists and is not a directory")
     t0 = time.perf_counter()
@@ -88,9 +94,14 @@ def run(args) -> int:
             if args.utterance not in ids:
                 raise CliError(f"--utterance {args.utterance!r}: no such utterance in {manifold.corpus_.name} "
                                f"(e.g. {', '.join(ids[:5])})")
+        skip = _phone_figures_to_skip(manifold)
         total = len(names)
         progress("figures", 0, total)
         for k, name in enumerate(names):
+            if name in skip:
+                print(f"lipspace figures: {name} skipped: {skip[name]}", file=sys.stderr)
+                progress("figures", k + 1, total)
+                continue
             opts = {"utterance": args.utterance} if name in UTTERANCE_FIGURES and args.utterance else {}
             try:
                 fig = make_figure(name, manifold, **opts)
@@ -101,6 +112,25 @@ def run(args) -> int:
             progress("figures", k + 1, total)
     for name, msg in failed:
         print(f"lipspace figures: {name} failed: {msg}", file=sys.stderr)
+    done = len(names) - len(failed) - len([n for n in names if n in skip])
     print(f"wrote {len(written)} file(s) to {outdir} ({', '.join(formats)}; "
-          f"{len(names) - len(failed)}/{len(names)} figures) in {time.perf_counter() - t0:.1f} s")
-    return 1 if failed else 0
+          f"{done}/{len(names)} figures) in {time.perf_counter() - t0:.1f} s")
+    return 1 if failed or not done else 0
+
+
+def _phone_figures_to_skip(manifold) -> dict:
+    """Figures that cannot be drawn without phone labels -> why; an unlabelled corpus with lip roles gets
+    kinematic landmark labels (fig3 regenerates an utterance through them)."""
+    c = manifold.corpus_
+    if any(u.phones for u in c.utterances):
+        return {}
+    from engine.kinematics import kinematic_if_unlabelled, lip_aperture
+
+    skip = {"fig4": f"it needs the phone labels /b/ /p/ /m/ and {c.name} has no phone labels"}
+    if lip_aperture(c) is not None:
+        manifold.corpus_, note = kinematic_if_unlabelled(c)
+        print(f"lipspace figures: {note}", file=sys.stderr)
+    else:
+        skip["fig3"] = (f"it regenerates an utterance through its phone mid-points and {c.name} has no phone "
+                        "labels (nor upper/lower lip roles for kinematic landmarks: import with --layout)")
+    return skip

@@ -135,7 +135,7 @@ def test_memory_error_is_one_line_with_a_hint(tmp_path, small_corpus, capsys, mo
     c = small_corpus.save(tmp_path / "c.npz")
     assert main(["build", str(c), "-o", str(tmp_path / "m.npz"), "-q"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "15.6 GiB" in err and "--landmarks" in err and "--resample" in err
+    assert err.count("\n") == 1 and "15.6 GiB" in err and "--landmarks 2000" in err and "--resample" in err
 
 
 def test_interrupted_mesh_export_leaves_nothing(tmp_path, built, capsys, monkeypatch):
@@ -180,4 +180,18 @@ def test_sigterm_and_sighup_stop_build_like_ctrl_c(tmp_path, signame):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + sig, err[-2000:]
     assert f"stopped by {signame}; nothing was written" in err and "Traceback" not in err, err[-2000:]
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("argv,limit", [
+    (["figures", "{m}", "-o", "{tmp}/figs", "--dpi", "100000", "-q"], "at most 1200"),
+    (["figures", "{m}", "-o", "{tmp}/figs", "--dpi", "nan", "-q"], "at most 1200"),
+    (["import", "{m}", "-o", "{tmp}/c.npz", "--resample", "1e9"], "at most 2000 Hz"),
+    (["import", "{m}", "-o", "{tmp}/c.npz", "--resample", "-5"], "at most 2000 Hz"),
+])
+def test_resource_arguments_are_bounded_with_the_limit_in_the_message(tmp_path, built, capsys, argv, limit):
+    argv = [a.format(m=built, tmp=tmp_path) for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and limit.replace("at most ", "") in err, err
     assert list(tmp_path.iterdir()) == []
