@@ -12,6 +12,10 @@ _POINT_OPTION = {"ema": "sensors", "mview": "sensors", "c3d": "markers", "csv": 
 ANALYSIS_RATE = 60.0
 
 
+#: highest --resample rate in Hz
+MAX_RATE = 2000.0
+
+
 def add_arguments(p):
     from engine.io.dispatch import FORMAT_ALIASES, FORMATS
 
@@ -111,6 +115,9 @@ def run(args) -> int:
             rate_out = float(args.resample)
         except ValueError:
             raise CliError(f"--resample {args.resample!r}: expected a rate in Hz or 'native'") from None
+        if not 0 < rate_out <= MAX_RATE:  # 1e9 Hz asked for a 14 GiB index array
+            raise CliError(f"--resample {args.resample}: must be above 0 and at most {MAX_RATE:g} Hz "
+                           "(the fastest articulographs record at 1250 Hz)")
     try:
         fmt = args.format or ("matrix" if args.layout is not None else detect_format(inputs[0]))
         fmt = FORMAT_ALIASES.get(fmt, fmt)
