@@ -277,13 +277,17 @@ def test_estimator_api_and_persistence(fitted):
 
 # ---------------------------------------------------------------- the synthetic talker
 #: the engine's opening side must agree with the talker's true opening velocity this often
-#: before the engine-side claims are meaningful (precondition measured in the test)
-MIN_SIGN_AGREEMENT = 0.75
+#: (measured at this commit: 0.941 on the small preset)
+MIN_SIGN_AGREEMENT = 0.90
 
 
 def test_bilabials_on_the_synthetic_manifold(small_manifold):
-    """Paper section 5 on the small synthetic corpus: /m/ sits on the closing side, /p b/ on the
-    opening side; /p/ and /b/ overlap; dynamics pull /m/ away from /p/."""
+    """Recovery check of a *planted* effect (paper section 5): the synthetic talker is built so that
+    /m/'s closure peaks late in the phone (its mid-point lies in the closing phase) and /p b/'s early
+    (mid-points in the opening phase). The test checks that the engine recovers what was planted:
+    /m/ on the closing side, /p b/ on the opening side; /p/ and /b/ overlap; dynamics pull /m/ away
+    from /p/. It is no evidence about real lips; the engine's opening side must also match the
+    trivial rule (sign of the frame-to-frame change of F^x_1) within a point."""
     from engine.dynamics import velocities
 
     m = small_manifold
@@ -318,11 +322,14 @@ def test_bilabials_on_the_synthetic_manifold(small_manifold):
     np.testing.assert_allclose(pc3.opening_fraction_, pc.opening_fraction_)
     np.testing.assert_allclose(pc3.covariances_, pc.covariances_)
 
-    if agree < MIN_SIGN_AGREEMENT:
-        pytest.xfail(f"the manifold's zero-velocity plane matches the true opening-velocity sign on only "
-                     f"{agree:.2f} of frames (< {MIN_SIGN_AGREEMENT}); engine opening fractions m {of['m']:.2f} "
-                     f"p {of['p']:.2f} b {of['b']:.2f} cannot show the talker's m {true_of['m']:.2f} "
-                     f"p {true_of['p']:.2f} b {true_of['b']:.2f}")
+    rule = velocities(np.asarray(m.Fx_[:, :1], np.float64), corpus.bounds)[:, 0]
+    agree_rule = float(np.mean((rule[moving] > 0) == (true_v[moving] > 0)))
+    msg = (f"the manifold's zero-velocity plane matches the true opening-velocity sign on {agree:.3f} of frames "
+           f"(required {MIN_SIGN_AGREEMENT}); the Delta F^x_1 rule on {agree_rule:.3f} "
+           f"(margin {100 * (agree - agree_rule):+.1f} points)")
+    print(msg)
+    assert agree >= MIN_SIGN_AGREEMENT, msg
+    assert agree >= agree_rule - 0.01, msg
     # the engine sees it: /m/ mostly closing, /p/ and /b/ mostly opening
     assert of["m"] < of["p"] and of["m"] < of["b"]
     # dynamics separate /m/ from /p/: centre distance over spread grows from X to Y

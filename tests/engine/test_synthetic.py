@@ -253,3 +253,27 @@ def test_manifold_of_the_small_corpus_is_paper_like(small_manifold):
     v = m.Fxv_[:, 0]
     assert (v[mids[np.isin(labels, ["p", "b"])]] > 0).mean() > 0.75
     assert (v[mids[labels == "m"]] < 0).mean() > 0.6
+
+
+def test_generator_variants_leave_the_default_talker_unchanged(tmp_cache):
+    """The held-out talker's keyword-only parameters: at their defaults nothing changes (same
+    frames, same cache file name); the held-out talker differs in timing and dynamics."""
+    from engine.synthetic import HELD_OUT_TALKER, _VARIANT_DEFAULTS
+
+    a = SyntheticTalker(preset="small", n_sentences=3).generate()
+    b = SyntheticTalker(preset="small", n_sentences=3, **_VARIANT_DEFAULTS).generate()
+    np.testing.assert_array_equal(a.frames, b.frames)
+    load_synthetic(preset="small", n_sentences=2)
+    load_synthetic(preset="small", n_sentences=2, **_VARIANT_DEFAULTS)
+    assert len(list(tmp_cache.glob("synthetic-small-*.npz"))) == 1  # one cache file for both
+    h = SyntheticTalker(preset="small", n_sentences=3, **HELD_OUT_TALKER).generate()
+    slow = SyntheticTalker(preset="small", n_sentences=3, dynamics_scale=2.0).generate()
+    # slower articulators: smaller frame-to-frame steps of the controls, same sentences
+    step = lambda c: np.abs(np.diff(c.latent["jaw"])).mean()  # noqa: E731
+    assert [u.text for u in slow.utterances] == [u.text for u in a.utterances]
+    assert step(slow) < 0.8 * step(a)
+    assert [u.text for u in h.utterances] != [u.text for u in a.utterances]
+    with pytest.raises(ValueError, match="dynamics_scale must be a factor"):
+        SyntheticTalker(preset="small", dynamics_scale=0.0).generate()
+    with pytest.raises(ValueError, match="timing_sd must be in"):
+        SyntheticTalker(preset="small", timing_sd=-1.0).generate()
