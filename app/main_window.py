@@ -65,9 +65,12 @@ class MainWindow(QtWidgets.QMainWindow):
     state : AppState, optional
     source : dict, optional
         Where ``manifold`` came from (``path``, ``preset``), for session files.
+    autosave : app.autosave.Autosaver, optional
+        Saves the session a few seconds after it changes (:mod:`app.autosave`).
     """
 
-    def __init__(self, manifold=None, *, state: AppState | None = None, source: dict | None = None):
+    def __init__(self, manifold=None, *, state: AppState | None = None, source: dict | None = None,
+                 autosave=None):
         super().__init__()
         from app.views import ClustersPanel, LipView, ManifoldView, ScreePanel, TrajectoryEditor
 
@@ -105,6 +108,11 @@ class MainWindow(QtWidgets.QMainWindow):
         self.statusBar().addPermanentWidget(self.summary_label)
         self._make_menus()
         self.state.events.manifold.connect(self._on_manifold)
+        self.autosaver = autosave
+        self._autosave_timer = QtCore.QTimer(self)
+        self._autosave_timer.timeout.connect(self._autosave_tick)
+        if autosave is not None:
+            self._autosave_timer.start(1000)
         if manifold is not None:
             self.set_manifold(manifold, source=source)
 
@@ -213,14 +221,30 @@ class MainWindow(QtWidgets.QMainWindow):
     def save_session(self, path) -> Path:
         from app.session import save_session
 
-        return save_session(self.state, path, cameras=self.cameras(), extra={"editor": self.editor.settings()})
+        return save_session(self.state, path, cameras=self.cameras(), extra={"editor": self.editor.settings()},
+                            targets=self.editor.targets)
+
+    def _autosave_tick(self):
+        """Timer slot: save the session once it has been unchanged for the autosave delay."""
+        from app.autosave import session_fingerprint
+
+        a = self.autosaver
+        if a is None or self._pending_session is not None or self.state.manifold is None:
+            return
+        fp = session_fingerprint(self.state, cameras=self.cameras(), extra={"editor": self.editor.settings()},
+                                 targets=self.editor.targets)
+        if not a.tick(fp, self.save_session) and a.last_error:
+            self.statusBar().showMessage(a.last_error, 10000)
 
     def apply_session(self, d: dict) -> None:
         """Restore selection, modes, phones, editor settings and cameras from a loaded session."""
         from app.session import apply_session
 
-        apply_session(self.state, d)
+        targets = apply_session(self.state, d)
         self.editor.apply_settings(d.get("extra", {}).get("editor", {}))
+        if targets is not None:  # the editor's (edited) key targets
+            self.editor.targets = targets
+            self.editor.timeline.set_targets(targets)
         cams = d.get("cameras", {})
         if "manifold" in cams:
             self.manifold_view.set_camera(cams["manifold"])
@@ -341,22 +365,63 @@ class MainWindow(QtWidgets.QMainWindow):
     def closeEvent(self, event):
         from app.workers import cancel_all
 
+        self._autosave_timer.stop()
         cancel_all()
         for view in (self.manifold_view, self.lip_view, self.editor, self.clusters, self.scree):
             view.close_view()
         super().closeEvent(event)
 
 
-def launch(path=None, preset: str = "default", session: dict | None = None) -> int:
-    """Open the explorer on ``path`` (or the synthetic talker ``preset``) and run the event loop."""
+def ask_restore(recovery, parent=None) -> str:
+    """Ask whether to reopen a crashed run's autosave: "restore", "discard" or "later"."""
+    box = QtWidgets.QMessageBox(parent)
+    box.setIcon(QtWidgets.QMessageBox.Icon.Question)
+    box.setWindowTitle("Lipspace")
+    box.setText(recovery.describe())
+    box.setInformativeText("Restore that session now?")
+    yes = box.addButton("Restore", QtWidgets.QMessageBox.ButtonRole.AcceptRole)
+    no = box.addButton("Discard", QtWidgets.QMessageBox.ButtonRole.DestructiveRole)
+    box.addButton("Not now", QtWidgets.QMessageBox.ButtonRole.RejectRole)
+    box.setDefaultButton(yes)
+    box.exec()
+    clicked = box.clickedButton()
+    return "restore" if clicked is yes else "discard" if clicked is no else "later"
+
+
+def launch(path=None, preset: str = "default", session: dict | None = None, restore: bool | None = None) -> int:
+    """Open the explorer on ``path`` (or the synthetic talker ``preset``) and run the event loop.
+
+    ``restore`` answers the autosave question after an abnormal exit (None: ask in a
+    dialog); see :mod:`app.autosave`.
+    """
+    from app.autosave import Autosaver, resolve_recovery
+    from app.session import SessionError
+
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
     app.setApplicationName("Lipspace")
-    win = MainWindow()
+    autosaver = Autosaver()
+    try:
+        recovery = autosaver.begin()
+    except OSError as exc:
+        print(f"lipspace explore: warning: autosave is off ({autosaver.directory}: {exc})", file=sys.stderr)
+        autosaver, recovery = None, None
+    win = MainWindow(autosave=autosaver)
     win.show()
+    if autosaver is not None and session is None:
+        try:
+            restored = resolve_recovery(autosaver, recovery, restore=restore, ask=lambda r: ask_restore(r, win))
+        except SessionError as exc:
+            QtWidgets.QMessageBox.warning(win, "Lipspace", str(exc))
+            restored = None
+        if restored is not None:
+            session, path = restored, None
     if session is not None and path is None and session.get("source", {}).get("path"):
         path = session["source"]["path"]
         preset = session["source"].get("preset", preset)
     elif session is not None and path is None:
         preset = session.get("source", {}).get("preset", preset)
     win.open_source(path, preset=preset, session=session)
-    return int(app.exec())
+    code = int(app.exec())
+    if autosaver is not None:
+        autosaver.finish()  # a clean exit: nothing to offer next time
+    return code

@@ -10,6 +10,7 @@ preset and manifold file version, so the second start is quick.
 """
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 from pathlib import Path
@@ -46,6 +47,9 @@ def add_arguments(p):
     p.add_argument("--preset", choices=PRESETS, default="default",
                    help="synthetic talker preset when no file is given (default: %(default)s)")
     p.add_argument("--session", default=None, help="session file to reopen (from File > Save session)")
+    p.add_argument("--restore", action=argparse.BooleanOptionalAction, default=None,
+                   help="after an abnormal exit, reopen (--restore) or keep for later (--no-restore) the "
+                        "autosaved session without asking (default: ask)")
 
 
 def has_display(environ=None, platform: str | None = None) -> bool:
@@ -189,4 +193,4 @@ def run(args) -> int:
             raise CliError(str(exc)) from None
     from app.main_window import launch
 
-    return launch(args.file, preset=args.preset, session=session)
+    return launch(args.file, preset=args.preset, session=session, restore=args.restore)
