@@ -85,7 +85,7 @@ class PointsHandle(Handle):
         return np.asarray(self.mesh.point_data["value"])
 
 
-def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: float = 6.0,
+def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: float = 6.0, spheres: bool = True,
                         name: str = "manifold_points") -> PointsHandle:
     """Draw F^y as points coloured per point.
 
@@ -97,14 +97,17 @@ def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: floa
     rgb : ndarray of shape (N, 3), float in [0, 1] or uint8, optional (default grey)
     values : ndarray of shape (N,), optional
         The scalar the colours encode.
+    spheres : bool, default=True
+        Shade each point as a small sphere; False draws flat dots, several times cheaper
+        per frame in software OpenGL (the explorer's choice for large clouds).
     """
     Y = _xyz(Fy3, "Fy3", 1)
     mesh = pv.PolyData(Y.astype(np.float32))
     n = len(Y)
     mesh.point_data["rgb"] = np.full((n, 3), 160, np.uint8) if rgb is None else np.zeros((n, 3), np.uint8)
     mesh.point_data["value"] = np.full(n, np.nan, np.float32)
-    actor = plotter.add_mesh(mesh, scalars="rgb", rgb=True, point_size=point_size, render_points_as_spheres=True,
-                             name=name, pickable=True, show_scalar_bar=False, reset_camera=False, render=False)
+    actor = plotter.add_mesh(mesh, scalars="rgb", rgb=True, point_size=point_size,
+                             render_points_as_spheres=bool(spheres), name=name, pickable=True, show_scalar_bar=False, reset_camera=False, render=False)
     h = PointsHandle(plotter, mesh, actor)
     if rgb is not None:
         h.set_colors(rgb, values)
@@ -317,8 +320,10 @@ def add_cluster_ellipsoids(plotter, vertices, faces, color, *, opacity: float = 
     if Fc.ndim != 2 or Fc.shape[1] != 3 or (Fc.size and (Fc.min() < 0 or Fc.max() >= len(V))):
         raise ValueError(f"faces must be (F, 3) indices into {len(V)} vertices, got shape {Fc.shape}")
     mesh = pv.PolyData(V, np.hstack([np.full((len(Fc), 1), 3, np.int64), Fc]).ravel())
+    # front faces only: a convex translucent surface then blends correctly in any draw order
+    # (the explorer renders translucency without order-independent transparency, see make_plotter)
     actor = plotter.add_mesh(mesh, color=color, opacity=opacity, smooth_shading=True, name=name, pickable=False,
-                             reset_camera=False, render=False)
+                             reset_camera=False, render=False, culling="back")
     return Handle(plotter, mesh, actor)
 
 

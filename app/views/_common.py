@@ -27,6 +27,9 @@ def make_plotter(parent):
     # (docs/DECISIONS.md, "GUI frame budget"); points are drawn as shaded spheres, which need none.
     plotter = QtInteractor(parent, auto_update=False, multi_samples=0)
     plotter.set_background("white")
+    # plain alpha blending for the few translucent things (zero-velocity plane, convex ellipsoids drawn
+    # front faces only): order-independent transparency adds full-window passes to every frame
+    plotter.renderer.SetUseOIT(False)
     return plotter
 
 

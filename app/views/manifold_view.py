@@ -41,6 +41,9 @@ def axes_origin(Y, plane_point, S, V, length_scale) -> np.ndarray:
 class ManifoldView(QtWidgets.QWidget):
     """3-D view of the manifold bound to an :class:`app.state.AppState`."""
 
+    #: clouds up to this many frames are drawn as shaded spheres, larger ones as flat dots
+    SPHERE_POINTS_MAX = 10000
+
     def __init__(self, state, parent=None):
         super().__init__(parent)
         self.state = state
@@ -131,7 +134,10 @@ class ManifoldView(QtWidgets.QWidget):
         self.scale = L
         t = m.tangent_
         h = self.handles
-        h["points"] = scene.add_manifold_points(p, Y, point_size=5.0 if len(Y) <= 10000 else 3.5)
+        # shaded spheres cost ~4x flat dots per frame in software GL; at 3.5 px they are hardly
+        # distinguishable, so large clouds (the default talker's 28,800 frames) use dots
+        small = len(Y) <= self.SPHERE_POINTS_MAX
+        h["points"] = scene.add_manifold_points(p, Y, point_size=5.0 if small else 3.5, spheres=small)
         h["plane"] = scene.add_zero_velocity_plane(p, t.plane_point_, t.plane_normal_, 1.1 * L)
         h["axes"] = scene.add_global_axes(p, axes_origin(Y, t.plane_point_, t.S_, t.plane_normal_, L), t.S_,
                                           t.plane_normal_, 0.45 * L)

@@ -1,0 +1,148 @@
+"""Benchmark: click a point -> its hemisphere drawn, in the real explorer window.
+
+Usage: python benchmarks/bench_gui_click.py [--clicks 21] [--cold 3] [--preset default]
+
+Drives ``app.main_window.MainWindow`` on the default synthetic talker (28,800 frames)
+under an X server (re-runs itself under ``xvfb-run`` without one; software OpenGL).
+Each click is a real mouse press/release on the manifold view's VTK widget (QTest) at
+the screen position of a point near the camera, each in a different state. Measured
+per click: wall time from the press until the manifold view's frame with the new
+hop-distance colours has reached the screen (the widget's ``frameSwapped`` after the
+render that follows the click), the process's CPU time over the same span (all threads,
+the software rasteriser's included: less sensitive to other processes on a shared
+machine than wall time), and how many VTK renders the click caused in the manifold
+view and in the lip view.
+
+* cold: the first click in a fresh process (window just opened), ``--cold`` processes;
+* warm: ``--clicks`` further clicks in one process.
+
+Prints min / median / max, peak RSS, BLAS kernel and the OpenGL renderer.
+Goal (issue 9 item 5): median under 150 ms.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import _gui_bench as gb  # noqa: E402
+
+
+def click_targets(win, n):
+    """Frames to click: near the camera (never hidden), each in a new state, far apart in the list."""
+    import numpy as np
+
+    m, view = win.state.manifold, win.manifold_view
+    Y = np.asarray(m.Fy_[:, :3], np.float64)
+    cam = np.asarray(view.plotter.camera.position)
+    order = np.argsort(np.linalg.norm(Y - cam, axis=1))
+    labels = m.states_.labels_
+    out, seen = [], set()
+    for i in order[:4000]:
+        if int(labels[i]) not in seen:
+            seen.add(int(labels[i]))
+            out.append(int(i))
+        if len(out) == n:
+            break
+    return out
+
+
+def click_once(app, win, frame, mlog, llog, timeout=20.0):
+    """One real mouse click on ``frame``'s point; returns (seconds to frame on screen, renders, lip renders)."""
+    from PySide6 import QtCore
+    from PySide6.QtTest import QTest
+
+    from app.scene import pick_display_point
+
+    view = win.manifold_view
+    widget = view.plotter.interactor
+    x, y = pick_display_point(view.plotter, win.state.manifold.Fy_[frame, :3])
+    ratio = widget.devicePixelRatioF()
+    height = view.plotter.render_window.GetSize()[1]
+    pos = QtCore.QPoint(int(round(x / ratio)), int(round((height - 1 - y) / ratio)))
+    n_r, n_s, n_l = len(mlog.renders), len(mlog.swaps), len(llog.renders)
+    before = win.state.state
+    c0 = time.process_time()
+    t0 = time.perf_counter()
+    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, pos)
+    # wait for the first frame that reached the screen after a render that followed the click
+    end = t0 + timeout
+    while time.perf_counter() < end:
+        app.processEvents()
+        if len(mlog.renders) > n_r and any(s > mlog.renders[n_r] for s in mlog.swaps[n_s:]):
+            break
+        time.sleep(0.0005)
+    else:
+        raise RuntimeError(f"no frame reached the screen within {timeout} s of clicking frame {frame}")
+    shown = next(s for s in mlog.swaps[n_s:] if s > mlog.renders[n_r])
+    cpu = time.process_time() - c0  # this process's CPU (all threads, llvmpipe's included) until then
+    # where the time went: until the render starts (state update, events, picking), the render, the rest
+    # (lip view render and Qt composing the window)
+    parts = (mlog.starts[n_r] - t0, mlog.renders[n_r] - mlog.starts[n_r], shown - mlog.renders[n_r])
+    gb.settle(app, 0.4)  # let any further (redundant) renders of this click happen, to count them
+    s = win.state
+    if s.state == before or s.frame is None or s.color_mode != "distance":
+        raise RuntimeError(f"the click on frame {frame} did not select a new state (state {s.state})")
+    return shown - t0, len(mlog.renders) - n_r, len(llog.renders) - n_l, parts, cpu
+
+
+def run_clicks(n_clicks: int, preset: str) -> dict:
+    m, src = gb.default_manifold(preset)
+    t = time.perf_counter()
+    app, win = gb.open_window(m, src)
+    opened = time.perf_counter() - t
+    mlog, llog = gb.RenderLog(win.manifold_view.plotter), gb.RenderLog(win.lip_view.plotter)
+    frames = click_targets(win, n_clicks + 1)
+    res = [click_once(app, win, f, mlog, llog) for f in frames]
+    out = {"first": res[0], "warm": res[1:], "window_s": opened, "gl": gb.gl_renderer(win.manifold_view.plotter),
+           "size": list(win.manifold_view.plotter.render_window.GetSize()), "rss_mb": gb.peak_rss_mb()}
+    win.close()
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--clicks", type=int, default=21, help="warm clicks in one process")
+    ap.add_argument("--cold", type=int, default=3, help="fresh processes for the cold first click")
+    ap.add_argument("--preset", default="default")
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    gb.ensure_display()
+    if args.child:  # one fresh process: print the first click as JSON
+        r = run_clicks(0, args.preset)
+        print("RESULT " + json.dumps({"first": r["first"][:3]}))
+        return
+    gb.header("click -> hemisphere drawn (real window, real mouse clicks)")
+    t_all = time.perf_counter()
+    r = run_clicks(args.clicks, args.preset)
+    print(f"   OpenGL renderer: {r['gl']}; window {gb.WINDOW_SIZE[0]}x{gb.WINDOW_SIZE[1]}, "
+          f"manifold view {r['size'][0]}x{r['size'][1]} px; window opened in {r['window_s']:.2f} s")
+    cold = [r["first"]]
+    for _ in range(max(0, args.cold - 1)):
+        p = subprocess.run([sys.executable, __file__, "--child", "--preset", args.preset], capture_output=True,
+                           text=True, env=os.environ)
+        line = [ln for ln in p.stdout.splitlines() if ln.startswith("RESULT ")]
+        if p.returncode != 0 or not line:
+            sys.exit(f"cold child failed ({p.returncode}):\n{p.stderr[-2000:]}")
+        cold.append(json.loads(line[0][7:])["first"])
+    warm = r["warm"]
+    print(f"cold (first click in a fresh process, {len(cold)} processes): {gb.stats([c[0] for c in cold])}")
+    print(f"   renders per cold click: manifold view {[c[1] for c in cold]}, lip view {[c[2] for c in cold]}")
+    print(f"warm ({len(warm)} clicks):                           {gb.stats([c[0] for c in warm])}")
+    print(f"   renders per warm click: manifold view {sorted(set(c[1] for c in warm))}, "
+          f"lip view {sorted(set(c[2] for c in warm))}")
+    print(f"   warm, CPU time of the process per click (less sensitive to other load): "
+          f"{gb.stats([c[4] for c in warm])}")
+    for k, what in enumerate(("until the render starts (state update, picking)", "manifold view render",
+                              "after it until on screen (lip render, window composition)")):
+        print(f"   warm, {what}: {gb.stats([c[3][k] for c in warm])}")
+    print(f"wall {time.perf_counter() - t_all:.1f} s; peak RSS {r['rss_mb']:.0f} MiB; "
+          f"load average {os.getloadavg()[0]:.1f} at end")
+
+
+if __name__ == "__main__":
+    main()
