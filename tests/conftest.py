@@ -16,6 +16,11 @@ def pytest_configure(config):
         import tempfile
 
         os.environ["LIPSPACE_CACHE_DIR"] = tempfile.mkdtemp(prefix="lipspace-test-cache-")
+    # nor autosave into the user's real state dir (app.autosave)
+    if "LIPSPACE_STATE_DIR" not in os.environ:
+        import tempfile
+
+        os.environ["LIPSPACE_STATE_DIR"] = tempfile.mkdtemp(prefix="lipspace-test-state-")
 
 
 @pytest.fixture(scope="session")
