@@ -83,35 +83,65 @@ class _DistanceOperator:
             np.sqrt(D, out=D)
         return D
 
-    def _map(self, fn):
+    def _map(self, fn, reduce):
+        """Run ``fn`` on every block of rows; ``reduce(sl, result)`` in block order.
+
+        Blocks are submitted a few per worker at a time and each result is reduced and
+        dropped before the next group starts, so memory holds O(workers) block results,
+        never one per block (with N^2/block blocks that grew as N^3), and sums are
+        taken in a fixed order (results do not depend on thread timing).
+        """
         N = self.G.shape[0]
         slices = [slice(s, min(N, s + self.block)) for s in range(0, N, self.block)]
+        group = 4 * self.workers
         with threadpool_limits(1), ThreadPoolExecutor(self.workers) as ex:
-            results = list(ex.map(fn, slices))
+            for g in range(0, len(slices), group):
+                part = slices[g:g + group]
+                for sl, res in zip(part, ex.map(fn, part)):
+                    reduce(sl, res)
         self.passes += 1
         report(self.progress, self.stage, self.passes, 0)
-        return slices, results
 
     def matmat(self, X, extra=None):
-        """Return D @ X, (N, r) float64; ``extra(D_block)`` returns per-block statistics."""
+        """Return D @ X, (N, r) float64.
+
+        ``extra(D_block)`` returns per-block statistics (a float, an ndarray or a tuple
+        of them); their sum over blocks is left in ``last_stats``.
+        """
         X32 = np.asarray(X, dtype=np.float32)
+        out = np.empty((self.G.shape[0], X32.shape[1]), dtype=np.float64)
+        stats = [None]
 
         def one(sl):
             Db = self.block_rows(sl)
             return Db @ X32, (extra(Db) if extra is not None else None)
 
-        slices, results = self._map(one)
-        out = np.empty((self.G.shape[0], X32.shape[1]), dtype=np.float64)
-        for sl, (y, _) in zip(slices, results):
-            out[sl] = y
-        self.last_stats = [r[1] for r in results]
+        def reduce(sl, res):
+            out[sl] = res[0]
+            if res[1] is not None:
+                stats[0] = res[1] if stats[0] is None else _add(stats[0], res[1])
+
+        self._map(one, reduce)
+        self.last_stats = stats[0]
         return out
 
     def rmatmat(self, Q):
         """D^T @ Q for a non-square (N, L) distance matrix, block-wise."""
         Q32 = np.asarray(Q, dtype=np.float32)
-        _, results = self._map(lambda sl: self.block_rows(sl).T @ Q32[sl])
-        return np.sum(results, axis=0, dtype=np.float64)
+        acc = np.zeros((self.cols.shape[0], Q32.shape[1]), dtype=np.float64)
+
+        def reduce(sl, res):
+            acc.__iadd__(res)
+
+        self._map(lambda sl: self.block_rows(sl).T @ Q32[sl], reduce)
+        return acc
+
+
+def _add(a, b):
+    """Sum of two block statistics (floats, ndarrays, or tuples of them)."""
+    if isinstance(a, tuple):
+        return tuple(_add(x, y) for x, y in zip(a, b))
+    return a + b
 
 
 class Embedding(BaseEstimator):
@@ -216,8 +246,8 @@ class Embedding(BaseEstimator):
         # first pass: D @ Omega, and the sum of squares and column sums of D
         Om = rng.standard_normal((L, r))
         Y = op.matmat(Om, extra=acc)
-        sumsq = sum(st[0] for st in op.last_stats)
-        c = np.sum([st[1] for st in op.last_stats], axis=0) / N
+        sumsq, colsum = op.last_stats
+        c = colsum / N
         Y -= np.outer(np.ones(N), c @ Om)
         Q, _ = np.linalg.qr(Y)
 
@@ -300,7 +330,7 @@ def _mds_eig(op, N, k, r, rng, n_iter):
 
     Om = rng.standard_normal((N, r))
     Y = B(Om, first=True)
-    colmean = np.sum(op.last_stats, axis=0) / N
+    colmean = op.last_stats / N
     Y = -0.5 * (Y - Y.mean(axis=0))
     Q, _ = np.linalg.qr(Y)
     for _ in range(n_iter):
