@@ -20,7 +20,8 @@ from dataclasses import replace
 import numpy as np
 
 __all__ = ["lip_aperture", "aperture_velocity", "opening_agreement", "kinematic_landmarks",
-           "with_kinematic_labels", "kinematic_key_frames", "LANDMARK_LABELS", "AGREEMENT_WARN_BELOW"]
+           "with_kinematic_labels", "kinematic_key_frames", "kinematic_if_unlabelled", "LANDMARK_LABELS",
+           "AGREEMENT_WARN_BELOW"]
 
 #: landmark label per kind
 LANDMARK_LABELS = ("open", "closed", "opening", "closing")
@@ -206,3 +207,26 @@ def kinematic_key_frames(corpus, utterance, **landmark_params) -> np.ndarray:
     u = corpus.utterance(getattr(utterance, "id", utterance))
     frames, _ = kinematic_landmarks(corpus.subset([u.id]), **landmark_params)
     return frames
+
+
+def kinematic_if_unlabelled(corpus):
+    """``(corpus, note)``: the corpus with kinematic landmark labels when it has no phone labels at all.
+
+    ``note`` is a sentence saying so (None when the corpus has phones and is returned
+    unchanged). Without upper/lower lip roles the first shape principal component of
+    the frames stands in for the aperture, and the note says that too.
+    """
+    if any(u.phones for u in corpus.utterances):
+        return corpus, None
+    ap = lip_aperture(corpus)
+    proxy = ""
+    if ap is None:
+        F = corpus.frames.astype(np.float64)
+        F = F - F.mean(axis=0)
+        _, _, Vt = np.linalg.svd(F[:: max(1, len(F) // 5000)], full_matrices=False)
+        ap = F @ Vt[0]
+        proxy = " (no upper/lower lip roles: the first shape component stands in for the aperture)"
+    out = with_kinematic_labels(corpus, aperture=ap)
+    n = sum(len(u.phones) for u in out.utterances)
+    return out, (f"{corpus.name} has no phone labels: using {n} kinematic landmarks (aperture maxima 'open', "
+                 f"minima 'closed', peak velocities 'opening' / 'closing') as labels{proxy}")

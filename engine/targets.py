@@ -398,7 +398,8 @@ def targets_from_utterance(manifold, utterance, *, corpus=None, key_frames=None,
         phones = tuple(PhoneInterval(p.start, p.end, _match_or_keep(matcher, p.label)) for p in phones)
     if key_frames is None:
         if not phones:
-            raise TargetError(f"{source} has no phone alignment; give key_frames instead")
+            raise TargetError(f"{source} has no phone alignment; give key_frames= (lipspace synthesize "
+                              "--key-frames F,F,... or --key-frames kinematic)")
         ph = phones
         keep, frames = _mid_targets(ph, c.rate, n, on_collision, source)
         items = [(frames[i], ph[i].label) for i in keep]

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 PRESETS = ("small", "default", "paper")
@@ -34,6 +35,10 @@ def add_arguments(p):
     p.add_argument("--normalize", action="store_true",
                    help="merge labels through the phone-set table (e.g. AH0 and ax become ax)")
     p.add_argument("--keep-pauses", action="store_true", help="keep pause labels (sil, sp, ...) as a cluster")
+    p.add_argument("--labels", choices=("auto", "phones", "kinematic"), default="auto",
+                   help="cluster phone mid-points, or kinematic landmarks (aperture maxima 'open', minima "
+                        "'closed', peak velocities 'opening' / 'closing'); auto = phones when the corpus has any "
+                        "(default: %(default)s)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -88,14 +93,31 @@ def run(args) -> int:
     if args.csv is not None and Path(args.csv).suffix.lower() != ".csv":
         raise CliError(f"{args.csv}: the table file must end in .csv")
     manifold = _manifold(args)
+    c = manifold.corpus_
+    has_phones = any(u.phones for u in c.utterances)
+    labels = args.labels if args.labels != "auto" else ("phones" if has_phones else "kinematic")
+    if labels == "phones" and not has_phones:
+        raise CliError(f"{c.name} has no phone labels; cluster its kinematic landmarks with --labels kinematic, "
+                       "or import it with an alignment (lipspace import --alignment)")
     try:
         pc = PhoneClusters(n_dims=args.dims, min_count=args.min_count, exclude_pauses=not args.keep_pauses,
-                           normalize_labels=args.normalize).fit(manifold)
+                           normalize_labels=args.normalize)
+        if labels == "phones":
+            pc.fit(manifold)
+        else:
+            from engine.kinematics import kinematic_if_unlabelled
+
+            kc, note = kinematic_if_unlabelled(replace(c, utterances=[replace(u, phones=()) for u in c.utterances]))
+            mids, labs = kc.phone_table()[:2]
+            print(note.replace(f"{c.name} has no phone labels: using", "labels:"), file=sys.stderr)
+            pc.fit(manifold.Fy_, manifold.Fx_, mids, labs, signed_velocity=manifold.tangent_.signed_velocity)
     except ValueError as exc:
         raise CliError(str(exc)) from None
     if not pc.phones_:
-        raise CliError(f"no phone has {args.min_count} or more mid-points in {manifold.corpus_.name}; "
-                       "lower --min-count or use a corpus with phone alignments")
+        fix = (f"lower --min-count (at least 2; now {args.min_count})" if args.min_count > 2 else
+               "use more speech, or labels with more instances")
+        raise CliError(f"no {'phone' if labels == 'phones' else 'kinematic landmark'} has {args.min_count} or more "
+                       f"mid-points in {c.name}; {fix}")
     phones = None
     if args.phones:
         phones = [p.strip() for p in args.phones.split(",") if p.strip()]

@@ -77,14 +77,21 @@ def _corpus(args, progress):
     if not paths:
         return load_corpus_arg(None, synthetic_preset=args.preset, progress=progress)
     from engine.io import ImportFormatError, read_corpus
+    from engine.kinematics import kinematic_if_unlabelled
 
     for p in paths:
         if not p.exists():
             raise CliError(f"{p}: no such file")
     try:
-        return read_corpus([str(p) for p in paths] if len(paths) > 1 else str(paths[0]))
+        corpus = read_corpus([str(p) for p in paths] if len(paths) > 1 else str(paths[0]))
+        corpus, note = kinematic_if_unlabelled(corpus)  # no phones: targets at kinematic landmarks
     except (ImportFormatError, ValueError) as exc:
         raise CliError(str(exc)) from None
+    if note:
+        import sys
+
+        print(f"lipspace evaluate: {note}", file=sys.stderr)
+    return corpus
 
 
 def run(args) -> int:
@@ -121,6 +128,12 @@ def run(args) -> int:
 
         write_table_csv(args.csv, result.table())
         print(f"wrote {args.csv}")
+    if sum(int(r.get("utterances") or 0) for r in result.rows) == 0:
+        import sys
+
+        print("lipspace evaluate: every item failed: no method synthesised any held-out utterance (see the "
+              "failures above)", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -1,0 +1,130 @@
+"""Real-recording faults end to end: a generated 3-speaker articulograph corpus (7 sensors x 6 values, 250 Hz,
+CSV without names, speaker origins 100 mm apart, offsets between utterances, head motion, tongue sensors, no
+phone labels) through import -> build -> info / clusters / synthesize / evaluate / figures."""
+import contextlib
+import io
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from engine.corpus import Corpus
+from engine.multispeaker import generate_recordings
+
+
+def _run(argv):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = main(argv)
+    return rc, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def recordings(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ema")
+    files = []
+    for r in generate_recordings(n_speakers=3, n_utterances=3, duration_s=(2.0, 2.5), seed=5):
+        (d / r.speaker).mkdir(exist_ok=True)
+        f = d / r.speaker / f"{r.id}.csv"
+        np.savetxt(f, r.matrix, delimiter=",", fmt="%.4f")
+        files.append(str(f))
+    return d, files
+
+
+@pytest.fixture(scope="module")
+def good(recordings):
+    """Imported as documented: layout, speakers from the directories; default registration and 60 Hz."""
+    d, files = recordings
+    corpus, mfile = d / "good.npz", d / "good-m.npz"
+    rc, out, err = _run(["import", *files, "--layout", "ema7x6", "--rate", "250", "--speaker-from", "dir",
+                         "-o", str(corpus)])
+    assert rc == 0, err
+    rc, out, berr = _run(["build", str(corpus), "-o", str(mfile), "--states", "30", "-q"])
+    assert rc == 0, berr
+    return corpus, mfile, err, berr
+
+
+@pytest.fixture(scope="module")
+def naive(recordings):
+    """Every sensor (tongue too), no registration, no speakers, no speaker normalisation."""
+    d, files = recordings
+    corpus, mfile = d / "naive.npz", d / "naive-m.npz"
+    assert _run(["import", *files, "--layout", "ema7x6", "--rate", "250", "--points", "all", "--register", "none",
+                 "-o", str(corpus)])[0] == 0
+    rc, out, berr = _run(["build", str(corpus), "-o", str(mfile), "--states", "30", "-q", "--speaker-norm", "none"])
+    assert rc == 0, berr
+    return corpus, mfile, berr
+
+
+def test_import_says_what_it_did(good):
+    corpus, _, err, _ = good
+    c = Corpus.load(corpus)
+    assert c.rate == 60 and c.point_names == ["UL", "LL", "LC", "RC"] and c.speakers == ["S1", "S2", "S3"]
+    assert "resampled 250 -> 60 Hz (polyphase x6/25, Kaiser-windowed anti-aliasing FIR)" in err
+    assert "registration: utterance centring (no reference sensors)" in err
+
+
+def test_registered_build_is_connected_and_opening_follows_the_aperture(good):
+    _, mfile, _, berr = good
+    assert "splits" not in berr and "Traceback" not in berr
+    rc, out, err = _run(["info", str(mfile)])
+    assert rc == 0
+    line = next(x for x in out.splitlines() if x.startswith("opening"))
+    assert "defined by lip aperture" in line
+    agree = float(line.rsplit(":", 1)[1].split("%")[0])
+    assert agree >= 85.0, line
+    assert "warning" not in err
+    assert "speakers    3: S1, S2, S3" in out and "speaker normalisation mean over 3 speakers" in out
+
+
+def test_naive_build_names_the_causes(naive):
+    _, mfile, berr = naive
+    assert "splits into" in berr and "along recordings" in berr and "--register utterance" in berr
+    rc, out, err = _run(["info", str(mfile)])
+    assert rc == 0
+    assert "agrees with the lip aperture velocity on only" in err
+    assert "3 tongue sensors in the shape space" in err and "no registration" in err
+
+
+def test_unlabelled_clusters_synthesis_and_figures(good, tmp_path):
+    corpus, mfile, _, _ = good
+    rc, out, err = _run(["clusters", str(mfile), "-q"])
+    assert rc == 0, err
+    assert "kinematic landmarks" in err
+    rows = {ln.split()[0]: ln.split() for ln in out.splitlines()[3:] if ln.strip()}
+    assert set(rows) == {"open", "closed", "opening", "closing"}
+    assert float(rows["opening"][5]) > 0.9 and float(rows["closing"][5]) < 0.1  # side of the zero-velocity plane
+    rc, _, err = _run(["clusters", str(mfile), "--labels", "phones", "-q"])
+    assert rc == 2 and "--labels kinematic" in err
+    uid = Corpus.load(corpus).utterances[0].id
+    rc, out, err = _run(["synthesize", "--manifold", str(mfile), "--utterance", uid, "-o", str(tmp_path / "a.npy"),
+                         "-q"])
+    assert rc == 0 and "kinematic landmarks" in err
+    rc, out, err = _run(["synthesize", "--manifold", str(mfile), "--states", "0,5,9", "-o", str(tmp_path / "b.npy"),
+                         "-q"])
+    assert rc == 0 and np.load(tmp_path / "b.npy").shape[0] == 2 * 12 + 1
+    rc, out, err = _run(["synthesize", "--manifold", str(mfile), "--states", "0,5", "--key-frames", "3", "-q"])
+    assert rc == 2 and "give --utterance ID too" in err
+    rc, out, err = _run(["figures", str(mfile), "-o", str(tmp_path / "f"), "--only", "fig3,fig4", "-q"])
+    assert rc == 0, err
+    assert "fig4 skipped: it needs the phone labels /b/ /p/ /m/" in err
+    assert (tmp_path / "f" / "fig3.png").is_file() and not (tmp_path / "f" / "fig4.png").exists()
+
+
+def test_evaluate_unlabelled_and_exit_status(good, tmp_path):
+    corpus, _, _, _ = good
+    rc, out, err = _run(["evaluate", str(corpus), "--methods", "linear", "-q"])
+    assert rc == 0, err
+    assert "kinematic landmarks" in err and "linear" in out
+    # every held-out item failing exits non-zero: a test utterance without targets
+    from dataclasses import replace
+
+    from engine.kinematics import with_kinematic_labels
+
+    c = with_kinematic_labels(Corpus.load(corpus))
+    bare = c.utterances[0].id
+    c = replace(c, utterances=[replace(u, phones=()) if u.id == bare else u for u in c.utterances])
+    c.save(tmp_path / "part.npz")
+    rc, out, err = _run(["evaluate", str(tmp_path / "part.npz"), "--methods", "linear", "--test-ids", bare, "-q"])
+    assert rc == 1, out + err
+    assert "every item failed" in err
