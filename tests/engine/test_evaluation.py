@@ -46,44 +46,10 @@ def test_per_utterance_errors_add_up(result):
         assert np.sqrt(total_y) == pytest.approx(result.row(m)["rmse_y"], rel=1e-6)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "paper's claim not reproduced on the synthetic talker: the Y -> X inverse map of the held-out frames' "
-    "own F^y already errs more than linear interpolation of the oracle F^x targets (see docs/DECISIONS.md)"))
-def test_paper_claim_manifold_path_beats_direct_interpolation(result):
-    man, lin = result.row("manifold")["rmse_x"], result.row("linear")["rmse_x"]
-    print(f"held-out RMSE in X from oracle phone mid-points: manifold {man:.3f}, linear {lin:.3f}")
-    assert man < lin
-
-
-@pytest.fixture(scope="module")
-def default_result():
-    """``lipspace evaluate --preset default``'s own split (10 % held out, seed 0): ~15 s."""
-    from engine.synthetic import load_synthetic
-
-    return evaluate(load_synthetic(preset="default"), methods=("manifold", "linear"))
-
-
-def test_paper_claim_in_y_manifold_path_beats_direct_interpolation(default_result, result):
-    """The paper's Fig. 3 space: the first 3 dims of Y, the manifold path before the inverse map.
-
-    Linear interpolation of the oracle F^x targets is projected into Y out-of-sample
-    through the manifold's own pipeline and compared, like the manifold's state-centroid
-    path, with the held-out utterance's own projected F^y. It is checked on the default
-    (8-minute) talker, a corpus of the paper's size. Measured (generator 3): default
-    manifold 6.42 vs linear 11.84 in Y (15.8 vs 6.49 in X); on the 1-minute small preset
-    the two tie (4.67 vs 4.68), too few frames for dense states (docs/DECISIONS.md).
-    """
-    man, lin = default_result.row("manifold"), default_result.row("linear")
-    per = {(p["utterance"], p["method"]): p["rmse_y"] for p in default_result.per_utterance}
-    wins = sum(per[(u, "manifold")] < per[(u, "linear")] for u in default_result.test_ids)
-    s_man, s_lin = result.row("manifold"), result.row("linear")
-    print(f"\nheld-out RMSE from oracle phone mid-points, first 3 dims of Y (default preset, "
-          f"{len(default_result.test_ids)} utterances): manifold {man['rmse_y']:.3f}, linear {lin['rmse_y']:.3f} "
-          f"(manifold better on {wins}); in X: manifold {man['rmse_x']:.3f}, linear {lin['rmse_x']:.3f}")
-    print(f"small preset: Y manifold {s_man['rmse_y']:.3f}, linear {s_lin['rmse_y']:.3f}; "
-          f"X manifold {s_man['rmse_x']:.3f}, linear {s_lin['rmse_x']:.3f}")
-    assert man["rmse_y"] < lin["rmse_y"]
-    assert wins > len(default_result.test_ids) // 2
+# The paper's claim (manifold path vs direct interpolation) is measured with equal information
+# for every method in tests/engine/test_protocols.py and reported in docs/RESULTS.md; the
+# per-method table here gives the manifold the nearest state (shape and velocity) but the
+# interpolations only X, so it cannot decide the claim either way.
 
 
 def test_trajectories_in_y(small_manifold):

@@ -203,3 +203,28 @@ def test_normalise_speakers(small_corpus):
     np.testing.assert_allclose(a.mean(0), 0.0, atol=1e-3)
     np.testing.assert_allclose(n.frames[: c.utterances[0].n_frames] + means["A"], c.frames[: c.utterances[0].n_frames],
                                atol=1e-3)
+
+
+@pytest.mark.parametrize("talker", ["default", "held-out"])
+def test_anchored_manifold_path_beats_linear_and_pchip_with_oracle_targets(talker, small_corpus, result, split,
+                                                                           heldout_corpus):
+    """The part of the paper's claim that holds with equal information, on both talkers.
+
+    With the oracle X at the targets and the target states, the anchored manifold path
+    beats linear and PCHIP interpolation in X, Y and LVE. It does *not* beat the cubic
+    Hermite spline that uses the states' mean velocity (docs/RESULTS.md gives the margins),
+    so that is not asserted. The held-out talker (engine.synthetic.HELD_OUT_TALKER) was
+    never used to tune the method.
+    """
+    if talker == "default":
+        r = result
+    else:
+        ids = [u.id for u in heldout_corpus.utterances]
+        r = evaluate_protocols(heldout_corpus, test_ids=ids[2::5], n_boot=500, inverse_table=False,
+                               settings_factory=lambda m: select_settings(m, **GRID))
+    for meas in ("rmse_x", "rmse_y", "lve"):
+        man = r.row("oracle", "manifold")[meas]
+        for base in ("linear", "pchip", "unitselection", "mean-frame"):
+            c = r.comparison("oracle", base, meas)
+            assert man < r.row("oracle", base)[meas], (talker, meas, base, man, r.row("oracle", base)[meas])
+            assert c["wins"] > c["losses"], (talker, meas, base, c)
