@@ -38,7 +38,9 @@ def test_build_fits_a_manifold_on_the_real_pair(built, capsys):
     assert "Traceback" not in err and "StateGraphConnectivityWarning" not in err
     c = Corpus.load(corpus)
     m = Manifold.load(mfile)
-    assert c.rate == pytest.approx(100.0) and len(c.utterances) == 2 and c.dims == 3
+    # imported at the 60 Hz analysis rate (from 100 Hz), each utterance centred (no reference sensors)
+    assert c.rate == pytest.approx(60.0) and len(c.utterances) == 2 and c.dims == 3
+    assert c.registration.startswith("utterance centring") and c.point_roles[:2] == ["upper_lip", "lower_lip"]
     assert m.Fy_.shape[0] == c.frames.shape[0] and np.isfinite(m.Fy_).all()
     assert m.states_.centroids_.shape[0] == 24
     # every frame's projection reproduces its embedding (the file round-trips the fit)
@@ -47,6 +49,10 @@ def test_build_fits_a_manifold_on_the_real_pair(built, capsys):
     assert main(["info", str(mfile)]) == 0
     out = capsys.readouterr().out
     assert "states" in out.lower()
+    # "opening" is the lips parting: the opening class follows the UL-LL aperture (80% measured; 64.5% when
+    # opening was F^x_1 at 100 Hz without registration)
+    line = next(x for x in out.splitlines() if x.startswith("opening"))
+    assert "defined by lip aperture" in line and float(line.rsplit(":", 1)[1].split("%")[0]) >= 75.0
 
 
 def test_clusters_table_on_the_real_pair(built, tmp_path, capsys):
