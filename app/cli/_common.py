@@ -126,3 +126,34 @@ def output_directory(path, *, pattern: str = "*"):
             os.replace(tmp, target)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+#: longest synthesis the command line runs, in seconds of speech
+MAX_SYNTHESIS_SECONDS = 600.0
+#: highest --inverse-dims (a Delaunay triangulation in d dimensions grows exponentially with d)
+MAX_INVERSE_DIMS = 5
+#: --tempo range (speaking-rate factor)
+TEMPO_RANGE = (0.1, 10.0)
+
+
+def check_synthesis_bounds(args, targets) -> None:
+    """Refuse a synthesis that would run for hours or exhaust memory, naming the limit.
+
+    A 1e6-second phone or ``--tempo 1e-6`` asked for tens of millions of frames, and
+    ``--inverse-dims 10`` for a 10-D Delaunay triangulation (several GB).
+    """
+    from app.cli import CliError
+
+    tempo = getattr(args, "tempo", None)
+    if tempo is not None and not TEMPO_RANGE[0] <= tempo <= TEMPO_RANGE[1]:
+        raise CliError(f"--tempo {tempo:g}: must be from {TEMPO_RANGE[0]:g} to {TEMPO_RANGE[1]:g} "
+                       "(1 = the duration model's own rate)")
+    dims = getattr(args, "inverse_dims", None)
+    if dims is not None and not 1 <= dims <= MAX_INVERSE_DIMS:
+        raise CliError(f"--inverse-dims {dims}: must be from 1 to {MAX_INVERSE_DIMS} (the paper uses 3; a "
+                       f"Delaunay triangulation in more dimensions needs far more time and memory)")
+    seconds = targets.n_frames / targets.rate
+    if not seconds <= MAX_SYNTHESIS_SECONDS:
+        raise CliError(f"the targets span {seconds:.6g} s ({targets.n_frames} frames at {targets.rate:g} Hz); "
+                       f"at most {MAX_SYNTHESIS_SECONDS:g} s can be synthesised at once. Check the phone "
+                       "durations (seconds, not milliseconds) and --tempo, or split the input")

@@ -195,3 +195,17 @@ def test_resource_arguments_are_bounded_with_the_limit_in_the_message(tmp_path, 
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and limit.replace("at most ", "") in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("extra,limit", [
+    (["--phones", "p 1e6 aa 0.1"], "at most 600 s"),
+    (["--text", "hello world", "--tempo", "1e-6"], "from 0.1 to 10"),
+    (["--phones", "p 0.1 aa 0.1", "--inverse-dims", "10"], "from 1 to 5"),
+])
+def test_synthesis_that_would_hang_is_refused_with_the_limit(tmp_path, built, capsys, extra, limit):
+    """These used to run past 60-180 s (tens of millions of frames, a 10-D Delaunay of 3.6 GB)."""
+    out = tmp_path / "t.csv"
+    assert main(["synthesize", "--manifold", str(built), *extra, "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and limit in err, err
+    assert not out.exists()
