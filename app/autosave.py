@@ -11,7 +11,9 @@ Qt-free logic; the window only calls :meth:`Autosaver.tick` from a timer.
 * **When**: debounced. Each tick the window hands a cheap fingerprint of the session
   (:func:`session_fingerprint`); a save happens once the fingerprint has stayed the same
   for ``delay`` seconds after it last changed (3 s by default), so dragging a camera or
-  clicking through states writes once when the user pauses, never on every event.
+  clicking through states writes once when the user pauses, never on every event; a
+  session that keeps changing is still saved ``max_delay`` seconds (30 s) after its
+  first unsaved change.
 * **Abnormal exit**: each process writes a marker ``running-<pid>.json`` at start
   (:meth:`Autosaver.begin`) and removes it, with its autosave, at a clean exit
   (:meth:`Autosaver.finish`). A marker whose process is gone means that run ended
@@ -30,11 +32,12 @@ from pathlib import Path
 
 from engine._atomic import write_text_atomic
 
-__all__ = ["STATE_DIR_ENV", "DEFAULT_DELAY_S", "state_dir", "Recovery", "Autosaver", "session_fingerprint",
+__all__ = ["STATE_DIR_ENV", "DEFAULT_DELAY_S", "DEFAULT_MAX_DELAY_S", "state_dir", "Recovery", "Autosaver", "session_fingerprint",
            "resolve_recovery", "pid_alive"]
 
 STATE_DIR_ENV = "LIPSPACE_STATE_DIR"
 DEFAULT_DELAY_S = 3.0
+DEFAULT_MAX_DELAY_S = 30.0
 _MARKER = "running-{pid}.json"
 _SESSION = "autosave-{pid}.lipspace.json"
 
@@ -138,15 +141,20 @@ class Autosaver:
         Where markers and autosaves go (default ``state_dir() / "autosave"``).
     delay : float, default=3.0
         Seconds the session must stay unchanged after a change before it is saved.
+    max_delay : float, default=30.0
+        Seconds after the first unsaved change when it is saved even if it keeps changing.
     clock : callable() -> float, default=time.monotonic
     pid : int, optional
         This process's id (default ``os.getpid()``; tests simulate other runs).
     """
 
-    def __init__(self, directory=None, *, delay: float = DEFAULT_DELAY_S, clock=time.monotonic,
-                 pid: int | None = None):
+    def __init__(self, directory=None, *, delay: float = DEFAULT_DELAY_S, max_delay: float = DEFAULT_MAX_DELAY_S,
+                 clock=time.monotonic, pid: int | None = None):
         if not delay >= 0:
             raise ValueError(f"autosave delay must be >= 0 seconds, got {delay!r}")
+        if not max_delay >= delay:
+            raise ValueError(f"autosave max_delay must be >= delay ({delay} s), got {max_delay!r}")
+        self.max_delay = float(max_delay)
         self.directory = Path(directory) if directory is not None else state_dir() / "autosave"
         self.delay = float(delay)
         self.clock = clock
@@ -154,7 +162,7 @@ class Autosaver:
         self.marker = self.directory / _MARKER.format(pid=self.pid)
         self.session = self.directory / _SESSION.format(pid=self.pid)
         self._fingerprint = None
-        self._changed_at = None
+        self._changed_at = self._dirty_since = None
         self.dirty = False
         self.saves = 0
         self.last_error: str | None = None
@@ -223,12 +231,15 @@ class Autosaver:
             return
         self._fingerprint = fingerprint
         self._changed_at = self.clock() if now is None else now
+        if not self.dirty:
+            self._dirty_since = self._changed_at
         self.dirty = True
 
     def due(self, now: float | None = None) -> bool:
-        """Whether the session changed and then stayed unchanged for ``delay`` seconds."""
+        """Whether the session changed and then stayed unchanged for ``delay`` seconds (or has
+        been changing for ``max_delay`` seconds)."""
         now = self.clock() if now is None else now
-        return self.dirty and now - self._changed_at >= self.delay
+        return self.dirty and (now - self._changed_at >= self.delay or now - self._dirty_since >= self.max_delay)
 
     def save(self, write) -> Path:
         """Write the autosave now with ``write(path)`` (e.g. :func:`app.session.save_session`)."""

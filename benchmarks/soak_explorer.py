@@ -21,7 +21,9 @@ The child does what a user does, on Qt timers inside the real event loop:
   mouse event (falling back to VTK's picker if the VTK build drops synthetic clicks),
 * every 5 s switches panels (clusters/scree tabs), colour mode and hemisphere,
 * every 30 s loads another input (an utterance or the typed text) and synthesises it
-  again, alternating methods, in the worker thread.
+  again, alternating methods, in the worker thread,
+* autosaves as ``lipspace explore`` does (:mod:`app.autosave`, into a temporary
+  directory; ``--no-autosave`` to leave it out).
 
 Printed at the end: whether the child was alive when the soak time ran out and how it
 exited; frames played (playback events) and frames/s; clicks; syntheses; panel
@@ -98,7 +100,15 @@ def child(args) -> int:
         blas = "threadpoolctl not installed"
     none_start = sys.getrefcount(None)
     rng = random.Random(args.seed)
-    win = MainWindow()
+    autosaver = None
+    if args.autosave:
+        import tempfile
+
+        from app.autosave import Autosaver
+
+        autosaver = Autosaver(Path(tempfile.mkdtemp(prefix="lipspace-soak-state-")))
+        autosaver.begin()
+    win = MainWindow(autosave=autosaver)
     win.resize(1400, 900)
     win.show()
     app.processEvents()
@@ -204,14 +214,22 @@ def child(args) -> int:
             synthesise(("utterance", "text")[counts["synths"] % 2])
         if now - last["sample"] >= SAMPLE_S:
             last["sample"] = now
-            _say(event="sample", t=now - t_soak, none=sys.getrefcount(None), **counts)
+            _say(event="sample", t=now - t_soak, none=sys.getrefcount(None), **autosaves(), **counts)
+
+    def autosaves():
+        if autosaver is None:
+            return {"autosaves": None, "autosave_error": None}
+        return {"autosaves": autosaver.saves, "autosave_error": autosaver.last_error}
 
     def finish():
         soaking["on"] = False
         ticker.stop()
         s.set_playing(False)
-        _say(event="soak_end", t=time.perf_counter() - t_soak, alive=True, none=sys.getrefcount(None), **counts)
+        _say(event="soak_end", t=time.perf_counter() - t_soak, alive=True, none=sys.getrefcount(None),
+             **autosaves(), **counts)
         win.close()
+        if autosaver is not None:
+            autosaver.finish()
         app.quit()
 
     ticker = QtCore.QTimer()
@@ -225,7 +243,8 @@ def child(args) -> int:
 # ============================================================================ parent: the monitor
 def monitor(args) -> int:
     cmd = [sys.executable, str(Path(__file__).resolve()), "--child", "--minutes", str(args.minutes), "--preset",
-           args.preset, "--text", args.text, "--click-every", str(args.click_every), "--seed", str(args.seed)]
+           args.preset, "--text", args.text, "--click-every", str(args.click_every), "--seed", str(args.seed),
+           "--autosave" if args.autosave else "--no-autosave"]
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=str(ROOT))
     events: list[dict] = []
@@ -278,7 +297,8 @@ def monitor(args) -> int:
         "clicks": end.get("clicks", 0), "clicks_selected": end.get("clicks_selected", 0),
         "picker_fallbacks": end.get("picker_fallbacks", 0), "synths": end.get("synths", 0),
         "synth_failures": end.get("synth_failures", 0), "panel_switches": end.get("switches", 0),
-        "playback_restarts": end.get("restarts", 0),
+        "playback_restarts": end.get("restarts", 0), "autosaves": end.get("autosaves"),
+        "autosave_error": end.get("autosave_error"),
         "none_refcount_start": loaded.get("none_start"), "none_refcount_end": end.get("none"),
         "rss_launch_mb": samples[0][1] if samples else None,
         "rss_start_mb": soak[0][1] if soak else None, "rss_end_mb": soak[-1][1] if soak else None,
@@ -297,7 +317,8 @@ def monitor(args) -> int:
     print(f"  frames played {summary['frames_played']} ({fps:.1f}/s); clicks {summary['clicks']} "
           f"({summary['clicks_selected']} selected a frame, {summary['picker_fallbacks']} via the VTK picker "
           f"fallback); syntheses {summary['synths']} ({summary['synth_failures']} failed); panel switches "
-          f"{summary['panel_switches']}; playback restarts {summary['playback_restarts']}")
+          f"{summary['panel_switches']}; playback restarts {summary['playback_restarts']}; autosaves "
+          f"{summary['autosaves']}" + (f" (last error: {summary['autosave_error']})" if summary['autosave_error'] else ""))
     print(f"  sys.getrefcount(None) in the child: {summary['none_refcount_start']} at start -> "
           f"{summary['none_refcount_end']} at the end of the soak")
     if soak:
@@ -323,6 +344,8 @@ def main(argv=None) -> int:
     p.add_argument("--load-timeout", type=float, default=900.0,
                    help="seconds allowed for loading/building before the soak (default %(default)s)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--autosave", action=argparse.BooleanOptionalAction, default=True,
+                   help="autosave the session as the explorer does (default: on)")
     p.add_argument("--json", default=None, help="also write the summary here")
     p.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args(argv)

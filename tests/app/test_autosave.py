@@ -61,6 +61,19 @@ def test_saves_once_the_session_stays_unchanged_for_the_delay(tmp_path):
     assert a.tick(("state", 5), write) and a.saves == 2
     with pytest.raises(ValueError, match=">= 0 seconds"):
         Autosaver(tmp_path, delay=-1)
+    with pytest.raises(ValueError, match="max_delay must be >= delay"):
+        Autosaver(tmp_path, delay=5, max_delay=1)
+
+
+def test_a_session_that_keeps_changing_is_still_saved(tmp_path):
+    clock = Clock()
+    a = Autosaver(tmp_path, delay=3.0, max_delay=30.0, clock=clock)
+    writes = []
+    for k in range(70):  # a click every second for 70 s: never 3 s of quiet
+        if a.tick(("click", k), lambda p: writes.append(clock.t)):
+            pass
+        clock.t += 1.0
+    assert writes == [130.0, 161.0]  # 30 s after the first unsaved change, then again
 
 
 def test_a_failed_write_is_reported_not_raised(tmp_path):
