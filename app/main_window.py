@@ -141,6 +141,7 @@ class MainWindow(QtWidgets.QMainWindow):
                           lambda _=False, n=name: self.export_figure_dialog(n))
             a.setToolTip(DESCRIPTIONS.get(name, ""))
         self._act(f, "Export &trajectory (CSV, NPY, OBJ, PLY)…", self.export_trajectory_dialog)
+        self._act(f, "Export &animation (glTF, MP4)…", self.export_animation_dialog)
         self._act(f, "Export &cluster table (CSV)…", self.export_clusters_dialog)
         f.addSeparator()
         self._act(f, "&Quit", self.close, QtGui.QKeySequence.StandardKey.Quit)
@@ -333,6 +334,36 @@ class MainWindow(QtWidgets.QMainWindow):
                                                         TRAJECTORY_FILTERS)
         if path:
             self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}")
+
+    def export_animation(self, path, progress=None) -> list[Path]:
+        """The current trajectory as a glTF morph animation (.glb/.gltf, WAV beside) or an MP4."""
+        from app.export.current import export_current_animation
+
+        return export_current_animation(self.state, path, progress=progress)
+
+    def export_animation_dialog(self):
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export animation", self.last_dir,
+                                                        "glTF binary (*.glb);;glTF (*.gltf);;MP4 video (*.mp4)")
+        if not path:
+            return
+        from engine.progress import Cancelled
+
+        dlg = QtWidgets.QProgressDialog("Rendering the video…", "Cancel", 0, 100, self)
+        dlg.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
+
+        def progress(_stage, done, total):  # off-screen VTK stays in the GUI thread
+            dlg.setMaximum(total)
+            dlg.setValue(done)
+            QtWidgets.QApplication.processEvents()
+            if dlg.wasCanceled():
+                raise Cancelled("export cancelled")
+
+        try:
+            self._report(lambda: self.export_animation(path, progress), f"wrote {path}")
+        except Cancelled:
+            self.statusBar().showMessage("export cancelled; nothing was written", 5000)
+        finally:
+            dlg.close()
 
     def export_clusters(self, path) -> Path:
         from engine.io.export import write_table_csv

@@ -1,0 +1,69 @@
+"""File › Export animation: what the explorer shows, as a glTF animation or an MP4 (Qt-free).
+
+The trajectory exported is the one File › Export trajectory writes: the synthetic one
+if there is one, else the selected utterance's original. The utterance's audio goes
+with it when the trajectory runs on the utterance's own timeline (the original, or a
+re-synthesis of the same length); an MP4 of a synthetic trajectory shows the original
+beside it and the manifold panel with both paths, as the lip view and manifold view do.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["export_current_animation", "ANIMATION_SUFFIXES"]
+
+ANIMATION_SUFFIXES = (".glb", ".gltf", ".mp4")
+
+
+def _fx(manifold, traj):
+    if traj.Fx is not None:
+        return np.asarray(traj.Fx, np.float32)
+    inv = manifold.inverse_map
+    return np.asarray(inv.transform(np.asarray(traj.Y)[:, :inv.n_dims]), np.float32)
+
+
+def export_current_animation(state, path, *, size=(640, 480), progress=None) -> list[Path]:
+    """Write the current trajectory of an :class:`app.state.AppState` by suffix.
+
+    Parameters
+    ----------
+    state : app.state.AppState
+        With a manifold and an original or synthetic trajectory.
+    path : str or Path
+        ``.glb`` / ``.gltf`` (morph animation, WAV beside it) or ``.mp4`` (video).
+    size : (int, int)
+        MP4: pixels of one panel.
+    progress : callable, optional
+        MP4: ``progress("render", done, total)``; raising from it cancels (nothing written).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    from app.export.animation import export_animation, utterance_audio
+    from app.views.lip_view import lip_frames
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in ANIMATION_SUFFIXES:
+        raise ValueError(f"{path}: an animation is written as .glb, .gltf or .mp4, not {suffix or 'no suffix'!r}")
+    m = state.manifold
+    traj = state.synthetic if state.synthetic is not None else state.original
+    if m is None or traj is None:
+        raise ValueError("no trajectory to export: choose an utterance or synthesise one in the trajectory editor")
+    audio = None
+    if state.utterance is not None and state.original is not None and len(traj) == len(state.original):
+        audio, _why = utterance_audio(m, state.utterance, state.source.get("path"))
+    if suffix in (".glb", ".gltf"):
+        return export_animation(m, _fx(m, traj), path, rate=traj.rate, audio=audio, source=traj.label)
+    from app.export.video import render_video
+
+    two = state.synthetic is not None and state.original is not None
+    original = lip_frames(m, state.original) if two else None
+    return [render_video(path, lip_frames(m, traj), rate=traj.rate, faces=m.corpus_.faces, dims=m.corpus_.dims,
+                         original=original, Y=np.asarray(traj.Y)[:, :3],
+                         Y_original=np.asarray(state.original.Y)[:, :3] if two else None, cloud=m.Fy_[:, :3],
+                         audio=audio, size=size, title=traj.label, progress=progress)]
