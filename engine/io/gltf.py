@@ -33,12 +33,14 @@ import numpy as np
 
 from engine._atomic import atomic_write
 
-__all__ = ["write_gltf_morph", "INTERPOLATIONS"]
+__all__ = ["write_gltf_morph", "read_gltf_morph", "INTERPOLATIONS"]
 
 INTERPOLATIONS = ("LINEAR", "STEP")
 _FLOAT, _UINT16, _UINT32 = 5126, 5123, 5125
 _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
 _POINTS, _TRIANGLES = 0, 4
+_DTYPES = {_FLOAT: np.float32, _UINT16: np.uint16, _UINT32: np.uint32}
+_WIDTH = {"SCALAR": 1, "VEC3": 3}
 LIP_COLOUR = (0.86, 0.45, 0.45, 1.0)
 
 
@@ -217,3 +219,63 @@ def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None
             gltf.buffers[0].uri = "data:application/octet-stream;base64," + base64.b64encode(data).decode("ascii")
             gltf.save_json(str(tmp))
     return path
+
+
+def read_gltf_morph(path) -> dict:
+    """Read back a morph-target animation written by :func:`write_gltf_morph` (with pygltflib).
+
+    Only the first mesh, its first primitive and the first animation's weight channel
+    are read; sparse accessors are not supported.
+
+    Returns
+    -------
+    dict
+        ``base`` (V, 3) float32, ``targets`` (m, V, 3) float32, ``times`` (n,) float32
+        seconds, ``weights`` (n, m) float32, ``faces`` (F, 3) int64 or None,
+        ``target_names`` list of str, ``interpolation`` str, ``scale`` float and
+        ``extras`` (the scene's extras). ``base + weights[k] @ targets`` is frame k.
+    """
+    import pygltflib as g
+
+    path = Path(path)
+    try:
+        gltf = g.GLTF2().load(str(path))
+    except Exception as exc:  # noqa: BLE001 - pygltflib raises many kinds on damaged files
+        raise ValueError(f"{path}: not a readable glTF file ({exc})") from None
+    if gltf is None or not gltf.meshes or not gltf.animations or not gltf.buffers:
+        raise ValueError(f"{path}: expected a glTF file with a mesh, an animation and a buffer")
+    buf = gltf.buffers[0]
+    blob = gltf.binary_blob() if buf.uri is None else gltf.get_data_from_buffer_uri(buf.uri)
+
+    def accessor(i):
+        a = gltf.accessors[i]
+        v = gltf.bufferViews[a.bufferView]
+        w = _WIDTH[a.type]
+        offset = (v.byteOffset or 0) + (a.byteOffset or 0)
+        if offset + a.count * w * np.dtype(_DTYPES[a.componentType]).itemsize > len(blob):
+            raise ValueError(f"{path}: accessor {i} ({a.name}) runs past the end of the buffer")
+        return np.frombuffer(blob, _DTYPES[a.componentType], count=a.count * w, offset=offset).reshape(a.count, w)
+
+    def position(attr):
+        return attr["POSITION"] if isinstance(attr, dict) else attr.POSITION
+
+    mesh = gltf.meshes[0]
+    prim = mesh.primitives[0]
+    base = accessor(position(prim.attributes)).astype(np.float32)
+    targets = np.stack([accessor(position(t)) for t in prim.targets]).astype(np.float32) if prim.targets else \
+        np.zeros((0,) + base.shape, np.float32)
+    anim = gltf.animations[0]
+    chans = [c for c in anim.channels if c.target.path == "weights"]
+    if not chans:
+        raise ValueError(f"{path}: the animation has no morph-weight channel")
+    sampler = anim.samplers[chans[0].sampler]
+    times = accessor(sampler.input).ravel().astype(np.float32)
+    weights = accessor(sampler.output).reshape(len(times), len(targets)).astype(np.float32)
+    faces = None if prim.indices is None else accessor(prim.indices).reshape(-1, 3).astype(np.int64)
+    node = gltf.nodes[0] if gltf.nodes else None
+    scale = float(node.scale[0]) if node is not None and node.scale else 1.0
+    names = list((mesh.extras or {}).get("targetNames", [f"X{k + 1}" for k in range(len(targets))]))
+    extras = dict(gltf.scenes[0].extras or {}) if gltf.scenes else {}
+    return {"base": base, "targets": targets, "times": times, "weights": weights, "faces": faces,
+            "target_names": names, "interpolation": sampler.interpolation or "LINEAR", "scale": scale,
+            "extras": extras}

@@ -3,7 +3,7 @@ import numpy as np
 import pygltflib
 import pytest
 
-from engine.io.gltf import write_gltf_morph
+from engine.io.gltf import read_gltf_morph, write_gltf_morph
 
 _DTYPES = {5126: np.float32, 5123: np.uint16, 5125: np.uint32}
 _WIDTH = {"SCALAR": 1, "VEC3": 3}
@@ -98,6 +98,14 @@ def test_points_without_faces_2d_step_and_embedded_gltf(tmp_path):
     np.testing.assert_array_equal(played[..., 2], 0.0)
     np.testing.assert_allclose(times, np.arange(n) / 100.0, rtol=1e-6)
     assert gltf.meshes[0].extras["targetNames"] == ["open", "round", "spread"]
+    # the module's own reader agrees with the decoding above
+    r = read_gltf_morph(p)
+    np.testing.assert_array_equal(r["base"][None] + np.einsum("nk,kvd->nvd", r["weights"], r["targets"]), played)
+    assert r["faces"] is None and r["interpolation"] == "STEP" and r["target_names"] == ["open", "round", "spread"]
+    assert r["extras"] == {"rate": 100.0, "frames": n} and r["scale"] == 1.0
+    (tmp_path / "broken.glb").write_bytes(p.read_bytes()[:40])
+    with pytest.raises(ValueError, match="broken.glb: not a readable glTF"):
+        read_gltf_morph(tmp_path / "broken.glb")
 
 
 def test_bad_input_names_the_problem_and_leaves_the_old_file(tmp_path):
