@@ -143,10 +143,14 @@ def run(args) -> int:
 
         with output_directory(args.mesh_dir, pattern=f"frame_*.{args.mesh_format}") as tmp:  # all or nothing
             try:
-                files = write_mesh_sequence(tmp, frames, faces=c.faces, dims=c.dims, format=args.mesh_format)
+                from engine.lipcontour import mesh_geometry
+
+                pts, faces, note = mesh_geometry(frames, c)  # sparse lip markers: a contour tube
+                files = write_mesh_sequence(tmp, pts, faces=faces, dims=c.dims, format=args.mesh_format)
             except ValueError as exc:
                 raise CliError(str(exc)) from None
-        print(f"wrote {len(files)} {args.mesh_format.upper()} files to {args.mesh_dir}")
+        print(f"wrote {len(files)} {args.mesh_format.upper()} files to {args.mesh_dir}"
+              + (f" ({note})" if note else ""))
     return 0
 
 def _write_animation(args, manifold, traj, out):

@@ -1,4 +1,9 @@
-"""The lip view's geometry: a mesh over the corpus faces, or markers as spheres."""
+"""The lip view's geometry: a mesh over the corpus faces, or sparse markers as a lip contour.
+
+With no faces and 3 to 20 lip points (by their roles), the markers are drawn as lips:
+a tube along the interpolated outer lip contour (:class:`engine.lipcontour.LipContour`),
+the markers as spheres and a label per sensor; otherwise as bare spheres.
+"""
 from __future__ import annotations
 
 import numpy as np
@@ -6,7 +11,7 @@ import pyvista as pv
 
 from app.scene.handles import Handle
 
-__all__ = ["lip_mesh", "LipsHandle", "add_lips"]
+__all__ = ["lip_mesh", "LipsHandle", "ContourHandle", "add_lips", "add_lip_contour"]
 
 
 def _points(points):
@@ -62,9 +67,106 @@ class LipsHandle(Handle):
         return np.asarray(self.mesh.points) - self.offset
 
 
+class ContourHandle(LipsHandle):
+    """Sparse lip markers drawn as a contour tube, sphere markers and sensor labels, moved frame by frame.
+
+    ``mesh`` is the tube; ``markers`` the markers' PolyData; ``contour`` the fitted
+    :class:`engine.lipcontour.LipContour`; ``labels`` the label actor (or None).
+    """
+
+    def __init__(self, plotter, mesh, actor, offset, contour, markers, marker_actor, labels, label_points):
+        super().__init__(plotter, mesh, actor, offset)
+        self.contour = contour
+        self.markers, self.marker_actor = markers, marker_actor
+        self.labels, self.label_points = labels, label_points
+        self._n = markers.n_points
+
+    def update(self, points) -> None:
+        P = _points(points)
+        if P.shape[0] != self._n:
+            raise ValueError(f"frame has {P.shape[0]} points, the lip markers are {self._n}")
+        self.mesh.points[:] = self.contour.transform(P) + self.offset
+        self.mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
+        self.mesh.Modified()
+        self.markers.points[:] = P + self.offset
+        self.markers.Modified()
+        if self.label_points is not None:
+            self.label_points.points[:] = P + self.offset
+            self.label_points.Modified()
+
+    @property
+    def points(self) -> np.ndarray:
+        return np.asarray(self.markers.points) - self.offset
+
+    def set_visible(self, visible: bool) -> None:
+        for a in (self.actor, self.marker_actor, self.labels):
+            if a is not None:
+                a.SetVisibility(bool(visible))
+
+    def remove(self) -> None:
+        for a in (self.actor, self.marker_actor, self.labels):
+            if a is not None:
+                self.plotter.remove_actor(a, render=False)
+
+
+def add_lip_contour(plotter, points, roles=None, names=None, *, color=(0.85, 0.45, 0.45), offset=(0.0, 0.0, 0.0),
+                    point_size: float = 10.0, name: str = "lips", labels: bool = True,
+                    reference=None) -> ContourHandle:
+    """Draw sparse lip markers as lips: contour tube + spheres + sensor labels.
+
+    Parameters
+    ----------
+    plotter : any pyvista plotter
+    points : ndarray of shape (V, 3)
+        The frame drawn.
+    roles : sequence of str or None
+        Point roles (``Corpus.point_roles``); lip roles form the contour, others are
+        drawn as markers only. None: every point is on the contour.
+    names : sequence of str or None
+        Sensor names for the labels.
+    reference : ndarray of shape (V, 3), optional
+        Frame that fixes the contour's point order (default: ``points``; pass the mean frame).
+
+    Raises
+    ------
+    ValueError
+        When the points cannot form a contour (fewer than 3 or more than 20 lip points).
+    """
+    from engine.lipcontour import LipContour
+
+    P = _points(points)
+    off = np.asarray(offset, np.float32)
+    contour = LipContour().fit(_points(reference) if reference is not None else P, roles)
+    tube = pv.PolyData(contour.transform(P) + off,
+                       np.hstack([np.full((len(contour.faces_), 1), 3, np.int64), contour.faces_]).ravel())
+    tube.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
+    actor = plotter.add_mesh(tube, color=color, specular=0.3, smooth_shading=True, name=name, pickable=False,
+                             reset_camera=False, render=False)
+    markers = pv.PolyData(P + off)
+    marker_actor = plotter.add_mesh(markers, color=(0.15, 0.15, 0.15), point_size=point_size,
+                                    render_points_as_spheres=True, name=f"{name}_markers", pickable=False,
+                                    reset_camera=False, render=False)
+    label_actor, label_points = None, None
+    if labels and names is not None:
+        label_points = pv.PolyData(P + off)
+        label_actor = plotter.add_point_labels(label_points, [str(n) for n in names], font_size=12,
+                                               point_size=1, shape_opacity=0.4, name=f"{name}_labels",
+                                               always_visible=True, render=False, reset_camera=False)
+    return ContourHandle(plotter, tube, actor, off, contour, markers, marker_actor, label_actor, label_points)
+
+
 def add_lips(plotter, points, faces=None, *, color=(0.85, 0.45, 0.45), offset=(0.0, 0.0, 0.0),
-             point_size: float = 8.0, name: str = "lips") -> LipsHandle:
-    """Draw one lip frame; returns a handle whose :meth:`LipsHandle.update` moves it."""
+             point_size: float = 8.0, name: str = "lips", roles=None, names=None) -> LipsHandle:
+    """Draw one lip frame; returns a handle whose :meth:`LipsHandle.update` moves it.
+
+    Without ``faces``, markers with roles (or names) that can form a lip contour are
+    drawn as one (:func:`add_lip_contour`); otherwise as spheres.
+    """
+    if (faces is None or len(faces) == 0) and (roles is not None or names is not None):
+        try:
+            return add_lip_contour(plotter, points, roles, names, color=color, offset=offset, name=name)
+        except ValueError:
+            pass  # not a lip marker set: spheres below
     mesh = lip_mesh(points, faces)
     mesh.points[:] = mesh.points + np.asarray(offset, np.float32)
     if faces is None or len(faces) == 0:

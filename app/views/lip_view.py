@@ -101,8 +101,10 @@ class LipView(QtWidgets.QWidget):
         mean = self._points(m.shape_.mean_)
         ext = mean.max(0) - mean.min(0)
         self.offset = np.array([1.25 * max(float(ext[0]), 1e-6), 0.0, 0.0])
-        self.main = scene.add_lips(p, mean, c.faces, color=MAIN_COLOUR, name="lips_main")
-        self.second = scene.add_lips(p, mean, c.faces, color=SYNTH_COLOUR, offset=self.offset, name="lips_second")
+        sensors = {"roles": c.point_roles, "names": c.point_names}  # sparse markers: a labelled lip contour
+        self.main = scene.add_lips(p, mean, c.faces, color=MAIN_COLOUR, name="lips_main", **sensors)
+        self.second = scene.add_lips(p, mean, c.faces, color=SYNTH_COLOUR, offset=self.offset, name="lips_second",
+                                     **sensors)
         self.second.set_visible(False)
         self._on_trajectories(render=False)
         # the lips face the viewer: look along -z (the capture's depth axis), y up

@@ -1,0 +1,44 @@
+"""Sparse lip markers in the lip view: a labelled contour tube on any pyvista plotter."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.gui
+pv = pytest.importorskip("pyvista")
+
+P = np.array([[10.0, 0.0, 6.0], [8.0, 0.0, -8.0], [-2.0, 25.0, -1.0], [-5.0, 0.0, -30.0]])
+
+
+@pytest.fixture
+def plotter():
+    p = pv.Plotter(off_screen=True, window_size=(240, 200))
+    yield p
+    p.close()
+
+
+def test_markers_with_roles_draw_a_labelled_contour(plotter):
+    from app.scene import ContourHandle, add_lips
+
+    h = add_lips(plotter, P, None, roles=["upper_lip", "lower_lip", "left_corner", "jaw"],
+                 names=["UL", "LL", "ML", "JAW"], offset=(1.0, 0, 0))
+    assert isinstance(h, ContourHandle)
+    assert h.mesh.n_cells == len(h.contour.faces_) and h.mesh.n_points == 48 * 8
+    assert h.markers.n_points == 4 and h.labels is not None
+    np.testing.assert_allclose(h.points, P, atol=1e-5)
+    before = np.array(h.mesh.points)
+    h.update(P + [0, 0, 2.0])
+    np.testing.assert_allclose(np.array(h.mesh.points) - before, [[0, 0, 2.0]] * h.mesh.n_points, atol=1e-4)
+    np.testing.assert_allclose(h.points, P + [0, 0, 2.0], atol=1e-5)
+    h.set_visible(False)
+    assert not h.visible and not h.marker_actor.GetVisibility()
+    plotter.render()
+    with pytest.raises(ValueError, match="3 points, the lip markers are 4"):
+        h.update(P[:3])
+
+
+def test_points_without_lip_roles_stay_spheres(plotter):
+    from app.scene import ContourHandle, add_lips
+
+    h = add_lips(plotter, P, None, roles=["jaw", "jaw", "tongue", "tongue"], names=["a", "b", "c", "d"])
+    assert not isinstance(h, ContourHandle) and h.mesh.n_points == 4 and h.mesh.n_cells == 4
