@@ -56,6 +56,8 @@ class ProtocolResult:
     missed_gaps: int = 0
     state_warnings: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    #: the manifold fitted on the training utterances (for further analysis; not part of any output)
+    manifold: object = field(default=None, repr=False)
 
     # ---------------------------------------------------------------- building
     @classmethod
@@ -126,7 +128,9 @@ class ProtocolResult:
         sig = ", ".join(f"{k} {v:g}" for k, v in s.get("sigma", {}).items())
         lines = [f"held-out synthesis on {self.corpus}: {len(self.test_ids)} test utterance(s), "
                  f"{len(self.train_ids)} training ({self.n_train_frames} frames)",
-                 f"states: {self.n_states} K-means states of the first {s['state_dims']} dims of F^y; local-linear "
+                 f"states: {self.n_states} K-means states"
+                 f"{'' if s.get('frames_per_state') is None else ' (one per %s training frames)' % s['frames_per_state']}"
+                 f" of the first {s['state_dims']} dims of F^y; local-linear "
                  f"inverse k = {s['n_neighbors']}; smoothing (frames) {sig}; {s.get('note', '')}"]
         if self.missed_gaps:
             lines.append(f"{self.missed_gaps} gap(s) could not reach their target state in time (ended at the "

@@ -31,8 +31,8 @@ frame the largest Euclidean error over the points, in the corpus's units, averag
 frames). Per-utterance differences to ``manifold`` are summarised with a bootstrap CI
 and a sign test (:mod:`engine.paired`).
 
-Settings (``state_dims``, the smoothing of each manifold method per protocol, k of the
-local-linear inverse) are chosen on a validation split of the *training* utterances
+Settings (``state_dims``, the number of states K, the smoothing of each manifold method
+per protocol, k of the local-linear inverse) are chosen on a validation split of the *training* utterances
 (:func:`select_settings`), never on held-out results.
 """
 from __future__ import annotations
@@ -43,7 +43,8 @@ from engine.inverse_local import NEIGHBOR_CANDIDATES, select_neighbors
 from engine.progress import ProgressFn, report
 from engine.statepaths import StateModel, anchor, interpolate_targets
 
-__all__ = ["PROTOCOLS", "PROTOCOL_METHODS", "STATE_DIM_CANDIDATES", "SMOOTHING_CANDIDATES", "Y_DIMS",
+__all__ = ["PROTOCOLS", "PROTOCOL_METHODS", "STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES",
+           "SMOOTHING_CANDIDATES", "Y_DIMS",
            "select_settings", "evaluate_protocols", "normalise_speakers"]
 
 PROTOCOLS = ("states", "oracle")
@@ -52,7 +53,9 @@ PROTOCOL_METHODS = {
     "oracle": ("manifold", "manifold-ll", "linear", "pchip", "hermite", "unitselection", "mean-frame"),
 }
 MEASURES = ("rmse_x", "rmse_y", "lve")
-STATE_DIM_CANDIDATES = (3, 4, 5, 6, 8)
+STATE_DIM_CANDIDATES = (3, 5, 8)
+#: K candidates: one state per this many training frames (30: the state graph's default)
+FRAMES_PER_STATE_CANDIDATES = (30, 15, 8)
 SMOOTHING_CANDIDATES = (0.0, 1.0, 2.0, 3.0, 4.0, 6.0)
 Y_DIMS = 3
 _MANIFOLDS = {"manifold": "state-mean", "manifold-ll": "local-linear"}
@@ -75,23 +78,26 @@ def _mid_frames(manifold, uid, corpus=None):
 
 def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=STATE_DIM_CANDIDATES,
                     sigmas=SMOOTHING_CANDIDATES, neighbors=NEIGHBOR_CANDIDATES, n_states=None,
-                    progress: ProgressFn = None) -> dict:
-    """Choose ``state_dims``, smoothing and k on a validation split of the training utterances.
+                    frames_per_state=FRAMES_PER_STATE_CANDIDATES, progress: ProgressFn = None) -> dict:
+    """Choose ``state_dims``, K, smoothing and k on a validation split of the training utterances.
 
     The fitted manifold's F^y stands for the training frames (the embedding saw the
     validation utterances, as it sees all training data; the *states*, their
     transitions and the inverse maps are fitted on the fitting part only). For each
     candidate ``state_dims``: k of the local-linear inverse by reconstruction of the
-    validation frames' X from their F^y, then the states-protocol synthesis of every
-    validation utterance; the dims with the smallest validation RMSE in X of
-    ``manifold`` (states protocol, best sigma) win, and each manifold method's sigma
-    per protocol is the best at those dims.
+    validation frames' X from their F^y; then for each K (``n_states`` if given, else
+    one state per ``frames_per_state`` frames) the states-protocol and oracle-protocol
+    synthesis of every validation utterance. The (dims, K) with the smallest validation
+    RMSE in X of ``manifold`` (states protocol, best sigma) win, and each manifold
+    method's sigma per protocol is the best at those.
 
     Returns
     -------
     dict
-        ``state_dims``, ``n_neighbors``, ``sigma`` (dict "protocol/method" -> frames),
-        ``validation`` (errors per candidate), ``val_ids``, ``note``.
+        ``state_dims``, ``frames_per_state`` (None when K was given), ``n_states`` (K for
+        the whole training set, or None for the default), ``n_neighbors``, ``sigma``
+        (dict "protocol/method" -> frames), ``validation`` (errors per candidate, keyed
+        "dims/frames-per-state"), ``val_ids``, ``note``.
     """
     c = manifold.corpus_
     ids = [u.id for u in c.utterances]
@@ -101,10 +107,10 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
         raise ValueError(f"no candidate state_dims in {list(state_dims)} fits the {maxd} dims of F^y")
     if len(ids) < 3:
         d = min(cand, key=lambda x: abs(x - 5))
-        return {"state_dims": d, "n_neighbors": 40, "sigma": {f"{p}/{m}": 2.0 for p in PROTOCOLS for m in _MANIFOLDS},
-                "validation": {}, "val_ids": [],
+        return {"state_dims": d, "n_neighbors": 40, "n_states": n_states, "frames_per_state": None,
+                "sigma": {f"{p}/{m}": 2.0 for p in PROTOCOLS for m in _MANIFOLDS}, "validation": {}, "val_ids": [],
                 "note": f"only {len(ids)} training utterance(s): no validation split; fixed defaults "
-                        f"(state_dims {d}, k 40, sigma 2 frames)"}
+                        f"(state_dims {d}, default K, k 40, sigma 2 frames)"}
     rng = np.random.default_rng(random_state)
     n_val = min(len(ids) - 2, max(1, int(round(val_fraction * len(ids)))))
     val_ids = sorted(rng.choice(len(ids), size=n_val, replace=False).tolist())
@@ -114,36 +120,46 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
     b_fit = _bounds(fit)
     Fy_val, Fx_val = _slice_rows(manifold.Fy_, val), _slice_rows(manifold.Fx_, val).astype(np.float64)
     targets = [_mid_frames(manifold, u.id).frames for u in val]
-    K = None if n_states is None else max(2, int(round(n_states * len(Fy_fit) / len(manifold.Fy_))))
+    N_fit = len(Fy_fit)
+    if n_states is not None:
+        Ks = {None: max(2, int(round(n_states * N_fit / len(manifold.Fy_))))}
+    else:
+        Ks = {int(f): max(2, min(N_fit, int(round(N_fit / float(f))))) for f in frames_per_state}
     table = {}
+    steps = len(cand) * len(Ks)
     for j, d in enumerate(cand):
-        report(progress, "validation", j, len(cand))
         k, k_err = select_neighbors(Fy_fit, Fx_fit, Fy_val, Fx_val, n_dims=d, candidates=neighbors)
-        sm = StateModel(state_dims=d, n_states=K, n_neighbors=k, random_state=random_state).fit(
-            Fy_fit, Fx_fit, Fxv_fit, b_fit)
-        sq = {(p, m, s): 0.0 for p in PROTOCOLS for m in _MANIFOLDS for s in sigmas}
-        n = 0
-        for u, f in zip(val, targets):
-            Yu, Xu = manifold.Fy_[u.start:u.stop], manifold.Fx_[u.start:u.stop].astype(np.float64)
-            path, _ = sm.path(f, sm.predict(Yu[f]), u.n_frames)
-            lo, hi = int(f[0]), int(f[-1]) + 1
-            n += hi - lo
-            for m, how in _MANIFOLDS.items():
-                for s in sigmas:
-                    X = sm.path_x(path, how=how, sigma=s)
-                    sq[("states", m, s)] += float(((X - Xu)[lo:hi] ** 2).sum())
-                    sq[("oracle", m, s)] += float(((anchor(X, f, Xu[f]) - Xu)[lo:hi] ** 2).sum())
-        table[d] = {"k": k, "k_errors": k_err, "rmse_x": {f"{p}/{m}/{s:g}": float(np.sqrt(v / max(n, 1)))
-                                                         for (p, m, s), v in sq.items()}}
-    report(progress, "validation", len(cand), len(cand))
+        for i, (fps, K) in enumerate(Ks.items()):
+            report(progress, "validation", j * len(Ks) + i, steps)
+            sm = StateModel(state_dims=d, n_states=K, n_neighbors=k, random_state=random_state).fit(
+                Fy_fit, Fx_fit, Fxv_fit, b_fit)
+            sq = {(p, m, s): 0.0 for p in PROTOCOLS for m in _MANIFOLDS for s in sigmas}
+            n = 0
+            for u, f in zip(val, targets):
+                Yu, Xu = manifold.Fy_[u.start:u.stop], manifold.Fx_[u.start:u.stop].astype(np.float64)
+                path, _ = sm.path(f, sm.predict(Yu[f]), u.n_frames)
+                lo, hi = int(f[0]), int(f[-1]) + 1
+                n += hi - lo
+                for m, how in _MANIFOLDS.items():
+                    for s in sigmas:
+                        X = sm.path_x(path, how=how, sigma=s)
+                        sq[("states", m, s)] += float(((X - Xu)[lo:hi] ** 2).sum())
+                        sq[("oracle", m, s)] += float(((anchor(X, f, Xu[f]) - Xu)[lo:hi] ** 2).sum())
+            table[f"{d}/{fps}"] = {"dims": d, "frames_per_state": fps, "K": sm.n_states_, "k": k, "k_errors": k_err,
+                                   "rmse_x": {f"{p}/{m}/{s:g}": float(np.sqrt(v / max(n, 1)))
+                                              for (p, m, s), v in sq.items()}}
+    report(progress, "validation", steps, steps)
 
-    def best_sigma(d, p, m):
-        r = table[d]["rmse_x"]
+    def best_sigma(key, p, m):
+        r = table[key]["rmse_x"]
         return min(sigmas, key=lambda s: r[f"{p}/{m}/{s:g}"])
 
-    d_best = min(cand, key=lambda d: table[d]["rmse_x"][f"states/manifold/{best_sigma(d, 'states', 'manifold'):g}"])
-    return {"state_dims": d_best, "n_neighbors": table[d_best]["k"],
-            "sigma": {f"{p}/{m}": float(best_sigma(d_best, p, m)) for p in PROTOCOLS for m in _MANIFOLDS},
+    best = min(table, key=lambda key: table[key]["rmse_x"][f"states/manifold/{best_sigma(key, 'states', 'manifold'):g}"])
+    t = table[best]
+    fps = t["frames_per_state"]
+    K = n_states if fps is None else max(2, int(round(len(manifold.Fy_) / fps)))
+    return {"state_dims": t["dims"], "frames_per_state": fps, "n_states": K, "n_neighbors": t["k"],
+            "sigma": {f"{p}/{m}": float(best_sigma(best, p, m)) for p in PROTOCOLS for m in _MANIFOLDS},
             "validation": table, "val_ids": [ids[i] for i in val_ids],
             "note": f"chosen on {len(val_ids)} of {len(ids)} training utterances held out from the states"}
 
@@ -263,7 +279,8 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
         settings = (settings_factory(manifold) if settings_factory is not None
                     else select_settings(manifold, random_state=random_state, progress=progress))
     d = int(settings["state_dims"])
-    sm = StateModel(state_dims=d, n_neighbors=int(settings["n_neighbors"]), random_state=random_state).fit(
+    sm = StateModel(state_dims=d, n_states=settings.get("n_states"), n_neighbors=int(settings["n_neighbors"]),
+                    random_state=random_state).fit(
         manifold.Fy_, manifold.Fx_, manifold.Fxv_, manifold.corpus_.bounds)
     us = UnitSelectionSynthesizer().fit(manifold)
     mean_x = np.asarray(manifold.Fx_, dtype=np.float64).mean(axis=0)
@@ -294,7 +311,8 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
     return ProtocolResult.build(per, corpus=corpus.name, test_ids=test, train_ids=train_ids,
                                 n_train_frames=train.n_frames, settings=settings, failures=failures,
                                 missed_gaps=missed, inverse=inv, n_states=sm.n_states_,
-                                state_warnings=sm.connectivity_warnings_, n_boot=n_boot, random_state=random_state)
+                                state_warnings=sm.connectivity_warnings_, n_boot=n_boot, random_state=random_state,
+                                manifold=manifold)
 
 
 def _inverse_errors(acc, manifold, sm, F, Y):

@@ -10,7 +10,7 @@ from engine.protocols import PROTOCOL_METHODS, evaluate_protocols, normalise_spe
 from engine.statepaths import StateModel, anchor, interpolate_targets
 
 #: a reduced candidate grid keeps the test fast; the generator of docs/RESULTS.md uses the full one
-GRID = {"state_dims": (3, 5), "sigmas": (0.0, 2.0), "neighbors": (20, 40)}
+GRID = {"state_dims": (3, 5), "sigmas": (0.0, 2.0), "neighbors": (20, 40), "frames_per_state": (30, 15)}
 
 
 @pytest.fixture(scope="module")
@@ -148,6 +148,8 @@ def test_protocol_tables(result, split, small_corpus, tmp_path):
     s = result.settings
     assert s["val_ids"] and set(s["val_ids"]) <= set(result.train_ids) and not set(s["val_ids"]) & set(split)
     assert s["state_dims"] in GRID["state_dims"] and s["n_neighbors"] in GRID["neighbors"]
+    assert s["frames_per_state"] in GRID["frames_per_state"] and len(s["validation"]) == 4
+    assert result.n_states == pytest.approx(result.n_train_frames / s["frames_per_state"], rel=0.05)
     text = result.format()
     for p in PROTOCOL_METHODS:
         assert f"protocol {p!r}" in text and "verdict X: manifold" in text
@@ -172,9 +174,9 @@ def test_verdicts_say_where_the_manifold_loses(result):
 def test_every_method_is_scored_in_y_through_the_same_projection(result, small_corpus, split):
     """Recompute one method's Y error by hand: its X trajectory through project_x, nothing else."""
     from engine.evaluation import project_x
-    from engine.manifold import Manifold
 
-    m = Manifold().fit(small_corpus.subset(result.train_ids))
+    m = result.manifold
+    assert m.corpus_.n_frames == result.n_train_frames
     uid = split[0]
     u = small_corpus.utterance(uid)
     F = small_corpus.frames[u.start:u.stop]
@@ -220,8 +222,9 @@ def test_anchored_manifold_path_beats_linear_and_pchip_with_oracle_targets(talke
         r = result
     else:
         ids = [u.id for u in heldout_corpus.utterances]
+        grid = {**GRID, "state_dims": (5,)}  # fewer candidates: keeps the test near 10 s
         r = evaluate_protocols(heldout_corpus, test_ids=ids[2::5], n_boot=500, inverse_table=False,
-                               settings_factory=lambda m: select_settings(m, **GRID))
+                               settings_factory=lambda m: select_settings(m, **grid))
     for meas in ("rmse_x", "rmse_y", "lve"):
         man = r.row("oracle", "manifold")[meas]
         for base in ("linear", "pchip", "unitselection", "mean-frame"):
