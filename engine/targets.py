@@ -156,6 +156,11 @@ class PhoneMatcher:
         if key is not None and key in self._map:
             return self._map[key]
         at = f" ({where})" if where else ""
+        if not self.known:
+            raise UnknownPhoneError(
+                f"phone {label!r}{at}: {self.name} has no phone labels, so phone targets cannot be placed; use "
+                "its utterances (kinematic landmarks) or manifold states as targets (lipspace synthesize "
+                "--utterance ID / --states S,S,...)")
         raise UnknownPhoneError(
             f"phone {label!r}{at} does not occur in {self.name}; known phones: {' '.join(self.known)}")
 
@@ -354,6 +359,10 @@ def targets_from_utterance(manifold, utterance, *, corpus=None, key_frames=None,
                            on_collision: str = "error") -> TargetSequence:
     """Oracle targets from a corpus utterance: its own phone mid-points (the paper's Fig. 3).
 
+    An utterance without phones uses its kinematic landmarks (:mod:`engine.kinematics`:
+    aperture maxima and minima, peak opening and closing velocity) as targets, labelled
+    with their kind, when the corpus names upper and lower lip points.
+
     Parameters
     ----------
     manifold : Manifold
@@ -396,10 +405,18 @@ def targets_from_utterance(manifold, utterance, *, corpus=None, key_frames=None,
     if phones and not own:  # held-out: use training labels where they match, keep the rest as given
         matcher = PhoneMatcher.for_corpus(manifold.corpus_)
         phones = tuple(PhoneInterval(p.start, p.end, _match_or_keep(matcher, p.label)) for p in phones)
-    if key_frames is None:
+    if key_frames is None and not phones:
+        from engine.kinematics import lip_aperture, with_kinematic_labels
+
+        one = c.subset([u.id])
+        if lip_aperture(one) is None:
+            raise TargetError(f"{source} has no phone alignment and {c.name} names no upper/lower lip points for "
+                              "kinematic landmarks; give key_frames= (lipspace synthesize --key-frames F,F,...)")
+        phones = with_kinematic_labels(one).utterances[0].phones  # aperture extrema and peak velocities
+        source += " (kinematic landmarks: it has no phone alignment)"
         if not phones:
-            raise TargetError(f"{source} has no phone alignment; give key_frames= (lipspace synthesize "
-                              "--key-frames F,F,... or --key-frames kinematic)")
+            raise TargetError(f"{source}: no kinematic landmarks found (the lips hardly move); give key_frames=")
+    if key_frames is None:
         ph = phones
         keep, frames = _mid_targets(ph, c.rate, n, on_collision, source)
         items = [(frames[i], ph[i].label) for i in keep]

@@ -6,7 +6,10 @@ fitted on the synthetic talker (``--preset``). Targets:
 ``--phones "p 0.08 ax 0.1 ..."``  labels and durations (s); any phone set the corpus's labels normalise to
 ``--textgrid FILE``              a Praat TextGrid (or HTK/MOCHA .lab) phone tier
 ``--text "..."``                 English text through the pronouncing dictionary and the duration model
-``--utterance ID``               a corpus utterance's own phone mid-points (oracle targets, as the paper's Fig. 3)
+``--utterance ID``               a corpus utterance's own phone mid-points (oracle targets, as the paper's Fig. 3);
+                                 with ``--key-frames F,F,...`` or ``--key-frames kinematic`` its frames at those
+                                 indices / at its kinematic landmarks (the default when it has no phones)
+``--states S,S,...``             manifold states (e.g. clicked in the explorer), ``--spacing`` seconds apart
 
 Outputs: ``-o traj.csv`` / ``-o traj.npy`` (``--values`` frames, fx or fy),
 ``-o speech.glb`` / ``.gltf`` (a glTF 2.0 morph-target animation: mean shape, shape
@@ -28,7 +31,14 @@ def add_arguments(p):
     src.add_argument("--phones", metavar='"P DUR ..."', help='phone labels with durations in seconds, e.g. "p 0.08 ax 0.1"')
     src.add_argument("--textgrid", metavar="FILE", help="Praat TextGrid (or .lab) phone alignment")
     src.add_argument("--text", metavar='"TEXT"', help="English text (words; [p h o n e s] in brackets for others)")
-    src.add_argument("--utterance", metavar="ID", help="a corpus utterance: its own phone mid-points as targets")
+    src.add_argument("--utterance", metavar="ID", help="a corpus utterance: its own phone mid-points as targets "
+                                                       "(kinematic landmarks when it has no phones)")
+    src.add_argument("--states", metavar="S,S,...", help="state indices of the manifold's state graph as targets")
+    p.add_argument("--key-frames", metavar="F,F,...|kinematic", default=None,
+                   help="with --utterance: target frames (0-based within the utterance), or 'kinematic' for its "
+                        "aperture maxima / minima and peak velocities")
+    p.add_argument("--spacing", type=float, default=0.2, metavar="SECONDS",
+                   help="with --states: time between successive targets (default: %(default)s)")
     p.add_argument("--manifold", metavar="FILE", help="manifold file from 'lipspace build' (default: fit the "
                                                      "synthetic talker)")
     p.add_argument("--preset", choices=PRESETS, default="default",
@@ -84,7 +94,35 @@ def _targets(args, manifold):
         from engine.phonetics import DurationModel
 
         return T.targets_from_text(manifold, args.text, duration_model=DurationModel(tempo=args.tempo))
-    return T.targets_from_utterance(manifold, args.utterance, on_collision="merge")
+    if args.states is not None:
+        try:
+            states = [int(x) for x in args.states.replace(" ", ",").split(",") if x.strip()]
+        except ValueError:
+            raise ValueError(f"--states {args.states!r}: expected comma-separated state indices") from None
+        if not states or not args.spacing > 0:
+            raise ValueError("--states needs at least one state and --spacing > 0 seconds")
+        step = max(1, int(round(args.spacing * manifold.corpus_.rate)))
+        return T.targets_from_points(manifold, [(k * step, s) for k, s in enumerate(states)],
+                                     n_frames=(len(states) - 1) * step + 1)
+    kf = _key_frames(args, manifold) if args.key_frames is not None else None  # no phones: kinematic landmarks
+    return T.targets_from_utterance(manifold, args.utterance, on_collision="merge", key_frames=kf)
+
+
+def _key_frames(args, manifold):
+    spec = args.key_frames.strip()
+    if spec == "kinematic":
+        from engine.kinematics import kinematic_key_frames, lip_aperture
+
+        c = manifold.corpus_
+        if lip_aperture(c) is None:
+            raise ValueError(f"utterance {args.utterance!r} has no phones and {c.name} names no upper/lower lip "
+                             "points for kinematic landmarks; give --key-frames F,F,... (frames within the "
+                             "utterance)")
+        return kinematic_key_frames(c, args.utterance)
+    try:
+        return [int(x) for x in spec.replace(" ", ",").split(",") if x.strip()]
+    except ValueError:
+        raise ValueError(f"--key-frames {spec!r}: expected comma-separated frame indices or 'kinematic'") from None
 
 
 def _synthesizer(args, manifold):
@@ -107,6 +145,8 @@ def run(args) -> int:
         raise CliError(f"--values {args.values} is for .csv/.npy; a glTF animation always holds the lip frames")
     if args.values == "fy" and args.method != "manifold":
         raise CliError(f"--values fy needs --method manifold (the {args.method} method moves in X, not Y)")
+    if args.key_frames is not None and args.utterance is None:
+        raise CliError("--key-frames picks frames of an utterance: give --utterance ID too")
     manifold = _manifold(args)
     try:
         targets = _targets(args, manifold)
@@ -152,6 +192,7 @@ def run(args) -> int:
         print(f"wrote {len(files)} {args.mesh_format.upper()} files to {args.mesh_dir}"
               + (f" ({note})" if note else ""))
     return 0
+
 
 def _write_animation(args, manifold, traj, out):
     """``-o speech.glb``: the trajectory as glTF morph weights, its audio as a WAV beside it."""

@@ -99,7 +99,13 @@ def test_unlabelled_clusters_synthesis_and_figures(good, tmp_path):
     uid = Corpus.load(corpus).utterances[0].id
     rc, out, err = _run(["synthesize", "--manifold", str(mfile), "--utterance", uid, "-o", str(tmp_path / "a.npy"),
                          "-q"])
-    assert rc == 0 and "kinematic landmarks" in err
+    assert rc == 0 and "(kinematic landmarks: it has no phone alignment): open" in out or \
+        "(kinematic landmarks: it has no phone alignment): clos" in out, out + err
+    rc, out, err = _run(["synthesize", "--manifold", str(mfile), "--utterance", uid, "--key-frames", "kinematic",
+                         "-q"])
+    assert rc == 0, err
+    rc, out, err = _run(["synthesize", "--manifold", str(mfile), "--phones", "p 0.1 aa 0.1", "-q"])
+    assert rc == 2 and "has no phone labels" in err and "--states S,S,..." in err
     rc, out, err = _run(["synthesize", "--manifold", str(mfile), "--states", "0,5,9", "-o", str(tmp_path / "b.npy"),
                          "-q"])
     assert rc == 0 and np.load(tmp_path / "b.npy").shape[0] == 2 * 12 + 1
@@ -116,14 +122,16 @@ def test_evaluate_unlabelled_and_exit_status(good, tmp_path):
     rc, out, err = _run(["evaluate", str(corpus), "--methods", "linear", "-q"])
     assert rc == 0, err
     assert "kinematic landmarks" in err and "linear" in out
-    # every held-out item failing exits non-zero: a test utterance without targets
+    # every held-out item failing exits non-zero: a test utterance without phones and, with no lip roles
+    # named, without kinematic landmarks either
     from dataclasses import replace
 
     from engine.kinematics import with_kinematic_labels
 
     c = with_kinematic_labels(Corpus.load(corpus))
     bare = c.utterances[0].id
-    c = replace(c, utterances=[replace(u, phones=()) if u.id == bare else u for u in c.utterances])
+    c = replace(c, utterances=[replace(u, phones=()) if u.id == bare else u for u in c.utterances],
+                point_roles=None, point_names=[f"p{i}" for i in range(c.n_points)])
     c.save(tmp_path / "part.npz")
     rc, out, err = _run(["evaluate", str(tmp_path / "part.npz"), "--methods", "linear", "--test-ids", bare, "-q"])
     assert rc == 1, out + err
