@@ -27,12 +27,18 @@ def _recording_lines(c):
     """Speakers, sensor roles, registration and import history of a corpus."""
     spk = [s for s in c.speakers if s]
     lines = []
+    if not any(u.phones for u in c.utterances):
+        lips = c.role_points("upper_lip").size and c.role_points("lower_lip").size
+        lines.append("labels      none: " + ("clusters, synthesize --utterance, evaluate and figures use kinematic "
+                                             "landmarks (aperture maxima/minima, peak velocities)" if lips else
+                                             "no lip roles for kinematic landmarks either; synthesize with "
+                                             "--states or --utterance ID --key-frames F,F,..."))
     if spk:
         lines.append(f"speakers    {len(spk)}: {', '.join(spk[:12])}{' ...' if len(spk) > 12 else ''}")
     if c.point_roles is not None:
         lines.append("roles       " + ", ".join(f"{n}={r or '-'}" for n, r in zip(c.point_names or [], c.point_roles)))
     lines.append(f"registration {c.registration or 'none'}")
-    lines += [f"history     {h}" for h in c.history if not h.startswith("read ")]
+    lines += [f"history     {h}" for h in c.history if not h.startswith(("read ", "registration:"))]
     return lines
 
 
