@@ -1,0 +1,202 @@
+"""Benchmark: a 3-second synthesised utterance exported as glTF (.glb) and rendered to MP4.
+
+Usage: python benchmarks/bench_export.py [--preset default|paper|small] [--manifold FILE] [--seconds 3]
+                                         [--repeat 5] [--cold 3] [--size 640x480] [--cache-dir DIR]
+
+Goals (issue 17): the .glb of a 3-s utterance in under 1 s; the MP4 at least real time
+(video seconds per wall-clock second >= 1) with software GL. Prints, per export, the
+min and median wall time of ``--repeat`` warm runs in this process, the peak traced
+memory (tracemalloc) of the first run and the max RSS, and ``--cold`` runs in fresh
+processes (interpreter start, imports, loading the manifold file, synthesis and the
+export; the export step's own time is reported separately). Also prints the BLAS
+kernel (threadpoolctl) and the OpenGL renderer VTK uses.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+
+def _rss_mib():
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def timed(name, fn, *, repeat=1, per=None):
+    """Run ``fn`` ``repeat`` times; print min / median wall time, peak traced memory of run 1, max RSS."""
+    times, cpus, peak = [], [], 0
+    for k in range(repeat):
+        if k == 0:
+            tracemalloc.start()
+        t, c = time.perf_counter(), time.process_time()
+        fn()
+        times.append(time.perf_counter() - t)
+        cpus.append(time.process_time() - c)
+        if k == 0:
+            peak = tracemalloc.get_traced_memory()[1]
+            tracemalloc.stop()
+    lo, med = min(times), float(np.median(times))
+    extra = f"   {per / med:5.2f}x real time (median)" if per else ""
+    print(f"  {name:<40} min {1000 * lo:8.1f} ms   median {1000 * med:8.1f} ms (of {repeat}; CPU median "
+          f"{1000 * float(np.median(cpus)):8.1f} ms, all threads)   peak traced {peak / 2**20:7.1f} MiB   "
+          f"max RSS {_rss_mib():6.0f} MiB{extra}   [load {os.getloadavg()[0]:.1f}]", flush=True)
+    return lo, med
+
+
+def _phones(corpus, seconds):
+    """(label, duration) of the first ``seconds`` of the corpus's longest utterance."""
+    u = max(corpus.utterances, key=lambda x: x.n_frames)
+    out, t = [], 0.0
+    for p in u.phones:
+        d = min(p.end - p.start, seconds - t)
+        if d <= 0:
+            break
+        out.append((p.label, d))
+        t += d
+    return out
+
+
+def _synthesize(m, seconds):
+    from engine.synthesis import make_synthesizer
+    from engine.targets import targets_from_phones
+
+    return make_synthesizer("manifold", m, strict=False).synthesize(targets_from_phones(m, _phones(m.corpus_, seconds)))
+
+
+def _size(text):
+    w, h = (int(v) for v in text.lower().split("x"))
+    return w, h
+
+
+def _child(kind, manifold_path, seconds, size, out):
+    """One cold run in this fresh process; prints a JSON line of its timings."""
+    t0 = time.perf_counter()
+    from engine.manifold import Manifold
+
+    m = Manifold.load(manifold_path)
+    traj = _synthesize(m, seconds)
+    t1 = time.perf_counter()
+    if kind == "glb":
+        from app.export.animation import export_animation
+
+        export_animation(m, traj.Fx, out, rate=m.corpus_.rate)
+    else:
+        from app.export.video import render_video
+
+        c = m.corpus_
+        render_video(out, traj.frames(m), rate=c.rate, faces=c.faces, dims=c.dims, size=size)
+    t2 = time.perf_counter()
+    print(json.dumps({"load_and_synthesize": t1 - t0, "export": t2 - t1, "rss_mib": _rss_mib()}))
+
+
+def _cold(kind, manifold_path, args, tmp):
+    walls, exports, rss = [], [], []
+    for k in range(args.cold):
+        out = Path(tmp) / f"cold{k}.{'glb' if kind == 'glb' else 'mp4'}"
+        t = time.perf_counter()
+        r = subprocess.run([sys.executable, __file__, "--child", kind, "--manifold", str(manifold_path),
+                            "--seconds", str(args.seconds), "--size", f"{args.size[0]}x{args.size[1]}",
+                            "--out", str(out)], capture_output=True, text=True, env=os.environ.copy())
+        walls.append(time.perf_counter() - t)
+        if r.returncode:
+            raise SystemExit(f"cold run failed:\n{r.stderr}")
+        d = json.loads(r.stdout.strip().splitlines()[-1])
+        exports.append(d["export"])
+        rss.append(d["rss_mib"])
+    print(f"  cold {kind:<39} process min {min(walls):6.2f} s  median {np.median(walls):6.2f} s; "
+          f"export step min {1000 * min(exports):8.1f} ms  median {1000 * np.median(exports):8.1f} ms "
+          f"(of {args.cold}); max RSS {max(rss):6.0f} MiB", flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--preset", default="default")
+    ap.add_argument("--manifold", default=None, help="a saved manifold instead of fitting the preset")
+    ap.add_argument("--seconds", type=float, default=3.0)
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--cold", type=int, default=3)
+    ap.add_argument("--size", type=_size, default=(640, 480))
+    ap.add_argument("--cache-dir", default=None)
+    ap.add_argument("--child", choices=("glb", "mp4"), default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--out", default=None, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        return _child(args.child, args.manifold, args.seconds, args.size, args.out)
+
+    from threadpoolctl import threadpool_info
+
+    from engine.manifold import Manifold
+    from engine.synthetic import load_synthetic
+
+    blas = [f"{i['internal_api']} {i.get('version')} {i.get('architecture')} x{i['num_threads']}"
+            for i in threadpool_info() if i["user_api"] == "blas"]
+    print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f} (other work on the machine slows wall times)")
+    print(f"python {sys.version.split()[0]}, numpy {np.__version__}, BLAS: {'; '.join(blas) or 'unknown'}")
+    with tempfile.TemporaryDirectory(prefix="bench-export-") as tmp:
+        if args.manifold:
+            m = Manifold.load(args.manifold)
+            mpath = Path(args.manifold)
+        else:
+            m = Manifold().fit(load_synthetic(preset=args.preset, cache_dir=args.cache_dir))
+            mpath = m.save(Path(tmp) / "m.npz")
+        c = m.corpus_
+        traj = _synthesize(m, args.seconds)
+        n = traj.n_frames
+        dur = n / c.rate
+        print(f"manifold: {c.n_frames} frames x {c.n_points} points ({0 if c.faces is None else len(c.faces)} "
+              f"triangles), {m.shape_.n_components_} shape components, rate {c.rate:g} Hz")
+        print(f"utterance: {n} frames = {dur:.2f} s")
+
+        from app.export.animation import export_animation
+        from app.export.video import render_video
+
+        print("\nglTF (.glb) - goal < 1 s")
+        glb = Path(tmp) / "speech.glb"
+        timed("export_animation -> .glb (warm)", lambda: export_animation(m, traj.Fx, glb, rate=c.rate),
+              repeat=args.repeat)
+        print(f"  file size {glb.stat().st_size / 2**20:.2f} MiB")
+        _cold("glb", mpath, args, tmp)
+
+        print(f"\nMP4 (H.264, {args.size[0]}x{args.size[1]} per panel, {c.rate:g} fps) - goal >= real time")
+        frames = traj.frames(m)
+        mp4 = Path(tmp) / "talk.mp4"
+        w = max(1, args.repeat // 2)
+        timed("lips only (warm)", lambda: render_video(mp4, frames, rate=c.rate, faces=c.faces, dims=c.dims,
+                                                       size=args.size), repeat=w, per=dur)
+        print(f"  file size {mp4.stat().st_size / 2**20:.2f} MiB")
+        from engine.evaluation import trajectory_y
+
+        u = max(c.utterances, key=lambda x: x.n_frames)
+        orig = c.frames[u.start:u.start + n]
+        Y = trajectory_y(m, traj)
+        timed("original beside + manifold panel (warm)",
+              lambda: render_video(mp4, frames, rate=c.rate, faces=c.faces, dims=c.dims, original=orig, Y=Y,
+                                   Y_original=m.Fy_[u.start:u.start + n], cloud=m.Fy_, size=args.size),
+              repeat=w, per=dur)
+        _cold("mp4", mpath, args, tmp)
+        import vtk
+
+        rw = vtk.vtkRenderWindow()
+        rw.SetOffScreenRendering(1)
+        rw.Render()
+        info = [ln for ln in rw.ReportCapabilities().splitlines() if "OpenGL renderer" in ln]
+        print(f"\nVTK {vtk.vtkVersion.GetVTKVersion()}, {type(rw).__name__}: {info[0].strip() if info else '?'}; "
+              f"DISPLAY={os.environ.get('DISPLAY', '(none)')}")
+        rw.Finalize()
+
+
+if __name__ == "__main__":
+    main()
