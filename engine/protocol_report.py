@@ -81,7 +81,9 @@ class ProtocolResult:
                                           n_boot=n_boot, random_state=random_state)
                     comps.append({"protocol": proto, "method": m, "measure": meas, **c.as_dict()})
         inv = [{"map": k, "frames": v["frames"], "rmse_x": float(np.sqrt(v["sq_x"] / v["frames"])),
-                "lve": v["lve_sum"] / v["frames"]} for k, v in inverse.items() if not k.startswith("_")]
+                "lve": v["lve_sum"] / v["frames"],
+                "r2": [float(x) for x in 1.0 - np.asarray(v["sq_comp"]) / np.maximum(np.asarray(v["var_comp"]), 1e-300)]}
+               for k, v in inverse.items() if not k.startswith("_")]
         slim = [{k: p[k] for k in ("protocol", "method", "utterance", "frames", "rmse_x", "rmse_y", "lve")}
                 for p in per]
         return cls(rows=rows, per_utterance=slim, comparisons=comps, inverse_rows=inv, **kw)
@@ -167,8 +169,10 @@ class ProtocolResult:
             out += [f"verdict X: {self.verdict(p, 'rmse_x')}", f"verdict Y: {self.verdict(p, 'rmse_y')}",
                     f"verdict LVE: {self.verdict(p, 'lve')}"]
         if self.inverse_rows:
-            out += ["", "inverse maps: held-out frames' X from their own F^y", "map  RMSE X  LVE"]
-            out += [f"{r['map']}  {r['rmse_x']:.4g}  {r['lve']:.4g}" for r in self.inverse_rows]
+            out += ["", "inverse maps: held-out frames' X from their own F^y (R^2 per X component)",
+                    "map  RMSE X  LVE  R^2"]
+            out += [f"{r['map']}  {r['rmse_x']:.4g}  {r['lve']:.4g}  " + " ".join(f"{x:.2f}" for x in r["r2"])
+                    for r in self.inverse_rows]
         return "\n".join(out)
 
     def markdown(self, *, title=None, level=3) -> str:
@@ -182,8 +186,11 @@ class ProtocolResult:
             out += ["", f"- X: {self.verdict(p, 'rmse_x')}", f"- Y: {self.verdict(p, 'rmse_y')}",
                     f"- LVE: {self.verdict(p, 'lve')}", ""]
         if self.inverse_rows:
-            out += [f"{h}# Inverse maps (held-out frames' X from their own F^y)", "", "| map | RMSE X | LVE |",
-                    "|---|---|---|"]
-            out += [f"| {r['map']} | {r['rmse_x']:.4g} | {r['lve']:.4g} |" for r in self.inverse_rows]
+            nc = min(6, len(self.inverse_rows[0]["r2"]))
+            out += [f"{h}# Inverse maps (held-out frames' X from their own F^y)", "",
+                    "| map | RMSE X | LVE | " + " | ".join(f"R² X{j + 1}" for j in range(nc)) + " |",
+                    "|---|---|---|" + "---|" * nc]
+            out += [f"| {r['map']} | {r['rmse_x']:.4g} | {r['lve']:.4g} | " + " | ".join(f"{x:.3f}" for x in r["r2"][:nc])
+                    + " |" for r in self.inverse_rows]
             out.append("")
         return "\n".join(out)

@@ -333,7 +333,9 @@ def _inverse_errors(acc, manifold, sm, F, Y):
         X = np.asarray(fn(), dtype=np.float64)
         Fh = manifold.shape_.inverse_transform(X.astype(np.float32)).astype(np.float64).reshape(n, -1, dims)
         lv = np.linalg.norm(Fh - F.astype(np.float64).reshape(n, -1, dims), axis=2).max(axis=1)
-        a = acc.setdefault(name, {"sq_x": 0.0, "lve_sum": 0.0, "frames": 0})
+        a = acc.setdefault(name, {"sq_x": 0.0, "lve_sum": 0.0, "frames": 0, "sq_comp": 0.0, "var_comp": 0.0})
         a["sq_x"] += float(((X - Xt) ** 2).sum())
+        a["sq_comp"] = a["sq_comp"] + ((X - Xt) ** 2).sum(axis=0)  # per component, for R^2
+        a["var_comp"] = a["var_comp"] + ((Xt - np.asarray(manifold.Fx_, np.float64).mean(axis=0)) ** 2).sum(axis=0)
         a["lve_sum"] += float(lv.sum())
         a["frames"] += n

@@ -159,6 +159,16 @@ def test_protocol_tables(result, split, small_corpus, tmp_path):
     assert list(rows[0]) == ["protocol", "method", "utterance", "rmse_x", "rmse_y", "lve"]
     assert sum(r["utterance"] == "ALL" for r in rows) == len(result.rows)
     assert {x["map"] for x in result.inverse_rows} >= {"delaunay-3d (paper)", "local-linear-3d"}
+    m = result.manifold.Fx_.shape[1]
+    for x in result.inverse_rows:
+        assert len(x["r2"]) == m and all(v <= 1 for v in x["r2"])
+    inv = {x["map"]: x for x in result.inverse_rows}
+    # the 3-D bottleneck (recovery check on the talker's lip rounding, X2): Y1-3 carry X1 but not X2;
+    # more dims of Y carry it
+    d = s["state_dims"]
+    if d > 3:
+        assert inv["local-linear-3d"]["r2"][0] > 0.9
+        assert inv[f"local-linear-{d}d"]["r2"][1] > inv["local-linear-3d"]["r2"][1] + 0.3, inv
 
 
 def test_verdicts_say_where_the_manifold_loses(result):
