@@ -102,6 +102,11 @@ def _parse_est_header(data: bytes, path):
     for k, (_, i) in names.items():
         if k >= n_ch:
             raise ImportFormatError(path, f"Channel_{k} is named but NumChannels is {n_ch}", line=i)
+    per_value = 4 if dtype == "binary" else 2  # a float32, or at least a digit and a separator
+    if n_frames * (1 + n_ch) * per_value > len(data):  # checked before anything is sized by the header
+        raise ImportFormatError(path, f"the header promises NumFrames {n_frames} x NumChannels {n_ch} (at least "
+                                f"{n_frames * (1 + n_ch) * per_value} bytes of data) but the file holds "
+                                f"{len(data)} bytes; damaged header?")
     channel_names = [names.get(k, (f"channel_{k}", 0))[0] or f"channel_{k}" for k in range(n_ch)]
     return dict(n_frames=n_frames, n_channels=n_ch, n_aux=n_aux, binary=dtype == "binary", endian=endian,
                 breaks="BreaksPresent" in hdr, names=channel_names, body=body_start,

@@ -28,6 +28,8 @@ MI_MATRIX, MI_COMPRESSED = 14, 15
 MX_CELL, MX_STRUCT, MX_OBJECT, MX_CHAR, MX_SPARSE = 1, 2, 3, 4, 5
 MAX_DEPTH = 32
 MAX_INFLATE = 2 * 1024**3  # bytes one compressed variable may expand to
+#: all compressed variables of one file together may expand to this many times the file size, plus 64 MiB
+MAX_EXPANSION, EXPANSION_SLACK = 64, 64 * 1024**2
 
 
 class MatStruct:
@@ -49,8 +51,9 @@ class MatStruct:
 
 
 class _Reader:
-    def __init__(self, path, endian):
+    def __init__(self, path, endian, budget=MAX_INFLATE):
         self.path, self.e = path, endian
+        self.budget = budget  # bytes all compressed variables may still expand to (zip bombs)
 
     def fail(self, offset, what):
         raise ImportFormatError(self.path, f"damaged MAT-file at byte {offset}: {what}")
@@ -88,12 +91,15 @@ class _Reader:
         mtype, n, start, nxt = self.tag(buf, pos, base)
         if mtype == MI_COMPRESSED:
             d = zlib.decompressobj()
+            limit = max(1, min(MAX_INFLATE, self.budget))
             try:
-                inner = d.decompress(buf[start:start + n], MAX_INFLATE)
+                inner = d.decompress(buf[start:start + n], limit)
             except zlib.error as exc:
                 self.fail(base + pos, f"compressed data is corrupt ({exc})")
             if d.unconsumed_tail:
-                self.fail(base + pos, f"compressed variable expands beyond {MAX_INFLATE} bytes")
+                self.fail(base + pos, f"compressed data expands beyond {limit} bytes (at most {MAX_EXPANSION}x "
+                          "the file size in all, 2 GiB per variable); refused as a decompression bomb")
+            self.budget -= len(inner)
             name, value, _ = self.element(inner, 0, 0, depth + 1)
             return name, value, nxt
         if mtype != MI_MATRIX:
@@ -186,7 +192,7 @@ def read_mat(path) -> dict:
     mark = data[126:128]
     if mark not in (b"IM", b"MI"):
         raise ImportFormatError(path, f"endian indicator at byte 126 is {mark!r}; expected 'IM' or 'MI'")
-    r = _Reader(path, "<" if mark == b"IM" else ">")
+    r = _Reader(path, "<" if mark == b"IM" else ">", budget=MAX_EXPANSION * len(data) + EXPANSION_SLACK)
     out, pos = {}, 128
     while pos < len(data):
         if len(data) - pos < 8 and not data[pos:].strip(b"\0"):

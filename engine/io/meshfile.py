@@ -154,11 +154,12 @@ def _read_binary_element(el, buf, pos, endian, path):
         ct_, it_ = np.dtype(endian + ct), np.dtype(endian + it)
         if pos + ct_.itemsize <= len(buf):
             k = int(np.frombuffer(buf, ct_, 1, pos)[0])
-            dt = np.dtype([("n", ct_), ("i", it_, (max(k, 1),))])
-            if k > 0 and pos + n * dt.itemsize <= len(buf):
+            dt = np.dtype([("n", ct_), ("i", it_, (k,))] if k > 0 else [("n", ct_)])
+            if k >= 0 and pos + n * dt.itemsize <= len(buf):  # also empty lists: no row-by-row Python loop
                 rec = np.frombuffer(buf, dtype=dt, count=n, offset=pos)
                 if (rec["n"] == k).all():
-                    return {name: rec["i"].astype(np.int64)}, pos + n * dt.itemsize
+                    lists = rec["i"].astype(np.int64) if k > 0 else np.zeros((n, 0), np.int64)
+                    return {name: lists}, pos + n * dt.itemsize
     cols = {p[0]: [] for p in props}
     for r in range(n):
         for name, ct, it in props:
@@ -192,8 +193,8 @@ def _read_ascii_element(el, lines, li, first_line, path):
             return {p[0]: arr[:, k] for k, p in enumerate(props)}, li + n
         if n and len(props) == 1 and props[0][2] is not None:
             k = int(rows[0][0])
-            if k > 0 and all(len(t) == k + 1 and t[0] == rows[0][0] for t in rows):
-                return {props[0][0]: np.array([t[1:] for t in rows], dtype=np.int64)}, li + n
+            if k >= 0 and all(len(t) == k + 1 and t[0] == rows[0][0] for t in rows):
+                return {props[0][0]: np.array([t[1:] for t in rows], dtype=np.int64).reshape(n, k)}, li + n
     except (ValueError, OverflowError, IndexError):
         pass  # the row-by-row reader below names the bad line
     cols = {p[0]: [] for p in props}
