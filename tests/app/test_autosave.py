@@ -238,8 +238,10 @@ def test_window_autosaves_and_restores_targets_trajectory_and_camera(qapp, qtbot
 
 
 @pytest.mark.gui
-def test_explore_restore_flag_reopens_a_crashed_session(qapp, qtbot, app_manifold, tmp_path, monkeypatch):
-    """``lipspace explore --restore`` after a crash: the autosave's source is loaded and the session applied."""
+@pytest.mark.parametrize("how", ["--restore", "dialog"])
+def test_explore_restores_a_crashed_session(qapp, qtbot, app_manifold, tmp_path, monkeypatch, how):
+    """After a crash, ``lipspace explore --restore`` (or the dialog's Restore button) loads the
+    autosave's source and applies the session."""
     from PySide6 import QtCore, QtWidgets
 
     from app.cli import main
@@ -253,6 +255,10 @@ def test_explore_restore_flag_reopens_a_crashed_session(qapp, qtbot, app_manifol
     seen = {}
 
     def poll():
+        for box in QtWidgets.QApplication.topLevelWidgets():
+            if isinstance(box, QtWidgets.QMessageBox) and box.isVisible():  # the restore question
+                seen["question"] = box.text()
+                next(b for b in box.buttons() if b.text() == "Restore").click()
         wins = [w for w in QtWidgets.QApplication.topLevelWidgets()
                 if isinstance(w, MainWindow) and w.autosaver is not None and w.isVisible()]
         if wins and wins[0].state.frame is not None:
@@ -270,7 +276,18 @@ def test_explore_restore_flag_reopens_a_crashed_session(qapp, qtbot, app_manifol
 
     timer = QtCore.QElapsedTimer()
     timer.start()
+    # the test ends the event loop itself, once: a second quit (closing the last window)
+    # would be left pending and end the next test's dialog loop at once
+    qapp.setQuitOnLastWindowClosed(False)
     QtCore.QTimer.singleShot(100, poll)
-    assert main(["explore", "--restore"]) == 0
+    try:
+        assert main(["explore"] + (["--restore"] if how == "--restore" else [])) == 0
+    finally:
+        qapp.setQuitOnLastWindowClosed(True)
+    question = seen.pop("question", None)
+    if how == "--restore":
+        assert question is None  # no dialog
+    else:
+        assert "did not exit normally" in question and f"process {dead.pid}" in question
     assert seen == {"frame": 33, "path": str(mfile.resolve()), "marker": True}
     assert not (tmp_path / "state" / "autosave").exists() or list((tmp_path / "state" / "autosave").iterdir()) == []
