@@ -231,3 +231,25 @@ def _high(spec, dims):
     if isinstance(high, str):
         return dims[high]  # a schema lists the attribute binding a symbol before its users
     return high
+
+
+def source_fingerprint(modules, extra=None) -> str:
+    """A short hash of the source code of ``modules`` (dotted names) and ``extra`` (JSON-able).
+
+    Caches key their entries on it, so a result computed by older code or with other
+    parameters is never reused: any edit to an algorithm's module changes the key
+    (no version number to forget to bump).
+    """
+    import hashlib
+    import importlib.util
+
+    h = hashlib.sha256()
+    for name in sorted(modules):
+        spec = importlib.util.find_spec(name)
+        origin = getattr(spec, "origin", None)
+        h.update(name.encode())
+        if origin and os.path.isfile(origin):
+            with open(origin, "rb") as fh:
+                h.update(fh.read())
+    h.update(json.dumps(extra, sort_keys=True, default=str).encode())
+    return h.hexdigest()[:16]

@@ -14,18 +14,33 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from engine._atomic import atomic_write
-from engine._persist import NpzReadError, dump_estimator, load_estimator, read_npz
+from engine._persist import NpzReadError, dump_estimator, load_estimator, read_npz, source_fingerprint
 from engine.corpus import Corpus, CorpusError
 from engine.dynamics import DynamicFeatures, velocities
 from engine.embedding import Embedding
 from engine.progress import ProgressFn, report
 from engine.shape import ShapeSpace
 
-__all__ = ["Manifold", "ManifoldFileError"]
+__all__ = ["Manifold", "ManifoldFileError", "algorithm_fingerprint"]
 
 FILE_VERSION = 1
 #: corpora whose frames exceed this are saved without F (reconstructed from F^x on load)
 MAX_SAVED_FRAME_BYTES = 512 * 2**20
+
+
+#: modules whose code determines a fitted manifold (see :func:`algorithm_fingerprint`)
+FIT_MODULES = ("engine.corpus", "engine.shape", "engine.dynamics", "engine.embedding", "engine.tangent",
+               "engine.states", "engine.manifold", "engine._persist")
+
+
+def algorithm_fingerprint(params: dict | None = None) -> str:
+    """Key for caches of fitted manifolds: a hash of the fitting code and the fit parameters.
+
+    ``params`` defaults to :class:`Manifold`'s defaults. A manifold cached under another
+    fingerprint was made by other code or settings and must be rebuilt.
+    """
+    params = Manifold().get_params() if params is None else params
+    return source_fingerprint(FIT_MODULES, {"file_version": FILE_VERSION, "params": params})
 
 
 class ManifoldFileError(ValueError):

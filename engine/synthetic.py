@@ -442,8 +442,17 @@ def cache_folder(override=None) -> Path:
     return Path(platformdirs.user_cache_dir("lipspace"))
 
 
+def generator_fingerprint() -> str:
+    """A hash of the synthetic talker's code (this module, the lip model, the phonetics)."""
+    from engine._persist import source_fingerprint
+
+    return source_fingerprint(("engine.synthetic", "engine.lipmodel", "engine.phonetics", "engine.corpus"))
+
+
 def _cache_key(params: dict) -> str:
-    blob = json.dumps({"version": GENERATOR_VERSION, **params}, sort_keys=True, default=str)
+    # the generator's code is part of the key: an edit without a GENERATOR_VERSION bump still regenerates
+    blob = json.dumps({"version": GENERATOR_VERSION, "code": generator_fingerprint(), **params}, sort_keys=True,
+                      default=str)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 

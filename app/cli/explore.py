@@ -79,7 +79,12 @@ def cached_manifold_path(preset: str) -> Path:
 
     if preset not in PRESETS:
         raise ValueError(f"preset must be one of {PRESETS}, got {preset!r}")
-    return cache_dir() / "manifolds" / f"synthetic-{preset}-g{GENERATOR_VERSION}-m{FILE_VERSION}-{__version__}.npz"
+    from engine.manifold import algorithm_fingerprint
+    from engine.synthetic import generator_fingerprint
+
+    # keyed on the generator's and the fitting code and parameters: never a manifold made by older code
+    return cache_dir() / "manifolds" / (f"synthetic-{preset}-g{GENERATOR_VERSION}-{generator_fingerprint()}-"
+                                        f"m{FILE_VERSION}-{algorithm_fingerprint()}-{__version__}.npz")
 
 
 def source_kind(path) -> str:

@@ -236,3 +236,32 @@ def test_session_source_accepts_a_data_file(tmp_path, small_corpus):
     s = tmp_path / "s.json"
     s.write_text(json.dumps({"lipspace_session": 1, "source": {"path": "c.npz"}}))
     assert load_session(s)["source"]["path"] == str((tmp_path / "c.npz").resolve())
+
+
+def test_cache_keys_follow_code_and_parameters(tmp_path, monkeypatch):
+    import engine._persist as persist
+    from engine.manifold import FIT_MODULES, algorithm_fingerprint
+    from engine.synthetic import generator_fingerprint
+
+    base = algorithm_fingerprint()
+    assert algorithm_fingerprint() == base and len(base) == 16
+    assert algorithm_fingerprint({**Manifold().get_params(), "n_states": 50}) != base
+    gen = generator_fingerprint()
+    # an edit to a fitting module changes the key (simulated: the module's source read differently)
+    real_open = open
+
+    def edited(path, mode="r", *a, **kw):
+        fh = real_open(path, mode, *a, **kw)
+        if str(path).endswith("embedding.py") and "b" in mode:
+            data = fh.read() + b"\n# edited\n"
+            fh.close()
+            import io
+
+            return io.BytesIO(data)
+        return fh
+
+    monkeypatch.setattr("builtins.open", edited)
+    assert "engine.embedding" in FIT_MODULES
+    assert algorithm_fingerprint() != base
+    assert generator_fingerprint() == gen
+    assert persist.source_fingerprint(("engine.embedding",)) != ""
