@@ -83,23 +83,31 @@ class RenderScheduler:
         self.pending = False
         self.n_renders = 0
         self.last_flush = 0.0
+        self._sync_next = False
         self._timer = QtCore.QTimer()
         self._timer.setSingleShot(True)
         self._timer.setInterval(0)
-        self._timer.timeout.connect(self.flush)
+        self._timer.timeout.connect(lambda: self.flush(sync=self._sync_next))
 
     def request(self, *, min_interval_s: float = 0.0) -> None:
-        """Ask for one render soon (no sooner than ``min_interval_s`` after the previous flush)."""
+        """Ask for one render soon (no sooner than ``min_interval_s`` after the previous flush).
+
+        A throttled render is painted on its own (``flush(sync=True)`` from its timer), so
+        it never joins, and delays, a frame another view paints at once (playback).
+        """
         import time
 
         wait_ms = 0
         if min_interval_s > 0:
             wait_ms = max(0, int(round(1000 * (self.last_flush + min_interval_s - time.perf_counter()))))
+            wait_ms = min(wait_ms, 2**31 - 1)
         if self.pending:
-            if wait_ms == 0 and self._timer.remainingTime() > 0:
+            if min_interval_s <= 0 and self._sync_next:
+                self._sync_next = False
                 self._timer.start(0)  # an unthrottled request overtakes a throttled one
             return
         self.pending = True
+        self._sync_next = min_interval_s > 0
         self._timer.start(wait_ms)
 
     def flush(self, *, sync: bool = False) -> None:
@@ -109,6 +117,7 @@ class RenderScheduler:
         if not self.pending:
             return
         self.pending = False
+        self._sync_next = False
         self._timer.stop()
         if getattr(self.plotter, "_lipspace_closed", False):
             return

@@ -14,6 +14,8 @@
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from PySide6 import QtCore, QtWidgets
 
@@ -50,6 +52,7 @@ class LipView(QtWidgets.QWidget):
         self._frames = {"original": None, "synthetic": None}
         self.audio = AudioPlayer(self)
         self.clock = None  # a PlaybackClock while playing
+        self.clock_source = time.monotonic  # seconds; the audio clock's time base (tests pass a fake)
         self.timer = QtCore.QTimer(self)
         self.timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
         self.timer.timeout.connect(self._tick)
@@ -219,7 +222,7 @@ class LipView(QtWidgets.QWidget):
             return
         rate = (s.original or s.synthetic).rate
         old = self.clock
-        self.clock = PlaybackClock(rate, s.n_playback, speed=self.speed)
+        self.clock = PlaybackClock(rate, s.n_playback, speed=self.speed, clock=self.clock_source)
         if old is not None:
             self.clock.latency_s = old.latency_s
         self.clock.start(s.playback or 0)

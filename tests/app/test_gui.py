@@ -118,6 +118,86 @@ def test_click_selects_frame_colours_hemisphere_and_links_lips(win, qtbot, app_m
     assert f"{len(s.path) - 1} hops" in view.info.text()
 
 
+def test_one_click_recolours_once_renders_once_and_keeps_the_actors(win, qapp, app_manifold):
+    from PySide6 import QtCore
+
+    from app.scene import pick_display_point
+
+    m, view, lips, s = app_manifold, win.manifold_view, win.lip_view, win.state
+    Y = np.asarray(m.Fy_[:, :3], np.float64)
+    for _ in range(5):
+        qapp.processEvents()
+    actors = dict(view.plotter.actors)
+    points = view.handles["points"]
+    actor, mesh = points.actor, points.mesh
+    changes, vtk_renders = [], []
+    s.events.changed.connect(changes.append)
+    obs = view.plotter.render_window.AddObserver("EndEvent", lambda *_a: vtk_renders.append(1))
+    n_recolor, n_req, n_lip = view.n_recolors, view.renderer.n_renders, lips.renderer.n_renders
+    try:
+        i = _front_frame(view, Y)
+        x, y = pick_display_point(view.plotter, Y[i])
+        widget = view.plotter.interactor
+        ratio = widget.devicePixelRatioF()
+        height = view.plotter.render_window.GetSize()[1]
+        pos = QtCore.QPoint(int(round(x / ratio)), int(round((height - 1 - y) / ratio)))
+        QtCore.QCoreApplication.processEvents()
+        from PySide6.QtTest import QTest
+
+        QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, pos)
+        if s.frame is None:  # some VTK builds drop synthetic Qt clicks; pick through VTK's picker instead
+            view.picker.pick(x, y)
+        for _ in range(10):
+            qapp.processEvents()
+    finally:
+        s.events.changed.disconnect(changes.append)
+        view.plotter.render_window.RemoveObserver(obs)
+    assert s.frame is not None and s.color_mode == "distance"
+    assert len(changes) == 1 and {"frame", "state", "color_mode"} <= changes[0]  # one state emission
+    assert view.n_recolors == n_recolor + 1  # one recolouring, not one per changed field
+    assert view.renderer.n_renders == n_req + 1 and lips.renderer.n_renders == n_lip + 1  # one render request each
+    assert len(vtk_renders) == 1  # and one VTK render of the manifold view
+    assert points.actor is actor and points.mesh is mesh  # colours changed in place
+    assert dict(view.plotter.actors) == actors and all(view.plotter.actors[k] is a for k, a in actors.items())
+    assert np.isfinite(points.values).any()
+
+
+def test_playback_shows_the_frame_due_by_the_clock_and_leaves_the_cloud_alone(win, qapp, app_manifold):
+    m, s, lv, view = app_manifold, win.state, win.lip_view, win.manifold_view
+    u = max(m.corpus_.utterances, key=lambda u: u.stop - u.start)
+    n = u.stop - u.start
+    assert n > 40
+    s.set_utterance(u.id)
+    s.select_frame(u.start)  # the cloud shows hop distances: playback must not recolour it
+    qapp.processEvents()
+    now = [1000.0]
+    lv.clock_source = lambda: now[0]
+    rgb = view.handles["points"].rgb.copy()
+    n_recolor = view.n_recolors
+    try:
+        s.set_playing(True)
+        lv.timer.stop()  # tick by hand with the fake clock
+        assert s.playback == 0
+        now[0] += 0.1  # 100 ms later at 60 Hz: frame 6, frames 1-5 dropped
+        lv._tick()
+        assert s.playback == 6
+        np.testing.assert_allclose(lv.main.points, _points(m, m.corpus_.frames[u.start + 6]), atol=1e-5)
+        now[0] += 0.5
+        lv._tick()
+        assert s.playback == 36
+        marker = view.handles["play_o"]
+        assert marker.visible and np.allclose(marker.center, m.Fy_[u.start + 36, :3])
+        lv._tick()  # no time passed: the same frame, nothing redrawn
+        assert s.playback == 36
+        assert view.n_recolors == n_recolor and np.array_equal(view.handles["points"].rgb, rgb)
+        now[0] += 60.0  # far past the end: the last frame, stopped
+        lv._tick()
+        assert not s.playing and s.playback == n - 1
+    finally:
+        lv.clock_source = __import__("time").monotonic
+        s.set_playing(False)
+
+
 def test_synthesise_typed_text_draws_red_trajectory(win, qtbot, app_manifold):
     m, view, s, ed = app_manifold, win.manifold_view, win.state, win.editor
     ed.set_method("manifold")

@@ -270,3 +270,57 @@ def test_state_picking_session_and_explore_cli_are_qt_free():
                        cwd=str(__import__("pathlib").Path(__file__).resolve().parents[2]))
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == ""
+
+
+# ----------------------------------------------------------------------------- batches
+def _changes(state):
+    log = []
+    state.events.changed.connect(log.append)
+    return log
+
+
+def test_one_click_is_one_changed_event(app_manifold):
+    s = AppState(app_manifold)
+    changes = _changes(s)
+    fields = _record(s, "frame", "state", "target", "path", "color_mode")
+    s.select_frame(123)  # frame, state and the switch to distance colours: one action
+    assert changes == [frozenset({"frame", "state", "color_mode"})]
+    assert [n for n, _ in fields] == ["frame", "state", "color_mode"]  # each field event once, final values
+    assert dict(fields)["state"] == s.state and dict(fields)["color_mode"] == "distance"
+    changes.clear()
+    s.select_frame(123)  # nothing changed: nothing emitted
+    assert changes == []
+    a, b, _d = _reachable_pair(app_manifold)
+    s.select_state(a)
+    changes.clear()
+    s.set_target(b)  # target and path together
+    assert changes == [frozenset({"target", "path"})]
+
+
+def test_batch_groups_nested_changes_and_flushes_on_error(app_manifold):
+    s = AppState(app_manifold)
+    changes = _changes(s)
+    frames = _record(s, "frame")
+    with s.batch():
+        s.select_frame(5)
+        with s.batch():
+            s.set_hemisphere("past")
+            s.select_frame(6)
+        assert changes == [] and frames == []  # held until the outermost batch ends
+    assert changes == [frozenset({"frame", "state", "color_mode", "hemisphere"})]
+    assert frames == [("frame", 6)]  # once, with the final value
+    changes.clear()
+    with pytest.raises(IndexError):
+        with s.batch():
+            s.set_color_mode("class")
+            s.select_frame(10 ** 9)
+    assert s.color_mode == "class" and changes == [frozenset({"color_mode"})]  # what did change is announced
+
+
+def test_changes_made_by_observers_join_the_same_changed_event(app_manifold):
+    s = AppState(app_manifold)
+    changes = _changes(s)
+    # a view that reacts to a new state by choosing a path target (changes made while events are sent)
+    s.events.state.connect(lambda st: s.set_path_mode(True) if st is not None else None)
+    s.select_frame(50)
+    assert changes == [frozenset({"frame", "state", "color_mode", "path_mode"})]

@@ -1,0 +1,73 @@
+"""Playback timing from elapsed time (app.playback): pure functions with a fake clock, no display."""
+from __future__ import annotations
+
+import pytest
+
+from app.playback import PlaybackClock, playback_frame
+
+
+class FakeClock:
+    def __init__(self, t=100.0):
+        self.t = t
+
+    def __call__(self):
+        return self.t
+
+
+def test_playback_frame_is_elapsed_time_times_rate():
+    assert playback_frame(0.0, 60.0) == 0
+    assert playback_frame(1.0, 60.0) == 60
+    assert playback_frame(5 / 60, 60.0) == 5  # exactly on a frame boundary despite rounding
+    assert playback_frame(0.999 / 60, 60.0) == 0
+    assert playback_frame(0.5, 60.0, start=10) == 40
+    assert playback_frame(1.0, 60.0, speed=0.25) == 15
+    assert playback_frame(-3.0, 60.0, start=7) == 7  # before the start: the start frame
+    with pytest.raises(ValueError, match="rate"):
+        playback_frame(1.0, 0.0)
+    with pytest.raises(ValueError, match="speed"):
+        playback_frame(1.0, 60.0, speed=float("nan"))
+
+
+def test_clock_drops_frames_when_ticks_come_late_and_stops_at_the_end():
+    fake = FakeClock()
+    c = PlaybackClock(60.0, 100, clock=fake)
+    with pytest.raises(RuntimeError, match="not been started"):
+        c.frame()
+    c.start(10)
+    assert c.frame() == 10
+    fake.t += 0.1  # one tick 100 ms late: frames 11..15 are skipped, not shown late
+    assert c.frame() == 16
+    fake.t += 0.2
+    assert c.frame() == 28
+    fake.t += (99 - 28) / 60 + 0.001
+    assert c.frame() == 99  # the last frame
+    fake.t += 1 / 60
+    assert c.frame() is None  # past the end
+    with pytest.raises(IndexError, match="out of range"):
+        c.start(100)
+
+
+def test_clock_looks_ahead_by_the_measured_display_latency():
+    fake = FakeClock()
+    c = PlaybackClock(60.0, 1000, clock=fake, latency_weight=1.0)
+    c.start(0)
+    fake.t += 1.0
+    assert c.frame() == 60
+    c.shown(chosen_at=fake.t, shown_at=fake.t + 0.05)  # frames take 50 ms to reach the screen
+    assert c.latency_s == pytest.approx(0.05)
+    assert c.frame() == 63  # the frame due when it will be on screen
+    assert c.due() == 60  # what is due now is unchanged
+    c.shown(chosen_at=0.0, shown_at=10.0)  # a one-off stall never plans more than 0.25 s ahead
+    assert c.latency_s == pytest.approx(0.25)
+
+
+def test_clock_speed_and_validation():
+    fake = FakeClock()
+    c = PlaybackClock(60.0, 1000, speed=0.5, clock=fake)
+    c.start(0)
+    fake.t += 1.0
+    assert c.frame() == 30
+    with pytest.raises(ValueError, match="n_frames"):
+        PlaybackClock(60.0, 0)
+    with pytest.raises(ValueError, match="latency_weight"):
+        PlaybackClock(60.0, 5, latency_weight=0.0)
