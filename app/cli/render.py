@@ -156,12 +156,15 @@ def run(args) -> int:
             original = c.frames[u.start:u.stop]
         Y_original = manifold.Fy_[u.start:u.stop, :3]
     audio = _audio(args, manifold)
+    title = label.split(":")[0]
+    if original is not None:
+        title = f"{args.utterance}: original (left), {title} (right)"
     t0 = time.perf_counter()
     with progress_bar(disable=True if args.quiet else None) as progress:
         try:
             render_video(out, frames, rate=c.rate, faces=c.faces, dims=c.dims, original=original, Y=Y,
                          Y_original=Y_original, cloud=manifold.Fy_[:, :3] if Y is not None else None, audio=audio,
-                         size=args.size, crf=args.crf, title=label.split(":")[0], progress=progress)
+                         size=args.size, crf=args.crf, title=title, progress=progress)
         except ValueError as exc:
             raise CliError(str(exc)) from None
     n = max(len(frames), 0 if original is None else len(original))

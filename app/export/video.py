@@ -120,11 +120,11 @@ class _Scene:
                 scene.add_trajectory(p, Y_original, scene.ORIGINAL_COLOUR, line_width=3.0, name="original")
             scene.add_trajectory(p, Y, scene.SYNTHETIC_COLOUR, line_width=3.0, name="synthetic")
             Yall = np.asarray(Y)[:, :3] if cloud is None or not len(cloud) else np.asarray(cloud)[:, :3]
-            self.marker = scene.add_marker(p, np.asarray(Y)[0, :3], radius=0.03 * scene.scene_scale(Yall),
+            self.marker = scene.add_marker(p, np.asarray(Y)[0, :3], radius=0.04 * scene.scene_scale(Yall),
                                            color=(1.0, 0.8, 0.0))
             p.view_isometric(render=False)
             p.reset_camera(render=False)
-            p.camera.zoom(1.4)
+            p.camera.zoom(1.6)
 
     def draw(self, main, second, y, caption):
         self.main.update(main)
