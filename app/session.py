@@ -159,8 +159,9 @@ def load_session(path) -> dict:
         d = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise SessionError(f"{path}: no such session file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise SessionError(f"{path}: not a readable Lipspace session (JSON) file: {exc}") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:  # RecursionError: deep nesting
+        why = "nested too deeply" if isinstance(exc, RecursionError) else exc
+        raise SessionError(f"{path}: not a readable Lipspace session (JSON) file: {why}") from None
     if not isinstance(d, dict) or "lipspace_session" not in d:
         raise SessionError(f"{path}: not a Lipspace session file (no 'lipspace_session' key)")
     if not isinstance(d["lipspace_session"], int) or d["lipspace_session"] > SESSION_VERSION:

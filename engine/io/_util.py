@@ -22,6 +22,8 @@ def read_bytes(path) -> bytes:
         raise FileNotFoundError(f"{path}: no such file")
     if path.is_dir():
         raise ImportFormatError(path, "is a directory; expected a file")
+    if not path.is_file():  # a FIFO or device would block or never end
+        raise ImportFormatError(path, "is not a regular file (a pipe, socket or device); expected a file on disk")
     return path.read_bytes()
 
 

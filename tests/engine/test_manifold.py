@@ -265,3 +265,23 @@ def test_cache_keys_follow_code_and_parameters(tmp_path, monkeypatch):
     assert algorithm_fingerprint() != base
     assert generator_fingerprint() == gen
     assert persist.source_fingerprint(("engine.embedding",)) != ""
+
+
+def test_deeply_nested_session_is_a_session_error(tmp_path):
+    from app.session import SessionError, load_session
+
+    s = tmp_path / "deep.json"
+    s.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(SessionError, match="nested too deeply"):
+        load_session(s)
+
+
+def test_importers_refuse_a_fifo(tmp_path):
+    import os
+
+    from engine.io import ImportFormatError, read_corpus
+
+    fifo = tmp_path / "pipe.ema"
+    os.mkfifo(fifo)
+    with pytest.raises(ImportFormatError, match="not a regular file"):
+        read_corpus(fifo)
