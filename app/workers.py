@@ -44,6 +44,7 @@ class WarningRouter:
         self._routes: dict[int, object] = {}
         self._lock = threading.Lock()
         self._previous = None
+        self._local = threading.local()
 
     def install(self) -> None:
         """Install (or re-install) the dispatcher; idempotent. Call on the GUI thread.
@@ -72,8 +73,16 @@ class WarningRouter:
         if callback is not None and issubclass(category, CorpusWarning):
             callback(str(message))
             return
-        previous = self._previous or warnings._showwarning_orig
-        previous(message, category, filename, lineno, file, line)
+        if getattr(self._local, "busy", False):
+            # the wrapped handler wraps this router in turn (it was installed over the
+            # router, then the router re-installed over it): end the loop with Python's own
+            warnings._showwarning_orig(message, category, filename, lineno, file, line)
+            return
+        self._local.busy = True
+        try:
+            (self._previous or warnings._showwarning_orig)(message, category, filename, lineno, file, line)
+        finally:
+            self._local.busy = False
 
 
 class _Route:

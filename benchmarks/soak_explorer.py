@@ -20,8 +20,8 @@ The child does what a user does, on Qt timers inside the real event loop:
 * every ``--click-every`` seconds clicks a random frame of the manifold view with a real
   mouse event (falling back to VTK's picker if the VTK build drops synthetic clicks),
 * every 5 s switches panels (clusters/scree tabs), colour mode and hemisphere,
-* every 30 s loads another input (an utterance or the typed text) and synthesises it
-  again, alternating methods, in the worker thread,
+* every ``--resynth-every`` s (30; 0 = never) loads another input (an utterance or the
+  typed text) and synthesises it again, alternating methods, in the worker thread,
 * autosaves as ``lipspace explore`` does (:mod:`app.autosave`, into a temporary
   directory; ``--no-autosave`` to leave it out).
 
@@ -50,7 +50,6 @@ if str(ROOT) not in sys.path:
 
 SAMPLE_S = 5.0
 PANEL_EVERY_S = 5.0
-RESYNTH_EVERY_S = 30.0
 
 
 def rss_mb(pid: int) -> float | None:
@@ -209,7 +208,7 @@ def child(args) -> int:
         if now - last["panel"] >= PANEL_EVERY_S:
             last["panel"] = now
             switch_panels()
-        if now - last["synth"] >= RESYNTH_EVERY_S and not soaking["synth_busy"]:
+        if args.resynth_every > 0 and now - last["synth"] >= args.resynth_every and not soaking["synth_busy"]:
             last["synth"] = now
             synthesise(("utterance", "text")[counts["synths"] % 2])
         if now - last["sample"] >= SAMPLE_S:
@@ -244,7 +243,7 @@ def child(args) -> int:
 def monitor(args) -> int:
     cmd = [sys.executable, str(Path(__file__).resolve()), "--child", "--minutes", str(args.minutes), "--preset",
            args.preset, "--text", args.text, "--click-every", str(args.click_every), "--seed", str(args.seed),
-           "--autosave" if args.autosave else "--no-autosave"]
+           "--resynth-every", str(args.resynth_every), "--autosave" if args.autosave else "--no-autosave"]
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=str(ROOT))
     events: list[dict] = []
@@ -307,6 +306,8 @@ def monitor(args) -> int:
         "rss_slope_second_half_mb_per_min": (slope_mb_per_min(*zip(*soak[len(soak) // 2:]))
                                              if len(soak) > 3 else float("nan")),
         "rss_samples": len(soak),
+        "rss_trace": [[round(t, 1), round(r, 1)] for t, r in soak],
+        "resynth_every_s": args.resynth_every, "click_every_s": args.click_every,
     }
     fps = summary["frames_played"] / summary["soak_s"] if summary["soak_s"] else float("nan")
     print(f"soak_explorer: preset {args.preset}, {args.minutes:g} min soak, Python {summary['python']}, "
@@ -340,6 +341,8 @@ def main(argv=None) -> int:
                    help="synthetic talker to load (default %(default)s)")
     p.add_argument("--text", default="bob meets mum in the warm room", help="text typed into the editor")
     p.add_argument("--click-every", type=float, default=2.0, help="seconds between clicks (default %(default)s)")
+    p.add_argument("--resynth-every", type=float, default=30.0,
+                   help="seconds between new syntheses, 0 = only the first (default %(default)s)")
     p.add_argument("--sample", type=float, default=SAMPLE_S, help="RSS sampling period, s (default %(default)s)")
     p.add_argument("--load-timeout", type=float, default=900.0,
                    help="seconds allowed for loading/building before the soak (default %(default)s)")

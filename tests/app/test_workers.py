@@ -68,6 +68,26 @@ def test_router_dispatches_by_thread_without_qt(monkeypatch):
             pass
 
 
+def test_router_reinstalled_over_a_handler_that_wraps_it_does_not_loop(monkeypatch):
+    """The CLI wraps the handler it finds (the router) and a task re-installs the router over it."""
+    from app.workers import WarningRouter
+
+    seen: list = []
+    monkeypatch.setattr(warnings, "showwarning", _recorder(seen))
+    monkeypatch.setattr(warnings, "_showwarning_orig", _recorder(seen))  # Python's own, at the end
+    router = WarningRouter()
+    router.install()
+    inner = warnings.showwarning
+
+    def cli_show(message, category, filename, lineno, file=None, line=None):
+        inner(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = cli_show
+    router.install()
+    warnings.warn("once", CorpusWarning)  # GUI thread: router -> CLI handler -> router -> Python's own
+    assert seen == [("once", CorpusWarning)]
+
+
 @pytest.mark.gui
 def test_worker_warning_reaches_the_status_bar_while_the_gui_thread_warns(qapp, qtbot, monkeypatch):
     from app.main_window import MainWindow
