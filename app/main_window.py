@@ -181,14 +181,20 @@ class MainWindow(QtWidgets.QMainWindow):
     def open_source(self, path=None, *, preset: str = "default", session: dict | None = None):
         """Load a manifold / corpus file (or the synthetic talker) in a worker; returns the runner."""
         from app.cli.explore import load_source
+        from app.views.task_progress import attach_status_progress
         from app.workers import run_task
 
+        if self._runner is not None and self._runner.state == "running":
+            self._runner.cancel()  # a newer choice replaces a load still running
         self._pending_session = session
         what = Path(path).name if path else f"the synthetic talker ({preset})"
         self.statusBar().showMessage(f"loading {what}…")
+        # no modal dialog: the window stays usable; progress and Cancel sit in the status bar
         self._runner = run_task(lambda progress: load_source(path, preset, progress), parent=self,
                                 title=f"Loading {what}", on_done=self._on_loaded, on_error=self._on_load_error,
-                                on_cancel=lambda: self.statusBar().showMessage("loading cancelled", 5000))
+                                on_cancel=lambda: self.statusBar().showMessage("loading cancelled", 5000),
+                                dialog=False)
+        attach_status_progress(self, self._runner, f"loading {what}")
         return self._runner
 
     def _on_loaded(self, result):

@@ -467,6 +467,40 @@ def test_worker_shows_engine_warnings_in_the_status_bar(win, qtbot):
     assert "not strongly connected" in win.statusBar().currentMessage()
 
 
+def test_open_runs_in_a_worker_with_status_bar_progress_and_cancel(win, qtbot, tmp_path, app_manifold):
+    from PySide6 import QtWidgets
+
+    from app.views.task_progress import TaskProgress, stage_text
+
+    corpus = tmp_path / "c.npz"
+    app_manifold.corpus_.save(corpus)
+    before = win.state.manifold
+    runner = win.open_source(corpus)  # File > Open of a corpus: fitted in the worker
+    prog = win.findChild(TaskProgress, "task_progress")
+    try:
+        assert runner.dialog is None and prog.isVisible() and prog.runner is runner
+        assert QtWidgets.QApplication.activeModalWidget() is None  # nothing blocks the window
+        qtbot.waitUntil(lambda: len(prog.stages) >= 2 or runner.state != "running", timeout=30000)
+        assert runner.state == "running"
+        # the window answers while the worker runs
+        win.state.set_color_mode("class")
+        assert win.manifold_view.color_box.currentData() == "class"
+        # a stage without a total, or whose count is complete, is busy, never a bar stuck at 100 %
+        runner.worker.progress.emit("embedding", 4, 0)
+        assert prog.bar.maximum() == 0 and prog.label.text().startswith("embedding · ")
+        runner.worker.progress.emit("tangent frames", 1, 1)
+        assert prog.bar.maximum() == 0
+        runner.worker.progress.emit("shape space", 2, 9)
+        assert (prog.bar.maximum(), prog.bar.value()) == (9, 2) and "shape space 2/9" in prog.label.text()
+        prog.cancel_btn.click()
+        qtbot.waitUntil(lambda: runner.state != "running", timeout=30000)
+    finally:
+        runner.cancel()
+    assert runner.state == "cancelled" and win.state.manifold is before
+    assert not prog.isVisible() and prog.runner is None
+    assert stage_text("embedding", 3, 10, 4.2) == "embedding 3/10 · 4 s"
+
+
 def test_open_session_reloads_its_source_in_the_worker(win, qtbot, tmp_path, app_manifold):
     """Last test: it replaces the window's manifold by a loaded copy."""
     import json
