@@ -6,15 +6,16 @@ Qt-free logic; the window only calls :meth:`Autosaver.tick` from a timer.
   or ``$LIPSPACE_STATE_DIR``), subfolder ``autosave/``.
 * **What**: a normal session file (:mod:`app.session`: selection, modes, cameras, the
   editor's settings and edited key targets, the synthesised trajectory), one per
-  running explorer process: ``autosave-<pid>.lipspace.json`` (+ ``.npz``), written
-  atomically.
+  running explorer process: ``autosave-<run>.lipspace.json`` (+ ``.npz``), written
+  atomically; ``<run>`` is the process id and its start time in milliseconds (pids are
+  reused, e.g. after a reboot).
 * **When**: debounced. Each tick the window hands a cheap fingerprint of the session
   (:func:`session_fingerprint`); a save happens once the fingerprint has stayed the same
   for ``delay`` seconds after it last changed (3 s by default), so dragging a camera or
   clicking through states writes once when the user pauses, never on every event; a
   session that keeps changing is still saved ``max_delay`` seconds (30 s) after its
   first unsaved change.
-* **Abnormal exit**: each process writes a marker ``running-<pid>.json`` at start
+* **Abnormal exit**: each process writes a marker ``running-<run>.json`` at start
   (:meth:`Autosaver.begin`) and removes it, with its autosave, at a clean exit
   (:meth:`Autosaver.finish`). A marker whose process is gone means that run ended
   abnormally (crash, kill, power loss); if it left an autosave, :meth:`begin` returns
@@ -38,8 +39,8 @@ __all__ = ["STATE_DIR_ENV", "DEFAULT_DELAY_S", "DEFAULT_MAX_DELAY_S", "state_dir
 STATE_DIR_ENV = "LIPSPACE_STATE_DIR"
 DEFAULT_DELAY_S = 3.0
 DEFAULT_MAX_DELAY_S = 30.0
-_MARKER = "running-{pid}.json"
-_SESSION = "autosave-{pid}.lipspace.json"
+_MARKER = "running-{run}.json"
+_SESSION = "autosave-{run}.lipspace.json"
 
 
 def state_dir() -> Path:
@@ -159,8 +160,9 @@ class Autosaver:
         self.delay = float(delay)
         self.clock = clock
         self.pid = os.getpid() if pid is None else int(pid)
-        self.marker = self.directory / _MARKER.format(pid=self.pid)
-        self.session = self.directory / _SESSION.format(pid=self.pid)
+        self.run = f"{self.pid}-{time.time_ns() // 1_000_000}"
+        self.marker = self.directory / _MARKER.format(run=self.run)
+        self.session = self.directory / _SESSION.format(run=self.run)
         self._fingerprint = None
         self._changed_at = self._dirty_since = None
         self.dirty = False
@@ -177,12 +179,14 @@ class Autosaver:
         """
         self.directory.mkdir(parents=True, exist_ok=True)
         found = []
-        for marker in self.directory.glob(_MARKER.format(pid="*")):
+        for marker in self.directory.glob(_MARKER.format(run="*")):
+            if marker == self.marker:
+                continue
             info = self._read_marker(marker)
             pid = info.get("pid") if info else None
-            if pid == self.pid or (isinstance(pid, int) and pid_alive(pid, info.get("start_ticks"))):
-                continue  # our own, or another explorer that is still running
-            session = self.directory / _SESSION.format(pid=pid)
+            if isinstance(pid, int) and pid != self.pid and pid_alive(pid, info.get("start_ticks")):
+                continue  # another explorer that is still running
+            session = self.directory / _SESSION.format(run=marker.stem[len("running-"):])
             if isinstance(pid, int) and session.is_file():
                 found.append(Recovery(session, marker, pid, float(info.get("started", 0.0)),
                                       session.stat().st_mtime))

@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import numpy as np
@@ -139,6 +140,19 @@ def test_running_and_cleanly_closed_runs_are_not_offered(tmp_path):
     assert pid_alive(os.getpid()) and not pid_alive(_dead_pid())
     if sys.platform.startswith("linux"):  # a reused pid is told apart by its start time
         assert not pid_alive(os.getpid(), start_ticks=1)
+
+
+def test_a_crashed_run_with_our_own_pid_is_still_offered(tmp_path):
+    """After a reboot the new explorer may get the crashed one's pid: its autosave must survive."""
+    old = Autosaver(tmp_path, pid=os.getpid())
+    old.begin()
+    old.save(lambda p: p.write_text(_session_json(5)))
+    old.marker.write_text(json.dumps({"pid": os.getpid(), "started": 0.0, "start_ticks": None}))
+    time.sleep(0.002)  # the new run starts later
+    new = Autosaver(tmp_path)
+    assert new.pid == old.pid
+    rec = new.begin()
+    assert rec is not None and rec.session == old.session and new.session != old.session
 
 
 def test_restore_choices(tmp_path):
