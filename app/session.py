@@ -299,7 +299,7 @@ def apply_session(state, d: dict):
         _check_fits(state.manifold, syn, targets)
         if syn is not None:
             state.set_trajectories(synthetic=syn)
-    except (IndexError, KeyError) as exc:
+    except (IndexError, KeyError, TypeError, ValueError) as exc:  # wrong types too: one dialog, no traceback
         raise SessionError(f"{where}: does not fit the loaded manifold ({exc}); "
                            "was it saved with another corpus or manifold?") from None
     return targets

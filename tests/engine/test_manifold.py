@@ -285,3 +285,13 @@ def test_importers_refuse_a_fifo(tmp_path):
     os.mkfifo(fifo)
     with pytest.raises(ImportFormatError, match="not a regular file"):
         read_corpus(fifo)
+
+
+@pytest.mark.parametrize("bad", [{"selection": {"frame": 10**9}}, {"component": "x"}, {"visible_phones": 5},
+                                 {"hemisphere": ["future"]}, {"utterance": 3}])
+def test_session_values_of_the_wrong_type_or_range_are_session_errors(small_manifold, bad):
+    from app.session import SessionError, apply_session
+    from app.state import AppState
+
+    with pytest.raises(SessionError, match="does not fit"):
+        apply_session(AppState(small_manifold), {"_file": "s.json", **bad})
