@@ -80,12 +80,12 @@ def generated(n_utt, seed, reference):
     else:
         lay = BUILTIN["ema7x6"]
     out = {}
-    for points in (None, "all"):
+    for points in (None, "all", "lips"):
         parts = []
         for r in recs:
             c = corpus_from_matrix(f"{r.id}.csv", r.matrix, lay, rate=r.rate, points=points)
             parts.append(replace(c, utterances=[Utterance(r.id, 0, c.n_frames, speaker=r.speaker)], name=r.id))
-        out[points or "lips"] = concat(parts, name="generated")
+        out[{None: "default", "all": "all", "lips": "lips"}[points]] = concat(parts, name="generated")
     return out
 
 
@@ -117,8 +117,7 @@ def main(argv=None):
         print(f"Haskins pair not found in {args.haskins}; skipped")
     for reference in (False, True):
         g = generated(args.utterances, args.seed, reference)
-        roles = g["lips"].point_roles
-        lip_roles = [r for r in roles if r != "reference"]
+        lip_roles = g["lips"].point_roles
         print(f"generated: 3 speakers x {args.utterances} utterances, 250 Hz, "
               f"{'with' if reference else 'without'} head reference sensors:")
         allp = g["all"]
@@ -127,15 +126,13 @@ def main(argv=None):
                 roles_for_score=allp.point_roles, use_aperture=False, speaker_norm="none")
         measure("all sensors, no registration, aperture", no_spk, roles_for_score=allp.point_roles,
                 speaker_norm="none")
-        lips = g["lips"]
-        if reference:
-            r = register(lips, method="rigid")
+        if reference:  # import default with a layout naming the head sensors: lips + references, rigid
+            r = register(g["default"], method="rigid")
             measure("lips, rigid registration, speaker norm, aperture, 250 Hz", r, roles_for_score=lip_roles)
             measure("lips, rigid registration, speaker norm, aperture, 60 Hz (default)", resample(r, 60),
                     roles_for_score=lip_roles)
-        r = register(lips if not reference else replace(lips, point_roles=[x if x != "reference" else "other"
-                                                                            for x in roles]), method="utterance")
-        scored = r.point_roles
+        r = register(g["lips"], method="utterance")  # lip sensors only: head motion within utterances stays
+        scored = lip_roles
         measure("lips, utterance centring, no speaker norm, aperture, 60 Hz", resample(r, 60),
                 roles_for_score=scored, speaker_norm="none")
         measure("lips, utterance centring, speaker norm, aperture, 250 Hz", r, roles_for_score=scored)

@@ -115,11 +115,11 @@ def generate_recordings(*, n_speakers=3, n_utterances=6, duration_s=(2.0, 3.0), 
             jaw = 0.7 * open_
             P = {name: np.repeat(rest[name][None], n, axis=0) for name in rest}
             P["UL"][:, 2] += 2.5 * size * open_
-            P["UL"][:, 0] += 0.7 * size * rnd
+            P["UL"][:, 0] += 0.5 * size * rnd
             P["LL"][:, 2] -= 9.0 * size * open_
-            P["LL"][:, 0] += 0.7 * size * rnd
+            P["LL"][:, 0] += 0.5 * size * rnd
             for c, sgn in (("LC", 1), ("RC", -1)):
-                P[c][:, 1] -= sgn * 1.5 * size * rnd
+                P[c][:, 1] -= sgn * 1.0 * size * rnd
                 P[c][:, 2] -= 2.0 * size * jaw
             tongue = 8.0 * _smooth_noise(rng, n, rate, 5.0)
             for j, name in enumerate(("TT", "TB", "TD")):

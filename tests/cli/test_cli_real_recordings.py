@@ -99,8 +99,7 @@ def test_unlabelled_clusters_synthesis_and_figures(good, tmp_path):
     uid = Corpus.load(corpus).utterances[0].id
     rc, out, err = _run(["synthesize", "--manifold", str(mfile), "--utterance", uid, "-o", str(tmp_path / "a.npy"),
                          "-q"])
-    assert rc == 0 and "(kinematic landmarks: it has no phone alignment): open" in out or \
-        "(kinematic landmarks: it has no phone alignment): clos" in out, out + err
+    assert rc == 0 and "(kinematic landmarks: it has no phone alignment)" in out, out + err
     rc, out, err = _run(["synthesize", "--manifold", str(mfile), "--utterance", uid, "--key-frames", "kinematic",
                          "-q"])
     assert rc == 0, err
