@@ -90,7 +90,8 @@ class _Scene:
         w, h = _even(size[0]), _even(size[1])
         panel = Y is not None
         self.plotter = p = pv.Plotter(off_screen=True, shape=(1, 2) if panel else (1, 1), border=False,
-                                      window_size=(2 * w if panel else w, h))
+                                      window_size=(2 * w if panel else w, h), lighting="none")
+        p.add_light(pv.Light(light_type="headlight"))  # one light: a third cheaper than the light kit in llvmpipe
         p.render_window.SetMultiSamples(MULTI_SAMPLES)
         p.set_background(BACKGROUND)
         p.subplot(0, 0)
