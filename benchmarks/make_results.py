@@ -78,7 +78,7 @@ def main():
 
     from engine._atomic import atomic_write
     from engine.io import read_corpus
-    from engine.protocols import evaluate_protocols, normalise_speakers
+    from engine.protocols import evaluate_protocols
     from engine.synthetic import HELD_OUT_TALKER, load_synthetic
 
     t_all = time.perf_counter()
@@ -107,23 +107,22 @@ def main():
     hdir = Path(args.haskins_dir)
     mats = sorted(hdir.glob("*.mat"))
     if len(mats) >= 2:
-        from app.cli.evaluate import haskins_speaker
+        from app.cli.evaluate import haskins_speaker, name_haskins_speakers, normalise_per_speaker
 
-        raw = read_corpus([str(p) for p in mats])
-        norm, means = normalise_speakers(raw, haskins_speaker)
+        raw = name_haskins_speakers(read_corpus([str(p) for p in mats]))
+        norm = normalise_per_speaker(raw)
         ids = [u.id for u in raw.utterances]
         for test in ids:
             who = haskins_speaker(raw.utterance(test))
             r = run(f"Haskins, test {who}", norm, test_ids=[test])
-            r.notes.append("per-speaker mean frame removed, computed here in the evaluation "
-                           "(engine.protocols.normalise_speakers): the registration module's speaker "
-                           "normalisation had not landed when this generator was written")
+            r.notes.append("per-speaker mean frame removed (engine.registration.normalise_speakers, mode 'mean', "
+                           "speakers named by the file name's first field)")
             sections.append(r.markdown(title=f"Haskins pair, cross-speaker: test speaker {who}, speaker means removed"))
             summary.append(_summary_line(f"Haskins, test {who} (normalised)", r))
         test = ids[1]
         r = run("Haskins raw", raw, test_ids=[test], inverse_table=False)
         r.notes.append("no speaker normalisation: the figures are dominated by the offset between the speakers' "
-                       f"mean frames ({_offset(means):.3g} mm RMS per coordinate); compare the mean-frame row")
+                       f"mean frames ({_offset(raw):.3g} mm RMS per coordinate); compare the mean-frame row")
         sections.append(r.markdown(title=f"Haskins pair, cross-speaker without normalisation: test speaker "
                                          f"{haskins_speaker(raw.utterance(test))}"))
         summary.append(_summary_line(f"Haskins, test {haskins_speaker(raw.utterance(test))} (raw)", r))
@@ -174,11 +173,14 @@ def main():
     print(f"wrote {args.out} in {total:.0f} s; max RSS {_rss_mb():.0f} MiB")
 
 
-def _offset(means):
+def _offset(corpus):
+    """RMS per coordinate of the difference between the first two speakers' mean frames."""
     import numpy as np
 
-    m = list(means.values())
-    return float(np.sqrt(np.mean((m[0] - m[1]) ** 2)))
+    spk = np.array([u.speaker for u in corpus.utterances])[corpus.utterance_index]
+    a, b = corpus.speakers[:2]
+    d = corpus.frames[spk == a].mean(axis=0, dtype=np.float64) - corpus.frames[spk == b].mean(axis=0, dtype=np.float64)
+    return float(np.sqrt(np.mean(d ** 2)))
 
 
 def _validation_table(r) -> str:

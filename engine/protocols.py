@@ -45,7 +45,7 @@ from engine.statepaths import StateModel, anchor, interpolate_targets
 
 __all__ = ["PROTOCOLS", "PROTOCOL_METHODS", "STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES",
            "SMOOTHING_CANDIDATES", "Y_DIMS",
-           "select_settings", "evaluate_protocols", "normalise_speakers"]
+           "select_settings", "evaluate_protocols"]
 
 PROTOCOLS = ("states", "oracle")
 PROTOCOL_METHODS = {
@@ -162,41 +162,6 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
             "sigma": {f"{p}/{m}": float(best_sigma(best, p, m)) for p in PROTOCOLS for m in _MANIFOLDS},
             "validation": table, "val_ids": [ids[i] for i in val_ids],
             "note": f"chosen on {len(val_ids)} of {len(ids)} training utterances held out from the states"}
-
-
-def normalise_speakers(corpus, speaker_of=None):
-    """The corpus with each speaker's mean frame subtracted from that speaker's frames.
-
-    Parameters
-    ----------
-    corpus : Corpus
-    speaker_of : callable(Utterance) -> str, optional
-        Default: ``utterance.speaker`` (every utterance must name its speaker).
-
-    Returns
-    -------
-    Corpus, dict of str to ndarray (C,)
-        The normalised corpus and the mean frame of every speaker.
-    """
-    from dataclasses import replace
-
-    who = speaker_of or (lambda u: u.speaker)
-    groups = {}
-    for u in corpus.utterances:
-        s = str(who(u))
-        if not s:
-            raise ValueError(f"{corpus.name}: utterance {u.id!r} names no speaker; per-speaker normalisation "
-                             f"needs one per utterance (set Utterance.speaker or pass speaker_of)")
-        groups.setdefault(s, []).append(u)
-    F = corpus.frames.astype(np.float64)
-    means = {}
-    for s, utts in groups.items():
-        idx = np.concatenate([np.arange(u.start, u.stop) for u in utts])
-        means[s] = F[idx].mean(axis=0)
-        F[idx] -= means[s]
-    out = replace(corpus, frames=F.astype(np.float32), name=f"{corpus.name} (per-speaker mean removed)",
-                  latent=dict(corpus.latent))
-    return out, means
 
 
 def _score(manifold, X, F, Y_true, lo, hi):

@@ -142,6 +142,27 @@ def haskins_speaker(utterance) -> str:
     return utterance.speaker or utterance.id.split("_")[0]
 
 
+def name_haskins_speakers(corpus):
+    """The corpus with every utterance's blank speaker named by :func:`haskins_speaker`."""
+    from dataclasses import replace
+
+    return replace(corpus, utterances=[replace(u, speaker=haskins_speaker(u)) for u in corpus.utterances])
+
+
+def normalise_per_speaker(corpus):
+    """Each speaker's mean frame removed (:func:`engine.registration.normalise_speakers`, mode "mean").
+
+    Raises ValueError when an utterance names no speaker.
+    """
+    from engine.registration import normalise_speakers
+
+    blank = [u.id for u in corpus.utterances if not u.speaker]
+    if blank:
+        raise ValueError(f"{corpus.name}: utterance {blank[0]!r} names no speaker; per-speaker normalisation needs "
+                         f"one per utterance (import with speakers, or use --haskins for the Haskins pair)")
+    return normalise_speakers(corpus, mode="mean")
+
+
 def _settings(args, manifold, progress):
     """Validated settings, overridden by whatever the command line fixes."""
     from engine.protocols import PROTOCOLS, STATE_DIM_CANDIDATES, select_settings
@@ -165,7 +186,7 @@ def _run_protocols(args) -> int:
     from app.cli import CliError
     from app.cli._common import progress_bar
     from engine.manifold import Manifold
-    from engine.protocols import evaluate_protocols, normalise_speakers
+    from engine.protocols import evaluate_protocols
 
     for name in ("smoothing", "neighbors", "state_dims", "states"):
         v = getattr(args, name)
@@ -175,13 +196,15 @@ def _run_protocols(args) -> int:
     with progress_bar(disable=True if args.quiet else None) as progress:
         corpus = _corpus(args, progress)
         notes = []
+        if args.haskins:
+            corpus = name_haskins_speakers(corpus)
         if args.speaker_norm or args.haskins:
             try:
-                corpus, means = normalise_speakers(corpus, haskins_speaker if args.haskins else None)
+                corpus = normalise_per_speaker(corpus)
             except ValueError as exc:
                 raise CliError(str(exc)) from None
-            notes.append(f"per-speaker mean frame removed ({', '.join(means)}); errors are the same in "
-                         f"either frame of reference")
+            notes.append(f"per-speaker mean frame removed ({', '.join(corpus.speakers)}; "
+                         f"engine.registration.normalise_speakers, mode 'mean')")
 
         def factory(train):
             return Manifold(n_states=args.states, random_state=args.seed).fit(train, progress=progress)

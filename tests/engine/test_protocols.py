@@ -6,7 +6,7 @@ import pytest
 
 from engine.inverse_local import LocalLinearInverse, StateMeanInverse, select_neighbors
 from engine.paired import paired_comparison
-from engine.protocols import PROTOCOL_METHODS, evaluate_protocols, normalise_speakers, select_settings
+from engine.protocols import PROTOCOL_METHODS, evaluate_protocols, select_settings
 from engine.statepaths import StateModel, anchor, interpolate_targets
 
 #: a reduced candidate grid keeps the test fast; the generator of docs/RESULTS.md uses the full one
@@ -199,22 +199,6 @@ def test_every_method_is_scored_in_y_through_the_same_projection(result, small_c
     ey = np.linalg.norm(project_x(m, X)[lo:hi, :3] - m.project(F)[lo:hi, :3], axis=1)
     row = next(x for x in result.per_utterance if (x["protocol"], x["method"], x["utterance"]) == ("oracle", "linear", uid))
     assert row["rmse_y"] == pytest.approx(float(np.sqrt((ey ** 2).mean())), rel=1e-4)
-
-
-def test_normalise_speakers(small_corpus):
-    from dataclasses import replace
-
-    ids = [u.id for u in small_corpus.utterances][:4]
-    c = small_corpus.subset(ids)
-    with pytest.raises(ValueError, match="names no speaker"):
-        normalise_speakers(c)
-    c = replace(c, utterances=[replace(u, speaker="A" if k < 2 else "B") for k, u in enumerate(c.utterances)])
-    n, means = normalise_speakers(c)
-    assert set(means) == {"A", "B"}
-    a = np.concatenate([n.frames[u.start:u.stop] for u in n.utterances[:2]])
-    np.testing.assert_allclose(a.mean(0), 0.0, atol=1e-3)
-    np.testing.assert_allclose(n.frames[: c.utterances[0].n_frames] + means["A"], c.frames[: c.utterances[0].n_frames],
-                               atol=1e-3)
 
 
 @pytest.mark.parametrize("talker", ["default", "held-out"])
