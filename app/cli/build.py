@@ -38,6 +38,10 @@ def run(args) -> int:
     t0 = time.perf_counter()
     with progress_bar(disable=True if args.quiet else None) as progress:
         corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress)
+        if abs(corpus.rate - 60.0) > 3.0:  # the analysis rate (README, "Real recordings")
+            print(f"lipspace build: warning: {corpus.name} is at {corpus.rate:g} Hz; the method's analysis rate is "
+                  "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "
+                  "'lipspace import CORPUS --resample 60 -o OUT.npz'", file=sys.stderr)
         try:
             manifold = Manifold(variance=args.variance, n_embedding=args.embedding_dims,
                                 embedding_method=args.method, n_landmarks=args.landmarks,

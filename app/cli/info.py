@@ -5,6 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
+#: the paper's frame rate, which velocities and the state graph are tuned to (see app.cli.importer)
+ANALYSIS_RATE = 60.0
+
 
 def add_arguments(p):
     p.add_argument("file", help="a manifold (from 'lipspace build') or native corpus file (.npz)")
@@ -16,7 +19,9 @@ def _corpus_lines(c):
     top = ", ".join(f"{u} {n}" for u, n in sorted(zip(uniq, counts), key=lambda t: -t[1])[:12])
     return [
         f"corpus      {c.name}",
-        f"frames      {c.n_frames} at {c.rate:g} Hz ({c.duration:.1f} s), {len(c.utterances)} utterances",
+        f"frames      {c.n_frames} at {c.rate:g} Hz ({c.duration:.1f} s), {len(c.utterances)} utterances"
+        + ("" if abs(c.rate - ANALYSIS_RATE) <= 0.05 * ANALYSIS_RATE else
+           f" (the method's analysis rate is {ANALYSIS_RATE:g} Hz: 'lipspace import --resample {ANALYSIS_RATE:g}')"),
         f"points      {c.n_points} ({c.dims}-D){', mesh with %d faces' % len(c.faces) if c.faces is not None else ''}",
         f"phones      {len(labels)} intervals, {len(uniq)} labels" + (f"; most frequent: {top}" if top else ""),
         f"latent      {', '.join(sorted(c.latent)) or '-'}",

@@ -67,15 +67,13 @@ def corpus_from_matrix(path, M, layout, *, rate: float, points=None, fill_gaps: 
     if not np.issubdtype(M.dtype, np.number) or np.iscomplexobj(M):
         raise ImportFormatError(path, f"holds {M.dtype} values; expected real numbers")
     if M.shape[1] != layout.n_columns:
-        per = layout.values
-        hint = ""
-        if M.shape[1] % per == 0:
-            hint = f" ({M.shape[1] // per} sensors x {per} values would fit: give a layout with that many sensors)"
-        else:
-            for v in (6, 7, 3):
-                if M.shape[1] % v == 0:
-                    hint = f" ({M.shape[1] // v} sensors x {v} values would fit)"
-                    break
+        per, cols = layout.values, M.shape[1]
+        fits = [f"{cols // v} sensors x {v} values" for v in dict.fromkeys((per, 7, 6)) if cols % v == 0]
+        from engine.layouts import BUILTIN
+
+        same = [n for n, lay in BUILTIN.items() if lay.format == "matrix" and lay.n_columns == cols]
+        hint = (f" ({cols} = {' or '.join(fits)}: give a layout with that shape"
+                f"{', e.g. ' + ', '.join(same) if same else ''})") if fits else ""
         raise ImportFormatError(path, f"has {M.shape[1]} columns but layout {layout.name!r} expects "
                                 f"{len(layout.sensors)} sensors x {per} values = {layout.n_columns}{hint}")
     try:
@@ -96,7 +94,6 @@ def corpus_from_matrix(path, M, layout, *, rate: float, points=None, fill_gaps: 
                              audio=sidecar_audio(path))
     roles = [layout.roles[i] for i in keep]
     c.point_roles = roles if any(roles) else None
-    c.history.append(f"read {Path(path).name} with layout {layout.name}: sensors {', '.join(names)}")
     return c
 
 
@@ -193,6 +190,9 @@ def read_matrix(path, *, layout, rate: float | None = None, variable: str | None
         fn = read_pos if lay.format == "pos" else read_wave
         return fn(path, layout=lay, rate=rate, points=points, alignment=alignment, tier=tier, fill_gaps=fill_gaps)
     suf = path.suffix.lower()
+    if suf == ".pos":
+        raise ImportFormatError(path, f"a .pos file is an AG500/AG501 binary; layout {lay.name!r} describes a plain "
+                                "matrix: use layout ag500 or ag501, or a layout file with 'base: ag501'")
     found = None
     if suf == ".mat":
         M, found = _from_mat(path, variable)

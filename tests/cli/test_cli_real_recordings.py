@@ -135,3 +135,46 @@ def test_evaluate_unlabelled_and_exit_status(good, tmp_path):
     rc, out, err = _run(["evaluate", str(tmp_path / "part.npz"), "--methods", "linear", "--test-ids", bare, "-q"])
     assert rc == 1, out + err
     assert "every item failed" in err
+
+
+def test_head_sensors_give_rigid_registration(tmp_path):
+    from engine.multispeaker import layout_text
+
+    (tmp_path / "ref.layout").write_text(layout_text(reference=True))
+    files = []
+    for r in generate_recordings(n_speakers=2, n_utterances=2, duration_s=(2.0, 2.0), head_motion=3.0,
+                                 reference=True, seed=7):
+        f = tmp_path / f"{r.id}.npy"
+        np.save(f, r.matrix)
+        files.append(str(f))
+    corpus, mfile = tmp_path / "c.npz", tmp_path / "m.npz"
+    rc, out, err = _run(["import", *files, "--layout", str(tmp_path / "ref.layout"), "--rate", "250",
+                         "--speaker-from", "prefix", "-o", str(corpus)])
+    assert rc == 0, err
+    assert "registration: rigid (Procrustes) to reference sensors NOSE, LMA, RMA" in err
+    c = Corpus.load(corpus)
+    assert c.point_names == ["UL", "LL", "LC", "RC"] and c.speakers == ["S1", "S2"]
+    rc, out, err = _run(["build", str(corpus), "-o", str(mfile), "--states", "12", "-q"])
+    assert rc == 0 and "warning" not in err, err
+    rc, out, err = _run(["info", str(mfile)])
+    line = next(x for x in out.splitlines() if x.startswith("opening"))
+    assert float(line.rsplit(":", 1)[1].split("%")[0]) >= 90.0, line
+
+
+def test_plain_matrix_errors_point_at_layouts(tmp_path, recordings):
+    import scipy.io
+
+    _, files = recordings
+    M = np.loadtxt(files[0], delimiter=",")
+    scipy.io.savemat(tmp_path / "X.mat", {"X": M})
+    for cmd in (["import", str(tmp_path / "X.mat"), "-o", str(tmp_path / "x.npz")],
+                ["build", str(tmp_path / "X.mat"), "-o", str(tmp_path / "m.npz"), "-q"]):
+        rc, out, err = _run(cmd)
+        assert rc == 2 and "plain" in err and "--layout ema7x6" in err, err
+    rc, out, err = _run(["import", str(tmp_path / "X.mat"), "--layout", "ema7x6", "-o", str(tmp_path / "x.npz")])
+    assert rc == 2 and "--rate HZ" in err
+    rc, out, err = _run(["import", str(tmp_path / "X.mat"), "--layout", "ema7x7", "--rate", "250",
+                         "-o", str(tmp_path / "x.npz")])
+    assert rc == 2 and "42 columns but layout 'ema7x7' expects 7 sensors x 7 values = 49" in err
+    assert "42 = 6 sensors x 7 values or 7 sensors x 6 values: give a layout with that shape, e.g. ema7x6" in err
+    assert not (tmp_path / "x.npz").exists()

@@ -42,7 +42,7 @@ def test_mat_npy_csv_with_builtin_7x6_layout(tmp_path, rec):
 
 def test_matrix_errors_name_the_fix(tmp_path, rec):
     np.save(tmp_path / "u.npy", rec.matrix[:, :40])
-    with pytest.raises(ImportFormatError, match=r"40 columns but layout 'ema7x6' expects 7 sensors x 6 values = 42"):
+    with pytest.raises(ImportFormatError, match=r"40 columns but layout 'ema7x6' expects 7 sensors x 6 values = 42$"):
         read_matrix(tmp_path / "u.npy", layout="ema7x6", rate=250)
     np.save(tmp_path / "v.npy", rec.matrix)
     with pytest.raises(ImportFormatError, match=r"no timing.*--rate HZ"):
