@@ -45,6 +45,8 @@ __all__ = [
 _UNBRIDGED_PENALTY = 1e6
 #: method names understood by :func:`make_synthesizer`
 METHODS = ("manifold", "linear", "cubic", "unitselection")
+#: inverse maps of :class:`ManifoldSynthesizer`
+INVERSES = ("delaunay", "state-mean", "local-linear")
 
 
 class NoPathError(ValueError):
@@ -378,6 +380,19 @@ class ManifoldSynthesizer(BaseEstimator):
         F^y (first d dims) of its frames. More dims carry more of X (the paper notes
         the construction extends beyond 3), at the cost of a much larger triangulation
         (d = 5 on the paper-scale preset: 3.3 million simplices, ~30 s to build).
+    inverse : {"delaunay", "state-mean", "local-linear"}, default="delaunay"
+        How the state path becomes X. ``"delaunay"``: the tetrahedralisation above (the
+        paper). ``"state-mean"``: each state's mean F^x over its training frames
+        (:class:`engine.inverse_local.StateMeanInverse`; no triangulation, any number of
+        state dims). ``"local-linear"``: the path's points (``points_``) through
+        :class:`engine.inverse_local.LocalLinearInverse` on the first ``inverse_dims``
+        (default: the state dims) of F^y, k = ``n_neighbors``.
+    smoothing : float, default=0.0
+        Gaussian smoothing of the path before the inverse map, in frames (X for
+        ``"state-mean"``, the path's points in Y otherwise). ``engine.protocols.select_settings``
+        chooses it on training utterances.
+    n_neighbors : int, default=40
+        k of the ``"local-linear"`` inverse.
 
     Use ``fit(manifold)`` then ``synthesize(targets)``.
 
@@ -392,17 +407,25 @@ class ManifoldSynthesizer(BaseEstimator):
 
     method = "manifold"
 
-    def __init__(self, *, n_candidates=8, cluster_weight=1.0, strict=True, inverse_dims=None):
+    def __init__(self, *, n_candidates=8, cluster_weight=1.0, strict=True, inverse_dims=None, inverse="delaunay",
+                 smoothing=0.0, n_neighbors=40):
         self.n_candidates = n_candidates
         self.cluster_weight = cluster_weight
         self.strict = strict
         self.inverse_dims = inverse_dims
+        self.inverse = inverse
+        self.smoothing = smoothing
+        self.n_neighbors = n_neighbors
 
     def fit(self, manifold):
         """Prepare the transition graph and phone candidate tables of a fitted manifold."""
         _check_fitted_manifold(manifold)
         if int(self.n_candidates) < 1:
             raise ValueError(f"n_candidates must be >= 1, got {self.n_candidates}")
+        if self.inverse not in INVERSES:
+            raise ValueError(f"inverse must be one of {', '.join(INVERSES)}, got {self.inverse!r}")
+        if not float(self.smoothing) >= 0:
+            raise ValueError(f"smoothing must be >= 0 frames, got {self.smoothing!r}")
         self._manifold = manifold
         self._graph = MaxProductGraph(log_transitions(observed_transitions(manifold.states_)))
         self._table = None
@@ -423,6 +446,27 @@ class ManifoldSynthesizer(BaseEstimator):
         return self
 
     # -- helpers ------------------------------------------------------------------
+    def _path_x(self, path) -> np.ndarray:
+        """X (n, m) of a state path through the chosen inverse map."""
+        from engine.statepaths import smooth
+
+        m = self._manifold
+        if self.inverse == "state-mean":
+            if self._own_inverse is None:
+                from engine.inverse_local import StateMeanInverse
+
+                self._own_inverse = StateMeanInverse().fit(m.states_.labels_, m.Fx_, n_states=self.n_states_)
+            return smooth(self._own_inverse.transform(path), self.smoothing)
+        P = smooth(self.points_[path], self.smoothing)
+        if self.inverse == "local-linear":
+            if self._own_inverse is None:
+                from engine.inverse_local import LocalLinearInverse
+
+                self._own_inverse = LocalLinearInverse(n_neighbors=int(self.n_neighbors),
+                                                       n_dims=self.points_.shape[1]).fit(m.Fy_, m.Fx_)
+            return self._own_inverse.transform(P)
+        return self._inverse().transform(P)
+
     def _inverse(self):
         m = self._manifold
         if self.inverse_dims is None and getattr(m, "inverse_map", None) is not None:
@@ -469,7 +513,7 @@ class ManifoldSynthesizer(BaseEstimator):
             states = self._choose_phone_states(targets, f, states, warnings)
         path = self._join(targets, f, states, warnings)
         Y = self.centroids_[path]
-        Fx = np.asarray(self._inverse().transform(self.points_[path]), dtype=np.float32)
+        Fx = np.asarray(self._path_x(path), dtype=np.float32)
         times = np.arange(targets.n_frames) / targets.rate
         return Trajectory(times=times, Fx=Fx, Fy=Y.astype(np.float32), method=self.method, states=path,
                           target_frames=f, target_labels=[t.label for t in targets.targets], warnings=warnings)

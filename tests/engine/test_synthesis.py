@@ -289,3 +289,31 @@ def test_inverse_dims_maps_state_means_through_a_higher_dimensional_map(small_ma
     assert syn._inverse().n_dims == 4 and tr.Fx.shape == base.Fx.shape and np.isfinite(tr.Fx).all()
     with pytest.raises(ValueError, match="inverse_dims must be in 1..10"):
         ManifoldSynthesizer(inverse_dims=11).fit(m)
+
+
+def test_inverse_maps_beside_delaunay(small_manifold):
+    """ManifoldSynthesizer(inverse=...): the same state path through the state means or the local-linear map."""
+    from engine.synthesis import ManifoldSynthesizer
+    from engine.targets import targets_from_utterance
+
+    m = small_manifold
+    u = m.corpus_.utterances[2]
+    tg = targets_from_utterance(m, u.id)
+    dela = ManifoldSynthesizer().fit(m).synthesize(tg)
+    mean = ManifoldSynthesizer(inverse="state-mean").fit(m).synthesize(tg)
+    np.testing.assert_array_equal(mean.states, dela.states)  # the inverse map never changes the path
+    lab = m.states_.labels_
+    expect = np.stack([m.Fx_[lab == k].mean(0) for k in mean.states])
+    np.testing.assert_allclose(mean.Fx, expect, rtol=1e-4, atol=1e-4)
+    smooth = ManifoldSynthesizer(inverse="state-mean", smoothing=2.0).fit(m).synthesize(tg)
+    assert np.abs(np.diff(smooth.Fx, axis=0)).sum() < np.abs(np.diff(mean.Fx, axis=0)).sum()
+    ll = ManifoldSynthesizer(inverse="local-linear", inverse_dims=5, n_neighbors=30).fit(m).synthesize(tg)
+    assert ll.Fx.shape == dela.Fx.shape and np.isfinite(ll.Fx).all()
+    # the 5-D local-linear map places the path's states nearer the real frames than 3-D Delaunay does
+    truth = m.Fx_[u.start:u.stop]
+    err = {k: float(np.sqrt(((t.Fx - truth) ** 2).sum(1).mean())) for k, t in (("delaunay", dela), ("ll5", ll))}
+    assert err["ll5"] < err["delaunay"], err
+    with pytest.raises(ValueError, match="inverse must be one of"):
+        ManifoldSynthesizer(inverse="nearest").fit(m)
+    with pytest.raises(ValueError, match="smoothing must be >= 0"):
+        ManifoldSynthesizer(smoothing=-1).fit(m)
