@@ -1,0 +1,63 @@
+"""The explorer on an unlabelled articulograph corpus: sparse markers drawn as lips, the editor's targets from
+kinematic landmarks (needs a display: Xvfb is started if absent)."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture(scope="module")
+def ema_manifold():
+    from engine.corpus import Utterance
+    from engine.io import concat, resample
+    from engine.io.matrix import corpus_from_matrix
+    from engine.layouts import BUILTIN
+    from engine.manifold import Manifold
+    from engine.multispeaker import generate_recordings
+    from engine.registration import register
+
+    parts = []
+    for r in generate_recordings(n_speakers=2, n_utterances=2, duration_s=(2.0, 2.0), seed=11):
+        c = corpus_from_matrix(f"{r.id}.csv", r.matrix, BUILTIN["ema7x6"], rate=r.rate)
+        parts.append(replace(c, utterances=[Utterance(r.id, 0, c.n_frames, speaker=r.speaker)], name=r.id))
+    corpus = resample(register(concat(parts, name="ema"), method="utterance"), 60)
+    import warnings
+
+    from engine.corpus import CorpusWarning
+
+    with warnings.catch_warnings():  # a state or two cut off by 8 s of speech is not what this test is about
+        warnings.simplefilter("ignore", CorpusWarning)
+        return Manifold(n_states=16).fit(corpus)
+
+
+def test_unlabelled_sparse_markers_in_the_explorer(qapp, qtbot, ema_manifold):
+    from app.main_window import MainWindow
+    from app.scene import ContourHandle
+
+    m = ema_manifold
+    w = MainWindow(m, source={"path": None, "preset": "small"})
+    w.resize(1100, 800)
+    w.show()
+    try:
+        for _ in range(5):
+            qapp.processEvents()
+        lv = w.lip_view
+        assert isinstance(lv.main, ContourHandle) and lv.main.labels is not None
+        u = m.corpus_.utterances[1]
+        s, ed = w.state, w.editor
+        ed.set_source("utterance")
+        ed.utt_box.setCurrentIndex(1)
+        assert ed.load()  # no phones: the targets are the utterance's kinematic landmarks
+        ed.set_method("linear")
+        ed.synthesize()
+        qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)
+        s.set_playback(10)
+        from engine.corpus import frame_points
+
+        np.testing.assert_allclose(lv.main.points, frame_points(m.corpus_.frames[u.start + 10], 3), atol=1e-4)
+    finally:
+        w.close()
