@@ -231,4 +231,10 @@ def _run_protocols(args) -> int:
             with open(tmp, "w", encoding="utf-8") as fh:
                 fh.write(result.markdown() + "\n")
         print(f"wrote {args.markdown}")
+    if sum(int(r.get("utterances") or 0) for r in result.rows) == 0:
+        import sys
+
+        print("lipspace evaluate: every item failed: no method synthesised any held-out utterance under any "
+              "protocol", file=sys.stderr)
+        return 1
     return 0

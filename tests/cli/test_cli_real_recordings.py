@@ -178,3 +178,19 @@ def test_plain_matrix_errors_point_at_layouts(tmp_path, recordings):
     assert rc == 2 and "42 columns but layout 'ema7x7' expects 7 sensors x 7 values = 49" in err
     assert "42 = 6 sensors x 7 values or 7 sensors x 6 values: give a layout with that shape, e.g. ema7x6" in err
     assert not (tmp_path / "x.npz").exists()
+
+
+def test_evaluate_protocols_exit_status_when_every_item_fails(good, tmp_path):
+    corpus, _, _, _ = good
+    from dataclasses import replace
+
+    from engine.kinematics import with_kinematic_labels
+
+    c = with_kinematic_labels(Corpus.load(corpus))
+    bare = c.utterances[0].id
+    c = replace(c, utterances=[replace(u, phones=()) if u.id == bare else u for u in c.utterances],
+                point_roles=None, point_names=[f"p{i}" for i in range(c.n_points)])
+    c.save(tmp_path / "part.npz")
+    rc, out, err = _run(["evaluate", str(tmp_path / "part.npz"), "--test-ids", bare, "-q"])
+    assert rc == 1, out + err
+    assert "every item failed" in err
