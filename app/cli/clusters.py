@@ -133,8 +133,10 @@ def run(args) -> int:
     headers = ["phone", "count", *ycols, "opening", "class", "lipreading", "nearest Y", "sep Y", "sep X",
                "nearest X", "sep X(nX)"]
     n_inst = int(pc.counts_.sum())
-    print(f"{manifold.corpus_.name}: {n_inst} phone mid-points in {len(pc.phones_)} clusters "
-          f"(F^y and F^x, {pc.n_dims_} / {pc.n_dims_x_} dims; separation: {args.measure}; labels: {pc.phoneset_}"
+    what = "phone mid-points" if labels == "phones" else "kinematic landmarks"
+    print(f"{manifold.corpus_.name}: {n_inst} {what} in {len(pc.phones_)} clusters "
+          f"(F^y and F^x, {pc.n_dims_} / {pc.n_dims_x_} dims; separation: {args.measure}; labels: "
+          f"{pc.phoneset_ if labels == 'phones' else 'open / closed / opening / closing'}"
           f"{', normalised' if args.normalize else ''})")
     if pc.excluded_phones_:
         few = ", ".join(f"{p} {n}" for p, n in zip(pc.excluded_phones_, pc.excluded_counts_))
