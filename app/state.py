@@ -9,6 +9,7 @@ minimum-distance path) are pure functions of the manifold and the state, below.
 from __future__ import annotations
 
 import functools
+import weakref
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
@@ -18,7 +19,7 @@ __all__ = ["Event", "AppState", "TrajectoryData", "Coloring", "HEMISPHERES", "CO
            "CLASS_COLOURS", "CLASS_LABELS", "UNREACHABLE_RGB", "knn_density", "frame_phones",
            "hop_distances", "hop_distance_scalars", "hop_distance_colors", "point_colors",
            "state_path", "categorical_palette", "phone_palette", "ellipsoid_colors", "cluster_table",
-           "original_trajectory"]
+           "original_trajectory", "prepare_derived"]
 
 HEMISPHERES = ("future", "past", "off")
 COLOR_MODES = ("density", "class", "phone", "utterance", "distance")
@@ -133,6 +134,38 @@ def original_trajectory(manifold, uid: str) -> TrajectoryData:
     return TrajectoryData(Y=manifold.Fy_[idx], Fx=manifold.Fx_[idx], frames=idx, label=u.id, rate=c.rate)
 
 
+#: derived data computed ahead of time per manifold object (see prepare_derived)
+_PREPARED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def prepare_derived(manifold, progress=None) -> None:
+    """Compute what the views derive from ``manifold`` ahead of showing it (Qt-free, any thread).
+
+    The k-NN density of every frame, the phone of every frame and the phone clusters
+    (together about a second of work at 28,800 frames) are computed here, e.g. in the
+    loading worker, and picked up by :meth:`AppState.set_manifold`, so that showing a
+    manifold does not freeze the window. Reports stage ``"preparing the views"``.
+    A corpus whose phone clusters cannot be fitted is left for the clusters panel to
+    report, as without this step.
+    """
+    from engine.progress import report
+
+    stage = "preparing the views"
+    report(progress, stage, 0, 3)
+    out = {"density": knn_density(manifold.Fy_)}
+    report(progress, stage, 1, 3)
+    out["phones"] = frame_phones(manifold.corpus_)
+    report(progress, stage, 2, 3)
+    try:
+        from engine.clusters import PhoneClusters
+
+        out["clusters"] = PhoneClusters.from_manifold(manifold)
+    except ValueError:
+        pass  # the panel computes (and reports) it when shown
+    report(progress, stage, 3, 3)
+    _PREPARED[manifold] = out
+
+
 class AppState:
     """What the user has selected and how things are shown; observed by every view.
 
@@ -180,9 +213,8 @@ class AppState:
         self.playback = None
         self.playing = False
         self.component = None
-        self._density = None
-        self._phones = None
-        self._clusters = None
+        pre = _PREPARED.get(manifold, {}) if manifold is not None else {}
+        self._density, self._phones, self._clusters = (pre.get(k) for k in ("density", "phones", "clusters"))
         self._batch_depth = 0
         self._pending: dict = {}  # field name -> None, in order of first change (a batch's events)
 
@@ -237,7 +269,8 @@ class AppState:
         self.manifold = manifold
         if source is not None:
             self.source = dict(source)
-        self._density = self._phones = self._clusters = None
+        pre = _PREPARED.get(manifold, {}) if manifold is not None else {}
+        self._density, self._phones, self._clusters = (pre.get(k) for k in ("density", "phones", "clusters"))
         self.frame = self.state = self.target = self.path = None
         self.utterance = self.original = self.synthetic = self.playback = self.component = None
         self.playing = False

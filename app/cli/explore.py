@@ -119,7 +119,8 @@ def source_kind(path) -> str:
     raise ValueError(f"{p}: neither a Lipspace manifold nor a corpus file (no manifold_version / corpus_version)")
 
 
-def load_source(path=None, preset: str = "default", progress=None, *, use_cache: bool = True):
+def load_source(path=None, preset: str = "default", progress=None, *, use_cache: bool = True,
+                prepare_views: bool = True):
     """Load or build the manifold the explorer shows (Qt-free; runs in the worker thread).
 
     Parameters
@@ -129,12 +130,25 @@ def load_source(path=None, preset: str = "default", progress=None, *, use_cache:
         cached).
     progress : callable(stage, done, total), optional
         Raising :class:`engine.progress.Cancelled` from it stops the build.
+    prepare_views : bool, default=True
+        Also compute what the views derive from the manifold (density, phone of every
+        frame, phone clusters: :func:`app.state.prepare_derived`), here in the worker, so
+        that showing the manifold costs the window's thread little.
 
     Returns
     -------
     manifold : engine.manifold.Manifold
     source : dict ``{"path": str or None, "preset": str, "kind": str}``
     """
+    m, src = _load_manifold(path, preset, progress, use_cache)
+    if prepare_views:
+        from app.state import prepare_derived
+
+        prepare_derived(m, progress)
+    return m, src
+
+
+def _load_manifold(path, preset, progress, use_cache):
     from engine.manifold import Manifold, ManifoldFileError
     from engine.progress import report
 

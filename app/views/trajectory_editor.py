@@ -248,8 +248,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.playback, self.timeline.set_cursor),
                              (ev.utterance, self._on_utterance)]
         connect_all(self._connections)
-        self._fill_methods()
-        self.rebuild()
+        self.rebuild()  # fills the methods once a manifold is there
 
     # ------------------------------------------------------------------ setup
     def _fill_methods(self):
@@ -293,6 +292,10 @@ class TrajectoryEditor(QtWidgets.QWidget):
 
     def rebuild(self) -> None:
         m = self.state.manifold
+        if m is not None and self.method_box.count() == 0:
+            # engine.synthesis pulls in scikit-learn (seconds at start-up); by the time a manifold
+            # is loaded it is imported already, so the empty window opens without it
+            self._fill_methods()
         self.synthesizers = {}
         self.targets = None
         self.timeline.set_targets(None)

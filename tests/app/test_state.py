@@ -324,3 +324,16 @@ def test_changes_made_by_observers_join_the_same_changed_event(app_manifold):
     s.events.state.connect(lambda st: s.set_path_mode(True) if st is not None else None)
     s.select_frame(50)
     assert changes == [frozenset({"frame", "state", "color_mode", "path_mode"})]
+
+
+def test_derived_data_prepared_ahead_is_used_by_every_state(app_manifold):
+    from app.state import prepare_derived
+
+    m, stages = app_manifold, []
+    prepare_derived(m, lambda st, d, t: stages.append((st, d, t)))  # as the loading worker does
+    assert stages[0] == ("preparing the views", 0, 3) and stages[-1] == ("preparing the views", 3, 3)
+    a, b = AppState(), AppState(m)
+    a.set_manifold(m)
+    assert a.density is b.density and a.phones is b.phones and a.clusters is b.clusters  # computed once, ahead
+    np.testing.assert_array_equal(a.density, knn_density(m.Fy_))
+    np.testing.assert_array_equal(a.phones, frame_phones(m.corpus_))

@@ -77,7 +77,7 @@ def test_load_source_manifold_corpus_and_cache(small_manifold, small_corpus, mon
     stages = []
     m2, src2 = load_source(None, "small", lambda st, d, t: stages.append(st))
     assert src2 == {"path": None, "preset": "small", "kind": "synthetic"}
-    assert stages and set(stages) == {"loading cached manifold"}
+    assert stages and set(stages) == {"loading cached manifold", "preparing the views"}
     np.testing.assert_array_equal(m2.Fy_, small_manifold.Fy_)
     # a corpus file is fitted (a few utterances keep it quick); cancelling stops the fit
     cpath = small_corpus.subset([u.id for u in small_corpus.utterances[:5]]).save(tmp_path / "c.npz")
