@@ -29,9 +29,10 @@ Printed at the end: whether the child was alive when the soak time ran out and h
 exited; frames played (playback events) and frames/s; clicks; syntheses; panel
 switches; ``sys.getrefcount(None)`` at start and end in the child (a drop means a Qt
 binding is losing references to None, the PySide6 6.12.0 / CPython 3.11 crash); RSS at
-launch, after warm-up (start), at the end, its maximum and its least-squares slope in
-MB/min over the soak (also over the second half, where start-up allocations are
-settled); wall time and the BLAS kernel (threadpoolctl).
+launch, after loading and the first synthesis (start), at the end, its maximum and its
+least-squares slope in MB/min over the soak (also over its second half, and after the
+first ``--warmup`` seconds, where first-click allocations are settled); wall time and
+the BLAS kernel (threadpoolctl).
 """
 from __future__ import annotations
 
@@ -286,6 +287,7 @@ def monitor(args) -> int:
 
     by = {e.get("event"): e for e in events}
     soak = [(t, r) for t, r, ph in samples if ph == "soak"]
+    warm = [(t, r) for t, r in soak if t - soak[0][0] >= args.warmup]
     loaded, end = by.get("loaded", {}), by.get("soak_end") or (
         [e for e in events if e.get("event") == "sample"] or [{}])[-1]
     summary = {
@@ -305,6 +307,8 @@ def monitor(args) -> int:
         "rss_slope_mb_per_min": slope_mb_per_min(*zip(*soak)) if len(soak) > 1 else float("nan"),
         "rss_slope_second_half_mb_per_min": (slope_mb_per_min(*zip(*soak[len(soak) // 2:]))
                                              if len(soak) > 3 else float("nan")),
+        "warmup_s": args.warmup, "rss_after_warmup_mb": warm[0][1] if warm else None,
+        "rss_slope_after_warmup_mb_per_min": slope_mb_per_min(*zip(*warm)) if len(warm) > 1 else float("nan"),
         "rss_samples": len(soak),
         "rss_trace": [[round(t, 1), round(r, 1)] for t, r in soak],
         "resynth_every_s": args.resynth_every, "click_every_s": args.click_every,
@@ -327,6 +331,10 @@ def monitor(args) -> int:
               f"end {summary['rss_end_mb']:.1f}, max {summary['rss_max_mb']:.1f}; slope "
               f"{summary['rss_slope_mb_per_min']:+.2f} MB/min (second half "
               f"{summary['rss_slope_second_half_mb_per_min']:+.2f}) over {len(soak)} samples")
+    if len(warm) > 1:
+        print(f"  after the first {args.warmup:g} s of soak (first clicks, recolour buffers, caches): RSS "
+              f"{summary['rss_after_warmup_mb']:.1f} -> {summary['rss_end_mb']:.1f} MB, slope "
+              f"{summary['rss_slope_after_warmup_mb_per_min']:+.2f} MB/min")
     if rc != 0 or not summary["alive_at_end"]:
         print("  child stderr (tail):", *err_tail[-20:], sep="\n    ")
     if args.json:
@@ -346,6 +354,8 @@ def main(argv=None) -> int:
     p.add_argument("--sample", type=float, default=SAMPLE_S, help="RSS sampling period, s (default %(default)s)")
     p.add_argument("--load-timeout", type=float, default=900.0,
                    help="seconds allowed for loading/building before the soak (default %(default)s)")
+    p.add_argument("--warmup", type=float, default=60.0,
+                   help="seconds of soak left out of the after-warm-up RSS slope (default %(default)s)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--autosave", action=argparse.BooleanOptionalAction, default=True,
                    help="autosave the session as the explorer does (default: on)")
