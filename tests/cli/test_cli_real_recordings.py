@@ -128,6 +128,7 @@ def test_evaluate_unlabelled_and_exit_status(good, tmp_path):
     from engine.kinematics import with_kinematic_labels
 
     c = with_kinematic_labels(Corpus.load(corpus))
+    c = c.subset([u.id for u in c.utterances[:3]])  # small: 2 training utterances, no validation split
     bare = c.utterances[0].id
     c = replace(c, utterances=[replace(u, phones=()) if u.id == bare else u for u in c.utterances],
                 point_roles=None, point_names=[f"p{i}" for i in range(c.n_points)])
@@ -187,6 +188,7 @@ def test_evaluate_protocols_exit_status_when_every_item_fails(good, tmp_path):
     from engine.kinematics import with_kinematic_labels
 
     c = with_kinematic_labels(Corpus.load(corpus))
+    c = c.subset([u.id for u in c.utterances[:3]])  # small: 2 training utterances, no validation split
     bare = c.utterances[0].id
     c = replace(c, utterances=[replace(u, phones=()) if u.id == bare else u for u in c.utterances],
                 point_roles=None, point_names=[f"p{i}" for i in range(c.n_points)])
