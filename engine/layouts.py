@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["ROLES", "Layout", "LayoutError", "BUILTIN", "get_layout", "read_layout", "guess_roles",
-           "LIP_ROLES", "DEFAULT_KEEP_ROLES"]
+           "LIP_ROLES", "DEFAULT_KEEP_ROLES", "roles_from_spec"]
 
 ROLES = ("upper_lip", "lower_lip", "left_corner", "right_corner", "lip", "jaw", "reference", "tongue", "other")
 #: roles that are points on the lips
@@ -295,3 +295,39 @@ def read_layout(path) -> Layout:
                       base.format if base else "matrix", f"user layout {path.name}")
     except LayoutError as exc:
         raise LayoutError(f"{path}: {exc}") from None
+
+
+def roles_from_spec(spec: str, n_points: int, names=None, base=None) -> list[str]:
+    """Point roles from a ``role=point,point;role=...`` string (``lipspace import --roles``).
+
+    Points are named (``point_names``, case-insensitive) or 0-based indices, so mesh
+    vertices on the lip contours can be marked too, e.g.
+    ``"upper_lip=UL;lower_lip=LL;left_corner=ML"`` or ``"upper_lip=812,813;lower_lip=1402"``.
+    Points not named keep their role in ``base`` (or get "").
+
+    Raises
+    ------
+    LayoutError
+        Naming the unknown role or point and what is allowed.
+    """
+    roles = list(base) if base is not None else [""] * n_points
+    upper = {str(n).upper(): i for i, n in enumerate(names or [])}
+    for part in (p.strip() for p in str(spec).split(";")):
+        if not part:
+            continue
+        if "=" not in part:
+            raise LayoutError(f"--roles {part!r}: expected ROLE=POINT[,POINT...] (roles: {', '.join(ROLES)})")
+        role, pts = (x.strip() for x in part.split("=", 1))
+        role = role.lower()
+        if role not in ROLES:
+            raise LayoutError(f"--roles: unknown role {role!r}; expected one of {', '.join(ROLES)}")
+        for tok in (t.strip() for t in pts.split(",") if t.strip()):
+            if tok.upper() in upper:
+                i = upper[tok.upper()]
+            elif tok.isdigit() and int(tok) < n_points:
+                i = int(tok)
+            else:
+                known = f"names {', '.join(list(names)[:12])} or " if names else ""
+                raise LayoutError(f"--roles: no point {tok!r}; expected {known}an index 0..{n_points - 1}")
+            roles[i] = role
+    return roles

@@ -70,8 +70,9 @@ def register(corpus: Corpus, *, method: str = "auto", drop_reference: bool = Tru
         ``rigid``: per-frame Procrustes alignment of the reference sensors (role
         ``reference``, at least 3) to their mean configuration; ``utterance`` /
         ``speaker``: translate each utterance / speaker so that its mean lip centroid is
-        the corpus's; ``auto``: rigid with 3 or more reference sensors, else utterance
-        centring when there are several utterances, else none.
+        the corpus's; ``auto``: nothing when the corpus is already registered, rigid with 3
+        or more reference sensors, else utterance centring when there are several
+        utterances, else none.
     drop_reference : bool, default=True
         After rigid registration, leave the reference sensors out (they no longer move).
 
@@ -83,6 +84,8 @@ def register(corpus: Corpus, *, method: str = "auto", drop_reference: bool = Tru
     if method not in REGISTRATION_METHODS:
         raise ValueError(f"registration method {method!r}; expected one of {', '.join(REGISTRATION_METHODS)}")
     ref = corpus.role_points("reference")
+    if method == "auto" and corpus.registration:
+        return corpus  # already registered (e.g. a native corpus file imported again)
     if method == "auto":
         method = "rigid" if ref.size >= 3 else ("utterance" if len(corpus.utterances) > 1 else "none")
     if method == "none":

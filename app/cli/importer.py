@@ -43,6 +43,10 @@ def add_arguments(p):
                         "TSV) through a sensor layout: ema7x6, ema7x7, ag500, ag501, wave, or a layout file "
                         "(see README, 'Sensor layouts')")
     p.add_argument("--variable", default=None, metavar="NAME", help="with --layout: the .mat variable to read")
+    p.add_argument("--roles", default=None, metavar="ROLE=P,P;...",
+                   help="set point roles by name or 0-based index, e.g. 'upper_lip=UL;lower_lip=LL' or, for a mesh's "
+                        "lip contours, 'upper_lip=812,813;lower_lip=1402' (roles: upper_lip, lower_lip, left_corner, "
+                        "right_corner, lip, jaw, reference, tongue, other)")
     p.add_argument("--register", default="auto", choices=("auto", "rigid", "utterance", "speaker", "none"),
                    help="remove head motion / recording offsets: rigid (Procrustes to the layout's reference "
                         "sensors), utterance or speaker centring, none; auto = rigid with 3+ reference sensors, "
@@ -143,6 +147,11 @@ def run(args) -> int:
                 c = replace(c, utterances=[replace(u, speaker=speaker) for u in c.utterances])
             parts.append(c)
         corpus = parts[0] if len(parts) == 1 else concat(parts)
+        if args.roles is not None:
+            from engine.layouts import roles_from_spec
+
+            corpus = replace(corpus, point_roles=roles_from_spec(args.roles, corpus.n_points, corpus.point_names,
+                                                                 corpus.point_roles))
         corpus = register(corpus, method=args.register)
         if rate_out is not None and abs(rate_out - corpus.rate) > 1e-9 * corpus.rate:
             corpus = resample(corpus, rate_out)

@@ -76,7 +76,8 @@ def _opening_lines(m):
         if len([s for s in c.speakers if s]) > 1 and getattr(m, "speaker_normalisation", "auto") == "none":
             causes.append("several speakers without per-speaker normalisation (build --speaker-norm mean)")
         if not causes:
-            causes.append("the embedding's first 3 dims may not hold the opening movement (try --embedding-dims)")
+            causes.append("opening shares the first three dimensions of Y with other lip movements (rounding, "
+                          "protrusion) or is small against sensor noise; check the lip sensors' roles")
         from engine.corpus import CorpusWarning
 
         warnings.warn(CorpusWarning(f"the opening class agrees with the lip aperture velocity on only "

@@ -196,3 +196,24 @@ def test_evaluate_protocols_exit_status_when_every_item_fails(good, tmp_path):
     rc, out, err = _run(["evaluate", str(tmp_path / "part.npz"), "--test-ids", bare, "-q"])
     assert rc == 1, out + err
     assert "every item failed" in err
+
+
+def test_roles_mark_a_mesh_s_lip_points(tmp_path):
+    from engine.io import write_mesh_sequence
+
+    r = generate_recordings(n_speakers=1, n_utterances=1, duration_s=(3.0, 3.0), head_motion=0.0, seed=9)[0]
+    P = r.matrix.reshape(len(r.matrix), 7, 6)[::4, :4, :3]  # UL LL LC RC at 62.5 Hz, as mesh vertices 0-3
+    write_mesh_sequence(tmp_path / "mesh", P, faces=[[0, 2, 1], [0, 1, 3]], format="ply")
+    corpus, mfile = tmp_path / "c.npz", tmp_path / "m.npz"
+    rc, out, err = _run(["import", str(tmp_path / "mesh"), "--rate", "62.5", "-o", str(corpus),
+                         "--roles", "upper_lip=0;lower_lip=1;left_corner=2;right_corner=3"])
+    assert rc == 0, err
+    c = Corpus.load(corpus)
+    assert c.point_roles == ["upper_lip", "lower_lip", "left_corner", "right_corner"] and c.rate == 60
+    rc, out, err = _run(["build", str(corpus), "-o", str(mfile), "--states", "8", "-q"])
+    assert rc == 0, err
+    rc, out, err = _run(["info", str(mfile)])
+    assert "opening     defined by lip aperture" in out
+    rc, out, err = _run(["import", str(tmp_path / "mesh"), "--rate", "62.5", "-o", str(corpus),
+                         "--roles", "upper_lip=7"])
+    assert rc == 2 and "no point '7'; expected an index 0..3" in err
