@@ -124,6 +124,19 @@ def _from_mat(path, variable):
 
 def _from_text(path):
     text = decode_text(read_bytes(path), path)
+    first = next((ln.strip() for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")), "")
+    sep = next((c for c in ("\t", ",", ";") if c in first), None)
+    try:  # fast path (numpy's C parser); any fault is located by the line-by-line parser below
+        import io
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            M = np.loadtxt(io.StringIO(text), delimiter=sep, comments="#", ndmin=2, dtype=np.float64)
+        if M.size:
+            return M
+    except (ValueError, UserWarning):
+        pass
     rows, width = [], None
     for ln, raw in enumerate(text.splitlines(), 1):
         line = raw.strip()

@@ -49,6 +49,9 @@ def test_matrix_errors_name_the_fix(tmp_path, rec):
         read_matrix(tmp_path / "v.npy", layout="ema7x6")
     with pytest.raises(ImportFormatError, match=r"no sensor 'NOSE'.*UL, LL"):
         read_matrix(tmp_path / "v.npy", layout="ema7x6", rate=250, points=["UL", "NOSE"])
+    (tmp_path / "r.csv").write_text("1,2,3\n4,5\n")
+    with pytest.raises(ImportFormatError, match=r"r.csv, line 2: has 2 values; earlier lines have 3"):
+        read_matrix(tmp_path / "r.csv", layout="ema7x6", rate=250)
     (tmp_path / "h.csv").write_text("UL_x,UL_y\n1,2\n")
     with pytest.raises(ImportFormatError, match=r"line 1.*column names.*without --layout"):
         read_matrix(tmp_path / "h.csv", layout="ema7x6", rate=250)
