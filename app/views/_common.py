@@ -74,6 +74,8 @@ class RenderScheduler:
         Renders requested of the widget so far (flushes that found a request pending).
     last_flush : float
         ``time.perf_counter()`` of the last flush (0 before any).
+    last_duration : float
+        Seconds the last synchronous flush took to render and compose (0 before any).
     """
 
     def __init__(self, plotter):
@@ -83,6 +85,7 @@ class RenderScheduler:
         self.pending = False
         self.n_renders = 0
         self.last_flush = 0.0
+        self.last_duration = 0.0
         self._sync_next = False
         self._timer = QtCore.QTimer()
         self._timer.setSingleShot(True)
@@ -126,6 +129,7 @@ class RenderScheduler:
         widget = self.plotter.interactor
         if sync:
             widget.repaint()
+            self.last_duration = time.perf_counter() - self.last_flush
         else:
             widget.update()
 

@@ -10,7 +10,7 @@
   (:class:`app.playback.PlaybackClock`), not from counting timer ticks: when a frame
   takes longer to draw than the frame period, the frames in between are dropped and
   playback stays in step with the clock. Each frame is painted at once (only this
-  view; the manifold view follows at a lower rate).
+  view; the manifold view follows at a lower rate, see ``ManifoldView``).
 """
 from __future__ import annotations
 
@@ -53,6 +53,7 @@ class LipView(QtWidgets.QWidget):
         self.audio = AudioPlayer(self)
         self.clock = None  # a PlaybackClock while playing
         self.clock_source = time.monotonic  # seconds; the audio clock's time base (tests pass a fake)
+        self._chosen_at = None
         self.timer = QtCore.QTimer(self)
         self.timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
         self.timer.timeout.connect(self._tick)
@@ -75,6 +76,7 @@ class LipView(QtWidgets.QWidget):
         bar.addWidget(self.slider, 1)
         self.plotter = make_plotter(self)
         self.renderer = RenderScheduler(self.plotter)
+        self.plotter.interactor.frameSwapped.connect(self._on_swapped)
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
         lay.setSpacing(0)
@@ -240,7 +242,11 @@ class LipView(QtWidgets.QWidget):
             self.audio.play(path, start_s=(s.playback or 0) / c.rate, rate=self.speed)
 
     def _tick(self):
-        """Show the frame due now (dropping those whose time has passed), painted at once."""
+        """Show the frame due now (dropping those whose time has passed), painted at once.
+
+        The frame is the one due when it will reach the screen: the clock looks ahead by
+        the latency measured from choosing a frame to its ``frameSwapped``.
+        """
         s, clock = self.state, self.clock
         if clock is None or not s.playing:
             return
@@ -252,10 +258,17 @@ class LipView(QtWidgets.QWidget):
             return
         if k == s.playback:
             return
-        chosen = clock.clock()
+        self._chosen_at = clock.clock()
         s.set_playback(k)
-        self.renderer.flush(sync=True)
-        clock.shown(chosen, clock.clock())
+        # paint now, in one window update with the caption, slider and timeline cursor
+        # (painting the 3-D widget on its own first would compose the window twice per frame)
+        self.renderer.flush()
+
+    def _on_swapped(self) -> None:
+        """A frame reached the screen: feed the latency it took to the clock's look-ahead."""
+        if self.clock is not None and self._chosen_at is not None:
+            self.clock.shown(self._chosen_at, self.clock.clock())
+            self._chosen_at = None
 
     def _stop(self):
         self.state.set_playing(False)

@@ -354,9 +354,12 @@ class ManifoldView(QtWidgets.QWidget):
         if render:
             self.renderer.request()
 
-    #: while playing, the manifold view renders the moving markers at most this often: the lip
-    #: view gets the frame budget (a manifold frame costs several lip frames in software GL)
+    #: while playing, the manifold view renders the moving markers at most this often, and at most
+    #: PLAYBACK_RENDER_SHARE of the time (its last render's duration sets a longer interval on a slow
+    #: or busy machine): the lip view gets the frame budget (a manifold frame costs several lip frames
+    #: in software GL)
     PLAYBACK_RENDER_INTERVAL_S = 0.5
+    PLAYBACK_RENDER_SHARE = 0.1
 
     def _on_playback(self, render=True):
         """Move the playback markers (actor positions only: the cloud is never recoloured)."""
@@ -369,7 +372,10 @@ class ManifoldView(QtWidgets.QWidget):
             else:
                 self.handles[key].move(np.asarray(traj.Y)[min(k, len(traj) - 1), :3])
         if render:
-            self.renderer.request(min_interval_s=self.PLAYBACK_RENDER_INTERVAL_S if self.state.playing else 0.0)
+            wait = 0.0
+            if self.state.playing:
+                wait = max(self.PLAYBACK_RENDER_INTERVAL_S, self.renderer.last_duration / self.PLAYBACK_RENDER_SHARE)
+            self.renderer.request(min_interval_s=wait)
 
     def _on_phones(self, render=True):
         if "points" not in self.handles:
