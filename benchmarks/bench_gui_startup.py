@@ -17,7 +17,8 @@ Measured from just before the process is started:
 * manifold shown: the manifold has reached the window and the manifold view has put its
   first frame with it on screen;
 * event-loop stalls: the longest gap between probe ticks while the manifold is loading
-  in the worker (what a user clicking around would feel) and around showing it.
+  in the worker (what a user clicking around would feel) and around showing it;
+* how long a modal dialog blocked the window while the manifold loaded.
 
 Also printed: each loading stage and when it began (cold run). Goals (issue 9 item 6):
 window interactive in under 20 s cold and under 5 s warm.
@@ -67,6 +68,8 @@ def child(t0: float, preset: str) -> None:
             out["interactive"] = now - t0  # first probe tick with the window on screen: the loop answers
             return
         if out["manifold"] is None:
+            if QtWidgets.QApplication.activeModalWidget() is not None:  # e.g. a modal progress dialog
+                out["modal_s"] = out.get("modal_s", 0.0) + gap
             if gap > out["stall_loading"]:
                 out["stall_loading"], out["stall_loading_at"] = gap, now - t0
             if win.state.manifold is not None:
@@ -111,6 +114,7 @@ def show(kind: str, k: int, r: dict) -> None:
     print(f"   {kind} {k}: window on screen {r['window']:.2f} s, interactive {r['interactive']:.2f} s, "
           f"manifold in the window {r['manifold']:.2f} s, drawn {r['shown']:.2f} s; longest event-loop stall "
           f"while loading {1e3 * r['stall_loading']:.0f} ms (ending at {r.get('stall_loading_at', 0):.2f} s), around showing it {1e3 * r['stall_showing']:.0f} ms; "
+          f"window blocked by a modal dialog for {r.get('modal_s', 0.0):.1f} s of the load; "
           f"peak RSS {r.get('rss_mb', 0):.0f} MiB", flush=True)
 
 
