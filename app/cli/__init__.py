@@ -11,6 +11,7 @@ import contextlib
 import errno
 import importlib
 import os
+import re
 import signal
 import stat
 import sys
@@ -59,20 +60,21 @@ def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] not in SUBCOMMANDS and argv[0] not in ("-h", "--help"):
         argv = ["explore", *argv]
-    parser = build_parser()
-    args = parser.parse_args(argv)
     caught = []
     with _signals_as_interrupt(caught):
         try:
+            args = argparse.Namespace(command=argv[0])
+            args = build_parser().parse_args(argv)  # imports the subcommands: can take seconds
             _check_paths(args)
             with _engine_warnings_to_stderr(args.command):
-                return int(args._run(args) or 0)
+                with _printable_stdout():
+                    return int(args._run(args) or 0)
         except (Cancelled, KeyboardInterrupt):
             what = f"stopped by {caught[-1]}" if caught else "interrupted"
             print(f"lipspace: {what}; nothing was written.", file=sys.stderr)
             return 128 + (caught_signum(caught) or 2)
         except CliError as exc:
-            print(f"lipspace {args.command}: error: {exc}", file=sys.stderr)
+            print(f"lipspace {args.command}: error: {printable(str(exc))}", file=sys.stderr)
             return 2
         except MemoryError as exc:
             size = f" ({exc})" if str(exc) else ""
@@ -97,6 +99,39 @@ MEMORY_HINTS = {
 }
 
 
+#: control characters that could drive the terminal (escape sequences in a corpus name, ...)
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+
+
+def printable(text: str) -> str:
+    """``text`` with terminal control characters shown as ``\\xNN`` (newlines and tabs kept)."""
+    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
+
+
+class _PrintableWriter:
+    """A text stream wrapper that passes :func:`printable` text to ``stream``."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        return self._stream.write(printable(text))
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+@contextlib.contextmanager
+def _printable_stdout():
+    """Commands print names and labels from the user's files: never raw escape codes."""
+    old = sys.stdout
+    sys.stdout = _PrintableWriter(old)
+    try:
+        yield
+    finally:
+        sys.stdout = old
+
+
 def _os_error_text(exc: OSError) -> str:
     text = exc.strerror or str(exc)
     name = exc.filename if exc.filename is not None else ""
@@ -119,11 +154,12 @@ def _signals_as_interrupt(caught: list):
         return
 
     def handler(signum, frame):
-        caught.append(signal.Signals(signum).name)
+        if signum != signal.SIGINT:
+            caught.append(signal.Signals(signum).name)
         raise KeyboardInterrupt
 
     old = {}
-    for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+    for sig in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)):
         if sig is not None:
             old[sig] = signal.signal(sig, handler)
     try:
@@ -179,7 +215,7 @@ def _engine_warnings_to_stderr(command):
 
     def show(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, CorpusWarning):
-            print(f"lipspace {command}: warning: {message}", file=sys.stderr)
+            print(f"lipspace {command}: warning: {printable(str(message))}", file=sys.stderr)
         else:
             _default_show(message, category, filename, lineno, file, line)
 

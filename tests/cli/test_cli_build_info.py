@@ -57,7 +57,7 @@ def test_ctrl_c_stops_build_cleanly_and_writes_nothing(tmp_path):
     out = tmp_path / "m.npz"
     proc = subprocess.Popen([sys.executable, "-m", "app.cli", "build", "--preset", "default", "-o", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
-    time.sleep(3.0)  # generating the talker or fitting: either way mid-work
+    time.sleep(3.0)  # importing, generating the talker or fitting: in each case nothing may be left
     assert proc.poll() is None, proc.communicate()
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
@@ -171,9 +171,9 @@ def test_sigterm_and_sighup_stop_build_like_ctrl_c(tmp_path, signame):
     import time
 
     out = tmp_path / "m.npz"
-    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "build", "--preset", "default", "-o", str(out), "-q"],
+    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "build", "--preset", "default", "-o", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
-    time.sleep(2.5)
+    time.sleep(3.0)
     assert proc.poll() is None, proc.communicate()
     sig = getattr(signal, signame)
     proc.send_signal(sig)
@@ -209,3 +209,13 @@ def test_synthesis_that_would_hang_is_refused_with_the_limit(tmp_path, built, ca
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and limit in err, err
     assert not out.exists()
+
+
+def test_names_with_terminal_escape_codes_are_printed_escaped(tmp_path, small_corpus, capsys):
+    from dataclasses import replace
+
+    c = replace(small_corpus.subset([small_corpus.utterances[0].id]), name="evil\x1b]0;owned\x07\x1b[2J")
+    p = c.save(tmp_path / "c.npz")
+    assert main(["info", str(p)]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "\x07" not in out and "evil\\x1b]0;owned\\x07\\x1b[2J" in out
