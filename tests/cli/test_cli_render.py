@@ -104,3 +104,27 @@ def test_render_errors_and_interrupt_leave_no_file(mfile, tmp_path, capsys, monk
     assert main(["render", "--manifold", str(mfile), "--phones", PHONES, "--size", SIZE, "-q", "-o", str(out)]) == 130
     assert "nothing was written" in capsys.readouterr().err
     assert out.read_bytes() == b"old video" and sorted(q.name for q in tmp_path.iterdir()) == ["x.mp4"]
+
+
+def test_real_sigint_mid_render_leaves_no_half_video(mfile, tmp_path):
+    """A real SIGINT once the temporary video exists: exit 130, one line, the old file intact."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "talk.mp4"
+    out.write_bytes(b"old video")
+    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "render", "--manifold", str(mfile), "--phones",
+                             "sil 10 aa 10 sil 10", "--size", SIZE, "-o", str(out)],  # 30 s: still rendering
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
+    deadline = time.monotonic() + 60
+    while not list(tmp_path.glob(".talk.*.part.mp4")) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err[-2000:]
+    assert "nothing was written" in err and "Traceback" not in err, err[-2000:]
+    assert out.read_bytes() == b"old video" and sorted(q.name for q in tmp_path.iterdir()) == ["talk.mp4"]
