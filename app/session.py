@@ -309,7 +309,7 @@ def _check_fits(m, syn, targets) -> None:
     """IndexError when the trajectory or targets do not fit manifold ``m``."""
     k, mx = int(m.Fy_.shape[1]), int(m.shape_.n_components_)
     if syn is not None:
-        if syn.Y.shape[1] != k:
+        if not min(3, k) <= syn.Y.shape[1] <= k:  # a path on the 3-D manifold, or all k dims
             raise IndexError(f"synthesised trajectory has {syn.Y.shape[1]} embedding dims, the manifold {k}")
         if syn.Fx is not None and syn.Fx.shape[1] != mx:
             raise IndexError(f"synthesised trajectory has {syn.Fx.shape[1]} shape components, the manifold {mx}")
@@ -321,7 +321,7 @@ def _check_fits(m, syn, targets) -> None:
         for t in targets.targets:
             if t.state is not None and not 0 <= t.state < K:
                 raise IndexError(f"target at frame {t.frame} has state {t.state}, the manifold has {K}")
-            if t.y is not None and t.y.shape[0] != k:
+            if t.y is not None and t.y.shape[0] > k:
                 raise IndexError(f"target at frame {t.frame} has {t.y.shape[0]} embedding dims, the manifold {k}")
             if t.x is not None and t.x.shape[0] != mx:
                 raise IndexError(f"target at frame {t.frame} has {t.x.shape[0]} shape components, the manifold {mx}")

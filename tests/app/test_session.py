@@ -146,3 +146,10 @@ def test_session_arrays_from_another_manifold_are_refused(app_manifold, tmp_path
     p = save_session(s, tmp_path / "a.lipspace.json", targets=bad)
     with pytest.raises(SessionError, match="does not fit.*state 1000000"):
         apply_session(AppState(m), load_session(p))
+    from app.state import TrajectoryData
+
+    s.set_trajectories(synthetic=TrajectoryData(Y=m.Fy_[:20, :3]))  # the manifold method's 3-D path fits
+    apply_session(AppState(m), load_session(save_session(s, tmp_path / "c.lipspace.json")))
+    s.set_trajectories(synthetic=TrajectoryData(Y=np.zeros((20, m.Fy_.shape[1] + 1), np.float32)))
+    with pytest.raises(SessionError, match="embedding dims"):
+        apply_session(AppState(m), load_session(save_session(s, tmp_path / "d.lipspace.json")))
