@@ -144,6 +144,12 @@ def check_synthesis_bounds(args, targets) -> None:
     """
     from app.cli import CliError
 
+    text = getattr(args, "text", None)
+    if text is not None and not text.strip():
+        raise CliError("--text is empty; give the words to synthesise (silence alone is not synthesised)")
+    phones = getattr(args, "phones", None)
+    if phones is not None and not phones.strip():
+        raise CliError('--phones is empty; give labels with durations, e.g. "p 0.08 aa 0.12"')
     tempo = getattr(args, "tempo", None)
     if tempo is not None and not TEMPO_RANGE[0] <= tempo <= TEMPO_RANGE[1]:
         raise CliError(f"--tempo {tempo:g}: must be from {TEMPO_RANGE[0]:g} to {TEMPO_RANGE[1]:g} "

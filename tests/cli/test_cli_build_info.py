@@ -201,6 +201,7 @@ def test_resource_arguments_are_bounded_with_the_limit_in_the_message(tmp_path, 
     (["--phones", "p 1e6 aa 0.1"], "at most 600 s"),
     (["--text", "hello world", "--tempo", "1e-6"], "from 0.1 to 10"),
     (["--phones", "p 0.1 aa 0.1", "--inverse-dims", "10"], "from 1 to 5"),
+    (["--text", "  "], "--text is empty"),
 ])
 def test_synthesis_that_would_hang_is_refused_with_the_limit(tmp_path, built, capsys, extra, limit):
     """These used to run past 60-180 s (tens of millions of frames, a 10-D Delaunay of 3.6 GB)."""
