@@ -141,6 +141,30 @@ class _Scene:
         self.plotter.close()
 
 
+class _QuietWithoutDisplay:
+    """Without an X display VTK tries X first and logs "bad X server connection" before it
+    falls back to EGL; that warning says nothing to the user, so VTK's stderr log is held at
+    errors while rendering (and only then)."""
+
+    def __init__(self):
+        import os
+        import sys
+
+        self.old = None
+        if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+            from vtkmodules.vtkCommonCore import vtkLogger
+
+            self.old = vtkLogger.GetCurrentVerbosityCutoff()
+            vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
+
+    def restore(self):
+        if self.old is not None:
+            from vtkmodules.vtkCommonCore import vtkLogger
+
+            vtkLogger.SetStderrVerbosity(self.old)
+            self.old = None
+
+
 class _Encoder:
     """H.264 encoding and muxing in a second thread, so it overlaps the next frame's rendering
     (FFmpeg and VTK's renderer both run without holding the GIL)."""
@@ -262,7 +286,12 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, origin
         samples, sample_rate = decode_audio(audio)
         samples = samples[:, : int(round(n / float(fps) * sample_rate))]
 
-    scene = _Scene(F, O, faces, Y, Y_original, cloud, size)
+    quiet = _QuietWithoutDisplay()
+    try:
+        scene = _Scene(F, O, faces, Y, Y_original, cloud, size)
+    except BaseException:
+        quiet.restore()
+        raise
     try:
         with atomic_write(path) as tmp:
             with av.open(str(tmp), mode="w", format="mp4") as out:
@@ -302,4 +331,5 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, origin
                     out.mux(aus.encode(None))
     finally:
         scene.close()
+        quiet.restore()
     return path
