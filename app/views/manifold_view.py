@@ -162,7 +162,7 @@ class ManifoldView(QtWidgets.QWidget):
         self._on_path(render=False)
         self._on_trajectories(render=False)
         self._on_phones(render=False)
-        p.reset_camera(render=False, bounds=h["points"].mesh.bounds)  # frame the cloud, not the plane
+        p.renderer.ResetCamera(*h["points"].mesh.bounds)  # frame the cloud, not the plane (VTK's: no render)
         p.camera_set = True  # keep this framing (pyvista re-frames everything on first camera access otherwise)
         self.renderer.request()
 
