@@ -99,17 +99,20 @@ class _Scene:
         ext = allpts.reshape(-1, 3).max(0) - allpts.reshape(-1, 3).min(0)
         offset = np.array([1.25 * max(float(ext[0]), 1e-6), 0.0, 0.0], np.float32)
         self.second = None
+        # markers without faces: a few sensors need big dots to be seen in a whole panel
+        dot = max(8.0, min(24.0, h / 20.0)) if frames.shape[1] <= 50 else 8.0
         if original is None:
-            self.main = scene.add_lips(p, frames[0], faces, color=SYNTH_COLOUR, name="lips_main")
+            self.main = scene.add_lips(p, frames[0], faces, color=SYNTH_COLOUR, point_size=dot, name="lips_main")
             bounds_pts = frames.reshape(-1, 3)
         else:
-            self.main = scene.add_lips(p, original[0], faces, color=MAIN_COLOUR, name="lips_main")
-            self.second = scene.add_lips(p, frames[0], faces, color=SYNTH_COLOUR, offset=offset, name="lips_second")
+            self.main = scene.add_lips(p, original[0], faces, color=MAIN_COLOUR, point_size=dot, name="lips_main")
+            self.second = scene.add_lips(p, frames[0], faces, color=SYNTH_COLOUR, offset=offset, point_size=dot,
+                                         name="lips_second")
             bounds_pts = np.concatenate([original.reshape(-1, 3), frames.reshape(-1, 3) + offset])
         lo, hi = bounds_pts.min(0), bounds_pts.max(0)
         p.view_xy(render=False)
         p.reset_camera(render=False, bounds=[lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]])
-        p.camera.zoom(1.3)
+        p.camera.zoom(1.3 if faces is not None and len(faces) else 1.05)  # dots need a margin
         self.text = p.add_text("", position=(8, 6), font_size=10, color="black")
         self.marker = None
         if panel:
