@@ -47,6 +47,24 @@ def _recording_lines(c):
     return lines
 
 
+def _wider_neighbourhood(m, aperture):
+    """(k, agreement) when tangent frames over k = max(2 x, 0.3% of the frames) neighbours agree with the
+    aperture at least 5 points better than the manifold's own, else None (refits only the tangent frames)."""
+    from engine.kinematics import opening_agreement
+    from engine.tangent import TangentFrames
+
+    t = m.tangent_
+    N = m.Fy_.shape[0]
+    k2 = int(max(2 * t.n_neighbors, round(0.003 * N)))
+    if k2 >= N:
+        return None
+    tf = TangentFrames(n_neighbors=k2, n_dims=t.n_dims, zero_velocity_quantile=t.zero_velocity_quantile,
+                       local_plane=t.local_plane).fit(m.Fy_, m.Fx_, m.Fxv_, m.corpus_.bounds, opening=aperture)
+    base = opening_agreement(t.opening_, aperture, m.corpus_.bounds)
+    agree2 = opening_agreement(tf.opening_, aperture, m.corpus_.bounds)
+    return (k2, agree2) if agree2 >= base + 0.05 else None
+
+
 def _opening_lines(m):
     """How "opening" is defined and how well the opening class follows the lip aperture."""
     import warnings
@@ -75,6 +93,12 @@ def _opening_lines(m):
             causes.append("no registration (import with --register utterance, or rigid with reference sensors)")
         if len([s for s in c.speakers if s]) > 1 and getattr(m, "speaker_normalisation", "auto") == "none":
             causes.append("several speakers without per-speaker normalisation (build --speaker-norm mean)")
+        if source == "lip aperture" and m.Fy_.shape[1] >= 3:
+            wider = _wider_neighbourhood(m, ap)
+            if wider is not None:
+                k2, agree2 = wider
+                causes.append(f"tangent neighbourhoods of {m.tangent_.n_neighbors} frames are small for "
+                              f"{c.n_frames} frames ('lipspace build --neighbors {k2}' gives {100 * agree2:.1f}%)")
         if not causes:
             causes.append("opening shares the first three dimensions of Y with other lip movements (rounding, "
                           "protrusion) or is small against sensor noise; check the lip sensors' roles")
