@@ -1,0 +1,59 @@
+"""Exports of a real recording: MOCHA-TIMIT fsew0_001 (three 2-D sensors, no faces, its own WAV)."""
+import numpy as np
+import pytest
+
+
+@pytest.fixture(scope="module")
+def mocha(shared_data):
+    import warnings
+
+    from engine.io import read_corpus, resample
+    from engine.manifold import Manifold
+
+    d = shared_data / "mocha-fsew0"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a 2-s, 116-frame corpus: the data warnings are expected
+        corpus = resample(read_corpus(d / "fsew0_001.ema", alignment=d / "fsew0_001.lab"), 60.0)
+        m = Manifold().fit(corpus)
+    return m
+
+
+def test_glb_of_markers_is_a_point_cloud_with_the_recording_beside(mocha, tmp_path):
+    from app.export.animation import export_animation, utterance_audio
+    from engine.io.gltf import read_gltf_morph
+
+    m = mocha
+    u = m.corpus_.utterances[0]
+    audio, why = utterance_audio(m, u.id)
+    assert audio is not None, why
+    files = export_animation(m, m.Fx_[u.start:u.stop], tmp_path / "fsew.glb", rate=m.corpus_.rate, audio=audio)
+    assert files == [tmp_path / "fsew.glb", tmp_path / "fsew.wav"]
+    assert (tmp_path / "fsew.wav").read_bytes() == audio.read_bytes()
+    r = read_gltf_morph(files[0])
+    assert r["faces"] is None and r["base"].shape == (m.corpus_.n_points, 3)
+    played = r["base"][None] + np.einsum("nk,kvd->nvd", r["weights"], r["targets"])
+    expect = m.shape_.inverse_transform(m.Fx_[u.start:u.stop]).reshape(u.n_frames, -1, 2)
+    np.testing.assert_allclose(played[..., :2], expect, rtol=0, atol=1e-4 * float(np.abs(expect).max()))
+    np.testing.assert_array_equal(played[..., 2], 0.0)
+
+
+@pytest.mark.gui
+def test_mp4_carries_the_recording_cut_to_the_video(mocha, tmp_path):
+    import av
+
+    from app.export.animation import utterance_audio
+    from app.export.video import render_video
+
+    m = mocha
+    c, u = m.corpus_, m.corpus_.utterances[0]
+    audio, _ = utterance_audio(m, u.id)
+    n = 30  # half a second of the 1.9-s utterance
+    p = render_video(tmp_path / "fsew.mp4", c.frames[u.start:u.start + n], rate=c.rate, dims=c.dims, audio=audio,
+                     size=(64, 48))
+    with av.open(str(p)) as f:
+        a = f.streams.audio[0]
+        assert a.codec_context.name == "aac" and sum(1 for _ in f.decode(video=0)) == n
+    with av.open(str(p)) as f:
+        samples = sum(fr.samples for fr in f.decode(audio=0))
+    # AAC pads to whole 1024-sample frames and adds its priming delay: within two frames of 0.5 s
+    assert abs(samples / a.codec_context.sample_rate - n / c.rate) < 2 * 1024 / a.codec_context.sample_rate + 0.01
