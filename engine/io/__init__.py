@@ -12,6 +12,10 @@ list of :class:`engine.corpus.PhoneInterval` for alignments) raise
 ``read_mesh_sequence``   OBJ / PLY, one file per frame
 ``read_csv_landmarks``   OpenFace / named / long CSV landmark tracks
 ``read_vertex_array``    ``.npy`` vertex arrays + template mesh (VOCASET-style)
+``read_matrix``          plain numeric matrices (.mat variable, .npy, CSV/TSV without names)
+                         through a sensor layout (:mod:`engine.layouts`), 3-D
+``read_pos``             Carstens AG500 / AG501 ``.pos`` binaries, 3-D
+``read_wave``            NDI Wave TSV exports, 3-D
 ``read_alignment``       Praat TextGrid, HTK / MOCHA ``.lab``, ESPS xlabel, TIMIT ``.phn``
 ======================  ===============================================================
 
@@ -30,6 +34,8 @@ from engine.io.landmarks import read_csv_landmarks
 from engine.io.markers import read_c3d
 from engine.io.mesh import read_mesh_sequence, read_vertex_array
 from engine.io.meshfile import read_mesh, read_obj, read_ply, write_obj, write_ply
+from engine.io.matrix import read_matrix
+from engine.io.articulograph import read_pos, read_wave
 from engine.io.mview import read_mview, read_mview_audio, write_audio
 from engine.io.resample import resample
 
@@ -37,6 +43,6 @@ __all__ = [
     "ImportFormatError", "read_corpus", "detect_format", "FORMATS", "read_alignment", "read_textgrid", "read_lab",
     "read_ema", "read_est_track", "write_est_track", "read_mview", "read_mview_audio", "write_audio", "read_c3d",
     "read_mesh_sequence", "read_vertex_array", "read_mesh", "read_obj", "read_ply", "write_obj", "write_ply",
-    "read_csv_landmarks", "resample", "concat", "write_trajectory_csv", "write_trajectory_npy",
+    "read_csv_landmarks", "read_matrix", "read_pos", "read_wave", "resample", "concat", "write_trajectory_csv", "write_trajectory_npy",
     "write_mesh_sequence", "write_table_csv", "point_columns", "corpus_columns",
 ]
