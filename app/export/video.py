@@ -20,7 +20,7 @@ import numpy as np
 
 from engine._atomic import atomic_write
 
-__all__ = ["render_video", "decode_audio", "MAIN_COLOUR", "SYNTH_COLOUR", "MAX_CLOUD_POINTS"]
+__all__ = ["render_video", "decode_audio", "AAC_RATES", "MAIN_COLOUR", "SYNTH_COLOUR", "MAX_CLOUD_POINTS"]
 
 MAIN_COLOUR = (0.86, 0.55, 0.55)   # the lip view's original (left)
 SYNTH_COLOUR = (0.95, 0.15, 0.1)   # the lip view's synthetic (right, red)
@@ -30,10 +30,15 @@ PRESET = "ultrafast"                # x264 speed preset: the encoder costs less 
 BACKGROUND = "white"
 
 
-def decode_audio(path):
+#: sample rates the AAC encoder takes; others are resampled to 48 kHz for the MP4
+AAC_RATES = (96000, 88200, 64000, 48000, 44100, 32000, 24000, 22050, 16000, 12000, 11025, 8000, 7350)
+
+
+def decode_audio(path, *, rate: int | None = None):
     """All samples of an audio file as float32 ``(channels, n)`` in [-1, 1] and the sample rate.
 
     Any format FFmpeg (inside PyAV) reads; a file that holds no audio stream is an error.
+    ``rate`` resamples to that many samples per second (default: the file's own rate).
     """
     import av
 
@@ -46,7 +51,7 @@ def decode_audio(path):
         if not container.streams.audio:
             raise ValueError(f"{path}: holds no audio stream")
         stream = container.streams.audio[0]
-        rate = int(stream.codec_context.sample_rate)
+        rate = int(rate or stream.codec_context.sample_rate)
         layout = stream.codec_context.layout.name
         resampler = av.AudioResampler(format="fltp", layout=layout, rate=rate)
         chunks = []
@@ -287,6 +292,8 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, origin
     samples = sample_rate = None
     if audio is not None:
         samples, sample_rate = decode_audio(audio)
+        if sample_rate not in AAC_RATES:
+            samples, sample_rate = decode_audio(audio, rate=48000)
         samples = samples[:, : int(round(n / float(fps) * sample_rate))]
 
     quiet = _QuietWithoutDisplay()
