@@ -189,9 +189,11 @@ def explain_split(states, corpus: Corpus) -> str | None:
     """Why the state graph is split, when its pieces follow speakers or recordings.
 
     Looks at the weakly connected components of the state graph (or, when it has
-    one, its strongly connected components) holding at least 5% of the frames; when
-    each is dominated (90%) by one speaker, or by one utterance, returns a sentence
-    naming that and the fix; else None.
+    one, its strongly connected components) holding at least 5% of the frames ("pieces").
+    Along speakers: each piece's frames are at least 90% one speaker, a different one per
+    piece. Along recordings: at least 90% of each piece's frames belong to utterances
+    that lie mostly in that piece (pieces are made of whole utterances). Returns a
+    sentence naming the pieces, the cause and the fix; else None.
     """
     from scipy.sparse.csgraph import connected_components
 
@@ -218,13 +220,13 @@ def explain_split(states, corpus: Corpus) -> str | None:
             return (f"the state graph splits into {len(big)} {kind} (holding {share} of the frames) along speakers: "
                     f"{parts}. Cause: speaker differences dominate the shape space. Fix: normalise per speaker "
                     "(build --speaker-norm mean) and register the recordings (import --register)")
-    # recordings: utterances do not straddle the pieces
-    purity = np.empty(len(corpus.utterances))
+    # recordings: every piece is made of whole utterances (those whose frames mostly lie in it)
+    home = np.empty(len(corpus.utterances), dtype=comp.dtype)
     for k, u in enumerate(corpus.utterances):
-        _, cnt = np.unique(frame_comp[u.start:u.stop], return_counts=True)
-        purity[k] = cnt.max() / cnt.sum()
-    w = corpus.bounds[:, 1] - corpus.bounds[:, 0]
-    if float(np.average(purity, weights=w)) >= _DOMINANT:
+        vals, cnt = np.unique(frame_comp[u.start:u.stop], return_counts=True)
+        home[k] = vals[cnt.argmax()]
+    own = home[utt] == frame_comp  # frame lies in its utterance's home piece
+    if all(own[frame_comp == c].mean() >= _DOMINANT for c in big):
         per = []
         for c in big:
             ids = [u.id for u in corpus.utterances if np.mean(frame_comp[u.start:u.stop] == c) >= 0.5]

@@ -124,3 +124,40 @@ def test_kinematic_landmarks_and_labels():
     opening = np.r_[ap[1:] > ap[:-1], False]
     assert opening_agreement(opening, ap, c.bounds) == 1.0
     assert opening_agreement(~opening, ap, c.bounds) == 0.0
+
+
+class _Graph:
+    """A stand-in fitted state graph: ``labels_`` per frame, ``adjacency_``, ``scc_labels_``."""
+
+    def __init__(self, labels, n_states, edges):
+        import scipy.sparse as sp
+        from scipy.sparse.csgraph import connected_components
+
+        self.labels_ = np.asarray(labels)
+        a, b = zip(*edges) if edges else ((), ())
+        self.adjacency_ = sp.csr_matrix((np.ones(len(a), bool), (a, b)), shape=(n_states, n_states))
+        self.scc_labels_ = connected_components(self.adjacency_, directed=True, connection="strong")[1]
+
+
+def _two_speaker_corpus():
+    F = np.zeros((40, 3), np.float32)
+    utts = [Utterance(f"u{k}", 10 * k, 10 * k + 10, speaker="A" if k < 2 else "B") for k in range(4)]
+    return Corpus(frames=F, rate=60, utterances=utts)
+
+
+def test_explain_split_names_speakers_recordings_or_nothing():
+    from engine.registration import explain_split
+
+    c = _two_speaker_corpus()
+    # states 0,1 for speaker A's frames, 2,3 for B's; no transitions between the pairs
+    g = _Graph(np.repeat([0, 1, 2, 3], 10), 4, [(0, 1), (1, 0), (2, 3), (3, 2)])
+    msg = explain_split(g, c)
+    assert "along speakers" in msg and "speaker A" in msg and "speaker B" in msg and "--speaker-norm mean" in msg
+    # one speaker: the same islands follow the recordings
+    one = Corpus(frames=c.frames, rate=60, utterances=[Utterance(u.id, u.start, u.stop) for u in c.utterances])
+    msg = explain_split(g, one)
+    assert "along recordings" in msg and "2 utterances (u0, u1)" in msg and "--register utterance" in msg
+    # a piece cut out of the middle of every utterance is neither
+    lab = np.tile(np.r_[np.zeros(4, int), np.ones(2, int), np.zeros(4, int)], 4)
+    g = _Graph(lab, 2, [(0, 1)])
+    assert explain_split(g, one) is None
