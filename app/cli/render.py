@@ -33,7 +33,8 @@ def _size(text):
 
 def add_arguments(p):
     src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--phones", metavar='"P DUR ..."', help='phone labels with durations in seconds, e.g. "p 0.08 ax 0.1"')
+    src.add_argument("--phones", metavar='"P DUR ..."',
+                     help='phone labels with durations in seconds, e.g. "p 0.08 ax 0.1"')
     src.add_argument("--textgrid", metavar="FILE", help="Praat TextGrid (or .lab) phone alignment")
     src.add_argument("--text", metavar='"TEXT"', help="English text (words; [p h o n e s] in brackets for others)")
     src.add_argument("--utterance", metavar="ID", help="a corpus utterance: its own phone mid-points as targets "

@@ -90,12 +90,22 @@ class _Scene:
     def __init__(self, frames, original, faces, Y, Y_original, cloud, size):
         import pyvista as pv
 
-        from app import scene
-
         w, h = _even(size[0]), _even(size[1])
         panel = Y is not None
         self.plotter = p = pv.Plotter(off_screen=True, shape=(1, 2) if panel else (1, 1), border=False,
                                       window_size=(2 * w if panel else w, h), lighting="none")
+        try:
+            self._build(p, frames, original, faces, Y, Y_original, cloud, h)
+        except BaseException:
+            p.close()
+            raise
+
+    def _build(self, p, frames, original, faces, Y, Y_original, cloud, h):
+        import pyvista as pv
+
+        from app import scene
+
+        panel = Y is not None
         p.add_light(pv.Light(light_type="headlight"))  # one light: a third cheaper than the light kit in llvmpipe
         p.render_window.SetMultiSamples(MULTI_SAMPLES)
         p.set_background(BACKGROUND)
@@ -333,7 +343,8 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, origin
                     raise
                 encoder.finish()
                 if aus is not None:
-                    af = av.AudioFrame.from_ndarray(np.ascontiguousarray(samples), format="fltp", layout=aus.layout.name)
+                    af = av.AudioFrame.from_ndarray(np.ascontiguousarray(samples), format="fltp",
+                                                    layout=aus.layout.name)
                     af.sample_rate = sample_rate
                     af.pts = 0
                     af.time_base = Fraction(1, sample_rate)
