@@ -244,7 +244,7 @@ def _mutated(path, data, n_keys=3):
         if action == "drop":
             d.pop(key, None)
         elif action == "shift" and key in d and d[key].dtype.kind in "iu" and d[key].size:
-            d[key] = d[key] + data.draw(st.sampled_from([1, -1, 10**6, -(10**6)]))
+            d[key] = d[key].astype(np.int64) + data.draw(st.sampled_from([1, -1, 10**6, -(10**6)]))
         elif action == "transpose" and key in d and d[key].ndim == 2:
             d[key] = np.ascontiguousarray(d[key].T)
         else:
