@@ -24,6 +24,7 @@ def atomic_write(path):
     if path.is_dir():
         raise IsADirectoryError(f"{path}: is a directory; give a file name to write")
     path.parent.mkdir(parents=True, exist_ok=True)
+    _remove_stale_parts(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".part" + path.suffix, dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
@@ -39,6 +40,32 @@ def atomic_write(path):
             tmp.unlink()
         raise
     _fsync(path.parent, directory=True)
+
+
+#: a temporary file of a write to the same path untouched this long was left by a killed process
+STALE_PART_SECONDS = 3600.0
+
+
+def _remove_stale_parts(path: Path) -> None:
+    """Remove ``.<stem>.*.part<suffix>`` files beside ``path`` left by a killed process.
+
+    SIGKILL (or a power cut) cannot be caught, so its temporary file stays; the next
+    write to the same path removes it once it has not been modified for an hour (a
+    write in progress in another process touches its file continually).
+    """
+    import time
+
+    now = time.time()
+    for q in path.parent.glob(f".{_glob_escape(path.stem)}.*.part{_glob_escape(path.suffix)}"):
+        with contextlib.suppress(OSError):
+            if q.is_file() and now - q.stat().st_mtime > STALE_PART_SECONDS:
+                q.unlink()
+
+
+def _glob_escape(text: str) -> str:
+    import glob
+
+    return glob.escape(text)
 
 
 def _fsync(p, *, directory: bool = False) -> None:

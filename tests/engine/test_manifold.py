@@ -295,3 +295,21 @@ def test_session_values_of_the_wrong_type_or_range_are_session_errors(small_mani
 
     with pytest.raises(SessionError, match="does not fit"):
         apply_session(AppState(small_manifold), {"_file": "s.json", **bad})
+
+
+def test_atomic_write_removes_parts_left_by_a_killed_process(tmp_path):
+    import os
+    import time
+
+    from engine._atomic import STALE_PART_SECONDS, write_text_atomic
+
+    stale = tmp_path / ".m.abc123.part.npz"
+    fresh = tmp_path / ".m.def456.part.npz"  # another process writing right now
+    other = tmp_path / ".n.abc123.part.npz"  # a temporary file of another target
+    for p in (stale, fresh, other):
+        p.write_bytes(b"x" * 100)
+    old = time.time() - STALE_PART_SECONDS - 60
+    os.utime(stale, (old, old))
+    os.utime(other, (old, old))
+    write_text_atomic(tmp_path / "m.npz", "content")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([fresh.name, other.name, "m.npz"])
