@@ -1,4 +1,11 @@
-"""Held-out synthesis evaluation: every method against the real lips of utterances the model never saw.
+"""Held-out synthesis evaluation, per method (the older table; ``lipspace evaluate --methods``).
+
+The methods of this table do not get the same information (the manifold gets the
+target's state, which carries shape *and* velocity, the interpolations only its X) and
+the manifold is scored in Y on its state centroids while the others are projected; it
+cannot decide whether the manifold path beats direct interpolation. The evaluation of
+record is :mod:`engine.protocols` (equal information, one projection for all, LVE, paired
+statistics), whose results are in docs/RESULTS.md.
 
 Whole utterances are held out; the manifold is fitted on the rest. Each held-out
 utterance is resynthesised from its phone sequence and compared with its own frames.
