@@ -271,13 +271,15 @@ class LipView(QtWidgets.QWidget):
             self._chosen_at = None
 
     def _stop(self):
-        self.state.set_playing(False)
-        self.state.set_playback(None)
+        with self.state.batch():  # one action: one redraw
+            self.state.set_playing(False)
+            self.state.set_playback(None)
 
     def _on_slider(self, v):
         if self.state.n_playback:
-            self.state.set_playing(False)
-            self.state.set_playback(int(v))
+            with self.state.batch():
+                self.state.set_playing(False)
+                self.state.set_playback(int(v))
 
     # ---------------------------------------------------------------- misc
     def camera(self) -> list:
