@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import deque
 
 __all__ = ["playback_frame", "PlaybackClock"]
 
@@ -56,8 +57,9 @@ class PlaybackClock:
     speed : float, default=1.0
     clock : callable() -> float, default=time.monotonic
         Seconds; tests pass a fake clock.
-    latency_weight : float, default=0.3
-        Weight of the newest measurement in the running latency estimate.
+    latency_window : int, default=15
+        The look-ahead is the median latency of this many latest frames (a median, so
+        that one stall does not make the following frames run early).
 
     Attributes
     ----------
@@ -66,18 +68,18 @@ class PlaybackClock:
     """
 
     def __init__(self, rate: float, n_frames: int, *, speed: float = 1.0, clock=time.monotonic,
-                 latency_weight: float = 0.3):
+                 latency_window: int = 15):
         playback_frame(0.0, rate, speed=speed)  # validates rate and speed
         if int(n_frames) < 1:
             raise ValueError(f"n_frames must be >= 1 (a trajectory to play), got {n_frames!r}")
-        if not 0 < latency_weight <= 1:
-            raise ValueError(f"latency_weight must be in (0, 1], got {latency_weight!r}")
+        if int(latency_window) < 1:
+            raise ValueError(f"latency_window must be >= 1 frame, got {latency_window!r}")
         self.rate = float(rate)
         self.n_frames = int(n_frames)
         self.speed = float(speed)
         self.clock = clock
-        self.latency_weight = float(latency_weight)
         self.latency_s = 0.0
+        self._latencies = deque(maxlen=int(latency_window))
         self.start_frame = 0
         self.t0 = None
 
@@ -116,7 +118,8 @@ class PlaybackClock:
 
     def shown(self, chosen_at: float, shown_at: float) -> None:
         """Record that a frame chosen at ``chosen_at`` reached the screen at ``shown_at``."""
-        d = max(0.0, float(shown_at) - float(chosen_at))
-        # never plan for more than a quarter second ahead (a one-off stall must not make playback run early)
-        d = min(d, 0.25)
-        self.latency_s += self.latency_weight * (d - self.latency_s)
+        # never plan for more than a quarter second ahead
+        self._latencies.append(min(max(0.0, float(shown_at) - float(chosen_at)), 0.25))
+        ordered = sorted(self._latencies)
+        n = len(ordered)
+        self.latency_s = ordered[n // 2] if n % 2 else 0.5 * (ordered[n // 2 - 1] + ordered[n // 2])

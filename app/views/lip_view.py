@@ -223,10 +223,11 @@ class LipView(QtWidgets.QWidget):
         if not s.playing:
             return
         rate = (s.original or s.synthetic).rate
-        old = self.clock
-        self.clock = PlaybackClock(rate, s.n_playback, speed=self.speed, clock=self.clock_source)
-        if old is not None:
-            self.clock.latency_s = old.latency_s
+        c = self.clock
+        if c is not None and c.rate == rate and c.n_frames == s.n_playback and c.clock is self.clock_source:
+            c.speed = self.speed  # a new speed: keep what was measured of the display latency
+        else:
+            self.clock = PlaybackClock(rate, s.n_playback, speed=self.speed, clock=self.clock_source)
         self.clock.start(s.playback or 0)
         # tick at the frame period; each tick shows the frame the clock says is due
         self.timer.start(max(1, int(1000.0 / (rate * self.speed))))

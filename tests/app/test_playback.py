@@ -49,7 +49,7 @@ def test_clock_drops_frames_when_ticks_come_late_and_stops_at_the_end():
 
 def test_clock_looks_ahead_by_the_measured_display_latency():
     fake = FakeClock()
-    c = PlaybackClock(60.0, 1000, clock=fake, latency_weight=1.0)
+    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=5)
     c.start(0)
     fake.t += 1.0
     assert c.frame() == 60
@@ -57,8 +57,13 @@ def test_clock_looks_ahead_by_the_measured_display_latency():
     assert c.latency_s == pytest.approx(0.05)
     assert c.frame() == 63  # the frame due when it will be on screen
     assert c.due() == 60  # what is due now is unchanged
-    c.shown(chosen_at=0.0, shown_at=10.0)  # a one-off stall never plans more than 0.25 s ahead
-    assert c.latency_s == pytest.approx(0.25)
+    for _ in range(2):
+        c.shown(chosen_at=fake.t, shown_at=fake.t + 0.05)
+    c.shown(chosen_at=0.0, shown_at=10.0)  # one stall (capped at 0.25 s) does not move the median
+    assert c.latency_s == pytest.approx(0.05)
+    for _ in range(5):
+        c.shown(chosen_at=0.0, shown_at=0.02)  # only the latest 5 count
+    assert c.latency_s == pytest.approx(0.02)
 
 
 def test_clock_speed_and_validation():
@@ -69,5 +74,5 @@ def test_clock_speed_and_validation():
     assert c.frame() == 30
     with pytest.raises(ValueError, match="n_frames"):
         PlaybackClock(60.0, 0)
-    with pytest.raises(ValueError, match="latency_weight"):
-        PlaybackClock(60.0, 5, latency_weight=0.0)
+    with pytest.raises(ValueError, match="latency_window"):
+        PlaybackClock(60.0, 5, latency_window=0)
