@@ -163,7 +163,8 @@ def run(args) -> int:
     t0 = time.perf_counter()
     with progress_bar(disable=True if args.quiet else None) as progress:
         try:
-            render_video(out, frames, rate=c.rate, faces=c.faces, dims=c.dims, original=original, Y=Y,
+            render_video(out, frames, rate=c.rate, faces=c.faces, dims=c.dims, roles=c.point_roles or None,
+                         names=c.point_names or None, original=original, Y=Y,
                          Y_original=Y_original, cloud=manifold.Fy_[:, :3] if Y is not None else None, audio=audio,
                          size=args.size, crf=args.crf, title=title, progress=progress)
         except ValueError as exc:

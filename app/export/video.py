@@ -87,7 +87,7 @@ def _frame_rate(rate):
 class _Scene:
     """The off-screen plotter and the handles moved every frame."""
 
-    def __init__(self, frames, original, faces, Y, Y_original, cloud, size):
+    def __init__(self, frames, original, faces, Y, Y_original, cloud, size, sensors):
         import pyvista as pv
 
         w, h = _even(size[0]), _even(size[1])
@@ -95,12 +95,12 @@ class _Scene:
         self.plotter = p = pv.Plotter(off_screen=True, shape=(1, 2) if panel else (1, 1), border=False,
                                       window_size=(2 * w if panel else w, h), lighting="none")
         try:
-            self._build(p, frames, original, faces, Y, Y_original, cloud, h)
+            self._build(p, frames, original, faces, Y, Y_original, cloud, h, sensors)
         except BaseException:
             p.close()
             raise
 
-    def _build(self, p, frames, original, faces, Y, Y_original, cloud, h):
+    def _build(self, p, frames, original, faces, Y, Y_original, cloud, h, sensors):
         import pyvista as pv
 
         from app import scene
@@ -117,17 +117,26 @@ class _Scene:
         # markers without faces: a few sensors need big dots to be seen in a whole panel
         dot = max(8.0, min(24.0, h / 20.0)) if frames.shape[1] <= 50 else 8.0
         if original is None:
-            self.main = scene.add_lips(p, frames[0], faces, color=SYNTH_COLOUR, point_size=dot, name="lips_main")
+            self.main = scene.add_lips(p, frames[0], faces, color=SYNTH_COLOUR, point_size=dot, name="lips_main",
+                                       **sensors)
             bounds_pts = frames.reshape(-1, 3)
         else:
-            self.main = scene.add_lips(p, original[0], faces, color=MAIN_COLOUR, point_size=dot, name="lips_main")
+            self.main = scene.add_lips(p, original[0], faces, color=MAIN_COLOUR, point_size=dot, name="lips_main",
+                                       **sensors)
             self.second = scene.add_lips(p, frames[0], faces, color=SYNTH_COLOUR, offset=offset, point_size=dot,
-                                         name="lips_second")
+                                         name="lips_second", **sensors)
             bounds_pts = np.concatenate([original.reshape(-1, 3), frames.reshape(-1, 3) + offset])
+        step = max(1, len(frames) // 60)
+        for handle, seq, off in ((self.main, frames if original is None else original, 0.0),
+                                 (self.second, frames, offset)):
+            if handle is not None and hasattr(handle, "contour"):  # a contour tube reaches past its markers
+                tube = np.concatenate([handle.contour.transform(f) for f in seq[::step]]) + off
+                bounds_pts = np.concatenate([bounds_pts, tube])
         lo, hi = bounds_pts.min(0), bounds_pts.max(0)
         p.view_xy(render=False)
         p.reset_camera(render=False, bounds=[lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]])
-        p.camera.zoom(1.3 if faces is not None and len(faces) else 1.05)  # dots need a margin
+        tubes = hasattr(self.main, "contour")
+        p.camera.zoom(1.3 if (faces is not None and len(faces)) else 1.15 if tubes else 1.05)  # dots need a margin
         self.text = p.add_text("", position=(8, 6), font_size=10, color="black")
         self.marker = None
         if panel:
@@ -236,8 +245,9 @@ class _Encoder:
         self.thread.join()
 
 
-def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, original=None, Y=None, Y_original=None,
-                 cloud=None, audio=None, size=(640, 480), title: str = "", crf: int = 20, progress=None) -> Path:
+def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=None, names=None, original=None,
+                 Y=None, Y_original=None, cloud=None, audio=None, size=(640, 480), title: str = "", crf: int = 20,
+                 progress=None) -> Path:
     """Render a lip trajectory to an MP4 (H.264 + AAC), one video frame per trajectory frame.
 
     Parameters
@@ -252,6 +262,9 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, origin
         Triangles; without them the points are drawn as spheres.
     dims : {2, 3}
         Coordinates per point in ``frames``.
+    roles, names : sequence of str, optional
+        ``Corpus.point_roles`` / ``point_names``: sparse lip markers are drawn as the lip
+        view draws them, a labelled contour tube (:func:`app.scene.add_lip_contour`).
     original : array of shape (n0, dims * V), optional
         The original utterance, drawn beside the trajectory on the left (as in the lip
         view's playback); the shorter sequence holds its last frame.
@@ -308,7 +321,7 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, origin
 
     quiet = _QuietWithoutDisplay()
     try:
-        scene = _Scene(F, O, faces, Y, Y_original, cloud, size)
+        scene = _Scene(F, O, faces, Y, Y_original, cloud, size, {"roles": roles, "names": names})
     except BaseException:
         quiet.restore()
         raise

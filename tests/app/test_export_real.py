@@ -57,3 +57,34 @@ def test_mp4_carries_the_recording_cut_to_the_video(mocha, tmp_path):
         samples = sum(fr.samples for fr in f.decode(audio=0))
     # AAC pads to whole 1024-sample frames and adds its priming delay: within two frames of 0.5 s
     assert abs(samples / a.codec_context.sample_rate - n / c.rate) < 2 * 1024 / a.codec_context.sample_rate + 0.01
+
+
+@pytest.mark.gui
+def test_mp4_draws_sparse_lip_markers_as_the_lip_view_does(shared_data, tmp_path):
+    """Haskins sensors (UL, LL, a corner, jaw): the video shows the labelled contour tube, framed whole."""
+    import av
+
+    from app.export.video import _Scene, render_video
+    from app.scene import pick_display_point
+    from engine.io import read_corpus
+
+    c = read_corpus(shared_data / "haskins-ieee" / "F01_B01_S01_R01_N.mat")
+    F = c.frames[:20]
+    sensors = {"roles": c.point_roles, "names": c.point_names}
+    from engine.corpus import frame_points
+
+    pts = frame_points(np.asarray(F, np.float32), c.dims)
+    s = _Scene(pts, None, None, None, None, None, (64, 48), sensors)
+    try:
+        assert hasattr(s.main, "contour")  # the tube, not bare spheres
+        s.plotter.render()
+        w, h = s.plotter.window_size
+        for frame in pts:  # every frame's tube, not just its markers, inside the picture
+            for xyz in s.main.contour.transform(frame)[::7]:
+                x, y = pick_display_point(s.plotter, xyz)
+                assert 0 <= x <= w and 0 <= y <= h, (x, y)
+    finally:
+        s.close()
+    p = render_video(tmp_path / "h.mp4", F, rate=c.rate, dims=c.dims, size=(64, 48), **sensors)
+    with av.open(str(p)) as f:
+        assert sum(1 for _ in f.decode(video=0)) == 20
