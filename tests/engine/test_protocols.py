@@ -1,5 +1,4 @@
 """Equal-information protocols, the d-dim state paths, the inverse maps beside Delaunay, paired statistics."""
-import csv
 
 import numpy as np
 import pytest
