@@ -94,9 +94,14 @@ def check_array(d, key, *, source, kind="float", shape=None, dims=None, low=None
             elif n != want:
                 raise FieldError(source, field, f"axis {axis} ({sym}) has length {n}, expected {want} "
                                                 "(the file's arrays do not fit together)")
-    if a.size and a.dtype.kind in "fc" and finite and not np.isfinite(a).all():
-        where = np.argwhere(~np.isfinite(a))[0]
-        raise FieldError(source, field, f"holds NaN/inf (first at index {tuple(int(i) for i in where)})")
+    if a.size and a.dtype.kind in "fc" and finite:
+        step = max(1, 2**22 // max(1, a[0].size if a.ndim else 1))  # rows per check: no full-size bool copy
+        for s in range(0, a.shape[0] if a.ndim else 1, step):
+            part = a[s:s + step] if a.ndim else a
+            if not np.isfinite(part).all():
+                where = np.argwhere(~np.isfinite(part))[0]
+                where = (where[0] + s, *where[1:]) if a.ndim else ()
+                raise FieldError(source, field, f"holds NaN/inf (first at index {tuple(int(i) for i in where)})")
     if a.size and (low is not None or high is not None) and a.dtype.kind in "fiub":
         lo, hi = a.min(), a.max()
         if low is not None and lo < low:
@@ -249,7 +254,8 @@ def check_corpus_arrays(d, *, source, frames_given: bool = False) -> None:
     check_array(d, "corpus_phone_times", source=source, kind="float", shape=("P", 2), dims=dims)
     check_array(d, "corpus_phone_labels", source=source, kind="str", shape=("P",), dims=dims)
     if not frames_given:
-        check_array(d, "corpus_frames", source=source, kind="number", shape=("N", "C"), dims=dims)
+        # finiteness is checked (naming frame and column) by Corpus.validate: one pass is enough
+        check_array(d, "corpus_frames", source=source, kind="number", shape=("N", "C"), dims=dims, finite=False)
     if "corpus_faces" in d:
         check_array(d, "corpus_faces", source=source, kind="int", shape=("_f", 3), dims=dims, low=0)
     if "corpus_point_names" in d:

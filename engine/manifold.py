@@ -60,7 +60,11 @@ class Manifold(BaseEstimator):
         Dimensions of Y kept.
     embedding_method : {"pca", "mds"}, default="pca"
     n_landmarks : int or None, default=None
-        Landmark embedding for very large corpora.
+        Landmark embedding with this many landmarks. None: chosen by size
+        (:func:`engine.buildplan.plan_build`: exact up to ``landmarks_above`` frames,
+        2,000 landmarks above).
+    landmarks_above : int, default=50000
+        Frames above which the embedding uses landmarks when ``n_landmarks`` is None.
     n_states : int or None, default=None
         K of the state graph (None: about N/30, see :class:`engine.states.StateGraph`).
     state_dims : int, default=3
@@ -94,7 +98,7 @@ class Manifold(BaseEstimator):
 
     def __init__(self, *, variance=0.99, max_components=100, n_embedding=10, embedding_method="pca",
                  n_landmarks=None, n_states=None, state_dims=3, n_neighbors=20, random_state=0,
-                 speaker_normalisation="auto"):
+                 speaker_normalisation="auto", landmarks_above=50000):
         self.variance = variance
         self.max_components = max_components
         self.n_embedding = n_embedding
@@ -105,10 +109,16 @@ class Manifold(BaseEstimator):
         self.n_neighbors = n_neighbors
         self.random_state = random_state
         self.speaker_normalisation = speaker_normalisation
+        self.landmarks_above = landmarks_above
 
     # ------------------------------------------------------------------ fitting
-    def fit(self, corpus: Corpus, *, progress: ProgressFn = None):
-        """Fit every stage on ``corpus``. Cancelling (via ``progress``) leaves ``self`` unfitted."""
+    def fit(self, corpus: Corpus, *, progress: ProgressFn = None, executor=None):
+        """Fit every stage on ``corpus``. Cancelling (via ``progress``) leaves ``self`` unfitted.
+
+        ``executor``: None fits in-process; an :class:`engine.scale.DaskExecutor` runs the
+        shape space and the embedding as Dask work (same results up to round-off).
+        """
+        from engine.buildplan import plan_build
         from engine.states import StateGraph
         from engine.tangent import TangentFrames
 
@@ -125,10 +135,14 @@ class Manifold(BaseEstimator):
         timings = {}
         bounds = corpus.bounds
 
+        plan = plan_build(N, n_landmarks=self.n_landmarks, landmarks_above=self.landmarks_above)
         t = time.perf_counter()
         shape = ShapeSpace(max_components=self.max_components, variance=self.variance,
-                           random_state=self.random_state).fit(corpus.frames, progress=progress)
-        Fx = shape.transform(corpus.frames)
+                           random_state=self.random_state)
+        if executor is None:
+            Fx = shape.fit(corpus.frames, progress=progress).transform(corpus.frames)
+        else:
+            Fx = executor.fit_shape(shape, corpus.frames, progress=progress)
         timings["shape"] = time.perf_counter() - t
 
         t = time.perf_counter()
@@ -140,7 +154,8 @@ class Manifold(BaseEstimator):
 
         t = time.perf_counter()
         emb = Embedding(n_components=self.n_embedding, method=self.embedding_method,
-                        n_landmarks=self.n_landmarks, random_state=self.random_state).fit(G, progress=progress)
+                        n_landmarks=plan.n_landmarks, random_state=self.random_state)
+        emb = emb.fit(G, progress=progress) if executor is None else executor.fit_embedding(emb, G, progress=progress)
         Fy = emb.embedding_
         timings["embedding"] = time.perf_counter() - t
 
@@ -283,7 +298,7 @@ class Manifold(BaseEstimator):
         _check_consistency(self, dims, path)
         frames = None
         if "corpus_frames" in d:
-            check_array(d, "corpus_frames", source=path, shape=("N", "C"), dims=dims)
+            check_array(d, "corpus_frames", source=path, shape=("N", "C"), dims=dims, finite=False)  # see Corpus
         else:
             frames = self.shape_.inverse_transform(self.Fx_)
         self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path))
