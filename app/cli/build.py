@@ -18,7 +18,11 @@ def add_arguments(p):
     p.add_argument("--variance", type=float, default=0.99, help="shape variance kept (default: %(default)s)")
     p.add_argument("--embedding-dims", type=int, default=10, help="dimensions of Y (default: %(default)s)")
     p.add_argument("--method", choices=("pca", "mds"), default="pca", help="embedding method (default: %(default)s)")
-    p.add_argument("--landmarks", type=int, default=None, help="landmark embedding with this many landmarks")
+    p.add_argument("--landmarks", type=int, default=None,
+                   help="force the landmark embedding with this many landmarks (default: exact up to "
+                        "--landmarks-above frames, 2000 landmarks above)")
+    p.add_argument("--landmarks-above", type=int, default=50000, metavar="N",
+                   help="frames above which the landmark embedding is chosen (default: %(default)s)")
     p.add_argument("--states", type=int, default=None, help="K, the number of states (default: about N/30)")
     p.add_argument("--neighbors", type=int, default=20, help="tangent-frame neighbourhood (default: %(default)s)")
     p.add_argument("--speaker-norm", choices=("auto", "mean", "mean+scale", "none"), default="auto",
@@ -43,11 +47,15 @@ def run(args) -> int:
                   "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "
                   "'lipspace import CORPUS --resample 60 -o OUT.npz'", file=sys.stderr)
         try:
+            from engine.buildplan import plan_build
+
+            plan = plan_build(corpus.n_frames, n_landmarks=args.landmarks, landmarks_above=args.landmarks_above)
+            print(f"lipspace build: {plan.describe()}", file=sys.stdout)
             manifold = Manifold(variance=args.variance, n_embedding=args.embedding_dims,
                                 embedding_method=args.method, n_landmarks=args.landmarks,
                                 n_states=args.states, n_neighbors=args.neighbors,
-                                random_state=args.seed, speaker_normalisation=args.speaker_norm).fit(
-                corpus, progress=progress)
+                                random_state=args.seed, speaker_normalisation=args.speaker_norm,
+                                landmarks_above=args.landmarks_above).fit(corpus, progress=progress)
         except ValueError as exc:
             raise CliError(str(exc)) from None
     manifold.save(out)
