@@ -179,6 +179,9 @@ class Embedding(BaseEstimator):
         PCA: the mean row of D. MDS: the column means of D^2.
     """
 
+    #: builds the products with D; engine.scale swaps in a Dask one for a single fit
+    _operator_factory = _DistanceOperator
+
     def __init__(self, *, n_components=10, method="pca", n_landmarks=None, n_iter=2, oversample=10,
                  random_state=0):
         self.n_components = n_components
@@ -218,8 +221,8 @@ class Embedding(BaseEstimator):
             lm, ref = None, G
         L = ref.shape[0]
         block = max(16, min(N, _BLOCK_BYTES // (4 * L)))
-        op = _DistanceOperator(G, ref, squared=self.method == "mds", block=block, progress=progress,
-                               stage="embedding")
+        op = self._operator_factory(G, ref, squared=self.method == "mds", block=block, progress=progress,
+                                    stage="embedding")
         k = int(self.n_components)
         r = min(k + int(self.oversample), L)
         if self.method == "pca":
