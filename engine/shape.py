@@ -21,6 +21,18 @@ def _row_blocks(n: int, block: int):
         yield slice(s, min(n, s + block))
 
 
+def _orthonormal(M):
+    """Q of the reduced QR decomposition of ``M`` (n, r), same dtype.
+
+    scipy's LAPACK wrapper releases the GIL while it works; ``numpy.linalg.qr`` holds it
+    (seconds at 28,800 rows), which froze the explorer's window while a worker thread
+    fitted the shape space.
+    """
+    from scipy.linalg import qr
+
+    return qr(M, mode="economic", check_finite=False)[0]
+
+
 class ShapeSpace(BaseEstimator):
     """PCA shape space of lip frames.
 
@@ -118,12 +130,12 @@ class ShapeSpace(BaseEstimator):
         Q = A_mat(rng.standard_normal((C, k + p)).astype(np.float32))
         step += 1
         report(progress, "shape space", step, total_steps)
-        Q, _ = np.linalg.qr(Q)
+        Q = _orthonormal(Q)
         for _ in range(self.n_iter):
-            Z, _ = np.linalg.qr(At_mat(Q))
+            Z = _orthonormal(At_mat(Q))
             step += 1
             report(progress, "shape space", step, total_steps)
-            Q, _ = np.linalg.qr(A_mat(Z))
+            Q = _orthonormal(A_mat(Z))
             step += 1
             report(progress, "shape space", step, total_steps)
         B = At_mat(Q).T  # (k+p, C)
@@ -136,6 +148,12 @@ class ShapeSpace(BaseEstimator):
             total += float(((F[sl] - mean32).astype(np.float64) ** 2).sum())
         step += 1
         report(progress, "shape space", step, total_steps)
+        return self._set_fitted(s, Vt, total, N, mean)
+
+    def _set_fitted(self, s, Vt, total, N, mean):
+        """Fitted attributes from the top singular values ``s`` (k,) and axes ``Vt`` (k, C) of
+        the centred F, its total sum of squares ``total``, N and the mean frame (C,)."""
+        k = len(s)
         ev = s**2 / (N - 1)
         total_var = total / (N - 1)
         scree = ev / total_var if total_var > 0 else np.zeros_like(ev)
@@ -143,7 +161,7 @@ class ShapeSpace(BaseEstimator):
         m = int(np.searchsorted(cum, float(self.variance) - 1e-12) + 1)
         m = max(1, min(m, k))
         Vt = self._orient(Vt, mean)
-        self.mean_ = mean32
+        self.mean_ = np.asarray(mean, dtype=np.float32)
         self.components_ = Vt[:m].astype(np.float32)
         self.explained_variance_ = ev[:m]
         self.explained_variance_ratio_ = scree[:m]
