@@ -242,10 +242,12 @@ class ManifoldView(QtWidgets.QWidget):
             self._recolor(render=False)
         elif selection or "path" in names:
             self._update_info()
+        if names & {"playback", "playing"} and "trajectory" not in names:
+            self._on_playback(render=False)
         if recolor or selection or names & {"path", "trajectory", "visible_phones"}:
             self.renderer.request()
         elif names & {"playback", "playing"}:
-            self._on_playback()
+            self._request_playback_render()
 
     def _sync_mode_boxes(self):
         with blocked(self.color_box, self.hemi_box):
@@ -372,10 +374,14 @@ class ManifoldView(QtWidgets.QWidget):
             else:
                 self.handles[key].move(np.asarray(traj.Y)[min(k, len(traj) - 1), :3])
         if render:
-            wait = 0.0
-            if self.state.playing:
-                wait = max(self.PLAYBACK_RENDER_INTERVAL_S, self.renderer.last_duration / self.PLAYBACK_RENDER_SHARE)
-            self.renderer.request(min_interval_s=wait)
+            self._request_playback_render()
+
+    def _request_playback_render(self):
+        """A render for moved playback markers: throttled while playing, at once otherwise."""
+        wait = 0.0
+        if self.state.playing:
+            wait = max(self.PLAYBACK_RENDER_INTERVAL_S, self.renderer.last_duration / self.PLAYBACK_RENDER_SHARE)
+        self.renderer.request(min_interval_s=wait)
 
     def _on_phones(self, render=True):
         if "points" not in self.handles:
