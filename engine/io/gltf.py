@@ -44,7 +44,7 @@ _WIDTH = {"SCALAR": 1, "VEC3": 3}
 LIP_COLOUR = (0.86, 0.45, 0.45, 1.0)
 
 
-def _points3(a, dims, what):
+def _points3(a, dims):
     """(..., dims * V) -> (..., V, 3) float32 (z = 0 for 2-D)."""
     from engine.corpus import frame_points
 
@@ -174,7 +174,7 @@ def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None
     names = [f"X{k + 1}" for k in range(m)] if target_names is None else [str(s) for s in target_names]
     if len(names) != m:
         raise ValueError(f"{len(names)} target names for {m} components")
-    base = _points3(mean, dims, "mean")
+    base = _points3(mean, dims)
     V = base.shape[0]
 
     gltf = g.GLTF2(asset=g.Asset(generator="lipspace (pygltflib)", version="2.0"))
@@ -182,7 +182,7 @@ def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None
     pos = blob.add(base, type_="VEC3", component=_FLOAT, target=_ARRAY_BUFFER, minmax=True, name="mean shape")
     targets = []
     for k in range(m):
-        d = _points3(components[k], dims, f"component {k + 1}")
+        d = _points3(components[k], dims)
         targets.append(g.Attributes(POSITION=blob.add(d, type_="VEC3", component=_FLOAT, target=_ARRAY_BUFFER,
                                                       minmax=True, name=names[k])))
     prim = g.Primitive(attributes=g.Attributes(POSITION=pos), targets=targets, material=0,
