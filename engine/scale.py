@@ -1,0 +1,335 @@
+"""Dask execution of a build's heavy stages (issue 13).
+
+:class:`DaskExecutor` runs, on a ``distributed`` cluster,
+
+* the shape space PCA over F: F is stored on disk as one memory-mapped ``.npy`` file
+  per block of frames (:func:`store_frame_blocks`) and every worker reads its own
+  blocks (:func:`open_frame_blocks`); the randomized range finder's tall products
+  ``F X`` stay on the workers (``persist``), only thin ``C x r`` products come back;
+  F^x (N x m) is gathered at the end;
+* the embedding's products with the distance matrix D (distances to all frames or to
+  the landmarks), one task per block of rows of D, each formed on a worker and
+  dropped there; G (N x 2m) is scattered once, the thin (N x r) products come back;
+* the out-of-sample projection of new G (:meth:`DaskExecutor.project`) and the
+  K-means assignment of frames to states (:meth:`DaskExecutor.assign`), one task per
+  block.
+
+Everything else (dynamic features, tangent frames, K-means fitting, the state graph)
+runs on the client. Without an executor :meth:`engine.manifold.Manifold.fit` runs
+the same algorithms in-process; the two agree up to round-off (same random draws,
+same range finder).
+
+The cluster is ``DaskExecutor.connect("local")`` (a ``distributed.LocalCluster`` with
+one single-threaded worker per core) or ``DaskExecutor.connect("tcp://host:8786")`` (an
+existing scheduler, e.g. started by dask-jobqueue). For a multi-node cluster the block
+directory must be on storage every worker can read (``chunk_dir``).
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from engine._atomic import atomic_write
+from engine.embedding import pairwise_distance_block
+from engine.progress import ProgressFn, report
+
+__all__ = ["DaskExecutor", "store_frame_blocks", "open_frame_blocks", "DEFAULT_BLOCK_FRAMES"]
+
+#: frames per on-disk block of F (and per task of the shape stage)
+DEFAULT_BLOCK_FRAMES = 8192
+
+
+def _block_slices(n: int, block: int) -> list[slice]:
+    """Row blocks of ``block`` rows; a last block shorter than half a block joins the one before
+    (every block stays taller than it is wide, as the tall-skinny QR needs)."""
+    starts = list(range(0, n, block))
+    if len(starts) > 1 and n - starts[-1] < block // 2:
+        starts.pop()
+    return [slice(s, starts[i + 1] if i + 1 < len(starts) else n) for i, s in enumerate(starts)]
+
+
+def store_frame_blocks(frames, directory, *, block_frames: int = DEFAULT_BLOCK_FRAMES) -> list[Path]:
+    """Write F (N, C) as ``block_00000.npy``, ... (float32, one per block of frames), atomically.
+
+    Returns
+    -------
+    list of Path
+        The block files in frame order.
+    """
+    frames = np.asarray(frames)
+    if frames.ndim != 2:
+        raise ValueError(f"frames must be 2-D (N, C), got shape {frames.shape}")
+    if int(block_frames) < 2:
+        raise ValueError(f"block_frames must be >= 2, got {block_frames}")
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for i, sl in enumerate(_block_slices(frames.shape[0], int(block_frames))):
+        path = directory / f"block_{i:05d}.npy"
+        with atomic_write(path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.save(fh, np.ascontiguousarray(frames[sl], dtype=np.float32))
+        paths.append(path)
+    return paths
+
+
+def _load_block(path):
+    return np.load(path, mmap_mode="r")
+
+
+def open_frame_blocks(paths):
+    """A dask array (N, C) float32 over block files; each block is memory-mapped by the
+    worker that reads it (nothing passes through the client)."""
+    import dask
+    import dask.array as da
+
+    parts = []
+    for p in paths:
+        hdr = np.load(p, mmap_mode="r")
+        if hdr.ndim != 2 or hdr.dtype != np.float32:
+            raise ValueError(f"{p}: expected a 2-D float32 block of frames, got {hdr.dtype} {hdr.shape}")
+        parts.append(da.from_delayed(dask.delayed(_load_block)(str(p)), shape=hdr.shape, dtype=np.float32))
+    if not parts:
+        raise ValueError("no block files given")
+    widths = {p.shape[1] for p in parts}
+    if len(widths) != 1:
+        raise ValueError(f"block files disagree on the number of coordinates: {sorted(widths)}")
+    return da.concatenate(parts, axis=0)
+
+
+# ------------------------------------------------------------------ block tasks
+def _dist_times(Gb, cols, cols_sq, X, squared, extra):
+    Db = pairwise_distance_block(Gb, cols, cols_sq, squared=squared)
+    return Db @ X, (extra(Db) if extra is not None else None)
+
+
+def _dist_t_times(Gb, cols, cols_sq, Qb, squared):
+    return pairwise_distance_block(Gb, cols, cols_sq, squared=squared).T @ Qb
+
+
+def _orthonormal_columns(Y, passes: int = 2):
+    """An orthonormal basis of the columns of a tall dask array Y (N, r), left on the workers.
+
+    SVQB (Stathopoulos & Wu 2002), twice: the r x r Gram matrix Y^T Y is the only thing
+    brought back; ``Y V diag(w)^-1/2`` stays distributed. Used instead of dask's
+    tall-skinny QR, whose many small LAPACK calls took ~2 s for 4,500 x 110 on two
+    shared cores (the Gram pass: one GEMM per block). Directions with ``w`` below
+    1e-14 of the largest are kept at that floor, not dropped (the width r never changes).
+    """
+    for _ in range(passes):
+        Y64 = Y.astype(np.float64)
+        gram = (Y64.T @ Y64).compute()
+        w, V = np.linalg.eigh(0.5 * (gram + gram.T))
+        w = np.maximum(w, max(float(w.max()), 1e-300) * 1e-14)
+        Y = (Y64 @ (V / np.sqrt(w))).persist()
+    return Y
+
+
+def _add(a, b):
+    if isinstance(a, tuple):
+        return tuple(_add(x, y) for x, y in zip(a, b))
+    return a + b
+
+
+class _DaskDistanceOperator:
+    """The interface of ``engine.embedding._DistanceOperator`` with one Dask task per block of rows."""
+
+    def __init__(self, G, cols, *, squared, block, progress, stage, client):
+        self.G, self.cols = G, cols
+        self.squared, self.block = squared, block
+        self.progress, self.stage = progress, stage
+        self.passes = 0
+        self.client = client
+        self.slices = _block_slices(G.shape[0], block)
+        self._blocks = [client.scatter(np.ascontiguousarray(G[sl])) for sl in self.slices]
+        self._cols = client.scatter(np.ascontiguousarray(cols, dtype=np.float32), broadcast=True)
+        self._cols_sq = client.scatter(np.einsum("ij,ij->i", cols, cols), broadcast=True)
+
+    def _done(self):
+        self.passes += 1
+        report(self.progress, self.stage, self.passes, 0)
+
+    def matmat(self, X, extra=None):
+        X32 = self.client.scatter(np.asarray(X, dtype=np.float32), broadcast=True)
+        futs = [self.client.submit(_dist_times, b, self._cols, self._cols_sq, X32, self.squared, extra,
+                                   pure=False) for b in self._blocks]
+        out = np.empty((self.G.shape[0], np.shape(X)[1]), dtype=np.float64)
+        stats = None
+        for sl, (prod, st) in zip(self.slices, self.client.gather(futs)):  # summed in block order
+            out[sl] = prod
+            if st is not None:
+                stats = st if stats is None else _add(stats, st)
+        self.last_stats = stats
+        self._done()
+        return out
+
+    def rmatmat(self, Q):
+        Q32 = np.asarray(Q, dtype=np.float32)
+        futs = [self.client.submit(_dist_t_times, b, self._cols, self._cols_sq, Q32[sl], self.squared, pure=False)
+                for b, sl in zip(self._blocks, self.slices)]
+        acc = np.zeros((self.cols.shape[0], Q32.shape[1]), dtype=np.float64)
+        for part in self.client.gather(futs):
+            acc += part
+        self._done()
+        return acc
+
+
+def _project_block(emb, Gb):
+    return emb.transform(Gb)
+
+
+def _assign_block(centroids, Yb):
+    return cKDTree(centroids).query(Yb)[1].astype(np.int32)
+
+
+class DaskExecutor:
+    """Runs the shape space and the embedding of a build on a Dask cluster.
+
+    Parameters
+    ----------
+    client : distributed.Client
+    chunk_dir : path or None, default=None
+        Where F is stored in blocks; None: a temporary folder removed by :meth:`close`.
+        With workers on other machines, give a folder they all read.
+    block_frames : int, default=DEFAULT_BLOCK_FRAMES
+        Frames per block of F (and per task).
+    own_cluster : bool, default=False
+        Close the client's cluster in :meth:`close` (set by :meth:`connect` ``("local")``).
+    """
+
+    def __init__(self, client, *, chunk_dir=None, block_frames: int = DEFAULT_BLOCK_FRAMES, own_cluster=False):
+        if int(block_frames) < 256:
+            raise ValueError(f"block_frames must be >= 256 (each block must be taller than the range finder "
+                             f"is wide), got {block_frames}")
+        self.client = client
+        self.block_frames = int(block_frames)
+        self._tmp = chunk_dir is None
+        self.chunk_dir = Path(tempfile.mkdtemp(prefix="lipspace-blocks-")) if chunk_dir is None else Path(chunk_dir)
+        self._own = own_cluster
+
+    @classmethod
+    def connect(cls, address: str, **kwargs) -> "DaskExecutor":
+        """``"local"``: a LocalCluster with one single-threaded worker per core (memory split
+        evenly); otherwise the address of a running scheduler (``tcp://host:8786``)."""
+        from distributed import Client, LocalCluster
+
+        if address == "local":
+            cluster = LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, dashboard_address=None)
+            return cls(Client(cluster), own_cluster=True, **kwargs)
+        try:
+            client = Client(address, timeout="20s")
+        except OSError as exc:
+            raise ValueError(f"cannot reach a Dask scheduler at {address!r} ({exc}); start one with "
+                             "'dask scheduler' or use --dask local") from None
+        return cls(client, **kwargs)
+
+    def close(self):
+        """Close the client (and the cluster it started) and remove temporary blocks."""
+        cluster = self.client.cluster if self._own else None
+        self.client.close()
+        if cluster is not None:
+            cluster.close()
+        if self._tmp:
+            shutil.rmtree(self.chunk_dir, ignore_errors=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # ------------------------------------------------------------ shape space
+    def fit_shape(self, shape, frames, *, progress: ProgressFn = None) -> np.ndarray:
+        """Fit ``shape`` (an unfitted :class:`engine.shape.ShapeSpace`) on F; return F^x (N, m).
+
+        The same randomized range finder as ``ShapeSpace.fit`` (same random draws and
+        power iterations) with F read block-wise by the workers.
+        """
+        import dask
+        import dask.array as da
+
+        F0 = shape._validate(frames)
+        N, C = F0.shape
+        F = open_frame_blocks(store_frame_blocks(F0, self.chunk_dir / "frames", block_frames=self.block_frames))
+        del F0
+        rng = np.random.default_rng(shape.random_state)
+        k = int(min(shape.max_components, N - 1, C))
+        p = min(10, min(N, C) - k)
+        mean = F.sum(axis=0, dtype=np.float64).compute() / N
+        mean32 = mean.astype(np.float32)
+        steps, step = 2 * int(shape.n_iter) + 3, 0
+
+        def A_mat(X):  # (F - 1 mu^T) X, left on the workers
+            X = X.astype(np.float32)
+            return (F @ X - mean32 @ X).persist()
+
+        def At_mat(Y):  # (F - 1 mu^T)^T Y, thin, brought back
+            out = (F.T @ Y).compute()
+            return out - np.outer(mean32, Y.sum(axis=0).compute())
+
+        def orth(Y):
+            return _orthonormal_columns(Y.rechunk({1: -1}))
+
+        Q = orth(A_mat(rng.standard_normal((C, k + p)).astype(np.float32)))
+        step += 1
+        report(progress, "shape space", step, steps)
+        for _ in range(int(shape.n_iter)):
+            Z = np.linalg.qr(At_mat(Q))[0]  # C x r: small, in-process
+            step += 1
+            report(progress, "shape space", step, steps)
+            Q = orth(A_mat(Z))
+            step += 1
+            report(progress, "shape space", step, steps)
+        B = At_mat(Q).T
+        step += 1
+        report(progress, "shape space", step, steps)
+        _, s, Vt = np.linalg.svd(B.astype(np.float64), full_matrices=False)
+        total = float((((F - mean32).astype(np.float64)) ** 2).sum().compute())
+        shape._set_fitted(s[:k], Vt[:k], total, N, mean)
+        Fx = da.map_blocks(lambda b, m=shape.mean_, c=shape.components_: (b - m) @ c.T, F,
+                           chunks=(F.chunks[0], (shape.n_components_,)), dtype=np.float32)
+        (Fx,) = dask.compute(Fx)
+        step += 1
+        report(progress, "shape space", step, steps)
+        return np.ascontiguousarray(Fx, dtype=np.float32)
+
+    # -------------------------------------------------------------- embedding
+    def fit_embedding(self, emb, G, *, progress: ProgressFn = None):
+        """Fit ``emb`` (an unfitted :class:`engine.embedding.Embedding`) on G with its products with
+        D computed by Dask tasks; returns ``emb``."""
+        client = self.client
+
+        def factory(*args, **kwargs):
+            return _DaskDistanceOperator(*args, client=client, **kwargs)
+
+        emb._operator_factory = factory
+        try:
+            emb.fit(G, progress=progress)
+        finally:
+            del emb._operator_factory  # back to the class's in-process operator
+        return emb
+
+    # --------------------------------------------------------- out-of-sample
+    def _map_rows(self, fn, fixed, X, block):
+        fixed_f = self.client.scatter(fixed, broadcast=True)
+        slices = _block_slices(X.shape[0], block) if X.shape[0] else []
+        futs = [self.client.submit(fn, fixed_f, np.ascontiguousarray(X[sl]), pure=False) for sl in slices]
+        return self.client.gather(futs)
+
+    def project(self, emb, G, *, block: int = 16384) -> np.ndarray:
+        """Out-of-sample F^y of dynamic features G (n, 2m) by a fitted embedding, one task per block."""
+        G = np.asarray(G, dtype=np.float32)
+        parts = self._map_rows(_project_block, emb, G, block)
+        return np.concatenate(parts) if parts else emb.transform(G)
+
+    def assign(self, centroids, Y, *, block: int = 65536) -> np.ndarray:
+        """K-means assignment: index of the nearest of ``centroids`` (K, d) for each row of Y (n, >= d)."""
+        centroids = np.asarray(centroids, dtype=np.float64)
+        Y = np.asarray(Y)[:, : centroids.shape[1]]
+        parts = self._map_rows(_assign_block, centroids, Y, block)
+        return np.concatenate(parts) if parts else np.zeros(0, np.int32)

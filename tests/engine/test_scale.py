@@ -1,0 +1,83 @@
+"""The Dask path of a build matches the in-process one (issue 13), on a two-worker LocalCluster."""
+import numpy as np
+import pytest
+from scipy.linalg import subspace_angles
+
+pytest.importorskip("distributed")
+
+#: largest principal angle (degrees) allowed between the Dask and in-process F^x / F^y subspaces
+ANGLE_TOL_DEG = 0.5
+
+
+@pytest.fixture(scope="module")
+def executor(tmp_path_factory):
+    from distributed import Client, LocalCluster
+
+    from engine.scale import DaskExecutor
+
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None)
+    ex = DaskExecutor(Client(cluster), chunk_dir=tmp_path_factory.mktemp("blocks"), block_frames=512,
+                      own_cluster=True)
+    yield ex
+    ex.close()
+
+
+@pytest.fixture(scope="module")
+def corpus(small_corpus):
+    """The first ~2,000 frames (whole utterances) of the small synthetic talker."""
+    ids = [u.id for u in small_corpus.utterances if u.stop <= 2000]
+    return small_corpus.subset(ids)
+
+
+@pytest.fixture(scope="module")
+def in_process(corpus):
+    from engine.manifold import Manifold
+
+    return Manifold(n_states=40).fit(corpus)
+
+
+@pytest.fixture(scope="module")
+def dask_manifold(corpus, executor):
+    from engine.manifold import Manifold
+
+    return Manifold(n_states=40).fit(corpus, executor=executor)
+
+
+def _max_angle(a, b):
+    return float(np.degrees(subspace_angles(a.astype(np.float64), b.astype(np.float64)).max()))
+
+
+def test_frame_blocks_round_trip(tmp_path):
+    from engine.scale import open_frame_blocks, store_frame_blocks
+
+    F = np.random.default_rng(0).standard_normal((2400, 7)).astype(np.float32)
+    paths = store_frame_blocks(F, tmp_path, block_frames=1000)
+    assert [p.name for p in paths] == ["block_00000.npy", "block_00001.npy"]  # 400-frame tail joins block 1
+    arr = open_frame_blocks(paths)
+    assert arr.chunks[0] == (1000, 1400)
+    np.testing.assert_array_equal(arr.compute(), F)
+
+
+def test_dask_build_matches_in_process(dask_manifold, in_process):
+    d, m = dask_manifold, in_process
+    assert d.shape_.n_components_ == m.shape_.n_components_
+    assert _max_angle(d.Fx_, m.Fx_) < ANGLE_TOL_DEG
+    assert _max_angle(d.Fy_[:, :3], m.Fy_[:, :3]) < ANGLE_TOL_DEG
+    np.testing.assert_allclose(d.embedding_.explained_variance_[:3], m.embedding_.explained_variance_[:3],
+                               rtol=1e-3)
+    assert "_operator_factory" not in vars(d.embedding_)  # the Dask operator is not kept
+
+
+def test_dask_projection_and_assignment_match(executor, in_process):
+    m = in_process
+    G = m.G_[:1500]
+    np.testing.assert_allclose(executor.project(m.embedding_, G, block=700), m.embedding_.transform(G),
+                               rtol=1e-4, atol=1e-3 * float(np.abs(m.Fy_).max()))
+    np.testing.assert_array_equal(executor.assign(m.states_.centroids_, m.Fy_, block=1000), m.states_.labels_)
+
+
+def test_small_blocks_are_refused(executor):
+    from engine.scale import DaskExecutor
+
+    with pytest.raises(ValueError, match="block_frames must be >= 256"):
+        DaskExecutor(executor.client, block_frames=10)
