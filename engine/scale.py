@@ -228,6 +228,12 @@ class DaskExecutor:
                              "'dask scheduler' or use --dask local") from None
         return cls(client, **kwargs)
 
+    def describe(self) -> str:
+        """``"2 workers, 2 threads at tcp://..."`` for the command line."""
+        workers = self.client.scheduler_info().get("workers", {})
+        threads = sum(int(w.get("nthreads", 0)) for w in workers.values())
+        return f"{len(workers)} workers, {threads} threads at {self.client.scheduler.address}"
+
     def close(self):
         """Close the client (and the cluster it started) and remove temporary blocks."""
         cluster = self.client.cluster if self._own else None

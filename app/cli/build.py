@@ -23,6 +23,12 @@ def add_arguments(p):
                         "--landmarks-above frames, 2000 landmarks above)")
     p.add_argument("--landmarks-above", type=int, default=50000, metavar="N",
                    help="frames above which the landmark embedding is chosen (default: %(default)s)")
+    p.add_argument("--dask", metavar="local|ADDRESS", default=None,
+                   help="run the shape space and the embedding on Dask: 'local' starts a cluster with one worker "
+                        "per core, an address (tcp://host:8786) uses a running scheduler (default: in-process)")
+    p.add_argument("--dask-blocks", metavar="DIR", default=None,
+                   help="folder for the frames stored in blocks, readable by every worker (default: a temporary "
+                        "folder; give shared storage for workers on other machines)")
     p.add_argument("--states", type=int, default=None, help="K, the number of states (default: about N/30)")
     p.add_argument("--neighbors", type=int, default=20, help="tangent-frame neighbourhood (default: %(default)s)")
     p.add_argument("--speaker-norm", choices=("auto", "mean", "mean+scale", "none"), default="auto",
@@ -51,11 +57,17 @@ def run(args) -> int:
 
             plan = plan_build(corpus.n_frames, n_landmarks=args.landmarks, landmarks_above=args.landmarks_above)
             print(f"lipspace build: {plan.describe()}", file=sys.stdout)
+            executor = _dask_executor(args)
             manifold = Manifold(variance=args.variance, n_embedding=args.embedding_dims,
                                 embedding_method=args.method, n_landmarks=args.landmarks,
                                 n_states=args.states, n_neighbors=args.neighbors,
                                 random_state=args.seed, speaker_normalisation=args.speaker_norm,
-                                landmarks_above=args.landmarks_above).fit(corpus, progress=progress)
+                                landmarks_above=args.landmarks_above)
+            try:
+                manifold.fit(corpus, progress=progress, executor=executor)
+            finally:
+                if executor is not None:
+                    executor.close()
         except ValueError as exc:
             raise CliError(str(exc)) from None
     manifold.save(out)
@@ -64,3 +76,19 @@ def run(args) -> int:
           f"Y {s['embedding_dims']}-D (first 3 hold {100 * s['Y_first3_recovered']:.1f}% of recovered variance), "
           f"K={s['n_states']} states, {time.perf_counter() - t0:.1f} s", file=sys.stdout)
     return 0
+
+
+def _dask_executor(args):
+    """The Dask executor named by ``--dask`` (None: in-process), its cluster printed."""
+    if not args.dask:
+        return None
+    try:
+        from engine.scale import DaskExecutor
+    except ImportError as exc:
+        from app.cli import CliError
+
+        raise CliError(f"--dask needs the 'scale' extra ({exc}); "
+                       "install it with pip install 'lipspace[scale]'") from None
+    ex = DaskExecutor.connect(args.dask, chunk_dir=args.dask_blocks)
+    print(f"lipspace build: Dask {ex.describe()}", file=sys.stdout)
+    return ex
