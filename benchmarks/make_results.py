@@ -14,7 +14,7 @@ Sections (every number in the file is computed by this run):
 
 Settings (state dims, smoothing, k) are chosen per corpus on a validation split of its
 training utterances (:func:`engine.protocols.select_settings`). Prints wall time and
-peak memory of each section and the BLAS in use. Measured: 18 minutes for the default
+peak memory of each section and the BLAS in use. Measured: 12-18 minutes for the default
 preset on two cores shared with other jobs (load average about 14; peak RSS 1.1 GB);
 the small preset about 1.5 minutes on the same machine.
 """
