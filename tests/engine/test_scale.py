@@ -6,7 +6,8 @@ from scipy.linalg import subspace_angles
 pytest.importorskip("distributed")
 
 #: largest principal angle (degrees) allowed between the Dask and in-process F^x / F^y subspaces
-ANGLE_TOL_DEG = 0.5
+#: (measured: 3e-5 deg for F^x, 8e-5 deg for the first 3 columns of F^y, 1,956 frames)
+ANGLE_TOL_DEG = 0.01
 
 
 @pytest.fixture(scope="module")
