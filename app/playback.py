@@ -58,8 +58,8 @@ class PlaybackClock:
     clock : callable() -> float, default=time.monotonic
         Seconds; tests pass a fake clock.
     latency_window : int, default=15
-        The look-ahead is the median latency of this many latest frames (a median, so
-        that one stall does not make the following frames run early).
+        The look-ahead is the upper quartile of the latency of this many latest frames (a
+        quantile, so that one stall does not make the following frames run early).
 
     Attributes
     ----------
@@ -108,18 +108,22 @@ class PlaybackClock:
         return playback_frame(t - self.t0, self.rate, start=self.start_frame, speed=self.speed)
 
     def frame(self) -> int | None:
-        """The frame to render now so that it is due when it reaches the screen; None at the end."""
+        """The frame nearest the clock when the one rendered now reaches the screen; None at the end.
+
+        Nearest rather than the one already begun, and the latency taken at its upper
+        quartile: a frame then errs towards being early by less than a frame period rather
+        than late (sight ahead of sound is tolerated far better than behind it).
+        """
         if self.t0 is None:
             raise RuntimeError("the playback clock has not been started")
-        k = self.due(self.clock() + self.latency_s)
         if self.due() >= self.n_frames:
             return None
-        return min(k, self.n_frames - 1)
+        half = 0.5 / (self.rate * self.speed)
+        return min(self.due(self.clock() + self.latency_s + half), self.n_frames - 1)
 
     def shown(self, chosen_at: float, shown_at: float) -> None:
         """Record that a frame chosen at ``chosen_at`` reached the screen at ``shown_at``."""
         # never plan for more than a quarter second ahead
         self._latencies.append(min(max(0.0, float(shown_at) - float(chosen_at)), 0.25))
         ordered = sorted(self._latencies)
-        n = len(ordered)
-        self.latency_s = ordered[n // 2] if n % 2 else 0.5 * (ordered[n // 2 - 1] + ordered[n // 2])
+        self.latency_s = ordered[int(round(0.75 * (len(ordered) - 1)))]  # the upper quartile

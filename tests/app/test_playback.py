@@ -37,7 +37,9 @@ def test_clock_drops_frames_when_ticks_come_late_and_stops_at_the_end():
     assert c.frame() == 10
     fake.t += 0.1  # one tick 100 ms late: frames 11..15 are skipped, not shown late
     assert c.frame() == 16
-    fake.t += 0.2
+    fake.t += 0.6 / 60
+    assert c.frame() == 17  # the nearest frame: 16.6 frame periods in
+    fake.t += 0.2 - 0.6 / 60
     assert c.frame() == 28
     fake.t += (99 - 28) / 60 + 0.001
     assert c.frame() == 99  # the last frame
@@ -59,7 +61,7 @@ def test_clock_looks_ahead_by_the_measured_display_latency():
     assert c.due() == 60  # what is due now is unchanged
     for _ in range(2):
         c.shown(chosen_at=fake.t, shown_at=fake.t + 0.05)
-    c.shown(chosen_at=0.0, shown_at=10.0)  # one stall (capped at 0.25 s) does not move the median
+    c.shown(chosen_at=0.0, shown_at=10.0)  # one stall (capped at 0.25 s) does not move the estimate
     assert c.latency_s == pytest.approx(0.05)
     for _ in range(5):
         c.shown(chosen_at=0.0, shown_at=0.02)  # only the latest 5 count
