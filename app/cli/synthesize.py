@@ -213,4 +213,6 @@ def _write_animation(args, manifold, traj, out):
                                  scale=args.gltf_scale, source=f"{traj.method}: {args.utterance or 'synthesis'}")
     except ValueError as exc:
         raise CliError(str(exc)) from None
-    print(f"wrote {', '.join(str(f) for f in files)} ({traj.n_frames} frames, {traj.Fx.shape[1]} morph targets)")
+    m = traj.Fx.shape[1]
+    print(f"wrote {', '.join(str(f) for f in files)} ({traj.n_frames} frames; {m} shape components as {2 * m} "
+          "morph targets X1+, X1-, ...)")

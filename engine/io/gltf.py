@@ -5,12 +5,19 @@ and so is a glTF morph: ``position = base + sum_k w_k * target_k``. The file the
 holds the trajectory exactly, in a form animation tools play directly:
 
 * one mesh whose base (``POSITION``) is the mean lip shape, ``(V, 3)`` float32;
-* one morph target per shape component (``X1``, ``X2``, ...: the rows of X as point
-  displacements, named in ``mesh.extras.targetNames``, which Blender turns into shape
-  key names);
+* two morph targets per shape component, ``X1+`` = ``s_1 X_1`` and ``X1-`` = ``-s_1 X_1``
+  (the rows of X as point displacements, named in ``mesh.extras.targetNames``, which
+  Blender turns into shape key names; ``mesh.extras.targetScale`` holds ``±s_k`` and
+  ``targetComponent`` k);
 * one animation whose sampler runs over the frame times ``k / rate`` (seconds) and whose
-  output is F^x frame by frame (the morph weights), with ``LINEAR`` or ``STEP``
-  interpolation.
+  output is, frame by frame, ``max(F^x_k, 0) / s_k`` and ``max(-F^x_k, 0) / s_k`` (the
+  morph weights), with ``LINEAR`` or ``STEP`` interpolation. ``s_k`` is the largest
+  ``|F^x_k|`` of the trajectory, so every weight lies in [0, 1], the range every tool
+  takes: F^x itself runs to tens (millimetres) and changes sign, Blender's shape-key
+  sliders stop at ±10, and Blender 3.4's importer clamps at 0 any weight below the
+  first frame's. Linear interpolation of the two halves is still linear in F^x
+  (their difference is), so nothing is lost between keys. ``two_sided=False`` writes
+  one target per component with signed weights in [-1, 1] instead.
 
 With faces the primitive is a triangle list; without them (a marker set) it is a
 ``POINTS`` primitive, which glTF viewers draw as points and Blender imports as loose
@@ -125,7 +132,8 @@ class _Blob:
 
 
 def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None, dims: int = 3,
-                     target_names=None, interpolation: str = "LINEAR", scale: float = 1.0,
+                     target_names=None, target_scale=None, two_sided: bool = True, interpolation: str = "LINEAR",
+                     scale: float = 1.0,
                      audio: str | None = None, name: str = "lips", extras: dict | None = None) -> Path:
     """Write a lip trajectory as a glTF 2.0 morph-target animation.
 
@@ -138,7 +146,8 @@ def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None
     components : array of shape (m, C)
         Morph targets: the shape components (rows of X), as displacements.
     weights : array of shape (n_frames, m)
-        F^x per frame: the animated morph weights.
+        F^x per frame; the animated morph weights are its positive and negative parts
+        over ``target_scale`` (see the module notes).
     rate : float
         Frames per second; frame ``k`` is keyed at ``k / rate`` seconds.
     faces : array of shape (F, 3) int, optional
@@ -147,6 +156,13 @@ def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None
         Coordinates per point in ``mean`` / ``components``.
     target_names : sequence of str, optional
         One name per component (default ``X1 .. Xm``).
+    target_scale : array of shape (m,), optional
+        Positive ``s_k``: target k is ``s_k`` times component k and its weight is divided
+        by ``s_k`` (the product, hence the shape, is unchanged). Default: the largest
+        ``|weights[:, k]|`` (1 where a column is all zero), so the weights lie in [0, 1].
+    two_sided : bool
+        Two targets per component (``+s_k X_k`` and ``-s_k X_k``, weights >= 0; default),
+        or one with signed weights.
     interpolation : {"LINEAR", "STEP"}
         Between keyed frames.
     scale : float
@@ -174,6 +190,13 @@ def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None
     names = [f"X{k + 1}" for k in range(m)] if target_names is None else [str(s) for s in target_names]
     if len(names) != m:
         raise ValueError(f"{len(names)} target names for {m} components")
+    if target_scale is None:
+        sk = np.abs(weights).max(axis=0).astype(np.float64)
+        sk[sk == 0] = 1.0
+    else:
+        sk = np.asarray(target_scale, np.float64).ravel()
+        if sk.shape != (m,) or not np.all(np.isfinite(sk) & (sk > 0)):
+            raise ValueError(f"target_scale must be {m} positive finite numbers, got {target_scale!r}")
     base = _points3(mean, dims)
     V = base.shape[0]
 
@@ -181,10 +204,18 @@ def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None
     blob = _Blob(gltf)
     pos = blob.add(base, type_="VEC3", component=_FLOAT, target=_ARRAY_BUFFER, minmax=True, name="mean shape")
     targets = []
+    signs = (1.0, -1.0) if two_sided else (1.0,)
+    t_names, t_scale, t_comp = [], [], []
     for k in range(m):
-        d = _points3(components[k], dims)
-        targets.append(g.Attributes(POSITION=blob.add(d, type_="VEC3", component=_FLOAT, target=_ARRAY_BUFFER,
-                                                      minmax=True, name=names[k])))
+        for sign in signs:
+            t_names.append(names[k] + ("+" if sign > 0 else "-") if two_sided else names[k])
+            t_scale.append(float(sign * sk[k]))
+            t_comp.append(k)
+            d = _points3(components[k].astype(np.float64) * (sign * sk[k]), dims)
+            targets.append(g.Attributes(POSITION=blob.add(d, type_="VEC3", component=_FLOAT, target=_ARRAY_BUFFER,
+                                                          minmax=True, name=t_names[-1])))
+    W = weights.astype(np.float64) / sk
+    W = np.stack([np.maximum(W, 0.0), np.maximum(-W, 0.0)], axis=2).reshape(n, 2 * m) if two_sided else W
     prim = g.Primitive(attributes=g.Attributes(POSITION=pos), targets=targets, material=0,
                        mode=_TRIANGLES if faces is not None else _POINTS)
     if faces is not None:
@@ -193,11 +224,12 @@ def write_gltf_morph(path, mean, components, weights, *, rate: float, faces=None
                                 target=_ELEMENT_ARRAY_BUFFER, name="faces")
     times = (np.arange(n, dtype=np.float64) / float(rate)).astype(np.float32)
     t_acc = blob.add(times, type_="SCALAR", component=_FLOAT, minmax=True, name="time (s)")
-    w_acc = blob.add(weights.ravel(), type_="SCALAR", component=_FLOAT, name="F^x")
+    w_acc = blob.add(W.astype(np.float32).ravel(), type_="SCALAR", component=_FLOAT, name="F^x / target scale")
 
     gltf.materials.append(g.Material(name="lip", doubleSided=True, pbrMetallicRoughness=g.PbrMetallicRoughness(
         baseColorFactor=list(LIP_COLOUR), metallicFactor=0.0, roughnessFactor=0.6)))
-    gltf.meshes.append(g.Mesh(name=name, primitives=[prim], weights=[0.0] * m, extras={"targetNames": names}))
+    gltf.meshes.append(g.Mesh(name=name, primitives=[prim], weights=[0.0] * len(targets),
+                              extras={"targetNames": t_names, "targetScale": t_scale, "targetComponent": t_comp}))
     gltf.nodes.append(g.Node(name=name, mesh=0, scale=None if scale == 1.0 else [float(scale)] * 3))
     scene_extras = dict(extras or {})
     scene_extras.update({"rate": float(rate), "frames": int(n)})
@@ -231,7 +263,10 @@ def read_gltf_morph(path) -> dict:
     -------
     dict
         ``base`` (V, 3) float32, ``targets`` (m, V, 3) float32, ``times`` (n,) float32
-        seconds, ``weights`` (n, m) float32, ``faces`` (F, 3) int64 or None,
+        seconds, ``weights`` (n, t) float32 (the morph weights of the t targets), ``Fx``
+        (n, m) float32 (per component, the sum of its targets' weights times their
+        ``targetScale``; a file without these extras gives its weights), ``faces`` (F, 3)
+        int64 or None,
         ``target_names`` list of str, ``interpolation`` str, ``scale`` float and
         ``extras`` (the scene's extras). ``base + weights[k] @ targets`` is frame k.
     """
@@ -275,7 +310,12 @@ def read_gltf_morph(path) -> dict:
     node = gltf.nodes[0] if gltf.nodes else None
     scale = float(node.scale[0]) if node is not None and node.scale else 1.0
     names = list((mesh.extras or {}).get("targetNames", [f"X{k + 1}" for k in range(len(targets))]))
+    sk = np.asarray((mesh.extras or {}).get("targetScale", np.ones(len(targets))), np.float64)
+    comp = np.asarray((mesh.extras or {}).get("targetComponent", np.arange(len(targets))), np.int64)
+    Fx = np.zeros((len(times), int(comp.max()) + 1 if comp.size else 0))
+    np.add.at(Fx.T, comp, (weights * sk).T)
     extras = dict(gltf.scenes[0].extras or {}) if gltf.scenes else {}
-    return {"base": base, "targets": targets, "times": times, "weights": weights, "faces": faces,
+    return {"base": base, "targets": targets, "times": times, "weights": weights,
+            "Fx": Fx.astype(np.float32), "target_scale": sk, "faces": faces,
             "target_names": names, "interpolation": sampler.interpolation or "LINEAR", "scale": scale,
             "extras": extras}

@@ -36,7 +36,8 @@ def test_glb_plays_the_synthesised_frames_with_the_audio_beside(mfile, small_man
     r = read_gltf_morph(glb)
     played = r["base"][None] + np.einsum("nk,kvd->nvd", r["weights"], r["targets"])
     n, m = frames.shape[0], small_manifold.shape_.n_components_
-    assert played.shape == (n, small_manifold.corpus_.n_points, 3) and r["targets"].shape[0] == m
+    assert played.shape == (n, small_manifold.corpus_.n_points, 3)
+    assert r["targets"].shape[0] == 2 * m  # X_k+ and X_k-
     tol = 8 * np.finfo(np.float32).eps * float(np.abs(frames).max()) * np.sqrt(m)
     np.testing.assert_allclose(played.reshape(n, -1), frames, rtol=0, atol=tol)
     np.testing.assert_allclose(r["times"], np.arange(n) / small_manifold.corpus_.rate, rtol=1e-6)

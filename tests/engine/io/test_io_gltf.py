@@ -66,11 +66,20 @@ def test_glb_reproduces_synthesised_frames_within_float32(small_manifold, synthe
     tol = 8 * np.finfo(np.float32).eps * float(np.abs(frames).max()) * np.sqrt(shape.n_components_)
     np.testing.assert_allclose(played, frames, rtol=0, atol=tol)
     np.testing.assert_allclose(times, np.arange(traj.n_frames) / c.rate, rtol=1e-6)
+    # weights within [0, 1] (F^x runs to tens of mm and changes sign; Blender's sliders stop at
+    # +-10 and its 3.4 importer clamps at 0): X_k+ and X_k- targets; F^x comes back exactly
+    r = read_gltf_morph(p)
+    m = shape.n_components_
+    assert r["weights"].min() == 0.0 and r["weights"].max() == pytest.approx(1.0) and np.abs(traj.Fx).max() > 10
+    assert r["weights"].shape == (traj.n_frames, 2 * m)
+    np.testing.assert_allclose(r["Fx"], traj.Fx, rtol=1e-6, atol=1e-6 * float(np.abs(traj.Fx).max()))
+    np.testing.assert_allclose(r["target_scale"][::2], np.abs(traj.Fx).max(axis=0), rtol=1e-6)
+    np.testing.assert_array_equal(r["target_scale"][1::2], -r["target_scale"][::2])
     prim = gltf.meshes[0].primitives[0]
     assert prim.mode == pygltflib.TRIANGLES
     np.testing.assert_array_equal(accessor(prim.indices).reshape(-1, 3), c.faces)
-    assert gltf.meshes[0].extras["targetNames"] == [f"X{k + 1}" for k in range(shape.n_components_)]
-    assert gltf.meshes[0].weights == [0.0] * shape.n_components_
+    assert gltf.meshes[0].extras["targetNames"] == [f"X{k + 1}{sign}" for k in range(m) for sign in "+-"]
+    assert gltf.meshes[0].weights == [0.0] * (2 * m)
     assert gltf.nodes[0].scale == [0.001] * 3
     assert gltf.scenes[0].extras["audio"] == "speech.wav" and gltf.scenes[0].extras["rate"] == c.rate
     # POSITION accessors (base and targets) carry the min/max the standard requires
@@ -87,7 +96,7 @@ def test_points_without_faces_2d_step_and_embedded_gltf(tmp_path):
     comps = rng.normal(size=(m, 2 * V))
     W = rng.normal(size=(n, m))
     p = write_gltf_morph(tmp_path / "markers.gltf", mean, comps, W, rate=100.0, dims=2, interpolation="STEP",
-                         target_names=["open", "round", "spread"])
+                         target_names=["open", "round", "spread"], two_sided=False)
     assert p.read_text(encoding="utf-8").lstrip().startswith("{")  # JSON with the buffer inside
     gltf, accessor = _load(p)
     played, times, interp = _played_frames(gltf, accessor)
@@ -103,6 +112,8 @@ def test_points_without_faces_2d_step_and_embedded_gltf(tmp_path):
     np.testing.assert_array_equal(r["base"][None] + np.einsum("nk,kvd->nvd", r["weights"], r["targets"]), played)
     assert r["faces"] is None and r["interpolation"] == "STEP" and r["target_names"] == ["open", "round", "spread"]
     assert r["extras"] == {"rate": 100.0, "frames": n} and r["scale"] == 1.0
+    assert np.abs(r["weights"]).max() == pytest.approx(1.0) and r["weights"].min() < 0  # one signed target each
+    np.testing.assert_allclose(r["Fx"], W, rtol=1e-6, atol=1e-6)
     (tmp_path / "broken.glb").write_bytes(p.read_bytes()[:40])
     with pytest.raises(ValueError, match="broken.glb: not a readable glTF"):
         read_gltf_morph(tmp_path / "broken.glb")
