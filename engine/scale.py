@@ -130,6 +130,15 @@ def _orthonormal_columns(Y, passes: int = 2):
     return Y
 
 
+def _centred_sumsq(block, mean32, rows: int = 1024):
+    """Sum of squares of ``block - mean32`` (float64 sums of float32 differences), as (1,)."""
+    total = 0.0
+    for s in range(0, block.shape[0], rows):
+        d = block[s:s + rows] - mean32
+        total += float(np.einsum("ij,ij->", d, d, dtype=np.float64))
+    return np.array([total])
+
+
 def _add(a, b):
     if isinstance(a, tuple):
         return tuple(_add(x, y) for x, y in zip(a, b))
@@ -274,9 +283,10 @@ class DaskExecutor:
             X = X.astype(np.float32)
             return (F @ X - mean32 @ X).persist()
 
-        def At_mat(Y):  # (F - 1 mu^T)^T Y, thin, brought back
-            out = (F.T @ Y).compute()
-            return out - np.outer(mean32, Y.sum(axis=0).compute())
+        def At_mat(Y):  # (F - 1 mu^T)^T Y, thin, brought back; float32 GEMMs as in-process
+            Y = Y.astype(np.float32)
+            out, ysum = dask.compute(F.T @ Y, Y.sum(axis=0))
+            return out - np.outer(mean32, ysum)
 
         def orth(Y):
             return _orthonormal_columns(Y.rechunk({1: -1}))
@@ -295,7 +305,8 @@ class DaskExecutor:
         step += 1
         report(progress, "shape space", step, steps)
         _, s, Vt = np.linalg.svd(B.astype(np.float64), full_matrices=False)
-        total = float((((F - mean32).astype(np.float64)) ** 2).sum().compute())
+        total = float(F.map_blocks(_centred_sumsq, mean32, chunks=((1,) * F.numblocks[0],), drop_axis=1,
+                                   dtype=np.float64).sum().compute())
         shape._set_fitted(s[:k], Vt[:k], total, N, mean)
         Fx = da.map_blocks(lambda b, m=shape.mean_, c=shape.components_: (b - m) @ c.T, F,
                            chunks=(F.chunks[0], (shape.n_components_,)), dtype=np.float32)
