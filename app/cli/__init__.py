@@ -57,10 +57,31 @@ OUTPUT_DIR_ARGS = ("outdir", "mesh_dir")
 
 
 def main(argv=None) -> int:
+    """Run one subcommand; the exit status (0 ok, 1 nothing succeeded, 2 error, 128 + signal)."""
+    caught = _CAUGHT
+    caught.clear()
+    rc = _main(argv, caught)
+    if caught and rc < 128:
+        # the signal's KeyboardInterrupt was swallowed where Python ignores exceptions
+        # (a weakref callback during an import): the command did not stop, say so
+        print(f"lipspace: {caught[-1]} arrived while Python could not stop the command; "
+              "it ran to its end (its output is complete).", file=sys.stderr)
+    return rc
+
+
+#: names of the signals that asked this command to stop (the handler appends; progress checks)
+_CAUGHT: list = []
+
+
+def stop_requested() -> bool:
+    """True once SIGINT, SIGTERM or SIGHUP asked the running command to stop."""
+    return bool(_CAUGHT)
+
+
+def _main(argv, caught) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] not in SUBCOMMANDS and argv[0] not in ("-h", "--help"):
         argv = ["explore", *argv]
-    caught = []
     with _signals_as_interrupt(caught):
         try:
             args = argparse.Namespace(command=argv[0])
@@ -70,7 +91,7 @@ def main(argv=None) -> int:
                 with _printable_stdout():
                     return int(args._run(args) or 0)
         except (Cancelled, KeyboardInterrupt):
-            what = f"stopped by {caught[-1]}" if caught else "interrupted"
+            what = f"stopped by {caught[-1]}" if caught and caught[-1] != "SIGINT" else "interrupted"
             print(f"lipspace: {what}; nothing was written.", file=sys.stderr)
             return 128 + (caught_signum(caught) or 2)
         except CliError as exc:
@@ -142,7 +163,7 @@ def _os_error_text(exc: OSError) -> str:
 
 
 def caught_signum(caught) -> int | None:
-    return {"SIGTERM": signal.SIGTERM, "SIGHUP": signal.SIGHUP}.get(caught[-1]) if caught else None
+    return {"SIGINT": signal.SIGINT, "SIGTERM": signal.SIGTERM, "SIGHUP": signal.SIGHUP}.get(caught[-1]) if caught else None
 
 
 @contextlib.contextmanager
@@ -154,8 +175,7 @@ def _signals_as_interrupt(caught: list):
         return
 
     def handler(signum, frame):
-        if signum != signal.SIGINT:
-            caught.append(signal.Signals(signum).name)
+        caught.append(signal.Signals(signum).name)
         raise KeyboardInterrupt
 
     old = {}

@@ -22,6 +22,10 @@ def progress_bar(*, disable: bool | None = None):
     bars = {}
 
     def progress(stage, done, total):
+        from app.cli import stop_requested
+
+        if stop_requested():  # a signal whose KeyboardInterrupt Python swallowed
+            raise Cancelled("interrupted")
         bar = bars.get(stage)
         if bar is None:
             for b in bars.values():
