@@ -128,7 +128,7 @@ def test_disk_full_is_one_line_and_leaves_no_file(tmp_path, built, capsys, monke
 def test_memory_error_is_one_line_with_a_hint(tmp_path, small_corpus, capsys, monkeypatch):
     from engine.manifold import Manifold
 
-    def oom(self, corpus, progress=None):
+    def oom(self, corpus, progress=None, **kwargs):
         raise MemoryError("Unable to allocate 15.6 GiB for an array with shape (461000, 4540) and data type float64")
 
     monkeypatch.setattr(Manifold, "fit", oom)
