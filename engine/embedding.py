@@ -24,6 +24,7 @@ from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from engine.progress import ProgressFn, report
+from engine.shape import orthonormal_basis
 
 __all__ = ["Embedding", "pairwise_distance_block"]
 
@@ -252,7 +253,7 @@ class Embedding(BaseEstimator):
         sumsq, colsum = op.last_stats
         c = colsum / N
         Y -= np.outer(np.ones(N), c @ Om)
-        Q, _ = np.linalg.qr(Y)
+        Q = orthonormal_basis(Y)
 
         def At(Qm):  # A^T Q = D^T Q - c 1^T Q
             if L == N:  # D symmetric
@@ -265,8 +266,8 @@ class Embedding(BaseEstimator):
             return op.matmat(Xm) - np.outer(np.ones(N), c @ Xm)
 
         for _ in range(int(self.n_iter)):
-            Z, _ = np.linalg.qr(At(Q))
-            Q, _ = np.linalg.qr(A(Z))
+            Z = orthonormal_basis(At(Q))
+            Q = orthonormal_basis(A(Z))
         B = At(Q).T  # (r, L)
         Ub, s, Vt = np.linalg.svd(B, full_matrices=False)
         s, Vt = s[:k], Vt[:k]
@@ -335,11 +336,11 @@ def _mds_eig(op, N, k, r, rng, n_iter):
     Y = B(Om, first=True)
     colmean = op.last_stats / N
     Y = -0.5 * (Y - Y.mean(axis=0))
-    Q, _ = np.linalg.qr(Y)
+    Q = orthonormal_basis(Y)
     for _ in range(n_iter):
         Y = -0.5 * B(Q)
         Y -= Y.mean(axis=0)
-        Q, _ = np.linalg.qr(Y)
+        Q = orthonormal_basis(Y)
     BQ = -0.5 * B(Q)
     BQ -= BQ.mean(axis=0)
     T = Q.T @ BQ

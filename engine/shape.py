@@ -21,7 +21,7 @@ def _row_blocks(n: int, block: int):
         yield slice(s, min(n, s + block))
 
 
-def _orthonormal(M):
+def orthonormal_basis(M):
     """Q of the reduced QR decomposition of ``M`` (n, r), same dtype.
 
     scipy's LAPACK wrapper releases the GIL while it works; ``numpy.linalg.qr`` holds it
@@ -130,12 +130,12 @@ class ShapeSpace(BaseEstimator):
         Q = A_mat(rng.standard_normal((C, k + p)).astype(np.float32))
         step += 1
         report(progress, "shape space", step, total_steps)
-        Q = _orthonormal(Q)
+        Q = orthonormal_basis(Q)
         for _ in range(self.n_iter):
-            Z = _orthonormal(At_mat(Q))
+            Z = orthonormal_basis(At_mat(Q))
             step += 1
             report(progress, "shape space", step, total_steps)
-            Q = _orthonormal(A_mat(Z))
+            Q = orthonormal_basis(A_mat(Z))
             step += 1
             report(progress, "shape space", step, total_steps)
         B = At_mat(Q).T  # (k+p, C)
