@@ -23,6 +23,8 @@ from pathlib import Path
 
 PRESETS = ("small", "default", "paper")
 METHODS = ("manifold", "linear", "cubic", "unitselection")
+#: the manifold synthesiser's inverse maps (engine.synthesis.INVERSES; a test keeps them equal)
+INVERSES = ("delaunay", "state-mean", "local-linear")
 VALUES = ("frames", "fx", "fy")
 
 
@@ -50,6 +52,13 @@ def add_arguments(p):
                    help="manifold method: candidate states per phone (default: %(default)s)")
     p.add_argument("--inverse-dims", type=int, default=None,
                    help="manifold method: dims of F^y used by the Y -> X inverse map (default: 3, the paper's)")
+    p.add_argument("--inverse", choices=INVERSES, default="delaunay",
+                   help="manifold method: Y -> X map of the state path: the paper's 3-D Delaunay interpolation, "
+                        "each state's mean X, or local-linear regression on the k nearest frames in F^y "
+                        "(docs/RESULTS.md compares them; default: %(default)s)")
+    p.add_argument("--smoothing", type=float, default=0.0, metavar="FRAMES",
+                   help="manifold method: Gaussian smoothing (s.d. in frames) of the state path before the "
+                        "inverse map (default: %(default)s)")
     p.add_argument("--tier", default=None, help="TextGrid tier holding the phones (default: found by name)")
     p.add_argument("--tempo", type=float, default=1.0, help="--text: speaking-rate factor (default: %(default)s)")
     p.add_argument("-o", "--output", metavar="TRAJ.csv|TRAJ.npy|ANIM.glb",
@@ -130,7 +139,7 @@ def _synthesizer(args, manifold):
 
     if args.method == "manifold":
         return make_synthesizer("manifold", manifold, strict=args.strict, n_candidates=args.candidates,
-                                inverse_dims=args.inverse_dims)
+                                inverse_dims=args.inverse_dims, inverse=args.inverse, smoothing=args.smoothing)
     return make_synthesizer(args.method, manifold)
 
 

@@ -101,3 +101,29 @@ def test_evaluate_on_the_haskins_pair(shared_data, capsys):
     assert main(["evaluate", "--haskins", "--methods", "linear,manifold", "-q"]) == 0
     out = capsys.readouterr().out
     assert "1 test utterance(s), 1 training" in out and "linear" in out
+
+
+def test_inverse_choice_reaches_the_synthesiser(mfile, small_manifold, tmp_path):
+    """--inverse / --smoothing pick the Y -> X map: the state-mean path's X is exactly the states' mean X."""
+    from app.cli.synthesize import INVERSES as CLI_INVERSES
+    from engine.synthesis import INVERSES
+
+    assert CLI_INVERSES == INVERSES
+    u = small_manifold.corpus_.utterances[1]
+    outs = {}
+    for inverse in INVERSES:
+        out = tmp_path / f"{inverse}.npy"
+        assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--inverse", inverse,
+                     "--values", "fx", "-o", str(out), "-q"]) == 0
+        outs[inverse] = np.load(out)
+        assert outs[inverse].shape == (u.n_frames, small_manifold.Fx_.shape[1])
+    # every row of the state-mean trajectory is one state's mean F^x
+    lab = np.asarray(small_manifold.states_.labels_)
+    means = np.stack([small_manifold.Fx_[lab == k].mean(axis=0) for k in np.unique(lab)])
+    d = np.abs(outs["state-mean"][:, None, :] - means[None, :, :]).max(axis=2).min(axis=1)
+    assert d.max() < 1e-4 * np.abs(means).max()
+    assert not np.allclose(outs["state-mean"], outs["delaunay"])
+    smooth = tmp_path / "smooth.npy"
+    assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--inverse", "state-mean",
+                 "--smoothing", "2", "--values", "fx", "-o", str(smooth), "-q"]) == 0
+    assert np.abs(np.diff(np.load(smooth), axis=0)).max() < np.abs(np.diff(outs["state-mean"], axis=0)).max()
