@@ -76,6 +76,10 @@ class Manifold(BaseEstimator):
         Per-speaker normalisation of the frames before the shape space
         (:func:`engine.registration.normalise_speakers`; "auto": "mean" when the
         utterances name two or more speakers). ``corpus_`` holds the normalised frames.
+    dynamics_scale : str, default="max"
+        How each block of the dynamic features G is scaled
+        (:class:`engine.dynamics.DynamicFeatures`): "max" (the paper's largest entry) or
+        "pQ", the Q-th percentile of absolute values (robust to outlying frames).
 
     Attributes
     ----------
@@ -98,7 +102,7 @@ class Manifold(BaseEstimator):
 
     def __init__(self, *, variance=0.99, max_components=100, n_embedding=10, embedding_method="pca",
                  n_landmarks=None, n_states=None, state_dims=3, n_neighbors=20, random_state=0,
-                 speaker_normalisation="auto", landmarks_above=50000):
+                 speaker_normalisation="auto", landmarks_above=50000, dynamics_scale="max"):
         self.variance = variance
         self.max_components = max_components
         self.n_embedding = n_embedding
@@ -110,6 +114,7 @@ class Manifold(BaseEstimator):
         self.random_state = random_state
         self.speaker_normalisation = speaker_normalisation
         self.landmarks_above = landmarks_above
+        self.dynamics_scale = dynamics_scale
 
     # ------------------------------------------------------------------ fitting
     def fit(self, corpus: Corpus, *, progress: ProgressFn = None, executor=None):
@@ -146,7 +151,7 @@ class Manifold(BaseEstimator):
         timings["shape"] = time.perf_counter() - t
 
         t = time.perf_counter()
-        dyn = DynamicFeatures().fit(Fx, bounds)
+        dyn = DynamicFeatures(scale=self.dynamics_scale).fit(Fx, bounds)
         Fxv = velocities(Fx, bounds)
         G = dyn.transform_pair(Fx, Fxv)
         timings["dynamics"] = time.perf_counter() - t

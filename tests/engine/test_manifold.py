@@ -313,3 +313,17 @@ def test_atomic_write_removes_parts_left_by_a_killed_process(tmp_path):
     os.utime(other, (old, old))
     write_text_atomic(tmp_path / "m.npz", "content")
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([fresh.name, other.name, "m.npz"])
+
+
+def test_dynamics_scale_reaches_the_dynamic_features_and_round_trips(small_corpus, small_manifold, tmp_path):
+    """Manifold(dynamics_scale="p99") scales G's blocks by a percentile, not the maximum."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the p99 scale may warn that the maximum is far above it
+        m = Manifold(dynamics_scale="p99").fit(small_corpus)
+    assert m.dynamics_.scale == "p99" and small_manifold.dynamics_.scale == "max"
+    assert not np.allclose(m.dynamics_.alpha_, small_manifold.dynamics_.alpha_)
+    m2 = Manifold.load(m.save(tmp_path / "p99.npz"))
+    assert m2.dynamics_scale == "p99"
+    np.testing.assert_array_equal(m2.Fy_, m.Fy_)
