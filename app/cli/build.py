@@ -34,6 +34,9 @@ def add_arguments(p):
     p.add_argument("--speaker-norm", choices=("auto", "mean", "mean+scale", "none"), default="auto",
                    help="per-speaker normalisation before the shape space: each speaker's mean frame removed "
                         "(and spread scaled); auto = mean when utterances name 2+ speakers (default: %(default)s)")
+    p.add_argument("--dynamics-scale", default="max", metavar="max|pQ",
+                   help="scale of each block of the dynamic features G: the largest entry (the paper's) or the "
+                        "Q-th percentile of absolute values, e.g. p99, robust to outlying frames (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
@@ -62,7 +65,7 @@ def run(args) -> int:
                                 embedding_method=args.method, n_landmarks=args.landmarks,
                                 n_states=args.states, n_neighbors=args.neighbors,
                                 random_state=args.seed, speaker_normalisation=args.speaker_norm,
-                                landmarks_above=args.landmarks_above)
+                                landmarks_above=args.landmarks_above, dynamics_scale=args.dynamics_scale)
             try:
                 manifold.fit(corpus, progress=progress, executor=executor)
             finally:

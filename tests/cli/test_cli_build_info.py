@@ -220,3 +220,12 @@ def test_names_with_terminal_escape_codes_are_printed_escaped(tmp_path, small_co
     assert main(["info", str(p)]) == 0
     out = capsys.readouterr().out
     assert "\x1b" not in out and "\x07" not in out and "evil\\x1b]0;owned\\x07\\x1b[2J" in out
+
+
+def test_dynamics_scale_option_is_validated(tmp_path, small_corpus, capsys):
+    c = small_corpus.save(tmp_path / "c.npz")
+    out = tmp_path / "m.npz"
+    assert main(["build", str(c), "-o", str(out), "-q", "--dynamics-scale", "p200"]) == 2
+    err = capsys.readouterr().err
+    assert "error: scale must be 'max' or a percentile 'pQ'" in err and "got 'p200'" in err
+    assert not out.exists()
