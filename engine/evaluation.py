@@ -234,6 +234,30 @@ def split_utterances(corpus, *, test_fraction=0.1, test_ids=None, random_state=0
     return [i for i in ids if i not in ts], test
 
 
+def fit_on_training_split(corpus, *, test_fraction=0.1, test_ids=None, random_state=0, manifold_factory=None,
+                          progress=None):
+    """Split ``corpus`` by whole utterances and fit a manifold on the training part only.
+
+    Returns
+    -------
+    train_ids, test_ids : list of str
+    train : Corpus
+        The training utterances.
+    manifold : Manifold
+        ``manifold_factory(train)``, or ``Manifold(random_state=random_state)`` fitted on ``train``.
+    """
+    train_ids, test = split_utterances(corpus, test_fraction=test_fraction, test_ids=test_ids,
+                                       random_state=random_state)
+    train = corpus.subset(train_ids)
+    if manifold_factory is None:
+        from engine.manifold import Manifold
+
+        manifold = Manifold(random_state=random_state).fit(train, progress=progress)
+    else:
+        manifold = manifold_factory(train)
+    return train_ids, test, train, manifold
+
+
 def _synthesizers(manifold, methods, params):
     from engine.synthesis import InterpolationSynthesizer, ManifoldSynthesizer
     from engine.unitselection import UnitSelectionSynthesizer
@@ -285,15 +309,9 @@ def evaluate(corpus, *, manifold_factory=None, test_fraction=0.1, test_ids=None,
     bad = [m for m in methods if m not in EVALUATION_METHODS]
     if bad or not methods:
         raise ValueError(f"unknown evaluation method(s) {bad}; choose from {', '.join(EVALUATION_METHODS)}")
-    train_ids, test = split_utterances(corpus, test_fraction=test_fraction, test_ids=test_ids,
-                                       random_state=random_state)
-    train = corpus.subset(train_ids)
-    if manifold_factory is None:
-        from engine.manifold import Manifold
-
-        manifold = Manifold(random_state=random_state).fit(train, progress=progress)
-    else:
-        manifold = manifold_factory(train)
+    train_ids, test, train, manifold = fit_on_training_split(
+        corpus, test_fraction=test_fraction, test_ids=test_ids, random_state=random_state,
+        manifold_factory=manifold_factory, progress=progress)
     synths = _synthesizers(manifold, methods, synthesizer_params or {})
     dims = corpus.dims
     acc = {m: {"sq": 0.0, "sq_y": 0.0, "n": 0, "pt_sum": 0.0, "pt_n": 0, "pt_max": 0.0, "hat": [], "true": [], "utts": 0,

@@ -227,19 +227,13 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
     -------
     ProtocolResult
     """
-    from engine.evaluation import split_utterances
+    from engine.evaluation import fit_on_training_split
     from engine.protocol_report import ProtocolResult
     from engine.unitselection import UnitSelectionSynthesizer
 
-    train_ids, test = split_utterances(corpus, test_fraction=test_fraction, test_ids=test_ids,
-                                       random_state=random_state)
-    train = corpus.subset(train_ids)
-    if manifold_factory is None:
-        from engine.manifold import Manifold
-
-        manifold = Manifold(random_state=random_state).fit(train, progress=progress)
-    else:
-        manifold = manifold_factory(train)
+    train_ids, test, train, manifold = fit_on_training_split(
+        corpus, test_fraction=test_fraction, test_ids=test_ids, random_state=random_state,
+        manifold_factory=manifold_factory, progress=progress)
     if settings is None:
         settings = (settings_factory(manifold) if settings_factory is not None
                     else select_settings(manifold, random_state=random_state, progress=progress))

@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-from app.cli.synthesize import METHODS, PRESETS
+from app.cli.synthesize import METHODS, PRESETS, add_synthesis_options
 
 __all__ = ["add_arguments", "run"]
 
@@ -46,14 +46,7 @@ def add_arguments(p):
                    help="synthetic talker preset without --manifold (default: %(default)s)")
     p.add_argument("--method", choices=METHODS + ("original",), default="manifold",
                    help="synthesis method, or 'original' to render the --utterance as captured (default: %(default)s)")
-    p.add_argument("--strict", action="store_true",
-                   help="manifold method: fail when a target cannot be reached in time (default: undershoot and warn)")
-    p.add_argument("--candidates", type=int, default=8,
-                   help="manifold method: candidate states per phone (default: %(default)s)")
-    p.add_argument("--inverse-dims", type=int, default=None,
-                   help="manifold method: dims of F^y used by the Y -> X inverse map (default: 3, the paper's)")
-    p.add_argument("--tier", default=None, help="TextGrid tier holding the phones (default: found by name)")
-    p.add_argument("--tempo", type=float, default=1.0, help="--text: speaking-rate factor (default: %(default)s)")
+    add_synthesis_options(p)
     p.add_argument("--side-by-side", action="store_true",
                    help="with --utterance: the original (left) beside the synthesis (right, red)")
     p.add_argument("--trajectory", action="store_true",

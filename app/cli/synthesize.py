@@ -46,6 +46,23 @@ def add_arguments(p):
     p.add_argument("--preset", choices=PRESETS, default="default",
                    help="synthetic talker preset without --manifold (default: %(default)s)")
     p.add_argument("--method", choices=METHODS, default="manifold", help="synthesis method (default: %(default)s)")
+    add_synthesis_options(p)
+    p.add_argument("-o", "--output", metavar="TRAJ.csv|TRAJ.npy|ANIM.glb",
+                   help="write the trajectory (CSV or NPY), or a glTF morph-target animation (.glb or .gltf)")
+    p.add_argument("--audio", metavar="FILE", help=".glb: audio written as a WAV beside it (default: the "
+                                                   "--utterance's own, if any)")
+    p.add_argument("--gltf-scale", type=float, default=0.001,
+                   help=".glb: node scale from corpus units to metres (default: %(default)s, for millimetres)")
+    p.add_argument("--values", choices=VALUES, default="frames",
+                   help="what -o holds: lip frames, shape coordinates F^x or manifold coordinates F^y "
+                        "(default: %(default)s)")
+    p.add_argument("--mesh-dir", metavar="DIR", help="write one mesh file per frame into DIR")
+    p.add_argument("--mesh-format", choices=("obj", "ply"), default="obj", help="mesh file format (default: obj)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+def add_synthesis_options(p):
+    """The manifold method's options and the target timing options, shared with ``lipspace render``."""
     p.add_argument("--strict", action="store_true",
                    help="manifold method: fail when a target cannot be reached in time (default: undershoot and warn)")
     p.add_argument("--candidates", type=int, default=8,
@@ -61,19 +78,6 @@ def add_arguments(p):
                         "inverse map (default: %(default)s)")
     p.add_argument("--tier", default=None, help="TextGrid tier holding the phones (default: found by name)")
     p.add_argument("--tempo", type=float, default=1.0, help="--text: speaking-rate factor (default: %(default)s)")
-    p.add_argument("-o", "--output", metavar="TRAJ.csv|TRAJ.npy|ANIM.glb",
-                   help="write the trajectory (CSV or NPY), or a glTF morph-target animation (.glb or .gltf)")
-    p.add_argument("--audio", metavar="FILE", help=".glb: audio written as a WAV beside it (default: the "
-                                                   "--utterance's own, if any)")
-    p.add_argument("--gltf-scale", type=float, default=0.001,
-                   help=".glb: node scale from corpus units to metres (default: %(default)s, for millimetres)")
-    p.add_argument("--values", choices=VALUES, default="frames",
-                   help="what -o holds: lip frames, shape coordinates F^x or manifold coordinates F^y "
-                        "(default: %(default)s)")
-    p.add_argument("--mesh-dir", metavar="DIR", help="write one mesh file per frame into DIR")
-    p.add_argument("--mesh-format", choices=("obj", "ply"), default="obj", help="mesh file format (default: obj)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
-
 
 def _manifold(args):
     from app.cli import CliError
