@@ -96,6 +96,10 @@ class Manifold(BaseEstimator):
     G_ : ndarray of shape (N, 2m), float32
     Fy_ : ndarray of shape (N, n_embedding), float32
         The embedding F^y.
+    state_x_ : ndarray of shape (K, m) or None
+        The Delaunay inverse map at every state centroid, stored in the file so that
+        synthesis needs no tetrahedralisation in a new process (None when the states
+        live in other dims than the map's 3, or the file predates it).
     timings_ : dict of str to float
         Seconds per stage of the last fit.
     """
@@ -181,9 +185,21 @@ class Manifold(BaseEstimator):
         self.shape_, self.dynamics_, self.embedding_ = shape, dyn, emb
         self.tangent_, self.states_ = tangent, states
         self.Fx_, self.Fxv_, self.G_, self.Fy_ = Fx, Fxv, G, Fy
-        self.timings_ = timings
         self._inverse = None
+        t = time.perf_counter()
+        report(progress, "inverse map", 0, 1)
+        self.state_x_ = self._state_x()
+        report(progress, "inverse map", 1, 1)
+        timings["inverse map"] = time.perf_counter() - t
+        self.timings_ = timings
         return self
+
+    def _state_x(self):
+        """(K, m) the Delaunay inverse map at every state centroid (first 3 dims), or None."""
+        C = np.asarray(self.states_.centroids_, dtype=np.float64)
+        if C.shape[1] != min(3, self.Fy_.shape[1]):
+            return None  # states in other dims than the map: synthesis maps its points itself
+        return np.asarray(self.inverse_map.transform(C))
 
     # -------------------------------------------------------------- projections
     def project(self, frames, bounds=None) -> np.ndarray:
@@ -239,6 +255,8 @@ class Manifold(BaseEstimator):
              "manifold_params": np.array(json.dumps(self.get_params())),
              "manifold_timings": np.array(json.dumps(self.timings_)),
              "Fx": self.Fx_, "Fxv": self.Fxv_, "G": self.G_, "Fy": self.Fy_}
+        if getattr(self, "state_x_", None) is not None:
+            d["state_x"] = self.state_x_
         d.update(self.corpus_.to_arrays(include_frames=include_frames))
         for name, attr in self._PARTS.items():
             d.update(dump_estimator(getattr(self, attr), name))
@@ -309,6 +327,10 @@ class Manifold(BaseEstimator):
         self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path))
         self.timings_ = _parse_timings(check_scalar(d, "manifold_timings", source=path, kind="str"), path)
         self._inverse = None
+        self.state_x_ = None  # files written before it was stored: synthesis maps the states itself
+        if "state_x" in d:
+            dims.setdefault("K", self.states_.centroids_.shape[0])
+            self.state_x_ = check_array(d, "state_x", source=path, shape=("K", "m"), dims=dims)
         return self
 
 

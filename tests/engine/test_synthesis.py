@@ -317,3 +317,22 @@ def test_inverse_maps_beside_delaunay(small_manifold):
         ManifoldSynthesizer(inverse="nearest").fit(m)
     with pytest.raises(ValueError, match="smoothing must be >= 0"):
         ManifoldSynthesizer(smoothing=-1).fit(m)
+
+
+def test_stored_state_inverse_table_gives_the_delaunay_path_exactly(small_manifold, tmp_path):
+    """The manifold file's state_x_ table replaces the tetrahedralisation in a new process."""
+    from engine.manifold import Manifold
+    from engine.synthesis import ManifoldSynthesizer
+    from engine.targets import targets_from_utterance
+
+    m = Manifold.load(small_manifold.save(tmp_path / "m.npz"))
+    assert m.state_x_ is not None and m._inverse is None
+    np.testing.assert_array_equal(m.state_x_, small_manifold.inverse_map.transform(small_manifold.states_.centroids_))
+    u = m.corpus_.utterances[0]
+    targets = targets_from_utterance(m, u.id, on_collision="merge")
+    fast = ManifoldSynthesizer(strict=False).fit(m).synthesize(targets)
+    assert m._inverse is None  # no Delaunay was built
+    m.state_x_ = None
+    slow = ManifoldSynthesizer(strict=False).fit(m).synthesize(targets)
+    assert m._inverse is not None
+    np.testing.assert_array_equal(fast.Fx, slow.Fx)
