@@ -37,7 +37,10 @@ SUBCOMMANDS = {
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``lipspace`` parser. With ``command``, only that subcommand's module is imported
+    (the others are listed with their help line): ``lipspace synthesize`` does not pay
+    for the figure modules' imports."""
     parser = argparse.ArgumentParser(
         prog="lipspace",
         description="Explore the visual speech manifold: lip shape and velocity in one space.",
@@ -45,6 +48,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (modname, help_) in SUBCOMMANDS.items():
         p = sub.add_parser(name, help=help_, description=help_)
+        if command is not None and name != command:
+            continue
         mod = importlib.import_module(modname)
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
@@ -85,7 +90,7 @@ def _main(argv, caught) -> int:
     with _signals_as_interrupt(caught):
         try:
             args = argparse.Namespace(command=argv[0])
-            args = build_parser().parse_args(argv)  # imports the subcommands: can take seconds
+            args = build_parser(argv[0] if argv[0] in SUBCOMMANDS else None).parse_args(argv)
             _check_paths(args)
             with _engine_warnings_to_stderr(args.command):
                 with _printable_stdout():

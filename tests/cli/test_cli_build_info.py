@@ -229,3 +229,15 @@ def test_dynamics_scale_option_is_validated(tmp_path, small_corpus, capsys):
     err = capsys.readouterr().err
     assert "error: scale must be 'max' or a percentile 'pQ'" in err and "got 'p200'" in err
     assert not out.exists()
+
+
+def test_a_subcommand_imports_only_its_own_module():
+    """`lipspace synthesize` used to import the figure modules (matplotlib) to build its parser."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from app.cli import build_parser; build_parser('synthesize'); "
+            "print(sorted(m for m in ('app.cli.figures', 'app.figures', 'matplotlib', 'app.cli.synthesize') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "['app.cli.synthesize']"
