@@ -11,7 +11,7 @@ from __future__ import annotations
 import functools
 import weakref
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -19,7 +19,7 @@ __all__ = ["Event", "AppState", "TrajectoryData", "Coloring", "HEMISPHERES", "CO
            "CLASS_COLOURS", "CLASS_LABELS", "UNREACHABLE_RGB", "knn_density", "frame_phones",
            "hop_distances", "hop_distance_scalars", "hop_distance_colors", "point_colors",
            "state_path", "categorical_palette", "phone_palette", "ellipsoid_colors", "cluster_table",
-           "original_trajectory", "prepare_derived"]
+           "original_trajectory", "prepare_derived", "insert_state_target", "TARGET_SPACING"]
 
 HEMISPHERES = ("future", "past", "off")
 COLOR_MODES = ("density", "class", "phone", "utterance", "distance")
@@ -28,6 +28,8 @@ COLOR_MODES = ("density", "class", "phone", "utterance", "distance")
 CLASS_COLOURS = ((0.839, 0.153, 0.157), (1.0, 0.596, 0.588), (0.122, 0.310, 0.706), (0.561, 0.722, 1.0))
 CLASS_LABELS = ("opening / accelerating", "opening / decelerating", "closing / accelerating",
                 "closing / decelerating")
+#: seconds between an appended clicked-state target and the last target (as ``synthesize --spacing``)
+TARGET_SPACING = 0.2
 #: frames with no value (unreachable state, no phone, no forward step)
 UNREACHABLE_RGB = (0.69, 0.69, 0.69)
 #: paper: density and similarity run blue (low / far) -> red (high / near)
@@ -375,6 +377,16 @@ class AppState:
         self._set("target", s)
         self._update_path()
 
+    def selected_state_target(self, targets=None, *, frame=None):
+        """``targets`` with a target holding the selected state inserted (see :func:`insert_state_target`).
+
+        Raises ValueError when no state is selected (click a point of the manifold first).
+        """
+        self._require()
+        if self.state is None:
+            raise ValueError("no state selected: click a point of the manifold first, then add it as a target")
+        return insert_state_target(self.manifold, targets, self.state, frame=frame)
+
     @_batched
     def clear_selection(self) -> None:
         self._set("frame", None)
@@ -706,3 +718,39 @@ def state_path(manifold, a: int, b: int):
         return np.asarray(manifold.states_.min_path(int(a), int(b)), dtype=np.int64)
     except UnreachableError:
         return None
+
+
+def insert_state_target(manifold, targets, state: int, *, frame=None, spacing: float = TARGET_SPACING):
+    """A copy of ``targets`` (a TargetSequence, or None) with a target holding ``state`` inserted.
+
+    The target goes at ``frame`` (replacing a target already there), or, with
+    ``frame=None``, ``spacing`` seconds after the last target (frame 0 when there are
+    none). The trajectory is lengthened to reach the new target. The target carries the
+    state (which :class:`engine.synthesis.ManifoldSynthesizer` passes through) and the
+    state's X (the manifold's map of its centroid, ``state_x_``, else the mean F^x of its
+    frames), so the methods that interpolate in X pass through it too. Its label is "".
+    """
+    from engine.targets import Target, TargetError, TargetSequence
+
+    K = int(manifold.states_.centroids_.shape[0])
+    s = int(state)
+    if not 0 <= s < K:
+        raise TargetError(f"state {s} is outside the state graph's 0..{K - 1}")
+    rate = float(targets.rate if targets is not None else manifold.corpus_.rate)
+    old = list(targets.targets) if targets is not None else []
+    if frame is None:
+        frame = old[-1].frame + max(1, int(round(spacing * rate))) if old else 0
+    frame = int(frame)
+    if frame < 0:
+        raise TargetError(f"target frame {frame} is negative")
+    table = getattr(manifold, "state_x_", None)
+    if table is not None and table.shape[0] == K:
+        x = np.asarray(table[s], dtype=np.float64)
+    else:
+        x = np.asarray(manifold.Fx_)[np.asarray(manifold.states_.labels_) == s].mean(axis=0, dtype=np.float64)
+    new = Target(frame, "", s, None, x)
+    ts = sorted([t for t in old if t.frame != frame] + [new], key=lambda t: t.frame)
+    n = max(targets.n_frames if targets is not None else 1, frame + 1)
+    if targets is None:
+        return TargetSequence(tuple(ts), (), n, rate, "clicked states")
+    return replace(targets, targets=tuple(ts), n_frames=n)

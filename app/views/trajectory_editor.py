@@ -2,8 +2,9 @@
 
 Targets come from a corpus utterance (its phone mid-points, with their oracle
 states: the paper's Fig. 3 experiment), typed English text, a phone string with
-durations (``p 0.08 ax 0.05 ...``) or a TextGrid / .lab file. Dragging a target
-marker moves its frame. The synthetic trajectory is drawn red in the manifold view
+durations (``p 0.08 ax 0.05 ...``) or a TextGrid / .lab file, and from clicked
+states: "Add clicked state" (Ctrl+T) inserts a target holding the selected state at
+the playback cursor, or after the last target. Dragging a target marker moves its frame. The synthetic trajectory is drawn red in the manifold view
 and played beside the original in the lip view; for an utterance the error
 against the captured original is shown.
 """
@@ -20,6 +21,7 @@ from app.views._common import connect_all, disconnect_all
 __all__ = ["TrajectoryEditor", "PhoneTimeline", "synthesize_targets", "trajectory_error", "move_target"]
 
 SOURCES = (("utterance", "Utterance"), ("text", "Text"), ("phones", "Phones + durations"), ("textgrid", "TextGrid"))
+ADD_STATE_SHORTCUT = "Ctrl+T"
 METHOD_LABELS = {"manifold": "Manifold (max-probability path)", "linear": "Linear interpolation (X)",
                  "cubic": "Cubic spline (X)", "unitselection": "Unit selection"}
 
@@ -211,6 +213,11 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.oracle_box.setToolTip("Targets carry the utterance's own states at the phone mid-points (paper Fig. 3);"
                                    " untick to synthesise from the phone labels and times only")
         self.load_btn = QtWidgets.QPushButton("Load")
+        self.add_state_btn = QtWidgets.QPushButton("Add clicked state")
+        self.add_state_btn.setShortcut(QtGui.QKeySequence(ADD_STATE_SHORTCUT))
+        self.add_state_btn.setToolTip(f"Insert a target holding the state selected in the manifold view at the "
+                                      f"playback cursor, or after the last target ({ADD_STATE_SHORTCUT})")
+        self.add_state_btn.setEnabled(False)
         self.method_box = QtWidgets.QComboBox()
         self.synth_btn = QtWidgets.QPushButton("Synthesise")
         self.play_btn = QtWidgets.QPushButton("Play")
@@ -221,7 +228,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
 
         row1 = QtWidgets.QHBoxLayout()
         for w in (QtWidgets.QLabel("Input:"), self.source_box, self.utt_box, self.text_edit, self.browse_btn,
-                  self.oracle_box, self.load_btn):
+                  self.oracle_box, self.load_btn, self.add_state_btn):
             row1.addWidget(w)
         row1.setStretchFactor(self.text_edit, 1)
         row1.addStretch(0)
@@ -240,13 +247,15 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.text_edit.returnPressed.connect(self.load)
         self.browse_btn.clicked.connect(self._browse)
         self.load_btn.clicked.connect(self.load)
+        self.add_state_btn.clicked.connect(self.add_selected_state)
         self.oracle_box.toggled.connect(lambda _on: self.load() if self.source == "utterance" else None)
         self.synth_btn.clicked.connect(self.synthesize)
         self.play_btn.clicked.connect(lambda: self.state.set_playing(True))
         self.timeline.targetsChanged.connect(self._on_dragged)
         ev = state.events
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.playback, self.timeline.set_cursor),
-                             (ev.utterance, self._on_utterance)]
+                             (ev.utterance, self._on_utterance),
+                             (ev.state, lambda st: self.add_state_btn.setEnabled(st is not None))]
         connect_all(self._connections)
         self.rebuild()  # fills the methods once a manifold is there
 
@@ -305,6 +314,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
             for u in m.corpus_.utterances:
                 self.utt_box.addItem(f"{u.id}" + (f" — {u.text[:40]}" if u.text else ""), u.id)
         self.utt_box.blockSignals(False)
+        self.add_state_btn.setEnabled(m is not None and self.state.state is not None)
         self._sync_inputs()
 
     def _on_utterance(self, uid):
@@ -368,6 +378,20 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.set_source(source)
         self.text_edit.setText(text)
         return self.load()
+
+    def add_selected_state(self) -> bool:
+        """Insert a target holding the selected state at the playback cursor (else after the last target)."""
+        cursor = self.timeline.cursor if self.targets is not None else None
+        try:
+            tg = self.state.selected_state_target(self.targets, frame=cursor)
+        except ValueError as exc:
+            self.readout.setText(f"<span style='color:#b00'>{exc}</span>")
+            return False
+        self.targets = tg
+        self.timeline.set_targets(tg)
+        self.readout.setText(f"state {self.state.state} added as a target: {len(tg.targets)} targets over "
+                             f"{tg.n_frames} frames; press Synthesise")
+        return True
 
     def _on_dragged(self, targets):
         self.targets = targets

@@ -271,6 +271,45 @@ def test_dragging_a_target_moves_its_frame(win, qtbot):
     assert f1 > f0 and f1 < ed.targets.targets[2].frame
 
 
+def test_clicked_states_become_targets_that_synthesis_passes_through(win, qtbot, app_manifold):
+    from PySide6 import QtCore
+
+    from app.views.trajectory_editor import ADD_STATE_SHORTCUT
+
+    m, s, ed = app_manifold, win.state, win.editor
+    assert ed.set_text("m 0.2 aa 0.3 p 0.2", source="phones")
+    phone_frames = [t.frame for t in ed.targets.targets]
+    assert not ed.add_state_btn.isEnabled()  # nothing clicked yet
+    K = s.n_states
+    a, b = 2 % K, (K // 2) % K
+    s.select_state(a)
+    assert ed.add_state_btn.isEnabled()
+    cursor = (phone_frames[0] + phone_frames[1]) // 2
+    ed.timeline.set_cursor(cursor)  # the playback position
+    qtbot.mouseClick(ed.add_state_btn, QtCore.Qt.MouseButton.LeftButton)
+    assert [t.frame for t in ed.targets.targets] == sorted(phone_frames + [cursor])
+    assert ed.targets.targets[1].state == a and ed.timeline.targets is ed.targets
+    s.select_state(b)
+    ed.timeline.set_cursor(None)
+    win.activateWindow()
+    qtbot.waitUntil(lambda: win.isActiveWindow(), timeout=5000)
+    assert ADD_STATE_SHORTCUT == "Ctrl+T"
+    qtbot.keyClick(ed, QtCore.Qt.Key.Key_T, QtCore.Qt.KeyboardModifier.ControlModifier)  # the shortcut
+    qtbot.waitUntil(lambda: len(ed.targets.targets) == 5, timeout=5000)  # a shortcut animates the click
+    last = ed.targets.targets[-1]
+    assert last.state == b and last.frame > phone_frames[-1] and ed.targets.n_frames == last.frame + 1
+    assert [t.state for t in ed.targets.targets] == [None, a, None, None, b]
+    ed.set_method("manifold")
+    s.set_trajectories(synthetic=None)
+    ed.synthesize()
+    qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)
+    syn = s.synthetic
+    assert len(syn) == ed.targets.n_frames and syn.extra["warnings"] == []
+    C = m.states_.centroids_
+    for f, st in ((cursor, a), (last.frame, b)):  # the path is at the clicked state on its target frame
+        np.testing.assert_allclose(syn.Y[f], C[st], rtol=1e-5, atol=1e-5)
+
+
 TEXTGRID = """File type = "ooTextFile"
 Object class = "TextGrid"
 

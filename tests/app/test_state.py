@@ -337,3 +337,42 @@ def test_derived_data_prepared_ahead_is_used_by_every_state(app_manifold):
     assert a.density is b.density and a.phones is b.phones and a.clusters is b.clusters  # computed once, ahead
     np.testing.assert_array_equal(a.density, knn_density(m.Fy_))
     np.testing.assert_array_equal(a.phones, frame_phones(m.corpus_))
+
+
+# ----------------------------------------------------------------------------- targets from clicked states
+def test_selected_state_targets_are_inserted_and_synthesis_passes_through_them(app_manifold):
+    from app.state import TARGET_SPACING
+    from engine.synthesis import make_synthesizer
+    from engine.targets import TargetError
+
+    m = app_manifold
+    s = AppState(m)
+    with pytest.raises(ValueError, match="no state selected"):
+        s.selected_state_target(None)
+    K = s.n_states
+    a, b, c = 3 % K, (K // 2) % K, (K - 2) % K
+    s.select_state(a)
+    tg = s.selected_state_target(None)
+    assert [(t.frame, t.state) for t in tg.targets] == [(0, a)] and tg.n_frames == 1
+    step = int(round(TARGET_SPACING * m.corpus_.rate))
+    s.select_state(b)
+    tg = s.selected_state_target(tg)  # appended after the last target
+    assert [(t.frame, t.state) for t in tg.targets] == [(0, a), (step, b)] and tg.n_frames == step + 1
+    s.select_state(c)
+    tg = s.selected_state_target(tg, frame=step // 2)  # inserted at the cursor, in frame order
+    assert [(t.frame, t.state) for t in tg.targets] == [(0, a), (step // 2, c), (step, b)]
+    s.select_state(a)
+    tg = s.selected_state_target(tg, frame=step // 2)  # a target already there is replaced
+    assert [(t.frame, t.state) for t in tg.targets] == [(0, a), (step // 2, a), (step, b)]
+    # each target carries its state's X (the inverse map at the centroid)
+    np.testing.assert_allclose(tg.targets[2].x, m.state_x_[b] if m.state_x_ is not None
+                               else m.Fx_[m.states_.labels_ == b].mean(axis=0))
+    traj = make_synthesizer("manifold", m, strict=False).synthesize(tg)
+    assert traj.warnings == []  # every gap bridged: the path is at each target's state on its frame
+    assert [int(traj.states[t.frame]) for t in tg.targets] == [a, a, b]
+    lin = make_synthesizer("linear", m).synthesize(tg)  # X methods pass through the states' X
+    for t in tg.targets:
+        np.testing.assert_allclose(lin.Fx[t.frame], t.x, rtol=1e-5, atol=1e-5)
+    with pytest.raises(TargetError, match="outside the state graph"):
+        from app.state import insert_state_target
+        insert_state_target(m, tg, K)
