@@ -192,13 +192,19 @@ class LipContour(BaseEstimator):
         return np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
 
 
-def mesh_geometry(frames, corpus):
+def mesh_geometry(frames, corpus, *, sensors: bool = False):
     """What to write as a mesh sequence for ``frames`` of ``corpus``: ``(points, faces, note)``.
 
     A corpus with faces gives its frames and faces. Sparse markers with 3 to 20 lip
     points (by ``point_roles``) give a contour tube per frame (:class:`LipContour`,
     fitted on the corpus's mean frame) and its triangles, with a note saying so;
     anything else gives bare points (faces None).
+
+    With ``sensors=True`` a fourth item, ``labels``, names the measured sensors:
+    a list of (sensor name, vertex index). For a contour tube each lip sensor on the
+    contour is appended as one extra vertex at its measured position (after the tube's
+    vertices, which no face uses); for bare points every point is its own sensor. A
+    mesh corpus (faces) or unnamed points give ``[]``.
 
     Parameters
     ----------
@@ -213,14 +219,27 @@ def mesh_geometry(frames, corpus):
     """
     from engine.corpus import frame_points
 
+    names = corpus.point_names
+
+    def bare():
+        labels = [] if corpus.faces is not None or not names else [(str(n), i) for i, n in enumerate(names)]
+        return (frames, corpus.faces, None) + ((labels,) if sensors else ())
+
     if corpus.faces is not None or corpus.point_roles is None:
-        return frames, corpus.faces, None
+        return bare()
     try:
         lc = LipContour().fit(frame_points(corpus.frames.mean(axis=0), corpus.dims), corpus.point_roles)
     except ValueError:
-        return frames, None, None
-    V = lc.transform(frame_points(np.asarray(frames), corpus.dims))
-    used = [corpus.point_names[i] if corpus.point_names else str(i) for i in lc.lip_points_ if i >= 0]
+        return bare()
+    P = frame_points(np.asarray(frames), corpus.dims)
+    V = lc.transform(P)
+    real = [int(i) for i in lc.lip_points_ if i >= 0]
+    used = [names[i] if names else str(i) for i in real]
     note = (f"lip contour tube through {', '.join(used)}"
             f"{' and a mirrored corner' if lc.mirrored_ is not None else ''} ({V.shape[1]} vertices)")
-    return V, lc.faces_, note
+    if not sensors:
+        return V, lc.faces_, note
+    n_tube = V.shape[1]
+    V = np.concatenate([V, P[:, real].astype(V.dtype)], axis=1)
+    note = note[:note.rindex("(")] + f"({n_tube} vertices, then the {len(real)} labelled sensors)"
+    return V, lc.faces_, note, [(name, n_tube + k) for k, name in enumerate(used)]

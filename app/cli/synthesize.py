@@ -198,8 +198,10 @@ def run(args) -> int:
             try:
                 from engine.lipcontour import mesh_geometry
 
-                pts, faces, note = mesh_geometry(frames, c)  # sparse lip markers: a contour tube
-                files = write_mesh_sequence(tmp, pts, faces=faces, dims=c.dims, format=args.mesh_format)
+                # sparse lip markers: a contour tube, plus one labelled vertex per sensor
+                pts, faces, note, labels = mesh_geometry(frames, c, sensors=True)
+                files = write_mesh_sequence(tmp, pts, faces=faces, dims=c.dims, format=args.mesh_format,
+                                            labels=labels)
             except ValueError as exc:
                 raise CliError(str(exc)) from None
         print(f"wrote {len(files)} {args.mesh_format.upper()} files to {args.mesh_dir}"

@@ -33,7 +33,7 @@ from engine.io.export import (corpus_columns, point_columns, write_mesh_sequence
 from engine.io.landmarks import read_csv_landmarks
 from engine.io.markers import read_c3d
 from engine.io.mesh import read_mesh_sequence, read_vertex_array
-from engine.io.meshfile import read_mesh, read_obj, read_ply, write_obj, write_ply
+from engine.io.meshfile import read_mesh, read_obj, read_ply, read_vertex_labels, write_obj, write_ply
 from engine.io.matrix import read_matrix
 from engine.io.articulograph import read_pos, read_wave
 from engine.io.mview import read_mview, read_mview_audio, write_audio
@@ -43,6 +43,7 @@ __all__ = [
     "ImportFormatError", "read_corpus", "detect_format", "FORMATS", "read_alignment", "read_textgrid", "read_lab",
     "read_ema", "read_est_track", "write_est_track", "read_mview", "read_mview_audio", "write_audio", "read_c3d",
     "read_mesh_sequence", "read_vertex_array", "read_mesh", "read_obj", "read_ply", "write_obj", "write_ply",
+    "read_vertex_labels",
     "read_csv_landmarks", "read_matrix", "read_pos", "read_wave", "resample", "concat", "write_trajectory_csv", "write_trajectory_npy",
     "write_mesh_sequence", "write_table_csv", "point_columns", "corpus_columns",
 ]

@@ -91,7 +91,7 @@ def write_trajectory_npy(path, values, *, dtype=np.float32) -> Path:
 
 def write_mesh_sequence(directory, frames, *, faces=None, dims: int = 3, format: str = "obj",
                         binary: bool = False, prefix: str = "frame", clear: bool = False,
-                        progress=None) -> list[Path]:
+                        labels=None, progress=None) -> list[Path]:
     """One mesh file per frame: ``<directory>/<prefix>_00000.obj`` ... (or ``.ply``).
 
     Parameters
@@ -113,6 +113,10 @@ def write_mesh_sequence(directory, frames, *, faces=None, dims: int = 3, format:
         Remove older ``<prefix>_*.<format>`` files in the directory that this export does
         not overwrite (after writing); without it such files are an error (they would be
         read back as extra frames).
+    labels : sequence of (str, int), optional
+        Named vertices (e.g. the sensors of a lip contour mesh, from
+        :func:`engine.lipcontour.mesh_geometry`), written into every file as
+        :mod:`engine.io.meshfile` describes (OBJ comments and groups, PLY header comments).
     progress : callable, optional
         ``progress("export", done, total)``.
 
@@ -144,9 +148,9 @@ def write_mesh_sequence(directory, frames, *, faces=None, dims: int = 3, format:
     for k, P in enumerate(pts):
         p = d / f"{prefix}_{k:0{width}d}.{fmt}"
         if fmt == "obj":
-            write_obj(p, P, faces)
+            write_obj(p, P, faces, labels=labels)
         else:
-            write_ply(p, P, faces, binary=binary)
+            write_ply(p, P, faces, binary=binary, labels=labels)
         out.append(p)
         if progress is not None:
             progress("export", k + 1, len(pts))

@@ -3,6 +3,14 @@ with numpy only.
 
 Readers return ``(vertices (V, 3) float64, faces (F, 3) int64 or None)``; polygons are
 split into triangle fans. Writers write atomically.
+
+Writers can label vertices (e.g. the articulograph sensors of a lip contour mesh),
+``labels=[(name, vertex index 0-based), ...]``. OBJ: a ``# sensor <name> vertex <k>``
+comment per label (``k`` 1-based, as OBJ indices are) before the vertices, the faces
+in group ``g mesh``, then per label a group ``g <name>`` (whitespace in the name
+replaced by ``_``) holding the point element ``p <k>``. PLY: a header line
+``comment sensor <name> vertex <k>`` per label (``k`` 0-based, as PLY face indices
+are). :func:`read_vertex_labels` reads them back from either format.
 """
 from __future__ import annotations
 
@@ -14,7 +22,7 @@ from engine._atomic import atomic_write
 from engine.io._util import decode_text, read_bytes
 from engine.io.errors import ImportFormatError
 
-__all__ = ["read_obj", "read_ply", "read_mesh", "write_obj", "write_ply", "write_mesh"]
+__all__ = ["read_obj", "read_ply", "read_mesh", "write_obj", "write_ply", "write_mesh", "read_vertex_labels"]
 
 _PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
@@ -292,24 +300,70 @@ def _check(vertices, faces):
     return V, F
 
 
-def write_obj(path, vertices, faces=None, *, precision: int = 9) -> Path:
-    """Write an OBJ file (``v`` records, ``f`` records when ``faces`` is given), atomically."""
+def _check_labels(labels, n_vertices):
+    """``labels`` as a list of (name, 0-based index); ValueError naming the bad one."""
+    out = []
+    for j, item in enumerate(labels or ()):
+        try:
+            name, k = item
+            k = int(k)
+        except (TypeError, ValueError):
+            raise ValueError(f"vertex label {j}: expected (name, vertex index), got {item!r}") from None
+        name = str(name)
+        if not name.strip() or any(c in name for c in "\r\n") or not name.isascii():
+            raise ValueError(f"vertex label {j}: name {name!r} must be non-empty ASCII on one line")
+        if not 0 <= k < n_vertices:
+            raise ValueError(f"vertex label {j} ({name!r}): vertex {k} is outside 0..{n_vertices - 1}")
+        out.append((name, k))
+    return out
+
+
+def write_obj(path, vertices, faces=None, *, labels=None, precision: int = 9) -> Path:
+    """Write an OBJ file (``v`` records, ``f`` records when ``faces`` is given), atomically.
+
+    ``labels`` : sequence of (name, vertex index 0-based), optional; see the module notes.
+    """
     V, F = _check(vertices, faces)
+    L = _check_labels(labels, len(V))
     fmt = f"%.{precision}g"
     with atomic_write(path) as tmp:
         with open(tmp, "w", encoding="ascii") as fh:
             fh.write("# written by Lipspace\n")
+            fh.write("".join(f"# sensor {name} vertex {k + 1}\n" for name, k in L))
             fh.write((f"v {fmt} {fmt} {fmt}\n" * len(V)) % tuple(V.ravel().tolist()))
             if F is not None and len(F):
+                if L:
+                    fh.write("g mesh\n")
                 fh.write(("f %d %d %d\n" * len(F)) % tuple((F + 1).ravel().tolist()))
+            for name, k in L:
+                fh.write(f"g {'_'.join(name.split())}\np {k + 1}\n")
     return Path(path)
 
 
-def write_ply(path, vertices, faces=None, *, binary: bool = False, precision: int = 9) -> Path:
-    """Write a PLY file (float32 vertices, int32 triangle lists), ASCII or little-endian binary, atomically."""
+def read_vertex_labels(path) -> list[tuple[str, int]]:
+    """The vertex labels a Lipspace writer put in an OBJ or PLY file: [(name, vertex index 0-based)]."""
+    import re
+
+    data = read_bytes(path)
+    if Path(path).suffix.lower() == ".ply":
+        end = data.find(b"end_header")
+        if end < 0:
+            raise ImportFormatError(path, "no 'end_header' line; expected a PLY header")
+        text, pat, base = data[:end].decode("ascii", "replace"), r"^comment sensor (.+) vertex (\d+)\s*$", 0
+    else:
+        text, pat, base = decode_text(data, path), r"^# sensor (.+) vertex (\d+)\s*$", 1
+    return [(m.group(1), int(m.group(2)) - base) for m in re.finditer(pat, text, flags=re.M)]
+
+
+def write_ply(path, vertices, faces=None, *, binary: bool = False, labels=None, precision: int = 9) -> Path:
+    """Write a PLY file (float32 vertices, int32 triangle lists), ASCII or little-endian binary, atomically.
+
+    ``labels`` : sequence of (name, vertex index 0-based), optional; see the module notes.
+    """
     V, F = _check(vertices, faces)
+    L = _check_labels(labels, len(V))
     head = ["ply", f"format {'binary_little_endian' if binary else 'ascii'} 1.0", "comment written by Lipspace",
-            f"element vertex {len(V)}", "property float x", "property float y", "property float z"]
+            *(f"comment sensor {name} vertex {k}" for name, k in L), f"element vertex {len(V)}", "property float x", "property float y", "property float z"]
     if F is not None:
         head += [f"element face {len(F)}", "property list uchar int vertex_indices"]
     head.append("end_header")

@@ -217,3 +217,25 @@ def test_roles_mark_a_mesh_s_lip_points(tmp_path):
     rc, out, err = _run(["import", str(tmp_path / "mesh"), "--rate", "62.5", "-o", str(corpus),
                          "--roles", "upper_lip=7"])
     assert rc == 2 and "no point '7'; expected an index 0..3" in err
+
+
+@pytest.mark.parametrize("fmt", ["obj", "ply"])
+def test_mesh_export_labels_the_sensors(good, tmp_path, fmt):
+    from engine.io import read_mesh, read_vertex_labels
+
+    _, mfile, _, _ = good
+    out, mesh = tmp_path / "frames.npy", tmp_path / "mesh"
+    rc, so, err = _run(["synthesize", "--manifold", str(mfile), "--states", "0,5,9", "-o", str(out),
+                        "--mesh-dir", str(mesh), "--mesh-format", fmt, "-q"])
+    assert rc == 0, err
+    assert "then the 4 labelled sensors" in so
+    frames = np.load(out).reshape(-1, 4, 3)  # UL LL LC RC
+    files = sorted(mesh.glob(f"frame_*.{fmt}"))
+    assert len(files) == len(frames)
+    order = {"UL": 0, "LL": 1, "LC": 2, "RC": 3}
+    for k in (0, len(files) // 2, len(files) - 1):
+        V, F = read_mesh(files[k])
+        labels = read_vertex_labels(files[k])
+        assert sorted(n for n, _ in labels) == sorted(order) and F.max() < min(v for _, v in labels)
+        for name, v in labels:
+            np.testing.assert_allclose(V[v], frames[k, order[name]], rtol=1e-5, atol=1e-4)

@@ -51,3 +51,46 @@ def test_mesh_geometry_for_sparse_markers_and_meshes():
     assert note.startswith("lip contour tube through") and "mirrored corner" in note
     bare = Corpus(frames=F, rate=60, utterances=[Utterance("u", 0, 6)])
     assert mesh_geometry(F, bare)[1] is None
+
+
+@pytest.mark.parametrize("fmt,binary", [("obj", False), ("ply", False), ("ply", True)])
+def test_mesh_export_labels_the_sensors_at_their_positions(tmp_path, fmt, binary):
+    from engine.io import read_mesh, read_vertex_labels, write_mesh_sequence
+
+    F = np.stack([P.ravel(), (P + [0, 0, 0.5]).ravel(), (P * 1.1).ravel()]).astype(np.float32)
+    c = Corpus(frames=F, rate=60, utterances=[Utterance("u", 0, 3)], point_names=["UL", "LL", "left corner", "JAW"],
+               point_roles=ROLES)
+    pts, faces, note, labels = mesh_geometry(F, c, sensors=True)
+    n_tube = 48 * 8
+    assert pts.shape == (3, n_tube + 3, 3) and faces.max() < n_tube  # the sensor vertices are not in the tube
+    # one vertex per lip sensor after the tube, in contour order; the jaw is not on the contour
+    assert sorted(n for n, _ in labels) == ["LL", "UL", "left corner"]
+    assert [v for _, v in labels] == [n_tube, n_tube + 1, n_tube + 2]
+    assert "3 labelled sensors" in note
+    files = write_mesh_sequence(tmp_path, pts, faces=faces, format=fmt, binary=binary, labels=labels)
+    idx = {"UL": 0, "LL": 1, "left corner": 2}
+    for k, f in enumerate(files):
+        V, Fc = read_mesh(f)
+        np.testing.assert_array_equal(Fc, faces)
+        got = read_vertex_labels(f)
+        assert got == labels
+        for name, v in got:  # each labelled vertex is its sensor's position in that frame
+            np.testing.assert_allclose(V[v], F[k].reshape(-1, 3)[idx[name]], rtol=1e-6, atol=1e-5)
+    text = files[0].read_text(errors="replace") if not binary else files[0].read_bytes()[:2000].decode("latin-1")
+    if fmt == "obj":
+        assert "# sensor left corner vertex" in text and "g left_corner\np " in text and "g mesh\nf " in text
+    else:
+        assert "comment sensor UL vertex" in text
+    # bare named points: every point is its own sensor
+    bare = Corpus(frames=F, rate=60, utterances=[Utterance("u", 0, 3)], point_names=["a", "b", "c", "d"])
+    assert mesh_geometry(F, bare, sensors=True)[3] == [("a", 0), ("b", 1), ("c", 2), ("d", 3)]
+
+
+def test_vertex_labels_are_validated(tmp_path):
+    from engine.io import write_obj
+
+    with pytest.raises(ValueError, match=r"vertex label 0 \('UL'\): vertex 4 is outside 0..3"):
+        write_obj(tmp_path / "a.obj", P, labels=[("UL", 4)])
+    with pytest.raises(ValueError, match="one line"):
+        write_obj(tmp_path / "a.obj", P, labels=[("U\nL", 0)])
+    assert not (tmp_path / "a.obj").exists()
