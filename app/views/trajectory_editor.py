@@ -365,13 +365,9 @@ class TrajectoryEditor(QtWidgets.QWidget):
             if s != "utterance":
                 self.state.set_utterance(None)
         except (ValueError, KeyError, OSError) as exc:
-            self.readout.setText(f"<span style='color:#b00'>{exc}</span>")
-            return False
-        self.targets = tg
-        self.timeline.set_targets(tg)
-        self.readout.setText(f"{len(tg.targets)} targets over {tg.n_frames} frames "
-                             f"({tg.n_frames / tg.rate:.2f} s) from {tg.source}")
-        return True
+            return self._show_error(exc)
+        return self._set_targets(tg, f"{len(tg.targets)} targets over {tg.n_frames} frames "
+                                     f"({tg.n_frames / tg.rate:.2f} s) from {tg.source}")
 
     def set_text(self, text: str, source: str = "text") -> bool:
         """Type ``text`` into the chosen input kind and load it (used by tests and scripts)."""
@@ -385,12 +381,18 @@ class TrajectoryEditor(QtWidgets.QWidget):
         try:
             tg = self.state.selected_state_target(self.targets, frame=cursor)
         except ValueError as exc:
-            self.readout.setText(f"<span style='color:#b00'>{exc}</span>")
-            return False
-        self.targets = tg
-        self.timeline.set_targets(tg)
-        self.readout.setText(f"state {self.state.state} added as a target: {len(tg.targets)} targets over "
-                             f"{tg.n_frames} frames; press Synthesise")
+            return self._show_error(exc)
+        return self._set_targets(tg, f"state {self.state.state} added as a target: {len(tg.targets)} targets "
+                                     f"over {tg.n_frames} frames; press Synthesise")
+
+    def _show_error(self, exc) -> bool:
+        self.readout.setText(f"<span style='color:#b00'>{exc}</span>")
+        return False
+
+    def _set_targets(self, targets, message: str) -> bool:
+        self.targets = targets
+        self.timeline.set_targets(targets)
+        self.readout.setText(message)
         return True
 
     def _on_dragged(self, targets):
