@@ -38,16 +38,9 @@ def peak_rss_mb() -> float:
 
 
 def blas_kernel() -> str:
-    try:
-        from threadpoolctl import threadpool_info
+    from _common import blas_kernel as kernel
 
-        info = [i for i in threadpool_info() if i.get("user_api") == "blas"]
-        if info:
-            i = info[0]
-            return f"{i.get('internal_api')} {i.get('version')} {i.get('architecture')} ({i.get('num_threads')} threads)"
-    except ImportError:
-        pass
-    return "unknown"
+    return kernel()
 
 
 def gl_renderer(plotter) -> str:

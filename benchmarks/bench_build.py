@@ -13,6 +13,7 @@ import time
 import tracemalloc
 
 import numpy as np
+from _common import blas_kernel
 
 
 def _rss_mb():
@@ -69,14 +70,7 @@ def main():
           f"{emb.n_passes_} passes over D")
     print(f"TOTAL build (excluding corpus generation): {total:.2f} s; max traced peak "
           f"{max(r[2] for r in rows[1:]):.0f} MiB; process max RSS {_rss_mb():.0f} MiB")
-    import os
-
-    from threadpoolctl import threadpool_info
-
-    blas = [f"{i.get('internal_api')} {i.get('version')} kernel={i.get('architecture')} threads={i.get('num_threads')}"
-            for i in threadpool_info() if i.get("user_api") == "blas"]
-    env = {k: os.environ[k] for k in ("OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE") if k in os.environ}
-    print(f"(numpy {np.__version__}; BLAS {'; '.join(blas)}; OPENBLAS_* env {env or 'unset'})")
+    print(f"(numpy {np.__version__}; BLAS {blas_kernel()})")
 
 
 if __name__ == "__main__":

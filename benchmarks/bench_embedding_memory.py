@@ -35,14 +35,8 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
-
-
-def _rss_mb() -> float:
-    with open("/proc/self/status") as fh:
-        for line in fh:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    return float("nan")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _common import blas_kernel, current_rss_mb  # noqa: E402
 
 
 def features(n_frames: int, n_points: int, seed: int = 0):
@@ -75,23 +69,13 @@ def one(n_frames: int, n_points: int, n_iter: int) -> dict:
 
     G = np.ascontiguousarray(features(n_frames, n_points), dtype=np.float32)
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    held = _rss_mb()
+    held = current_rss_mb()
     t = time.perf_counter()
     emb = Embedding(n_components=10, n_iter=n_iter).fit(G)
     wall = time.perf_counter() - t
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return {"N": n_frames, "cols": int(G.shape[1]), "wall_s": wall, "peak_mb": peak, "held_mb": held,
             "peak_before_fit_mb": before, "passes": emb.n_passes_}
-
-
-def blas_kernel() -> str:
-    from threadpoolctl import threadpool_info
-
-    info = [i for i in threadpool_info() if i.get("user_api") == "blas"]
-    if not info:
-        return "unknown"
-    i = info[0]
-    return f"{i.get('internal_api')} {i.get('version')} {i.get('architecture')} ({i.get('num_threads')} threads)"
 
 
 def main(argv=None) -> int:

@@ -36,6 +36,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import blas_kernel  # noqa: E402
 
 _STAGES = r"""
 import json, sys, time
@@ -62,15 +64,6 @@ print(json.dumps(out))
 """
 
 
-def _blas():
-    from threadpoolctl import threadpool_info
-
-    rows = [f"{i.get('internal_api')} {i.get('version')} kernel={i.get('architecture')} threads={i.get('num_threads')}"
-            for i in threadpool_info() if i.get("user_api") == "blas"]
-    env = {k: os.environ[k] for k in ("OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE") if k in os.environ}
-    return "; ".join(rows) + f"   env {env or 'unset'}"
-
-
 def _child_peak_mb():
     return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
 
@@ -85,7 +78,7 @@ def main(argv=None):
     if args.cache_dir:
         env["LIPSPACE_CACHE_DIR"] = args.cache_dir
     lipspace = [sys.executable, "-m", "app.cli"]
-    print("BLAS:", _blas(), flush=True)
+    print("BLAS:", blas_kernel(), flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         man = args.manifold
         if man is None:

@@ -37,14 +37,8 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
-
-
-def _rss_mb() -> float:
-    with open("/proc/self/status") as fh:
-        for line in fh:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    return float("nan")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _common import blas_kernel, current_rss_mb  # noqa: E402
 
 
 class _PeakSampler(threading.Thread):
@@ -52,17 +46,17 @@ class _PeakSampler(threading.Thread):
 
     def __init__(self, interval=0.01):
         super().__init__(daemon=True)
-        self.interval, self.peak, self._halt = interval, _rss_mb(), threading.Event()
+        self.interval, self.peak, self._halt = interval, current_rss_mb(), threading.Event()
 
     def run(self):
         while not self._halt.is_set():
-            self.peak = max(self.peak, _rss_mb())
+            self.peak = max(self.peak, current_rss_mb())
             time.sleep(self.interval)
 
     def stop(self) -> float:
         self._halt.set()
         self.join()
-        self.peak = max(self.peak, _rss_mb())
+        self.peak = max(self.peak, current_rss_mb())
         return self.peak
 
 
@@ -70,14 +64,6 @@ def _worker_peak_mb():
     import resource
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-
-
-def blas_kernel() -> str:
-    from threadpoolctl import threadpool_info
-
-    info = [i for i in threadpool_info() if i.get("user_api") == "blas"]
-    return ", ".join(f"{i['internal_api']} {i.get('version')} {i.get('architecture')} x{i['num_threads']}"
-                     for i in info) or "none found"
 
 
 def one(n_frames: int, resolution: str, dask: str | None) -> dict:
@@ -96,7 +82,7 @@ def one(n_frames: int, resolution: str, dask: str | None) -> dict:
         from engine.scale import DaskExecutor
 
         executor = DaskExecutor.connect(dask)
-    start = _rss_mb()
+    start = current_rss_mb()
     sampler = _PeakSampler()
     sampler.start()
     t = time.perf_counter()

@@ -1,0 +1,30 @@
+"""What every benchmark prints beside its figures: the BLAS kernel in use and memory now.
+
+The scripts run as ``python benchmarks/NAME.py``, so this folder is on ``sys.path``.
+"""
+from __future__ import annotations
+
+import os
+
+
+def blas_kernel() -> str:
+    """Every BLAS library loaded (threadpoolctl), with its kernel and threads, and the
+    OPENBLAS_CORETYPE / OPENBLAS_L2_SIZE setting that picks the kernel on these machines."""
+    from threadpoolctl import threadpool_info
+
+    libs = [f"{i.get('internal_api')} {i.get('version')} kernel={i.get('architecture')} "
+            f"threads={i.get('num_threads')}" for i in threadpool_info() if i.get("user_api") == "blas"]
+    env = {k: os.environ[k] for k in ("OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE") if k in os.environ}
+    return f"{'; '.join(libs) or 'none found'}; OPENBLAS_* env {env or 'unset'}"
+
+
+def current_rss_mb() -> float:
+    """Resident memory of this process now (MiB), from /proc (NaN where there is none)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return float("nan")
