@@ -99,7 +99,8 @@ class Manifold(BaseEstimator):
     state_x_ : ndarray of shape (K, m) or None
         The Delaunay inverse map at every state centroid, stored in the file so that
         synthesis needs no tetrahedralisation in a new process (None when the states
-        live in other dims than the map's 3, or the file predates it).
+        live in other dims than the map's 3, when the build took the landmark path, or
+        the file predates it).
     timings_ : dict of str to float
         Seconds per stage of the last fit.
     """
@@ -188,7 +189,9 @@ class Manifold(BaseEstimator):
         self._inverse = None
         t = time.perf_counter()
         report(progress, "inverse map", 0, 1)
-        self.state_x_ = self._state_x()
+        # the tetrahedralisation is built here only while the build is exact-sized: above
+        # that (a million frames) it would cost the build more than it saves synthesis
+        self.state_x_ = self._state_x() if plan.n_landmarks is None else None
         report(progress, "inverse map", 1, 1)
         timings["inverse map"] = time.perf_counter() - t
         self.timings_ = timings

@@ -327,3 +327,16 @@ def test_dynamics_scale_reaches_the_dynamic_features_and_round_trips(small_corpu
     m2 = Manifold.load(m.save(tmp_path / "p99.npz"))
     assert m2.dynamics_scale == "p99"
     np.testing.assert_array_equal(m2.Fy_, m.Fy_)
+
+
+def test_state_inverse_table_only_on_the_exact_path(small_corpus, small_manifold):
+    """The landmark (large-corpus) build does not tetrahedralise all frames at build time."""
+    from engine.synthesis import ManifoldSynthesizer
+    from engine.targets import targets_from_utterance
+
+    assert small_manifold.state_x_ is not None
+    m = Manifold(n_landmarks=300).fit(small_corpus)
+    assert m.state_x_ is None and m._inverse is None
+    u = m.corpus_.utterances[0]
+    traj = ManifoldSynthesizer(strict=False).fit(m).synthesize(targets_from_utterance(m, u.id, on_collision="merge"))
+    assert np.isfinite(traj.Fx).all() and m._inverse is not None  # mapped lazily instead
