@@ -31,24 +31,14 @@ from __future__ import annotations
 import warnings as _warnings
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
 
 from engine.inverse_local import LocalLinearInverse, StateMeanInverse
+from engine.trajectory import smooth
 
 __all__ = ["StateModel", "anchor", "interpolate_targets", "smooth", "INTERPOLATIONS", "PATH_INVERSES"]
 
 INTERPOLATIONS = ("linear", "pchip", "hermite")
 PATH_INVERSES = ("state-mean", "local-linear")
-
-
-def smooth(A, sigma) -> np.ndarray:
-    """Gaussian smoothing along frames (axis 0) with s.d. ``sigma`` frames (0: unchanged)."""
-    A = np.asarray(A, dtype=np.float64)
-    if float(sigma) < 0:
-        raise ValueError(f"smoothing sigma must be >= 0 frames, got {sigma}")
-    if float(sigma) == 0 or A.shape[0] < 2:
-        return A
-    return gaussian_filter1d(A, float(sigma), axis=0, mode="nearest")
 
 
 def anchor(X, frames, X_targets) -> np.ndarray:

@@ -27,14 +27,14 @@ Baselines behind the same :class:`Synthesizer` interface: :class:`InterpolationS
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
-
 import numpy as np
 import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 
 from engine.targets import TargetSequence
+from engine.trajectory import Synthesizer, Trajectory, smooth
+from engine.trajectory import check_fitted_manifold as _check_fitted_manifold
+from engine.trajectory import target_frames as _target_frames
 
 __all__ = [
     "NoPathError", "MaxProductGraph", "log_transitions", "observed_transitions", "viterbi_path", "Trajectory", "Synthesizer",
@@ -253,78 +253,6 @@ def _no_path_message(g, a, b, n) -> str:
     return f"no path of exactly {n} frames from state {a} to state {b}: {why}"
 
 
-# ------------------------------------------------------------------ trajectories
-@dataclass
-class Trajectory:
-    """A synthesised lip trajectory.
-
-    Attributes
-    ----------
-    times : ndarray of shape (n,)
-        Seconds of each frame from the start.
-    Fx : ndarray of shape (n, m), float32
-        Shape coordinates.
-    Fy : ndarray of shape (n, state_dims) or None
-        Embedding coordinates (methods that move in Y: the state centroids).
-    method : str
-    states : ndarray of shape (n,) int or None
-        State path (manifold method).
-    target_frames : ndarray of shape (T,) int
-    target_labels : list of str
-    warnings : list of str
-        Targets missed, fall-backs taken.
-    info : dict
-        Method-specific details (e.g. the units and joins of unit selection).
-    """
-
-    times: np.ndarray
-    Fx: np.ndarray
-    Fy: np.ndarray | None
-    method: str
-    states: np.ndarray | None = None
-    target_frames: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    target_labels: list = field(default_factory=list)
-    warnings: list = field(default_factory=list)
-    info: dict = field(default_factory=dict)
-
-    @property
-    def n_frames(self) -> int:
-        return int(self.Fx.shape[0])
-
-    def frames(self, manifold) -> np.ndarray:
-        """Frames (n, C) reconstructed through the manifold's shape space."""
-        return manifold.shape_.inverse_transform(self.Fx)
-
-
-@runtime_checkable
-class Synthesizer(Protocol):
-    """Anything that turns a :class:`engine.targets.TargetSequence` into a :class:`Trajectory`."""
-
-    def synthesize(self, targets: TargetSequence) -> Trajectory:  # pragma: no cover - protocol
-        ...
-
-
-def _check_fitted_manifold(manifold):
-    for attr in ("Fy_", "Fx_", "states_", "shape_", "corpus_"):
-        if not hasattr(manifold, attr):
-            raise ValueError(f"synthesis needs a fitted engine.manifold.Manifold (missing {attr}); call fit first")
-
-
-def _target_frames(targets: TargetSequence) -> np.ndarray:
-    f = np.array([t.frame for t in targets.targets], dtype=np.int64)
-    if f.size == 0:
-        raise ValueError("no targets to synthesise from")
-    if f.min() < 0 or f.max() >= targets.n_frames:
-        raise ValueError(f"target frames {f.min()}..{f.max()} fall outside 0..{targets.n_frames - 1}")
-    bad = np.flatnonzero(np.diff(f) <= 0)
-    if bad.size:
-        i = int(bad[0])
-        raise ValueError(f"targets {i} ({targets.targets[i].label!r}) and {i + 1} "
-                         f"({targets.targets[i + 1].label!r}) are both at frame {f[i]} or out of order "
-                         f"(frame {f[i + 1]}): a gap needs at least one frame; lengthen the phones")
-    return f
-
-
 def _phone_state_table(manifold):
     """Per corpus phone label: (states, log P(state | phone)) sorted by frequency; labels most frequent first."""
     c = manifold.corpus_
@@ -448,8 +376,6 @@ class ManifoldSynthesizer(BaseEstimator):
     # -- helpers ------------------------------------------------------------------
     def _path_x(self, path) -> np.ndarray:
         """X (n, m) of a state path through the chosen inverse map."""
-        from engine.statepaths import smooth
-
         m = self._manifold
         if self.inverse == "state-mean":
             if self._own_inverse is None:

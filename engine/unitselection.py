@@ -33,8 +33,8 @@ from __future__ import annotations
 import numpy as np
 from sklearn.base import BaseEstimator
 
-from engine.synthesis import Trajectory, _check_fitted_manifold, _target_frames
 from engine.targets import TargetSequence
+from engine.trajectory import Trajectory, check_fitted_manifold, target_frames
 
 __all__ = ["UnitSelectionSynthesizer", "OVERLAP_TABLE", "overlap_fraction", "crossfade_weights", "lip_class"]
 
@@ -110,7 +110,7 @@ class UnitSelectionSynthesizer(BaseEstimator):
     # ------------------------------------------------------------------ fitting
     def fit(self, manifold):
         """Index the phone instances of the manifold's training corpus."""
-        _check_fitted_manifold(manifold)
+        check_fitted_manifold(manifold)
         if self.context not in (3, 5):
             raise ValueError(f"context must be 3 or 5 (the N of N-phone units), got {self.context}")
         if int(self.max_candidates) < 1:
@@ -305,7 +305,7 @@ class UnitSelectionSynthesizer(BaseEstimator):
         if float(self.smoothing) > 0:
             for i in hard_windows:
                 self._smooth(out, phones, i, rate, float(self.smoothing))
-        f = _target_frames(targets) if targets.targets else np.zeros(0, dtype=np.int64)
+        f = target_frames(targets) if targets.targets else np.zeros(0, dtype=np.int64)
         info = {"units": [(self._ids[self.utterance_[u]], int(self.position_[u])) for u in units],
                 "joins": joins, "cost": total, "classes": classes}
         return Trajectory(times=t, Fx=out.astype(np.float32), Fy=None, method=self.method,
