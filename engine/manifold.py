@@ -126,7 +126,8 @@ class Manifold(BaseEstimator):
         """Fit every stage on ``corpus``. Cancelling (via ``progress``) leaves ``self`` unfitted.
 
         ``executor``: None fits in-process; an :class:`engine.scale.DaskExecutor` runs the
-        shape space and the embedding as Dask work (same results up to round-off).
+        shape space, the embedding, the local tangent frames and the assignment to states
+        with the transition counts as Dask work (same results up to round-off).
         """
         from engine.buildplan import plan_build
         from engine.states import StateGraph
@@ -172,13 +173,13 @@ class Manifold(BaseEstimator):
         t = time.perf_counter()
         report(progress, "tangent frames", 0, 1)
         tangent = TangentFrames(n_neighbors=self.n_neighbors, n_dims=min(3, self.n_embedding)).fit(
-            Fy, Fx, Fxv, bounds, opening=lip_aperture(corpus))  # "opening" = the lips part, when known
+            Fy, Fx, Fxv, bounds, opening=lip_aperture(corpus), executor=executor)  # "opening": the lips part
         report(progress, "tangent frames", 1, 1)
         timings["tangent"] = time.perf_counter() - t
 
         t = time.perf_counter()
         states = StateGraph(n_states=self.n_states, n_dims=min(self.state_dims, self.n_embedding),
-                            random_state=self.random_state).fit(Fy, bounds, progress=progress)
+                            random_state=self.random_state).fit(Fy, bounds, progress=progress, executor=executor)
         timings["states"] = time.perf_counter() - t
         warn_if_split(states, corpus)  # names speakers / recordings when the graph splits along them
 

@@ -14,8 +14,16 @@
   K-means assignment of frames to states (:meth:`DaskExecutor.assign`), one task per
   block.
 
-Everything else (dynamic features, tangent frames, K-means fitting, the state graph)
-runs on the client. Without an executor :meth:`engine.manifold.Manifold.fit` runs
+* the local tangent frames (:meth:`DaskExecutor.map_row_blocks` over
+  :func:`engine.tangent.local_frames_block`: the fitted KD-tree, F^y and the opening
+  signal travel once to each worker, every task returns its block's s_i, v_i, s_i x v_i);
+* the assignment of frames to states and the transition counts
+  (:func:`engine.states.assign_and_count`: labels of the block and a sparse K x K count
+  matrix per task, summed on the client).
+
+The client keeps the small work: the dynamic features (O(N m), one pass), the
+zero-velocity plane and the movement classes (O(N) numpy), the mini-batch K-means fit
+(a few thousand frames per step) and the graph of K states. Without an executor :meth:`engine.manifold.Manifold.fit` runs
 the same algorithms in-process; the two agree up to round-off (same random draws,
 same range finder).
 
@@ -343,6 +351,21 @@ class DaskExecutor:
         G = np.asarray(G, dtype=np.float32)
         parts = self._map_rows(_project_block, emb, G, block)
         return np.concatenate(parts) if parts else emb.transform(G)
+
+    def map_row_blocks(self, fn, n_rows: int, *shared, block: int = 65536) -> list:
+        """``[fn(start, stop, *shared) for each block of rows]``, one Dask task per block, in block order.
+
+        The ``shared`` arguments (arrays, fitted objects) are scattered once to every
+        worker; each task reads its own rows of them and returns only its block's
+        result. Used by the tangent frames (:func:`engine.tangent.local_frames_block`)
+        and the state graph (:func:`engine.states.assign_and_count`).
+        """
+        if int(block) < 1:
+            raise ValueError(f"block must be a positive number of rows, got {block}")
+        futs = [self.client.scatter(a, broadcast=True) for a in shared]
+        starts = range(0, int(n_rows), int(block))
+        tasks = [self.client.submit(fn, a, min(int(n_rows), a + int(block)), *futs, pure=False) for a in starts]
+        return self.client.gather(tasks)
 
     def assign(self, centroids, Y, *, block: int = 65536) -> np.ndarray:
         """K-means assignment: index of the nearest of ``centroids`` (K, d) for each row of Y (n, >= d)."""

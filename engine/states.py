@@ -27,7 +27,8 @@ from engine.corpus import CorpusWarning
 from engine.dynamics import check_bounds
 from engine.progress import ProgressFn, report
 
-__all__ = ["StateGraph", "UnreachableError", "StateGraphConnectivityWarning", "default_n_states"]
+__all__ = ["StateGraph", "UnreachableError", "StateGraphConnectivityWarning", "default_n_states",
+           "assign_and_count"]
 
 #: above this many frames K-means runs as MiniBatchKMeans
 MINIBATCH_ABOVE = 20000
@@ -54,6 +55,38 @@ def default_n_states(n_frames: int) -> int:
     that the graph queries stay interactive; pass ``n_states`` for more.
     """
     return int(min(n_frames, np.clip(round(n_frames / FRAMES_PER_STATE), MIN_DEFAULT_STATES, MAX_DEFAULT_STATES)))
+
+
+def assign_and_count(start, stop, centroids, Y, has_next, *, workers=1):
+    """States of frames ``start:stop`` and the transitions they start.
+
+    Parameters
+    ----------
+    start, stop : int
+        The block of frames.
+    centroids : ndarray of shape (K, d)
+    Y : ndarray of shape (N, d)
+        All frames (only ``start:stop`` and frame ``stop``, the next one, are read).
+    has_next : ndarray of shape (N,), bool
+        False at the last frame of each utterance.
+    workers : int, default=1
+        Threads of the KD-tree query (-1: all cores).
+
+    Returns
+    -------
+    labels : ndarray of shape (stop - start,), int64
+        Nearest centroid of each frame.
+    counts : scipy.sparse.coo_matrix of shape (K, K), int64
+        Transitions ``i -> i + 1`` for i in the block with ``has_next[i]`` (the last
+        one may end in the next block), self-transitions included.
+    """
+    N, K = len(Y), len(centroids)
+    end = min(stop + 1, N)
+    lab = cKDTree(centroids).query(Y[start:end], workers=workers)[1]
+    step = has_next[start:end - 1]
+    src, dst = lab[:-1][step], lab[1:][step]
+    counts = sp.coo_matrix((np.ones(len(src), np.int64), (src, dst)), shape=(K, K))
+    return lab[: stop - start], counts
 
 
 class StateGraph(BaseEstimator):
@@ -133,7 +166,7 @@ class StateGraph(BaseEstimator):
         return int(state)
 
     # -------------------------------------------------------------------- fit
-    def fit(self, Fy, bounds, *, progress: ProgressFn = None):
+    def fit(self, Fy, bounds, *, progress: ProgressFn = None, executor=None):
         """Cluster F^y into states and build the transition graph.
 
         Parameters
@@ -142,6 +175,11 @@ class StateGraph(BaseEstimator):
         bounds : ndarray of shape (U, 2)
             Utterance ``[start, stop)`` frame ranges; no transition crosses one.
         progress : callable(stage, done, total), optional
+        executor : object with ``map_row_blocks``, optional
+            Runs the assignment of frames to states and the transition counting one
+            block of frames per task (:meth:`engine.scale.DaskExecutor.map_row_blocks`);
+            None: in-process. K-means itself is fitted here (mini-batch above
+            20,000 frames: it touches a few batches, not every frame). Same result.
 
         Returns
         -------
@@ -168,24 +206,29 @@ class StateGraph(BaseEstimator):
         report(progress, stage, 0, 3)
 
         centroids = self._kmeans(Y, int(K)).astype(np.float64)
-        labels = cKDTree(centroids).query(Y, workers=-1)[1]
+        has_next = np.ones(N, bool)
+        has_next[b[:, 1] - 1] = False
+        if executor is None:
+            labels, counts = assign_and_count(0, N, centroids, Y, has_next, workers=-1)
+        else:  # one task per block of frames; only labels and sparse K x K counts come back
+            parts = executor.map_row_blocks(assign_and_count, N, centroids, Y, has_next)
+            labels = np.concatenate([p[0] for p in parts])
+            counts = sum((p[1] for p in parts[1:]), parts[0][1])
+        counts = sp.csr_matrix(counts, dtype=np.int64)
         used = np.bincount(labels, minlength=len(centroids)) > 0
-        if not used.all():
+        if not used.all():  # an unused state has no frame, so no count: dropping it renumbers the rest
             centroids = centroids[used]
             labels = (np.cumsum(used) - 1)[labels]
+            counts = counts[used][:, used]
         labels = labels.astype(np.int32)
         K = len(centroids)
         report(progress, stage, 1, 3)
 
-        has_next = np.ones(N, bool)
-        has_next[b[:, 1] - 1] = False
-        src = labels[:-1][has_next[:-1]]
-        dst = labels[1:][has_next[:-1]]
-        counts = sp.coo_matrix((np.ones(len(src), np.int64), (src, dst)), shape=(K, K)).tocsr()
         counts.sum_duplicates()
-        move = src != dst
-        adjacency = sp.coo_matrix((np.ones(int(move.sum()), bool), (src[move], dst[move])), shape=(K, K)).tocsr()
-        adjacency.sum_duplicates()
+        counts.sort_indices()
+        moves = counts - sp.diags(counts.diagonal(), format="csr", dtype=np.int64)
+        moves.eliminate_zeros()
+        adjacency = sp.csr_matrix(moves, dtype=bool)
         adjacency.sort_indices()
         out = np.asarray(counts.sum(axis=1)).ravel()
         dead = out == 0

@@ -34,7 +34,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from engine.dynamics import check_bounds
 
-__all__ = ["TangentFrames", "CLASS_NAMES", "NO_STEP"]
+__all__ = ["TangentFrames", "CLASS_NAMES", "NO_STEP", "local_frames_block"]
 
 #: names of ``classes_`` 0..3
 CLASS_NAMES = ("opening/accelerating", "opening/decelerating", "closing/accelerating", "closing/decelerating")
@@ -75,6 +75,69 @@ def _in_plane_gradient(C, f, ridge=1e-10):
     CtC = C.T @ C
     CtC += (ridge * np.trace(CtC) + 1e-300) * np.eye(2)
     return np.linalg.solve(CtC, C.T @ f)
+
+
+def local_frames_block(start, stop, nn, Y, x1, v1, S, V, opts):
+    """Local frames s_i, v_i, s_i x v_i of frames ``start:stop`` (see :class:`TangentFrames`, Notes).
+
+    Parameters
+    ----------
+    start, stop : int
+        The block of frames.
+    nn : sklearn.neighbors.NearestNeighbors
+        Fitted on all of Y with ``n_neighbors + 1`` neighbours (the frame itself included).
+    Y : ndarray of shape (N, 3), float32
+    x1, v1 : ndarray of shape (N,)
+        Opening and its velocity.
+    S, V : ndarray of shape (3,)
+        Global shape and velocity directions (the fallbacks).
+    opts : dict
+        ``in_plane`` (bool), ``tiny`` ({"x": float, "v": float}), ``y_scale`` (float).
+
+    Returns
+    -------
+    s, v, normal : ndarray of shape (stop - start, 3), float32
+    n_bad : int
+        Frames that needed a fallback.
+    """
+    z = slice(start, stop)
+    k = nn.n_neighbors
+    in_plane, tiny, y_scale = opts["in_plane"], opts["tiny"], opts["y_scale"]
+    SxV = np.cross(S, V)
+    idx = nn.kneighbors(Y[z], return_distance=False)  # (B, k), self included
+    P = Y[idx].astype(np.float64)
+    P -= P.mean(axis=1, keepdims=True)
+    w, E = np.linalg.eigh(np.einsum("bki,bkj->bij", P, P))  # ascending; E[:, :, 0] = PCA normal
+    U = np.einsum("bki,bij->bkj", P, E)  # (B, k, 3) uncorrelated coordinates: U^T U = diag(w)
+    tr = w.sum(axis=1)
+    denom = w + (_RIDGE * tr + 1e-300)[:, None]
+    flat = tr <= 1e-12 * y_scale * k  # neighbours (nearly) coincide
+    out = []
+    for f, key, glob in ((x1, "x", S), (v1, "v", V)):
+        fk = f[idx]
+        fk = fk - fk.mean(axis=1, keepdims=True)
+        g = np.einsum("bki,bk->bi", U, fk) / denom  # least-squares gradient, eigen-coordinates
+        if in_plane:
+            g[:, 0] = 0.0
+        d, dn = _unit(np.einsum("bij,bj->bi", E, g))
+        bad = flat | (fk.std(axis=1) <= tiny[key]) | ~(dn > 0) | ~np.isfinite(dn)
+        if bad.any():
+            fb = np.broadcast_to(glob, (int(bad.sum()), 3)).copy()
+            if in_plane:
+                e0 = E[bad, :, 0]
+                fb -= np.einsum("bi,bi->b", fb, e0)[:, None] * e0
+            fb, fn = _unit(fb)
+            fb[fn < 1e-3] = glob
+            d[bad] = fb
+        out.append((d, bad))
+    (sd, sbad), (vd, vbad) = out
+    c, cn = _unit(np.cross(sd, vd))
+    cbad = cn < 1e-6
+    if cbad.any():
+        e0 = E[cbad, :, 0]
+        e0 *= np.where(e0 @ SxV < 0, -1.0, 1.0)[:, None]
+        c[cbad] = e0
+    return (sd.astype(np.float32), vd.astype(np.float32), c.astype(np.float32), int((sbad | vbad | cbad).sum()))
 
 
 class TangentFrames(BaseEstimator):
@@ -187,7 +250,7 @@ class TangentFrames(BaseEstimator):
         return np.ascontiguousarray(Y)
 
     # -------------------------------------------------------------------- fit
-    def fit(self, Fy, Fx, Fxv, bounds, opening=None):
+    def fit(self, Fy, Fx, Fxv, bounds, opening=None, *, executor=None):
         """Fit the plane, the global and local directions and classify every frame.
 
         Parameters
@@ -206,6 +269,10 @@ class TangentFrames(BaseEstimator):
             reference of S, V, s_i, v_i and so of the classes: "opening" then means the
             lips part, whatever the first shape component is. ``opening_source_`` says
             which was used.
+        executor : object with ``map_row_blocks``, optional
+            Computes the local frames one block of frames per task
+            (:meth:`engine.scale.DaskExecutor.map_row_blocks`); None: in-process. Same
+            result: the plane, S, V and the classes are computed here from them.
 
         Returns
         -------
@@ -233,7 +300,7 @@ class TangentFrames(BaseEstimator):
 
         point, V, spread = self._zero_velocity_plane(Y, Fxv, v1)
         S = self._global_shape(Y, point, V, x1)
-        s, v, nrm, n_bad = self._local_frames(Y, x1, v1, S, V)
+        s, v, nrm, n_bad = self._local_frames(Y, x1, v1, S, V, executor)
 
         step = np.zeros_like(Y)
         step[:-1] = Y[1:] - Y[:-1]
@@ -294,56 +361,18 @@ class TangentFrames(BaseEstimator):
         S = B.T @ g
         return S / np.linalg.norm(S)
 
-    def _local_frames(self, Y, x1, v1, S, V):
+    def _local_frames(self, Y, x1, v1, S, V, executor=None):
         N = len(Y)
-        k = int(self.n_neighbors) + 1
-        nn = NearestNeighbors(n_neighbors=k, algorithm="kd_tree").fit(Y)
-        s = np.empty((N, 3), np.float32)
-        v = np.empty((N, 3), np.float32)
-        nrm = np.empty((N, 3), np.float32)
-        SxV = np.cross(S, V)
-        in_plane = self.local_plane == "pca"
-        tiny = {"x": 1e-6 * (np.std(x1) + 1e-300), "v": 1e-6 * (np.std(v1) + 1e-300)}
-        y_scale = float(np.ptp(Y, axis=0).max()) ** 2 + 1e-300
-        n_bad = 0
-        for a in range(0, N, _CHUNK):
-            z = slice(a, min(N, a + _CHUNK))
-            idx = nn.kneighbors(Y[z], return_distance=False)  # (B, k), self included
-            P = Y[idx].astype(np.float64)
-            P -= P.mean(axis=1, keepdims=True)
-            w, E = np.linalg.eigh(np.einsum("bki,bkj->bij", P, P))  # ascending; E[:, :, 0] = PCA normal
-            U = np.einsum("bki,bij->bkj", P, E)  # (B, k, 3) uncorrelated coordinates: U^T U = diag(w)
-            tr = w.sum(axis=1)
-            denom = w + (_RIDGE * tr + 1e-300)[:, None]
-            flat = tr <= 1e-12 * y_scale * k  # neighbours (nearly) coincide
-            out = []
-            for f, key, glob in ((x1, "x", S), (v1, "v", V)):
-                fk = f[idx]
-                fk = fk - fk.mean(axis=1, keepdims=True)
-                g = np.einsum("bki,bk->bi", U, fk) / denom  # least-squares gradient, eigen-coordinates
-                if in_plane:
-                    g[:, 0] = 0.0
-                d, dn = _unit(np.einsum("bij,bj->bi", E, g))
-                bad = flat | (fk.std(axis=1) <= tiny[key]) | ~(dn > 0) | ~np.isfinite(dn)
-                if bad.any():
-                    fb = np.broadcast_to(glob, (int(bad.sum()), 3)).copy()
-                    if in_plane:
-                        e0 = E[bad, :, 0]
-                        fb -= np.einsum("bi,bi->b", fb, e0)[:, None] * e0
-                    fb, fn = _unit(fb)
-                    fb[fn < 1e-3] = glob
-                    d[bad] = fb
-                out.append((d, bad))
-            (sd, sbad), (vd, vbad) = out
-            c, cn = _unit(np.cross(sd, vd))
-            cbad = cn < 1e-6
-            if cbad.any():
-                e0 = E[cbad, :, 0]
-                e0 *= np.where(e0 @ SxV < 0, -1.0, 1.0)[:, None]
-                c[cbad] = e0
-            s[z], v[z], nrm[z] = sd, vd, c
-            n_bad += int((sbad | vbad | cbad).sum())
-        return s, v, nrm, n_bad
+        nn = NearestNeighbors(n_neighbors=int(self.n_neighbors) + 1, algorithm="kd_tree").fit(Y)
+        opts = {"in_plane": self.local_plane == "pca",
+                "tiny": {"x": 1e-6 * (np.std(x1) + 1e-300), "v": 1e-6 * (np.std(v1) + 1e-300)},
+                "y_scale": float(np.ptp(Y, axis=0).max()) ** 2 + 1e-300}
+        if executor is None:
+            parts = [local_frames_block(a, min(N, a + _CHUNK), nn, Y, x1, v1, S, V, opts) for a in range(0, N, _CHUNK)]
+        else:  # one task per block of frames; the fitted tree, Y, x1, v1 travel once to each worker
+            parts = executor.map_row_blocks(local_frames_block, N, nn, Y, x1, v1, S, V, opts, block=_CHUNK)
+        s, v, nrm = (np.concatenate([p[i] for p in parts]) for i in range(3))
+        return s, v, nrm, sum(p[3] for p in parts)
 
     # ------------------------------------------------------------------ query
     def signed_velocity(self, Y) -> np.ndarray:

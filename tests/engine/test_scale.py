@@ -8,6 +8,10 @@ pytest.importorskip("distributed")
 #: largest principal angle (degrees) allowed between the Dask and in-process F^x / F^y subspaces
 #: (measured: 3e-5 deg for F^x, 8e-5 deg for the first 3 columns of F^y, 1,956 frames)
 ANGLE_TOL_DEG = 0.01
+#: adjusted Rand index of the Dask build's state labels against the in-process build's
+STATE_ARI_MIN = 0.99  # measured 1.0 (1,956 frames, K = 40)
+#: fraction of frames in the same movement class in both builds
+CLASS_AGREEMENT_MIN = 0.995  # measured 1.0
 
 
 @pytest.fixture(scope="module")
@@ -82,3 +86,39 @@ def test_small_blocks_are_refused(executor):
 
     with pytest.raises(ValueError, match="block_frames must be >= 256"):
         DaskExecutor(executor.client, block_frames=10)
+
+
+def test_dask_tangent_frames_and_states_equal_in_process_on_the_same_fy(executor, in_process):
+    """Given the same F^y, the per-block Dask tasks reproduce the in-process tangent frames and state graph."""
+    from engine.kinematics import lip_aperture
+    from engine.states import StateGraph
+    from engine.tangent import TangentFrames
+
+    m = in_process
+    b = m.corpus_.bounds
+    args = (m.Fy_, m.Fx_, m.Fxv_, b)
+    ref = TangentFrames().fit(*args, opening=lip_aperture(m.corpus_))
+    got = TangentFrames().fit(*args, opening=lip_aperture(m.corpus_), executor=executor)
+    for attr in ("s_", "v_", "normal_", "classes_"):
+        np.testing.assert_array_equal(getattr(got, attr), getattr(ref, attr))
+    assert got.n_degenerate_ == ref.n_degenerate_
+
+    class SmallBlocks:  # blocks of 300 frames: transitions across block edges must be counted once
+        def map_row_blocks(self, fn, n, *shared, block=None):
+            return executor.map_row_blocks(fn, n, *shared, block=300)
+
+    ref_s = StateGraph(n_states=40).fit(m.Fy_, b)
+    got_s = StateGraph(n_states=40).fit(m.Fy_, b, executor=SmallBlocks())
+    np.testing.assert_array_equal(got_s.labels_, ref_s.labels_)
+    for attr in ("counts_", "adjacency_", "transition_"):
+        assert (getattr(got_s, attr) != getattr(ref_s, attr)).nnz == 0, attr
+    assert got_s.counts_.sum() == m.corpus_.n_frames - len(b)  # one transition per frame with a successor
+
+
+def test_dask_build_states_and_classes_agree(dask_manifold, in_process):
+    """Whole builds: F^y differs by round-off, so K-means may move a few frames between neighbouring states."""
+    from sklearn.metrics import adjusted_rand_score
+
+    d, m = dask_manifold, in_process
+    assert adjusted_rand_score(m.states_.labels_, d.states_.labels_) > STATE_ARI_MIN
+    assert np.mean(d.tangent_.classes_ == m.tangent_.classes_) > CLASS_AGREEMENT_MIN
