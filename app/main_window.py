@@ -8,50 +8,15 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.state import AppState
 
-__all__ = ["MainWindow", "launch", "export_trajectory", "trajectory_table"]
+__all__ = ["MainWindow", "launch"]
 
 TRAJECTORY_FILTERS = "CSV table (*.csv);;NumPy array (*.npy);;OBJ mesh sequence (*.obj);;PLY mesh sequence (*.ply)"
 
-
-# ============================================================================ exports (no Qt)
-def trajectory_table(traj) -> tuple[np.ndarray, list[str]]:
-    """The columns a trajectory exports to CSV/NPY: Y1..Y3 (embedding) then X1..Xm (shape).
-
-    Returns (values (n, 3 + m) float32, column names).
-    """
-    Y = np.asarray(traj.Y, np.float32)[:, :3]
-    Fx = np.zeros((len(Y), 0), np.float32) if traj.Fx is None else np.asarray(traj.Fx, np.float32)
-    cols = [f"Y{k + 1}" for k in range(Y.shape[1])] + [f"X{k + 1}" for k in range(Fx.shape[1])]
-    return np.hstack([Y, Fx]), cols
-
-
-def export_trajectory(manifold, traj, path) -> list[Path]:
-    """Write a trajectory by suffix: ``.csv`` (time, Y1-3, X1-m), ``.npy`` (the same columns
-    without time), ``.obj`` / ``.ply`` (lip mesh sequence: ``<stem>_00000.obj`` ... in a
-    folder ``<stem>/`` beside ``path``). Returns the files written.
-    """
-    from app.views.lip_view import lip_frames
-    from engine.io.export import write_mesh_sequence, write_trajectory_csv, write_trajectory_npy
-
-    path = Path(path)
-    suf = path.suffix.lower()
-    if suf == ".csv":
-        values, cols = trajectory_table(traj)
-        return [write_trajectory_csv(path, values, rate=traj.rate, columns=cols)]
-    if suf == ".npy":
-        return [write_trajectory_npy(path, trajectory_table(traj)[0])]
-    if suf in (".obj", ".ply"):
-        frames = lip_frames(manifold, traj)
-        c = manifold.corpus_
-        return write_mesh_sequence(path.with_suffix(""), frames, faces=c.faces, dims=c.dims, format=suf[1:],
-                                   prefix=path.stem, clear=True)
-    raise ValueError(f"{path}: cannot export a trajectory as {suf or 'a file without a suffix'!r}; "
-                     "use .csv, .npy, .obj or .ply")
+TRAJECTORY_FILTERS = "CSV table (*.csv);;NumPy array (*.npy);;OBJ mesh sequence (*.obj);;PLY mesh sequence (*.ply)"
 
 
 # ============================================================================ the window
@@ -180,7 +145,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def open_source(self, path=None, *, preset: str = "default", session: dict | None = None):
         """Load a manifold / corpus file (or the synthetic talker) in a worker; returns the runner."""
-        from app.cli.explore import load_source
+        from app.source_loading import load_source
         from app.views.task_progress import attach_status_progress
         from app.workers import run_task
 
@@ -339,6 +304,8 @@ class MainWindow(QtWidgets.QMainWindow):
         path, _ = QtWidgets.QFileDialog.getSaveFileName(self, f"Export trajectory ({traj.label})", self.last_dir,
                                                         TRAJECTORY_FILTERS)
         if path:
+            from app.trajectories import export_trajectory
+
             self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}")
 
     def export_animation(self, path, progress=None) -> list[Path]:

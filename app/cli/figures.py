@@ -58,7 +58,7 @@ def _load(path, preset, progress):
     from engine.manifold import Manifold
 
     if path is not None:
-        from app.cli.explore import source_kind
+        from app.source_loading import source_kind
 
         try:
             kind = source_kind(path)

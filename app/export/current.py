@@ -44,7 +44,7 @@ def export_current_animation(state, path, *, size=(640, 480), progress=None) -> 
         The files written.
     """
     from app.export.animation import export_animation, utterance_audio
-    from app.views.lip_view import lip_frames
+    from app.trajectories import lip_frames
 
     path = Path(path)
     suffix = path.suffix.lower()

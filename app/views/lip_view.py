@@ -22,24 +22,15 @@ from PySide6 import QtCore, QtWidgets
 from app import scene
 from app.audio import AudioPlayer, resolve_audio_path
 from app.playback import PlaybackClock
+from app.trajectories import lip_frames
 from app.views._common import (camera_of, close_plotter, connect_all, disconnect_all,
                                make_plotter, RenderScheduler, set_camera)
 
-__all__ = ["LipView", "lip_frames"]
+__all__ = ["LipView"]
 
 MAIN_COLOUR = (0.86, 0.55, 0.55)
 SYNTH_COLOUR = (0.95, 0.15, 0.1)
 SPEEDS = (("1×", 1.0), ("½×", 0.5), ("¼×", 0.25))
-
-
-def lip_frames(manifold, traj) -> np.ndarray:
-    """Frames (n, C) of a trajectory: captured rows for originals, F^x mapped back otherwise."""
-    if traj.frames is not None:
-        return np.asarray(manifold.corpus_.frames[np.asarray(traj.frames)])
-    if traj.Fx is not None:
-        return np.asarray(manifold.shape_.inverse_transform(traj.Fx))
-    Fx = manifold.inverse_map.transform(np.asarray(traj.Y)[:, :manifold.inverse_map.n_dims])
-    return np.asarray(manifold.shape_.inverse_transform(Fx))
 
 
 class LipView(QtWidgets.QWidget):

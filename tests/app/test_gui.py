@@ -352,10 +352,10 @@ def test_textgrid_input_and_bad_input(win, tmp_path):
 
 
 def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
-    from app.main_window import export_trajectory, trajectory_table
+    from app.trajectories import export_trajectory, trajectory_table
     from engine import targets as T
     from engine.io.meshfile import read_obj
-    from app.views.lip_view import lip_frames
+    from app.trajectories import lip_frames
     from app.views.trajectory_editor import synthesize_targets
 
     m, s = app_manifold, win.state

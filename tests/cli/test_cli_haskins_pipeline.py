@@ -91,7 +91,7 @@ def test_synthesize_a_real_utterance_and_a_phone_string(built, tmp_path, capsys)
 
 
 def test_explorer_and_figures_open_a_foreign_file_directly(haskins_files, tmp_path):
-    from app.cli.explore import load_source, source_kind
+    from app.source_loading import load_source, source_kind
 
     mat = haskins_files[0]
     assert source_kind(mat) == "foreign"

@@ -1,0 +1,62 @@
+"""A trajectory the explorer shows, as lip frames and as files (Qt-free).
+
+The lip view plays :func:`lip_frames`, the window's File > Export trajectory writes
+through :func:`export_trajectory`, the animation export renders :func:`lip_frames`.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["lip_frames", "trajectory_table", "export_trajectory"]
+
+
+
+def lip_frames(manifold, traj) -> np.ndarray:
+    """Frames (n, C) of a trajectory: captured rows for originals, F^x mapped back otherwise.
+
+    ``traj`` is an :class:`app.state.TrajectoryData` of n frames; C = points x dims of
+    the manifold's corpus. F^x is mapped back through the shape space; a trajectory with
+    only Y goes through the manifold's inverse map first.
+    """
+    if traj.frames is not None:
+        return np.asarray(manifold.corpus_.frames[np.asarray(traj.frames)])
+    if traj.Fx is not None:
+        return np.asarray(manifold.shape_.inverse_transform(traj.Fx))
+    Fx = manifold.inverse_map.transform(np.asarray(traj.Y)[:, :manifold.inverse_map.n_dims])
+    return np.asarray(manifold.shape_.inverse_transform(Fx))
+
+
+def trajectory_table(traj) -> tuple[np.ndarray, list[str]]:
+    """The columns a trajectory exports to CSV/NPY: Y1..Y3 (embedding) then X1..Xm (shape).
+
+    Returns (values (n, 3 + m) float32, column names).
+    """
+    Y = np.asarray(traj.Y, np.float32)[:, :3]
+    Fx = np.zeros((len(Y), 0), np.float32) if traj.Fx is None else np.asarray(traj.Fx, np.float32)
+    cols = [f"Y{k + 1}" for k in range(Y.shape[1])] + [f"X{k + 1}" for k in range(Fx.shape[1])]
+    return np.hstack([Y, Fx]), cols
+
+
+def export_trajectory(manifold, traj, path) -> list[Path]:
+    """Write a trajectory by suffix: ``.csv`` (time, Y1-3, X1-m), ``.npy`` (the same columns
+    without time), ``.obj`` / ``.ply`` (lip mesh sequence: ``<stem>_00000.obj`` ... in a
+    folder ``<stem>/`` beside ``path``). Returns the files written.
+    """
+    from engine.io.export import write_mesh_sequence, write_trajectory_csv, write_trajectory_npy
+
+    path = Path(path)
+    suf = path.suffix.lower()
+    if suf == ".csv":
+        values, cols = trajectory_table(traj)
+        return [write_trajectory_csv(path, values, rate=traj.rate, columns=cols)]
+    if suf == ".npy":
+        return [write_trajectory_npy(path, trajectory_table(traj)[0])]
+    if suf in (".obj", ".ply"):
+        frames = lip_frames(manifold, traj)
+        c = manifold.corpus_
+        return write_mesh_sequence(path.with_suffix(""), frames, faces=c.faces, dims=c.dims, format=suf[1:],
+                                   prefix=path.stem, clear=True)
+    raise ValueError(f"{path}: cannot export a trajectory as {suf or 'a file without a suffix'!r}; "
+                     "use .csv, .npy, .obj or .ply")
