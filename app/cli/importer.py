@@ -61,6 +61,12 @@ def add_arguments(p):
     p.add_argument("--no-fill", action="store_true",
                    help="fail on dropouts (invalid or missing samples) instead of interpolating them")
     p.add_argument("--name", default=None, help="corpus name (default: from the input)")
+    p.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
+                   help="with several inputs: read them in N processes (default: one per core; 1 reads them here)")
+    p.add_argument("--dask", metavar="local|ADDRESS", default=None,
+                   help="with several inputs: read them on Dask workers, 'local' (one per core) or a running "
+                        "scheduler's address; the files must be readable by every worker")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
 
 def _options(args, fmt):
@@ -105,7 +111,7 @@ def summary(corpus) -> str:
 def run(args) -> int:
     from app.cli import CliError
     from engine.corpus import CorpusError
-    from engine.io import ImportFormatError, concat, read_corpus, resample, write_audio
+    from engine.io import ImportFormatError, concat, resample
     from engine.io.dispatch import FORMAT_ALIASES, detect_format
     from engine.registration import register
 
@@ -135,17 +141,12 @@ def run(args) -> int:
                            "<stem>.TextGrid or <stem>.lab beside it instead")
         kw = _options(args, fmt)
         groups = [inputs] if fmt == "mesh" and len(inputs) > 1 else [[p] for p in inputs]
-        parts = []
-        for g in groups:
-            src = g if len(g) > 1 else g[0]
-            c = read_corpus(src, format=fmt, rate=args.rate, alignment=alignment, **kw)
-            if args.audio_dir and fmt == "mview":
-                wav = write_audio(src, Path(args.audio_dir) / (Path(src).stem + ".wav"))
-                c = replace(c, utterances=[replace(u, audio=str(wav)) for u in c.utterances])
-            speaker = args.speaker or _speaker_of(src if len(g) == 1 else g[0], args.speaker_from)
-            if speaker:
-                c = replace(c, utterances=[replace(u, speaker=speaker) for u in c.utterances])
-            parts.append(c)
+        job = {"format": fmt, "rate": args.rate, "alignment": alignment, "options": kw,
+               "audio_dir": args.audio_dir, "speaker": args.speaker, "speaker_from": args.speaker_from}
+        if len(groups) == 1:
+            parts = [_read_group(groups[0], job)]
+        else:
+            parts = _read_many(groups, job, args)
         corpus = parts[0] if len(parts) == 1 else concat(parts)
         if args.roles is not None:
             from engine.layouts import roles_from_spec
@@ -172,6 +173,112 @@ def run(args) -> int:
               file=sys.stderr)
     print(f"wrote {out}: {summary(corpus)}", file=sys.stdout)
     return 0
+
+
+def _input_errors():
+    """Errors that make one input unreadable (reported and skipped when there are several inputs)."""
+    from engine.corpus import CorpusError
+    from engine.io import ImportFormatError
+
+    return (ImportFormatError, CorpusError, OSError, ValueError, TypeError)
+
+
+def _read_group(g, job):
+    """The corpus of one input (a file, or the frame files of one mesh sequence)."""
+    from engine.io import read_corpus, write_audio
+
+    src = g if len(g) > 1 else g[0]
+    c = read_corpus(src, format=job["format"], rate=job["rate"], alignment=job["alignment"], **job["options"])
+    if job["audio_dir"] and job["format"] == "mview":
+        wav = write_audio(src, Path(job["audio_dir"]) / (Path(src).stem + ".wav"))
+        c = replace(c, utterances=[replace(u, audio=str(wav)) for u in c.utterances])
+    speaker = job["speaker"] or _speaker_of(g[0], job["speaker_from"])
+    if speaker:
+        c = replace(c, utterances=[replace(u, speaker=speaker) for u in c.utterances])
+    return c
+
+
+def read_one(g, job):
+    """``(corpus, None)`` or ``(None, reason)`` for one input; runs in a worker process or on a Dask worker."""
+    try:
+        return _read_group(g, job), None
+    except _input_errors() as exc:
+        return None, str(exc) or type(exc).__name__
+
+
+def _read_many(groups, job, args):
+    """Read every input with the chosen backend, in input order, with a progress bar; skip unreadable ones.
+
+    Backends: ``--dask`` (a Dask cluster, ``client.map``), else a process pool of
+    ``--jobs`` processes (default: one per core), else (``--jobs 1``) this process.
+    The skipped inputs are printed on stderr, one line each with the reason.
+    """
+    import os
+
+    from app.cli import CliError
+    from app.cli._common import progress_bar
+
+    n = len(groups)
+    results = [None] * n
+    stage = f"reading {n} inputs"
+    jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
+    if jobs < 1:
+        raise CliError(f"--jobs {jobs}: must be at least 1")
+    jobs = min(jobs, n)
+    if args.dask:
+        with progress_bar(disable=True if args.quiet else None) as progress:
+            progress(stage, 0, n)
+            _read_on_dask(groups, job, args.dask, results, lambda done: progress(stage, done, n))
+    elif jobs == 1:
+        with progress_bar(disable=True if args.quiet else None) as progress:
+            for i, g in enumerate(groups):
+                progress(stage, i, n)
+                results[i] = read_one(g, job)
+            progress(stage, n, n)
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        # fork: the readers are imported already; the pool starts before the progress bar's thread
+        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
+            futs = {pool.submit(read_one, g, job): i for i, g in enumerate(groups)}
+            with progress_bar(disable=True if args.quiet else None) as progress:
+                progress(stage, 0, n)
+                for done, f in enumerate(as_completed(futs), 1):
+                    results[futs[f]] = f.result()
+                    progress(stage, done, n)
+    skipped = [(g[0], reason) for g, (c, reason) in zip(groups, results) if c is None]
+    for src, reason in skipped:
+        print(f"lipspace import: skipped {src}: {reason}", file=sys.stderr)
+    parts = [c for c, _ in results if c is not None]
+    if not parts:
+        raise CliError(f"none of the {n} inputs could be read (first: {skipped[0][0]}: {skipped[0][1]})")
+    if skipped:
+        print(f"lipspace import: read {len(parts)} of {n} inputs, skipped {len(skipped)} (listed above)",
+              file=sys.stderr)
+    return parts
+
+
+def _read_on_dask(groups, job, address, results, tick):
+    from app.cli import CliError
+
+    try:
+        from distributed import as_completed
+
+        from engine.scale import DaskExecutor
+    except ImportError as exc:
+        raise CliError(f"--dask needs the 'scale' extra ({exc}); install it with pip install 'lipspace[scale]'") from None
+    try:
+        ex = DaskExecutor.connect(address)
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
+    with ex:
+        print(f"lipspace import: Dask {ex.describe()}", file=sys.stderr)
+        futs = ex.client.map(read_one, groups, job=job, pure=False)
+        index = {f.key: i for i, f in enumerate(futs)}
+        for done, f in enumerate(as_completed(futs), 1):
+            results[index[f.key]] = f.result()
+            tick(done)
 
 
 def _speaker_of(path, how) -> str:
