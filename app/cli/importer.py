@@ -31,9 +31,10 @@ def add_arguments(p):
     p.add_argument("--tier", default=None, help="TextGrid tier holding the phones (default: 'phones' or similar)")
     p.add_argument("--rate", type=float, default=None, metavar="HZ",
                    help="frame rate of inputs without timing (mesh frames, .npy, CSV without a time column)")
-    p.add_argument("--resample", "--analysis-rate", dest="resample", default=f"{ANALYSIS_RATE:g}", metavar="HZ",
+    p.add_argument("--resample", "--analysis-rate", dest="resample", default=None, metavar="HZ",
                    help="analysis frame rate: the result is resampled to it with an anti-aliasing filter, per "
-                        "utterance (default: %(default)s Hz, the paper's rate; 'native' keeps the file's rate)")
+                        f"utterance (default: {ANALYSIS_RATE:g} Hz, the paper's rate, for every input but video, "
+                        "which keeps its own rate; 'native' keeps the file's rate)")
     p.add_argument("--points", default=None, metavar="LIST",
                    help="comma-separated sensors / markers / landmarks to keep, or 'all' (EMA, MVIEW, layouts) or "
                         "'lips' (OpenFace, layouts); default: lips and jaw for EMA, lip, jaw and reference "
@@ -57,7 +58,11 @@ def add_arguments(p):
                      help="speaker of each input from its directory name or its file name up to the first '_'")
     p.add_argument("--template", default=None, metavar="MESH", help="template OBJ/PLY giving faces for .npy input")
     p.add_argument("--audio-dir", default=None, metavar="DIR",
-                   help="MVIEW .mat input: write each file's AUDIO to DIR/<stem>.wav and link it")
+                   help="MVIEW .mat input: write each file's AUDIO to DIR/<stem>.wav and link it; video input: "
+                        "where each utterance's audio track goes (default: <output stem>_audio/ beside the output)")
+    p.add_argument("--interocular-mm", type=float, default=None, metavar="MM",
+                   help="video input: assumed distance between the eye centres, which sets the mm scale "
+                        "(default: 63, the mean adult interpupillary distance)")
     p.add_argument("--no-fill", action="store_true",
                    help="fail on dropouts (invalid or missing samples) instead of interpolating them")
     p.add_argument("--name", default=None, help="corpus name (default: from the input)")
@@ -85,6 +90,15 @@ def _options(args, fmt):
 
             raise CliError("--variable needs --layout (it names the .mat variable holding a plain matrix)")
         kw["variable"] = args.variable
+    if fmt == "video":  # FaceMesh tracking (engine.io.video); audio beside the output
+        if args.interocular_mm is not None:
+            kw["interocular_mm"] = args.interocular_mm
+        out = Path(args.output)
+        kw["audio_dir"] = args.audio_dir or str(out.with_name(out.stem + "_audio"))
+    elif args.interocular_mm is not None:
+        from app.cli import CliError
+
+        raise CliError(f"--interocular-mm applies to video input only, not to {fmt!r} input")
     if args.points is not None:
         opt = _POINT_OPTION.get(fmt)
         if opt is None:
@@ -120,6 +134,8 @@ def run(args) -> int:
         raise CliError(f"{out}: the corpus file must end in .npz")
     inputs = args.inputs
     rate_out = None
+    if args.resample is None:  # video keeps its own frame rate; other inputs go to the paper's 60 Hz
+        args.resample = "native" if _is_video(args) else f"{ANALYSIS_RATE:g}"
     if str(args.resample).lower() not in ("native", "none"):
         try:
             rate_out = float(args.resample)
@@ -173,6 +189,17 @@ def run(args) -> int:
               file=sys.stderr)
     print(f"wrote {out}: {summary(corpus)}", file=sys.stdout)
     return 0
+
+
+def _is_video(args) -> bool:
+    from engine.io.dispatch import FORMAT_ALIASES, detect_format
+
+    if args.format is not None or args.layout is not None:
+        return FORMAT_ALIASES.get(args.format, args.format) == "video"
+    try:
+        return detect_format(args.inputs[0]) == "video"
+    except (ValueError, OSError):
+        return False
 
 
 def _input_errors():

@@ -22,11 +22,14 @@ FORMATS = {
                "names, AG500/AG501 .pos, NDI Wave TSV) read through a sensor layout (layout=)"),
     "pos": ("engine.io.articulograph", "read_pos", "Carstens AG500 / AG501 .pos binary"),
     "wave": ("engine.io.articulograph", "read_wave", "NDI Wave TSV export"),
+    "video": ("engine.io.video", "read_video", "video of a talking face (.mp4 .mov .avi .mkv ...; a folder of them): "
+              "FaceMesh lip landmarks, head pose removed, mm (needs the [video] extra)"),
 }
 FORMAT_ALIASES = {"mocha": "ema", "est": "ema", "haskins": "mview", "mat": "mview", "obj": "mesh", "ply": "mesh",
                   "openface": "csv", "tsv": "csv", "vocaset": "npy", "native": "npz"}
 _EXT = {".ema": "ema", ".mat": "mview", ".c3d": "c3d", ".obj": "mesh", ".ply": "mesh", ".csv": "csv",
-        ".tsv": "csv", ".txt": "csv", ".npy": "npy", ".npz": "npz", ".pos": "pos"}
+        ".tsv": "csv", ".txt": "csv", ".npy": "npy", ".npz": "npz", ".pos": "pos",
+        **{e: "video" for e in (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv")}}
 _ALIGN_EXT = (".textgrid", ".lab", ".phn")
 
 
@@ -41,7 +44,7 @@ def detect_format(path) -> str:
     if any(c in s for c in "*?["):
         return "mesh"
     if p.is_dir():
-        return "mesh"
+        return "video" if _videos_in(p) else "mesh"
     suf = p.suffix.lower()
     if suf in _ALIGN_EXT:
         raise ImportFormatError(p, "is a phone alignment, not lip data; read it with read_alignment or pass it as "
@@ -64,10 +67,20 @@ def detect_format(path) -> str:
         return "pos"
     if head.startswith(b"PK\x03\x04"):
         return "npz"
+    if head[4:8] == b"ftyp" or head.startswith(b"\x1a\x45\xdf\xa3") or (head[:4] == b"RIFF" and head[8:12] == b"AVI "):
+        return "video"
     if len(head) >= 2 and head[1] == 0x50:
         return "c3d"
     raise ImportFormatError(p, f"cannot tell the format from the name or the first bytes {head[:16]!r}; pass "
                             f"format= one of {sorted(FORMATS)}")
+
+
+def _videos_in(folder) -> list:
+    """The video files directly in ``folder``, in natural order (one utterance each)."""
+    from engine.io._util import natural_key
+
+    return sorted((f for f in Path(folder).iterdir() if f.is_file() and _EXT.get(f.suffix.lower()) == "video"),
+                  key=lambda f: natural_key(f.name))
 
 
 def _reader(fmt):
@@ -146,6 +159,10 @@ def read_corpus(path, *, format: str | None = None, rate: float | None = None, a
     if fmt not in FORMATS:
         raise ValueError(f"format={format!r} is not known; expected one of {sorted(FORMATS)} "
                          f"(or {sorted(FORMAT_ALIASES)})")
+    if fmt == "video" and not isinstance(path, (list, tuple)) and Path(str(path)).is_dir():
+        folder, path = path, _videos_in(path)  # a folder of videos, one utterance each (TextGrid / .lab beside)
+        if not path:
+            raise ImportFormatError(folder, "holds no video files; expected .mp4, .mov, .avi, .mkv ... files")
     if isinstance(path, (list, tuple)) and fmt != "mesh":  # several files: one utterance each
         from engine.io.combine import concat
 

@@ -1,0 +1,336 @@
+"""Video of a talking face -> lip landmarks in mm, head pose removed (``.mp4``, ``.mov``, ...).
+
+:func:`read_video` decodes the frames one at a time with PyAV (never holding more than
+the current frame), tracks the face with MediaPipe FaceMesh in video mode
+(:class:`engine.io.facemesh.FaceTracker`), keeps the 80 refined lip landmarks and the 17
+rigid reference landmarks per frame, removes head pose by a similarity Procrustes fit of
+the reference landmarks to the video's speaker template in mm (:mod:`engine.headpose`),
+and returns a corpus at the video's frame rate with the FaceMesh lip triangles as faces.
+
+Frames without a face are never invented silently. Every run of them is reported (frame
+indices and times) in ``Corpus.history``: a run inside the utterance of at most
+``bridge_s`` seconds (default 0.1 s, shorter than a bilabial closure) is bridged by linear
+interpolation of the head-pose-free lip landmarks; a longer run splits the utterance
+(``<stem>_1``, ``<stem>_2``, ...); runs at the start or end are cut off. Phone times
+and the audio follow each part.
+
+The audio track (when the video has one and ``audio_dir`` is given) is decoded,
+mixed to mono, resampled to ``audio_rate`` (16 kHz) and written as 16-bit PCM WAV per
+utterance (``audio_dir/<utterance>.wav``), the form the other corpora store audio in.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from engine.io.errors import ImportFormatError
+
+__all__ = ["read_video", "iter_video_frames", "track_video", "VIDEO_EXTENSIONS", "DEFAULT_BRIDGE_S",
+           "AUDIO_RATE", "find_gaps", "segments", "read_audio_track", "video_rate"]
+
+VIDEO_EXTENSIONS = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv")
+#: longest run of face-less frames bridged by interpolation (s)
+DEFAULT_BRIDGE_S = 0.1
+#: sample rate of the stored audio (Hz)
+AUDIO_RATE = 16000
+
+
+def _require_av():
+    try:
+        import av
+    except ImportError as exc:  # pragma: no cover - av is a core dependency
+        raise ImportError(f"video import needs PyAV ({exc}); install it with: pip install -e '.[video]'") from None
+    return av
+
+
+def _open(path):
+    av = _require_av()
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if not path.is_file():
+        raise ImportFormatError(path, "is not a regular file; expected a video file (.mp4, .mov, .avi, .mkv, ...)")
+    if path.stat().st_size == 0:
+        raise ImportFormatError(path, "is empty (0 bytes); expected a video file")
+    try:
+        container = av.open(str(path), mode="r")
+    except (av.error.FFmpegError, UnicodeDecodeError) as exc:
+        raise ImportFormatError(path, f"cannot be read as a video ({exc}); expected a video file such as "
+                                ".mp4, .mov, .avi or .mkv") from None
+    if not container.streams.video:
+        container.close()
+        raise ImportFormatError(path, "holds no video stream; expected a video of a face")
+    return container
+
+
+def iter_video_frames(path):
+    """Yield ``(index, rgb (H, W, 3) uint8)`` for each frame of ``path``, decoding one at a time.
+
+    The rate is :func:`video_rate`. Decoding errors become an
+    :class:`ImportFormatError` naming the frame.
+    """
+    av = _require_av()
+    container = _open(path)
+    try:
+        stream = container.streams.video[0]
+        stream.thread_type = "AUTO"
+        k = 0
+        try:
+            for frame in container.decode(stream):
+                yield k, frame.to_ndarray(format="rgb24")
+                k += 1
+        except av.error.FFmpegError as exc:
+            raise ImportFormatError(path, f"video data is damaged ({exc}); {k} frames could be decoded",
+                                    frame=k) from None
+    finally:
+        container.close()
+
+
+def video_rate(path) -> float:
+    """The video stream's frame rate (Hz): its average rate, else its guessed rate."""
+    container = _open(path)
+    try:
+        st = container.streams.video[0]
+        r = st.average_rate or st.guessed_rate or st.base_rate
+    finally:
+        container.close()
+    if not r or float(r) <= 0:
+        raise ImportFormatError(path, "the video stream states no frame rate; expected a constant-rate video")
+    rate = float(r)
+    n = round(rate)
+    return float(n) if abs(rate - n) < 1e-3 * n else rate
+
+
+def track_video(path, *, tracker=None, progress=None):
+    """Track the face in every frame of ``path``.
+
+    Returns
+    -------
+    landmarks : ndarray (N, P, 3) float32
+        :data:`engine.io.facemesh.TRACKED_POINTS` per frame (NaN where no face was found).
+    found : ndarray (N,) bool
+    """
+    from engine.io.facemesh import TRACKED_POINTS, FaceTracker
+    from engine.progress import report
+
+    own = tracker is None
+    tracker = tracker or FaceTracker()
+    rows, found = [], []
+    nan = np.full((len(TRACKED_POINTS), 3), np.nan, dtype=np.float32)
+    try:
+        for k, rgb in iter_video_frames(path):
+            lm = tracker.track(rgb)
+            rows.append(nan if lm is None else lm)
+            found.append(lm is not None)
+            if progress is not None and k % 10 == 0:
+                report(progress, "tracking face", k, 0)
+    finally:
+        if own:
+            tracker.close()
+    if not rows:
+        raise ImportFormatError(path, "holds no decodable video frames; expected a video of a face")
+    return np.stack(rows), np.asarray(found, dtype=bool)
+
+
+def find_gaps(found) -> list[tuple[int, int]]:
+    """``[start, stop)`` frame ranges of consecutive False in ``found``."""
+    f = np.asarray(found, dtype=bool)
+    d = np.diff(np.concatenate([[1], f.astype(np.int8), [1]]))
+    return list(zip(np.flatnonzero(d == -1).tolist(), np.flatnonzero(d == 1).tolist()))
+
+
+def segments(found, max_bridge: int) -> tuple[list[tuple[int, int]], list[tuple[int, int, str]]]:
+    """Utterance parts and what happens to each run of face-less frames.
+
+    Parameters
+    ----------
+    found : (N,) bool
+    max_bridge : int
+        Longest interior run (frames) bridged by interpolation.
+
+    Returns
+    -------
+    parts : list of [start, stop) frame ranges kept (gaps inside them are bridged)
+    gaps : list of (start, stop, action), action in {"bridged", "split", "cut"}
+    """
+    f = np.asarray(found, dtype=bool)
+    n = f.size
+    gaps = []
+    parts = []
+    cur = None
+    for a, b in find_gaps(f):
+        if a == 0 or b == n:
+            gaps.append((a, b, "cut"))
+            continue
+        if b - a <= max_bridge:
+            gaps.append((a, b, "bridged"))
+            continue
+        gaps.append((a, b, "split"))
+    if f.any():
+        first, last = int(np.argmax(f)), int(n - np.argmax(f[::-1]))
+        cur = first
+        for a, b, act in gaps:
+            if act == "split":
+                parts.append((cur, a))
+                cur = b
+        parts.append((cur, last))
+    return parts, gaps
+
+
+def read_audio_track(path, rate: int = AUDIO_RATE) -> np.ndarray | None:
+    """The video's first audio stream as mono int16 at ``rate`` Hz, or None when it has none."""
+    av = _require_av()
+    container = _open(path)
+    try:
+        if not container.streams.audio:
+            return None
+        stream = container.streams.audio[0]
+        res = av.AudioResampler(format="s16", layout="mono", rate=int(rate))
+        chunks = []
+        try:
+            for frame in container.decode(stream):
+                for out in res.resample(frame):
+                    chunks.append(out.to_ndarray().reshape(-1))
+            for out in res.resample(None):
+                chunks.append(out.to_ndarray().reshape(-1))
+        except av.error.FFmpegError as exc:
+            raise ImportFormatError(path, f"audio data is damaged ({exc})") from None
+    finally:
+        container.close()
+    return np.concatenate(chunks).astype(np.int16) if chunks else np.zeros(0, np.int16)
+
+
+def _write_wav(path, pcm, rate):
+    import scipy.io.wavfile
+
+    from engine._atomic import atomic_write
+
+    with atomic_write(path) as tmp:
+        scipy.io.wavfile.write(tmp, int(rate), pcm)
+    return Path(path).resolve()
+
+
+def _span(a, b, rate):
+    frames = f"frame {a}" if b - a == 1 else f"frames {a}-{b - 1}"
+    return f"{frames} ({a / rate:.3f}-{b / rate:.3f} s)"
+
+
+def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: float = 63.0,
+               bridge_s: float = DEFAULT_BRIDGE_S, audio_dir=None, audio_rate: int = AUDIO_RATE,
+               tracker=None, progress=None):
+    """Read a video of one talking face as a corpus of lip landmarks (mm, head pose removed).
+
+    Parameters
+    ----------
+    path : str or Path
+        Video file (anything FFmpeg decodes: .mp4, .mov, .avi, .mkv, .webm ...), one
+        speaker facing the camera.
+    rate : float, optional
+        Must agree with the video's frame rate when given (frames are kept at that rate).
+    alignment : None, False, path or sequence of PhoneInterval
+        None: ``<stem>.TextGrid`` / ``.lab`` beside the video, if any.
+    tier : str, optional
+        TextGrid tier of the phones.
+    interocular_mm : float, default 63
+        Assumed distance between the eye centres (mm): the scale of the output.
+    bridge_s : float, default 0.1
+        Longest run of face-less frames inside the utterance bridged by interpolation;
+        longer runs split it.
+    audio_dir : str or Path, optional
+        Where to write each utterance's audio (``<utterance>.wav``); None: not stored.
+    audio_rate : int, default 16000
+        Sample rate (Hz) of the stored audio.
+    tracker : FaceTracker, optional
+        Reuse a tracker (default: a new one, closed at the end).
+    progress : callable, optional
+        ``progress(stage, done, total)``; raise ``engine.progress.Cancelled`` to stop.
+
+    Returns
+    -------
+    Corpus
+        Frames (n, 240) float32: the 80 lip landmarks of :data:`engine.io.facemesh.LIP_POINTS`
+        (x right, y up, z toward the camera, mm, origin between the eyes), faces
+        :data:`engine.io.facemesh.LIP_FACES`, point roles, ``registration`` and ``history``
+        describing the head-pose fit, the scale assumption and every face-less run.
+
+    Raises
+    ------
+    ImportFormatError
+        Empty, damaged or non-video file; no face in any frame; too few frames with a face.
+    """
+    from engine.corpus import Corpus, CorpusError, Utterance
+    from engine.headpose import HeadPose
+    from engine.io._util import check_rate, fit_phones
+    from engine.io.alignment import resolve_alignment
+    from engine.io.facemesh import EYE_CORNERS, LIP_FACES, LIP_NAMES, LIP_POINTS, LIP_ROLES, REFERENCE_POINTS
+
+    path = Path(path)
+    bridge_s = float(bridge_s)
+    if not np.isfinite(bridge_s) or bridge_s < 0:
+        raise ValueError(f"bridge_s={bridge_s!r}; expected a duration in seconds >= 0 (default {DEFAULT_BRIDGE_S})")
+    native = video_rate(path)
+    native = check_rate(path, native, rate)
+    lm, found = track_video(path, tracker=tracker, progress=progress)
+    n = len(found)
+    if not found.any():
+        raise ImportFormatError(path, f"no face found in any of its {n} frames; expected a video of one face seen "
+                                "from the front, lit well enough to see the lips")
+    n_lip = len(LIP_POINTS)
+    ref_pos = {p: n_lip + k for k, p in enumerate(REFERENCE_POINTS)}
+    eyes = tuple((ref_pos[a] - n_lip, ref_pos[b] - n_lip) for a, b in EYE_CORNERS)
+    pose = HeadPose(interocular_mm=interocular_mm, eye_points=eyes, up_point=ref_pos[10] - n_lip)
+    ref = lm[found, n_lip:]
+    pose.fit(ref)
+    lips = np.full((n, n_lip, 3), np.nan)
+    lips[found] = pose.transform(ref, lm[found, :n_lip])
+    max_bridge = int(np.floor(bridge_s * native + 1e-9))
+    parts, gaps = segments(found, max_bridge)
+    history = [f"read {path.name}: {n} frames at {native:g} Hz, face found in {int(found.sum())}"]
+    for a, b, act in gaps:
+        what = {"bridged": f"bridged by linear interpolation (<= {bridge_s:g} s)",
+                "split": f"longer than {bridge_s:g} s: the utterance is split there",
+                "cut": "at the start or end of the video: cut off"}[act]
+        history.append(f"{path.name}: no face in {_span(a, b, native)}: {what}")
+        if act == "bridged":
+            w = (np.arange(a, b) - (a - 1)) / (b - a + 1)
+            lips[a:b] = (1 - w)[:, None, None] * lips[a - 1] + w[:, None, None] * lips[b]
+    kept = [(a, b) for a, b in parts if b - a >= 2]
+    for a, b in parts:
+        if b - a < 2:
+            history.append(f"{path.name}: {_span(a, b, native)} dropped: a part of fewer than 2 frames")
+    if not kept:
+        raise ImportFormatError(path, f"a face was found in only {int(found.sum())} of {n} frames, never in 2 "
+                                "consecutive ones; expected a video where the face stays in view")
+    desc = (f"head pose removed per frame: similarity Procrustes (rotation, translation, scale) of "
+            f"{len(REFERENCE_POINTS)} FaceMesh reference landmarks (forehead, nose bridge, temples, eye corners) to "
+            f"the speaker template, residual {pose.residual_mm_:.2g} mm rms; mm from an assumed inter-ocular "
+            f"distance of {float(interocular_mm):g} mm")
+    history.append(f"registration: {desc}")
+    phones, _ = resolve_alignment(path, alignment, tier=tier)
+    pcm = read_audio_track(path, audio_rate) if audio_dir is not None else None
+    if audio_dir is not None and pcm is None:
+        history.append(f"{path.name}: no audio track")
+    utts, rows = [], []
+    start = 0
+    for j, (a, b) in enumerate(kept):
+        uid = path.stem if len(kept) == 1 else f"{path.stem}_{j + 1}"
+        t0, t1 = a / native, b / native
+        ph = [type(p)(p.start - t0, p.end - t0, p.label) for p in phones if p.end > t0 and p.start < t1]
+        cut = t1 - t0 if b < n else np.inf  # a part ended by a gap: its phones end there (no overrun)
+        ph = [type(p)(max(p.start, 0.0), min(p.end, cut), p.label) for p in ph]
+        wav = None
+        if pcm is not None:
+            s0, s1 = int(round(t0 * audio_rate)), int(round(t1 * audio_rate))
+            wav = str(_write_wav(Path(audio_dir) / f"{uid}.wav", pcm[s0:s1], audio_rate))
+        utts.append(Utterance(uid, start, start + b - a, fit_phones(ph, b - a, native), wav, ""))
+        rows.append(lips[a:b])
+        start += b - a
+    frames = np.concatenate(rows).reshape(start, -1).astype(np.float32)
+    try:
+        c = Corpus(frames=frames, rate=native, utterances=utts, dims=3, faces=LIP_FACES.copy(),
+                   point_names=list(LIP_NAMES), name=path.stem, point_roles=list(LIP_ROLES),
+                   registration=desc, history=history)
+    except CorpusError as exc:
+        raise ImportFormatError(path, str(exc)) from None
+    return c
