@@ -46,6 +46,12 @@ def add_arguments(p):
     p.add_argument("--restore", action=argparse.BooleanOptionalAction, default=None,
                    help="after an abnormal exit, reopen (--restore) or keep for later (--no-restore) the "
                         "autosaved session without asking (default: ask)")
+    p.add_argument("--camera", default=None, metavar="N|VIDEO",
+                   help="live mirror: project a camera (number N, /dev/videoN) or a video file played as a stream "
+                        "into the manifold given by --manifold (built from a video import)")
+    p.add_argument("--manifold", default=None, metavar="M", help="with --camera: the manifold file (.npz)")
+    p.add_argument("--interocular-mm", type=float, default=63.0, metavar="MM",
+                   help="with --camera: assumed distance between the eye centres (default: %(default)s)")
 
 
 def has_display(environ=None, platform: str | None = None) -> bool:
@@ -63,6 +69,10 @@ def run(args) -> int:
         return EXIT_NO_DISPLAY
     from app.cli import CliError
 
+    if args.camera is not None:  # the live mirror (app.live)
+        from app.live import run_live
+
+        return run_live(args.manifold or args.file, args.camera, interocular_mm=args.interocular_mm)
     if args.file is not None:
         try:
             source_kind(args.file)
