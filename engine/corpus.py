@@ -401,8 +401,11 @@ class Corpus:
             phones = tuple(PhoneInterval(float(s), float(e), str(lab)) for (s, e), lab in zip(p_t[sel], p_lab[sel]))
             utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, str(audio[k]) or None, str(text[k]),
                                   str(speaker[k])))
-        return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
-                   latent=latent, name=name, point_roles=roles, registration=registration, history=history)
+        try:
+            return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
+                       latent=latent, name=name, point_roles=roles, registration=registration, history=history)
+        except CorpusError as exc:  # name the file, not only the corpus
+            raise CorpusError(f"{source}: {exc}") from None
 
     def save(self, path) -> Path:
         """Write the native corpus file (``.npz``) atomically."""

@@ -204,7 +204,9 @@ def parse_phones(text: str) -> list[str]:
     return [_check_phone(p) for p in text.lower().split()]
 
 
-_TOKEN = re.compile(r"\[([^\]]*)\]|([A-Za-z][A-Za-z']*)|(\S)")
+#: a bracketed phone string, a word (letters of any script, with apostrophes: "café" is one
+#: word, not 'caf' and a stray 'é'), or any other character
+_TOKEN = re.compile(r"\[([^\]]*)\]|([^\W\d_](?:[^\W\d_]|')*)|(\S)")
 
 
 def pronounce(text: str, *, pauses: bool = False) -> list[str]:

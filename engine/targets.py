@@ -339,9 +339,11 @@ def targets_from_text(manifold, text: str, *, duration_model=None, pauses: bool 
             pauses = True
         except UnknownPhoneError:
             pauses = False
-    labels = pronounce(text, pauses=pauses)
-    if not labels:
-        raise TargetError(f"no phones in the text {text!r}")
+    labels = pronounce(text)
+    if not labels:  # before the pauses: punctuation alone is not silence to synthesise
+        raise TargetError(f"no words in the text {text[:60]!r}; give the words to synthesise")
+    if pauses:
+        labels = [PAUSE, *labels, PAUSE]
     dm = duration_model or DurationModel()
     durs = dm.durations(labels)
     return targets_from_phones(manifold, list(zip(labels, durs)), on_collision=on_collision,

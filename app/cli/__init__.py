@@ -134,14 +134,19 @@ def printable(text: str) -> str:
     return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
 
 
+#: on stderr a carriage return is kept: progress bars redraw their line with it
+_CONTROL_STDERR = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f]")
+
+
 class _PrintableWriter:
     """A text stream wrapper that passes :func:`printable` text to ``stream``."""
 
-    def __init__(self, stream):
+    def __init__(self, stream, pattern=_CONTROL):
         self._stream = stream
+        self._pattern = pattern
 
     def write(self, text):
-        return self._stream.write(printable(text))
+        return self._stream.write(self._pattern.sub(lambda m: f"\\x{ord(m.group()):02x}", text))
 
     def __getattr__(self, name):
         return getattr(self._stream, name)
@@ -149,13 +154,15 @@ class _PrintableWriter:
 
 @contextlib.contextmanager
 def _printable_stdout():
-    """Commands print names and labels from the user's files: never raw escape codes."""
-    old = sys.stdout
+    """Commands print names and labels from the user's files (on stdout, and in notes
+    and warnings on stderr): never raw escape codes."""
+    old, old_err = sys.stdout, sys.stderr
     sys.stdout = _PrintableWriter(old)
+    sys.stderr = _PrintableWriter(old_err, _CONTROL_STDERR)
     try:
         yield
     finally:
-        sys.stdout = old
+        sys.stdout, sys.stderr = old, old_err
 
 
 def _os_error_text(exc: OSError) -> str:

@@ -110,6 +110,29 @@ def _opening_lines(m):
     return lines
 
 
+def _refuse_foreign(path: Path) -> None:
+    """A recording in a format the importers read (.mat, .ema, .c3d, .csv ...) is not a
+    Lipspace file: say what it is and how to import it, instead of a zip error."""
+    from app.cli import CliError
+    from engine.io import ImportFormatError
+    from engine.io.dispatch import FORMATS, detect_format
+
+    if path.is_dir():
+        raise CliError(f"{path}: is a directory; give a Lipspace corpus or manifold file (.npz)")
+    with open(path, "rb") as fh:
+        if fh.read(4) == b"PK\x03\x04":
+            return  # a zip: the loaders below say what is wrong with it
+    try:
+        fmt = detect_format(path)
+    except (ImportFormatError, OSError, ValueError):
+        fmt = None
+    if fmt is None or fmt == "npz":
+        raise CliError(f"{path}: not a Lipspace corpus or manifold file (those are .npz files written by "
+                       "'lipspace import' and 'lipspace build')")
+    raise CliError(f"{path}: a recording in the {fmt!r} format ({FORMATS[fmt][2]}), not a Lipspace corpus or "
+                   f"manifold file; import it first: lipspace import {path} -o corpus.npz")
+
+
 def run(args) -> int:
     from app.cli import CliError
     from engine.corpus import Corpus, CorpusError
@@ -118,6 +141,7 @@ def run(args) -> int:
     path = Path(args.file)
     if not path.exists():
         raise CliError(f"{path}: no such file")
+    _refuse_foreign(path)
     try:
         m = Manifold.load(path)
     except ManifoldFileError as exc:

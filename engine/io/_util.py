@@ -108,14 +108,48 @@ def fill_gaps(X: np.ndarray, missing: np.ndarray, *, path, names=None, fill: boo
     return X
 
 
-def fit_phones(phones, n_frames: int, rate: float) -> tuple[PhoneInterval, ...]:
+#: pause labels of common aligners: a trailing pause past the data is cut without a word
+_PAUSES = frozenset({"sil", "sp", "spn", "pau", "#", "h#", "<sil>", "silence", "_", "<p:>", "breath"})
+#: an alignment's speech running past the data by more than this (s) is cut with a warning ...
+ALIGNMENT_OVERRUN_WARN = 0.1
+#: ... and one this many times longer than the data (and 1 s past it) is refused
+ALIGNMENT_OVERRUN_RATIO = 2.0
+
+
+def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneInterval, ...]:
     """Fit an alignment to a track of ``n_frames`` at ``rate`` Hz.
 
     Phones starting at or after the end of the data are dropped, phones running past it
     are cut at it, zero-length phones and unlabelled intervals are dropped. Times stay
     in seconds from the utterance start.
+
+    An alignment whose speech (phones other than pauses) ends more than
+    :data:`ALIGNMENT_OVERRUN_WARN` s after the data is
+    cut with an :class:`~engine.io.errors.ImportDataWarning` naming both durations; one
+    :data:`ALIGNMENT_OVERRUN_RATIO` times as long as the data (and over 1 s longer) is
+    refused with an :class:`ImportFormatError` naming ``path`` (a different
+    recording's alignment, or a wrong frame rate).
     """
     dur = n_frames / float(rate)
+    labelled = [(float(p.start), float(p.end)) for p in phones
+                if str(p.label).strip() and str(p.label).strip().lower() not in _PAUSES]
+    end = max((e for _, e in labelled), default=0.0)
+    if end > dur + ALIGNMENT_OVERRUN_WARN:
+        lost = sum(1 for s, _ in labelled if s >= dur)
+        what = (f"the alignment runs to {end:.3f} s but the data last {dur:.3f} s ({n_frames} frames at "
+                f"{float(rate):g} Hz)")
+        if end > ALIGNMENT_OVERRUN_RATIO * dur and end > dur + 1.0:
+            raise ImportFormatError(path if path is not None else "<alignment>",
+                                    f"{what}: {end / dur:.1f} times as long. Is it this recording's alignment, "
+                                    "and is the frame rate right?")
+        import warnings
+
+        from engine.io.errors import ImportDataWarning
+
+        where = f"{path}: " if path is not None else ""
+        warnings.warn(ImportDataWarning(
+            f"{where}{what}; it was cut at the end of the data ({lost} phone{'s' * (lost != 1)} dropped)"),
+            stacklevel=2)
     out = []
     for p in phones:
         s, e, lab = float(p.start), float(p.end), str(p.label).strip()
@@ -169,7 +203,8 @@ def one_utterance_corpus(path, frames, rate, *, dims, uid=None, phones=(), point
         raise ImportFormatError(path, f"holds {n} frame{'s' * (n != 1)}; expected at least 2")
     uid = uid or Path(path).stem or "utt"
     try:
-        utt = Utterance(uid, 0, frames.shape[0], fit_phones(phones, frames.shape[0], rate), audio, text)
+        utt = Utterance(uid, 0, frames.shape[0], fit_phones(phones, frames.shape[0], rate, path=path), audio,
+                      text)
         return Corpus(frames=frames, rate=rate, utterances=[utt], dims=dims, faces=faces,
                       point_names=point_names, name=name or uid)
     except CorpusError as exc:

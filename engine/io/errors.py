@@ -1,7 +1,10 @@
-"""The one error every importer raises for bad input: :class:`ImportFormatError`."""
+"""The one error every importer raises for bad input (:class:`ImportFormatError`) and the
+one warning for input read with a repair (:class:`ImportDataWarning`)."""
 from __future__ import annotations
 
-__all__ = ["ImportFormatError"]
+from engine.corpus import CorpusWarning
+
+__all__ = ["ImportFormatError", "ImportDataWarning"]
 
 
 class ImportFormatError(ValueError):
@@ -46,3 +49,8 @@ class ImportFormatError(ValueError):
 
 def _rebuild(path, detail, line, frame):
     return ImportFormatError(path, detail, line=line, frame=frame)
+
+
+class ImportDataWarning(CorpusWarning):
+    """A file was read, but something in it was repaired or cut (dropped frames
+    interpolated, an alignment longer than the data cut): the message says what."""

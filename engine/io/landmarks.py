@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import csv
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -193,11 +194,12 @@ def read_csv_landmarks(path, *, rate: float | None = None, points=None, space: s
     si = _find(header, ("success",))
     if si is not None:
         missing |= (_numbers(body, si, path, "success") == 0)[:, None]
-    if rate is None:
-        if ti is None:
-            raise ImportFormatError(path, f"has no time column ({', '.join(_TIME)}); pass the frame rate "
-                                    "(rate=<Hz>)")
-        native = uniform_rate(_numbers(body, ti, path, f"time column {header[ti]!r}"), path)
+    if ti is not None:
+        native = _column_rate(uniform_rate(_numbers(body, ti, path, f"time column {header[ti]!r}"), path),
+                              rate, header[ti], path)
+    elif rate is None:
+        raise ImportFormatError(path, f"has no time column ({', '.join(_TIME)}); pass the frame rate "
+                                "(rate=<Hz>)")
     else:
         native = float(rate)
     names = [("L" + n if openface else n) for n, _ in pts]
@@ -205,6 +207,54 @@ def read_csv_landmarks(path, *, rate: float | None = None, points=None, space: s
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     return one_utterance_corpus(path, frames, native, dims=dims, phones=phones, point_names=names,
                                 audio=sidecar_audio(path))
+
+
+def _column_rate(native, rate, column, path) -> float:
+    """The rate the time column gives; an explicit ``rate`` that disagrees is refused."""
+    if rate is not None and abs(float(rate) - native) > 1e-3 * native:
+        raise ImportFormatError(path, f"the time column {column!r} gives {native:g} Hz but rate={float(rate):g} "
+                                "was given; leave the rate out to use the column's times, or resample "
+                                "('lipspace import --resample') to change it")
+    return float(native)
+
+
+#: at most this share of a long table's frame numbers may be missing (filled by interpolation)
+MAX_MISSING_FRAMES = 0.5
+
+
+def _frame_numbers(frame_keys, frame_of, keys, body, column, path):
+    """Frame numbers as consecutive rows: integers, every missing number a gap to fill.
+
+    A warning names the missing numbers; more than :data:`MAX_MISSING_FRAMES` of the
+    span missing (e.g. a typo making frame 1000000) is refused before allocating.
+    """
+    from engine.io.errors import ImportDataWarning
+
+    frac = np.flatnonzero(frame_keys != np.round(frame_keys))
+    if frac.size:
+        r = int(np.flatnonzero(keys == frame_keys[frac[0]])[0])
+        raise ImportFormatError(path, f"frame number {frame_keys[frac[0]]:g} in column {column!r} is not a whole "
+                                "number; expected frame numbers 0, 1, 2, ... (or a time column in seconds)",
+                                line=body[r][0])
+    span = int(frame_keys[-1] - frame_keys[0]) + 1
+    if span == len(frame_keys):
+        return frame_keys, frame_of
+    n_missing = span - len(frame_keys)
+    first = []  # the first ten missing numbers, without listing a typo's billion
+    for k in np.flatnonzero(np.diff(frame_keys) > 1):
+        first += [f"{m:g}" for m in np.arange(frame_keys[k] + 1, min(frame_keys[k + 1], frame_keys[k] + 11))]
+        if len(first) >= 10:
+            break
+    shown = ", ".join(first[:10]) + (", ..." if n_missing > 10 else "")
+    if n_missing > MAX_MISSING_FRAMES * span:
+        raise ImportFormatError(path, f"column {column!r} numbers frames {frame_keys[0]:g} to {frame_keys[-1]:g} "
+                                f"but {n_missing} of those {span} frames have no rows ({shown}); expected "
+                                "consecutive frame numbers")
+    warnings.warn(ImportDataWarning(
+        f"{path}: frames {shown} ({n_missing} of {span}) have no rows in column {column!r}; they are "
+        "treated as dropouts and interpolated (--no-fill, fill_gaps=False, refuses them)"), stacklevel=3)
+    return np.arange(frame_keys[0], frame_keys[-1] + 1, dtype=np.float64), \
+        (frame_keys[frame_of] - frame_keys[0]).astype(np.intp)
 
 
 def _read_long(path, header, body, ti, fi, pi, rate, points, alignment, tier, fill_gaps):
@@ -220,6 +270,8 @@ def _read_long(path, header, body, ti, fi, pi, rate, points, alignment, tier, fi
         raise ImportFormatError(path, f"{header[key_col]!r} is empty or not a number", line=body[r][0])
     names = [row[pi].strip() for _, row in body]
     frame_keys, frame_of = np.unique(keys, return_inverse=True)
+    if key_col == fi:  # frame numbers: missing numbers are dropped frames, never closed up
+        frame_keys, frame_of = _frame_numbers(frame_keys, frame_of, keys, body, header[fi], path)
     point_order = list(dict.fromkeys(names))
     if points is not None:
         want = [str(p) for p in points]
@@ -240,13 +292,13 @@ def _read_long(path, header, body, ti, fi, pi, rate, points, alignment, tier, fi
             raise ImportFormatError(path, f"point {nm!r} appears twice in frame {frame_keys[f]:g}", line=line)
         seen[f, k] = True
         X[f, k * dims:(k + 1) * dims] = vals[r]
-    if rate is None:
-        if ti is None:
-            raise ImportFormatError(path, "has frame numbers but no time column; pass the frame rate (rate=<Hz>)")
+    if ti is not None:
         t = _numbers(body, ti, path, f"time column {header[ti]!r}")
         first = np.zeros(len(frame_keys))
         first[frame_of[::-1]] = t[::-1]  # each frame's time from its first row
-        native = uniform_rate(first, path)
+        native = _column_rate(uniform_rate(first, path), rate, header[ti], path)
+    elif rate is None:
+        raise ImportFormatError(path, "has frame numbers but no time column; pass the frame rate (rate=<Hz>)")
     else:
         native = float(rate)
     frames = _fill_gaps(X, ~np.isfinite(X), path=path,

@@ -145,6 +145,76 @@ def _check(argv, outdir: Path, code):
         assert not left, (argv, left)
 
 
+# ------------------------------------------------------------------ silent acceptance / misreports
+@pytest.mark.parametrize("text, expected", [
+    ("café", "the word 'café' is not in"),          # was reported as unknown word 'caf'
+    ("Zoë's naïve", "the word \"Zoë's\" is not in"),
+    ("...", "no words in the text '...'"),          # was synthesised as silence with exit 0
+    ("[]", "no words in the text '[]'"),
+    ("   ", "no words in the text"),
+])
+def test_text_that_says_nothing_is_refused_naming_the_whole_word(files, tmp_path, capsys, text, expected):
+    out = tmp_path / "t.csv"
+    assert main(["synthesize", "--manifold", str(files["manifold"]), "--text", text, "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lipspace synthesize: error:") and expected in err and err.count("\n") == 1, err
+    assert not out.exists()
+
+
+def test_info_on_a_recording_says_what_it_is_and_how_to_import_it(shared_data, tmp_path, capsys):
+    """Not numpy's 'not a zip file' / allow_pickle hint: the format, and 'lipspace import' first."""
+    for f, fmt in [(shared_data / "haskins-ieee" / "F01_B01_S01_R01_N.mat", "'mview'"),
+                   (shared_data / "mocha-fsew0" / "fsew0_001.ema", "'ema'")]:
+        assert main(["info", str(f)]) == 2
+        err = capsys.readouterr().err
+        assert f"a recording in the {fmt} format" in err and f"lipspace import {f} -o corpus.npz" in err, err
+        assert "zip" not in err.lower() and "pickle" not in err and err.count("\n") == 1
+    (tmp_path / "x.bin").write_bytes(b"\x00\x01junk")
+    assert main(["info", str(tmp_path / "x.bin")]) == 2
+    assert "not a Lipspace corpus or manifold file" in capsys.readouterr().err
+
+
+def test_terminal_escape_codes_in_names_are_not_printed_raw(files, tmp_path, capsys):
+    """A corpus named with escape sequences (colour, window title, clear screen) is shown escaped."""
+    from engine._persist import read_npz
+
+    d = read_npz(files["corpus"])
+    d["corpus_name"] = np.array("\x1b[31mRED\x1b]0;owned\x07")
+    with open(tmp_path / "esc.npz", "wb") as fh:
+        np.savez(fh, **d)
+    assert main(["info", str(tmp_path / "esc.npz")]) == 0
+    cap = capsys.readouterr()
+    assert "\\x1b[31mRED\\x1b]0;owned\\x07" in cap.out and "\x1b" not in cap.out + cap.err
+    csv = tmp_path / "roles.csv"  # point names reach stderr (import's roles line): escaped there too
+    csv.write_text("time,\x1b[2JUL_x,\x1b[2JUL_y\n" + "".join(f"{k / 60:.4f},{k},0\n" for k in range(10)))
+    assert main(["import", str(csv), "-o", str(tmp_path / "c.npz"), "--roles", "upper_lip=0"]) == 0
+    cap = capsys.readouterr()
+    assert "\x1b" not in cap.out + cap.err and "\\x1b[2JUL" in cap.err, cap.err
+
+
+def test_import_refuses_a_rate_that_contradicts_the_time_column(tmp_path, capsys):
+    csv = tmp_path / "t.csv"
+    csv.write_text("time,a_x,a_y\n" + "".join(f"{k / 100:.2f},{k},0\n" for k in range(30)))
+    out = tmp_path / "c.npz"
+    assert main(["import", str(csv), "-o", str(out), "--rate", "60"]) == 2
+    err = capsys.readouterr().err
+    assert "gives 100 Hz but rate=60 was given" in err and not out.exists(), err
+
+
+def test_import_warns_about_frame_gaps_and_a_long_alignment(tmp_path, capsys):
+    long = tmp_path / "g.csv"
+    long.write_text("frame,point,x,y\n" + "".join(f"{f},m,{f},0\n" for f in range(60) if f not in (7, 8)))
+    (tmp_path / "g.lab").write_text("0 0.5 p\n0.5 1.5 aa\n")  # 1.5 s of speech for 1 s of data
+    assert main(["import", str(long), "-o", str(tmp_path / "c.npz"), "--rate", "60"]) == 0
+    err = capsys.readouterr().err
+    assert "lipspace import: warning:" in err and "frames 7, 8 (2 of 60) have no rows" in err, err
+    assert "runs to 1.500 s but the data last 1.000 s" in err, err
+    (tmp_path / "g.lab").write_text("0 0.5 p\n0.5 25 aa\n")  # 25x the data: refused
+    assert main(["import", str(long), "-o", str(tmp_path / "d.npz"), "--rate", "60"]) == 2
+    err = capsys.readouterr().err
+    assert "25.0 times as long" in err and not (tmp_path / "d.npz").exists(), err
+
+
 # ------------------------------------------------------------------ CLI fuzz
 @FUZZ
 @given(data=st.data())

@@ -116,3 +116,57 @@ def test_csv_timing_errors(tmp_path):
     p.write_text("a_x,a_y,b_x,b_y,b_z\n1,2,3,4,5\n1,2,3,4,5\n")
     with pytest.raises(ImportFormatError, match="point 'a' has no z column"):
         read_csv_landmarks(p, rate=10)
+
+
+def test_time_column_and_a_different_rate_is_refused(tmp_path):
+    """A CSV's own times decide its rate: a --rate that disagrees is an error, not silently used."""
+    p = tmp_path / "t.csv"
+    p.write_text("time,a_x,a_y\n" + "".join(f"{k / 100:.2f},{k},{-k}\n" for k in range(20)))
+    with pytest.raises(ImportFormatError, match=r"time column 'time' gives 100 Hz but rate=60 was given"):
+        read_csv_landmarks(p, rate=60)
+    assert read_csv_landmarks(p, rate=100).rate == 100 == read_csv_landmarks(p).rate
+    q = tmp_path / "long.csv"
+    q.write_text("time,point,x,y\n" + "".join(f"{k / 50:.2f},m,{k},0\n" for k in range(10)))
+    with pytest.raises(ImportFormatError, match=r"gives 50 Hz but rate=25"):
+        read_csv_landmarks(q, rate=25)
+
+
+def test_long_table_frame_gaps_are_filled_and_named(tmp_path):
+    """Missing frame numbers are dropouts (interpolated, with a warning naming them), never closed up."""
+    from engine.io.errors import ImportDataWarning
+
+    p = tmp_path / "gaps.csv"
+    p.write_text("frame,point,x,y\n" + "".join(f"{f},m,{2 * f},1\n" for f in (0, 1, 2, 5, 6, 7)))
+    with pytest.warns(ImportDataWarning, match=r"frames 3, 4 \(2 of 8\) have no rows"):
+        c = read_csv_landmarks(p, rate=10)
+    assert c.n_frames == 8  # not 6: the track keeps its timing
+    np.testing.assert_allclose(c.frames[:, 0], 2 * np.arange(8))  # the gap interpolated linearly
+    with pytest.warns(ImportDataWarning), pytest.raises(ImportFormatError, match="missing") as e:
+        read_csv_landmarks(p, rate=10, fill_gaps=False)
+    assert e.value.frame == 3
+    p.write_text("frame,point,x,y\n0,m,0,0\n1,m,1,1\n1000000000,m,2,2\n")  # a typo: no billion-row array
+    with pytest.raises(ImportFormatError, match=r"999999998 of those 1000000001 frames have no rows \(2, 3, 4"):
+        read_csv_landmarks(p, rate=10)
+    p.write_text("frame,point,x,y\n0,m,0,0\n0.5,m,1,1\n1,m,2,2\n")
+    with pytest.raises(ImportFormatError, match="frame number 0.5 .* not a whole number") as e:
+        read_csv_landmarks(p, rate=10)
+    assert e.value.line == 3
+
+
+def test_alignment_longer_than_the_data(tmp_path):
+    """Cut with a warning naming both durations; refused when it is many times as long (wrong file or rate)."""
+    from engine.io.errors import ImportDataWarning
+
+    p = tmp_path / "a.csv"
+    p.write_text("time,a_x,a_y\n" + "".join(f"{k / 100:.2f},{k},0\n" for k in range(100)))  # 1.00 s
+    lab = tmp_path / "a.lab"
+    lab.write_text("0 0.5 p\n0.5 25 aa\n")
+    with pytest.raises(ImportFormatError, match=r"runs to 25\.000 s but the data last 1\.000 s .*25\.0 times"):
+        read_corpus(p, alignment=lab)
+    lab.write_text("0 0.5 p\n0.5 1.3 aa\n1.3 1.4 m\n")
+    with pytest.warns(ImportDataWarning, match=r"runs to 1\.400 s but the data last 1\.000 s.*1 phone dropped"):
+        c = read_corpus(p, alignment=lab)
+    assert [ph.label for ph in c.utterances[0].phones] == ["p", "aa"] and c.utterances[0].phones[-1].end == 1.0
+    lab.write_text("0 0.5 p\n0.5 1.0 aa\n1.0 3.5 sil\n")  # a trailing pause past the data: no warning
+    c = read_corpus(p, alignment=lab)
+    assert [ph.label for ph in c.utterances[0].phones] == ["p", "aa"]
