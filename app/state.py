@@ -3,8 +3,9 @@
 Every view observes an :class:`AppState` and changes it through its methods; views
 never call each other. Selections are indices (frames, states), never actors. Each
 field has an :class:`Event` in ``state.events`` that fires with the new value when
-the value changes. Derived data (hop distances, point colours, density, the
-minimum-distance path) are pure functions of the manifold and the state, below.
+the value changes. Derived data (density, phones, the minimum-distance path) are
+pure functions of the manifold and the state, below; how points are coloured is
+:mod:`app.colouring`.
 """
 from __future__ import annotations
 
@@ -15,26 +16,20 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-__all__ = ["Event", "AppState", "TrajectoryData", "Coloring", "HEMISPHERES", "COLOR_MODES",
-           "CLASS_COLOURS", "CLASS_LABELS", "UNREACHABLE_RGB", "knn_density", "frame_phones",
-           "hop_distances", "hop_distance_scalars", "hop_distance_colors", "point_colors",
-           "state_path", "categorical_palette", "phone_palette", "ellipsoid_colors", "cluster_table",
+__all__ = ["Event", "AppState", "TrajectoryData", "HEMISPHERES", "COLOR_MODES", "DEFAULT_HORIZON_MS",
+           "HORIZON_MAX_MS", "knn_density", "frame_phones", "state_path", "cluster_table",
            "original_trajectory", "prepare_derived", "insert_state_target", "TARGET_SPACING"]
 
-HEMISPHERES = ("future", "past", "off")
+HEMISPHERES = ("future", "past", "both", "off")
 COLOR_MODES = ("density", "class", "phone", "utterance", "distance")
+#: the hemisphere's time horizon when a manifold is opened (about half the frames inside on the
+#: default talker at 60 frames/s); None = no horizon
+DEFAULT_HORIZON_MS = 100.0
+#: longest horizon the explorer offers (longer ones are "no horizon")
+HORIZON_MAX_MS = 1000.0
 
-#: the four tangent classes (engine.tangent classes_ 0..3), as in the figure set
-CLASS_COLOURS = ((0.839, 0.153, 0.157), (1.0, 0.596, 0.588), (0.122, 0.310, 0.706), (0.561, 0.722, 1.0))
-CLASS_LABELS = ("opening / accelerating", "opening / decelerating", "closing / accelerating",
-                "closing / decelerating")
 #: seconds between an appended clicked-state target and the last target (as ``synthesize --spacing``)
 TARGET_SPACING = 0.2
-#: frames with no value (unreachable state, no phone, no forward step)
-UNREACHABLE_RGB = (0.69, 0.69, 0.69)
-#: paper: density and similarity run blue (low / far) -> red (high / near)
-DENSITY_CMAP = "jet"
-DISTANCE_CMAP = "jet_r"
 
 
 class Event:
@@ -79,8 +74,9 @@ class _Events:
     several fields redraws once (see :meth:`AppState.batch`).
     """
 
-    NAMES = ("manifold", "frame", "state", "target", "path", "hemisphere", "color_mode", "path_mode",
-             "utterance", "trajectory", "visible_phones", "playback", "playing", "component")
+    NAMES = ("manifold", "frame", "state", "target", "path", "hemisphere", "horizon_ms", "color_mode",
+             "phone_filter", "path_mode", "utterance", "trajectory", "visible_phones", "playback", "playing",
+             "component", "hover")
 
     def __init__(self):
         for n in self.NAMES:
@@ -182,8 +178,14 @@ class AppState:
         Selected frame, its state, and the second (target) state of the path.
     path : ndarray of int or None
         Minimum-distance state path from ``state`` to ``target`` (None: none or unreachable).
-    hemisphere : {"future", "past", "off"}
+    hemisphere : {"future", "past", "both", "off"}
+        Which hemisphere of the selected state distance colouring shows.
+    horizon_ms : float or None
+        Time horizon of the hemisphere in ms (None: every reachable state); converted to
+        hops at the corpus frame rate (:func:`engine.horizon.horizon_hops`).
     color_mode : {"density", "class", "phone", "utterance", "distance"}
+    phone_filter : frozenset of str
+        Phones the phone colouring shows (empty: all phones).
     path_mode : bool
         When True, a click while a state is selected sets the target instead.
     utterance : str or None
@@ -195,7 +197,10 @@ class AppState:
     playing : bool
         Whether playback runs (the lip view's timer advances ``playback``).
     component : int or None
-        Shape component shown as a deformation in the lip view.
+        Shape component shown as a deformation in the lip view (None: the lip view follows
+        the selection; selecting a frame or state, or :meth:`reset_view`, sets None).
+    hover : int or None
+        Frame under the mouse pointer in the manifold view (readout only; never selects).
     source : dict
         Where the manifold came from (``path``, ``preset``), for sessions.
     """
@@ -207,8 +212,11 @@ class AppState:
         self.frame = self.state = self.target = None
         self.path = None
         self.hemisphere = "future"
+        self.horizon_ms = DEFAULT_HORIZON_MS
         self.color_mode = "density"
+        self.phone_filter = frozenset()
         self.path_mode = False
+        self.hover = None
         self.utterance = None
         self.original = self.synthetic = None
         self.visible_phones = frozenset()
@@ -273,11 +281,28 @@ class AppState:
             self.source = dict(source)
         pre = _PREPARED.get(manifold, {}) if manifold is not None else {}
         self._density, self._phones, self._clusters = (pre.get(k) for k in ("density", "phones", "clusters"))
-        self.frame = self.state = self.target = self.path = None
+        self.frame = self.state = self.target = self.path = self.hover = None
         self.utterance = self.original = self.synthetic = self.playback = self.component = None
         self.playing = False
-        self.visible_phones = frozenset()
+        self.visible_phones = self.phone_filter = frozenset()
+        # a new file starts from the default view: no colouring or readout of the previous one survives
+        self.color_mode, self.hemisphere, self.horizon_ms = "density", "future", DEFAULT_HORIZON_MS
+        self.path_mode = False
         self._emit("manifold")
+
+    @_batched
+    def reset_view(self) -> None:
+        """Back to the default view of this manifold (Esc): no selection, path, component or hover,
+        density colouring, future hemisphere, default horizon, no phone filter or ellipsoids."""
+        self.clear_selection()
+        self._set("component", None)
+        self._set("hover", None)
+        self._set("path_mode", False)
+        self._set("color_mode", "density")
+        self._set("hemisphere", "future")
+        self._set("horizon_ms", DEFAULT_HORIZON_MS)
+        self._set("phone_filter", frozenset())
+        self._set("visible_phones", frozenset())
 
     def _require(self):
         if self.manifold is None:
@@ -349,6 +374,7 @@ class AppState:
             self.set_target(s)
             return
         self._set("frame", i)
+        self._set("component", None)  # a click means: show me this frame (the lip view follows clicks again)
         self._set_state(s)
 
     @_batched
@@ -359,6 +385,7 @@ class AppState:
             self.set_target(s)
             return
         self._set("frame", None)
+        self._set("component", None)
         self._set_state(s)
 
     def _set_state(self, s) -> None:
@@ -411,6 +438,33 @@ class AppState:
         self._set("hemisphere", mode)
         if mode != "off" and self.state is not None and self.color_mode != "distance":
             self.set_color_mode("distance")
+
+    @_batched
+    def set_horizon(self, ms) -> None:
+        """Time horizon of the hemisphere in milliseconds (None: no horizon, every reachable state)."""
+        if ms is not None:
+            if isinstance(ms, (bool, np.bool_)) or not isinstance(ms, (int, float, np.integer, np.floating)):
+                raise TypeError(f"horizon must be a number of milliseconds or None, got {ms!r}")
+            ms = float(ms)
+            if not (0.0 <= ms <= HORIZON_MAX_MS):
+                raise ValueError(f"horizon {ms:g} ms is outside 0..{HORIZON_MAX_MS:g} ms; use None for no horizon")
+        self._set("horizon_ms", ms)
+
+    @_batched
+    def set_phone_filter(self, labels) -> None:
+        """Phones the phone colouring shows (empty: all); unknown labels are refused with the known ones."""
+        labels = frozenset(str(x) for x in labels)
+        if labels and self.manifold is not None:
+            known = set(self.phones.tolist()) - {""}
+            bad = sorted(labels - known)
+            if bad:
+                raise ValueError(f"unknown phone(s) {', '.join(bad)}; this corpus has {', '.join(sorted(known))}")
+        self._set("phone_filter", labels)
+
+    @_batched
+    def set_hover(self, i) -> None:
+        """Frame under the mouse pointer (None: none); shown in the readout, never selected."""
+        self._set("hover", None if i is None else self._check_index(i, self.n_frames, "hovered frame"))
 
     @_batched
     def set_color_mode(self, mode: str) -> None:
@@ -536,154 +590,6 @@ def frame_phones(corpus) -> np.ndarray:
     return out.astype(str)
 
 
-def hop_distances(manifold, state: int, hemisphere: str) -> np.ndarray:
-    """Directed hop distance of every state from ``state`` (future) or to it (past).
-
-    Returns ndarray of shape (K,) float, inf where unreachable. ``hemisphere="off"``
-    gives 0 at ``state`` and inf elsewhere.
-    """
-    g = manifold.states_
-    if hemisphere == "future":
-        return np.asarray(g.future(state), dtype=np.float64)
-    if hemisphere == "past":
-        return np.asarray(g.past(state), dtype=np.float64)
-    if hemisphere == "off":
-        d = np.full(g.centroids_.shape[0], np.inf)
-        d[state] = 0.0
-        return d
-    raise ValueError(f"hemisphere must be one of {HEMISPHERES}, got {hemisphere!r}")
-
-
-def hop_distance_scalars(state_distances, labels) -> np.ndarray:
-    """Per-frame hop distance from per-state distances: NaN where unreachable.
-
-    Parameters
-    ----------
-    state_distances : ndarray of shape (K,), inf = unreachable
-    labels : ndarray of shape (N,) int, the state of each frame
-
-    Returns
-    -------
-    ndarray of shape (N,) float32
-    """
-    d = np.asarray(state_distances, dtype=np.float64)[np.asarray(labels)]
-    d[~np.isfinite(d)] = np.nan
-    return d.astype(np.float32)
-
-
-def _map(values, cmap: str, clim) -> np.ndarray:
-    from matplotlib import colormaps
-
-    lo, hi = clim
-    t = (np.asarray(values, dtype=np.float64) - lo) / (hi - lo if hi > lo else 1.0)
-    rgb = colormaps[cmap](np.clip(np.nan_to_num(t, nan=0.0), 0, 1))[:, :3]
-    rgb[~np.isfinite(values)] = UNREACHABLE_RGB
-    return rgb.astype(np.float32)
-
-
-def hop_distance_colors(state_distances, labels, cmap: str = DISTANCE_CMAP):
-    """RGB of every frame by hop distance (red near, blue far, grey unreachable).
-
-    Returns
-    -------
-    rgb : ndarray of shape (N, 3) float32 in [0, 1]
-    values : ndarray of shape (N,) float32, NaN where unreachable
-    clim : (float, float)
-    """
-    values = hop_distance_scalars(state_distances, labels)
-    finite = values[np.isfinite(values)]
-    clim = (0.0, float(max(finite.max(), 1.0)) if finite.size else 1.0)
-    return _map(values, cmap, clim), values, clim
-
-
-def categorical_palette(n: int) -> np.ndarray:
-    """``n`` distinguishable RGB colours, shape (n, 3).
-
-    tab20, tab20b and tab20c, each reordered so that consecutive colours differ in hue
-    (tab20 stores light/dark pairs side by side), cycled when ``n`` exceeds 60.
-    """
-    from matplotlib import colormaps
-
-    parts = []
-    for name, step in (("tab20", 2), ("tab20b", 4), ("tab20c", 4)):
-        c = np.asarray(colormaps[name].colors)[:, :3]
-        parts.append(np.concatenate([c[k::step] for k in range(step)]))
-    base = np.concatenate(parts)
-    return np.asarray(base[np.arange(n) % len(base)], dtype=np.float32)
-
-
-@dataclass
-class Coloring:
-    """How to colour the manifold's points.
-
-    Attributes
-    ----------
-    rgb : ndarray of shape (N, 3) float32 in [0, 1]
-    values : ndarray of shape (N,) float32 or None
-        The scalar shown (density, hop distance), NaN = no value; None for categories.
-    cmap : str or None
-        Colour map of ``values``.
-    clim : (float, float) or None
-    title : str
-    legend : list of (str, (r, g, b))
-        Category colours (class, phone); empty for scalars.
-    """
-
-    rgb: np.ndarray
-    values: np.ndarray | None = None
-    cmap: str | None = None
-    clim: tuple | None = None
-    title: str = ""
-    legend: list = field(default_factory=list)
-
-
-def point_colors(mode: str, manifold, state: AppState | None = None) -> Coloring:
-    """Colours of every frame of ``manifold`` for colour mode ``mode``.
-
-    ``state`` supplies the selection (distance mode), the current utterance
-    (utterance mode highlights it) and the cached density / phones.
-    """
-    if state is None:
-        state = AppState(manifold)
-    N = manifold.Fy_.shape[0]
-    if mode == "density":
-        v = state.density
-        clim = (float(np.percentile(v, 2)), float(np.percentile(v, 98)))
-        return Coloring(_map(v, DENSITY_CMAP, clim), v, DENSITY_CMAP, clim, "log density")
-    if mode == "distance":
-        if state.state is None:
-            v = np.full(N, np.nan, dtype=np.float32)
-            return Coloring(_map(v, DISTANCE_CMAP, (0, 1)), v, DISTANCE_CMAP, (0.0, 1.0),
-                            "hop distance (click a point)")
-        dist = hop_distances(manifold, state.state, state.hemisphere)
-        rgb, v, clim = hop_distance_colors(dist, manifold.states_.labels_)
-        return Coloring(rgb, v, DISTANCE_CMAP, clim, f"{state.hemisphere} hops")
-    if mode == "class":
-        cls = np.asarray(manifold.tangent_.classes_)
-        pal = np.vstack([np.asarray(CLASS_COLOURS, np.float32), np.asarray(UNREACHABLE_RGB, np.float32)])
-        rgb = pal[np.where(cls < 0, 4, cls)]
-        return Coloring(rgb, None, None, None, "tangent class",
-                        [(n, CLASS_COLOURS[i]) for i, n in enumerate(CLASS_LABELS)])
-    if mode == "phone":
-        lut = phone_palette(state)
-        names = list(lut)
-        codes = np.searchsorted(np.array(names + ["\uffff"]), state.phones)  # "" sorts before every label
-        pal = np.vstack([np.asarray(list(lut.values()), np.float32).reshape(-1, 3),
-                         np.asarray(UNREACHABLE_RGB, np.float32)])
-        known = np.isin(state.phones, names)
-        rgb = pal[np.where(known, codes, len(names))]
-        return Coloring(rgb, None, None, None, "phone", [(n, tuple(lut[n])) for n in names])
-    if mode == "utterance":
-        uidx = manifold.corpus_.utterance_index
-        rgb = categorical_palette(int(uidx.max()) + 1)[uidx] if N else np.zeros((0, 3), np.float32)
-        if state.utterance is not None:
-            k = [u.id for u in manifold.corpus_.utterances].index(state.utterance)
-            rgb = rgb * 0.25 + 0.75 * np.asarray(UNREACHABLE_RGB, np.float32)
-            rgb[uidx == k] = (0.0, 0.0, 0.0)
-        return Coloring(rgb.astype(np.float32), None, None, None, "utterance")
-    raise ValueError(f"colour mode must be one of {COLOR_MODES}, got {mode!r}")
-
-
 def cluster_table(clusters) -> list[dict]:
     """Rows of the phone table from fitted PhoneClusters, most frequent phone first.
 
@@ -691,23 +597,6 @@ def cluster_table(clusters) -> list[dict]:
     lipreading_class, nearest_y, separation_y, separation_x (Bhattacharyya distances), ...
     """
     return sorted(clusters.table(), key=lambda r: (-r["count"], r["phone"]))
-
-
-#: ellipsoid colours, in phone-label order of the visible set (paper Fig. 4: red, green, yellow)
-ELLIPSOID_COLOURS = ((0.84, 0.15, 0.16), (0.17, 0.63, 0.17), (0.95, 0.8, 0.0), (0.12, 0.47, 0.71),
-                     (0.58, 0.4, 0.74), (1.0, 0.5, 0.05), (0.09, 0.75, 0.81), (0.89, 0.47, 0.76))
-
-
-def ellipsoid_colors(visible) -> dict:
-    """Colour of each visible phone's ellipsoid: high-contrast colours in label order."""
-    names = sorted(visible)
-    return {n: ELLIPSOID_COLOURS[i % len(ELLIPSOID_COLOURS)] for i, n in enumerate(names)}
-
-
-def phone_palette(state) -> dict:
-    """Colour of each phone label (sorted labels, :func:`categorical_palette`), shared by all views."""
-    names = sorted(set(state.phones.tolist()) - {""})
-    return {n: tuple(float(c) for c in col) for n, col in zip(names, categorical_palette(len(names)))}
 
 
 def state_path(manifold, a: int, b: int):

@@ -9,12 +9,13 @@ from app.scene.lips import ContourHandle, LipsHandle, add_lip_contour, add_lips,
 from app.scene.manifold import (ORIGINAL_COLOUR, PATH_COLOUR, S_COLOUR, SYNTHETIC_COLOUR, V_COLOUR,
                                 PointsHandle, add_cluster_ellipsoids, add_global_axes, add_local_frame,
                                 add_manifold_points, add_marker, add_point_markers, add_state_path, add_trajectory,
-                                add_zero_velocity_plane, scene_scale, to_rgb8)
+                                add_zero_velocity_plane, move_to_overlay, overlay_renderer, scene_scale,
+                                to_rgb8)
 from app.scene.pick import ClickPicker, enable_click_picking, pick_display_point
 
 __all__ = ["Handle", "PointsHandle", "LipsHandle", "ContourHandle", "add_lip_contour", "ClickPicker",
            "add_manifold_points", "add_zero_velocity_plane",
            "add_global_axes", "add_local_frame", "add_trajectory", "add_cluster_ellipsoids", "add_state_path",
            "add_marker", "add_point_markers", "add_lips", "lip_mesh", "enable_click_picking", "pick_display_point",
-           "scene_scale",
+           "scene_scale", "overlay_renderer", "move_to_overlay",
            "to_rgb8", "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR", "S_COLOUR", "V_COLOUR"]

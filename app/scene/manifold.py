@@ -13,7 +13,7 @@ from app.scene.handles import Handle
 __all__ = ["PointsHandle", "LocalFrameHandle", "PolylineHandle", "add_manifold_points", "add_zero_velocity_plane",
            "add_global_axes", "add_local_frame", "add_point_markers", "add_trajectory", "add_state_path",
            "add_cluster_ellipsoids",
-           "add_marker", "MarkerHandle", "scene_scale", "to_rgb8", "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR",
+           "add_marker", "MarkerHandle", "scene_scale", "overlay_renderer", "move_to_overlay", "to_rgb8", "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR",
            "S_COLOUR", "V_COLOUR", "NORMAL_COLOUR", "PLANE_COLOUR"]
 
 ORIGINAL_COLOUR = (0.0, 0.0, 0.0)
@@ -356,3 +356,38 @@ def add_marker(plotter, center=None, radius: float = 1.0, *, color=(1.0, 1.0, 0.
     else:
         h.move(center)
     return h
+
+
+def overlay_renderer(plotter):
+    """A renderer layered over ``plotter``'s, sharing its camera: what it draws is never hidden.
+
+    Created once per plotter (layer 1 of the render window, same viewport, its own
+    light); the layer's depth buffer is cleared, so its actors are drawn over the point
+    cloud while still hiding each other by depth. Picking stays on the main renderer.
+    """
+    ren = getattr(plotter, "_lipspace_overlay", None)
+    if ren is not None:
+        return ren
+    from vtkmodules.vtkRenderingCore import vtkRenderer
+
+    main = plotter.renderer
+    win = plotter.render_window
+    ren = vtkRenderer()
+    ren.SetLayer(1)
+    ren.SetViewport(*main.GetViewport())
+    ren.SetActiveCamera(main.GetActiveCamera())
+    ren.InteractiveOff()
+    ren.SetPreserveDepthBuffer(False)
+    win.SetNumberOfLayers(max(2, win.GetNumberOfLayers()))
+    win.AddRenderer(ren)
+    plotter._lipspace_overlay = ren
+    return ren
+
+
+def move_to_overlay(plotter, handle) -> None:
+    """Draw ``handle`` (a Handle, a LocalFrameHandle or a PolylineHandle with markers) on top of the cloud."""
+    ren = overlay_renderer(plotter)
+    parts = handle.parts.values() if isinstance(handle, LocalFrameHandle) else [handle]
+    for h in parts:
+        plotter.renderer.RemoveActor(h.actor)
+        ren.AddActor(h.actor)

@@ -79,7 +79,7 @@ class ClustersPanel(QtWidgets.QWidget):
                                   "(shape only), from the phone's nearest neighbour in Y.")
             except (ImportError, ValueError) as exc:
                 self.note.setText(f"phone clusters unavailable: {exc}")
-        from app.state import phone_palette
+        from app.colouring import phone_palette
 
         palette = phone_palette(self.state) if m is not None else {}
         self._palette = palette
@@ -114,7 +114,7 @@ class ClustersPanel(QtWidgets.QWidget):
 
     def _sync_checks(self, visible):
         """Tick the visible phones; their swatch shows the ellipsoid colour, the others the phone colour."""
-        from app.state import ellipsoid_colors
+        from app.colouring import ellipsoid_colors
 
         ell = ellipsoid_colors(visible)
         with blocked(self.table):

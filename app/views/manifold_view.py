@@ -4,7 +4,10 @@ Shows the zero-velocity plane, the global S and V, the picked frame's local s_i,
 v_i and normal, trajectories (original black, synthetic red), the minimum-distance
 path between two states and phone cluster ellipsoids. A click selects the nearest
 frame (and its state); with the *Path* box ticked, or with Shift held, a second
-click sets the target state and draws the path between them.
+click sets the target state and draws the path between them. The selection, target,
+path, trajectories and playback markers are drawn over the cloud (a second renderer
+layer). Hop distance is shown within a time horizon (slider, ms); the pointer's frame
+is read out as it moves; Side / Top / Reset give the standard views; Esc resets the view.
 """
 from __future__ import annotations
 
@@ -12,8 +15,10 @@ import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from app import scene
+from app.colouring import CLASS_LABELS, ellipsoid_colors, point_colors
 from app.picking import PointLocator, handle_pick
-from app.state import COLOR_MODES, HEMISPHERES, point_colors
+from app.scene.projection import nearest_on_screen, project, standard_camera, view_transform
+from app.state import COLOR_MODES, HEMISPHERES, HORIZON_MAX_MS
 from app.views._common import (blocked, camera_of, close_plotter, connect_all,
                                disconnect_all, make_plotter, RenderScheduler, set_camera)
 
@@ -21,7 +26,19 @@ __all__ = ["ManifoldView", "axes_origin"]
 
 COLOR_LABELS = {"density": "Density", "class": "Tangent class", "phone": "Phone", "utterance": "Utterance",
                 "distance": "Hop distance"}
-HEMI_LABELS = {"future": "Future hemisphere", "past": "Past hemisphere", "off": "No hemisphere"}
+HEMI_LABELS = {"future": "Future hemisphere", "past": "Past hemisphere", "both": "Past and future",
+               "off": "No hemisphere"}
+#: the horizon slider runs 0..HORIZON_SLIDER_MS in whole frame periods; the "Horizon" box off means no horizon
+HORIZON_SLIDER_MS = 500
+
+
+def hover_text(manifold, phones, i) -> str:
+    """The readout of frame ``i`` under the pointer: frame, utterance, time, phone, state, tangent class."""
+    c = manifold.corpus_
+    u = c.utterances[int(c.utterance_index[i])]
+    cls = int(manifold.tangent_.classes_[i])
+    return (f"frame {i} ({u.id}, t={(i - u.start) / c.rate:.3f} s) · phone {phones[i] or '—'} · "
+            f"state {int(manifold.states_.labels_[i])} · {CLASS_LABELS[cls] if cls >= 0 else 'no forward step'}")
 
 
 def axes_origin(Y, plane_point, S, V, length_scale) -> np.ndarray:
@@ -36,6 +53,41 @@ def axes_origin(Y, plane_point, S, V, length_scale) -> np.ndarray:
     W = np.cross(V, S)
     d = np.asarray(Y, float)[:, :3] - plane_point
     return np.asarray(plane_point, float) + (d @ S).min() * S + ((d @ W).max() + 0.05 * length_scale) * W
+
+
+def configure_scalar_bar(bar, coloring) -> None:
+    """Set a vtkScalarBarActor to show ``coloring``'s scale: a colour map, or a discrete table with
+    labels at whole values (hop distance: one band per hop, a label at each whole hop)."""
+    if coloring.cmap is None:
+        return
+    import pyvista as pv
+    from vtkmodules.vtkCommonCore import vtkDoubleArray
+
+    lo, hi = coloring.clim
+    if isinstance(coloring.cmap, str):
+        lut = pv.LookupTable(cmap=coloring.cmap)
+        lut.scalar_range = (lo, hi)
+    else:
+        table = np.asarray(coloring.cmap, dtype=np.float64)
+        lut = pv.LookupTable()
+        lut.SetNumberOfTableValues(len(table))
+        for k, (r, g, b) in enumerate(table):
+            lut.SetTableValue(k, r, g, b, 1.0)
+        lut.SetRange(lo, hi)
+    bar.SetLookupTable(lut)
+    bar.SetTitle(coloring.title)
+    if coloring.ticks is not None:
+        arr = vtkDoubleArray()
+        for t in coloring.ticks:
+            arr.InsertNextValue(float(t))
+        bar.SetUseCustomLabels(True)
+        bar.SetCustomLabels(arr)
+        bar.SetLabelFormat("%.0f")
+        bar.SetMaximumNumberOfColors(len(coloring.cmap))
+    else:
+        bar.SetUseCustomLabels(False)
+        bar.SetLabelFormat("%-#6.3g")
+        bar.SetMaximumNumberOfColors(256)
 
 
 class ManifoldView(QtWidgets.QWidget):
@@ -76,13 +128,41 @@ class ManifoldView(QtWidgets.QWidget):
         self.axes_box.setChecked(True)
         self.axes_box.setToolTip("Show the global shape (S) and velocity (V) directions")
         self.clear_btn = QtWidgets.QPushButton("Clear")
-        self.clear_btn.setToolTip("Clear the selection (Esc)")
+        self.clear_btn.setToolTip("Clear the selection and reset colours, horizon and readouts (Esc)")
+        self.horizon_box = QtWidgets.QCheckBox("Horizon")
+        self.horizon_box.setChecked(True)
+        self.horizon_box.setToolTip("Colour only the states reachable within the time horizon (untick: every "
+                                    "reachable state)")
+        self.horizon_slider = QtWidgets.QSlider(QtCore.Qt.Orientation.Horizontal)
+        self.horizon_slider.setMinimumWidth(120)
+        self.horizon_slider.setToolTip("Time horizon of the hemisphere in ms: states more hops away than fit in "
+                                       "this time at the corpus frame rate are dimmed")
+        self.horizon_label = QtWidgets.QLabel("")
+        self.phone_edit = QtWidgets.QLineEdit()
+        self.phone_edit.setPlaceholderText("all phones")
+        self.phone_edit.setMaximumWidth(140)
+        self.phone_edit.setToolTip("Phones to colour, separated by spaces (e.g. 'p b m'); the others are dimmed. "
+                                   "Empty: all phones")
+        self.view_btns = {}
+        for key, label, tip in (("side", "Side", "The S–V plane face on: opening half above the zero-velocity "
+                                 "plane, closing half below"),
+                                ("top", "Top", "Looking down V onto the zero-velocity plane"),
+                                ("default", "Reset", "The default view: both halves, the plane slightly from "
+                                 "above")):
+            b = QtWidgets.QToolButton()
+            b.setText(label)
+            b.setToolTip(tip)
+            b.clicked.connect(lambda _=False, k=key: self.standard_view(k))
+            self.view_btns[key] = b
         self.info = QtWidgets.QLabel("Click a point to select its state")
+        self.hover_label = QtWidgets.QLabel("")
+        self.hover_label.setStyleSheet("color: #444")
 
         bar = QtWidgets.QHBoxLayout()
         bar.setContentsMargins(4, 2, 4, 2)
-        for w in (QtWidgets.QLabel("Colour:"), self.color_box, self.hemi_box, self.path_box, self.points_box,
-                  self.plane_box, self.axes_box, self.clear_btn):
+        for w in (QtWidgets.QLabel("Colour:"), self.color_box, self.phone_edit, self.hemi_box, self.horizon_box,
+                  self.horizon_slider, self.horizon_label, self.path_box, self.points_box, self.plane_box,
+                  self.axes_box, *self.view_btns.values(), self.clear_btn):
             bar.addWidget(w)
         bar.addStretch(1)
         self.plotter = make_plotter(self)
@@ -93,6 +173,7 @@ class ManifoldView(QtWidgets.QWidget):
         lay.addLayout(bar)
         lay.addWidget(self.plotter.interactor, 1)
         lay.addWidget(self.info)
+        lay.addWidget(self.hover_label)
 
         self.color_box.currentIndexChanged.connect(lambda _: state.set_color_mode(self.color_box.currentData()))
         self.hemi_box.currentIndexChanged.connect(lambda _: state.set_hemisphere(self.hemi_box.currentData()))
@@ -100,9 +181,20 @@ class ManifoldView(QtWidgets.QWidget):
         self.points_box.toggled.connect(self._show_points)
         self.plane_box.toggled.connect(lambda on: self._set_visible("plane", on))
         self.axes_box.toggled.connect(self._show_axes)
-        self.clear_btn.clicked.connect(state.clear_selection)
-        esc = QtGui.QShortcut(QtGui.QKeySequence(QtCore.Qt.Key.Key_Escape), self)
-        esc.activated.connect(state.clear_selection)
+        self.clear_btn.clicked.connect(state.reset_view)
+        self.esc_shortcut = QtGui.QShortcut(QtGui.QKeySequence(QtCore.Qt.Key.Key_Escape), self)
+        self.esc_shortcut.activated.connect(state.reset_view)
+        self.horizon_box.toggled.connect(lambda _on: self._push_horizon())
+        self.horizon_slider.valueChanged.connect(lambda _v: self._push_horizon())
+        self.phone_edit.editingFinished.connect(self._push_phone_filter)
+        # hover: the latest pointer position is looked up at most every HOVER_INTERVAL_MS
+        self._hover_pos = None
+        self._hover_xy = None
+        self._hover_timer = QtCore.QTimer(self)
+        self._hover_timer.setSingleShot(True)
+        self._hover_timer.setInterval(self.HOVER_INTERVAL_MS)
+        self._hover_timer.timeout.connect(self._do_hover)
+        self._hover_observer = None
 
         ev = state.events
         # one handler for everything one action changes: a click (frame, state, target, path,
@@ -113,6 +205,7 @@ class ManifoldView(QtWidgets.QWidget):
         ]
         self.n_recolors = 0
         connect_all(self._connections)
+        self._sync_horizon()
         if state.manifold is not None:
             self.rebuild()
 
@@ -123,7 +216,9 @@ class ManifoldView(QtWidgets.QWidget):
         if self.picker is not None:
             self.picker.remove()
         p.clear_actors()
+        scene.overlay_renderer(p).RemoveAllViewProps()
         self.handles, self.ellipsoids, self.members = {}, {}, {}
+        self._hover_cache = None
         self._legend_mode = None
         m = self.state.manifold
         if m is None:
@@ -149,6 +244,8 @@ class ManifoldView(QtWidgets.QWidget):
         h["synthetic"] = scene.add_trajectory(p, None, scene.SYNTHETIC_COLOUR, name="synthetic")
         h["play_o"] = scene.add_marker(p, None, 0.016 * L, color=scene.ORIGINAL_COLOUR, name="play_original")
         h["play_s"] = scene.add_marker(p, None, 0.016 * L, color=scene.SYNTHETIC_COLOUR, name="play_synthetic")
+        for key in self.OVERLAY:  # drawn over the cloud: never buried inside it
+            scene.move_to_overlay(p, h[key])
         self._bar = self._make_scalar_bar()
         self.locator = PointLocator(Y)
         self.picker = scene.enable_click_picking(p, h["points"].actor, self._on_pick)
@@ -162,9 +259,60 @@ class ManifoldView(QtWidgets.QWidget):
         self._on_path(render=False)
         self._on_trajectories(render=False)
         self._on_phones(render=False)
-        p.renderer.ResetCamera(*h["points"].mesh.bounds)  # frame the cloud, not the plane (VTK's: no render)
+        self._install_hover()
+        self.standard_view("default", render=False)
         p.camera_set = True  # keep this framing (pyvista re-frames everything on first camera access otherwise)
         self.renderer.request()
+
+    #: handles drawn in the overlay layer, over the cloud
+    OVERLAY = ("marker", "target", "path", "local", "original", "synthetic", "play_o", "play_s")
+    #: milliseconds between two hover look-ups while the pointer moves
+    HOVER_INTERVAL_MS = 60
+
+    def standard_view(self, name: str, render: bool = True) -> None:
+        """Put the camera in a standard view: "side" (S–V plane), "top" (down V) or "default"."""
+        m = self.state.manifold
+        if m is None or "points" not in self.handles:
+            return
+        t = m.tangent_
+        pos, focal, up = standard_camera(name, m.Fy_[:, :3], t.plane_point_, t.S_, t.plane_normal_)
+        cam = self.plotter.renderer.GetActiveCamera()
+        cam.SetPosition(*pos)
+        cam.SetFocalPoint(*focal)
+        cam.SetViewUp(*up)
+        self.plotter.renderer.ResetCamera(*self.handles["points"].mesh.bounds)  # fit the cloud, same direction
+        self.plotter.renderer.ResetCameraClippingRange()
+        if render:
+            self.renderer.request()
+
+    # ---------------------------------------------------------------- hover
+    def _install_hover(self):
+        iren = getattr(self.plotter, "iren", None)
+        if self._hover_observer is None and iren is not None and getattr(iren, "interactor", None) is not None:
+            self._hover_observer = iren.add_observer("MouseMoveEvent", self._on_mouse_move)
+
+    def _on_mouse_move(self, _obj, _event):
+        iren = self.plotter.iren.interactor
+        self._hover_pos = tuple(iren.GetEventPosition())
+        if not self._hover_timer.isActive():
+            self._hover_timer.start()
+
+    def _do_hover(self):
+        if self._hover_pos is None or self.state.manifold is None or "points" not in self.handles:
+            return
+        self.state.set_hover(self.hover_frame(self._hover_pos))
+
+    def hover_frame(self, display_xy, radius: float = 6.0):
+        """The frame drawn under display position ``display_xy`` (pixels, origin bottom left), or None."""
+        M, size = view_transform(self.plotter)
+        key = (M.tobytes(), size)
+        if self._hover_cache is None or self._hover_cache[0] != key:  # re-project only when the camera moved
+            xy, depth = project(self.handles["points"].mesh.points, M, size)
+            self._hover_cache = (key, xy, depth)
+        _, xy, depth = self._hover_cache
+        if not self.handles["points"].visible:
+            return None
+        return nearest_on_screen(xy, depth, display_xy, radius)
 
     def _make_scalar_bar(self):
         import pyvista as pv
@@ -178,7 +326,7 @@ class ManifoldView(QtWidgets.QWidget):
         bar.SetHeight(0.6)
         bar.SetNumberOfLabels(4)
         bar.UnconstrainedFontSizeOn()
-        bar.SetVerticalTitleSeparation(6)
+        bar.SetVerticalTitleSeparation(14)
         for tp in (bar.GetLabelTextProperty(), bar.GetTitleTextProperty()):
             tp.SetColor(0.1, 0.1, 0.1)
             tp.SetShadow(False)
@@ -219,17 +367,26 @@ class ManifoldView(QtWidgets.QWidget):
     def _on_changed(self, names) -> None:
         """Bring the view up to date with one action's changed fields (``events.changed``)."""
         if "manifold" in names:
+            self._sync_horizon()
+            self._sync_phone_edit()
             self.rebuild()
             return
+        if names & {"hover"}:
+            self._update_hover()
         if "points" not in self.handles:
             return
         s = self.state
         selection = bool(names & {"frame", "state", "target"})
-        recolor = (bool(names & {"color_mode", "hemisphere"})
-                   or (s.color_mode == "distance" and "state" in names)
+        recolor = (bool(names & {"color_mode", "hemisphere", "visible_phones"})
+                   or (s.color_mode == "distance" and bool(names & {"state", "horizon_ms"}))
+                   or (s.color_mode == "phone" and "phone_filter" in names)
                    or (s.color_mode == "utterance" and "utterance" in names))
         if names & {"color_mode", "hemisphere"}:
             self._sync_mode_boxes()
+        if "horizon_ms" in names:
+            self._sync_horizon()
+        if "phone_filter" in names:
+            self._sync_phone_edit()
         if selection:
             self._on_selection(render=False, recolor=False)
         if "path" in names:
@@ -244,7 +401,7 @@ class ManifoldView(QtWidgets.QWidget):
             self._update_info()
         if names & {"playback", "playing"} and "trajectory" not in names:
             self._on_playback(render=False)
-        if recolor or selection or names & {"path", "trajectory", "visible_phones"}:
+        if recolor or selection or names & {"path", "trajectory", "visible_phones", "horizon_ms", "phone_filter"}:
             self.renderer.request()
         elif names & {"playback", "playing"}:
             self._request_playback_render()
@@ -253,6 +410,51 @@ class ManifoldView(QtWidgets.QWidget):
         with blocked(self.color_box, self.hemi_box):
             self.color_box.setCurrentIndex(COLOR_MODES.index(self.state.color_mode))
             self.hemi_box.setCurrentIndex(HEMISPHERES.index(self.state.hemisphere))
+        self.phone_edit.setEnabled(self.state.color_mode == "phone")
+
+    def _frame_ms(self) -> float:
+        m = self.state.manifold
+        return 1000.0 / float(m.corpus_.rate) if m is not None else 1000.0 / 60.0
+
+    def _push_horizon(self):
+        """The slider moves in whole frame periods (one hop each); the state holds milliseconds."""
+        ms = self.horizon_slider.value() * self._frame_ms() if self.horizon_box.isChecked() else None
+        self.state.set_horizon(ms)
+
+    def _sync_horizon(self):
+        """Slider, box and label from the state's horizon (ms, and hops at the corpus rate)."""
+        from engine.horizon import horizon_hops
+
+        ms = self.state.horizon_ms
+        m = self.state.manifold
+        step = self._frame_ms()
+        with blocked(self.horizon_box, self.horizon_slider):
+            self.horizon_box.setChecked(ms is not None)
+            self.horizon_slider.setRange(0, int(HORIZON_SLIDER_MS // step))  # positions = frame periods = hops
+            if ms is not None:
+                self.horizon_slider.setValue(int(np.floor(min(ms, HORIZON_SLIDER_MS) / step + 1e-9)))
+        self.horizon_slider.setEnabled(ms is not None)
+        if ms is None:
+            self.horizon_label.setText("all hops")
+        elif m is None:
+            self.horizon_label.setText(f"{ms:.0f} ms")
+        else:
+            H = horizon_hops(ms / 1000.0, m.corpus_.rate)
+            self.horizon_label.setText(f"{ms:.0f} ms = {H} hop{'s' if H != 1 else ''}")
+
+    def _push_phone_filter(self):
+        words = self.phone_edit.text().replace(",", " ").split()
+        try:
+            self.state.set_phone_filter(words)
+        except ValueError as exc:
+            QtWidgets.QMessageBox.warning(self, "Lipspace", str(exc))
+            self._sync_phone_edit()
+
+    def _sync_phone_edit(self):
+        text = " ".join(sorted(self.state.phone_filter))
+        if self.phone_edit.text() != text:
+            with blocked(self.phone_edit):
+                self.phone_edit.setText(text)
 
     def _on_mode(self, render=True):
         self._sync_mode_boxes()
@@ -265,25 +467,18 @@ class ManifoldView(QtWidgets.QWidget):
         self.n_recolors += 1
         self.coloring = c
         self.handles["points"].set_colors(c.rgb, c.values)
-        bar = self._bar
-        if c.cmap is not None:
-            import pyvista as pv
-
-            lut = pv.LookupTable(cmap=c.cmap)
-            lut.scalar_range = c.clim
-            bar.SetLookupTable(lut)
-            bar.SetTitle(c.title)
-            bar.SetVisibility(self.points_box.isChecked())
-        else:
-            bar.SetVisibility(False)
-        want_legend = self.state.color_mode == "class"
-        if want_legend != (self._legend_mode == "class"):
-            if want_legend:
-                self.plotter.add_legend([[name, col] for name, col in c.legend], bcolor="white", border=False,
-                                        size=(0.2, 0.1), loc="lower left", face="circle")
-            else:
+        configure_scalar_bar(self._bar, c)
+        self._bar.SetVisibility(c.cmap is not None and self.points_box.isChecked())
+        legend = tuple((n, tuple(col)) for n, col in c.legend)
+        if legend != self._legend_mode:
+            if self._legend_mode:
                 self.plotter.remove_legend(render=False)
-            self._legend_mode = "class" if want_legend else None
+            if legend:
+                rows = len(legend)
+                self.plotter.add_legend([[n, col] for n, col in legend], bcolor="white", border=False,
+                                        size=(0.22, min(0.6, 0.035 * rows + 0.02)), loc="lower left",
+                                        face="circle")
+            self._legend_mode = legend or None
         self._update_info()
         if render:
             self.renderer.request()
@@ -321,20 +516,22 @@ class ManifoldView(QtWidgets.QWidget):
             u = m.corpus_.utterances[int(m.corpus_.utterance_index[s.frame])]
             ph = s.phones[s.frame] or "—"
             cls = int(m.tangent_.classes_[s.frame])
-            from app.state import CLASS_LABELS
-
             parts.append(f"frame {s.frame} ({u.id}, t={(s.frame - u.start) / m.corpus_.rate:.2f} s, phone {ph}, "
                          f"{CLASS_LABELS[cls] if cls >= 0 else 'no step'})")
         if s.state is not None:
             parts.append(f"state {s.state}")
-            if self.coloring is not None and self.coloring.values is not None and s.color_mode == "distance":
-                v = self.coloring.values
-                parts.append(f"{s.hemisphere}: {int(np.isfinite(v).sum())}/{len(v)} frames reachable")
+        if self.coloring is not None and self.coloring.readout and (s.state is not None or s.color_mode != "distance"):
+            parts.append(self.coloring.readout)
         if s.target is not None:
             parts.append(f"target {s.target}: " + (f"{len(s.path) - 1} hops" if s.path is not None
                                                   else "unreachable"))
         self.info.setText("; ".join(parts) if parts else "Click a point to select its state "
                           "(Shift-click or tick Path for a path to a second state)")
+
+    def _update_hover(self):
+        s = self.state
+        self.hover_label.setText("" if s.hover is None or s.manifold is None else
+                                 "under the pointer: " + hover_text(s.manifold, s.phones, s.hover))
 
     def _on_path(self, render=True):
         if "path" not in self.handles:
@@ -386,8 +583,6 @@ class ManifoldView(QtWidgets.QWidget):
     def _on_phones(self, render=True):
         if "points" not in self.handles:
             return
-        from app.state import ellipsoid_colors
-
         want = self.state.visible_phones
         colours = ellipsoid_colors(want)
         Y = self.state.manifold.Fy_
@@ -416,6 +611,10 @@ class ManifoldView(QtWidgets.QWidget):
 
     def close_view(self) -> None:
         disconnect_all(self._connections)
+        self._hover_timer.stop()
+        if self._hover_observer is not None:
+            self.plotter.iren.remove_observer(self._hover_observer)
+            self._hover_observer = None
         if self.picker is not None:
             self.picker.remove()
         self.renderer.stop()

@@ -104,5 +104,11 @@ class ScreePanel(QtWidgets.QWidget):
         ratio = float(m.shape_.scree_[k]) if k < len(m.shape_.scree_) else float("nan")
         self.readout.setText(f"X{k + 1}: {100 * ratio:.1f}% of the variance")
 
+    def hideEvent(self, event) -> None:  # noqa: N802 (Qt)
+        """Leaving the panel (another tab, dock closed) ends the component view: the lip view follows clicks."""
+        if self.state.component is not None:
+            self.state.set_component(None)
+        super().hideEvent(event)
+
     def close_view(self) -> None:
         disconnect_all(self._connections)

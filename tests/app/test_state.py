@@ -4,9 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.state import (COLOR_MODES, UNREACHABLE_RGB, AppState, Event, frame_phones, hop_distance_colors,
-                       hop_distance_scalars, hop_distances, knn_density, original_trajectory, phone_palette,
-                       point_colors)
+from app.colouring import UNREACHABLE_RGB, point_colors
+from app.state import DEFAULT_HORIZON_MS, AppState, Event, frame_phones, knn_density, original_trajectory
 
 
 # ----------------------------------------------------------------------------- Event
@@ -69,7 +68,7 @@ def test_select_frame_validates(app_manifold):
     with pytest.raises(TypeError):
         s.select_frame(1.5)
     with pytest.raises(ValueError, match="hemisphere"):
-        s.set_hemisphere("both")
+        s.set_hemisphere("sideways")
     with pytest.raises(ValueError, match="colour mode"):
         s.set_color_mode("rainbow")
     with pytest.raises(RuntimeError, match="no manifold"):
@@ -128,6 +127,7 @@ def test_hemisphere_off_marks_only_the_selected_state(app_manifold):
     mine = m.states_.labels_ == s.state
     assert np.all(c.values[mine] == 0) and np.isnan(c.values[~mine]).all()
     np.testing.assert_allclose(c.rgb[~mine][0], UNREACHABLE_RGB, atol=1e-6)
+    assert len(np.unique(c.rgb[mine], axis=0)) == 1 and not np.allclose(c.rgb[mine][0], UNREACHABLE_RGB)
 
 
 def test_utterance_trajectory_and_playback(app_manifold):
@@ -176,63 +176,6 @@ def test_visible_phones_and_component(app_manifold):
 
 
 # ----------------------------------------------------------------------------- derived data
-def test_hop_distance_scalars_and_colours():
-    dist = np.array([0.0, 1.0, 4.0, np.inf])
-    labels = np.array([0, 0, 1, 2, 3, 3])
-    v = hop_distance_scalars(dist, labels)
-    np.testing.assert_array_equal(v[:4], [0, 0, 1, 4])
-    assert np.isnan(v[4:]).all()
-    rgb, values, clim = hop_distance_colors(dist, labels)
-    assert clim == (0.0, 4.0)
-    np.testing.assert_allclose(rgb[4], UNREACHABLE_RGB, atol=1e-6)
-    assert rgb[0][0] > 0.4 and rgb[0][2] < 0.1  # distance 0 is red (paper: most similar = red)
-    assert rgb[3][2] > 0.4 and rgb[3][0] < 0.1  # farthest is blue
-
-
-def test_point_colors_distance_marks_selected_state_and_unreachable(app_manifold):
-    m = app_manifold
-    s = AppState(m)
-    s.select_frame(200)
-    c = point_colors("distance", m, s)
-    mine = m.states_.labels_ == s.state
-    assert np.all(c.values[mine] == 0)
-    d = hop_distances(m, s.state, "future")
-    unreach = ~np.isfinite(d[m.states_.labels_])
-    assert np.array_equal(np.isnan(c.values), unreach)
-    np.testing.assert_allclose(c.rgb[unreach], np.broadcast_to(UNREACHABLE_RGB, (unreach.sum(), 3)), atol=1e-6)
-    s.set_hemisphere("past")
-    cp = point_colors("distance", m, s)
-    np.testing.assert_array_equal(np.nan_to_num(cp.values, nan=-1),
-                                  np.nan_to_num(hop_distance_scalars(m.states_.past(s.state), m.states_.labels_),
-                                                nan=-1))
-
-
-def test_point_colors_every_mode(app_manifold):
-    m = app_manifold
-    s = AppState(m)
-    s.set_utterance(m.corpus_.utterances[0].id)
-    N = m.Fy_.shape[0]
-    for mode in COLOR_MODES:
-        c = point_colors(mode, m, s)
-        assert c.rgb.shape == (N, 3) and c.rgb.dtype == np.float32
-        assert np.all((c.rgb >= 0) & (c.rgb <= 1))
-    cls = point_colors("class", m, s)
-    k = m.tangent_.classes_
-    for a in range(4):  # one colour per class
-        assert len(np.unique(cls.rgb[k == a], axis=0)) == 1
-    utt = point_colors("utterance", m, s)
-    u = m.corpus_.utterances[0]
-    assert np.all(utt.rgb[u.start:u.stop] == 0)  # the current utterance in black
-    ph = point_colors("phone", m, s)
-    pal = phone_palette(s)
-    f = int(np.flatnonzero(s.phones != "")[0])
-    np.testing.assert_allclose(ph.rgb[f], pal[s.phones[f]], atol=1e-6)
-    dens = point_colors("density", m, s)
-    assert dens.values.shape == (N,) and np.isfinite(dens.values).all()
-    with pytest.raises(ValueError):
-        point_colors("bogus", m, s)
-
-
 def test_knn_density_is_higher_in_a_dense_cluster():
     rng = np.random.default_rng(0)
     Y = np.vstack([rng.normal(0, 0.1, (200, 3)), rng.normal(5, 2.0, (200, 3))])
@@ -376,3 +319,55 @@ def test_selected_state_targets_are_inserted_and_synthesis_passes_through_them(a
     with pytest.raises(TargetError, match="outside the state graph"):
         from app.state import insert_state_target
         insert_state_target(m, tg, K)
+
+
+# ----------------------------------------------------------------------------- state hygiene
+def test_new_manifold_and_reset_view_restore_the_default_view(app_manifold):
+    m = app_manifold
+    s = AppState(m)
+    s.select_frame(40)
+    s.set_hemisphere("both")
+    s.set_horizon(250)
+    s.set_component(1)
+    s.set_hover(7)
+    s.set_path_mode(True)
+    ph = sorted(set(s.phones.tolist()) - {""})[:2]
+    s.set_phone_filter(ph)
+    s.set_visible_phones(ph[:1])
+    assert s.color_mode == "distance"
+    changes = _changes(s)
+    s.reset_view()  # Esc
+    assert (s.frame, s.state, s.target, s.path, s.component, s.hover) == (None,) * 6
+    assert (s.color_mode, s.hemisphere, s.horizon_ms, s.path_mode) == ("density", "future", DEFAULT_HORIZON_MS, False)
+    assert s.phone_filter == frozenset() and s.visible_phones == frozenset()
+    assert len(changes) == 1 and {"color_mode", "hemisphere", "horizon_ms", "component", "hover"} <= changes[0]
+    # a new file: the same defaults, whatever the previous file showed
+    s.select_frame(40)
+    s.set_color_mode("phone")
+    s.set_horizon(None)
+    s.set_manifold(m)
+    assert (s.color_mode, s.horizon_ms, s.state, s.hover) == ("density", DEFAULT_HORIZON_MS, None, None)
+
+
+def test_a_click_leaves_the_component_view(app_manifold):
+    s = AppState(app_manifold)
+    s.set_component(0)
+    s.select_frame(12)  # the lip view follows clicks again: it shows the clicked frame, not component 1
+    assert s.component is None and s.frame == 12
+    s.set_component(2)
+    s.select_state(3)
+    assert s.component is None
+
+
+def test_horizon_phone_filter_and_hover_validate(app_manifold):
+    s = AppState(app_manifold)
+    with pytest.raises(ValueError, match="outside 0..1000 ms"):
+        s.set_horizon(-5)
+    with pytest.raises(TypeError, match="milliseconds"):
+        s.set_horizon("100")
+    with pytest.raises(ValueError, match="unknown phone.*zz"):
+        s.set_phone_filter(["zz"])
+    with pytest.raises(IndexError, match="hovered frame"):
+        s.set_hover(app_manifold.Fy_.shape[0])
+    s.set_horizon(None)
+    assert s.horizon_ms is None

@@ -1,0 +1,163 @@
+"""The manifold view on its own (needs a display): horizon, overlay, hover, standard views, legends, Esc."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture(scope="module")
+def view(qapp, app_manifold):
+    from app.state import AppState
+    from app.views.manifold_view import ManifoldView
+
+    v = ManifoldView(AppState(app_manifold))
+    v.resize(1000, 750)
+    v.show()
+    for _ in range(5):
+        qapp.processEvents()
+    yield v
+    v.close_view()
+    v.close()
+
+
+@pytest.fixture
+def fresh(view, qapp):
+    view.state.reset_view()
+    view.renderer.flush(sync=True)
+    return view
+
+
+def _front_state_frame(view, m):
+    cam = np.array(view.plotter.camera.position)
+    return int(np.argmin(np.linalg.norm(m.Fy_[:, :3] - cam, axis=1)))
+
+
+def test_horizon_slider_dims_states_beyond_it_on_an_integer_scale(fresh, qtbot, app_manifold):
+    v, s, m = fresh, fresh.state, app_manifold
+    i = _front_state_frame(v, m)
+    s.select_frame(i)
+    v.horizon_slider.setValue(2)                     # the slider moves in frame periods: 33 ms = 2 hops at 60/s
+    assert s.horizon_ms == pytest.approx(2000 / m.corpus_.rate) and "33 ms = 2 hops" in v.horizon_label.text()
+    vals = v.handles["points"].values
+    d = m.states_.future(s.state)[m.states_.labels_]
+    np.testing.assert_array_equal(np.isfinite(vals), d <= 2)            # what is drawn: hops 0..2, rest NaN
+    rgb = v.handles["points"].rgb
+    assert len(np.unique(rgb[d > 2], axis=0)) == 1                       # one dimmed grey outside
+    bar = v._bar
+    assert bar.GetVisibility() and bar.GetUseCustomLabels()
+    labels = [bar.GetCustomLabels().GetValue(k) for k in range(bar.GetCustomLabels().GetNumberOfTuples())]
+    assert labels == [0.0, 1.0, 2.0]                                    # ticks at whole hops only
+    assert bar.GetLookupTable().GetNumberOfTableValues() == 3
+    assert f"{100 * (d <= 2).mean():.1f}% of frames" in v.info.text()
+    v.horizon_box.setChecked(False)                                     # no horizon: every reachable state
+    assert s.horizon_ms is None and np.isfinite(v.handles["points"].values).sum() == np.isfinite(d).sum()
+    v.hemi_box.setCurrentIndex(v.hemi_box.findData("both"))
+    assert (v.handles["points"].values < 0).any()                       # the past side, on the same scale
+
+
+def test_selection_path_and_trajectories_are_drawn_over_the_cloud(fresh, app_manifold):
+    v, s, m = fresh, fresh.state, app_manifold
+    overlay = v.plotter._lipspace_overlay
+    assert overlay.GetLayer() == 1 and v.plotter.render_window.GetNumberOfLayers() >= 2
+    assert overlay.GetActiveCamera() is v.plotter.renderer.GetActiveCamera()
+    for key in ("marker", "target", "path", "original", "synthetic"):
+        assert overlay.HasViewProp(v.handles[key].actor) and not v.plotter.renderer.HasViewProp(v.handles[key].actor)
+    assert v.plotter.renderer.HasViewProp(v.handles["points"].actor)
+    # a selected frame deep inside the cloud still shows its yellow marker on screen
+    centre = m.Fy_[:, :3].mean(0)
+    i = int(np.argmin(np.linalg.norm(m.Fy_[:, :3] - centre, axis=1)))
+    s.select_frame(i)
+    v.renderer.flush(sync=True)
+    from app.scene import pick_display_point
+
+    x, y = pick_display_point(v.plotter, m.Fy_[i, :3])
+    img = v.plotter.screenshot()
+    h = img.shape[0]
+    patch = img[h - 1 - int(y) - 2:h - 1 - int(y) + 3, int(x) - 2:int(x) + 3].reshape(-1, 3).astype(int)
+    yellow = (patch[:, 0] > 200) & (patch[:, 1] > 170) & (patch[:, 2] < 80)
+    assert yellow.any(), patch
+
+
+def test_hover_reads_out_the_frame_under_the_pointer(fresh, qtbot, app_manifold):
+    from app.scene import pick_display_point
+    from app.views.manifold_view import hover_text
+
+    v, s, m = fresh, fresh.state, app_manifold
+    i = _front_state_frame(v, m)
+    x, y = pick_display_point(v.plotter, m.Fy_[i, :3])
+    got = v.hover_frame((x, y))
+    assert got is not None and np.linalg.norm(m.Fy_[got, :3] - m.Fy_[i, :3]) < 0.05 * np.ptp(m.Fy_[:, :3])
+    assert v.hover_frame((-50, -50)) is None
+    s.set_hover(got)
+    text = v.hover_label.text()
+    assert f"frame {got}" in text and f"state {int(m.states_.labels_[got])}" in text and "phone" in text
+    assert hover_text(m, s.phones, got) in text
+    assert s.frame is None                                             # hovering never selects
+
+
+def test_standard_views_and_the_default_camera(fresh, app_manifold):
+    v, m = fresh, app_manifold
+    t = m.tangent_
+    V = t.plane_normal_ / np.linalg.norm(t.plane_normal_)
+    cam = v.plotter.renderer.GetActiveCamera()
+
+    def view_dir():
+        return np.subtract(cam.GetFocalPoint(), cam.GetPosition()) / cam.GetDistance()
+
+    v.view_btns["side"].click()
+    assert abs(view_dir() @ V) < 1e-6 and np.dot(cam.GetViewUp(), V) > 0.999   # the plane seen edge on
+    v.view_btns["top"].click()
+    assert view_dir() @ V < -0.999                                       # looking down V
+    v.view_btns["default"].click()
+    assert -0.6 < view_dir() @ V < -0.2                                  # from above, but both halves apart
+
+
+def test_phone_colouring_has_a_legend_and_a_filter(fresh, qtbot, app_manifold):
+    v, s = fresh, fresh.state
+    v.color_box.setCurrentIndex(v.color_box.findData("phone"))
+    assert v.phone_edit.isEnabled()
+    legend = v.plotter.legend
+    assert legend is not None and legend.GetNumberOfEntries() <= 17
+    v.phone_edit.setText("p b m")
+    v.phone_edit.editingFinished.emit()
+    assert s.phone_filter == {"p", "b", "m"}
+    assert v.plotter.legend.GetNumberOfEntries() == 3
+    s.set_visible_phones(["p"])                                          # ellipsoid shown: points dimmed
+    from app.colouring import OUTSIDE_RGB
+
+    rgb = v.handles["points"].rgb.astype(float) / 255
+    assert np.abs(rgb - np.asarray(OUTSIDE_RGB)).max(axis=1).mean() < 0.2
+
+
+def test_esc_resets_colour_bar_and_readouts(fresh, qtbot, app_manifold):
+    from PySide6 import QtCore, QtGui
+
+    v, s = fresh, fresh.state
+    s.select_frame(_front_state_frame(v, app_manifold))
+    s.set_component(0)
+    assert s.color_mode == "distance" and "hops" in v._bar.GetTitle()
+    assert v.esc_shortcut.key().matches(QtGui.QKeySequence(QtCore.Qt.Key.Key_Escape)) == \
+        QtGui.QKeySequence.SequenceMatch.ExactMatch
+    v.esc_shortcut.activated.emit()  # Esc (no window manager under Xvfb gives the test window the focus)
+    assert s.color_mode == "density" and s.state is None and s.component is None
+    assert v._bar.GetTitle() == "log density" and not v._bar.GetUseCustomLabels()
+    assert v.color_box.currentData() == "density"
+    assert "Click a point" in v.info.text()
+
+
+def test_leaving_the_component_panel_returns_the_lips_to_the_selection(qapp, app_manifold):
+    from app.state import AppState
+    from app.views.scree_panel import ScreePanel
+
+    s = AppState(app_manifold)
+    panel = ScreePanel(s)
+    panel.show()
+    qapp.processEvents()
+    panel.show_box.setChecked(True)
+    assert s.component == 0
+    panel.hide()  # another dock tab raised, or the dock closed
+    qapp.processEvents()
+    assert s.component is None and not panel.show_box.isChecked()
+    panel.close_view()
