@@ -159,7 +159,12 @@ def run(args) -> int:
         groups = [inputs] if fmt == "mesh" and len(inputs) > 1 else [[p] for p in inputs]
         job = {"format": fmt, "rate": args.rate, "alignment": alignment, "options": kw,
                "audio_dir": args.audio_dir, "speaker": args.speaker, "speaker_from": args.speaker_from}
-        if len(groups) == 1:
+        if len(groups) == 1 and fmt == "video":  # tracking a face takes a while: show it
+            from app.cli._common import progress_bar
+
+            with progress_bar(disable=True if args.quiet else None) as progress:
+                parts = [_read_group(groups[0], {**job, "options": {**kw, "progress": progress}})]
+        elif len(groups) == 1:
             parts = [_read_group(groups[0], job)]
         else:
             parts = _read_many(groups, job, args)

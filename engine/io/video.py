@@ -87,6 +87,20 @@ def iter_video_frames(path):
         container.close()
 
 
+def _frame_count(path) -> int:
+    """The stream's stated frame count, else duration x rate (0 when neither is known): for progress only."""
+    container = _open(path)
+    try:
+        st = container.streams.video[0]
+        if st.frames:
+            return int(st.frames)
+        if st.duration and st.time_base and (st.average_rate or st.guessed_rate):
+            return int(float(st.duration * st.time_base) * float(st.average_rate or st.guessed_rate))
+        return 0
+    finally:
+        container.close()
+
+
 def video_rate(path) -> float:
     """The video stream's frame rate (Hz): its average rate, else its guessed rate."""
     container = _open(path)
@@ -114,6 +128,7 @@ def track_video(path, *, tracker=None, progress=None):
     from engine.io.facemesh import TRACKED_POINTS, FaceTracker
     from engine.progress import report
 
+    total = _frame_count(path) if progress is not None else 0
     own = tracker is None
     tracker = tracker or FaceTracker()
     rows, found = [], []
@@ -124,12 +139,13 @@ def track_video(path, *, tracker=None, progress=None):
             rows.append(nan if lm is None else lm)
             found.append(lm is not None)
             if progress is not None and k % 10 == 0:
-                report(progress, "tracking face", k, 0)
+                report(progress, f"tracking the face in {Path(path).name}", k, max(total, k + 1))
     finally:
         if own:
             tracker.close()
     if not rows:
         raise ImportFormatError(path, "holds no decodable video frames; expected a video of a face")
+    report(progress, f"tracking the face in {Path(path).name}", len(rows), len(rows))
     return np.stack(rows), np.asarray(found, dtype=bool)
 
 
