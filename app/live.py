@@ -115,14 +115,11 @@ class LiveProjector:
         return 0 if self._pose is not None else self.calibration_frames - len(self._calib)
 
     def _fit_pose(self):
-        from engine.headpose import HeadPose
-        from engine.io.facemesh import EYE_CORNERS, LIP_POINTS, REFERENCE_POINTS
+        from engine.io.facemesh import LIP_POINTS
+        from engine.io.video import head_pose_model
 
-        n_lip = len(LIP_POINTS)
-        pos = {p: k for k, p in enumerate(REFERENCE_POINTS)}
-        eyes = tuple((pos[a], pos[b]) for a, b in EYE_CORNERS)
-        ref = np.stack(self._calib)[:, n_lip:]
-        self._pose = HeadPose(interocular_mm=self.interocular_mm, eye_points=eyes, up_point=pos[10]).fit(ref)
+        ref = np.stack(self._calib)[:, len(LIP_POINTS):]
+        self._pose = head_pose_model(self.interocular_mm).fit(ref)
         self._calib = []
 
     def push(self, landmarks, index: int = 0, t: float = 0.0) -> LiveSample | None:

@@ -160,9 +160,12 @@ def read_corpus(path, *, format: str | None = None, rate: float | None = None, a
         raise ValueError(f"format={format!r} is not known; expected one of {sorted(FORMATS)} "
                          f"(or {sorted(FORMAT_ALIASES)})")
     if fmt == "video" and not isinstance(path, (list, tuple)) and Path(str(path)).is_dir():
-        folder, path = path, _videos_in(path)  # a folder of videos, one utterance each (TextGrid / .lab beside)
-        if not path:
-            raise ImportFormatError(folder, "holds no video files; expected .mp4, .mov, .avi, .mkv ... files")
+        videos = _videos_in(path)  # a folder of one speaker's videos, one utterance each (TextGrid / .lab beside)
+        if not videos:
+            raise ImportFormatError(path, "holds no video files; expected .mp4, .mov, .avi, .mkv ... files")
+        from engine.io.video import read_videos
+
+        return read_videos(videos, rate=rate, alignment=alignment, **kw)
     if isinstance(path, (list, tuple)) and fmt != "mesh":  # several files: one utterance each
         from engine.io.combine import concat
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from engine.io.errors import ImportFormatError
 
-__all__ = ["read_video", "iter_video_frames", "track_video", "VIDEO_EXTENSIONS", "DEFAULT_BRIDGE_S",
+__all__ = ["read_video", "read_videos", "head_pose_model", "iter_video_frames", "track_video", "VIDEO_EXTENSIONS", "DEFAULT_BRIDGE_S",
            "AUDIO_RATE", "find_gaps", "segments", "read_audio_track", "video_rate"]
 
 VIDEO_EXTENSIONS = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv")
@@ -232,9 +232,61 @@ def _span(a, b, rate):
     return f"{frames} ({a / rate:.3f}-{b / rate:.3f} s)"
 
 
+def head_pose_model(interocular_mm: float = 63.0):
+    """An unfitted :class:`engine.headpose.HeadPose` for :data:`engine.io.facemesh.REFERENCE_POINTS`."""
+    from engine.headpose import HeadPose
+    from engine.io.facemesh import EYE_CORNERS, REFERENCE_POINTS
+
+    pos = {p: k for k, p in enumerate(REFERENCE_POINTS)}
+    eyes = tuple((pos[a], pos[b]) for a, b in EYE_CORNERS)
+    return HeadPose(interocular_mm=interocular_mm, eye_points=eyes, up_point=pos[10])
+
+
+def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: float = 63.0,
+                bridge_s: float = DEFAULT_BRIDGE_S, audio_dir=None, audio_rate: int = AUDIO_RATE, progress=None):
+    """Several videos of one speaker (e.g. a folder), one utterance each, with one pooled template.
+
+    Every video is tracked first (only its landmarks are kept); the speaker template is then
+    fitted to the reference landmarks of all of them together, and each video is read
+    through it (:func:`read_video` with ``landmarks=`` and ``pose=``). ``alignment`` is None
+    (each video's own ``<stem>.TextGrid`` / ``.lab``), False, or one path / phone list per
+    video. Other parameters as :func:`read_video`.
+
+    Returns
+    -------
+    Corpus of the videos in order (joined by :func:`engine.io.concat`).
+    """
+    from engine.io.combine import concat
+    from engine.io.facemesh import LIP_POINTS
+
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise ValueError("read_videos: no video files given")
+    if isinstance(alignment, (list, tuple)) and len(alignment) == len(paths) and \
+            all(a is False or a is None or isinstance(a, (str, Path)) for a in alignment):
+        aligns = list(alignment)
+    elif isinstance(alignment, (str, Path)):
+        raise ValueError(f"one alignment file for {len(paths)} videos; give one per video or put each video's "
+                         "<stem>.TextGrid / .lab beside it")
+    else:
+        aligns = [alignment] * len(paths)
+    # a fresh tracker per video (video mode tracks from the previous frame: never across two files)
+    tracked = [track_video(p, progress=progress) for p in paths]
+    n_lip = len(LIP_POINTS)
+    refs = [lm[found, n_lip:] for lm, found in tracked if found.any()]
+    if not refs:
+        raise ImportFormatError(paths[0].parent, f"no face found in any frame of its {len(paths)} videos; expected "
+                                "videos of one face seen from the front")
+    pose = head_pose_model(interocular_mm).fit(np.concatenate(refs))
+    parts = [read_video(p, rate=rate, alignment=a, tier=tier, interocular_mm=interocular_mm, bridge_s=bridge_s,
+                        audio_dir=audio_dir, audio_rate=audio_rate, landmarks=t, pose=pose)
+             for p, a, t in zip(paths, aligns, tracked)]
+    return concat(parts)
+
+
 def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: float = 63.0,
                bridge_s: float = DEFAULT_BRIDGE_S, audio_dir=None, audio_rate: int = AUDIO_RATE,
-               tracker=None, progress=None):
+               tracker=None, progress=None, landmarks=None, pose=None):
     """Read a video of one talking face as a corpus of lip landmarks (mm, head pose removed).
 
     Parameters
@@ -261,6 +313,11 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
         Reuse a tracker (default: a new one, closed at the end).
     progress : callable, optional
         ``progress(stage, done, total)``; raise ``engine.progress.Cancelled`` to stop.
+    landmarks : (ndarray (N, 97, 3), ndarray (N,) bool), optional
+        This video's :func:`track_video` result, when already tracked.
+    pose : HeadPose, optional
+        A fitted speaker template (:func:`head_pose_model`) to use instead of fitting one
+        to this video's frames (:func:`read_videos` pools one over a speaker's videos).
 
     Returns
     -------
@@ -276,10 +333,9 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
         Empty, damaged or non-video file; no face in any frame; too few frames with a face.
     """
     from engine.corpus import Corpus, CorpusError, Utterance
-    from engine.headpose import HeadPose
     from engine.io._util import check_rate, fit_phones
     from engine.io.alignment import resolve_alignment
-    from engine.io.facemesh import EYE_CORNERS, LIP_FACES, LIP_NAMES, LIP_POINTS, LIP_ROLES, REFERENCE_POINTS
+    from engine.io.facemesh import LIP_FACES, LIP_NAMES, LIP_POINTS, LIP_ROLES, REFERENCE_POINTS
 
     path = Path(path)
     bridge_s = float(bridge_s)
@@ -287,17 +343,16 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
         raise ValueError(f"bridge_s={bridge_s!r}; expected a duration in seconds >= 0 (default {DEFAULT_BRIDGE_S})")
     native = video_rate(path)
     native = check_rate(path, native, rate)
-    lm, found = track_video(path, tracker=tracker, progress=progress)
+    lm, found = track_video(path, tracker=tracker, progress=progress) if landmarks is None else landmarks
     n = len(found)
     if not found.any():
         raise ImportFormatError(path, f"no face found in any of its {n} frames; expected a video of one face seen "
                                 "from the front, lit well enough to see the lips")
     n_lip = len(LIP_POINTS)
-    ref_pos = {p: n_lip + k for k, p in enumerate(REFERENCE_POINTS)}
-    eyes = tuple((ref_pos[a] - n_lip, ref_pos[b] - n_lip) for a, b in EYE_CORNERS)
-    pose = HeadPose(interocular_mm=interocular_mm, eye_points=eyes, up_point=ref_pos[10] - n_lip)
     ref = lm[found, n_lip:]
-    pose.fit(ref)
+    pooled = pose is not None
+    if pose is None:
+        pose = head_pose_model(interocular_mm).fit(ref)
     lips = np.full((n, n_lip, 3), np.nan)
     lips[found] = pose.transform(ref, lm[found, :n_lip])
     max_bridge = int(np.floor(bridge_s * native + 1e-9))
@@ -320,8 +375,9 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
                                 "consecutive ones; expected a video where the face stays in view")
     desc = (f"head pose removed per frame: similarity Procrustes (rotation, translation, scale) of "
             f"{len(REFERENCE_POINTS)} FaceMesh reference landmarks (forehead, nose bridge, temples, eye corners) to "
-            f"the speaker template, residual {pose.residual_mm_:.2g} mm rms; mm from an assumed inter-ocular "
-            f"distance of {float(interocular_mm):g} mm")
+            f"the speaker template{f' pooled over {pose.n_frames_} frames' if pooled else ''}, residual "
+            f"{pose.residual_mm_:.2g} mm rms; mm from an assumed inter-ocular distance of "
+            f"{float(pose.interocular_mm):g} mm")
     history.append(f"registration: {desc}")
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     pcm = read_audio_track(path, audio_rate) if audio_dir is not None else None

@@ -182,6 +182,12 @@ def test_dispatch_and_folder_of_videos(videos, tmp_path):
     c = read_corpus(folder)
     assert [u.id for u in c.utterances] == ["a", "b"] and c.n_frames == 2 * N
     assert [p.label for p in c.utterances[0].phones] == ["m", "iy"] and c.utterances[1].phones == ()
+    # one speaker template pooled over both videos; each video's lips stay where its own template put them
+    assert f"speaker template pooled over {2 * N} frames" in c.registration
+    for k, key in enumerate(("moving", "still")):
+        mine = videos[key].frames.astype(float)
+        d = np.linalg.norm((c.frames[k * N:(k + 1) * N] - mine).reshape(N, -1, 3), axis=2)
+        assert np.sqrt((d ** 2).mean()) < 0.5
 
 
 def test_cli_import_keeps_video_rate_and_audio(videos, tmp_path):
