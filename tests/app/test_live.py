@@ -29,11 +29,11 @@ def video_world(tmp_path_factory):
     d = tmp_path_factory.mktemp("live")
     img = np.ascontiguousarray(skdata.astronaut()[0:256, 96:352])
     write_video(d / "talk.mp4", moving_image_frames(img, default_motion(N, rate=RATE)), RATE)
-    corpus = read_video(d / "talk.mp4")
-    m = Manifold(n_states=4, n_neighbors=5, n_embedding=3).fit(corpus)
-    m.save(d / "m.npz")
     lm, found = track_video(d / "talk.mp4")
     assert found.all()
+    corpus = read_video(d / "talk.mp4", landmarks=(lm, found))  # tracked once
+    m = Manifold(n_states=4, n_neighbors=5, n_embedding=3).fit(corpus)
+    m.save(d / "m.npz")
     return {"dir": d, "corpus": corpus, "manifold": Manifold.load(d / "m.npz"), "landmarks": lm}
 
 
