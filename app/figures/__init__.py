@@ -4,8 +4,9 @@ Each figure is ``make_<name>(manifold, **opts) -> matplotlib.figure.Figure``; th
 figure carries a ``lipspace`` dict attribute with the numbers it shows (seed
 states, chosen utterance, errors...). :data:`FIGURES` maps names to functions in
 paper order; :func:`export_figure` renders one and saves it atomically as PNG, SVG
-or PDF. 3-D views of the GUI are saved with :func:`save_plotter_image` (PNG) and
-:func:`save_plotter_vector` (SVG/PDF/EPS through VTK's gl2ps).
+or PDF. 3-D views of the GUI are saved with :func:`save_plotter_image` (PNG, at a DPI) and
+:func:`save_plotter_vector` (SVG/PDF/EPS redrawn from the scene's data as vector paths,
+:mod:`app.figures.view_vector`).
 
 No pyplot: every figure owns an Agg canvas, so this works without a display and
 never disturbs a Qt event loop.

@@ -9,20 +9,20 @@ from pathlib import Path
 
 from engine._atomic import atomic_write
 
-__all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure",
+__all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure", "suffix_from_filter",
            "save_plotter_image", "save_plotter_vector", "vector_export_available"]
 
 #: suffix -> matplotlib format name for 2-D figures
 FIGURE_FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
-#: suffixes the VTK gl2ps exporter writes
-VECTOR_3D_FORMATS = (".svg", ".pdf", ".eps", ".ps")
+#: suffixes 3-D views are saved to as vector graphics
+VECTOR_3D_FORMATS = (".svg", ".pdf", ".eps")
 #: metadata that would make output differ run to run (dates) is left out
 _METADATA = {".png": {"Software": "Lipspace"}, ".svg": {"Date": None, "Creator": "Lipspace"},
              ".pdf": {"CreationDate": None, "ModDate": None, "Creator": "Lipspace"}}
 
 
 class VectorExportUnavailable(RuntimeError):
-    """This VTK build cannot write vector graphics (no gl2ps); PNG still works."""
+    """Kept for callers that catch it: vector export no longer depends on the VTK build."""
 
 
 def _suffix(path, allowed, what):
@@ -63,7 +63,12 @@ def save_figure(fig, path, *, dpi: float = 200, transparent: bool = False) -> Pa
     return Path(path)
 
 
-def save_plotter_image(plotter, path, *, scale: int = 1, transparent: bool = False) -> Path:
+#: the screen resolution a view's pixels are taken to have (a PNG at this DPI is the window's size)
+SCREEN_DPI = 96.0
+
+
+def save_plotter_image(plotter, path, *, scale: int = 1, dpi: float | None = None,
+                       transparent: bool = False) -> Path:
     """Save a pyvista plotter's view as PNG via ``plotter.screenshot``, atomically.
 
     Parameters
@@ -71,52 +76,99 @@ def save_plotter_image(plotter, path, *, scale: int = 1, transparent: bool = Fal
     plotter : pyvista.Plotter, pyvistaqt.QtInteractor or BackgroundPlotter
         Must be open (not closed) and have rendered or be able to render.
     path : str or Path
-        Must end in ``.png``.
+        Must end in ``.png`` (any case).
     scale : int, default=1
         Resolution multiplier over the window size (2 doubles width and height).
+    dpi : float, optional
+        Print resolution instead of ``scale``: the view keeps its on-screen size (window
+        pixels at :data:`SCREEN_DPI`) and gets ``dpi`` pixels per inch: it is rendered at
+        the next whole multiple of the window size and resampled to
+        ``round(window * dpi / 96)`` pixels; the PNG records the DPI.
     """
     _suffix(path, (".png",), "a 3-D view image")
     scale = int(scale)
     if scale < 1:
         raise ValueError(f"scale must be a positive integer, got {scale}; 1 keeps the window size")
-    return _write_view(plotter, path, lambda tmp: plotter.screenshot(
-        str(tmp), transparent_background=transparent, scale=scale, return_img=False), "the renderer produced no image")
+    if dpi is None:
+        return _write_view(plotter, path, lambda tmp: plotter.screenshot(
+            str(tmp), transparent_background=transparent, scale=scale, return_img=False),
+            "the renderer produced no image")
+    dpi = float(dpi)
+    if not (30.0 <= dpi <= 1200.0):
+        raise ValueError(f"dpi {dpi:g} is outside 30..1200; 96 keeps the window's pixels, 300 is print quality")
+
+    def write(tmp):
+        import math
+
+        from PIL import Image
+
+        w, h = (int(v) for v in plotter.window_size)
+        k = max(1, math.ceil(dpi / SCREEN_DPI))
+        img = plotter.screenshot(None, transparent_background=transparent, scale=k, return_img=True)
+        size = (max(1, round(w * dpi / SCREEN_DPI)), max(1, round(h * dpi / SCREEN_DPI)))
+        im = Image.fromarray(img)
+        if im.size != size:
+            im = im.resize(size, Image.Resampling.LANCZOS)
+        im.save(tmp, format="PNG", dpi=(dpi, dpi))
+
+    return _write_view(plotter, path, write, "the renderer produced no image")
+
+
+def suffix_from_filter(path, selected_filter: str, allowed=(".png", ".svg", ".pdf")) -> Path:
+    """The path a save dialog means: its own suffix when it is an allowed one (any case), else the
+    chosen filter's suffix appended (``"SVG (*.svg)"`` -> ``.svg``).
+
+    Parameters
+    ----------
+    path : str or Path
+        What the user typed.
+    selected_filter : str
+        The dialog's chosen filter, e.g. ``"PDF (*.pdf)"``.
+    """
+    import re
+
+    path = Path(path)
+    if path.suffix.lower() in allowed:
+        return path
+    m = re.search(r"\*(\.[A-Za-z0-9]+)", selected_filter or "")
+    suf = m.group(1).lower() if m else allowed[0]
+    return path.with_name(path.name + suf)
 
 
 def vector_export_available() -> bool:
-    """True when this VTK build has the gl2ps exporter (SVG/PDF/EPS of 3-D views)."""
-    try:
-        from vtkmodules.vtkIOExportGL2PS import vtkGL2PSExporter  # noqa: F401
-    except ImportError:
-        return False
+    """True: 3-D views are saved as vector graphics from the scene's data (no gl2ps needed)."""
     return True
 
 
-def save_plotter_vector(plotter, path, *, title: str = "Lipspace") -> Path:
-    """Save a pyvista plotter's view as .svg, .pdf, .eps or .ps, atomically.
+def save_plotter_vector(plotter, path, *, title: str | None = None) -> Path:
+    """Save a pyvista plotter's view as .svg, .pdf or .eps vector graphics, atomically.
 
-    Uses VTK's gl2ps exporter (``plotter.save_graphic``). With VTK's OpenGL2 backend
-    (every current VTK wheel) gl2ps writes the 3-D geometry as one embedded raster
-    image at window resolution; text, scalar bars and other 2-D overlays are real
-    vector primitives. For print quality, enlarge the window or use
-    :func:`save_plotter_image` with ``scale=``.
+    The view is redrawn from the scene's data through its camera
+    (:func:`app.figures.view_vector.scene_figure`): points, lines and shaded polygons
+    are vector primitives, the colour bar and legend are drawn again as a matplotlib
+    colour bar and legend. No raster image is embedded. (VTK's gl2ps exporter, with
+    the OpenGL2 backend of current VTK wheels, embeds the 3-D geometry as one image.)
 
-    Raises
-    ------
-    VectorExportUnavailable
-        If this VTK build lacks gl2ps (PNG via :func:`save_plotter_image` still works).
+    Parameters
+    ----------
+    plotter : pyvista plotter, open
+    path : str or Path
+        Suffix .svg, .pdf or .eps, in any case.
+    title : str, optional
+        A title drawn above the view.
     """
     suf = _suffix(path, VECTOR_3D_FORMATS, "a 3-D view as vector graphics")
-    if Path(path).suffix != suf:
-        raise ValueError(f"{path}: write the suffix in lower case ({suf}); gl2ps appends its own suffix")
-    if not vector_export_available():
-        raise VectorExportUnavailable(
-            f"{path}: this VTK build has no gl2ps exporter (vtkmodules.vtkIOExportGL2PS), so 3-D views "
-            f"cannot be saved as {suf}; save the view as PNG instead (save_plotter_image), or install a "
-            "VTK wheel built with gl2ps (the standard PyPI 'vtk' wheels are)")
-    # gl2ps writes <prefix><suffix>; the temporary name keeps the suffix, so it writes tmp itself
-    return _write_view(plotter, path, lambda tmp: plotter.save_graphic(str(tmp), title=title, raster=True,
-                                                                       painter=True), "the gl2ps exporter wrote nothing")
+    if getattr(plotter, "render_window", None) is None:
+        raise ValueError("this plotter is closed; save the view before closing it")
+    from app.figures.view_vector import scene_figure
+
+    fig = scene_figure(plotter, title=title)
+    fmt = suf.lstrip(".")
+    from matplotlib import rc_context
+
+    with rc_context({"svg.hashsalt": "lipspace", "svg.fonttype": "path"}), atomic_write(path) as tmp:
+        fig.savefig(tmp, format=fmt, metadata=_METADATA.get(suf, {}), facecolor=fig.get_facecolor())
+    return Path(path)
 
 
 def _write_view(plotter, path, write, empty_message: str) -> Path:

@@ -436,35 +436,60 @@ def test_png_export_rejects_other_suffixes_and_closed_plotters(plotter, tmp_path
 
 
 @pytest.mark.gui
-@pytest.mark.skipif(not F.vector_export_available(), reason="this VTK build has no gl2ps exporter")
-@pytest.mark.parametrize("suffix", [".svg", ".pdf", ".eps"])
+@pytest.mark.parametrize("suffix", [".svg", ".PDF", ".eps"])
 def test_vector_export_writes_valid_files(plotter, tmp_path, suffix):
-    out = F.save_plotter_vector(plotter, tmp_path / f"view{suffix}")
+    out = F.save_plotter_vector(plotter, tmp_path / f"view{suffix}")  # the suffix in any case
     data = out.read_bytes()
     if suffix == ".svg":
         root = ET.fromstring(data)
         assert root.tag.endswith("svg")
-        tags = {el.tag.rsplit("}", 1)[-1] for el in root.iter()}
-        assert {"image", "text"} <= tags          # 3-D props as an embedded image, the label as text
-    elif suffix == ".pdf":
-        assert data.startswith(b"%PDF")
+    elif suffix == ".PDF":
+        assert data.startswith(b"%PDF") and b"/Subtype /Image" not in data   # no embedded raster
     else:
-        assert data.startswith(b"%!PS")
+        assert data.startswith(b"%!PS") and b"colorimage" not in data and b" image\n" not in data
     assert [p.name for p in tmp_path.iterdir()] == [f"view{suffix}"]
+
+
+@pytest.mark.gui
+def test_vector_export_of_a_3d_view_holds_paths_not_an_image(plotter, tmp_path):
+    from app.figures.view_vector import scene_figure
+
+    fig = scene_figure(plotter)
+    assert fig.lipspace["n_points"] == 30 and fig.lipspace["n_polygons"] > 100   # the 30 dots, the sphere
+    root = ET.fromstring(F.save_plotter_vector(plotter, tmp_path / "view.svg").read_bytes())
+    tags = [el.tag.rsplit("}", 1)[-1] for el in root.iter()]
+    assert "image" not in tags                          # gl2ps embedded the geometry as one PNG
+    assert tags.count("path") > 100                     # sphere facets and dots as vector paths
+    # the sphere's facets keep their colour: red, shaded (not a grey or white fill)
+    fills = [el.get("style", "") for el in root.iter() if el.tag.endswith("path")]
+    assert sum("fill: #" in f and f.split("fill: #")[1][:2] > "80" and f.split("fill: #")[1][2:6] < "3030"
+               for f in fills) > 50
 
 
 @pytest.mark.gui
 def test_vector_export_rejects_raster_suffix(plotter, tmp_path):
     with pytest.raises(ValueError, match=r"\.svg"):
         F.save_plotter_vector(plotter, tmp_path / "view.png")
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.gui
-def test_vector_export_without_gl2ps_says_png_works(plotter, tmp_path, monkeypatch):
-    # a VTK build without gl2ps has no vtkIOExportGL2PS module: importing it fails
-    monkeypatch.setitem(sys.modules, "vtkmodules.vtkIOExportGL2PS", None)
-    assert not F.vector_export_available()
-    (tmp_path / "view.svg").write_text("old")
-    with pytest.raises(F.VectorExportUnavailable, match="PNG"):
-        F.save_plotter_vector(plotter, tmp_path / "view.svg")
-    assert (tmp_path / "view.svg").read_text() == "old"
+def test_png_export_at_a_dpi_keeps_the_size_and_records_it(plotter, tmp_path):
+    from PIL import Image
+
+    out = F.save_plotter_image(plotter, tmp_path / "view.PNG", dpi=300)
+    with Image.open(out) as im:
+        assert im.size == (round(160 * 300 / 96), round(120 * 300 / 96))
+        assert im.info["dpi"] == pytest.approx((300, 300), abs=0.01)
+    with pytest.raises(ValueError, match="outside 30..1200"):
+        F.save_plotter_image(plotter, tmp_path / "x.png", dpi=5000)
+
+
+def test_suffix_from_the_chosen_filter():
+    from pathlib import Path
+
+    from app.figures.export import suffix_from_filter
+
+    assert suffix_from_filter("/d/fig", "SVG (*.svg)") == Path("/d/fig.svg")
+    assert suffix_from_filter("/d/fig.PDF", "PNG image (*.png)") == Path("/d/fig.PDF")   # typed suffix wins
+    assert suffix_from_filter("/d/fig.v2", "PDF (*.pdf)") == Path("/d/fig.v2.pdf")
