@@ -38,6 +38,7 @@ class AudioPlayer:
         self.available = False
         self.reason = ""
         self._player = self._output = None
+        self._playing_state = None
         try:
             from PySide6.QtMultimedia import QAudioOutput, QMediaDevices, QMediaPlayer
         except ImportError as exc:  # missing libpulse / Addons
@@ -50,6 +51,7 @@ class AudioPlayer:
             self._output = QAudioOutput(parent)
             self._player = QMediaPlayer(parent)
             self._player.setAudioOutput(self._output)
+            self._playing_state = QMediaPlayer.PlaybackState.PlayingState
         except Exception as exc:  # noqa: BLE001 - any backend failure means no sound, not a crash
             self.reason = f"audio backend failed ({exc})"
             self._player = self._output = None
@@ -67,6 +69,21 @@ class AudioPlayer:
         self._player.setPosition(int(1000 * start_s))
         self._player.play()
         return True
+
+    def set_rate(self, rate: float) -> None:
+        """Change the playback speed of the sound that plays (media seconds per second)."""
+        if self.available:
+            self._player.setPlaybackRate(float(rate))
+
+    def position_s(self) -> float | None:
+        """Where the sound is, in seconds of the file, while it plays; None otherwise.
+
+        This is the position QtMultimedia reports (``QMediaPlayer.position``, whole
+        milliseconds, updated in steps); :class:`app.playback.PlaybackClock` follows it.
+        """
+        if not self.available or self._player.playbackState() != self._playing_state:
+            return None
+        return self._player.position() / 1000.0
 
     def stop(self) -> None:
         if self.available:

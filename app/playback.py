@@ -1,11 +1,21 @@
-"""Playback timing: which frame to show now, from elapsed time (Qt-free).
+"""Playback timing: which frame to show now, and when to choose the next one (Qt-free).
 
 Playback is driven by a clock, never by counting timer ticks: a tick that comes late
 (a slow render, a busy machine) skips the frames whose time has passed instead of
-falling behind, so the shown frame keeps up with the audio. :class:`PlaybackClock`
-also looks ahead by the measured display latency (how long a frame takes from being
-chosen to being on screen), so the frame that reaches the screen is the one due at
-that moment.
+falling behind. The clock is the *media time* of the utterance (seconds from its first
+frame; frame ``k`` is due at ``k / rate``):
+
+* when the utterance's audio plays, media time follows the audio device's position
+  (``position()``), which moves in coarse steps: between steps it runs on the monotonic
+  clock at the playback speed, and every new position pulls it in (a small error is
+  slewed out gradually, a large one — a seek, a stall of the audio — is taken at once);
+* without audio (no sound file, no device) it is the monotonic clock since Play,
+  times the speed.
+
+:class:`PlaybackClock` chooses the frame for the moment it will be *on screen* — the
+clock now plus the measured display latency (present-time prediction) — and says when
+the next frame becomes the right one (:meth:`PlaybackClock.next_tick_in`), so a timer
+can fire at that deadline instead of polling.
 """
 from __future__ import annotations
 
@@ -46,7 +56,7 @@ def playback_frame(elapsed_s: float, rate: float, *, start: int = 0, speed: floa
 
 
 class PlaybackClock:
-    """Maps a clock to the frame to show, with look-ahead for display latency.
+    """Media time of a playing utterance, and the frame to show for it.
 
     Parameters
     ----------
@@ -55,71 +65,155 @@ class PlaybackClock:
     n_frames : int
         Frames in the trajectory; :meth:`frame` returns None past the last one.
     speed : float, default=1.0
+        Media seconds per second of the monotonic clock (the audio's playback rate).
     clock : callable() -> float, default=time.monotonic
         Seconds; tests pass a fake clock.
+    position : callable() -> float or None, optional
+        The audio device's position in media seconds (what is being heard now), or None
+        while it has none (no audio, not started). None: the monotonic clock alone.
     latency_window : int, default=15
         The look-ahead is the upper quartile of the latency of this many latest frames (a
         quantile, so that one stall does not make the following frames run early).
+    resync_s : float, default=0.1
+        An audio position further than this from the clock's media time is taken at once
+        (a seek or a stall); a nearer one is slewed in.
+    slew : float, default=0.2
+        Fraction of a small audio-position error corrected at each new position (0 < slew <= 1).
 
     Attributes
     ----------
     latency_s : float
         Estimated time from choosing a frame to its being on screen.
+    following_audio : bool
+        True once the audio position has moved since :meth:`start`: the clock follows it
+        from then on (taking that first moved position at once, so the audio's start-up
+        delay is not the video's).
+    n_resyncs : int
+        Audio positions taken at once (errors beyond ``resync_s``) since :meth:`start`.
     """
 
-    def __init__(self, rate: float, n_frames: int, *, speed: float = 1.0, clock=time.monotonic,
-                 latency_window: int = 15):
+    def __init__(self, rate: float, n_frames: int, *, speed: float = 1.0, clock=time.monotonic, position=None,
+                 latency_window: int = 15, resync_s: float = 0.1, slew: float = 0.2):
         playback_frame(0.0, rate, speed=speed)  # validates rate and speed
         if int(n_frames) < 1:
             raise ValueError(f"n_frames must be >= 1 (a trajectory to play), got {n_frames!r}")
         if int(latency_window) < 1:
             raise ValueError(f"latency_window must be >= 1 frame, got {latency_window!r}")
+        if not (resync_s > 0 and math.isfinite(resync_s)):
+            raise ValueError(f"resync_s must be a positive number of seconds, got {resync_s!r}")
+        if not 0 < slew <= 1:
+            raise ValueError(f"slew must be in (0, 1] (the fraction of an error corrected per position), got {slew!r}")
         self.rate = float(rate)
         self.n_frames = int(n_frames)
         self.speed = float(speed)
         self.clock = clock
+        self.position = position
+        self.resync_s = float(resync_s)
+        self.slew = float(slew)
         self.latency_s = 0.0
         self._latencies = deque(maxlen=int(latency_window))
         self.start_frame = 0
         self.t0 = None
+        self._anchor = (0.0, 0.0)  # (clock time, media time) the clock runs on from
+        self._last_position = None
+        self.following_audio = False
+        self.n_resyncs = 0
 
     def start(self, frame: int = 0) -> None:
-        """Start (or restart) playback at ``frame`` now."""
+        """Start (or restart) playback at ``frame`` now (media time ``frame / rate``)."""
         if not 0 <= int(frame) < self.n_frames:
             raise IndexError(f"start frame {frame} out of range 0..{self.n_frames - 1}")
         self.start_frame = int(frame)
         self.t0 = self.clock()
+        self._anchor = (self.t0, self.start_frame / self.rate)
+        self._last_position = self._read_position()  # a position left from before Play is not news
+        self.following_audio = False
+        self.n_resyncs = 0
 
     @property
     def running(self) -> bool:
         return self.t0 is not None
 
-    def elapsed(self) -> float:
-        """Seconds since :meth:`start`."""
+    def _check_started(self):
         if self.t0 is None:
             raise RuntimeError("the playback clock has not been started")
+
+    def _read_position(self):
+        if self.position is None:
+            return None
+        p = self.position()
+        return None if p is None or not math.isfinite(p) else float(p)
+
+    def elapsed(self) -> float:
+        """Seconds of the monotonic clock since :meth:`start`."""
+        self._check_started()
         return self.clock() - self.t0
 
-    def due(self, at: float | None = None) -> int:
-        """The frame due at clock time ``at`` (default now), without look-ahead; may be past the end."""
-        if self.t0 is None:
-            raise RuntimeError("the playback clock has not been started")
+    def sync(self) -> None:
+        """Take in the audio position if it moved since the last call (cheap; :meth:`frame` calls it)."""
+        self._check_started()
+        p = self._read_position()
+        if p is None:
+            return
+        last, self._last_position = self._last_position, p
+        if last is None or p == last:  # news is a position that moved
+            return
+        now = self.clock()
+        err = p - self.media_time(now)
+        if not self.following_audio or abs(err) > self.resync_s:
+            # the audio has just started moving (its start-up delay is not the video's), or jumped
+            self.n_resyncs += self.following_audio
+            self.following_audio = True
+            self._anchor = (now, p)
+        else:
+            t, m = self._anchor
+            self._anchor = (t, m + self.slew * err)
+
+    def media_time(self, at: float | None = None) -> float:
+        """Media seconds at clock time ``at`` (default now), as the clock last synced."""
+        self._check_started()
         t = self.clock() if at is None else float(at)
-        return playback_frame(t - self.t0, self.rate, start=self.start_frame, speed=self.speed)
+        t_a, m_a = self._anchor
+        return m_a + (t - t_a) * self.speed
+
+    def due(self, at: float | None = None) -> int:
+        """The frame whose time has come at clock time ``at`` (default now), without look-ahead; may be past the end."""
+        return int(math.floor(self.media_time(at) * self.rate + 1e-9))
 
     def frame(self) -> int | None:
         """The frame nearest the clock when the one rendered now reaches the screen; None at the end.
 
-        Nearest rather than the one already begun, and the latency taken at its upper
-        quartile: a frame then errs towards being early by less than a frame period rather
-        than late (sight ahead of sound is tolerated far better than behind it).
+        Syncs to the audio first. Nearest rather than the one already begun, and the
+        latency taken at its upper quartile: a frame then errs towards being early by
+        less than a frame period rather than late (sight ahead of sound is tolerated far
+        better than behind it).
         """
-        if self.t0 is None:
-            raise RuntimeError("the playback clock has not been started")
-        if self.due() >= self.n_frames:
+        self.sync()
+        now = self.clock()
+        if self.due(now) >= self.n_frames:
             return None
-        half = 0.5 / (self.rate * self.speed)
-        return min(self.due(self.clock() + self.latency_s + half), self.n_frames - 1)
+        k = int(math.floor(self.media_time(now + self.latency_s) * self.rate + 0.5))
+        return min(max(k, 0), self.n_frames - 1)
+
+    def next_tick_in(self, shown: int | None) -> float:
+        """Clock seconds until a frame other than ``shown`` becomes the one to choose.
+
+        That is when the predicted on-screen media time passes ``shown + 0.5`` frames (the
+        moment :meth:`frame` turns to ``shown + 1``); 0 when that moment has passed. Never
+        more than one frame period of clock time, so a tick still comes if the audio
+        position jumps.
+        """
+        self._check_started()
+        period = 1.0 / (self.rate * self.speed)
+        if shown is None:
+            return 0.0
+        now = self.clock()
+        frames_left = (int(shown) + 0.5) - self.media_time(now + self.latency_s) * self.rate
+        return min(max(0.0, frames_left / (self.rate * self.speed)), period)
+
+    def lag_frames(self, frame: int, at: float | None = None) -> float:
+        """How many frame periods ``frame`` is behind the media time at ``at`` (negative: early)."""
+        return self.media_time(at) * self.rate - int(frame)
 
     def shown(self, chosen_at: float, shown_at: float) -> None:
         """Record that a frame chosen at ``chosen_at`` reached the screen at ``shown_at``."""

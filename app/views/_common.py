@@ -4,7 +4,7 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 __all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all",
-           "RenderScheduler"]
+           "RenderScheduler", "Throttle"]
 
 
 @contextmanager
@@ -30,7 +30,33 @@ def make_plotter(parent):
     # plain alpha blending for the few translucent things (zero-velocity plane, convex ellipsoids drawn
     # front faces only): order-independent transparency adds full-window passes to every frame
     plotter.renderer.SetUseOIT(False)
+    _native_when_shown(plotter.interactor)
     return plotter
+
+
+def _native_when_shown(widget) -> None:
+    """Give a 3-D widget a native window of its own once it is first shown.
+
+    Qt composes a window holding OpenGL widgets through OpenGL, the whole window at every
+    repaint of any of its widgets; in software OpenGL (Mesa llvmpipe) that composition
+    cost more than a lip frame itself (15-25 ms at 1400x900). With each 3-D widget in a
+    native window of its own, a render repaints that window alone, and a label or slider
+    repaint in the main window is a plain raster update (docs/DECISIONS.md, "Playback at
+    the corpus rate"). Requested once on screen: asked for at construction it measured
+    no better than none.
+    """
+    from PySide6 import QtCore
+
+    class _OnShow(QtCore.QObject):
+        def eventFilter(self, obj, event):  # noqa: N802 - Qt override
+            if event.type() == QtCore.QEvent.Type.Show:
+                obj.removeEventFilter(self)
+                if not obj.testAttribute(QtCore.Qt.WidgetAttribute.WA_NativeWindow):
+                    obj.winId()
+            return False
+
+    widget._lipspace_native_filter = _OnShow(widget)
+    widget.installEventFilter(widget._lipspace_native_filter)
 
 
 def camera_of(plotter) -> list:
@@ -136,6 +162,76 @@ class RenderScheduler:
     def stop(self) -> None:
         self._timer.stop()
         self.pending = False
+
+
+class Throttle:
+    """Call ``callback`` at most once per slot of ``interval_s``, always ending on the latest arguments.
+
+    Time is cut into slots of ``interval_s`` on the clock (``floor(t / interval_s)``). The
+    first call in a slot runs at once; later calls in the same slot are held (the latest
+    replaces any held one) and run at the start of the next slot. Readouts that follow
+    playback (caption, slider, timeline cursor) each go through one: all throttles of one
+    interval share the slot boundaries, so they repaint in the same turn of the event loop
+    — one composition of the window every ``interval_s`` instead of one per readout per
+    frame. In software OpenGL a composition of the whole window costs more than a lip
+    frame (docs/DECISIONS.md, "Playback at the corpus rate").
+
+    Parameters
+    ----------
+    callback : callable
+    interval_s : float
+        Slot length in seconds (> 0).
+    clock : callable() -> float, default=time.monotonic
+    parent : QObject, optional
+        Owner of the timer (a held call dies with it).
+    """
+
+    def __init__(self, callback, interval_s: float, *, clock=None, parent=None):
+        import time
+
+        from PySide6 import QtCore
+
+        if not interval_s > 0:
+            raise ValueError(f"interval_s must be a positive number of seconds, got {interval_s!r}")
+        self.callback = callback
+        self.interval_s = float(interval_s)
+        self.clock = clock or time.monotonic
+        self.last_slot = None
+        self._held = None
+        self._timer = QtCore.QTimer(parent)
+        self._timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
+        self._timer.setSingleShot(True)
+        self._timer.timeout.connect(self.flush)
+
+    def __call__(self, *args) -> None:
+        import math
+
+        now = self.clock()
+        slot = math.floor(now / self.interval_s)
+        if slot != self.last_slot:
+            self._timer.stop()
+            self._held = None
+            self.last_slot = slot
+            self.callback(*args)
+            return
+        self._held = args
+        if not self._timer.isActive():
+            self._timer.start(max(1, math.ceil(1000 * ((slot + 1) * self.interval_s - now))))
+
+    def flush(self) -> None:
+        """Run the held call now (nothing when none is held)."""
+        import math
+
+        self._timer.stop()
+        if self._held is not None:
+            args, self._held = self._held, None
+            self.last_slot = math.floor(self.clock() / self.interval_s)
+            self.callback(*args)
+
+    def cancel(self) -> None:
+        """Drop the held call."""
+        self._timer.stop()
+        self._held = None
 
 
 def connect_all(connections) -> list:

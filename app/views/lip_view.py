@@ -7,13 +7,21 @@
 * Playback shows the original trajectory (left, grey-pink) and the synthetic one
   (right, red) side by side, at the corpus rate, with the utterance's audio when it
   has any and a sound device exists. The frame shown comes from elapsed time
-  (:class:`app.playback.PlaybackClock`), not from counting timer ticks: when a frame
+  (:class:`app.playback.PlaybackClock`: the audio device's position while the sound
+  plays, the monotonic clock otherwise), not from counting timer ticks: when a frame
   takes longer to draw than the frame period, the frames in between are dropped and
-  playback stays in step with the clock. Each frame is painted at once (only this
-  view; the manifold view follows at a lower rate, see ``ManifoldView``).
+  playback stays in step with the clock. A single-shot timer fires at the moment the
+  next frame becomes due (on screen after the measured display latency).
+* The 3-D widget is a native window of its own, so a playback frame repaints only it:
+  in a window whose widgets are all composed by Qt, every frame made Qt compose the
+  whole 1400×900 window through (software) OpenGL, which cost more than the frame. The
+  caption and slider follow playback at most every ``READOUT_INTERVAL_S`` (each of their
+  repaints composes the whole window); the manifold view follows at a lower rate, see
+  ``ManifoldView``.
 """
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -24,9 +32,13 @@ from app.audio import AudioPlayer, resolve_audio_path
 from app.playback import PlaybackClock
 from app.trajectories import lip_frames
 from app.views._common import (camera_of, close_plotter, connect_all, disconnect_all,
-                               make_plotter, RenderScheduler, set_camera)
+                               make_plotter, RenderScheduler, set_camera, Throttle)
 
-__all__ = ["LipView"]
+__all__ = ["LipView", "READOUT_INTERVAL_S"]
+
+#: seconds between two updates of the caption and slider while playing (and of the
+#: trajectory editor's cursor, which uses the same value)
+READOUT_INTERVAL_S = 0.2
 
 MAIN_COLOUR = (0.86, 0.55, 0.55)
 SYNTH_COLOUR = (0.95, 0.15, 0.1)
@@ -44,9 +56,13 @@ class LipView(QtWidgets.QWidget):
         self.audio = AudioPlayer(self)
         self.clock = None  # a PlaybackClock while playing
         self.clock_source = time.monotonic  # seconds; the audio clock's time base (tests pass a fake)
+        # the audio device's position in media seconds while sound plays, else None (tests pass a fake)
+        self.position_source = self.audio.position_s
+        self.shown_frame = None  # the playback frame the lip meshes hold (None outside playback)
         self._chosen_at = None
         self.timer = QtCore.QTimer(self)
         self.timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
+        self.timer.setSingleShot(True)  # each tick sets the next deadline; a late tick is never queued
         self.timer.timeout.connect(self._tick)
 
         self.play_btn = QtWidgets.QPushButton("Play")
@@ -60,6 +76,8 @@ class LipView(QtWidgets.QWidget):
         self.slider.setEnabled(False)
         self.caption = QtWidgets.QLabel("")
         self.caption.setWordWrap(True)
+        self._caption_readout = Throttle(self.caption.setText, READOUT_INTERVAL_S, parent=self)
+        self._slider_readout = Throttle(self._set_slider, READOUT_INTERVAL_S, parent=self)
         bar = QtWidgets.QHBoxLayout()
         bar.setContentsMargins(4, 2, 4, 2)
         for w in (self.play_btn, self.stop_btn, self.speed_box):
@@ -132,7 +150,8 @@ class LipView(QtWidgets.QWidget):
         s, m = self.state, self.state.manifold
         if m is None or self.main is None:
             return
-        second, second_colour = None, SYNTH_COLOUR
+        second, second_colour, slider = None, SYNTH_COLOUR, None
+        self.shown_frame = None
         if s.playback is not None and (self._frames["original"] is not None or self._frames["synthetic"] is not None):
             k = s.playback
             fo, fs = self._frames["original"], self._frames["synthetic"]
@@ -143,9 +162,8 @@ class LipView(QtWidgets.QWidget):
             text = f"playback frame {k + 1}/{s.n_playback} ({t:.2f} s)"
             if second is not None:
                 text += ": original (left), " + (s.synthetic.label or "synthetic") + " (right, red)"
-            self.slider.blockSignals(True)
-            self.slider.setValue(k)
-            self.slider.blockSignals(False)
+            slider = k
+            self.shown_frame = k
         elif s.component is not None:
             i = s.component
             main = m.shape_.component_deformation(i, -2.0)
@@ -169,9 +187,23 @@ class LipView(QtWidgets.QWidget):
         if self.second.visible != (second is not None):  # frame one mesh or both, once per change
             self.second.set_visible(second is not None)
             self.plotter.reset_camera(render=False)
-        self.caption.setText(text)
+        if s.playing:  # readouts at a few per second: each of their repaints composes the window
+            self._caption_readout(text)
+            if slider is not None:
+                self._slider_readout(slider)
+        else:
+            self._caption_readout.cancel()
+            self._slider_readout.cancel()
+            self.caption.setText(text)
+            if slider is not None:
+                self._set_slider(slider)
         if render:
             self.renderer.request()
+
+    def _set_slider(self, k) -> None:
+        self.slider.blockSignals(True)
+        self.slider.setValue(k)
+        self.slider.blockSignals(False)
 
     def _on_trajectories(self, render=True):
         m = self.state.manifold
@@ -207,6 +239,8 @@ class LipView(QtWidgets.QWidget):
             self.timer.stop()
             self.clock = None
             self.audio.stop()
+            self._caption_readout.flush()  # paused: the readouts show where it stopped, now
+            self._slider_readout.flush()
 
     def _restart_clock(self) -> None:
         """(Re)start the playback clock at the shown frame (on play, or when the speed changes)."""
@@ -215,13 +249,15 @@ class LipView(QtWidgets.QWidget):
             return
         rate = (s.original or s.synthetic).rate
         c = self.clock
-        if c is not None and c.rate == rate and c.n_frames == s.n_playback and c.clock is self.clock_source:
+        if (c is not None and c.rate == rate and c.n_frames == s.n_playback and c.clock is self.clock_source
+                and c.position is self.position_source):
             c.speed = self.speed  # a new speed: keep what was measured of the display latency
+            self.audio.set_rate(self.speed)  # the clock takes the sound's position again once it moves
         else:
-            self.clock = PlaybackClock(rate, s.n_playback, speed=self.speed, clock=self.clock_source)
+            self.clock = PlaybackClock(rate, s.n_playback, speed=self.speed, clock=self.clock_source,
+                                       position=self.position_source)
         self.clock.start(s.playback or 0)
-        # tick at the frame period; each tick shows the frame the clock says is due
-        self.timer.start(max(1, int(1000.0 / (rate * self.speed))))
+        self.timer.start(0)
 
     def _start_audio(self):
         s = self.state
@@ -234,10 +270,11 @@ class LipView(QtWidgets.QWidget):
             self.audio.play(path, start_s=(s.playback or 0) / c.rate, rate=self.speed)
 
     def _tick(self):
-        """Show the frame due now (dropping those whose time has passed), painted at once.
+        """Show the frame due now (dropping those whose time has passed), then wait for the next one.
 
         The frame is the one due when it will reach the screen: the clock looks ahead by
-        the latency measured from choosing a frame to its ``frameSwapped``.
+        the latency measured from choosing a frame to its ``frameSwapped``. The timer is
+        single-shot, set to the moment the next frame becomes the one to choose.
         """
         s, clock = self.state, self.clock
         if clock is None or not s.playing:
@@ -248,13 +285,11 @@ class LipView(QtWidgets.QWidget):
                 s.set_playback(s.n_playback - 1)
                 s.set_playing(False)
             return
-        if k == s.playback:
-            return
-        self._chosen_at = clock.clock()
-        s.set_playback(k)
-        # paint now, in one window update with the caption, slider and timeline cursor
-        # (painting the 3-D widget on its own first would compose the window twice per frame)
-        self.renderer.flush()
+        if k != s.playback:
+            self._chosen_at = clock.clock()
+            s.set_playback(k)
+            self.renderer.flush()  # paint this widget (a native window: it alone) on the next turn
+        self.timer.start(max(1, math.ceil(1000.0 * clock.next_tick_in(k))))
 
     def _on_swapped(self) -> None:
         """A frame reached the screen: feed the latency it took to the clock's look-ahead."""
@@ -282,6 +317,8 @@ class LipView(QtWidgets.QWidget):
 
     def close_view(self) -> None:
         self.timer.stop()
+        self._caption_readout.cancel()
+        self._slider_readout.cancel()
         self.clock = None
         self.audio.stop()
         disconnect_all(self._connections)

@@ -78,3 +78,189 @@ def test_clock_speed_and_validation():
         PlaybackClock(60.0, 0)
     with pytest.raises(ValueError, match="latency_window"):
         PlaybackClock(60.0, 5, latency_window=0)
+
+
+def test_clock_follows_the_audio_position_once_it_moves():
+    fake = FakeClock(0.0)
+    audio = {"p": None}
+    c = PlaybackClock(60.0, 1000, clock=fake, position=lambda: audio["p"], resync_s=0.1, slew=0.25)
+    c.start(0)
+    fake.t = 0.05  # no sound yet: the monotonic clock runs
+    assert c.frame() == 3 and not c.following_audio
+    audio["p"] = 0.0  # the player reports a position that has not moved: not news
+    fake.t = 0.15
+    assert c.frame() == 9 and not c.following_audio
+    audio["p"] = 0.01  # the sound starts moving 0.15 s late: the clock takes its position at once
+    assert c.frame() == 1 and c.following_audio and c.n_resyncs == 0
+    assert c.media_time() == pytest.approx(0.01)
+    fake.t += 0.1  # no new position: runs on at the speed
+    assert c.media_time() == pytest.approx(0.11)
+    audio["p"] = 0.12  # a small error (10 ms) is slewed, a quarter at a time
+    c.sync()
+    assert c.media_time() == pytest.approx(0.11 + 0.25 * 0.01)
+    c.sync()  # the same position again is not news
+    assert c.media_time() == pytest.approx(0.11 + 0.25 * 0.01)
+    audio["p"] = 1.0  # a jump (a seek, a stall) beyond resync_s is taken at once
+    assert c.frame() == 60 and c.n_resyncs == 1
+    audio["p"] = float("nan")  # a nonsense position is ignored
+    fake.t += 0.5
+    assert c.frame() == 90
+
+
+def test_clock_keeps_with_audio_that_runs_slow_where_the_wall_clock_drifts():
+    fake = FakeClock(0.0)
+    rate, drift = 60.0, 0.99  # the sound card runs 1 % slow: 6 frames behind the wall clock after 10 s
+    audio_t0 = 0.08
+    c = PlaybackClock(rate, 10_000, clock=fake, position=lambda: round(max(0.0, fake.t - audio_t0) * drift, 3))
+    c.start(0)
+    worst = 0.0
+    for i in range(1, 601):  # 10 s of ticks at 60 Hz; positions move in 1-ms steps
+        fake.t = i / 60
+        k = c.frame()
+        heard = max(0.0, fake.t - audio_t0) * drift
+        if fake.t > audio_t0 + 0.05:
+            worst = max(worst, abs(c.media_time() - heard))
+    assert c.following_audio and c.n_resyncs == 0
+    assert worst < 0.5 / rate  # within half a frame period of what is heard, all along
+    assert abs(k - heard * rate) <= 1
+    assert (fake.t - heard) * rate > 6  # the wall clock alone would be 6+ frames off by now
+
+
+def test_next_tick_is_when_the_next_frame_becomes_the_nearest_on_screen():
+    fake = FakeClock(0.0)
+    c = PlaybackClock(50.0, 100, clock=fake)  # 20-ms frames
+    c.start(0)
+    c.shown(chosen_at=0.0, shown_at=0.004)  # 4 ms from choosing a frame to its being on screen
+    assert c.frame() == 0
+    # frame 1 is nearest from media 10 ms on; on screen 4 ms after it is chosen: choose it at 6 ms
+    assert c.next_tick_in(0) == pytest.approx(0.006)
+    fake.t = 0.006 - 1e-6
+    assert c.frame() == 0
+    fake.t = 0.006 + 1e-6
+    assert c.frame() == 1
+    assert c.next_tick_in(1) == pytest.approx(0.020 - 1e-6)
+    assert c.next_tick_in(0) == 0.0  # overdue
+    assert c.next_tick_in(40) == pytest.approx(0.020)  # never more than a frame period
+    assert c.next_tick_in(None) == 0.0
+    c.speed = 0.5
+    c.start(10)
+    assert c.next_tick_in(60) == pytest.approx(0.040)  # a frame period at half speed
+    assert c.lag_frames(10) == pytest.approx(0.0)
+    fake.t += 0.1
+    assert c.lag_frames(10) == pytest.approx(2.5)  # 0.1 s at half speed, 50 Hz
+    assert c.lag_frames(14) == pytest.approx(-1.5)  # early
+
+
+def test_clock_audio_options_are_validated():
+    with pytest.raises(ValueError, match="resync_s"):
+        PlaybackClock(60.0, 5, resync_s=0.0)
+    with pytest.raises(ValueError, match="slew"):
+        PlaybackClock(60.0, 5, slew=1.5)
+
+
+# --------------------------------------------------------------------------- the real lip view (Xvfb)
+@pytest.fixture
+def lip_view(qapp, app_manifold):
+    from app.state import AppState
+    from app.views.lip_view import LipView
+
+    s = AppState(app_manifold)
+    u = max(app_manifold.corpus_.utterances, key=lambda u: u.stop - u.start)
+    s.set_utterance(u.id)
+    view = LipView(s)
+    view.resize(480, 360)
+    view.show()
+    for _ in range(5):
+        qapp.processEvents()
+    yield view
+    s.set_playing(False)
+    view.close_view()
+    view.deleteLater()
+    qapp.processEvents()
+
+
+def _play(qapp, view, seconds, position=None):
+    """Press Play and run the event loop; returns [(monotonic time, frame on screen)] at each swap."""
+    import time
+
+    swaps = []
+    view.plotter.interactor.frameSwapped.connect(lambda: swaps.append((time.monotonic(), view.shown_frame)))
+    if position is not None:
+        view.position_source = position
+    t0 = time.monotonic()
+    view.state.set_playing(True)
+    while time.monotonic() - t0 < seconds and view.state.playing:
+        qapp.processEvents()
+        time.sleep(0.001)
+    return t0, [(t, k) for t, k in swaps if k is not None]
+
+
+@pytest.mark.gui
+def test_real_playback_advances_by_elapsed_time(qapp, lip_view):
+    s = lip_view.state
+    rate = s.original.rate
+    t0, swaps = _play(qapp, lip_view, 1.0)
+    clock = lip_view.clock
+    s.set_playing(False)
+    assert len({k for _, k in swaps}) >= 5  # frames reach the screen (dropped ones skipped, not queued)
+    assert [k for _, k in swaps] == sorted(k for _, k in swaps)
+    assert not clock.following_audio  # no sound here: the monotonic clock
+    t_last, k_last = swaps[-1]
+    # the frame on screen is the one due by elapsed time (nearest, looking ahead by the
+    # display latency, itself capped at 0.25 s) - not one per tick, not stuck behind
+    assert -0.5 - 0.25 * rate <= (t_last - t0) * rate - k_last <= 0.5 + 0.25 * rate
+    assert k_last >= 0.5 * rate * (t_last - t0) - 3
+    # the readouts are up to date once playback stops
+    qapp.processEvents()
+    assert lip_view.slider.value() == s.playback
+    assert f"playback frame {s.playback + 1}/" in lip_view.caption.text()
+
+
+@pytest.mark.gui
+def test_real_playback_follows_the_audio_position(qapp, lip_view):
+    import time
+
+    rate = lip_view.state.original.rate
+    t_play = [None]
+
+    def heard():  # a sound card that starts 0.1 s late, plays at 0.5x and reports in 20-ms steps
+        if t_play[0] is None:
+            t_play[0] = time.monotonic()
+        t = time.monotonic() - t_play[0] - 0.1
+        return None if t < 0 else 0.02 * int(0.5 * t / 0.02)
+
+    t0, swaps = _play(qapp, lip_view, 1.2, position=heard)
+    clock = lip_view.clock
+    lip_view.state.set_playing(False)
+    assert clock.following_audio
+    late = [(t, k) for t, k in swaps if t - t0 > 0.3]
+    assert len({k for _, k in late}) >= 3
+    for t, k in late:  # near what is heard (the monotonic clock alone would be 2x ahead by the end)
+        assert abs(k - 0.5 * (t - t0 - 0.1) * rate) <= 0.25 * 0.5 * rate + 2
+    t_last, k_last = late[-1]
+    assert k_last < 0.75 * (t_last - t0) * rate
+
+
+@pytest.mark.gui
+def test_throttle_runs_at_most_once_per_slot_and_ends_on_the_latest(qapp):
+    from app.views._common import Throttle
+
+    now = [10.0]
+    calls = []
+    th = Throttle(calls.append, 0.2, clock=lambda: now[0])
+    th(1)  # the first call of a slot runs at once
+    th(2)
+    th(3)  # held, replacing 2
+    assert calls == [1]
+    now[0] = 10.21  # the next slot: runs at once, the held one dropped
+    th(4)
+    assert calls == [1, 4]
+    th(5)
+    th.flush()
+    assert calls == [1, 4, 5]
+    th(6)
+    th.cancel()
+    th.flush()
+    assert calls == [1, 4, 5]
+    with pytest.raises(ValueError, match="interval_s"):
+        Throttle(calls.append, 0.0)
