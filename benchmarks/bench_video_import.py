@@ -15,7 +15,8 @@ landmarks per frame is kept). Target: a 1-minute 30 fps video in under 2 minutes
 ``--live`` also plays the shortest video as a live stream (paced at 30 fps, as a camera
 delivers it) into a manifold built from its own import (app.live.LiveSession, the live
 mirror's engine without the window) and prints the frames processed per second and the
-frames dropped because tracking could not keep up.
+frames dropped because tracking could not keep up. ``--live-window`` does the same
+through the live mirror's window (drawing included; run under ``xvfb-run -a``).
 """
 from __future__ import annotations
 
@@ -92,6 +93,38 @@ def live(path: Path) -> None:
           f"{st.processed / wall:.1f} frames/s processed; {st.error or 'no error'}")
 
 
+def live_window(path: Path) -> None:
+    """The same stream through the live mirror window (needs a display: run under xvfb-run)."""
+    from PySide6 import QtCore, QtWidgets
+
+    from app.live import LiveSession
+    from app.views.live_view import LiveWindow
+    from engine.io.video import read_video
+    from engine.manifold import Manifold
+
+    m = Manifold(n_states=50).fit(read_video(path))
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
+    t0 = time.perf_counter()
+    s = LiveSession(m, str(path)).start()
+    w = LiveWindow(s)
+    w.show()
+
+    def check():
+        if w.last_stats is not None and (w.last_stats.finished or w.last_stats.error):
+            w.close()
+            app.quit()
+
+    timer = QtCore.QTimer()
+    timer.timeout.connect(check)
+    timer.start(100)
+    app.exec()
+    wall = time.perf_counter() - t0
+    st = w.last_stats
+    print(f"live mirror window on {path.name}: {st.received} frames received in {wall:.1f} s, {st.processed} "
+          f"processed, {st.dropped} dropped ({100 * st.dropped / max(st.received, 1):.1f} %), "
+          f"{w.renders.n_renders} renders ({w.renders.n_renders / wall:.1f} per s); {st.error or 'no error'}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, nargs="+", default=[20.0, 60.0])
@@ -99,6 +132,8 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=512, help="video width = height in pixels (even)")
     ap.add_argument("--keep", default=None, help="folder for the generated videos (reused when present)")
     ap.add_argument("--live", action="store_true", help="also play the shortest video as a live stream")
+    ap.add_argument("--live-window", action="store_true",
+                    help="also play it through the live mirror window (needs a display, e.g. xvfb-run)")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.child:
@@ -134,6 +169,8 @@ def main() -> None:
     print(f"BLAS: {runs[0]['blas']}")
     if a.live:
         live(folder / f"astronaut_{a.size}_{min(a.seconds):g}s.mp4")
+    if a.live_window:
+        live_window(folder / f"astronaut_{a.size}_{min(a.seconds):g}s.mp4")
     if not a.keep:
         import shutil
 
