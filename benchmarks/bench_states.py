@@ -1,6 +1,7 @@
 """Benchmark: state graph and tangent frames at paper scale; hemisphere and path query times.
 
 Usage: python benchmarks/bench_states.py [--source synthetic|standin] [--preset paper] [--repeats 21]
+       python benchmarks/bench_states.py --source standin --frames 600000 --states 20000   # issue 13 item 8
 
 Data: the paper-scale synthetic talker (``engine.synthetic``, preset "paper") put through
 the manifold pipeline (shape space, dynamic features, embedding) when ``--source
@@ -8,7 +9,8 @@ synthetic`` (the default, if ``engine.synthetic`` is importable). ``--source sta
 (or no ``engine.synthetic``) uses a stand-in with the paper's N = 28,833 frames: speech-like
 opening trajectories (critically damped articulator driven by random phone targets, 60 Hz,
 utterances of 1.5-3.5 s) embedded as a paraboloid-shaped sheet in 3-D, F^y = (x, v, x^2 - v^2/2)
-plus noise, with F^x = (x, ...) and F^x' its first differences. The output says which.
+plus noise, with F^x = (x, ...) and F^x' its first differences; ``--frames N`` sets its size
+(600,000 frames give K = 20,000 states their default 30 frames each). The output says which.
 
 Measured: fit of TangentFrames and of StateGraph at K = 1,000 and 5,000; then for each K the
 median wall time (over ``--repeats``) of
@@ -106,6 +108,7 @@ def main():
     ap.add_argument("--preset", default="paper")
     ap.add_argument("--repeats", type=int, default=21)
     ap.add_argument("--states", type=int, nargs="+", default=[1000, 5000])
+    ap.add_argument("--frames", type=int, default=PAPER_FRAMES, help="frames of the stand-in (default: the paper's)")
     args = ap.parse_args()
 
     from engine.states import StateGraph, StateGraphConnectivityWarning, UnreachableError
@@ -125,7 +128,7 @@ def main():
               f"{len(Fy)} frames x {corpus.frames.shape[1]} coordinates, {len(b)} utterances "
               f"({time.perf_counter() - t:.1f} s to build)")
     else:
-        Fy, Fx, Fxv, b, _ = standin()
+        Fy, Fx, Fxv, b, _ = standin(args.frames)
         print(f"data: STAND-IN (paraboloid sheet of speech-like opening trajectories), {len(Fy)} frames, "
               f"{len(b)} utterances (engine.synthetic not used)")
 

@@ -24,7 +24,7 @@ from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from engine.progress import ProgressFn, report
-from engine.shape import orthonormal_basis
+from engine.shape import orthonormal_basis, thin_svd
 
 __all__ = ["Embedding", "pairwise_distance_block"]
 
@@ -269,7 +269,7 @@ class Embedding(BaseEstimator):
             Z = orthonormal_basis(At(Q))
             Q = orthonormal_basis(A(Z))
         B = At(Q).T  # (r, L)
-        Ub, s, Vt = np.linalg.svd(B, full_matrices=False)
+        Ub, s, Vt = thin_svd(B)
         s, Vt = s[:k], Vt[:k]
         U = Q @ Ub[:, :k]
         # deterministic signs: largest |score| positive

@@ -45,6 +45,7 @@ from scipy.spatial import cKDTree
 from engine._atomic import atomic_write
 from engine.embedding import pairwise_distance_block
 from engine.progress import ProgressFn, report
+from engine.shape import orthonormal_basis, thin_svd
 
 __all__ = ["DaskExecutor", "store_frame_blocks", "open_frame_blocks", "DEFAULT_BLOCK_FRAMES"]
 
@@ -303,7 +304,7 @@ class DaskExecutor:
         step += 1
         report(progress, "shape space", step, steps)
         for _ in range(int(shape.n_iter)):
-            Z = np.linalg.qr(At_mat(Q))[0]  # C x r: small, in-process
+            Z = orthonormal_basis(At_mat(Q))  # C x r: small, in-process, one BLAS thread
             step += 1
             report(progress, "shape space", step, steps)
             Q = orth(A_mat(Z))
@@ -312,7 +313,7 @@ class DaskExecutor:
         B = At_mat(Q).T
         step += 1
         report(progress, "shape space", step, steps)
-        _, s, Vt = np.linalg.svd(B.astype(np.float64), full_matrices=False)
+        _, s, Vt = thin_svd(B.astype(np.float64))
         total = float(F.map_blocks(_centred_sumsq, mean32, chunks=((1,) * F.numblocks[0],), drop_axis=1,
                                    dtype=np.float64).sum().compute())
         shape._set_fitted(s[:k], Vt[:k], total, N, mean)

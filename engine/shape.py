@@ -21,8 +21,21 @@ def _row_blocks(n: int, block: int):
         yield slice(s, min(n, s + block))
 
 
+def one_thread():
+    """Context manager: BLAS/LAPACK on one thread, for the small factorisations of a build.
+
+    A QR of 28,833 x 110 or an SVD of 110 x 12,780 gains nothing from a second OpenBLAS
+    thread and collapses when the cores are shared: measured at load average 12-14 on
+    two cores, the QR took 5.5 s (min of 5) on two threads and 0.41 s on one, the SVD
+    12.4 s and 2.1 s. The big GEMMs over F keep every thread.
+    """
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
+
+
 def orthonormal_basis(M):
-    """Q of the reduced QR decomposition of ``M`` (n, r), same dtype.
+    """Q of the reduced QR decomposition of ``M`` (n, r), same dtype, on one BLAS thread.
 
     scipy's LAPACK wrapper releases the GIL while it works; ``numpy.linalg.qr`` holds it
     (seconds at 28,800 rows), which froze the explorer's window while a worker thread
@@ -30,7 +43,14 @@ def orthonormal_basis(M):
     """
     from scipy.linalg import qr
 
-    return qr(M, mode="economic", check_finite=False)[0]
+    with one_thread():
+        return qr(M, mode="economic", check_finite=False)[0]
+
+
+def thin_svd(B):
+    """``numpy.linalg.svd(B, full_matrices=False)`` of a short-wide (or small) matrix, on one BLAS thread."""
+    with one_thread():
+        return np.linalg.svd(B, full_matrices=False)
 
 
 class ShapeSpace(BaseEstimator):
@@ -141,7 +161,7 @@ class ShapeSpace(BaseEstimator):
         B = At_mat(Q).T  # (k+p, C)
         step += 1
         report(progress, "shape space", step, total_steps)
-        _, s, Vt = np.linalg.svd(B.astype(np.float64), full_matrices=False)
+        _, s, Vt = thin_svd(B.astype(np.float64))
         s, Vt = s[:k], Vt[:k]
         total = 0.0
         for sl in _row_blocks(N, block):
