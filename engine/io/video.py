@@ -27,7 +27,7 @@ import numpy as np
 from engine.io.errors import ImportFormatError
 
 __all__ = ["read_video", "read_videos", "head_pose_model", "iter_video_frames", "track_video", "VIDEO_EXTENSIONS", "DEFAULT_BRIDGE_S",
-           "AUDIO_RATE", "find_gaps", "segments", "read_audio_track", "video_rate"]
+           "AUDIO_RATE", "find_gaps", "segments", "read_audio_track", "video_rate", "video_info"]
 
 VIDEO_EXTENSIONS = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv")
 #: longest run of face-less frames bridged by interpolation (s)
@@ -87,33 +87,28 @@ def iter_video_frames(path):
         container.close()
 
 
-def _frame_count(path) -> int:
-    """The stream's stated frame count, else duration x rate (0 when neither is known): for progress only."""
-    container = _open(path)
-    try:
-        st = container.streams.video[0]
-        if st.frames:
-            return int(st.frames)
-        if st.duration and st.time_base and (st.average_rate or st.guessed_rate):
-            return int(float(st.duration * st.time_base) * float(st.average_rate or st.guessed_rate))
-        return 0
-    finally:
-        container.close()
-
-
-def video_rate(path) -> float:
-    """The video stream's frame rate (Hz): its average rate, else its guessed rate."""
+def video_info(path) -> tuple[float, int]:
+    """``(rate, frames)``: the video stream's frame rate (Hz; its average rate, else its guessed
+    rate) and its stated frame count (else duration x rate; 0 when unknown, for progress only)."""
     container = _open(path)
     try:
         st = container.streams.video[0]
         r = st.average_rate or st.guessed_rate or st.base_rate
+        n = int(st.frames or 0)
+        if not n and st.duration and st.time_base and r:
+            n = int(float(st.duration * st.time_base) * float(r))
     finally:
         container.close()
     if not r or float(r) <= 0:
         raise ImportFormatError(path, "the video stream states no frame rate; expected a constant-rate video")
     rate = float(r)
-    n = round(rate)
-    return float(n) if abs(rate - n) < 1e-3 * n else rate
+    k = round(rate)
+    return (float(k) if abs(rate - k) < 1e-3 * k else rate), n
+
+
+def video_rate(path) -> float:
+    """The video stream's frame rate (Hz), see :func:`video_info`."""
+    return video_info(path)[0]
 
 
 def track_video(path, *, tracker=None, progress=None):
@@ -128,7 +123,7 @@ def track_video(path, *, tracker=None, progress=None):
     from engine.io.facemesh import TRACKED_POINTS, FaceTracker
     from engine.progress import report
 
-    total = _frame_count(path) if progress is not None else 0
+    total = video_info(path)[1] if progress is not None else 0
     own = tracker is None
     tracker = tracker or FaceTracker()
     rows, found = [], []

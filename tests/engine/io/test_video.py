@@ -136,7 +136,9 @@ def test_faceless_frames_bridged_or_split_and_reported(tmp_path):
     seq = [img] * 6 + [grey] * 2 + [img] * 6 + [grey] * 8 + [img] * 6  # 2-frame gap, 8-frame gap
     (tmp_path / "gaps.lab").write_text("0.0 0.3 m\n0.3 0.6 aa\n0.6 0.9 p\n")
     write_video(tmp_path / "gaps.mp4", iter(seq), RATE)
-    c = read_video(tmp_path / "gaps.mp4", bridge_s=0.1)
+    calls = []
+    c = read_video(tmp_path / "gaps.mp4", bridge_s=0.1, progress=lambda *a: calls.append(a))
+    assert calls[-1] == ("tracking the face in gaps.mp4", 28, 28) and calls[0][1:] == (0, 28)
     assert [u.id for u in c.utterances] == ["gaps_1", "gaps_2"]
     assert [u.n_frames for u in c.utterances] == [14, 6]
     text = "\n".join(c.history)
