@@ -146,6 +146,93 @@ def _ply_header(data: bytes, path):
     return fmt, elements, body, len(lines) + 1
 
 
+class _Ragged:
+    """A list property of every row: ``counts`` (n,) and the items ``flat`` (counts.sum(),), int64."""
+
+    __slots__ = ("counts", "flat")
+
+    def __init__(self, counts, flat):
+        self.counts, self.flat = counts, flat
+
+    def __len__(self):
+        return len(self.counts)
+
+
+#: positions handled per pass of the binary row finder (its arrays are a few times this, int64)
+_CHUNK = 1 << 20
+
+
+def _gather(u8, starts, dt):
+    """Values of dtype ``dt`` at the (unaligned) byte offsets ``starts`` of ``u8``."""
+    if dt.itemsize == 1:
+        return u8[starts].view(dt)
+    idx = starts[:, None] + np.arange(dt.itemsize)
+    return np.ascontiguousarray(u8[idx]).view(dt).reshape(-1)
+
+
+def _row_lengths(u8, p, props, endian):
+    """Byte length of a row starting at each offset in ``p``; -1 where it cannot be one."""
+    off = np.zeros(len(p), np.int64)
+    ok = np.ones(len(p), bool)
+    for _, ct, it in props:
+        ct_ = np.dtype(endian + ct)
+        if it is None:
+            off += ct_.itemsize
+            continue
+        at = p + off
+        fits = ok & (at + ct_.itemsize <= len(u8))
+        k = np.zeros(len(p), np.int64)
+        k[fits] = _gather(u8, at[fits], ct_).astype(np.int64)
+        ok &= fits & (k >= 0)
+        off += ct_.itemsize + np.where(ok, k, 0) * np.dtype(it).itemsize
+    return np.where(ok & (p + off <= len(u8)), off, -1)
+
+
+def _binary_row_starts(el, u8, pos, endian, path):
+    """Byte offsets of an element's ``n`` rows, whose lengths vary (list properties).
+
+    Row r + 1 starts where row r ends, which depends on row r's list counts: a chain. It
+    is followed without a Python loop per row: every byte offset of a window is given
+    the offset of the row that would follow it (``next``), and the chain from the
+    window's first row is read off by pointer doubling (rows 0..2^j-1 -> 0..2^(j+1)-1
+    through next^(2^j)), O(window x log rows) in numpy.
+    """
+    n, props = el["count"], el["props"]
+    starts = []
+    have = 0
+    while have < n:
+        hi = min(len(u8), pos + _CHUNK)
+        p = np.arange(pos, hi, dtype=np.int64)
+        L = _row_lengths(u8, p, props, endian)
+        if L[0] < 0:
+            raise ImportFormatError(path, f"element {el['name']!r} row {have}: a list does not fit in the "
+                                    f"{len(u8) - pos} bytes left (byte {pos}); truncated file?")
+        W = hi - pos
+        nxt = np.where(L > 0, np.arange(W) + L, W)  # local offsets; W = beyond this window
+        J = np.append(np.minimum(nxt, W), W).astype(np.int32)  # int32: half the memory traffic per pass
+        S = np.zeros(1, np.int32)
+        while len(S) < n - have:
+            T = J[S]
+            T = T[T < W]
+            if not T.size:
+                break
+            S = np.concatenate([S, T])
+            J = J[J]
+        S = S[: n - have]
+        S = S.astype(np.int64)
+        starts.append(S + pos)
+        have += len(S)
+        last = int(S[-1])
+        if L[last] < 0:
+            raise ImportFormatError(path, f"element {el['name']!r} row {have - 1}: a list does not fit in the "
+                                    f"{len(u8) - pos - last} bytes left (byte {pos + last}); truncated file?")
+        pos = pos + last + int(L[last])
+        if have < n and pos >= len(u8):
+            raise ImportFormatError(path, f"element {el['name']!r}: the data ends after {have} of its {n} rows "
+                                    f"(byte {pos}); truncated file?")
+    return np.concatenate(starts), pos
+
+
 def _read_binary_element(el, buf, pos, endian, path):
     n, props = el["count"], el["props"]
     if all(p[2] is None for p in props):
@@ -157,7 +244,11 @@ def _read_binary_element(el, buf, pos, endian, path):
         with np.errstate(invalid="ignore", over="ignore"):  # NaN payloads are caught later as non-finite
             cols = {p[0]: rec[f"p{k}"].astype(np.float64) for k, p in enumerate(props)}
         return cols, pos + n * dt.itemsize
-    if len(props) == 1 and n > 0:  # e.g. faces: one list; fast path when every row has the same length
+    if n == 0:
+        return {p[0]: (_Ragged(np.zeros(0, np.int64), np.zeros(0, np.int64)) if p[2] else np.zeros(0))
+                for p in props}, pos
+    u8 = np.frombuffer(buf, np.uint8)
+    if len(props) == 1:  # e.g. faces: one list; fast path when every row has the same length
         name, ct, it = props[0]
         ct_, it_ = np.dtype(endian + ct), np.dtype(endian + it)
         if pos + ct_.itemsize <= len(buf):
@@ -168,47 +259,87 @@ def _read_binary_element(el, buf, pos, endian, path):
                 if (rec["n"] == k).all():
                     lists = rec["i"].astype(np.int64) if k > 0 else np.zeros((n, 0), np.int64)
                     return {name: lists}, pos + n * dt.itemsize
-    cols = {p[0]: [] for p in props}
-    for r in range(n):
-        for name, ct, it in props:
-            t = np.dtype(endian + ct)
-            if pos + t.itemsize > len(buf):
-                raise ImportFormatError(path, f"element {el['name']!r} row {r}: the data ends at byte {pos}; "
-                                        "truncated file?")
-            v = np.frombuffer(buf, t, 1, pos)[0]
-            pos += t.itemsize
-            if it is None:
-                cols[name].append(float(v))
-                continue
-            k, t2 = int(v), np.dtype(endian + it)
-            if k < 0 or pos + k * t2.itemsize > len(buf):
-                raise ImportFormatError(path, f"element {el['name']!r} row {r}: a list of {k} items does not fit "
-                                        f"in the {len(buf) - pos} bytes left; truncated file?")
-            cols[name].append(np.frombuffer(buf, t2, k, pos).astype(np.int64))
-            pos += k * t2.itemsize
-    return cols, pos
+    starts, end = _binary_row_starts(el, u8, pos, endian, path)
+    cols, off = {}, np.zeros(n, np.int64)
+    for name, ct, it in props:
+        ct_ = np.dtype(endian + ct)
+        vals = _gather(u8, starts + off, ct_)
+        off += ct_.itemsize
+        if it is None:
+            with np.errstate(invalid="ignore", over="ignore"):
+                cols[name] = vals.astype(np.float64)
+            continue
+        it_ = np.dtype(endian + it)
+        k = vals.astype(np.int64)
+        first = np.cumsum(k) - k
+        item = np.repeat(starts + off, k) + (np.arange(int(k.sum())) - np.repeat(first, k)) * it_.itemsize
+        cols[name] = _Ragged(k, _gather(u8, item, it_).astype(np.int64))
+        off += k * it_.itemsize
+    return cols, end
 
 
-def _read_ascii_element(el, lines, li, first_line, path):
+def _ascii_lines(data: bytes, body: int, body_line: int, path):
+    """The body's non-blank lines: (byte start, byte end, tokens, line number) arrays, without
+    splitting it into Python strings."""
+    decode_text(data[body:], path)  # UTF-8 / NUL check, naming the line
+    u8 = np.frombuffer(data, np.uint8, offset=body)
+    nl = np.flatnonzero(u8 == 10)
+    ends = np.append(nl, len(u8))
+    begins = np.append(0, nl + 1)
+    blank = (u8 == 32) | (u8 == 9) | (u8 == 13) | (u8 == 10)
+    tok = ~blank & np.append(True, blank[:-1])  # a token starts after a blank or at the start
+    ntok = np.add.reduceat(np.append(tok, False).view(np.uint8), begins, dtype=np.int64)  # per line
+    keep = ntok > 0
+    return (begins[keep] + body, ends[keep] + body, ntok[keep],
+            np.flatnonzero(keep) + body_line)
+
+
+def _ascii_numbers(data, a, b, count, dtype):
+    """``count`` numbers of ``dtype`` parsed in C from ``data[a:b]``; None if it does not parse."""
+    import warnings
+
+    text = data[a:b].decode("ascii", "replace").replace("\r", " ")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy warns (not raises) on text it cannot read to its end
+        try:
+            vals = np.fromstring(text, dtype=dtype, sep=" ") if text.strip() else np.zeros(0, dtype)
+        except (ValueError, DeprecationWarning):
+            return None
+    return vals if vals.size == count else None
+
+
+def _read_ascii_element(el, data, lines, li, path):
     n, props = el["count"], el["props"]
-    if li + n > len(lines):
-        raise ImportFormatError(path, f"element {el['name']!r} declares {n} rows but only {len(lines) - li} "
-                                "lines follow; truncated file?", line=first_line + len(lines))
-    rows = [lines[li + r].split() for r in range(n)]
-    try:  # fast paths: scalar-only rows, or one list of constant length (faces)
-        if n and all(p[2] is None for p in props) and all(len(t) == len(props) for t in rows):
-            arr = np.array(rows, dtype=np.float64)
-            return {p[0]: arr[:, k] for k, p in enumerate(props)}, li + n
-        if n and len(props) == 1 and props[0][2] is not None:
-            k = int(rows[0][0])
-            if k >= 0 and all(len(t) == k + 1 and t[0] == rows[0][0] for t in rows):
-                return {props[0][0]: np.array([t[1:] for t in rows], dtype=np.int64).reshape(n, k)}, li + n
-    except (ValueError, OverflowError, IndexError):
-        pass  # the row-by-row reader below names the bad line
+    begins, ends, ntok, lineno = lines
+    if li + n > len(begins):
+        last = int(lineno[-1]) if len(lineno) else 0
+        raise ImportFormatError(path, f"element {el['name']!r} declares {n} rows but only {len(begins) - li} "
+                                "lines follow; truncated file?", line=last + 1)
+    if n == 0:
+        return {p[0]: (_Ragged(np.zeros(0, np.int64), np.zeros(0, np.int64)) if p[2] else np.zeros(0))
+                for p in props}, li
+    rows = slice(li, li + n)
+    a, b, counts = int(begins[rows][0]), int(ends[rows][-1]), ntok[rows]
+    if all(p[2] is None for p in props):  # scalars only (vertices): one C parse
+        if (counts == len(props)).all():
+            vals = _ascii_numbers(data, a, b, n * len(props), np.float64)
+            if vals is not None:
+                arr = vals.reshape(n, len(props))
+                return {p[0]: arr[:, k] for k, p in enumerate(props)}, li + n
+    elif len(props) == 1:  # one list (faces): its count, then the items, one row per line
+        vals = _ascii_numbers(data, a, b, int(counts.sum()), np.int64)
+        if vals is not None:
+            first = np.cumsum(counts) - counts
+            k = vals[first]
+            if (k == counts - 1).all():
+                items = np.ones(len(vals), bool)
+                items[first] = False
+                return {props[0][0]: _Ragged(k, vals[items])}, li + n
+    # something does not fit: the line-by-line reader names the first bad line
     cols = {p[0]: [] for p in props}
     for r in range(n):
-        tok, j = rows[r], 0
-        where = dict(line=first_line + li + r)
+        raw = data[int(begins[li + r]):int(ends[li + r])].decode("utf-8", "replace")
+        tok, j = raw.split(), 0
         try:
             for name, ct, it in props:
                 if it is None:
@@ -220,10 +351,38 @@ def _read_ascii_element(el, lines, li, first_line, path):
                         raise IndexError
                     cols[name].append(np.array([int(t) for t in tok[j + 1:j + 1 + k]], np.int64))
                     j += 1 + k
-        except (IndexError, ValueError):
-            raise ImportFormatError(path, f"element {el['name']!r} row {r}: {lines[li + r].strip()[:60]!r}; "
-                                    f"expected values for {[p[0] for p in props]}", **where) from None
-    return cols, li + n
+            if j != len(tok):
+                raise IndexError
+        except (IndexError, ValueError, OverflowError):
+            raise ImportFormatError(path, f"element {el['name']!r} row {r}: {raw.strip()[:60]!r}; "
+                                    f"expected values for {[p[0] for p in props]}",
+                                    line=int(lineno[li + r])) from None
+    out = {}
+    for name, ct, it in props:
+        if it is None:
+            out[name] = np.asarray(cols[name], np.float64)
+        else:
+            k = np.array([len(x) for x in cols[name]], np.int64)
+            out[name] = _Ragged(k, np.concatenate(cols[name]) if len(k) else np.zeros(0, np.int64))
+    return out, li + n
+
+
+def _triangles(lists, path) -> np.ndarray:
+    """Triangle fans (F, 3) of a face list property: an (n, k) array or :class:`_Ragged`."""
+    if isinstance(lists, np.ndarray):
+        if lists.shape[1] < 3:
+            raise ImportFormatError(path, f"faces have {lists.shape[1]} vertices; expected at least 3")
+        return np.concatenate([lists[:, [0, k, k + 1]] for k in range(1, lists.shape[1] - 1)])
+    k, flat = lists.counts, lists.flat
+    short = np.flatnonzero(k < 3)
+    if short.size:
+        r = int(short[0])
+        raise ImportFormatError(path, f"face {r} has {int(k[r])} vertices; expected at least 3"
+                                + (f" ({short.size} faces have fewer than 3)" if short.size > 1 else ""))
+    t = k - 2
+    base = np.repeat(np.cumsum(k) - k, t)
+    j = np.arange(int(t.sum())) - np.repeat(np.cumsum(t) - t, t) + 1
+    return np.column_stack([flat[base], flat[base + j], flat[base + j + 1]])
 
 
 def read_ply(path):
@@ -238,10 +397,10 @@ def read_ply(path):
     fmt, elements, body, body_line = _ply_header(data, path)
     got = {}
     if fmt == "ascii":
-        lines = [s for s in decode_text(data[body:], path).split("\n") if s.strip()]
+        lines = _ascii_lines(data, body, body_line, path)
         li = 0
         for el in elements:
-            got[el["name"]], li = _read_ascii_element(el, lines, li, body_line, path)
+            got[el["name"]], li = _read_ascii_element(el, data, lines, li, path)
     else:
         endian = "<" if fmt == "binary_little_endian" else ">"
         pos = body
@@ -256,22 +415,11 @@ def read_ply(path):
         raise ImportFormatError(path, "has 0 vertices; expected at least one")
     faces = None
     f = got.get("face")
-    if f:
+    if f is not None and len(f):
         key = "vertex_indices" if "vertex_indices" in f else ("vertex_index" if "vertex_index" in f else None)
         if key is None:
             raise ImportFormatError(path, f"the face element has {list(f)}; expected a 'vertex_indices' list")
-        lists = f[key]
-        tris = []
-        if isinstance(lists, np.ndarray):
-            if lists.shape[1] < 3:
-                raise ImportFormatError(path, f"faces have {lists.shape[1]} vertices; expected at least 3")
-            tris = np.concatenate([lists[:, [0, k, k + 1]] for k in range(1, lists.shape[1] - 1)])
-        else:
-            for r, poly in enumerate(lists):
-                if len(poly) < 3:
-                    raise ImportFormatError(path, f"face {r} has {len(poly)} vertices; expected at least 3")
-                tris.extend(_fan(list(poly)))
-            tris = np.asarray(tris, np.int64).reshape(-1, 3)
+        tris = _triangles(f[key], path)
         if tris.size and (tris.min() < 0 or tris.max() >= V.shape[0]):
             r = int(np.flatnonzero((tris < 0).any(1) | (tris >= V.shape[0]).any(1))[0])
             raise ImportFormatError(path, f"triangle {r} indexes vertex {tris[r].tolist()}; there are {V.shape[0]}")

@@ -166,3 +166,60 @@ def test_vertex_array_with_template(tmp_path):
         read_vertex_array(tmp_path / "bad.npy", rate=60)
     with pytest.raises(ImportFormatError, match="pass the frame rate"):
         read_vertex_array(npy)
+
+
+def _polygon_ply(path, V, polys, *, fmt, count="uchar", index="int", extra=True):
+    """A PLY with faces of varying length, written row by row (the reference layout)."""
+    e = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(fmt)
+    head = (f"ply\nformat {fmt} 1.0\nelement vertex {len(V)}\nproperty float x\nproperty float y\n"
+            f"property float z\nelement face {len(polys)}\n" + ("property uchar flag\n" if extra else "")
+            + f"property list {count} {index} vertex_indices\n" + ("property float quality\n" if extra else "")
+            + "end_header\n").encode()
+    types = {"uchar": "u1", "ushort": "u2", "uint": "u4", "int": "i4"}
+    if e is None:
+        body = "".join(f"{x} {y} {z}\n" for x, y, z in V.tolist())
+        body += "".join(("7 " if extra else "") + " ".join(map(str, [len(q), *q])) + (" 0.5" if extra else "") + "\n"
+                        for q in polys)
+        path.write_bytes(head + body.encode())
+        return path
+    out = bytearray(V.astype(e + "f4").tobytes())
+    for q in polys:
+        if extra:
+            out += b"\x07"
+        out += np.array([len(q)], e + types[count]).tobytes() + np.array(q, e + types[index]).tobytes()
+        if extra:
+            out += np.array([0.5], e + "f4").tobytes()
+    path.write_bytes(head + bytes(out))
+    return path
+
+
+@pytest.mark.parametrize("fmt, count, index, extra", [
+    ("binary_little_endian", "uchar", "int", False), ("binary_little_endian", "ushort", "uint", True),
+    ("binary_big_endian", "uint", "int", True), ("ascii", "uchar", "int", False), ("ascii", "uchar", "int", True),
+])
+def test_ply_faces_of_varying_length_read_without_a_row_loop(tmp_path, monkeypatch, fmt, count, index, extra):
+    """Triangles, quads and pentagons mixed: the vectorised readers give the fans a per-row reader gives,
+    also when the binary row finder works through several windows."""
+    import engine.io.meshfile as mf
+
+    monkeypatch.setattr(mf, "_CHUNK", 97)  # many windows, rows straddling their edges
+    rng = np.random.default_rng(5)
+    V = rng.normal(size=(40, 3)).astype(np.float32)
+    polys = [rng.integers(0, 40, size=k).tolist() for k in rng.choice([3, 4, 5], size=300)]
+    V2, F2 = read_ply(_polygon_ply(tmp_path / "p.ply", V, polys, fmt=fmt, count=count, index=index, extra=extra))
+    expected = [(q[0], q[j], q[j + 1]) for q in polys for j in range(1, len(q) - 1)]
+    np.testing.assert_array_equal(V2, V)
+    assert F2.tolist() == [list(t) for t in expected]
+
+
+@pytest.mark.parametrize("fmt", ["binary_little_endian", "ascii"])
+def test_ply_short_and_truncated_faces_are_named(tmp_path, fmt):
+    V = np.eye(3)
+    p = _polygon_ply(tmp_path / "s.ply", V, [[0, 1, 2]] + [[]] * 1000 + [[0, 1]], fmt=fmt, extra=False)
+    with pytest.raises(ImportFormatError, match=r"face 1 has 0 vertices; expected at least 3 \(1001 faces"):
+        read_ply(p)
+    p = _polygon_ply(tmp_path / "t.ply", V, [[0, 1, 2], [0, 1, 2, 1]] * 50, fmt=fmt, extra=False)
+    data = p.read_bytes()
+    p.write_bytes(data[:-7])
+    with pytest.raises(ImportFormatError, match="truncated|row 99"):
+        read_ply(p)
