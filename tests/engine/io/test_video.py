@@ -139,6 +139,13 @@ def test_faceless_frames_bridged_or_split_and_reported(tmp_path):
     calls = []
     c = read_video(tmp_path / "gaps.mp4", bridge_s=0.1, progress=lambda *a: calls.append(a))
     assert calls[-1] == ("tracking the face in gaps.mp4", 28, 28) and calls[0][1:] == (0, 28)
+    from engine.progress import Cancelled
+
+    def cancel(stage, done, total):
+        raise Cancelled("stop")
+
+    with pytest.raises(Cancelled):  # long work stops cleanly when asked
+        read_video(tmp_path / "gaps.mp4", progress=cancel)
     assert [u.id for u in c.utterances] == ["gaps_1", "gaps_2"]
     assert [u.n_frames for u in c.utterances] == [14, 6]
     text = "\n".join(c.history)
