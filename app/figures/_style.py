@@ -51,8 +51,10 @@ def require_fitted(manifold, *attrs):
 
 def below(ax, text, *, fontsize=7.5):
     """A note under an axes' x label, inside the constrained layout (never overlapping)."""
-    t = ax.annotate(text, xy=(0.0, 0.0), xycoords="axes fraction", xytext=(0, -30), textcoords="offset points",
-                    va="top", ha="left", fontsize=fontsize, color="0.25", annotation_clip=False)
+    # anchored under the x label itself (wherever the layout puts it), not at a fixed offset that a
+    # tall tick label or x label can reach
+    t = ax.annotate(text, xy=(0.5, 0.0), xycoords=ax.xaxis.label, xytext=(0, -3), textcoords="offset points",
+                    va="top", ha="center", fontsize=fontsize, color="0.25", annotation_clip=False)
     t.set_gid("note")
     return t
 
@@ -238,3 +240,69 @@ def shape_points(manifold, frame_row) -> np.ndarray:
     from engine.corpus import frame_points
 
     return frame_points(np.asarray(frame_row), manifold.corpus_.dims).astype(np.float64)
+
+
+def place_labels(ax, xy, labels, *, fontsize: float = 7.0, color="0.25", marker_pt: float = 7.0,
+                 radii_pt=(4.0, 8.0, 13.0, 19.0)) -> int:
+    """Write ``labels`` beside the data points ``xy`` without any two labels overlapping.
+
+    Each label tries positions around its point (8 directions at growing distances,
+    north-east first) and takes the first whose box overlaps no label placed before it,
+    no other point's marker and stays inside the axes; failing that, the first that
+    overlaps no label. A label with no free place is left out. Labels do not take part
+    in the figure's layout, so the layout (and the checked places) stay as computed here.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    xy : ndarray of shape (n, 2), data coordinates
+    labels : sequence of str, length n
+    marker_pt : float
+        Diameter of the points' markers in points (kept clear of labels).
+
+    Returns
+    -------
+    int
+        Number of labels left out.
+    """
+    from matplotlib.transforms import Bbox
+
+    fig = ax.figure
+    fig.draw_without_rendering()  # the final layout: positions below are in display units of it
+    renderer = fig.canvas.get_renderer()
+    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    disp = ax.transData.transform(xy)
+    half = 0.5 * marker_pt * fig.dpi / 72.0
+    markers = [Bbox.from_extents(x - half, y - half, x + half, y + half) for x, y in disp]
+    frame = ax.get_window_extent(renderer)
+    angles = np.radians([45, 135, -45, -135, 0, 180, 90, -90])
+    placed, left_out = [], 0
+    for k, ((x, y), lab) in enumerate(zip(xy, labels)):
+        best = None
+        for strict in (True, False):
+            for r in radii_pt:
+                for a in angles:
+                    dx, dy = r * np.cos(a), r * np.sin(a)
+                    ha = "left" if dx > 0.5 else "right" if dx < -0.5 else "center"
+                    va = "bottom" if dy > 0.5 else "top" if dy < -0.5 else "center"
+                    t = ax.annotate(str(lab), xy=(x, y), xytext=(dx, dy), textcoords="offset points", ha=ha,
+                                    va=va, fontsize=fontsize, color=color, annotation_clip=False)
+                    t.set_in_layout(False)
+                    bb = t.get_window_extent(renderer)
+                    free = not any(bb.overlaps(o) for o in placed)
+                    if strict:
+                        free = (free and not any(bb.overlaps(m) for j, m in enumerate(markers) if j != k)
+                                and frame.contains(bb.x0, bb.y0) and frame.contains(bb.x1, bb.y1))
+                    if free:
+                        best = (t, bb)
+                        break
+                    t.remove()
+                if best:
+                    break
+            if best:
+                break
+        if best is None:
+            left_out += 1
+            continue
+        placed.append(best[1])
+    return left_out

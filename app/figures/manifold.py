@@ -71,8 +71,12 @@ def make_fig2a(manifold, *, utterance=None, n_local: int = 4, n_traj: int = 45, 
             local.append(int(idx[np.argmax(dens3[idx])]))
     traj = example_segment(manifold, utterance, n_frames=n_traj)
     fig = new_figure(width, 0.85 * width)
-    gs = fig.add_gridspec(2, 2)
-    axs = [fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[1, 0])]
+    # a corner layout sized by the data's extents, so that equal-aspect panels fill their cells (no empty
+    # cell): Y1-Y2 above Y1-Y3 (same Y1 width), Y2-Y3 beside Y1-Y3 (same Y3 height), the 3-D view top right
+    ext = np.maximum(np.ptp(Y, axis=0), 1e-9 * extent)
+    gs = fig.add_gridspec(2, 2, width_ratios=[ext[0], ext[1]], height_ratios=[ext[1], ext[2]])
+    cells = {(0, 1): gs[0, 0], (0, 2): gs[1, 0], (1, 2): gs[1, 1]}
+    axs = [fig.add_subplot(cells[p]) for p in PANELS]
     s_pts = marker_size(N)
     L, l_loc = 0.35 * extent, 0.12 * extent
     for ax, (a, b) in zip(axs, PANELS):
@@ -98,7 +102,7 @@ def make_fig2a(manifold, *, utterance=None, n_local: int = 4, n_traj: int = 45, 
         ax.set_xlabel(f"$Y_{a + 1}$")
         ax.set_ylabel(f"$Y_{b + 1}$")
         ax.set_aspect("equal", adjustable="box")
-    ax3 = fig.add_subplot(gs[1, 1], projection="3d")
+    ax3 = fig.add_subplot(gs[0, 1], projection="3d")
     _panel3d(ax3, Y, dens3, tan, o, S, V, L, traj, view3d)
     handles = [Line2D([], [], color="k", ls=":", label="zero-velocity plane"),
                Line2D([], [], color=ORIGINAL, marker=">", label="example trajectory"),

@@ -188,7 +188,7 @@ def make_scree(manifold, *, max_components: int | None = 30, width: float = 8.0,
         ax.set_ylabel("% of variance")
         ax.set_title(name, fontsize=10)
         ax.grid(True, axis="y", alpha=0.3)
-        ax.legend(frameon=False, fontsize=8, loc="center right")
+        ax.legend(frameon=False, fontsize=8, loc="lower right", bbox_to_anchor=(1.0, 0.08))
     if m <= len(sx):
         axs[0].axvline(m + 0.5, color="k", ls="--", lw=0.8)
         axs[0].annotate(f"{m} kept", xy=(m + 0.5, 50), xytext=(4, 0), textcoords="offset points", fontsize=8)

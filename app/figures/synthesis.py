@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.figures._style import GENERATED, ORIGINAL, below, new_figure, require_fitted
+from app.figures._style import GENERATED, ORIGINAL, below, new_figure, place_labels, require_fitted
 
 __all__ = ["make_fig3", "default_utterance"]
 
@@ -90,17 +90,24 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     mk, = ax.plot(orig[tf, a], orig[tf, b], "o", ms=7, mfc="none", mec=ORIGINAL, mew=1.2, ls="none",
                   label="phone mid-points")
     mk.set_gid("fig3:midpoints")
-    if label_phones:
-        for f, lab in zip(tf, traj.target_labels):
-            ax.annotate(lab, xy=(orig[f, a], orig[f, b]), xytext=(4, 4), textcoords="offset points",
-                        fontsize=7, color="0.25")
     ax.set_xlabel(f"$Y_{a + 1}$")
     ax.set_ylabel(f"$Y_{b + 1}$")
     ax.legend(frameon=False, fontsize=8, loc="best")
     text = f" \u201c{u.text}\u201d" if u.text else ""
     ax.set_title(f"Utterance {u.id}{text}\n{len(tf)} phone targets, RMSE in X {rmse_x:.3g}", fontsize=9)
+    notes = []
     if traj.warnings:
-        below(ax, f"{len(traj.warnings)} gap(s) not reachable in time; ended at the nearest reachable state")
+        notes.append(f"{len(traj.warnings)} gap(s) not reachable in time; ended at the nearest reachable state")
+    left_out = 0
+    if label_phones:  # placed last, against the final layout, so that no two labels collide
+        if notes:
+            below(ax, "; ".join(notes))
+        left_out = place_labels(ax, orig[tf][:, [a, b]], traj.target_labels, fontsize=7)
+        if left_out:
+            fig.text(0.01, 0.005, f"{left_out} phone label(s) left out where they would overlap", fontsize=6.5,
+                     color="0.35", ha="left", va="bottom").set_in_layout(False)
+    elif notes:
+        below(ax, "; ".join(notes))
     fig.lipspace.update(utterance=u.id, target_frames=tf, labels=list(traj.target_labels), rmse_x=rmse_x,
-                        rmse_y=rmse_y, warnings=list(traj.warnings))
+                        rmse_y=rmse_y, warnings=list(traj.warnings), labels_left_out=left_out)
     return fig

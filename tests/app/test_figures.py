@@ -493,3 +493,60 @@ def test_suffix_from_the_chosen_filter():
     assert suffix_from_filter("/d/fig", "SVG (*.svg)") == Path("/d/fig.svg")
     assert suffix_from_filter("/d/fig.PDF", "PNG image (*.png)") == Path("/d/fig.PDF")   # typed suffix wins
     assert suffix_from_filter("/d/fig.v2", "PDF (*.pdf)") == Path("/d/fig.v2.pdf")
+
+
+def _drawn_texts(fig):
+    """Every text the figure draws: tick labels of the ticks in view (2-D axes), labels, titles,
+    legends, notes, annotations whose point is drawn. mplot3d places its tick labels itself."""
+    from matplotlib.text import Annotation, Text
+
+    r = fig.canvas.get_renderer()
+    tick_texts, out = set(), []
+    for ax in fig.axes:
+        for axis in ax._axis_map.values():
+            for t in axis.get_major_ticks() + axis.get_minor_ticks():
+                tick_texts.update({id(t.label1), id(t.label2)})
+            if ax.name != "3d":
+                for t in axis._update_ticks():
+                    out += [lab for lab in (t.label1, t.label2) if lab.get_visible()]
+    out += [t for t in fig.findobj(Text) if id(t) not in tick_texts and t.get_visible()]
+    return [t for t in out if t.get_text().strip() and not (isinstance(t, Annotation) and not t._check_xy(r))]
+
+
+@pytest.mark.parametrize("name", list(F.FIGURES))
+def test_no_two_texts_of_a_figure_overlap(figs, name):
+    fig = figs[name]
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    boxes = [(t.get_text(), t.get_window_extent(r)) for t in _drawn_texts(fig)]
+    assert len(boxes) >= 3
+    clashes = [(a, b) for i, (a, ba) in enumerate(boxes) for b, bb in boxes[i + 1:] if ba.overlaps(bb)]
+    assert clashes == []
+
+
+def test_fig3_phone_labels_avoid_each_other_in_a_crowd():
+    from app.figures._style import new_figure, place_labels
+
+    fig = new_figure(4, 3)
+    ax = fig.subplots()
+    rng = np.random.default_rng(1)
+    xy = np.vstack([rng.normal(0, 0.15, (12, 2)), rng.uniform(-5, 5, (8, 2))])  # 12 in a tight knot
+    ax.plot(xy[:, 0], xy[:, 1], "o")
+    left_out = place_labels(ax, xy, [f"p{k}" for k in range(len(xy))])
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    texts = [t for t in ax.texts if t.get_text().startswith("p")]
+    assert len(texts) == len(xy) - left_out and len(texts) >= 14
+    boxes = [t.get_window_extent(r) for t in texts]
+    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+
+
+def test_fig2a_panels_fill_their_cells(figs):
+    fig = figs["fig2a"]
+    r = fig.canvas.get_renderer()
+    flat = [ax for ax in fig.axes if ax.name == "rectilinear" and ax.get_xlabel()]
+    assert len(flat) == 3
+    # the corner layout: panels sharing Y1 have the same width, panels sharing Y3 the same height
+    box = {ax.get_xlabel() + ax.get_ylabel(): ax.get_window_extent(r) for ax in flat}
+    assert box["$Y_1$$Y_2$"].width == pytest.approx(box["$Y_1$$Y_3$"].width, rel=0.03)
+    assert box["$Y_1$$Y_3$"].height == pytest.approx(box["$Y_2$$Y_3$"].height, rel=0.03)
