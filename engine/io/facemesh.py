@@ -49,9 +49,8 @@ LIP_RINGS = {
 _RING_ORDER = ("outer", "semi_outer", "semi_inner", "inner")
 
 
-def _ring_cycle(ring):
-    """Positions 0..19 of a ring in walking order round the mouth (lower 0..10, upper back 19..11)."""
-    return list(range(11)) + list(range(19, 10, -1))
+#: positions 0..19 of a ring in walking order round the mouth (lower half 0..10, upper half back 19..11)
+_RING_CYCLE = tuple(range(11)) + tuple(range(19, 10, -1))
 
 
 #: the 80 FaceMesh indices kept per frame, ring by ring (outer, semi-outer, semi-inner, inner)
@@ -83,7 +82,7 @@ LIP_ROLES = _roles()
 
 
 def _faces():
-    cyc = _ring_cycle(None)
+    cyc = _RING_CYCLE
     tris = []
     for b in range(3):  # bands outer|semi-outer, semi-outer|semi-inner, semi-inner|inner
         a0, b0 = 20 * b, 20 * (b + 1)
