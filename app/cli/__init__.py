@@ -103,7 +103,7 @@ def _main(argv, caught) -> int:
             print(f"lipspace {args.command}: error: {printable(str(exc))}", file=sys.stderr)
             return 2
         except MemoryError as exc:
-            size = f" ({exc})" if str(exc) else ""
+            size = _memory_size(exc)
             print(f"lipspace {args.command}: error: out of memory{size}. "
                   f"{MEMORY_HINTS.get(args.command, MEMORY_HINTS['build'])}", file=sys.stderr)
             return 2
@@ -123,6 +123,17 @@ MEMORY_HINTS = {
     "figures": "Use a lower --dpi or fewer figures (--only).",
     "synthesize": "Use fewer inverse-map dimensions (--inverse-dims 3) or shorter input.",
 }
+
+
+def _memory_size(exc) -> str:
+    """' (needed 15.6 GB more at once; this computer has 8.0 GB)', or '' when the error does not say."""
+    from app.out_of_memory import format_bytes, installed_bytes, requested_bytes
+
+    need, have = requested_bytes(exc), installed_bytes()
+    if not need:
+        return ""
+    ram = f"; this computer has {format_bytes(have)}" if have else ""
+    return f" (needed {format_bytes(need)} more at once{ram})"
 
 
 #: control characters that could drive the terminal (escape sequences in a corpus name, ...)

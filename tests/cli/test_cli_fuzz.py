@@ -215,6 +215,19 @@ def test_import_warns_about_frame_gaps_and_a_long_alignment(tmp_path, capsys):
     assert "25.0 times as long" in err and not (tmp_path / "d.npz").exists(), err
 
 
+def test_cli_memory_error_names_the_size(monkeypatch, capsys):
+    def build(args):
+        return np.empty((10**7, 10**6))
+
+    import app.cli.build as b
+
+    monkeypatch.setattr(b, "run", build)
+    assert main(["build", "-o", "x.npz", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lipspace build: error: out of memory (needed 80000.0 GB more at once") and \
+        "--landmarks 2000" in err and err.count("\n") == 1, err
+
+
 # ------------------------------------------------------------------ CLI fuzz
 @FUZZ
 @given(data=st.data())
