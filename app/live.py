@@ -101,7 +101,9 @@ class LiveProjector:
             raise ValueError(f"calibration_frames={calibration_frames!r}; expected an integer >= 1")
         self.manifold = manifold
         self.rate = rate
-        self.interocular_mm = float(interocular_mm)
+        from engine.headpose import check_interocular
+
+        self.interocular_mm = check_interocular(interocular_mm)
         self.calibration_frames = int(calibration_frames)
         self._calib = []
         self._pose = None

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from sklearn.base import BaseEstimator
 
-__all__ = ["similarity_fit", "HeadPose", "DEFAULT_INTEROCULAR_MM"]
+__all__ = ["similarity_fit", "HeadPose", "DEFAULT_INTEROCULAR_MM", "check_interocular"]
 
 #: mean adult interpupillary distance (mm), the default scale assumption
 DEFAULT_INTEROCULAR_MM = 63.0
@@ -60,6 +60,18 @@ def similarity_fit(A, B):
     s = (S * D).sum(axis=1) / np.maximum(var_a, 1e-300)
     t = mb - s[:, None] * np.einsum("nij,nj->ni", R, ma)
     return s, R, t
+
+
+def check_interocular(value) -> float:
+    """``value`` as a float when it is a plausible eye-centre distance in mm, else ValueError."""
+    try:
+        iod = float(value)
+    except (TypeError, ValueError):
+        iod = float("nan")
+    if not np.isfinite(iod) or not 10.0 <= iod <= 200.0:
+        raise ValueError(f"interocular_mm={value!r} (--interocular-mm): expected the distance between the eye "
+                         f"centres in mm, between 10 and 200 (adults average {DEFAULT_INTEROCULAR_MM:g})")
+    return iod
 
 
 def _apply(s, R, t, X):
@@ -125,10 +137,7 @@ class HeadPose(BaseEstimator):
         -------
         self
         """
-        iod = float(self.interocular_mm)
-        if not np.isfinite(iod) or not 10.0 <= iod <= 200.0:
-            raise ValueError(f"interocular_mm={self.interocular_mm!r}; expected a distance in mm between 10 and 200 "
-                             "(adults average 63)")
+        check_interocular(self.interocular_mm)
         if not isinstance(self.n_iter, (int, np.integer)) or self.n_iter < 1:
             raise ValueError(f"n_iter={self.n_iter!r}; expected an integer >= 1")
         ref = np.asarray(ref, dtype=np.float64)

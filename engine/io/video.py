@@ -254,6 +254,9 @@ def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: 
     from engine.io.combine import concat
     from engine.io.facemesh import LIP_POINTS
 
+    from engine.headpose import check_interocular
+
+    check_interocular(interocular_mm)
     paths = [Path(p) for p in paths]
     if not paths:
         raise ValueError("read_videos: no video files given")
@@ -332,7 +335,10 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
     from engine.io.alignment import resolve_alignment
     from engine.io.facemesh import LIP_FACES, LIP_NAMES, LIP_POINTS, LIP_ROLES, REFERENCE_POINTS
 
+    from engine.headpose import check_interocular
+
     path = Path(path)
+    check_interocular(interocular_mm)  # before minutes of tracking
     bridge_s = float(bridge_s)
     if not np.isfinite(bridge_s) or bridge_s < 0:
         raise ValueError(f"bridge_s={bridge_s!r}; expected a duration in seconds >= 0 (default {DEFAULT_BRIDGE_S})")

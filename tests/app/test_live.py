@@ -115,6 +115,8 @@ def test_wrong_manifold_and_missing_inputs_are_one_line_errors(video_world, smal
 
     with pytest.raises(ValueError, match="the live mirror needs a manifold built from a video import"):
         check_video_manifold(small_manifold)
+    with pytest.raises(ValueError, match="--interocular-mm"):
+        LiveProjector(video_world["manifold"], rate=30, interocular_mm=300)
     with pytest.raises(CliError, match="--camera needs --manifold"):
         run_live(None, "0")
     with pytest.raises(CliError, match="no camera number and no such video file"):

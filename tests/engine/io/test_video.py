@@ -110,6 +110,8 @@ def test_no_face_corrupt_and_empty_files(tmp_path):
     write_video(tmp_path / "noise.mp4", iter(frames), RATE)
     with pytest.raises(ImportFormatError, match=r"noise\.mp4: no face found in any of its 8 frames"):
         read_video(tmp_path / "noise.mp4")
+    with pytest.raises(ValueError, match=r"interocular_mm=5 \(--interocular-mm\): expected the distance"):
+        read_video(tmp_path / "noise.mp4", interocular_mm=5)  # refused before any tracking
     (tmp_path / "empty.mp4").write_bytes(b"")
     with pytest.raises(ImportFormatError, match=r"empty\.mp4: is empty \(0 bytes\); expected a video file"):
         read_video(tmp_path / "empty.mp4")
