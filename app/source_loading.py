@@ -135,8 +135,9 @@ def _load_manifold(path, preset, progress, use_cache):
             report(progress, "loading cached manifold", 0, 1)
             m = Manifold.load(cached)
             report(progress, "loading cached manifold", 1, 1)
+            _prune_cache(cached, preset)
             return m, src
-        except ManifoldFileError:
+        except (ManifoldFileError, OSError):
             pass  # stale or damaged cache: rebuild below
     from engine.synthetic import load_synthetic
 
@@ -147,4 +148,12 @@ def _load_manifold(path, preset, progress, use_cache):
             m.save(cached)
         except OSError:
             pass  # a read-only cache only costs a rebuild next time
+        _prune_cache(cached, preset)
     return m, src
+
+
+def _prune_cache(manifold_path, preset) -> None:
+    """Delete the cache entries older code left for ``preset`` (see :func:`app.cache.prune`)."""
+    from app.cache import newest, prune
+
+    prune([manifold_path, *newest("corpus", preset)])

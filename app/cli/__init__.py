@@ -34,6 +34,7 @@ SUBCOMMANDS = {
     "figures": ("app.cli.figures", "render the paper's figure set in batch"),
     "import": ("app.cli.importer", "convert a foreign corpus format to the native corpus file"),
     "render": ("app.cli.render", "render a synthesised utterance as an MP4 video with its audio"),
+    "cache": ("app.cli.cache", "show the cache folder and its size; --clear empties it"),
 }
 
 

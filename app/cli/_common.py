@@ -51,9 +51,12 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None):
     from engine.corpus import Corpus, CorpusError
 
     if path is None:
+        from app.cache import newest, prune
         from engine.synthetic import load_synthetic
 
-        return load_synthetic(preset=synthetic_preset, progress=progress)
+        corpus = load_synthetic(preset=synthetic_preset, progress=progress)
+        prune(newest("corpus", synthetic_preset))  # the corpora older code left behind
+        return corpus
     p = Path(path)
     if not p.exists():
         raise CliError(f"{p}: no such file")
