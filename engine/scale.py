@@ -267,6 +267,12 @@ class DaskExecutor:
     def __exit__(self, *exc):
         self.close()
 
+    def use_frame_blocks(self, frames, paths) -> None:
+        """Let the shape stage read F from existing block files (``engine.corpus_blocks``)
+        instead of writing it out: used when :meth:`fit_shape` is given this very
+        ``frames`` array (not a normalised copy of it)."""
+        self._frame_blocks = (frames, [Path(p) for p in paths])
+
     # ------------------------------------------------------------ shape space
     def fit_shape(self, shape, frames, *, progress: ProgressFn = None) -> np.ndarray:
         """Fit ``shape`` (an unfitted :class:`engine.shape.ShapeSpace`) on F; return F^x (N, m).
@@ -279,7 +285,14 @@ class DaskExecutor:
 
         F0 = shape._validate(frames)
         N, C = F0.shape
-        F = open_frame_blocks(store_frame_blocks(F0, self.chunk_dir / "frames", block_frames=self.block_frames))
+        given = getattr(self, "_frame_blocks", None)
+        if given is not None and given[0] is frames:  # the corpus is stored in blocks already: read them in place
+            paths = given[1]
+        else:
+            paths = store_frame_blocks(F0, self.chunk_dir / "frames", block_frames=self.block_frames)
+        F = open_frame_blocks(paths)
+        if F.shape != F0.shape:
+            raise ValueError(f"the frame blocks hold {F.shape} frames x coordinates but the corpus has {F0.shape}")
         del F0
         rng = np.random.default_rng(shape.random_state)
         k = int(min(shape.max_components, N - 1, C))

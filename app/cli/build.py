@@ -11,7 +11,8 @@ PRESETS = ("small", "default", "paper")
 
 
 def add_arguments(p):
-    p.add_argument("corpus", nargs="?", help="native corpus file (.npz); omit for the synthetic talker")
+    p.add_argument("corpus", nargs="?", help="native corpus file (.npz, frames inside or in blocks beside it: "
+                                             "'lipspace import --block-frames'); omit for the synthetic talker")
     p.add_argument("--preset", choices=PRESETS, default="default",
                    help="synthetic talker preset when no corpus is given (default: %(default)s)")
     p.add_argument("-o", "--output", required=True, help="manifold file to write (.npz)")
@@ -50,7 +51,11 @@ def run(args) -> int:
         raise CliError(f"{out}: the manifold file must end in .npz")
     t0 = time.perf_counter()
     with progress_bar(disable=True if args.quiet else None) as progress:
-        corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress)
+        blocks = None
+        if args.corpus is not None and _is_blocked(args.corpus):  # written by 'lipspace import --block-frames'
+            corpus, blocks = _load_blocked(args.corpus)
+        else:
+            corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress)
         if abs(corpus.rate - 60.0) > 3.0:  # the analysis rate (README, "Real recordings")
             print(f"lipspace build: warning: {corpus.name} is at {corpus.rate:g} Hz; the method's analysis rate is "
                   "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "
@@ -61,6 +66,8 @@ def run(args) -> int:
             plan = plan_build(corpus.n_frames, n_landmarks=args.landmarks, landmarks_above=args.landmarks_above)
             print(f"lipspace build: {plan.describe()}", file=sys.stdout)
             executor = _dask_executor(args)
+            if executor is not None and blocks is not None:
+                executor.use_frame_blocks(corpus.frames, blocks)
             manifold = Manifold(variance=args.variance, n_embedding=args.embedding_dims,
                                 embedding_method=args.method, n_landmarks=args.landmarks,
                                 n_states=args.states, n_neighbors=args.neighbors,
@@ -79,6 +86,23 @@ def run(args) -> int:
           f"Y {s['embedding_dims']}-D (first 3 hold {100 * s['Y_first3_recovered']:.1f}% of recovered variance), "
           f"K={s['n_states']} states, {time.perf_counter() - t0:.1f} s", file=sys.stdout)
     return 0
+
+
+def _is_blocked(path) -> bool:
+    from engine.corpus_blocks import is_blocked
+
+    return Path(path).suffix.lower() == ".npz" and Path(path).is_file() and is_blocked(path)
+
+
+def _load_blocked(path):
+    from app.cli import CliError
+    from engine.corpus import CorpusError
+    from engine.corpus_blocks import load_blocked
+
+    try:
+        return load_blocked(path)
+    except CorpusError as exc:
+        raise CliError(str(exc)) from None
 
 
 def _dask_executor(args):

@@ -72,6 +72,9 @@ def add_arguments(p):
                    help="with several inputs: read them on Dask workers, 'local' (one per core) or a running "
                         "scheduler's address; the files must be readable by every worker")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--block-frames", type=int, default=None, metavar="N",
+                   help="store the frames in blocks of N frames (.npy files in OUT.blocks/ beside OUT.npz) that "
+                        "Dask workers read in place during 'lipspace build --dask' (default: inside OUT.npz)")
 
 
 def _options(args, fmt):
@@ -132,6 +135,8 @@ def run(args) -> int:
     out = Path(args.output)
     if out.suffix != ".npz":
         raise CliError(f"{out}: the corpus file must end in .npz")
+    if args.block_frames is not None and args.block_frames < 256:
+        raise CliError(f"--block-frames {args.block_frames}: must be at least 256 frames per block")
     inputs = args.inputs
     rate_out = None
     if args.resample is None:  # video keeps its own frame rate; other inputs go to the paper's 60 Hz
@@ -181,7 +186,16 @@ def run(args) -> int:
             corpus = replace(corpus, name=args.name)
     except (ImportFormatError, CorpusError, FileNotFoundError, ValueError, TypeError) as exc:
         raise CliError(str(exc)) from None
-    corpus.save(out)
+    if args.block_frames is None:
+        corpus.save(out)
+    else:
+        from engine.corpus_blocks import blocks_folder, save_blocked
+
+        try:
+            blocks = save_blocked(corpus, out, block_frames=args.block_frames)
+        except ValueError as exc:
+            raise CliError(f"--block-frames {args.block_frames}: {exc}") from None
+        print(f"lipspace import: frames in {len(blocks)} blocks in {blocks_folder(out)}", file=sys.stderr)
     # what was done to the data, on stderr (stdout keeps the one summary line)
     for note in corpus.history:
         if not note.startswith("read "):
