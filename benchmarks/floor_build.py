@@ -18,23 +18,19 @@ overhead above the floor (small at this size). The widths (k + p, m, r, L, passe
 are read from a build of the same corpus, so the floor does exactly the GEMMs the
 build does.
 
-The benchmark runs build and floor as *pairs*, each in a fresh process (cold: imports
-and loading the corpus from the cache are not timed), alternating so that both see
-the same load, and prints each pair's wall times and ratio build / floor, then min
-and median of the ratios and of both walls (goal: ratio <= 2), the load average and
-the BLAS kernel.
+This script runs the floor alone (one fresh process, corpus loading not timed) and
+prints its seconds, GFLOP and bytes streamed. ``benchmarks/bench_build_floor.py`` runs
+it beside the build in paired, alternating fresh processes and reports the ratio.
 
 Usage::
 
-    python benchmarks/floor_build.py [--pairs 3] [--preset paper]
+    python benchmarks/floor_build.py [--preset paper] [--widths '{"r_shape": 110, ...}']
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
-import statistics
-import subprocess
 import sys
 import time
 
@@ -100,33 +96,31 @@ def floor(F, *, r_shape: int, n_iter: int, m: int, r_emb: int, n_passes: int, L:
     return out
 
 
+#: the widths of the build the issue measured (951 GFLOP): 100 + 10 shape columns and 3
+#: power iterations, 10 + 10 embedding columns and 6 passes over D; m and L come from
+#: the corpus (the kept components and the frames are the same whatever the widths)
+ISSUE_WIDTHS = {"r_shape": 110, "n_iter": 3, "r_emb": 20, "n_passes": 6}
+
+
+def work(N, C, *, r_shape, n_iter, m, r_emb, n_passes, L=None, **_) -> dict:
+    """GFLOP of the floor's GEMMs and GB it streams from F, for an (N, C) corpus."""
+    L = N if L is None else L
+    shape_cols = 2 * (n_iter + 1) * r_shape + m
+    gflop = (2.0 * N * C * shape_cols + n_passes * 2.0 * N * L * ((2 * m + 2) + r_emb)) / 1e9
+    reads = 2 * (n_iter + 1) + 3  # the mean, the range finder's products, the total, F^x
+    return {"gflop": gflop, "gb_read": reads * N * C * 4 / 1e9}
+
+
 def _corpus(preset):
     from engine.synthetic import load_synthetic
 
     return load_synthetic(preset=preset)
 
 
-def run_build(preset) -> dict:
-    import warnings
-
-    from engine.manifold import Manifold
-
-    corpus = _corpus(preset)
-    load0 = os.getloadavg()[0]
-    c0, t = time.process_time(), time.perf_counter()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        m = Manifold().fit(corpus)
-    wall, cpu = time.perf_counter() - t, time.process_time() - c0
-    sh, emb = m.shape_, m.embedding_
-    widths = {"r_shape": int(min(sh.max_components, corpus.n_frames - 1, corpus.frames.shape[1])) + 10,
-              "n_iter": int(sh.n_iter), "m": int(sh.n_components_), "r_emb": int(emb.n_components) + int(emb.oversample),
-              "n_passes": int(emb.n_passes_), "L": int(emb.reference_.shape[0])}
-    return {"wall_s": wall, "cpu_s": cpu, "stages": m.timings_, "widths": widths, "load": load0,
-            "shape": list(corpus.frames.shape), "blas": blas_kernel()}
-
-
 def run_floor(preset, widths) -> dict:
+    """Load the corpus, then time :func:`floor` (wall and CPU seconds) in this process."""
+    import resource
+
     import numpy as np
 
     F = np.ascontiguousarray(_corpus(preset).frames, dtype=np.float32)
@@ -134,46 +128,25 @@ def run_floor(preset, widths) -> dict:
     c0, t = time.process_time(), time.perf_counter()
     parts = floor(F, **widths)
     wall, cpu = time.perf_counter() - t, time.process_time() - c0
-    return {"wall_s": wall, "cpu_s": cpu, "parts": parts, "load": load0}
-
-
-def _child(args) -> dict:
-    out = subprocess.run([sys.executable, os.path.abspath(__file__), *args], capture_output=True, text=True)
-    if out.returncode != 0:
-        raise SystemExit(f"{' '.join(args)} failed:\n{out.stderr[-2000:]}")
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return {"wall_s": wall, "cpu_s": cpu, "parts": parts, "load": load0, "work": work(*F.shape, **widths),
+            "max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--pairs", type=int, default=3)
     ap.add_argument("--preset", default="paper")
-    ap.add_argument("--child", choices=("build", "floor"), help=argparse.SUPPRESS)
-    ap.add_argument("--widths", help=argparse.SUPPRESS)
+    ap.add_argument("--widths", help="JSON of floor()'s widths (default: the issue's, with m=30 and L=N)")
+    ap.add_argument("--json", action="store_true", help="print one JSON line (for bench_build_floor.py)")
     args = ap.parse_args(argv)
-    if args.child == "build":
-        print(json.dumps(run_build(args.preset)))
+    widths = json.loads(args.widths) if args.widths else dict(ISSUE_WIDTHS, m=30)
+    out = run_floor(args.preset, widths)
+    if args.json:
+        print(json.dumps(out))
         return 0
-    if args.child == "floor":
-        print(json.dumps(run_floor(args.preset, json.loads(args.widths))))
-        return 0
-    builds, floors, ratios = [], [], []
-    for i in range(args.pairs):
-        b = _child(["--child", "build", "--preset", args.preset])
-        f = _child(["--child", "floor", "--preset", args.preset, "--widths", json.dumps(b["widths"])])
-        builds.append(b["wall_s"])
-        floors.append(f["wall_s"])
-        ratios.append(b["wall_s"] / f["wall_s"])
-        st = ", ".join(f"{k} {v:.1f}" for k, v in b["stages"].items())
-        print(f"pair {i}: build {b['wall_s']:.1f} s wall / {b['cpu_s']:.1f} s CPU ({st}); floor {f['wall_s']:.1f} s "
-              f"wall / {f['cpu_s']:.1f} s CPU (shape {f['parts']['shape']:.1f}, embedding "
-              f"{f['parts']['embedding']:.1f}); ratio {ratios[-1]:.2f}; load average {b['load']:.1f} / "
-              f"{f['load']:.1f}", flush=True)
-    med = statistics.median
-    print(f"corpus {b['shape'][0]} x {b['shape'][1]}; widths {b['widths']}")
-    print(f"build/floor over {len(ratios)} pairs: min {min(ratios):.2f}, median {med(ratios):.2f} (goal <= 2); "
-          f"build min {min(builds):.1f} s, median {med(builds):.1f} s; floor min {min(floors):.1f} s, median "
-          f"{med(floors):.1f} s; {os.cpu_count()} cores\nBLAS: {b['blas']}")
+    print(f"floor {out['wall_s']:.2f} s wall / {out['cpu_s']:.2f} s CPU (shape {out['parts']['shape']:.2f}, "
+          f"embedding {out['parts']['embedding']:.2f}); {out['work']['gflop']:.0f} GFLOP, "
+          f"{out['work']['gb_read']:.1f} GB read from F; widths {widths}; load average {out['load']:.1f}; "
+          f"max RSS {out['max_rss_mib']:.0f} MiB\nBLAS: {blas_kernel()}")
     return 0
 
 

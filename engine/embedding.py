@@ -178,6 +178,10 @@ class Embedding(BaseEstimator):
         PCA: the principal axes of the rows of D. MDS: the out-of-sample projector.
     center_ : ndarray of shape (L,)
         PCA: the mean row of D. MDS: the column means of D^2.
+    n_passes_ : int
+        Passes over the blocks of D the fit made.
+    n_range_ : int
+        Columns of the randomized range finder (``n_components + oversample``, at most L).
     """
 
     #: builds the products with D; engine.scale swaps in a Dask one for a single fit
@@ -239,6 +243,7 @@ class Embedding(BaseEstimator):
         self.reference_ = ref
         self.landmarks_ = lm
         self.n_passes_ = op.passes
+        self.n_range_ = r
         return self
 
     # -- PCA of the rows of D (N observations of L features) -------------------

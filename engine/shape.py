@@ -84,6 +84,9 @@ class ShapeSpace(BaseEstimator):
         Cumulative fraction of the variance of the computed components.
     total_variance_ : float
     n_components_ : int
+    n_range_ : int
+        Columns of the randomized range finder (computed components + oversampling):
+        every product with F is an (N, C) x (C, n_range_) GEMM.
     """
 
     def __init__(self, *, max_components=100, variance=0.99, n_iter=3, block_size=4096, random_state=0):
@@ -168,6 +171,7 @@ class ShapeSpace(BaseEstimator):
             total += float(((F[sl] - mean32).astype(np.float64) ** 2).sum())
         step += 1
         report(progress, "shape space", step, total_steps)
+        self.n_range_ = k + p
         return self._set_fitted(s, Vt, total, N, mean)
 
     def _set_fitted(self, s, Vt, total, N, mean):

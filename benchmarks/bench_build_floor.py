@@ -1,0 +1,139 @@
+"""The paper-scale build against its floor, paired and alternated (issue 13 item 5; goal: build <= 2x floor).
+
+Each pair runs the build (``Manifold().fit`` on ``load_synthetic(preset="paper")``) and
+the floor (``benchmarks/floor_build.py``: exactly the build's GEMMs and streamed reads)
+in fresh processes, one after the other; even pairs run the build first, odd pairs the
+floor first, so that a change of load between the two touches both. Imports and loading
+the cached corpus are not timed (the corpus cache is filled before the first pair).
+
+Two floors are run in every pair:
+
+* **own**: the floor with the widths the build used this time (range-finder columns,
+  power iterations, passes over D), read from the fitted manifold: the ratio
+  build / own floor is the build's overhead above its own GEMMs;
+* **issue**: the floor of the build the issue measured (110 shape columns and 3 power
+  iterations, 20 embedding columns and 6 passes over D, about 951 GFLOP): the ratio
+  build / issue floor is the goal as the issue states it.
+
+Printed: every pair's walls, CPU seconds, stage times and ratios; then min and median
+over pairs of both ratios and of the walls; peak RSS of each process; the load average
+before and after; the BLAS kernel.
+
+Usage::
+
+    python benchmarks/bench_build_floor.py [--pairs 3] [--preset paper] [--no-issue-floor]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+for p in (ROOT, HERE):
+    if p not in sys.path:
+        sys.path.insert(0, p)
+from _common import blas_kernel  # noqa: E402
+from floor_build import ISSUE_WIDTHS, work  # noqa: E402
+
+
+def run_build(preset) -> dict:
+    """Load the corpus, then time ``Manifold().fit`` in this process; report the widths it used."""
+    import resource
+    import warnings
+
+    from engine.manifold import Manifold
+    from engine.synthetic import load_synthetic
+
+    corpus = load_synthetic(preset=preset)
+    load0 = os.getloadavg()[0]
+    c0, t = time.process_time(), time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = Manifold().fit(corpus)
+    wall, cpu = time.perf_counter() - t, time.process_time() - c0
+    sh, emb = m.shape_, m.embedding_
+    widths = {"r_shape": int(sh.n_range_), "n_iter": int(sh.n_iter), "m": int(sh.n_components_),
+              "r_emb": int(emb.n_range_), "n_passes": int(emb.n_passes_), "L": int(emb.reference_.shape[0])}
+    return {"wall_s": wall, "cpu_s": cpu, "stages": m.timings_, "widths": widths, "load": load0,
+            "shape": list(corpus.frames.shape), "blas": blas_kernel(),
+            "max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+
+
+def _child(args) -> dict:
+    out = subprocess.run([sys.executable, *args], capture_output=True, text=True, cwd=ROOT)
+    if out.returncode != 0:
+        raise SystemExit(f"{' '.join(args)} failed:\n{out.stderr[-2000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _build(preset):
+    return _child([os.path.abspath(__file__), "--child-build", "--preset", preset])
+
+
+def _floor(preset, widths):
+    return _child([os.path.join(HERE, "floor_build.py"), "--json", "--preset", preset, "--widths", json.dumps(widths)])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pairs", type=int, default=3)
+    ap.add_argument("--preset", default="paper")
+    ap.add_argument("--no-issue-floor", action="store_true", help="run only the floor of the build's own widths")
+    ap.add_argument("--child-build", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.child_build:
+        print(json.dumps(run_build(args.preset)))
+        return 0
+    subprocess.run([sys.executable, "-c", f"from engine.synthetic import load_synthetic; "
+                    f"load_synthetic(preset={args.preset!r})"], check=True, cwd=ROOT)  # fill the cache
+    load_before = os.getloadavg()
+    widths = None
+    rows = []
+    for i in range(args.pairs):
+        floors = {}
+        if i % 2 == 1 and widths is not None:  # odd pairs: floors first
+            floors["own"] = _floor(args.preset, widths)
+            if not args.no_issue_floor:
+                floors["issue"] = _floor(args.preset, dict(ISSUE_WIDTHS, m=widths["m"], L=widths["L"]))
+            b = _build(args.preset)
+        else:
+            b = _build(args.preset)
+        widths = b["widths"]
+        if "own" not in floors:
+            floors["own"] = _floor(args.preset, widths)
+            if not args.no_issue_floor:
+                floors["issue"] = _floor(args.preset, dict(ISSUE_WIDTHS, m=widths["m"], L=widths["L"]))
+        ratios = {k: b["wall_s"] / f["wall_s"] for k, f in floors.items()}
+        rows.append((b, floors, ratios))
+        st = ", ".join(f"{k} {v:.1f}" for k, v in b["stages"].items())
+        fl = "; ".join(f"{k} floor {f['wall_s']:.1f} s wall / {f['cpu_s']:.1f} s CPU ({f['work']['gflop']:.0f} "
+                       f"GFLOP, {f['work']['gb_read']:.1f} GB), ratio {ratios[k]:.2f}" for k, f in floors.items())
+        print(f"pair {i} ({'floor' if i % 2 else 'build'} first): build {b['wall_s']:.1f} s wall / "
+              f"{b['cpu_s']:.1f} s CPU ({st}), max RSS {b['max_rss_mib']:.0f} MiB; {fl}; load average at start "
+              f"{b['load']:.1f} (build) / {floors['own']['load']:.1f} (own floor)", flush=True)
+    med = statistics.median
+    b0 = rows[-1][0]
+    print(f"corpus {b0['shape'][0]} x {b0['shape'][1]}; build widths {b0['widths']}; issue widths "
+          f"{dict(ISSUE_WIDTHS, m=b0['widths']['m'], L=b0['widths']['L'])} "
+          f"({work(*b0['shape'], **dict(ISSUE_WIDTHS, m=b0['widths']['m'], L=b0['widths']['L']))['gflop']:.0f} GFLOP)")
+    builds = [r[0]["wall_s"] for r in rows]
+    print(f"build wall over {len(rows)} pairs: min {min(builds):.1f} s, median {med(builds):.1f} s; "
+          f"max RSS {max(r[0]['max_rss_mib'] for r in rows):.0f} MiB")
+    for k in rows[0][2]:
+        rs = [r[2][k] for r in rows]
+        fw = [r[1][k]["wall_s"] for r in rows]
+        print(f"{k} floor: wall min {min(fw):.1f} s, median {med(fw):.1f} s; build/floor min {min(rs):.2f}, "
+              f"median {med(rs):.2f} (goal <= 2)")
+    print(f"load average (1/5/15 min) before {'/'.join(f'{x:.1f}' for x in load_before)}, after "
+          f"{'/'.join(f'{x:.1f}' for x in os.getloadavg())}; {os.cpu_count()} cores\nBLAS: {b0['blas']}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
