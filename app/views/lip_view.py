@@ -76,6 +76,10 @@ class LipView(QtWidgets.QWidget):
         self.slider.setEnabled(False)
         self.caption = QtWidgets.QLabel("")
         self.caption.setWordWrap(True)
+        self.caption.setAlignment(QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignTop)
+        # two lines, whatever the text: a caption that re-wraps to another height would resize the
+        # 3-D widget during playback (a VTK resize, and the window composed whole from then on)
+        self.caption.setFixedHeight(2 * self.caption.fontMetrics().lineSpacing() + 4)
         self._caption_readout = Throttle(self.caption.setText, READOUT_INTERVAL_S, parent=self)
         self._slider_readout = Throttle(self._set_slider, READOUT_INTERVAL_S, parent=self)
         bar = QtWidgets.QHBoxLayout()
@@ -187,6 +191,7 @@ class LipView(QtWidgets.QWidget):
         if self.second.visible != (second is not None):  # frame one mesh or both, once per change
             self.second.set_visible(second is not None)
             self.plotter.reset_camera(render=False)
+        self.caption.setToolTip(text)  # the whole text where two lines are too few
         if s.playing:  # readouts at a few per second: each of their repaints composes the window
             self._caption_readout(text)
             if slider is not None:
