@@ -21,10 +21,10 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
-from threadpoolctl import threadpool_limits
 
 from engine.progress import ProgressFn, report
 from engine.shape import orthonormal_basis, thin_svd
+from engine.threads import one_blas_thread
 
 __all__ = ["Embedding", "pairwise_distance_block"]
 
@@ -95,7 +95,7 @@ class _DistanceOperator:
         N = self.G.shape[0]
         slices = [slice(s, min(N, s + self.block)) for s in range(0, N, self.block)]
         group = 4 * self.workers
-        with threadpool_limits(1), ThreadPoolExecutor(self.workers) as ex:
+        with one_blas_thread(), ThreadPoolExecutor(self.workers) as ex:
             for g in range(0, len(slices), group):
                 part = slices[g:g + group]
                 for sl, res in zip(part, ex.map(fn, part)):

@@ -39,6 +39,8 @@ from scipy.spatial import ConvexHull, Delaunay, cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.threads import single_blas_thread
+
 __all__ = ["InverseMap", "barycentric_transforms"]
 
 #: Qhull options: scipy's defaults for <= 4-D ("Qt" is always added by scipy)
@@ -272,6 +274,7 @@ class InverseMap(BaseEstimator):
         return (P @ eq[:, :-1].T + eq[:, -1]).max(axis=1) > self.tolerance_
 
     # ---------------------------------------------------------------- mapping
+    @single_blas_thread
     def transform(self, Y, *, return_outside=False):
         """Map embedding points to values.
 

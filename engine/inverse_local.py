@@ -23,6 +23,8 @@ from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.threads import single_blas_thread
+
 __all__ = ["StateMeanInverse", "LocalLinearInverse", "select_neighbors", "NEIGHBOR_CANDIDATES"]
 
 #: k tried by :func:`select_neighbors`
@@ -135,6 +137,7 @@ class LocalLinearInverse(BaseEstimator):
         self._tree = cKDTree(Fy)
         return self
 
+    @single_blas_thread
     def transform(self, Y) -> np.ndarray:
         """F^x at query points: ndarray (n, >= n_dims) -> (n, m) float64."""
         check_is_fitted(self, "points_")

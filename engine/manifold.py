@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import time
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,8 @@ from engine.corpus import Corpus, CorpusError
 from engine.dynamics import DynamicFeatures, velocities
 from engine.embedding import Embedding
 from engine.progress import ProgressFn, report
-from engine.shape import ShapeSpace
+from engine.shape import SMALL_QUERY_ROWS, ShapeSpace
+from engine.threads import one_blas_thread
 
 __all__ = ["Manifold", "ManifoldFileError", "algorithm_fingerprint"]
 
@@ -207,14 +209,18 @@ class Manifold(BaseEstimator):
 
     # -------------------------------------------------------------- projections
     def project(self, frames, bounds=None) -> np.ndarray:
-        """Out-of-sample F^y for new frames (n, C) forming utterances ``bounds`` (default: one)."""
+        """Out-of-sample F^y for new frames (n, C) forming utterances ``bounds`` (default: one).
+
+        Up to ``engine.shape.SMALL_QUERY_ROWS`` frames on one BLAS thread (interactive).
+        """
         check_is_fitted(self, "Fy_")
         frames = np.atleast_2d(np.asarray(frames, dtype=np.float32))
         if bounds is None:
             bounds = np.array([[0, frames.shape[0]]])
-        Fx = self.shape_.transform(frames)
-        G = self.dynamics_.transform(Fx, bounds)
-        return self.embedding_.transform(G)
+        with one_blas_thread() if frames.shape[0] <= SMALL_QUERY_ROWS else nullcontext():  # live mirror: a frame
+            Fx = self.shape_.transform(frames)
+            G = self.dynamics_.transform(Fx, bounds)
+            return self.embedding_.transform(G)
 
     @property
     def inverse_map(self):

@@ -7,13 +7,25 @@ multiplies F (block by block) by thin matrices, so neither a dense covariance
 """
 from __future__ import annotations
 
+from contextlib import nullcontext
+
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from engine.progress import ProgressFn, report
+from engine.threads import one_blas_thread
 
 __all__ = ["ShapeSpace"]
+
+
+#: at most this many frames count as a small (interactive) query: one BLAS thread
+SMALL_QUERY_ROWS = 4096
+
+
+def _small(n_rows: int):
+    """One BLAS thread for a small query (a click, a synthesised utterance); every thread above."""
+    return one_blas_thread() if n_rows <= SMALL_QUERY_ROWS else nullcontext()
 
 
 def _row_blocks(n: int, block: int):
@@ -22,16 +34,9 @@ def _row_blocks(n: int, block: int):
 
 
 def one_thread():
-    """Context manager: BLAS/LAPACK on one thread, for the small factorisations of a build.
-
-    A QR of 28,833 x 110 or an SVD of 110 x 12,780 gains nothing from a second OpenBLAS
-    thread and collapses when the cores are shared: measured at load average 12-14 on
-    two cores, the QR took 5.5 s (min of 5) on two threads and 0.41 s on one, the SVD
-    12.4 s and 2.1 s. The big GEMMs over F keep every thread.
-    """
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(limits=1, user_api="blas")
+    """Context manager: BLAS/LAPACK on one thread, for the small factorisations of a build
+    (see :func:`engine.threads.one_blas_thread`; the big GEMMs over F keep every thread)."""
+    return one_blas_thread()
 
 
 def orthonormal_basis(M):
@@ -224,13 +229,17 @@ class ShapeSpace(BaseEstimator):
         return out
 
     def inverse_transform(self, Fx):
-        """Reconstruct frames: F^x (n, m') with m' <= m -> F (n, C) = mean + F^x X^T."""
+        """Reconstruct frames: F^x (n, m') with m' <= m -> F (n, C) = mean + F^x X^T.
+
+        Up to ``SMALL_QUERY_ROWS`` frames (a click, an utterance) on one BLAS thread.
+        """
         check_is_fitted(self, "components_")
         Fx = np.atleast_2d(np.asarray(Fx, dtype=np.float32))
         m = Fx.shape[1]
         if m > self.n_components_:
             raise ValueError(f"F^x has {m} columns but the shape space has {self.n_components_} components")
-        return self.mean_ + Fx @ self.components_[:m]
+        with _small(Fx.shape[0]):
+            return self.mean_ + Fx @ self.components_[:m]
 
     def component_deformation(self, index: int, amount_sd: float = 2.0):
         """Frame of the mean shape moved ``amount_sd`` standard deviations along one component.

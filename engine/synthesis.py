@@ -32,6 +32,8 @@ import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 
 from engine.targets import TargetSequence
+from engine.threads import single_blas_thread
+from engine.threads import single_blas_thread
 from engine.trajectory import Synthesizer, Trajectory, smooth
 from engine.trajectory import check_fitted_manifold as _check_fitted_manifold
 from engine.trajectory import target_frames as _target_frames
@@ -434,6 +436,7 @@ class ManifoldSynthesizer(BaseEstimator):
         return out
 
     # -- synthesis ----------------------------------------------------------------
+    @single_blas_thread
     def synthesize(self, targets: TargetSequence) -> Trajectory:
         """Trajectory through ``targets`` (states / F^y points, or phone labels)."""
         if not hasattr(self, "_graph"):
@@ -580,6 +583,7 @@ class InterpolationSynthesizer(BaseEstimator):
                                                                    "instances")]])
         return np.array(rows)
 
+    @single_blas_thread
     def synthesize(self, targets: TargetSequence) -> Trajectory:
         if not hasattr(self, "phone_means_"):
             raise ValueError("InterpolationSynthesizer is not fitted; call fit(manifold) first")

@@ -34,6 +34,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 
 from engine.targets import TargetSequence
+from engine.threads import single_blas_thread
 from engine.trajectory import Trajectory, check_fitted_manifold, target_frames
 
 __all__ = ["UnitSelectionSynthesizer", "OVERLAP_TABLE", "overlap_fraction", "crossfade_weights", "lip_class"]
@@ -251,6 +252,7 @@ class UnitSelectionSynthesizer(BaseEstimator):
         w = (pos - f0)[:, None]
         return (1 - w) * self._Fx[f0] + w * self._Fx[f1]
 
+    @single_blas_thread
     def synthesize(self, targets: TargetSequence) -> Trajectory:
         """Select units for ``targets.phones`` and concatenate them over ``targets.n_frames`` frames."""
         if not hasattr(self, "labels_"):
