@@ -33,6 +33,12 @@ launch, after loading and the first synthesis (start), at the end, its maximum a
 least-squares slope in MB/min over the soak (also over its second half, and after the
 first ``--warmup`` seconds, where first-click allocations are settled); wall time and
 the BLAS kernel (threadpoolctl).
+
+``--tracemalloc N`` traces Python allocations in the child (N frames per traceback;
+this slows the child): the memory Python objects hold is sampled with the RSS, so the
+two growths over the same stretch of the soak can be told apart (Python-side vs native:
+Qt, VTK, OpenGL, the allocator), and the ``--top`` source lines whose Python allocations
+grew most between the end of the warm-up and the end of the soak are printed.
 """
 from __future__ import annotations
 
@@ -81,6 +87,15 @@ def _say(**kw) -> None:
     print(json.dumps(kw), flush=True)
 
 
+def traced() -> dict:
+    """The memory Python allocations hold now (tracemalloc), in MB; empty when not tracing."""
+    import tracemalloc
+
+    if not tracemalloc.is_tracing():
+        return {}
+    return {"py_mb": tracemalloc.get_traced_memory()[0] / 2**20}
+
+
 def child(args) -> int:
     import random
 
@@ -99,6 +114,10 @@ def child(args) -> int:
     except ImportError:
         blas = "threadpoolctl not installed"
     none_start = sys.getrefcount(None)
+    if args.tracemalloc:
+        import tracemalloc
+
+        tracemalloc.start(args.tracemalloc)
     rng = random.Random(args.seed)
     autosaver = None
     if args.autosave:
@@ -195,8 +214,9 @@ def child(args) -> int:
 
     synthesise("text")
     t_soak = time.perf_counter()
-    _say(event="soak_start", rss_mb=rss_mb(os.getpid()), none=sys.getrefcount(None))
+    _say(event="soak_start", rss_mb=rss_mb(os.getpid()), none=sys.getrefcount(None), **traced())
     last = {"click": t_soak, "panel": t_soak, "synth": t_soak, "sample": t_soak}
+    snaps = {}
 
     def step():
         now = time.perf_counter()
@@ -214,7 +234,12 @@ def child(args) -> int:
             synthesise(("utterance", "text")[counts["synths"] % 2])
         if now - last["sample"] >= SAMPLE_S:
             last["sample"] = now
-            _say(event="sample", t=now - t_soak, none=sys.getrefcount(None), **autosaves(), **counts)
+            _say(event="sample", t=now - t_soak, none=sys.getrefcount(None), rss_mb=rss_mb(os.getpid()),
+                 **traced(), **autosaves(), **counts)
+        if args.tracemalloc and "warm" not in snaps and now - t_soak >= args.warmup:
+            import tracemalloc
+
+            snaps["warm"] = (now - t_soak, tracemalloc.take_snapshot())
 
     def autosaves():
         if autosaver is None:
@@ -225,6 +250,14 @@ def child(args) -> int:
         soaking["on"] = False
         ticker.stop()
         s.set_playing(False)
+        if args.tracemalloc and "warm" in snaps:
+            import tracemalloc
+
+            t_warm, first = snaps["warm"]
+            stats = tracemalloc.take_snapshot().compare_to(first, "lineno")
+            _say(event="tracemalloc", t_from=t_warm, t_to=time.perf_counter() - t_soak,
+                 top=[{"where": str(st.traceback[0]), "size_diff_kb": st.size_diff / 1024,
+                       "count_diff": st.count_diff, "size_kb": st.size / 1024} for st in stats[:args.top]])
         _say(event="soak_end", t=time.perf_counter() - t_soak, alive=True, none=sys.getrefcount(None),
              **autosaves(), **counts)
         win.close()
@@ -244,7 +277,8 @@ def child(args) -> int:
 def monitor(args) -> int:
     cmd = [sys.executable, str(Path(__file__).resolve()), "--child", "--minutes", str(args.minutes), "--preset",
            args.preset, "--text", args.text, "--click-every", str(args.click_every), "--seed", str(args.seed),
-           "--resynth-every", str(args.resynth_every), "--autosave" if args.autosave else "--no-autosave"]
+           "--resynth-every", str(args.resynth_every), "--autosave" if args.autosave else "--no-autosave",
+           "--warmup", str(args.warmup), "--tracemalloc", str(args.tracemalloc), "--top", str(args.top)]
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=str(ROOT))
     events: list[dict] = []
@@ -313,6 +347,15 @@ def monitor(args) -> int:
         "rss_trace": [[round(t, 1), round(r, 1)] for t, r in soak],
         "resynth_every_s": args.resynth_every, "click_every_s": args.click_every,
     }
+    traced_samples = [(e["t"], e["rss_mb"], e["py_mb"]) for e in events
+                      if e.get("event") == "sample" and "py_mb" in e and e.get("rss_mb") is not None]
+    warm_traced = [x for x in traced_samples if x[0] >= args.warmup]
+    if len(warm_traced) > 1:
+        t_w, rss_w, py_w = zip(*warm_traced)
+        summary.update({"py_traced_after_warmup_mb": [py_w[0], py_w[-1]],
+                        "py_traced_slope_after_warmup_mb_per_min": slope_mb_per_min(t_w, py_w),
+                        "rss_in_child_slope_after_warmup_mb_per_min": slope_mb_per_min(t_w, rss_w),
+                        "tracemalloc_top": by.get("tracemalloc", {}).get("top", [])})
     fps = summary["frames_played"] / summary["soak_s"] if summary["soak_s"] else float("nan")
     print(f"soak_explorer: preset {args.preset}, {args.minutes:g} min soak, Python {summary['python']}, "
           f"BLAS {summary['blas']}, load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
@@ -335,6 +378,14 @@ def monitor(args) -> int:
         print(f"  after the first {args.warmup:g} s of soak (first clicks, recolour buffers, caches): RSS "
               f"{summary['rss_after_warmup_mb']:.1f} -> {summary['rss_end_mb']:.1f} MB, slope "
               f"{summary['rss_slope_after_warmup_mb_per_min']:+.2f} MB/min")
+    if "py_traced_slope_after_warmup_mb_per_min" in summary:
+        a, b = summary["py_traced_after_warmup_mb"]
+        print(f"  tracemalloc ({args.tracemalloc} frames), after the warm-up: Python objects hold {a:.1f} -> {b:.1f} MB, "
+              f"slope {summary['py_traced_slope_after_warmup_mb_per_min']:+.2f} MB/min; RSS (same samples) "
+              f"{summary['rss_in_child_slope_after_warmup_mb_per_min']:+.2f} MB/min; the rest is native")
+        for st in summary["tracemalloc_top"]:
+            print(f"    {st['size_diff_kb']:+9.1f} kB ({st['count_diff']:+d} blocks, now {st['size_kb']:.1f} kB)  "
+                  f"{st['where']}")
     if rc != 0 or not summary["alive_at_end"]:
         print("  child stderr (tail):", *err_tail[-20:], sep="\n    ")
     if args.json:
@@ -360,6 +411,9 @@ def main(argv=None) -> int:
     p.add_argument("--autosave", action=argparse.BooleanOptionalAction, default=True,
                    help="autosave the session as the explorer does (default: on)")
     p.add_argument("--json", default=None, help="also write the summary here")
+    p.add_argument("--tracemalloc", type=int, default=0, metavar="N",
+                   help="trace Python allocations with N frames per traceback (0 = off, the default)")
+    p.add_argument("--top", type=int, default=12, help="source lines listed with --tracemalloc (default %(default)s)")
     p.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.minutes <= 0:
