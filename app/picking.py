@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["pick_to_frame", "PointLocator", "handle_pick"]
+__all__ = ["pick_to_frame", "PointLocator", "handle_pick", "hover_text"]
 
 
 def pick_to_frame(picked, Fy3) -> int:
@@ -70,3 +70,14 @@ def handle_pick(state, picked, locator, *, as_target: bool | None = None) -> int
     i = locator(picked)
     state.select_frame(i, as_target=as_target)
     return i
+
+
+def hover_text(manifold, phones, i) -> str:
+    """The readout of frame ``i`` under the pointer: frame, utterance, time, phone, state, tangent class."""
+    from app.colouring import CLASS_LABELS
+
+    c = manifold.corpus_
+    u = c.utterances[int(c.utterance_index[i])]
+    cls = int(manifold.tangent_.classes_[i])
+    return (f"frame {i} ({u.id}, t={(i - u.start) / c.rate:.3f} s) · phone {phones[i] or '—'} · "
+            f"state {int(manifold.states_.labels_[i])} · {CLASS_LABELS[cls] if cls >= 0 else 'no forward step'}")

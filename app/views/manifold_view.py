@@ -16,9 +16,10 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app import scene
 from app.colouring import CLASS_LABELS, ellipsoid_colors, point_colors
-from app.picking import PointLocator, handle_pick
+from app.scene.colour_bar import add_scalar_bar, configure_scalar_bar
+from app.picking import PointLocator, handle_pick, hover_text
 from app.scene.projection import nearest_on_screen, project, standard_camera, view_transform
-from app.state import COLOR_MODES, HEMISPHERES, HORIZON_MAX_MS
+from app.state import COLOR_MODES, HEMISPHERES
 from app.views._common import (blocked, camera_of, close_plotter, connect_all,
                                disconnect_all, make_plotter, RenderScheduler, set_camera)
 
@@ -30,15 +31,6 @@ HEMI_LABELS = {"future": "Future hemisphere", "past": "Past hemisphere", "both":
                "off": "No hemisphere"}
 #: the horizon slider runs 0..HORIZON_SLIDER_MS in whole frame periods; the "Horizon" box off means no horizon
 HORIZON_SLIDER_MS = 500
-
-
-def hover_text(manifold, phones, i) -> str:
-    """The readout of frame ``i`` under the pointer: frame, utterance, time, phone, state, tangent class."""
-    c = manifold.corpus_
-    u = c.utterances[int(c.utterance_index[i])]
-    cls = int(manifold.tangent_.classes_[i])
-    return (f"frame {i} ({u.id}, t={(i - u.start) / c.rate:.3f} s) · phone {phones[i] or '—'} · "
-            f"state {int(manifold.states_.labels_[i])} · {CLASS_LABELS[cls] if cls >= 0 else 'no forward step'}")
 
 
 def axes_origin(Y, plane_point, S, V, length_scale) -> np.ndarray:
@@ -53,41 +45,6 @@ def axes_origin(Y, plane_point, S, V, length_scale) -> np.ndarray:
     W = np.cross(V, S)
     d = np.asarray(Y, float)[:, :3] - plane_point
     return np.asarray(plane_point, float) + (d @ S).min() * S + ((d @ W).max() + 0.05 * length_scale) * W
-
-
-def configure_scalar_bar(bar, coloring) -> None:
-    """Set a vtkScalarBarActor to show ``coloring``'s scale: a colour map, or a discrete table with
-    labels at whole values (hop distance: one band per hop, a label at each whole hop)."""
-    if coloring.cmap is None:
-        return
-    import pyvista as pv
-    from vtkmodules.vtkCommonCore import vtkDoubleArray
-
-    lo, hi = coloring.clim
-    if isinstance(coloring.cmap, str):
-        lut = pv.LookupTable(cmap=coloring.cmap)
-        lut.scalar_range = (lo, hi)
-    else:
-        table = np.asarray(coloring.cmap, dtype=np.float64)
-        lut = pv.LookupTable()
-        lut.SetNumberOfTableValues(len(table))
-        for k, (r, g, b) in enumerate(table):
-            lut.SetTableValue(k, r, g, b, 1.0)
-        lut.SetRange(lo, hi)
-    bar.SetLookupTable(lut)
-    bar.SetTitle(coloring.title)
-    if coloring.ticks is not None:
-        arr = vtkDoubleArray()
-        for t in coloring.ticks:
-            arr.InsertNextValue(float(t))
-        bar.SetUseCustomLabels(True)
-        bar.SetCustomLabels(arr)
-        bar.SetLabelFormat("%.0f")
-        bar.SetMaximumNumberOfColors(len(coloring.cmap))
-    else:
-        bar.SetUseCustomLabels(False)
-        bar.SetLabelFormat("%-#6.3g")
-        bar.SetMaximumNumberOfColors(256)
 
 
 class ManifoldView(QtWidgets.QWidget):
@@ -246,7 +203,7 @@ class ManifoldView(QtWidgets.QWidget):
         h["play_s"] = scene.add_marker(p, None, 0.016 * L, color=scene.SYNTHETIC_COLOUR, name="play_synthetic")
         for key in self.OVERLAY:  # drawn over the cloud: never buried inside it
             scene.move_to_overlay(p, h[key])
-        self._bar = self._make_scalar_bar()
+        self._bar = add_scalar_bar(p)
         self.locator = PointLocator(Y)
         self.picker = scene.enable_click_picking(p, h["points"].actor, self._on_pick)
         self._set_visible("plane", self.plane_box.isChecked())
@@ -313,28 +270,6 @@ class ManifoldView(QtWidgets.QWidget):
         if not self.handles["points"].visible:
             return None
         return nearest_on_screen(xy, depth, display_xy, radius)
-
-    def _make_scalar_bar(self):
-        import pyvista as pv
-        from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
-
-        bar = vtkScalarBarActor()
-        bar.SetLookupTable(pv.LookupTable(cmap="jet"))
-        bar.SetOrientationToVertical()
-        bar.SetPosition(0.88, 0.1)
-        bar.SetWidth(0.07)
-        bar.SetHeight(0.6)
-        bar.SetNumberOfLabels(4)
-        bar.UnconstrainedFontSizeOn()
-        bar.SetVerticalTitleSeparation(14)
-        for tp in (bar.GetLabelTextProperty(), bar.GetTitleTextProperty()):
-            tp.SetColor(0.1, 0.1, 0.1)
-            tp.SetShadow(False)
-            tp.SetItalic(False)
-            tp.SetFontSize(12)
-            tp.SetBold(False)
-        self.plotter.add_actor(bar, reset_camera=False, pickable=False, name="scalar_bar", render=False)
-        return bar
 
     # --------------------------------------------------------------- events
     def _on_pick(self, point_id, xyz, shift):

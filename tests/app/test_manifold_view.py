@@ -69,6 +69,7 @@ def test_selection_path_and_trajectories_are_drawn_over_the_cloud(fresh, app_man
     centre = m.Fy_[:, :3].mean(0)
     i = int(np.argmin(np.linalg.norm(m.Fy_[:, :3] - centre, axis=1)))
     s.select_frame(i)
+    v.handles["local"].set_visible(False)  # the frame's own arrows start at the marker and may cover it
     v.renderer.flush(sync=True)
     from app.scene import pick_display_point
 
@@ -82,7 +83,7 @@ def test_selection_path_and_trajectories_are_drawn_over_the_cloud(fresh, app_man
 
 def test_hover_reads_out_the_frame_under_the_pointer(fresh, qtbot, app_manifold):
     from app.scene import pick_display_point
-    from app.views.manifold_view import hover_text
+    from app.picking import hover_text
 
     v, s, m = fresh, fresh.state, app_manifold
     i = _front_state_frame(v, m)
