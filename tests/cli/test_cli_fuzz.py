@@ -404,3 +404,165 @@ def test_fuzz_session_loader(files, doc, source):
         finally:
             p.unlink(missing_ok=True)
             del tmp
+
+
+# ------------------------------------------------------------------ explore (headless), evaluate, render
+@pytest.fixture
+def headless_explore(monkeypatch):
+    """explore's batch path (argument, file and session checks) without opening a window:
+    a display is reported, and the window's launch records what it was given."""
+    import types
+
+    launched = []
+    fake = types.ModuleType("app.main_window")
+    fake.launch = lambda path, **kw: launched.append((path, kw)) or 0
+    monkeypatch.setitem(sys.modules, "app.main_window", fake)
+    monkeypatch.setattr("app.cli.explore.has_display", lambda *a, **k: True)
+    return launched
+
+
+@settings(FUZZ, max_examples=20)
+@given(data=st.data())
+def test_fuzz_explore_headless(files, data, headless_explore, capsys):
+    argv = ["explore"]
+    if data.draw(st.booleans()):
+        argv.append(data.draw(_inputs(files)))
+    argv += data.draw(st.sampled_from([[], ["--preset", "small"], ["--preset", "huge"], ["--restore"],
+                                       ["--interocular-mm", "nan"]]))
+    session = data.draw(st.sampled_from([None, "missing", "junk", "dir", "fifo", "passwd", "good"]))
+    with tempfile.TemporaryDirectory() as tmp:
+        if session is not None:
+            s = Path(tmp) / "s.lipspace.json"
+            body = {"junk": "{not json", "passwd": json.dumps({"lipspace_session": 1, "source": {
+                "path": "/etc/passwd"}}), "good": json.dumps({"lipspace_session": 1, "source": {
+                    "path": str(files["manifold"])}})}.get(session)
+            if body is not None:
+                s.write_text(body)
+            target = {"dir": files["dir"], "fifo": files["fifo"]}.get(session, s)
+            argv += ["--session", str(target)]
+        n_before = len(headless_explore)
+        code = _call(argv)
+    err = capsys.readouterr().err
+    assert code in (0, 2) and "Traceback" not in err, (argv, code, err)
+    assert (code == 0) == (len(headless_explore) == n_before + 1), (argv, code)  # the window opens only if valid
+    assert "root:" not in err, err  # never /etc/passwd's content
+    if code == 2 and not err.startswith("usage:"):  # argparse's usage error is its own few lines
+        assert err.count("\n") == 1, err
+
+
+@settings(FUZZ, max_examples=12)
+@given(data=st.data())
+def test_fuzz_evaluate_and_render(files, data, capsys):
+    cmd = data.draw(st.sampled_from(["evaluate", "render"]))
+    with tempfile.TemporaryDirectory() as out:
+        o = Path(out)
+        if cmd == "evaluate":
+            argv = ["evaluate", data.draw(_inputs(files)), "-q", "--methods", "linear"]
+            for opt in data.draw(st.lists(st.sampled_from(["--test-fraction", "--states", "--state-dims", "--seed",
+                                                           "--inverse-dims", "--test-ids"]), max_size=2, unique=True)):
+                argv += [opt, data.draw(NUMBERS)]
+            if data.draw(st.booleans()):
+                argv += ["--csv", str(o / data.draw(st.sampled_from(["e.csv", "sub/e.csv", "."])))]
+        else:
+            argv = ["render", "--manifold", data.draw(_inputs(files)), "-o",
+                    str(o / data.draw(st.sampled_from(["r.mp4", "r.txt", "."]))), "-q", "--no-audio"]
+            argv += data.draw(st.sampled_from([["--phones", "p -1 aa 0.1"], ["--text", "..."], ["--phones", "p 1e6"],
+                                               ["--utterance", "nope"], ["--textgrid", str(files["csv"])]]))
+            argv += data.draw(st.sampled_from([[], ["--size", "0x0"], ["--size", "99999x99999"], ["--size", "x"],
+                                               ["--crf", "-5"], ["--tempo", "1e-6"], ["--smoothing", "nan"]]))
+        _check(argv, o, _call(argv))
+    assert "Traceback" not in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ every command in a capped process
+_DRIVER = r'''
+import io, json, os, resource, signal, sys, time, types, traceback
+cap, budget, cases = float(sys.argv[1]), float(sys.argv[2]), json.loads(sys.argv[3])
+resource.setrlimit(resource.RLIMIT_AS, (int(cap), int(cap)))
+os.environ.pop("DISPLAY", None)
+fake = types.ModuleType("app.main_window")
+fake.launch = lambda path, **kw: 0
+sys.modules["app.main_window"] = fake
+import app.cli.explore
+app.cli.explore.has_display = lambda *a, **k: True
+from app.cli import main
+
+class Hang(BaseException):
+    pass
+
+def alarm(*_):
+    raise Hang()
+
+for argv, outdir in cases:
+    os.makedirs(outdir, exist_ok=True)
+    err, old = io.StringIO(), sys.stderr
+    sys.stderr = err
+    signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, budget)
+    t = time.perf_counter()
+    escaped = ""
+    try:
+        code = main(argv)
+    except SystemExit as exc:
+        code = exc.code
+    except Hang:
+        code, escaped = "hang", "hang"
+    except BaseException as exc:
+        code, escaped = "exception", traceback.format_exc()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        sys.stderr = old
+    left = sorted(os.path.relpath(os.path.join(d, f), outdir) for d, _, fs in os.walk(outdir) for f in fs)
+    print(json.dumps({"argv": argv, "code": code, "wall": time.perf_counter() - t, "err": err.getvalue()[-2000:],
+                      "escaped": escaped[-2000:], "left": left}), flush=True)
+'''
+CASE_BUDGET = 30.0  # s per case before it counts as a hang
+
+
+def _campaign(files, tmp):
+    """One hostile case per command (and per loader), as the bad-input campaign tried them."""
+    big_text = " ".join(["hello"] * 5000)
+    m, c, junk, fifo, d = (str(files[k]) for k in ("manifold", "corpus", "junk", "fifo", "dir"))
+    session = tmp / "passwd.lipspace.json"
+    session.write_text(json.dumps({"lipspace_session": 1, "source": {"path": "../../../../etc/passwd"}}))
+    deep = tmp / "deep.lipspace.json"
+    deep.write_text('{"lipspace_session": 1, "x": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    cases = [
+        ["info", fifo], ["info", junk], ["clusters", m, "--dims", "1000000000"], ["build", c, "-o", c],
+        ["build", c, "-o", "{out}/m.npz", "--states", "1000000000", "-q"],
+        ["build", c, "-o", "{out}/m.npz", "--landmarks", "-3", "-q"],
+        ["import", fifo, "-o", "{out}/c.npz"], ["import", files["csv"], "-o", "{out}/c.npz", "--resample", "1e9"],
+        ["synthesize", "--manifold", m, "--phones", "p 1e6 aa 0.1", "-o", "{out}/t.csv", "-q"],
+        ["synthesize", "--manifold", m, "--text", big_text, "-o", "{out}/t.csv", "-q"],
+        ["synthesize", "--manifold", m, "--phones", "p 0.1 aa 0.1", "--mesh-dir", c, "-q"],
+        ["synthesize", "--manifold", m, "--phones", "p 0.1", "--inverse-dims", "10", "-o", "{out}/t.csv", "-q"],
+        ["evaluate", junk, "-q"], ["evaluate", c, "--test-fraction", "1e9", "-q"],
+        ["render", "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o", "{out}/r.mp4", "--size", "100000x100000",
+         "-q", "--no-audio"],
+        ["figures", m, "-o", "{out}/figs", "--dpi", "100000", "--only", "scree", "-q"],
+        ["explore", fifo], ["explore", "--session", str(session)], ["explore", "--session", str(deep)],
+        ["explore", m, "--session", d], ["cache", "--clear", "--bogus"],
+    ]
+    return [([a.format(out=str(tmp / f"out{k}")) if isinstance(a, str) else str(a) for a in argv],
+             str(tmp / f"out{k}")) for k, argv in enumerate(cases)]
+
+
+def test_every_command_under_a_memory_cap_and_a_time_budget(files, tmp_path):
+    """Each case: exit 0 or 2, no traceback (nothing escapes main), within CASE_BUDGET s, under MEMORY_CAP of
+    address space, and no file in its output folder when it failed."""
+    cases = _campaign(files, tmp_path)
+    env = dict(os.environ, LIPSPACE_CACHE_DIR=str(tmp_path / "cache"))
+    r = subprocess.run([sys.executable, "-c", _DRIVER, str(MEMORY_CAP), str(CASE_BUDGET), json.dumps(cases)],
+                       capture_output=True, text=True, timeout=CASE_BUDGET * len(cases) + 120, env=env,
+                       cwd=tmp_path)
+    results = [json.loads(line) for line in r.stdout.splitlines() if line.startswith("{")]
+    assert len(results) == len(cases), (r.returncode, r.stderr[-3000:])  # a crash or OOM kill ends the list
+    for res in results:
+        where = (res["argv"][:3], res["err"][-500:], res["escaped"][-1500:])
+        assert res["code"] in (0, 2), where
+        assert "Traceback" not in res["err"] and not res["escaped"], where
+        assert res["wall"] < CASE_BUDGET, where
+        if res["code"] != 0:
+            assert not res["left"], (where, res["left"])
+            assert "root:" not in res["err"], where
+            assert res["err"].startswith("usage:") or res["err"].count("\n") <= 2, where
