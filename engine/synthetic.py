@@ -32,46 +32,60 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.signal import lfilter, lfilter_zi
+from scipy.signal import lfilter
 from sklearn.base import BaseEstimator
+from threadpoolctl import threadpool_limits
 
 from engine.assets import asset_path
 from engine.corpus import Corpus, CorpusError, PhoneInterval, Utterance
-from engine.lipmodel import CONTROL_NAMES, RESOLUTIONS, LipModel
+from engine.lipmodel import CONTROL_NAMES, SIGNED_CONTROLS, Anatomy, LipModel
 from engine.phonetics import PAUSE, DurationModel, pronounce
 from engine.progress import report
 
 __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker", "load_synthetic", "cache_folder",
-           "phone_gestures"]
+           "phone_gestures", "gesture_phases", "speaker_anatomy"]
 
 #: Bumped whenever the generated corpus changes for the same parameters (cache key).
-GENERATOR_VERSION = 3
+GENERATOR_VERSION = 4
 
 #: Preset: seconds of speech (frames = seconds * rate) and lip-surface resolution.
 PRESETS = {
-    "small": {"duration": 75.0, "resolution": "small"},
-    "default": {"duration": 480.0, "resolution": "default"},
-    "paper": {"duration": 28833 / 60.0, "resolution": "paper"},
+    "small": {"duration": 75.0, "resolution": "small", "speakers": 1},
+    "default": {"duration": 480.0, "resolution": "default", "speakers": 1},
+    "paper": {"duration": 28833 / 60.0, "resolution": "paper", "speakers": 1},
+    "multi": {"duration": 480.0, "resolution": "default", "speakers": 4},
 }
 
 # ---------------------------------------------------------------- phone targets
-# control order: jaw, round, spread, raise, closure, labiodental
-_J, _R, _S, _U, _C, _L = range(6)
+# control order: jaw, round, spread, raise, closure, labiodental, protrude, depress, corner, asymmetry, jaw_lateral
+_J, _R, _S, _U, _C, _L, _P, _D, _K, _A, _X = range(11)
+_NC = len(CONTROL_NAMES)
 #: Time to reach 63 % of a step (s) per control; natural frequency w = 2.146 / T63.
-T63 = np.array([0.060, 0.080, 0.070, 0.065, 0.060, 0.045])
+#: Protrusion is slower than rounding (Perkell 1986); corners, asymmetry and the lateral
+#: jaw follow slow postural changes.
+T63 = np.array([0.060, 0.080, 0.070, 0.065, 0.060, 0.045, 0.100, 0.060, 0.150, 0.300, 0.120])
 _WINDOW = 8  # gestures either side of a sample that contribute to its blend
 _TIMING_SD = 0.08  # s.d. of a gesture's timing, as a fraction of its phone's duration
-_SHAPE = np.array([1.5, 1.5, 1.5, 1.5, 2.0, 2.0])  # dominance exponent c per control
+_SHAPE = np.array([1.5, 1.5, 1.5, 1.5, 2.0, 2.0, 1.5, 1.5, 1.5, 1.5, 1.5])  # dominance exponent c per control
+_LOOKAHEAD = (1.0, 0.15)  # dominance width (a * duration + b s) before a rounded / protruded phone
+_EMPHASIS_SD = 0.15  # s.d. of log jaw opening of a vowel (stress and emphasis)
+_TEMPO_SD = 0.08     # s.d. of log speaking rate between sentences
+#: slow postural drift per control (s.d. in control units; 0 = none), first-order, 0.4 Hz corner
+_DRIFT_SD = np.array([0.0, 0.05, 0.06, 0.05, 0.0, 0.0, 0.06, 0.05, 0.25, 0.25, 0.3])
+_DRIFT_HZ = 0.4
+_LATERAL_JAW = 0.3   # s.d. over speakers of the lateral jaw shift per unit of jaw opening
 
 #: A second, independently parameterised talker (``SyntheticTalker(**HELD_OUT_TALKER)``):
-#: another seed, faster speech, sloppier gesture timing, slower articulators, narrower
-#: coarticulation, more target jitter and noise. The method's defaults were never tuned
-#: on it; tests and docs/RESULTS.md use it as held-out data.
+#: another seed (so another speaker's anatomy), faster speech, sloppier gesture timing,
+#: slower articulators, narrower coarticulation, more target jitter and noise. The
+#: method's defaults were never tuned on it; tests and docs/RESULTS.md use it as
+#: held-out data.
 HELD_OUT_TALKER = {"seed": 7, "tempo": 1.15, "timing_sd": 0.12, "dynamics_scale": 1.3, "coarticulation": 0.8,
-                   "jitter": 0.06, "noise": 0.05}
+                   "jitter": 0.06, "noise": 0.25}
 #: defaults of the keyword-only generator-variant parameters (left out of the cache key at
 #: these values, so the default talker's cache files keep their names)
-_VARIANT_DEFAULTS = {"timing_sd": _TIMING_SD, "dynamics_scale": 1.0, "coarticulation": 1.0}
+_VARIANT_DEFAULTS = {"timing_sd": _TIMING_SD, "dynamics_scale": 1.0, "coarticulation": 1.0, "speakers": None,
+                     "registration": 0.3}
 
 
 @dataclass(frozen=True)
@@ -80,38 +94,44 @@ class Gesture:
     (a number, or one per control)."""
 
     frac: float | tuple
-    target: tuple  # (6,)
-    alpha: tuple   # (6,) dominance magnitudes
-    before: tuple  # (6,) (a, b): dominance width = a * duration + b before the centre
-    after: tuple   # (6,) same after the centre
+    target: tuple  # (11,)
+    alpha: tuple   # (11,) dominance magnitudes
+    before: tuple  # (11,) (a, b): dominance width = a * duration + b before the centre
+    after: tuple   # (11,) same after the centre
 
 
 def _vowel(*subs):
-    """Vowel gestures from (jaw, round, spread, raise) targets, one or two (diphthong)."""
+    """Vowel gestures from (jaw, round, spread, raise) targets, one or two (diphthong).
+
+    Protrusion goes with rounding (0.85 of it), the corners rise with spreading and fall
+    a little with rounding, open vowels depress the lower lip a little."""
     fracs = (0.5,) if len(subs) == 1 else (0.3, 0.8)
     out = []
     for f, (j, r, s, u) in zip(fracs, subs):
-        tgt = (j, r, s, u, 0.0, 0.0)
-        alpha = (1.0, 1.0, 1.0, 0.8, 1.0, 1.0)
-        w = ((0.5, 0.03),) * 6
-        out.append(Gesture(f, tgt, alpha, w, w))
+        tgt = (j, r, s, u, 0.0, 0.0, 0.85 * r, 0.3 * max(j - 0.5, 0.0), 0.4 * s - 0.2 * r, 0.0, 0.0)
+        alpha = (1.0, 1.0, 1.0, 0.8, 1.0, 1.0, 1.0, 0.8, 0.6, 0.05, 0.05)
+        w = ((0.5, 0.03),) * _NC
+        wb = _with(_with(w, _R, _LOOKAHEAD), _P, _LOOKAHEAD) if r > 0.4 else w
+        out.append(Gesture(f, tgt, alpha, wb, w))
     return tuple(out)
 
 
 def _cons(jaw=(0.2, 0.4), rnd=(0.1, 0.15), spr=(0.1, 0.15), rai=(0.1, 0.3), clo=(0.0, 0.6),
-          lab=(0.0, 0.6), frac=0.5, before=None, after=None, jaw_frac=None):
-    tgt = tuple(v[0] for v in (jaw, rnd, spr, rai, clo, lab))
-    alpha = tuple(v[1] for v in (jaw, rnd, spr, rai, clo, lab))
-    w = [(0.5, 0.03)] * 6
-    if rnd[0] > 0.4:
-        wb = list(w)
-        wb[_R] = (1.0, 0.08)  # anticipatory rounding reaches further back
-    else:
-        wb = list(w)
-    b = tuple(before) if before else tuple(wb)
-    a = tuple(after) if after else tuple(w)
+          lab=(0.0, 0.6), pro=None, dep=(0.0, 0.2), cor=(0.0, 0.2), frac=0.5, before=None, after=None,
+          jaw_frac=None):
+    if pro is None:
+        pro = (0.85 * rnd[0], rnd[1])
+    drift = ((0.0, 0.05), (0.0, 0.05))
+    tgt = tuple(v[0] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift)
+    alpha = tuple(v[1] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift)
+    w = ((0.5, 0.03),) * _NC
+    wb = w
+    if rnd[0] > 0.4 or pro[0] > 0.4:  # anticipatory (look-ahead) rounding and protrusion
+        wb = _with(_with(w, _R, _LOOKAHEAD), _P, _LOOKAHEAD)
+    b = tuple(before) if before else wb
+    a = tuple(after) if after else w
     if jaw_frac is not None:
-        frac = (jaw_frac,) + (frac,) * 5
+        frac = (jaw_frac,) + (frac,) * (_NC - 1)
     return (Gesture(frac, tgt, alpha, b, a),)
 
 
@@ -121,10 +141,10 @@ def _with(widths, k, val):
     return tuple(widths)
 
 
-_W0 = ((0.5, 0.03),) * 6
+_W0 = ((0.5, 0.03),) * _NC
 _PROTECT = 20.0
 
-#: Gestures of every phone (targets 0..1 in the order of CONTROL_NAMES).
+#: Gestures of every phone (targets in the order of CONTROL_NAMES: 0..1, the signed ones -1..1).
 PHONE_GESTURES = {
     # vowels: (jaw, round, spread, raise)
     "iy": _vowel((0.12, 0.0, 0.8, 0.25)), "ih": _vowel((0.25, 0.0, 0.5, 0.2)),
@@ -153,19 +173,28 @@ PHONE_GESTURES = {
                frac=0.75, jaw_frac=1.3, before=_with(_W0, _C, (0.5, 0.01)), after=_with(_W0, _C, (0.45, 0.02))),
     **dict.fromkeys(("f", "v"), _cons(jaw=(0.12, 0.6), rai=(0.25, 0.5), lab=(1.0, _PROTECT), frac=0.45,
                                       before=_with(_W0, _L, (0.4, 0.01)), after=_with(_W0, _L, (0.35, 0.01)))),
-    **dict.fromkeys(("th", "dh"), _cons(jaw=(0.22, 0.5), spr=(0.2, 0.2), rai=(0.25, 0.3))),
-    **dict.fromkeys(("s", "z"), _cons(jaw=(0.08, 1.2), spr=(0.35, 0.4), rai=(0.2, 0.3))),
+    # dental fricatives: the lower lip drops to let the tongue tip show
+    **dict.fromkeys(("th", "dh"), _cons(jaw=(0.22, 0.5), spr=(0.2, 0.2), rai=(0.25, 0.3), dep=(0.35, 0.5))),
+    **dict.fromkeys(("s", "z"), _cons(jaw=(0.08, 1.2), spr=(0.35, 0.4), rai=(0.2, 0.3), cor=(0.15, 0.3))),
     **dict.fromkeys(("t", "d"), _cons(jaw=(0.15, 0.7))),
     **dict.fromkeys(("n", "l"), _cons(jaw=(0.2, 0.5))),
-    **dict.fromkeys(("sh", "zh", "ch", "jh"), _cons(jaw=(0.12, 0.8), rnd=(0.65, 1.2), rai=(0.35, 0.6))),
-    "r": _cons(jaw=(0.2, 0.4), rnd=(0.55, 1.0)),
-    "w": _cons(jaw=(0.12, 0.8), rnd=(1.0, 3.0)),
-    "y": _cons(jaw=(0.12, 0.6), spr=(0.55, 0.8)),
+    # postalveolars: strong protrusion with moderate rounding, lower lip everted (funnel)
+    **dict.fromkeys(("sh", "zh", "ch", "jh"), _cons(jaw=(0.12, 0.8), rnd=(0.5, 1.2), rai=(0.35, 0.6),
+                                                    pro=(0.9, 1.5), dep=(0.4, 0.8))),
+    "r": _cons(jaw=(0.2, 0.4), rnd=(0.55, 1.0), pro=(0.45, 0.8)),
+    "w": _cons(jaw=(0.12, 0.8), rnd=(1.0, 3.0), pro=(0.8, 2.0)),
+    "y": _cons(jaw=(0.12, 0.6), spr=(0.55, 0.8), cor=(0.2, 0.4)),
     **dict.fromkeys(("k", "g", "ng"), _cons(jaw=(0.25, 0.3))),
-    "hh": _cons(jaw=(0.3, 0.1), rnd=(0.1, 0.05), spr=(0.1, 0.05), rai=(0.1, 0.05), clo=(0.0, 0.3), lab=(0.0, 0.3)),
+    "hh": _cons(jaw=(0.3, 0.1), rnd=(0.1, 0.05), spr=(0.1, 0.05), rai=(0.1, 0.05), clo=(0.0, 0.3), lab=(0.0, 0.3),
+                pro=(0.1, 0.05), dep=(0.0, 0.05), cor=(0.0, 0.05)),
     # pause: lips lightly together, jaw almost closed
-    PAUSE: _cons(jaw=(0.02, 1.5), rnd=(0.05, 0.6), spr=(0.1, 0.6), rai=(0.05, 0.6), clo=(0.7, 1.5), lab=(0.0, 1.0)),
+    PAUSE: _cons(jaw=(0.02, 1.5), rnd=(0.05, 0.6), spr=(0.1, 0.6), rai=(0.05, 0.6), clo=(0.7, 1.5), lab=(0.0, 1.0),
+                 pro=(0.0, 0.6), dep=(0.0, 0.6), cor=(0.0, 0.3)),
 }
+
+
+_VOWELS = frozenset(("iy", "ih", "eh", "ae", "aa", "ah", "ax", "ao", "oh", "uh", "uw", "er", "ey", "ay", "aw", "oy",
+                     "ow", "ia", "ea", "ua"))
 
 
 def phone_gestures(phone: str) -> tuple:
@@ -193,9 +222,10 @@ class SyntheticTalker(BaseEstimator):
 
     Parameters
     ----------
-    preset : {"small", "default", "paper"}
+    preset : {"small", "default", "paper", "multi"}
         ``"small"``: 75 s, 156 points (tests); ``"default"``: 8 minutes (28,800
-        frames at 60 Hz), 600 points; ``"paper"``: 28,833 frames, 4,260 points.
+        frames at 60 Hz), 600 points; ``"paper"``: 28,833 frames, 4,260 points;
+        ``"multi"``: as ``"default"`` spoken by four speakers in turn.
     n_sentences : int or None
         Generate exactly this many sentences instead of the preset's duration.
     duration : float or None
@@ -208,7 +238,7 @@ class SyntheticTalker(BaseEstimator):
     seed : int
         Seed of the random generator; same parameters give identical corpora.
     noise : float
-        Standard deviation (mm) of measurement noise added to each coordinate
+        Standard deviation (mm) of capture noise added to each coordinate
         (independent, uniformly distributed).
     jitter : float
         Standard deviation of per-phone random variation of the control targets.
@@ -220,11 +250,19 @@ class SyntheticTalker(BaseEstimator):
         Factor on every articulator's time constant (> 1: slower, smoother lips).
     coarticulation : float, default=1.0
         Factor on every dominance width (< 1: less overlap between neighbouring phones).
+    speakers : int or None
+        Speakers taking turns sentence by sentence, each with their own anatomy
+        (:func:`speaker_anatomy`); None: the preset's (1, or 4 for ``"multi"``).
+    registration : float, default=0.3
+        Size (mm) of the capture's registration error: a spatially smooth, slowly
+        varying displacement field over the surface of RMS ``registration`` per
+        coordinate (correspondence drift of dense registration), plus residual rigid
+        head motion of s.d. ``0.6 * registration`` mm and degrees (0 = perfect).
     """
 
     def __init__(self, *, preset="default", n_sentences=None, duration=None, resolution=None, rate=60.0,
-                 seed=0, noise=0.03, jitter=0.04, tempo=1.0, timing_sd=_TIMING_SD, dynamics_scale=1.0,
-                 coarticulation=1.0):
+                 seed=0, noise=0.2, jitter=0.04, tempo=1.0, timing_sd=_TIMING_SD, dynamics_scale=1.0,
+                 coarticulation=1.0, speakers=None, registration=0.3):
         self.preset = preset
         self.n_sentences = n_sentences
         self.duration = duration
@@ -237,6 +275,8 @@ class SyntheticTalker(BaseEstimator):
         self.timing_sd = timing_sd
         self.dynamics_scale = dynamics_scale
         self.coarticulation = coarticulation
+        self.speakers = speakers
+        self.registration = registration
 
     # -------------------------------------------------------------- validation
     def _validate(self):
@@ -259,11 +299,16 @@ class SyntheticTalker(BaseEstimator):
             v = getattr(self, name)
             if not (np.isfinite(v) and 0.25 <= v <= 4.0):
                 raise ValueError(f"{name} must be a factor in [0.25, 4], got {v!r}")
+        if self.speakers is not None and (int(self.speakers) != self.speakers or not 1 <= self.speakers <= 100):
+            raise ValueError(f"speakers must be an integer in 1..100 or None, got {self.speakers!r}")
+        if not (np.isfinite(self.registration) and 0 <= self.registration <= 5):
+            raise ValueError(f"registration must be in [0, 5] (mm and degrees), got {self.registration!r}")
         res = PRESETS[self.preset]["resolution"] if self.resolution is None else self.resolution
         return dur, res
 
     # -------------------------------------------------------------- sentences
     def _sentence(self, rng, dm, words, prons, n_words):
+        dm = DurationModel(tempo=self.tempo * math.exp(_TEMPO_SD * rng.standard_normal()))  # this sentence's rate
         idx = rng.integers(0, len(words), size=n_words)
         phones, text = [PAUSE], []
         for k, i in enumerate(idx):
@@ -328,24 +373,30 @@ class SyntheticTalker(BaseEstimator):
             return out
 
     # -------------------------------------------------------------- articulation
-    def _controls(self, rng, phones, durs, n_frames):
-        """Controls after dynamics for one utterance, ndarray (n_frames, 6)."""
+    def _controls(self, rng, phones, durs, n_frames, lateral=0.0):
+        """Controls after dynamics for one utterance, ndarray (n_frames, 11)."""
         rate = float(self.rate)
         sub = max(1, math.ceil(240.0 / rate))
         fs = rate * sub
         starts = np.concatenate([[0.0], np.cumsum(durs)[:-1]])
-        cen, tgt, alp, wb, wa = [], [], [], [], []
+        cen, tgt, alp, wb, wa, vow = [], [], [], [], [], []
         for p, s, d in zip(phones, starts, durs):
-            for g in phone_gestures(p):
-                frac = np.broadcast_to(np.asarray(g.frac, dtype=float), (6,))
+            gs = phone_gestures(p)
+            for g in gs:
+                frac = np.broadcast_to(np.asarray(g.frac, dtype=float), (_NC,))
                 jit = frac + float(self.timing_sd) * rng.standard_normal()
                 cen.append(s + np.clip(jit, np.minimum(frac, 0.0), np.maximum(frac, 1.0)) * d)
                 tgt.append(g.target)
                 alp.append(g.alpha)
                 wb.append([(a * d + b) * self.coarticulation for a, b in g.before])
                 wa.append([(a * d + b) * self.coarticulation for a, b in g.after])
-        cen = np.array(cen)                                                      # (E, 6)
-        tgt = np.clip(np.array(tgt) + self.jitter * rng.standard_normal((len(cen), 6)), 0.0, 1.0)
+                vow.append(p in _VOWELS)
+        cen = np.array(cen)                                                      # (E, 11)
+        tgt = np.array(tgt) + self.jitter * rng.standard_normal((len(cen), _NC))
+        # stress and emphasis: a vowel's jaw opening varies by a log-normal factor
+        vow = np.array(vow)
+        tgt[vow, _J] *= np.exp(_EMPHASIS_SD * rng.standard_normal(int(vow.sum())))
+        tgt = np.clip(tgt, _LOW, 1.0)                                          # the controls' ranges
         alp, wb, wa = np.array(alp), np.array(wb), np.array(wa)
         omega = 2.146 / (T63 * float(self.dynamics_scale))
         lead = 2.0 / omega                                   # group delay of the dynamics
@@ -357,20 +408,26 @@ class SyntheticTalker(BaseEstimator):
         near = np.searchsorted(cen.mean(1), t)[:, None] + np.arange(-_WINDOW, _WINDOW)[None, :]   # (n, 2W)
         valid = (near >= 0) & (near < len(cen))
         near = np.clip(near, 0, len(cen) - 1)
-        tau = t[:, None, None] + lead[None, None, :] - cen[near]                 # (n, 2W, 6)
+        tau = t[:, None, None] + lead[None, None, :] - cen[near]                 # (n, 2W, 11)
         w = np.where(tau < 0, wb[near], wa[near])
         dom = alp[near] * np.exp(-(np.abs(tau) / w) ** _SHAPE) * valid[:, :, None]
-        u = (dom * tgt[near]).sum(1) / (dom.sum(1) + 1e-12)                    # (n, 6)
+        u = (dom * tgt[near]).sum(1) / (dom.sum(1) + 1e-12)                    # (n, 11)
         u += 0.02 * rng.standard_normal(u.shape)                               # motor noise
+        # slow postural drift (expression, corners, asymmetry, lateral jaw), stationary from the start
+        pd = math.exp(-2 * math.pi * _DRIFT_HZ / fs)
+        drift = lfilter([1.0], [1.0, -pd], rng.standard_normal((n_sub, _NC)) * math.sqrt(1 - pd * pd), axis=0,
+                        zi=(rng.standard_normal(_NC) * pd)[None, :])[0]
+        u += drift * _DRIFT_SD
+        u[:, _X] += lateral * u[:, _J]                                         # this speaker's jaw path
         p = np.exp(-omega / fs)
         out = np.empty_like(u)
-        for k in range(6):
+        for k in range(_NC):
             b, a = [1 - p[k]], [1.0, -p[k]]
-            zi = lfilter_zi(b, a)
+            zi = np.array([p[k]])  # = lfilter_zi(b, a): the state that holds a constant input
             y, _ = lfilter(b, a, u[:, k], zi=zi * u[0, k])
             y, _ = lfilter(b, a, y, zi=zi * u[0, k])
             out[:, k] = y
-        return np.clip(out[::sub], 0.0, 1.0)
+        return np.clip(out[::sub], _LOW, 1.0)
 
     # -------------------------------------------------------------- generate
     def generate(self, progress=None) -> Corpus:
@@ -384,48 +441,160 @@ class SyntheticTalker(BaseEstimator):
         -------
         Corpus
             ``frames`` (n_frames, 3 * n_points) float32 in mm, ``faces``,
-            ``point_names``, phone-aligned utterances ``s0001``..., and ``latent``.
+            ``point_names``, phone-aligned utterances ``s0001``..., and ``latent``:
+            the eleven controls, ``aperture`` (mm) and ``phase`` (see :func:`gesture_phases`).
         """
         dur, res = self._validate()
         rng = np.random.default_rng(self.seed)
         rate = float(self.rate)
-        lip = LipModel(res)
+        n_spk = int(PRESETS[self.preset]["speakers"] if self.speakers is None else self.speakers)
+        anat = [speaker_anatomy(self.seed, k) for k in range(n_spk)]
+        lateral = [float(_LATERAL_JAW * np.random.default_rng([int(self.seed), 2000 + k]).standard_normal())
+                   for k in range(n_spk)]
+        lips = [LipModel(res, a) for a in anat]
+        lip = lips[0]
         total = int(round(dur * rate))
         report(progress, "sentences", 0, 1)
         sents = self._sentences(rng, total)
         report(progress, "sentences", 1, 1)
-        ctrls, utts, pos = [], [], 0
+        ctrls, utts, pos, who = [], [], 0, []
         for k, (ph, d, txt, nf) in enumerate(sents):
             report(progress, "articulation", k, len(sents))
-            ctrls.append(self._controls(rng, ph, d, nf))
+            spk = k % n_spk
+            ctrls.append(self._controls(rng, ph, d, nf, lateral[spk]))
             ends = np.cumsum(d)
             ends[-1] = nf / rate
             st = np.concatenate([[0.0], ends[:-1]])
             phones = tuple(PhoneInterval(float(a), float(b), p) for a, b, p in zip(st, ends, ph))
-            utts.append(Utterance(f"s{k + 1:04d}", pos, pos + nf, phones, None, txt))
+            utts.append(Utterance(f"s{k + 1:04d}", pos, pos + nf, phones, None, txt,
+                                  f"spk{spk + 1}" if n_spk > 1 else ""))
+            who.append(np.full(nf, spk, np.int16))
             pos += nf
         report(progress, "articulation", len(sents), len(sents))
         C = np.concatenate(ctrls)
+        who = np.concatenate(who)
         n = C.shape[0]
         frames = np.empty((n, 3 * lip.n_points), dtype=np.float32)
+        aperture = np.empty(n)
+        for k, lm in enumerate(lips):
+            aperture[who == k] = lm.aperture(C[who == k])
+        head = self._head_motion(rng, utts, n)
+        field = self._registration_field(rng, utts, n, lip)
         chunk = max(1, 4_000_000 // (3 * lip.n_points))
         for s in range(0, n, chunk):
             report(progress, "geometry", s, n)
             blk = frames[s:s + chunk]
-            lip.deform(C[s:s + chunk], out=blk)
-            if self.noise > 0:  # uniform measurement noise of s.d. `noise` (7x cheaper than normal)
+            w = who[s:s + chunk]
+            if n_spk == 1:
+                lip.deform(C[s:s + chunk], out=blk)
+            else:
+                for k in np.unique(w):
+                    blk[w == k] = lips[k].deform(C[s:s + chunk][w == k])
+            if head is not None:  # residual registration error: small rigid motion, P + w x P + t
+                P = blk.reshape(len(blk), -1, 3)
+                om, tr = head[0][s:s + chunk], head[1][s:s + chunk]
+                x, y, z = P[..., 0].copy(), P[..., 1].copy(), P[..., 2].copy()
+                for d, (a, b, u, v) in enumerate(((1, 2, z, y), (2, 0, x, z), (0, 1, y, x))):
+                    P[..., d] += om[:, a, None] * u - om[:, b, None] * v + tr[:, d, None]
+                with threadpool_limits(1, "blas"):  # small products: one thread beats two contending ones
+                    blk += field[0][s:s + chunk] @ field[1]
+            if self.noise > 0:  # uniform capture noise of s.d. `noise` (7x cheaper than normal)
                 buf = rng.random(blk.shape, dtype=np.float32)
                 buf -= np.float32(0.5)
                 buf *= np.float32(self.noise * math.sqrt(12.0))
                 blk += buf
         report(progress, "geometry", n, n)
         latent = {name: C[:, k].astype(np.float64) for k, name in enumerate(CONTROL_NAMES)}
-        latent["aperture"] = lip.aperture(C)
+        latent["aperture"] = aperture
+        bounds = np.array([[u.start, u.stop] for u in utts])
+        latent["phase"] = gesture_phases(aperture, bounds)
         self.n_frames_ = int(n)
         self.n_points_ = int(lip.n_points)
         self.n_utterances_ = len(utts)
+        self.anatomies_ = anat
         return Corpus(frames=frames, rate=rate, utterances=utts, dims=3, faces=lip.faces,
                       point_names=lip.point_names, latent=latent, name=f"synthetic-{self.preset}")
+
+    def _registration_field(self, rng, utts, n, lip):
+        """(coefficients (n, K), basis (K, 3 * n_points)) of the smooth registration error:
+        products of low-order cosines over the rest surface's x and y (orders 0..3 each,
+        amplitude 1 / (1 + a + b)) for each coordinate, coefficients a first-order process
+        (1 Hz) per utterance; scaled so the RMS displacement per coordinate is
+        ``registration`` mm."""
+        V = lip.rest_vertices
+        u = (V[:, 0] - V[:, 0].min()) / np.ptp(V[:, 0])
+        v = (V[:, 1] - V[:, 1].min()) / np.ptp(V[:, 1])
+        basis = []
+        for a in range(4):
+            for b in range(4):
+                phi = np.cos(np.pi * a * u) * np.cos(np.pi * b * v) / (1.0 + a + b)
+                for d in range(3):
+                    f = np.zeros((len(V), 3))
+                    f[:, d] = phi
+                    basis.append(f.ravel())
+        B = np.array(basis, np.float32)                                  # (48, 3V)
+        B *= np.float32(self.registration / math.sqrt((B ** 2).sum() / B.shape[1]))
+        rate = float(self.rate)
+        ph = math.exp(-2 * math.pi * 1.0 / rate)
+        coef = np.empty((n, len(B)), np.float32)
+        for utt in utts:
+            e = rng.standard_normal((utt.stop - utt.start, len(B))) * math.sqrt(1 - ph * ph)
+            coef[utt.start:utt.stop] = lfilter([1.0], [1.0, -ph], e, axis=0,
+                                               zi=rng.standard_normal(len(B))[None, :] * ph)[0]
+        return coef, B
+
+    def _head_motion(self, rng, utts, n):
+        """(rotation vectors (n, 3) in radians, translations (n, 3) in mm) of the residual
+        registration error, or None when ``registration`` is 0: per utterance a slow
+        first-order process (0.3 Hz) of s.d. ``0.6 * registration`` (mm; degrees)."""
+        if not self.registration > 0:
+            return None
+        rate = float(self.rate)
+        ph = math.exp(-2 * math.pi * 0.3 / rate)
+        out = np.empty((n, 6), np.float32)
+        for u in utts:
+            m = u.stop - u.start
+            e = rng.standard_normal((m, 6)) * math.sqrt(1 - ph * ph)
+            out[u.start:u.stop] = lfilter([1.0], [1.0, -ph], e, axis=0, zi=rng.standard_normal(6)[None, :] * ph)[0]
+        out *= np.float32(0.6 * self.registration)
+        out[:, :3] *= np.float32(np.pi / 180.0)
+        return out[:, :3], out[:, 3:]
+
+
+_LOW = np.array([-1.0 if n in SIGNED_CONTROLS else 0.0 for n in CONTROL_NAMES])
+
+
+def speaker_anatomy(seed: int, speaker: int) -> Anatomy:
+    """The lip anatomy of speaker ``speaker`` of the talker with ``seed`` (drawn around the
+    adult mean, :meth:`engine.lipmodel.Anatomy.draw`)."""
+    return Anatomy.draw(np.random.default_rng([int(seed), 1000 + int(speaker)]))
+
+
+def gesture_phases(aperture, bounds) -> np.ndarray:
+    """The ground-truth phase of the lip gesture per frame, from the exact aperture.
+
+    Forward steps inside each utterance: opening when the aperture grows to the next
+    frame (step v), accelerating when the change of velocity has the sign of the velocity,
+    ``sign(v - v_prev) == sign(v)`` with ``v_prev`` the step into the frame (the engine's
+    convention for its four classes, ``engine.tangent.CLASS_NAMES``; the first frame of
+    an utterance takes its own step as ``v_prev``, so it counts as decelerating).
+
+    Returns
+    -------
+    int8 ndarray of shape (n,): 0 opening/accelerating, 1 opening/decelerating,
+    2 closing/accelerating, 3 closing/decelerating, -1 at the last frame of each
+    utterance (no forward step).
+    """
+    a = np.asarray(aperture, np.float64)
+    out = np.full(len(a), -1, np.int8)
+    for s, e in np.asarray(bounds):
+        if e - s < 2:
+            continue
+        v = np.diff(a[s:e])                 # forward step of frames s..e-2
+        prev = np.r_[v[0], v[:-1]]          # step into the frame (the first frame repeats its own)
+        acc = np.sign(v - prev) == np.sign(v)
+        out[s:e - 1] = np.where(v > 0, np.where(acc, 0, 1), np.where(acc, 2, 3))
+    return out
 
 
 # ------------------------------------------------------------------ caching
@@ -456,15 +625,19 @@ def _cache_key(params: dict) -> str:
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 
-def load_synthetic(*, preset="default", progress=None, cache_dir=None, **params) -> Corpus:
+def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=False, **params) -> Corpus:
     """The synthetic corpus for ``preset``, generated once and cached.
 
     Parameters
     ----------
-    preset : {"small", "default", "paper"}
+    preset : {"small", "default", "paper", "multi"}
     progress : callable(stage, done, total) or None
     cache_dir : path or None
         Overrides ``$LIPSPACE_CACHE_DIR`` and the user cache folder.
+    audio : bool, default=False
+        Give every utterance speech audio (:mod:`engine.speech_audio`, espeak-ng),
+        written once beside the cached corpus (``<cache file>-audio/``). Without
+        espeak-ng the corpus has no audio and its ``history`` says why.
     **params
         Further :class:`SyntheticTalker` parameters (``seed``, ``n_sentences``, ...).
 
@@ -482,7 +655,7 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, **params)
         try:
             corpus = Corpus.load(path)
             report(progress, "loading cache", 1, 1)
-            return corpus
+            return _with_audio(corpus, path, progress) if audio else corpus
         except (CorpusError, OSError, ValueError):
             pass  # damaged cache file: regenerate it
     corpus = talker.generate(progress=progress)
@@ -492,4 +665,19 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, **params)
         report(progress, "saving cache", 1, 1)
     except OSError:
         pass  # a read-only cache folder only costs regeneration next time
+    return _with_audio(corpus, path, progress) if audio else corpus
+
+
+def _with_audio(corpus, path, progress):
+    """The corpus with speech audio in ``<path stem>-audio/``, or without it and a note why."""
+    import subprocess
+
+    from engine.speech_audio import SpeechAudioUnavailable, add_speech_audio
+
+    try:
+        return add_speech_audio(corpus, path.with_name(path.stem + "-audio"), progress=progress)
+    except SpeechAudioUnavailable as exc:
+        corpus.history.append(f"speech audio: none; {exc}")
+    except (OSError, ValueError, subprocess.SubprocessError) as exc:
+        corpus.history.append(f"speech audio: none; generating it failed ({exc})")
     return corpus

@@ -11,7 +11,7 @@ import pyvista as pv
 
 from app.scene.handles import Handle
 
-__all__ = ["lip_mesh", "LipsHandle", "ContourHandle", "add_lips", "add_lip_contour"]
+__all__ = ["lip_mesh", "LipsHandle", "ContourHandle", "add_lips", "add_lip_contour", "lip_colours", "SKIN"]
 
 
 def _points(points):
@@ -59,6 +59,8 @@ class LipsHandle(Handle):
             raise ValueError(f"frame has {P.shape[0]} points, the mesh has {self.mesh.n_points}")
         self.mesh.points[:] = P + self.offset
         if self.mesh.n_cells and "Normals" in self.mesh.point_data:
+            # VTK's normals filter passes an existing "Normals" array through: drop it first
+            del self.mesh.point_data["Normals"]
             self.mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
         self.mesh.Modified()
 
@@ -86,6 +88,7 @@ class ContourHandle(LipsHandle):
         if P.shape[0] != self._n:
             raise ValueError(f"frame has {P.shape[0]} points, the lip markers are {self._n}")
         self.mesh.points[:] = self.contour.transform(P) + self.offset
+        self.mesh.point_data.pop("Normals", None)  # else VTK's normals filter keeps the old ones
         self.mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
         self.mesh.Modified()
         self.markers.points[:] = P + self.offset
@@ -160,7 +163,9 @@ def add_lips(plotter, points, faces=None, *, color=(0.85, 0.45, 0.45), offset=(0
     """Draw one lip frame; returns a handle whose :meth:`LipsHandle.update` moves it.
 
     Without ``faces``, markers with roles (or names) that can form a lip contour are
-    drawn as one (:func:`add_lip_contour`); otherwise as spheres.
+    drawn as one (:func:`add_lip_contour`); otherwise as spheres. A mesh is smooth-shaded;
+    with the synthetic lip model's point names its vermilion takes ``color`` and the skin
+    around it a skin tone (:func:`lip_colours`).
     """
     if (faces is None or len(faces) == 0) and (roles is not None or names is not None):
         try:
@@ -173,7 +178,36 @@ def add_lips(plotter, points, faces=None, *, color=(0.85, 0.45, 0.45), offset=(0
         actor = plotter.add_mesh(mesh, color=color, point_size=point_size, render_points_as_spheres=True, name=name,
                                  pickable=False, reset_camera=False, render=False)
     else:
+        # smooth (Gouraud) shading over point normals shared by the triangles around each
+        # point: no facets, and no per-triangle colour steps that show as seams in exports
         mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
-        actor = plotter.add_mesh(mesh, color=color, specular=0.3, name=name, pickable=False, reset_camera=False,
-                                 render=False)
+        rgb = lip_colours(mesh.n_points, color, names)
+        if rgb is None:
+            kw = {"color": color}
+        else:
+            mesh.point_data["lip_rgb"] = rgb
+            kw = {"scalars": "lip_rgb", "rgb": True}
+        actor = plotter.add_mesh(mesh, specular=0.25, specular_power=12.0, smooth_shading=True, name=name,
+                                 pickable=False, reset_camera=False, render=False, show_scalar_bar=False, **kw)
     return LipsHandle(plotter, mesh, actor, offset)
+
+
+#: the skin colour the lip colour is blended towards outside the vermilion
+SKIN = (0.93, 0.80, 0.70)
+
+
+def lip_colours(n_points: int, color, names=None) -> np.ndarray | None:
+    """Per-point RGB (uint8, (V, 3)) for a lip mesh: ``color`` on the vermilion, blended
+    towards :data:`SKIN` on the surrounding skin, when the point names are the synthetic
+    lip model's (``engine.lipmodel.vermilion_weight``); None otherwise (one colour)."""
+    if names is None or len(names) != n_points:
+        return None
+    from engine.lipmodel import vermilion_weight
+
+    w = vermilion_weight(list(names))
+    if w is None:
+        return None
+    c = np.asarray(pv.Color(color).float_rgb, np.float64)
+    skin = 0.3 * c + 0.7 * np.asarray(SKIN)
+    rgb = w[:, None] * c[None, :] + (1 - w[:, None]) * skin[None, :]
+    return np.round(255 * rgb).astype(np.uint8)

@@ -201,15 +201,19 @@ def test_every_method_is_scored_in_y_through_the_same_projection(result, small_c
 
 
 @pytest.mark.parametrize("talker", ["default", "held-out"])
-def test_anchored_manifold_path_beats_linear_and_pchip_with_oracle_targets(talker, small_corpus, result, split,
-                                                                           heldout_corpus):
+def test_anchored_manifold_path_beats_linear_and_pchip_in_y_with_oracle_targets(talker, small_corpus, result, split,
+                                                                                heldout_corpus):
     """The part of the paper's claim that holds with equal information, on both talkers.
 
     With the oracle X at the targets and the target states, the anchored manifold path
-    beats linear and PCHIP interpolation in X, Y and LVE. It does *not* beat the cubic
-    Hermite spline that uses the states' mean velocity (docs/RESULTS.md gives the margins),
-    so that is not asserted. The held-out talker (engine.synthetic.HELD_OUT_TALKER) was
-    never used to tune the method.
+    beats unit selection and the mean frame in X, Y and LVE, and linear and PCHIP
+    interpolation in Y. On the talkers of generator 4 (eleven controls, capture noise,
+    registration error) it *loses* to linear and PCHIP in X and LVE (measured, small
+    preset: X 6.99 vs 5.20 / 4.99 on the default talker, 5.26 vs 4.69 / 4.65 held out),
+    so that is not asserted; generator 3's nearly 4-dimensional talker let it win there
+    too. It does not beat the cubic Hermite spline that uses the states' mean velocity
+    (docs/RESULTS.md gives the margins). The held-out talker
+    (engine.synthetic.HELD_OUT_TALKER) was never used to tune the method.
     """
     if talker == "default":
         r = result
@@ -221,6 +225,8 @@ def test_anchored_manifold_path_beats_linear_and_pchip_with_oracle_targets(talke
     for meas in ("rmse_x", "rmse_y", "lve"):
         man = r.row("oracle", "manifold")[meas]
         for base in ("linear", "pchip", "unitselection", "mean-frame"):
+            if base in ("linear", "pchip") and meas != "rmse_y":
+                continue
             c = r.comparison("oracle", base, meas)
             assert man < r.row("oracle", base)[meas], (talker, meas, base, man, r.row("oracle", base)[meas])
             assert c["wins"] > c["losses"], (talker, meas, base, c)

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from engine.corpus import Corpus
-from engine.lipmodel import CONTROL_NAMES, LipModel
+from engine.lipmodel import CONTROL_NAMES, SIGNED_CONTROLS, Anatomy, LipModel, vermilion_weight
 from engine.phonetics import PAPER_COUNTS, PAUSE, PHONES
 from engine.progress import Cancelled
-from engine.synthetic import PHONE_GESTURES, SyntheticTalker, load_synthetic
+from engine.synthetic import PHONE_GESTURES, SyntheticTalker, gesture_phases, load_synthetic
 
 
 @pytest.fixture
@@ -25,7 +25,7 @@ def small():
 
 
 def _controls(**kw):
-    c = np.zeros((1, 6))
+    c = np.zeros((1, len(CONTROL_NAMES)))
     for k, v in kw.items():
         c[0, CONTROL_NAMES.index(k)] = v
     return c
@@ -56,6 +56,8 @@ def test_lip_model_rejects_bad_input():
         LipModel("huge")
     with pytest.raises(ValueError, match="shape"):
         LipModel("small").deform(np.zeros((3, 5)))
+    with pytest.raises(ValueError, match="anatomy"):
+        LipModel("small", anatomy={"half_width": 20})
 
 
 def test_deformations_are_physically_sensible():
@@ -70,7 +72,8 @@ def test_deformations_are_physically_sensible():
     corner = np.argmax(np.abs(rest[:n, 0]) * (np.abs(rest[:n, 0]) < 26))
     assert abs((rest + moves["round"])[corner, 0]) < abs(rest[corner, 0]) - 2   # narrows
     assert abs((rest + moves["spread"])[corner, 0]) > abs(rest[corner, 0]) + 1  # widens
-    assert moves["round"][:, 2].max() > 3                                      # protrudes
+    assert moves["protrude"][:, 2].max() > 3.5                                 # protrudes
+    assert moves["round"][:, 2].max() < moves["protrude"][:, 2].max() / 2      # rounding alone barely does
     mid_lo = lip.midline[1]
     assert moves["labiodental"][mid_lo, 2] < -2 and moves["labiodental"][mid_lo, 1] > 0  # up and back
     ap = lip.aperture(np.vstack([_controls(), _controls(jaw=1.0), _controls(closure=1.0),
@@ -83,7 +86,9 @@ def test_deformations_are_physically_sensible():
 def test_aperture_is_the_geometric_inner_lip_distance():
     lip = LipModel("small")
     rng = np.random.default_rng(0)
-    c = rng.random((50, 6))
+    c = rng.random((50, len(CONTROL_NAMES)))
+    signed = [CONTROL_NAMES.index(n) for n in SIGNED_CONTROLS]
+    c[:, signed] = 2 * c[:, signed] - 1
     P = lip.deform(c).reshape(50, -1, 3)
     u, l = lip.midline
     np.testing.assert_allclose(lip.aperture(c), P[:, u, 1] - P[:, l, 1], atol=1e-4)
@@ -98,7 +103,7 @@ def test_every_phone_has_articulatory_targets():
     assert set(PHONES) <= set(PHONE_GESTURES)
     for p, gestures in PHONE_GESTURES.items():
         for g in gestures:
-            assert len(g.target) == 6 and all(0 <= t <= 1 for t in g.target)
+            assert len(g.target) == len(CONTROL_NAMES) and all(-1 <= t <= 1 for t in g.target)
 
 
 def test_small_corpus_shape_and_alignment(small):
@@ -107,7 +112,7 @@ def test_small_corpus_shape_and_alignment(small):
     c.validate()
     assert c.rate == 60.0 and c.n_frames == 4500 and 100 <= c.n_points <= 300
     assert c.faces is not None and c.point_names is not None
-    assert set(c.latent) == set(CONTROL_NAMES) | {"aperture"}
+    assert set(c.latent) == set(CONTROL_NAMES) | {"aperture", "phase"}
     assert all(v.shape == (c.n_frames,) and np.isfinite(v).all() for v in c.latent.values())
     assert c.utterances[0].id == "s0001" and len(c.utterances) >= 10
     for u in c.utterances:
@@ -182,9 +187,10 @@ def test_first_principal_component_is_jaw_opening(small):
 def test_controls_are_smooth_and_bounded(small):
     for name in CONTROL_NAMES:
         x = small.latent[name]
-        assert x.min() >= 0 and x.max() <= 1
-        # second-order dynamics: frame-to-frame steps are small
-        assert np.abs(np.diff(x)).max() < 0.35
+        assert x.min() >= (-1 if name in SIGNED_CONTROLS else 0) and x.max() <= 1
+        # second-order dynamics: frame-to-frame steps inside an utterance are small (sentences
+        # are separate recordings: posture may differ from one to the next)
+        assert max(np.abs(np.diff(x[s:e])).max() for s, e in small.bounds) < 0.35
 
 
 def test_progress_and_cancel():
@@ -277,3 +283,80 @@ def test_generator_variants_leave_the_default_talker_unchanged(tmp_cache):
         SyntheticTalker(preset="small", dynamics_scale=0.0).generate()
     with pytest.raises(ValueError, match="timing_sd must be in"):
         SyntheticTalker(preset="small", timing_sd=-1.0).generate()
+
+
+# ------------------------------------------------ the new controls and anatomy
+def test_new_controls_move_the_lips_as_named():
+    lip = LipModel("default")
+    rest = lip.deform(_controls()).reshape(-1, 3)
+    n, C = lip.rows * lip.cols, lip.cols
+    up_mid, lo_mid = lip.midline
+    mv = {k: lip.deform(_controls(**{k: 1.0})).reshape(-1, 3) - rest for k in CONTROL_NAMES}
+    # lower-lip depression: the lower lip goes down, the upper lip stays
+    assert mv["depress"][lo_mid, 1] < -2 and abs(mv["depress"][up_mid, 1]) < 0.1
+    # corners: raise moves the commissure region up, not the midline
+    corner = int(np.argmin(np.abs(np.abs(rest[:C, 0]) - lip.anatomy.half_width)))
+    assert mv["corner"][corner, 1] > 1.5 and abs(mv["corner"][up_mid, 1]) < 0.05
+    # asymmetry: left and right halves differ, the midline aperture does not change
+    both = lip.deform(_controls(jaw=0.8, asymmetry=1.0)).reshape(-1, 3) - lip.deform(_controls(jaw=0.8)).reshape(-1, 3)
+    assert both[lo_mid + 3, 1] * both[lo_mid - 3, 1] < 0  # one side opens more, the other less
+    assert lip.aperture(_controls(jaw=0.8, asymmetry=1.0))[0] == pytest.approx(lip.aperture(_controls(jaw=0.8))[0])
+    # lateral jaw: the lower lip shifts sideways, the upper lip does not
+    assert mv["jaw_lateral"][n:, 0].mean() > 0.8 and np.abs(mv["jaw_lateral"][:n, 0]).max() < 1e-4
+
+
+def test_rest_shape_has_cupids_bow_and_philtrum():
+    lip = LipModel("paper")
+    V = lip.rest_vertices
+    R, C = lip.rows, lip.cols
+    x = V[:C, 0]
+    border = int(np.argmin(np.abs(np.linspace(0, 1, R) ** 1.4 - 0.4)))  # the vermilion border row
+    y_border = V[border * C:(border + 1) * C, 1]
+    mid = C // 2
+    peak = mid + int(np.argmax(y_border[mid:mid + C // 4]))
+    assert 3 < x[peak] < 7                                   # Cupid's bow peak beside the midline
+    assert y_border[peak] - y_border[mid] > 0.8              # with a notch between the peaks
+    z_skin = V[(border + 2) * C:(border + 3) * C, 2]
+    col = mid + int(np.argmin(np.abs(x[mid:] - 5.0)))
+    assert z_skin[col] - z_skin[mid] > 0.5                   # philtral column stands out of the groove
+    w = vermilion_weight(lip.point_names)
+    assert w.shape == (lip.n_points,) and w[:C].min() == 1 and w[(R - 1) * C:R * C].max() == 0
+    assert vermilion_weight(["UL", "LL"]) is None
+
+
+def test_speakers_differ_in_anatomy_not_in_topology():
+    a = SyntheticTalker(preset="small", n_sentences=4, speakers=2).generate()
+    assert [u.speaker for u in a.utterances] == ["spk1", "spk2", "spk1", "spk2"]
+    rest = [a.frames[u.start] for u in a.utterances[:2]]
+    assert np.abs(rest[0] - rest[1]).max() > 1.0
+    an = Anatomy.draw(np.random.default_rng(0))
+    assert an != Anatomy() and 15 < an.half_width < 35
+
+
+def test_gesture_phases_follow_the_exact_aperture(small):
+    ph = small.latent["phase"]
+    ap = small.latent["aperture"]
+    ends = small.bounds[:, 1] - 1
+    assert (ph[ends] == -1).all() and set(np.unique(ph)) == {-1, 0, 1, 2, 3}
+    ok = np.ones(len(ap), bool)
+    ok[ends] = False
+    v = np.zeros_like(ap)
+    v[:-1] = np.diff(ap)
+    assert ((ph[ok] <= 1) == (v[ok] > 0)).all()
+    np.testing.assert_array_equal(gesture_phases(ap, small.bounds), ph)
+    # opening (faster, then slower), then turning to close: the turn accelerates the closing
+    np.testing.assert_array_equal(gesture_phases(np.array([0, 1, 3, 4, 4.5, 4.0]), [[0, 6]]), [1, 0, 1, 1, 2, -1])
+
+
+def test_look_ahead_rounding_starts_before_the_rounded_vowel():
+    """Protrusion anticipates a rounded vowel across the consonants before it."""
+    c = SyntheticTalker(preset="small", duration=240.0).generate()
+    pro = c.latent["protrude"]
+    # consonants /t d s z n l k g/ directly before /uw/ vs before /iy/
+    before = {"uw": [], "iy": []}
+    for u in c.utterances:
+        for a, b in zip(u.phones[:-1], u.phones[1:]):
+            if a.label in ("t", "d", "s", "z", "n", "l", "k", "g") and b.label in before:
+                before[b.label].append(pro[u.start + int(round(a.mid * c.rate))])
+    assert len(before["uw"]) >= 5 and len(before["iy"]) >= 5
+    assert np.median(before["uw"]) > np.median(before["iy"]) + 0.2

@@ -25,6 +25,16 @@ from engine.tangent import CLASS_NAMES, NO_STEP, TangentFrames
 
 AGREEMENT = 0.90
 PLANE_CORR = 0.80
+#: The engine's synthetic talkers (generator 4) carry capture noise (0.2 mm per coordinate)
+#: and registration error like a real capture, so at 60 Hz the frame-to-frame change of
+#: velocity is mostly noise -- for the method and the trivial rule alike. Measured on the
+#: small preset: opening 90.7 %, accelerating 65.6 % (rule 90.3 / 67.6); held-out talker
+#: 90.5 / 65.7 (rule 91.0 / 67.1). The accelerating floor stays well above chance (50 %),
+#: which is what a method that lost the velocity axis scores.
+SYNTH_OPENING = 0.88
+SYNTH_ACCELERATING = 0.60
+#: on those talkers the classes trail the rule on acceleration (-1.9 and -1.4 points measured)
+SYNTH_RULE_TOLERANCE = 0.03
 
 
 # ------------------------------------------------------------------ helpers
@@ -115,10 +125,11 @@ def _rule_agreement(aperture, Fx1, bounds):
 def _assert_matches_rule(o, a, aperture, Fx1, bounds, label, tolerance=RULE_TOLERANCE):
     """The method must match (within ``tolerance``) or beat the Delta X1 rule; the margin is reported.
 
-    Measured (this commit): the tangent classes do *not* beat the rule anywhere. On the
-    engine's talkers they tie with it (small: opening -0.1, accelerating -0.0 points;
-    held-out: +0.3 / +0.6); on the compact talker above, whose F^x_1 is its aperture up to
-    noise (so the rule holds the answer by construction), they trail it by 0.1 / 1.4 points.
+    Measured: the tangent classes do *not* beat the rule anywhere. On the engine's talkers
+    (generator 4, with capture noise) they tie with it on opening (small +0.4, held-out
+    -0.4 points) and trail it on acceleration (-1.9 / -1.4 points); on the compact talker
+    above, whose F^x_1 is its aperture up to noise (so the rule holds the answer by
+    construction), they trail it by 0.1 / 1.4 points.
     """
     ro, ra = _rule_agreement(aperture, Fx1, bounds)
     msg = (f"{label}: tangent classes vs the Delta F^x_1 rule: opening {100 * o:.1f}% vs {100 * ro:.1f}% "
@@ -206,9 +217,10 @@ def test_synthetic_talker_classes_agree_with_true_aperture(small_manifold):
     print(f"synthetic small: corr(signed_velocity, F^x'_1) = {r:.3f}; R^2 of F^x'_1 on Y1-3 = {r2:.2f}; "
           f"|corr(F^x_1, true aperture)| = {r_ap:.4f}")
     assert r2 > 0.5 and r_ap > 0.95
-    assert o >= AGREEMENT and a >= AGREEMENT
+    assert o >= SYNTH_OPENING and a >= SYNTH_ACCELERATING
     assert r > PLANE_CORR
-    _assert_matches_rule(o, a, m.corpus_.latent["aperture"], m.Fx_[:, 0], m.corpus_.bounds, "synthetic small")
+    _assert_matches_rule(o, a, m.corpus_.latent["aperture"], m.Fx_[:, 0], m.corpus_.bounds, "synthetic small",
+                         tolerance=SYNTH_RULE_TOLERANCE)
 
 
 def test_held_out_talker_classes_agree_with_true_aperture(heldout_manifold):
@@ -219,8 +231,9 @@ def test_held_out_talker_classes_agree_with_true_aperture(heldout_manifold):
     o, a, both, _ = _agreement(tf, ap, m.Fx_[:, 0], m.corpus_.bounds, "held-out talker (small)")
     r2, r_ap = _synthetic_structure(m)
     print(f"held-out talker: R^2 of F^x'_1 on Y1-3 = {r2:.2f}; |corr(F^x_1, true aperture)| = {r_ap:.4f}")
-    assert o >= AGREEMENT and a >= AGREEMENT
-    _assert_matches_rule(o, a, ap, m.Fx_[:, 0], m.corpus_.bounds, "held-out talker (small)")
+    assert o >= SYNTH_OPENING and a >= SYNTH_ACCELERATING
+    _assert_matches_rule(o, a, ap, m.Fx_[:, 0], m.corpus_.bounds, "held-out talker (small)",
+                         tolerance=SYNTH_RULE_TOLERANCE)
 
 
 # ------------------------------------------------------------ invariants
