@@ -114,7 +114,7 @@ def _read_native(path, rate=None, alignment=None, tier=None):
                                 "a corpus of one utterance")
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     u = c.utterances[0]
-    return replace(c, utterances=[replace(u, phones=fit_phones(phones, u.n_frames, c.rate))])
+    return replace(c, utterances=[replace(u, phones=fit_phones(phones, u.n_frames, c.rate, path=path))])
 
 
 def read_corpus(path, *, format: str | None = None, rate: float | None = None, alignment=None, **kw):
