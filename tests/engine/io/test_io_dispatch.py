@@ -4,7 +4,7 @@ import shutil
 import numpy as np
 import pytest
 
-from engine.corpus import Corpus, Utterance
+from engine.corpus import Corpus, CorpusError, PhoneInterval, Utterance
 from engine.io.errors import ImportDataWarning
 from engine.io import (ImportFormatError, detect_format, read_corpus, write_est_track, write_obj,
                        write_trajectory_csv)
@@ -75,3 +75,21 @@ def test_several_files_become_utterances(tmp_path):
         write_obj(tmp_path / f"m{k}.obj", np.eye(3) * k)
     m = read_corpus([tmp_path / f"m{k}.obj" for k in range(3)], rate=10)
     assert m.n_frames == 3 and len(m.utterances) == 1
+
+
+def test_native_npz_with_phones_out_of_range_is_refused_not_dropped(tmp_path):
+    """A phone outside its utterance, or of an utterance that does not exist, names the file, the phone and the range."""
+    from engine._persist import read_npz
+
+    c = Corpus(frames=np.zeros((100, 6)), rate=100, utterances=[Utterance("u", 0, 100, (PhoneInterval(0, 0.5, "a"),))])
+    d = read_npz(c.save(tmp_path / "c.npz"))
+    for name, key, value, says in [
+        ("late.npz", "corpus_phone_times", np.array([[5.0, 6.0]]), r"late\.npz: .*phone 0 \('a' 5\.0000-6\.0000 s\): "
+                                                                     r"lies outside the utterance \(0-1\.0000 s"),
+        ("utt.npz", "corpus_phone_utt", np.array([3]), r"utt\.npz: field 'corpus_phone_utt': value 3 is out of range "
+                                                       r"\(must be < 1\)"),
+    ]:
+        with open(tmp_path / name, "wb") as fh:
+            np.savez(fh, **{**d, key: value})
+        with pytest.raises(CorpusError, match=says):
+            read_corpus(tmp_path / name)
