@@ -162,3 +162,29 @@ def test_leaving_the_component_panel_returns_the_lips_to_the_selection(qapp, app
     qapp.processEvents()
     assert s.component is None and not panel.show_box.isChecked()
     panel.close_view()
+
+
+def test_exported_view_is_vector_with_the_hop_bar_title_clear_of_its_ticks(fresh, tmp_path, app_manifold):
+    import xml.etree.ElementTree as ET
+
+    from app.figures.export import save_plotter_vector
+    from app.figures.view_vector import scene_figure
+
+    v, s = fresh, fresh.state
+    s.select_frame(_front_state_frame(v, app_manifold))
+    v.renderer.flush(sync=True)
+    fig = scene_figure(v.plotter)
+    n_shown = int(v.handles["points"].visible) * app_manifold.Fy_.shape[0]
+    assert fig.lipspace["n_points"] >= n_shown                    # every frame a vector marker
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    bar = [ax for ax in fig.axes if ax.get_title(loc="left") == "future hops"]
+    assert len(bar) == 1
+    ticks = [t for t in bar[0].yaxis.get_ticklabels() if t.get_text()]
+    assert [t.get_text() for t in ticks] == [str(k) for k in range(len(ticks))]   # whole hops 0, 1, 2, ...
+    title = bar[0].title if bar[0].title.get_text() else bar[0]._left_title
+    tb = title.get_window_extent(r)
+    assert not any(tb.overlaps(t.get_window_extent(r)) for t in ticks)
+    root = ET.fromstring(save_plotter_vector(v.plotter, tmp_path / "view.SVG").read_bytes())
+    tags = [el.tag.rsplit("}", 1)[-1] for el in root.iter()]
+    assert "image" not in tags and tags.count("path") + tags.count("use") > app_manifold.Fy_.shape[0]
