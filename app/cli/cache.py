@@ -16,7 +16,6 @@ def _mb(n: int) -> str:
 
 def run(args) -> int:
     from app.cache import cache_dir, clear, entries
-    from app.source_loading import CACHE_DIR_ENV
 
     root = cache_dir()
     if args.clear:
@@ -27,7 +26,7 @@ def run(args) -> int:
         return 0 if not left else 1
     found = entries(root)
     print(f"cache folder {root}" + ("" if root.is_dir() else " (not created yet)")
-          + f"  (set {CACHE_DIR_ENV} to use another folder)")
+          + "  (set LIPSPACE_CACHE_DIR to use another folder)")
     for kind, label in _KINDS:
         mine = [e for e in found if e.kind == kind]
         if mine:

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from app.cache import clear, entries, prune, total_bytes
+from app.cache import entries, prune, total_bytes
 
 
 def _fill(root):

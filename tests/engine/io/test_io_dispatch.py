@@ -52,7 +52,8 @@ def test_native_npz_with_an_alignment(tmp_path):
     p = c.save(tmp_path / "c.npz")
     lab = tmp_path / "u.lab"
     lab.write_text("0 0.5 a\n0.5 1.5 b\n")  # runs past the 1 s of data: cut
-    with pytest.warns(ImportDataWarning, match=r"c\.npz: the alignment runs to 1\.500 s but the data last 1\.000 s .*cut"):
+    with pytest.warns(ImportDataWarning, match=r"c\.npz: the alignment runs to 1\.500 s but the data last "
+                                               r"1\.000 s .*cut"):
         r = read_corpus(p, alignment=lab)
     assert [(x.start, x.end, x.label) for x in r.utterances[0].phones] == [(0, 0.5, "a"), (0.5, 1.0, "b")]
     np.testing.assert_array_equal(r.frames, c.frames)
@@ -78,7 +79,7 @@ def test_several_files_become_utterances(tmp_path):
 
 
 def test_native_npz_with_phones_out_of_range_is_refused_not_dropped(tmp_path):
-    """A phone outside its utterance, or of an utterance that does not exist, names the file, the phone and the range."""
+    """A phone outside its utterance, or of an utterance that does not exist: the file, the phone and the range."""
     from engine._persist import read_npz
 
     c = Corpus(frames=np.zeros((100, 6)), rate=100, utterances=[Utterance("u", 0, 100, (PhoneInterval(0, 0.5, "a"),))])
