@@ -28,7 +28,7 @@ import numpy as np
 
 from engine.io._util import decode_text, read_bytes, uniform_rate
 from engine.io.errors import ImportFormatError
-from engine.io.matrix import corpus_from_matrix
+from engine.io.sensor_matrix import corpus_from_matrix
 from engine.layouts import LayoutError, get_layout
 
 __all__ = ["read_pos", "read_wave", "POS_MAGIC"]
