@@ -15,22 +15,29 @@ be one the user named with ``$LIPSPACE_CACHE_DIR``.
 """
 from __future__ import annotations
 
+import os
 import re
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["CacheEntry", "cache_dir", "entries", "total_bytes", "newest", "prune", "clear"]
+__all__ = ["CACHE_DIR_ENV", "CacheEntry", "cache_dir", "entries", "total_bytes", "newest", "prune", "clear"]
 
 #: a cached corpus or manifold file, or a corpus's audio folder, or a temporary file left by a killed write
 _ENTRY = re.compile(r"^(?:synthetic-(?P<preset>[A-Za-z0-9_]+)-.+?(?:\.npz|-audio)|\..+\.part\.npz)$")
 
+#: environment variable that moves the cache folder
+CACHE_DIR_ENV = "LIPSPACE_CACHE_DIR"
+
 
 def cache_dir() -> Path:
     """The cache folder: ``$LIPSPACE_CACHE_DIR``, else the platform's user cache folder."""
-    from app.source_loading import cache_dir as _cache_dir
+    env = os.environ.get(CACHE_DIR_ENV)
+    if env:
+        return Path(env)
+    from platformdirs import user_cache_dir
 
-    return _cache_dir()
+    return Path(user_cache_dir("lipspace"))
 
 
 @dataclass(frozen=True)

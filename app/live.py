@@ -337,28 +337,3 @@ class LiveSession:
         self._mail.close()
         for th in self._threads:
             th.join(timeout)
-
-
-def run_live(manifold_path, source, *, interocular_mm: float = 63.0) -> int:
-    """``lipspace explore --manifold M --camera SOURCE``: check the inputs, then open the window."""
-    from app.cli import CliError
-    from engine.manifold import Manifold, ManifoldFileError
-
-    if manifold_path is None:
-        raise CliError("--camera needs --manifold M: a manifold built from a video import "
-                       "(lipspace import talk.mp4 -o c.npz; lipspace build c.npz -o M)")
-    try:
-        camera_source(source)
-        manifold = Manifold.load(manifold_path)
-        check_video_manifold(manifold)
-        from engine.io.facemesh import require_mediapipe
-
-        require_mediapipe()
-    except (ValueError, ManifoldFileError, FileNotFoundError, ImportError) as exc:
-        raise CliError(f"{manifold_path}: {exc}" if "manifold was built" in str(exc) else str(exc)) from None
-    from app.views.live_view import launch_live
-
-    try:
-        return launch_live(manifold, source, interocular_mm=interocular_mm)
-    except ValueError as exc:  # the camera / stream cannot be opened
-        raise CliError(str(exc)) from None

@@ -10,24 +10,14 @@ preset, generator, fitting code and manifold file version, so the second start i
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
+
+from app.cache import CACHE_DIR_ENV, cache_dir
 
 __all__ = ["PRESETS", "CACHE_DIR_ENV", "cache_dir", "cached_manifold_path", "source_kind", "load_source"]
 
 #: synthetic talker presets (engine.synthetic)
 PRESETS = ("small", "default", "paper")
-CACHE_DIR_ENV = "LIPSPACE_CACHE_DIR"
-
-
-def cache_dir() -> Path:
-    """Lipspace's cache directory (``$LIPSPACE_CACHE_DIR`` or the platform user cache dir)."""
-    env = os.environ.get(CACHE_DIR_ENV)
-    if env:
-        return Path(env)
-    from platformdirs import user_cache_dir
-
-    return Path(user_cache_dir("lipspace"))
 
 
 def cached_manifold_path(preset: str) -> Path:

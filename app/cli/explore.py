@@ -70,7 +70,7 @@ def run(args) -> int:
     from app.cli import CliError
 
     if args.camera is not None:  # the live mirror (app.live)
-        from app.live import run_live
+        from app.views.live_view import run_live
 
         return run_live(args.manifold or args.file, args.camera, interocular_mm=args.interocular_mm)
     if args.file is not None:

@@ -114,14 +114,15 @@ def _refuse_foreign(path: Path) -> None:
     """A recording in a format the importers read (.mat, .ema, .c3d, .csv ...) is not a
     Lipspace file: say what it is and how to import it, instead of a zip error."""
     from app.cli import CliError
-    from engine.io import ImportFormatError
-    from engine.io.dispatch import FORMATS, detect_format
 
     if path.is_dir():
         raise CliError(f"{path}: is a directory; give a Lipspace corpus or manifold file (.npz)")
     with open(path, "rb") as fh:
         if fh.read(4) == b"PK\x03\x04":
             return  # a zip: the loaders below say what is wrong with it
+    # only for a file that is not a Lipspace .npz: summarising one never loads the importers
+    from engine.io import ImportFormatError
+    from engine.io.dispatch import FORMATS, detect_format
     try:
         fmt = detect_format(path)
     except (ImportFormatError, OSError, ValueError):

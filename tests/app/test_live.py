@@ -14,7 +14,8 @@ import pytest
 pytest.importorskip("mediapipe", reason="the [video] extra is not installed (pip install -e '.[video]')")
 skdata = pytest.importorskip("skimage.data", reason="scikit-image (the [video] extra) is not installed")
 
-from app.live import LatestFrame, LiveProjector, LiveSession, check_video_manifold, run_live  # noqa: E402
+from app.live import LatestFrame, LiveProjector, LiveSession, check_video_manifold  # noqa: E402
+from app.views.live_view import run_live  # noqa: E402
 from engine.io.video import read_video, track_video  # noqa: E402
 from engine.io.video_synth import default_motion, moving_image_frames, write_video  # noqa: E402
 
