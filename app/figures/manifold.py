@@ -130,22 +130,35 @@ def _panel3d(ax, Y, dens, tan, o, S, V, L, traj, view):
     P = o + gu[:, None, None] * S + gw[None, :, None] * w
     ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], color="0.5", alpha=0.18, linewidth=0, shade=False,
                     axlim_clip=True)
+    lo, hi = Y.min(axis=0), Y.max(axis=0)
     for vec, col, lab in ((S, S_COLOUR, "S"), (V, V_COLOUR, "V")):
-        ax.quiver(*o, *(L * vec), color=col, linewidth=2.2, arrow_length_ratio=0.15)
-        ax.text(*(o + 1.08 * L * vec), lab, color=col, fontweight="bold")
+        # mplot3d does not clip: an arrow leaving the box runs over the tick labels, so each arrow
+        # (and its label) stops inside the data's box
+        Lv = min(L, 0.85 * _reach_in_box(o, vec, lo, hi))
+        ax.quiver(*o, *(Lv * vec), color=col, linewidth=2.2, arrow_length_ratio=0.15)
+        ax.text(*(o + 1.08 * Lv * vec), lab, color=col, fontweight="bold")
     p = Y[traj]
     ax.plot(p[:, 0], p[:, 1], p[:, 2], color=ORIGINAL, lw=1.2)
     ax.quiver(p[-2, 0], p[-2, 1], p[-2, 2], *(p[-1] - p[-2]), color=ORIGINAL, arrow_length_ratio=3.0)
     ax.set_xlabel("$Y_1$")
     ax.set_ylabel("$Y_2$")
     ax.set_zlabel("$Y_3$")
-    lo, hi = Y.min(axis=0), Y.max(axis=0)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
     ax.set_box_aspect(tuple(np.maximum(hi - lo, 1e-9)))
     ax.view_init(elev=view[0], azim=view[1])
     ax.tick_params(labelsize=7)
+
+
+def _reach_in_box(o, vec, lo, hi) -> float:
+    """How far from ``o`` along ``vec`` the box [lo, hi] extends (inf if unbounded or ``o`` is outside it)."""
+    o, vec = np.asarray(o, float), np.asarray(vec, float)
+    if np.any(o < lo) or np.any(o > hi):
+        return float("inf")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(vec > 0, (hi - o) / vec, np.where(vec < 0, (lo - o) / vec, np.inf))
+    return float(np.min(t))
 
 
 def _mappable(cmap=CMAP, norm=None):
