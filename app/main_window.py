@@ -32,14 +32,20 @@ class MainWindow(QtWidgets.QMainWindow):
         Where ``manifold`` came from (``path``, ``preset``), for session files.
     autosave : app.autosave.Autosaver, optional
         Saves the session a few seconds after it changes (:mod:`app.autosave`).
+    settings : app.window_settings.WindowSettings, optional
+        Where geometry, dock layout and recent files are remembered (default: the user's
+        settings, :func:`app.window_settings.open_settings`).
     """
 
     def __init__(self, manifold=None, *, state: AppState | None = None, source: dict | None = None,
-                 autosave=None):
+                 autosave=None, settings=None):
         super().__init__()
         from app.views import ClustersPanel, LipView, ManifoldView, ScreePanel, TrajectoryEditor
+        from app.window_settings import WindowSettings
 
         self.state = state or AppState()
+        self.settings = settings if settings is not None else WindowSettings()
+        self._help = None
         self.setWindowTitle("Lipspace")
         self.resize(1400, 900)
         self._runner = None
@@ -67,7 +73,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.docks["clusters"].raise_()
         self.resizeDocks([self.docks["lips"]], [480], QtCore.Qt.Orientation.Horizontal)
         self.resizeDocks([self.docks["lips"], self.docks["clusters"]], [420, 380], QtCore.Qt.Orientation.Vertical)
-        self.resizeDocks([self.docks["editor"]], [170], QtCore.Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["editor"]], [230], QtCore.Qt.Orientation.Vertical)
+        self._set_minimum_sizes()
+        self._default_layout = self.saveState()  # View > Reset layout goes back to this
 
         self.summary_label = QtWidgets.QLabel("no manifold loaded")
         self.statusBar().addPermanentWidget(self.summary_label)
@@ -78,14 +86,31 @@ class MainWindow(QtWidgets.QMainWindow):
         self._autosave_timer.timeout.connect(self._autosave_tick)
         if autosave is not None:
             self._autosave_timer.start(1000)
+        self.layout_restored = self.settings.restore_layout(self)
         if manifold is not None:
             self.set_manifold(manifold, source=source)
+
+    #: smallest useful size of each view: below it the window stops shrinking instead of
+    #: collapsing a dock to nothing (the Lips dock vanished at 1179 x 407 before)
+    VIEW_MINIMUM = {"manifold": (360, 260), "lips": (240, 170), "clusters": (240, 150), "scree": (240, 150),
+                    "editor": (560, 190)}
+
+    def _set_minimum_sizes(self) -> None:
+        views = {"manifold": self.manifold_view, **{k: d.widget() for k, d in self.docks.items()}}
+        for key, view in views.items():
+            hint = view.minimumSizeHint()  # never below what the view's own layout needs
+            view.setMinimumSize(max(self.VIEW_MINIMUM[key][0], hint.width()),
+                                max(self.VIEW_MINIMUM[key][1], hint.height()))
+        self.setMinimumSize(self.minimumSizeHint())
 
     # ------------------------------------------------------------------ menus
     def _make_menus(self):
         mb = self.menuBar()
         f = mb.addMenu("&File")
         self._act(f, "&Open corpus or manifold…", self.open_dialog, QtGui.QKeySequence.StandardKey.Open)
+        self.recent_menu = f.addMenu("Open &Recent")
+        self.recent_menu.aboutToShow.connect(self._fill_recent_menu)
+        self._fill_recent_menu()
         syn = f.addMenu("Open synthetic talker")
         for preset in ("small", "default", "paper"):
             self._act(syn, preset, lambda _=False, p=preset: self.open_source(None, preset=p))
@@ -110,12 +135,23 @@ class MainWindow(QtWidgets.QMainWindow):
         self._act(f, "Export &cluster table (CSV)…", self.export_clusters_dialog)
         f.addSeparator()
         self._act(f, "&Quit", self.close, QtGui.QKeySequence.StandardKey.Quit)
+        e = mb.addMenu("&Edit")
+        stack = self.editor.undo_stack
+        self.undo_action = stack.createUndoAction(self, "&Undo")
+        self.undo_action.setShortcut(QtGui.QKeySequence.StandardKey.Undo)
+        self.redo_action = stack.createRedoAction(self, "&Redo")
+        self.redo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Shift+Z"), QtGui.QKeySequence("Ctrl+Y")])
+        e.addAction(self.undo_action)
+        e.addAction(self.redo_action)
         v = mb.addMenu("&View")
         for key, dock in self.docks.items():
             v.addAction(dock.toggleViewAction())
         v.addSeparator()
         self._act(v, "Reset 3-D cameras", self.reset_cameras)
+        self._act(v, "Reset &layout", self.reset_layout)
         h = mb.addMenu("&Help")
+        self._act(h, "&User guide", self.show_user_guide, QtGui.QKeySequence.StandardKey.HelpContents)
+        self._act(h, "&Keyboard shortcuts", self.show_shortcuts)
         self._act(h, "&About Lipspace", self._about)
 
     def _act(self, menu, text, slot, shortcut=None):
@@ -125,6 +161,35 @@ class MainWindow(QtWidgets.QMainWindow):
         a.triggered.connect(slot)
         menu.addAction(a)
         return a
+
+    def _fill_recent_menu(self):
+        menu = self.recent_menu
+        menu.clear()
+        files = self.settings.recent_files()
+        for i, path in enumerate(files):
+            a = menu.addAction(f"&{i + 1} {Path(path).name}" if i < 9 else Path(path).name)
+            a.setToolTip(path)
+            a.setData(path)
+            a.triggered.connect(lambda _=False, p=path: self.open_recent(p))
+        if files:
+            menu.addSeparator()
+            menu.addAction("Clear list", self._clear_recent)
+        else:
+            menu.addAction("(no recent files)").setEnabled(False)
+
+    def _clear_recent(self):
+        self.settings.clear_recent()
+        self._fill_recent_menu()
+
+    def open_recent(self, path):
+        """Open a file of File > Open Recent; a file since moved or deleted is taken off the list."""
+        if not Path(path).is_file():
+            self.settings.remove_recent(path)
+            self._fill_recent_menu()
+            self.show_error(f"{Path(path).name} is no longer there ({path}); it was taken off the recent files.")
+            return None
+        self.last_dir = str(Path(path).parent)
+        return self.open_source(path)
 
     # ------------------------------------------------------------------ data
     def set_manifold(self, manifold, *, source: dict | None = None) -> None:
@@ -146,6 +211,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def open_source(self, path=None, *, preset: str = "default", session: dict | None = None):
         """Load a manifold / corpus file (or the synthetic talker) in a worker; returns the runner."""
         from app.source_loading import load_source
+        from app.user_messages import plain_errors
         from app.views.task_progress import attach_status_progress
         from app.workers import run_task
 
@@ -155,7 +221,8 @@ class MainWindow(QtWidgets.QMainWindow):
         what = Path(path).name if path else f"the synthetic talker ({preset})"
         self.statusBar().showMessage(f"loading {what}…")
         # no modal dialog: the window stays usable; progress and Cancel sit in the status bar
-        self._runner = run_task(lambda progress: load_source(path, preset, progress), parent=self,
+        task = plain_errors(lambda progress: load_source(path, preset, progress), doing=f"open {what}", path=path)
+        self._runner = run_task(task, parent=self,
                                 title=f"Loading {what}", on_done=self._on_loaded, on_error=self._on_load_error,
                                 on_cancel=lambda: self.statusBar().showMessage("loading cancelled", 5000),
                                 dialog=False)
@@ -165,6 +232,9 @@ class MainWindow(QtWidgets.QMainWindow):
     def _on_loaded(self, result):
         manifold, source = result
         self.set_manifold(manifold, source=source)
+        if source.get("path"):
+            self.settings.add_recent(source["path"])
+            self._fill_recent_menu()
         warned = self._runner.warnings
         if warned:  # e.g. a disconnected state graph: keep it on screen, not "ready"
             self.statusBar().showMessage(f"loaded with a warning: {warned[-1]}", 30000)
@@ -172,11 +242,21 @@ class MainWindow(QtWidgets.QMainWindow):
             self.statusBar().showMessage("ready", 3000)
         if self._pending_session is not None:
             d, self._pending_session = self._pending_session, None
-            self.apply_session(d)
+            # a session that does not fit what was loaded: a dialog, not a traceback in the slot
+            self._report(lambda: self.apply_session(d), "session restored", "restore the session")
 
     def _on_load_error(self, message, _tb):
         self.statusBar().showMessage("loading failed", 5000)
-        QtWidgets.QMessageBox.critical(self, "Lipspace", f"Could not load: {message}")
+        self.show_error(message)
+
+    def show_error(self, message: str) -> None:
+        """A plain-language error dialog (``message`` from :func:`app.user_messages.user_message`)."""
+        self.last_error_message = message
+        box = QtWidgets.QMessageBox(QtWidgets.QMessageBox.Icon.Critical, "Lipspace", message,
+                                    QtWidgets.QMessageBox.StandardButton.Ok, self)
+        box.setObjectName("error_dialog")
+        box.setAttribute(QtCore.Qt.WidgetAttribute.WA_DeleteOnClose)
+        box.open()
 
     def open_dialog(self):
         path, _ = QtWidgets.QFileDialog.getOpenFileName(
@@ -215,8 +295,7 @@ class MainWindow(QtWidgets.QMainWindow):
         targets = apply_session(self.state, d)
         self.editor.apply_settings(d.get("extra", {}).get("editor", {}))
         if targets is not None:  # the editor's (edited) key targets
-            self.editor.targets = targets
-            self.editor.timeline.set_targets(targets)
+            self.editor.restore_targets(targets)
         cams = d.get("cameras", {})
         if "manifold" in cams:
             self.manifold_view.set_camera(cams["manifold"])
@@ -242,53 +321,68 @@ class MainWindow(QtWidgets.QMainWindow):
         if path:
             if not path.endswith(".json"):
                 path += ".lipspace.json"
-            self._report(lambda: self.save_session(path), f"session saved to {path}")
+            self._report(lambda: self.save_session(path), f"session saved to {path}", "save the session")
 
     def open_session_dialog(self):
         path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Open session", self.last_dir,
                                                         "Lipspace session (*.json);;All files (*)")
         if path:
-            self._report(lambda: self.open_session(path), f"session {Path(path).name} opened")
+            self._report(lambda: self.open_session(path), f"session {Path(path).name} opened", "open the session")
 
-    def _report(self, fn, ok_message):
+    def _report(self, fn, ok_message, doing="finish that"):
+        from app.user_messages import user_message
+
         try:
             fn()
-        except (ValueError, OSError, RuntimeError) as exc:
-            QtWidgets.QMessageBox.critical(self, "Lipspace", str(exc))
+        except (ValueError, OSError, RuntimeError, KeyError, IndexError, TypeError, MemoryError) as exc:
+            self.show_error(user_message(exc, doing=doing))
             return False
         self.statusBar().showMessage(ok_message, 5000)
         return True
 
     # ------------------------------------------------------------------ exports
-    def export_view(self, which: str, path) -> Path:
-        """Save the manifold or lip view as PNG (raster) or SVG/PDF (vector, via VTK's gl2ps)."""
+    def export_view(self, which: str, path, *, dpi=None) -> Path:
+        """Save the manifold or lip view as PNG (at ``dpi``) or SVG/PDF (vector, from the scene's data)."""
         from app.figures import save_plotter_image, save_plotter_vector
 
         plotter = {"manifold": self.manifold_view.plotter, "lips": self.lip_view.plotter}[which]
         if Path(path).suffix.lower() == ".png":
-            return save_plotter_image(plotter, path)
+            return save_plotter_image(plotter, path, dpi=dpi)
         return save_plotter_vector(plotter, path)
 
     def export_view_dialog(self, which):
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, f"Export {which} view", self.last_dir,
-                                                        "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)")
+        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, f"Export {which} view", self.last_dir,
+                                                             "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)")
         if path:
-            self._report(lambda: self.export_view(which, path), f"wrote {path}")
+            from app.figures.export import suffix_from_filter
+
+            path, dpi = suffix_from_filter(path, chosen), None
+            if path.suffix.lower() == ".png":
+                dpi, ok = QtWidgets.QInputDialog.getInt(self, "PNG resolution", "Dots per inch (96 = as on screen):",
+                                                        150, 30, 1200, 10)
+                if not ok:
+                    return
+            self._report(lambda: self.export_view(which, path, dpi=dpi), f"wrote {path}", f"export the {which} view")
 
     def export_figure_dialog(self, name):
         if self.state.manifold is None:
             return
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, f"Export figure {name}",
-                                                        str(Path(self.last_dir) / f"{name}.png"),
-                                                        "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)")
+        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, f"Export figure {name}",
+                                                             str(Path(self.last_dir) / f"{name}.png"),
+                                                             "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)")
         if not path:
             return
+        from app.figures.export import suffix_from_filter
+
+        path = suffix_from_filter(path, chosen)
         from app.figures import UTTERANCE_FIGURES, export_figure
+        from app.user_messages import plain_errors
         from app.workers import run_task
 
         m = self.state.manifold
         opts = {"utterance": self.state.utterance} if (name in UTTERANCE_FIGURES and self.state.utterance) else {}
-        run_task(lambda progress: export_figure(name, m, path, **opts), parent=self, title=f"Rendering {name}",
+        run_task(plain_errors(lambda progress: export_figure(name, m, path, **opts), doing=f"write figure {name}"),
+                 parent=self, title=f"Rendering {name}",
                  on_done=lambda p: self.statusBar().showMessage(f"wrote {p}", 5000))
 
     def current_trajectory(self):
@@ -306,7 +400,8 @@ class MainWindow(QtWidgets.QMainWindow):
         if path:
             from app.trajectories import export_trajectory
 
-            self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}")
+            self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}",
+                         "export the trajectory")
 
     def export_animation(self, path, progress=None) -> list[Path]:
         """The current trajectory as a glTF morph animation (.glb/.gltf, WAV beside) or an MP4."""
@@ -332,7 +427,7 @@ class MainWindow(QtWidgets.QMainWindow):
                 raise Cancelled("export cancelled")
 
         try:
-            self._report(lambda: self.export_animation(path, progress), f"wrote {path}")
+            self._report(lambda: self.export_animation(path, progress), f"wrote {path}", "export the animation")
         except Cancelled:
             self.statusBar().showMessage("export cancelled; nothing was written", 5000)
         finally:
@@ -349,7 +444,7 @@ class MainWindow(QtWidgets.QMainWindow):
         path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export cluster table", self.last_dir,
                                                         "CSV table (*.csv)")
         if path:
-            self._report(lambda: self.export_clusters(path), f"wrote {path}")
+            self._report(lambda: self.export_clusters(path), f"wrote {path}", "export the cluster table")
 
     # ------------------------------------------------------------------ misc
     def reset_cameras(self):
@@ -359,16 +454,54 @@ class MainWindow(QtWidgets.QMainWindow):
         self.lip_view.plotter.reset_camera()
         self.lip_view.plotter.render()
 
+    def reset_layout(self) -> None:
+        """View > Reset layout: every dock back where it started, shown, at its first size."""
+        for dock in self.docks.values():
+            dock.setFloating(False)
+            dock.show()
+        self.restoreState(self._default_layout)
+        self.resizeDocks([self.docks["lips"]], [480], QtCore.Qt.Orientation.Horizontal)
+        self.resizeDocks([self.docks["editor"]], [230], QtCore.Qt.Orientation.Vertical)
+
+    def _show_help(self, title, page):
+        from app.help.browser import HelpBrowser
+
+        if self._help is None:
+            self._help = HelpBrowser(title, page, self)
+        self._help.setWindowTitle(title)
+        self._help.set_page(page)
+        self._help.show()
+        self._help.raise_()
+        return self._help
+
+    def show_user_guide(self):
+        """Help > User guide: the guide shipped with the program, in a help window."""
+        from app.help import user_guide_html
+
+        return self._show_help("Lipspace user guide", user_guide_html())
+
+    def show_shortcuts(self):
+        from app.help import shortcut_sheet_html
+
+        return self._show_help("Lipspace keyboard shortcuts", shortcut_sheet_html())
+
+    def about_text(self) -> str:
+        from app.help import about_html
+        from engine import __version__
+
+        return about_html(__version__)
+
     def _about(self):
-        QtWidgets.QMessageBox.about(
-            self, "About Lipspace",
-            "Lipspace explores the visual speech manifold (Edge, Hilton & Jackson): lip shape and velocity "
-            "in one low-dimensional space.\n\nClick a point to select its state and colour its future (or past) "
-            "hemisphere by hop distance; Shift-click a second point for the minimum-distance path.")
+        QtWidgets.QMessageBox.about(self, "About Lipspace", self.about_text())
 
     def closeEvent(self, event):
         from app.workers import cancel_all
 
+        self.settings.save_layout(self)
+        for box in self.findChildren(QtWidgets.QMessageBox):  # error dialogs left open go with the window
+            box.close()
+        if self._help is not None:
+            self._help.close()
         self._autosave_timer.stop()
         cancel_all()
         for view in (self.manifold_view, self.lip_view, self.editor, self.clusters, self.scree):
@@ -399,10 +532,11 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
     dialog); see :mod:`app.autosave`.
     """
     from app.autosave import Autosaver, resolve_recovery
+    from app.qt_app import make_application
     from app.session import SessionError
+    from app.user_messages import user_message
 
-    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
-    app.setApplicationName("Lipspace")
+    app = make_application(sys.argv[:1])
     autosaver = Autosaver()
     try:
         recovery = autosaver.begin()
@@ -415,7 +549,7 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
         try:
             restored = resolve_recovery(autosaver, recovery, restore=restore, ask=lambda r: ask_restore(r, win))
         except SessionError as exc:
-            QtWidgets.QMessageBox.warning(win, "Lipspace", str(exc))
+            QtWidgets.QMessageBox.warning(win, "Lipspace", user_message(exc, doing="restore the autosaved session"))
             restored = None
         if restored is not None:
             session, path = restored, None

@@ -1,7 +1,9 @@
 """A trajectory the explorer shows, as lip frames and as files (Qt-free).
 
-The lip view plays :func:`lip_frames`, the window's File > Export trajectory writes
-through :func:`export_trajectory`, the animation export renders :func:`lip_frames`.
+The trajectory editor makes one from key targets with :func:`synthesize_targets` and
+scores it with :func:`trajectory_error`; the lip view plays :func:`lip_frames`, the
+window's File > Export trajectory writes through :func:`export_trajectory`, the
+animation export renders :func:`lip_frames`.
 """
 from __future__ import annotations
 
@@ -9,7 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["lip_frames", "trajectory_table", "export_trajectory"]
+__all__ = ["lip_frames", "trajectory_table", "export_trajectory", "synthesize_targets", "trajectory_error",
+           "METHOD_LABELS"]
+
+METHOD_LABELS = {"manifold": "Manifold (max-probability path)", "linear": "Linear interpolation (X)",
+                 "cubic": "Cubic spline (X)", "unitselection": "Unit selection"}
 
 
 
@@ -60,3 +66,44 @@ def export_trajectory(manifold, traj, path) -> list[Path]:
                                    prefix=path.stem, clear=True)
     raise ValueError(f"{path}: cannot export a trajectory as {suf or 'a file without a suffix'!r}; "
                      "use .csv, .npy, .obj or .ply")
+
+
+def synthesize_targets(manifold, targets, method: str, synthesizers: dict | None = None):
+    """Run synthesis method ``method`` on ``targets``; returns (TrajectoryData, engine Trajectory).
+
+    The manifold method runs with ``strict=False`` so a target that cannot be reached
+    in time is undershot (and said so in the trajectory's warnings) instead of failing.
+    ``synthesizers`` caches fitted synthesisers per method.
+    """
+    from app.state import TrajectoryData
+    from engine.synthesis import make_synthesizer
+
+    cache = synthesizers if synthesizers is not None else {}
+    if method not in cache:
+        params = {"strict": False} if method == "manifold" else {}
+        cache[method] = make_synthesizer(method, manifold, **params)
+    traj = cache[method].synthesize(targets)
+    Y = traj.Fy
+    if Y is None:  # methods that move in X: place them in Y out of sample
+        Y = manifold.project(traj.frames(manifold))
+    data = TrajectoryData(Y=np.asarray(Y, np.float32), Fx=np.asarray(traj.Fx, np.float32), frames=None,
+                          label=METHOD_LABELS.get(method, method).split(" (")[0], rate=float(targets.rate),
+                          extra={"method": method, "warnings": list(traj.warnings),
+                                 "target_frames": np.asarray(traj.target_frames)})
+    return data, traj
+
+
+def trajectory_error(manifold, synthetic, original) -> dict:
+    """Error of a synthetic trajectory against the captured original, as ``lipspace evaluate`` scores it.
+
+    The first ``n = min(len(synthetic), len(original))`` frames are compared through
+    :func:`engine.evaluation.trajectory_errors`, so the editor's readout and the
+    evaluation table are the same numbers. Returns its dict: ``rmse_x`` (root mean
+    square over frames of the Euclidean error in X), ``mean_point_error`` and
+    ``max_point_error`` (per-point Euclidean error in the corpus's units), ``frames``.
+    """
+    from engine.evaluation import trajectory_errors
+
+    n = min(len(synthetic), len(original))
+    frames = manifold.corpus_.frames[np.asarray(original.frames[:n])]
+    return trajectory_errors(manifold, np.asarray(synthetic.Fx[:n]), frames)

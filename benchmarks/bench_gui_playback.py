@@ -142,7 +142,7 @@ def main():
     c = m.corpus_
     u = max(c.utterances, key=lambda u: u.stop - u.start)
     from engine import targets as T
-    from app.views.trajectory_editor import synthesize_targets
+    from app.trajectories import synthesize_targets
 
     win.state.set_utterance(u.id)
     data, _ = synthesize_targets(m, T.targets_from_utterance(m, u.id, on_collision="merge"), "linear")

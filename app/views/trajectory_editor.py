@@ -4,188 +4,46 @@ Targets come from a corpus utterance (its phone mid-points, with their oracle
 states: the paper's Fig. 3 experiment), typed English text, a phone string with
 durations (``p 0.08 ax 0.05 ...``) or a TextGrid / .lab file, and from clicked
 states: "Add clicked state" (Ctrl+T) inserts a target holding the selected state at
-the playback cursor, or after the last target. Dragging a target marker moves its frame. The synthetic trajectory is drawn red in the manifold view
-and played beside the original in the lip view; for an utterance the error
-against the captured original is shown.
+the playback cursor, or after the last target. Dragging a target marker moves its
+frame, inside its phone interval (:mod:`app.target_editing`); "Remove target" (Delete)
+and "Reset targets" (back to the targets as loaded) complete the edits, each one a
+command on :attr:`TrajectoryEditor.undo_stack` (the window's Edit > Undo / Redo).
+The timeline zooms (wheel, + / -, Fit), shows time in ms, and with the keyboard focus
+plays (Space) and steps (Left / Right) through :class:`app.state.AppState`'s playback.
+The synthetic trajectory is drawn red in the manifold view and played beside the
+original in the lip view; for an utterance the error against the captured original
+is shown, and every synthesis warning is listed under the timeline.
 """
 from __future__ import annotations
 
-from dataclasses import replace
-
-import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.state import TrajectoryData
+from app.target_editing import remove_target
+from app.trajectories import METHOD_LABELS, synthesize_targets, trajectory_error
 from app.views._common import connect_all, disconnect_all, Throttle
+from app.views.phone_timeline import PhoneTimeline
 
-__all__ = ["TrajectoryEditor", "PhoneTimeline", "synthesize_targets", "trajectory_error", "move_target"]
+__all__ = ["TrajectoryEditor", "TargetsEdit", "ZOOM_RANGE", "ADD_STATE_SHORTCUT", "REMOVE_SHORTCUT"]
 
 SOURCES = (("utterance", "Utterance"), ("text", "Text"), ("phones", "Phones + durations"), ("textgrid", "TextGrid"))
 ADD_STATE_SHORTCUT = "Ctrl+T"
-METHOD_LABELS = {"manifold": "Manifold (max-probability path)", "linear": "Linear interpolation (X)",
-                 "cubic": "Cubic spline (X)", "unitselection": "Unit selection"}
+REMOVE_SHORTCUT = "Delete"
+#: timeline zoom: times the width that shows the whole trajectory
+ZOOM_RANGE = (1.0, 64.0)
 
 
-# ============================================================================ pure helpers
-def move_target(targets, index: int, frame: int):
-    """A copy of ``targets`` with target ``index`` moved to ``frame``, clamped between its neighbours."""
-    ts = list(targets.targets)
-    lo = ts[index - 1].frame + 1 if index > 0 else 0
-    hi = ts[index + 1].frame - 1 if index + 1 < len(ts) else targets.n_frames - 1
-    f = int(np.clip(int(frame), lo, max(lo, hi)))
-    ts[index] = replace(ts[index], frame=f)
-    return replace(targets, targets=tuple(ts))
+class TargetsEdit(QtGui.QUndoCommand):
+    """One edit of the key targets (move, add, remove, reset) on the editor's undo stack."""
 
+    def __init__(self, editor, before, after, text: str):
+        super().__init__(text)
+        self.editor, self.before, self.after = editor, before, after
 
-def synthesize_targets(manifold, targets, method: str, synthesizers: dict | None = None):
-    """Run synthesis method ``method`` on ``targets``; returns (TrajectoryData, engine Trajectory).
+    def redo(self):
+        self.editor._apply_targets(self.after, f"{self.text()}: press Synthesise")
 
-    The manifold method runs with ``strict=False`` so a target that cannot be reached
-    in time is undershot (and said so in the trajectory's warnings) instead of failing.
-    ``synthesizers`` caches fitted synthesisers per method.
-    """
-    from engine.synthesis import make_synthesizer
-
-    cache = synthesizers if synthesizers is not None else {}
-    if method not in cache:
-        params = {"strict": False} if method == "manifold" else {}
-        cache[method] = make_synthesizer(method, manifold, **params)
-    traj = cache[method].synthesize(targets)
-    Y = traj.Fy
-    if Y is None:  # methods that move in X: place them in Y out of sample
-        Y = manifold.project(traj.frames(manifold))
-    data = TrajectoryData(Y=np.asarray(Y, np.float32), Fx=np.asarray(traj.Fx, np.float32), frames=None,
-                          label=METHOD_LABELS.get(method, method).split(" (")[0], rate=float(targets.rate),
-                          extra={"method": method, "warnings": list(traj.warnings),
-                                 "target_frames": np.asarray(traj.target_frames)})
-    return data, traj
-
-
-def trajectory_error(manifold, synthetic, original) -> dict:
-    """Error of a synthetic trajectory against the captured original, as ``lipspace evaluate`` scores it.
-
-    The first ``n = min(len(synthetic), len(original))`` frames are compared through
-    :func:`engine.evaluation.trajectory_errors`, so the editor's readout and the
-    evaluation table are the same numbers. Returns its dict: ``rmse_x`` (root mean
-    square over frames of the Euclidean error in X), ``mean_point_error`` and
-    ``max_point_error`` (per-point Euclidean error in the corpus's units), ``frames``.
-    """
-    from engine.evaluation import trajectory_errors
-
-    n = min(len(synthetic), len(original))
-    frames = manifold.corpus_.frames[np.asarray(original.frames[:n])]
-    return trajectory_errors(manifold, np.asarray(synthetic.Fx[:n]), frames)
-
-
-# ============================================================================ timeline widget
-class PhoneTimeline(QtWidgets.QWidget):
-    """Phone intervals as boxes, targets as draggable triangles, the playback position as a line.
-
-    Signals ``targetsChanged(object)`` with the new TargetSequence after a drag.
-    """
-
-    targetsChanged = QtCore.Signal(object)
-    MARGIN = 8
-    GRAB = 7
-
-    def __init__(self, parent=None):
-        super().__init__(parent)
-        self.targets = None
-        self.cursor = None
-        self._drag = None
-        self.setMinimumHeight(74)
-        self.setMouseTracking(True)
-        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Fixed)
-
-    def set_targets(self, targets) -> None:
-        self.targets = targets
-        self._drag = None
-        self.update()
-
-    def set_cursor(self, frame) -> None:
-        self.cursor = frame
-        self.update()
-
-    # geometry
-    def _x(self, frame: float) -> float:
-        n = max(self.targets.n_frames - 1, 1)
-        return self.MARGIN + (self.width() - 2 * self.MARGIN) * frame / n
-
-    def _frame(self, x: float) -> int:
-        n = max(self.targets.n_frames - 1, 1)
-        return int(round((x - self.MARGIN) / max(self.width() - 2 * self.MARGIN, 1) * n))
-
-    def marker_x(self, index: int) -> float:
-        """Pixel x of target ``index`` (for tests and tools)."""
-        return self._x(self.targets.targets[index].frame)
-
-    def marker_y(self) -> float:
-        return self.height() - 14
-
-    def paintEvent(self, _event):
-        qp = QtGui.QPainter(self)
-        qp.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
-        qp.fillRect(self.rect(), QtGui.QColor("white"))
-        if self.targets is None:
-            qp.setPen(QtGui.QColor("gray"))
-            qp.drawText(self.rect(), QtCore.Qt.AlignmentFlag.AlignCenter, "no targets: choose an input and press Load")
-            return
-        t = self.targets
-        h = self.height()
-        top, box_h = 4, h - 34
-        for i, p in enumerate(t.phones):
-            x0, x1 = self._x(p.start * t.rate), self._x(p.end * t.rate)
-            qp.fillRect(QtCore.QRectF(x0, top, max(x1 - x0, 1), box_h),
-                        QtGui.QColor("#e8e8f0" if i % 2 else "#d4d8e8"))
-            qp.setPen(QtGui.QColor("#222"))
-            qp.drawText(QtCore.QRectF(x0, top, max(x1 - x0, 1), box_h), QtCore.Qt.AlignmentFlag.AlignCenter, p.label)
-        # time axis
-        qp.setPen(QtGui.QColor("#888"))
-        y_axis = top + box_h + 2
-        qp.drawLine(QtCore.QPointF(self.MARGIN, y_axis), QtCore.QPointF(self.width() - self.MARGIN, y_axis))
-        # targets
-        ym = self.marker_y()
-        for i, tg in enumerate(t.targets):
-            x = self._x(tg.frame)
-            col = QtGui.QColor("#c00000" if self._drag != i else "#ff7f00")
-            qp.setPen(QtGui.QPen(col, 1, QtCore.Qt.PenStyle.DashLine))
-            qp.drawLine(QtCore.QPointF(x, top), QtCore.QPointF(x, ym - 6))
-            qp.setPen(QtCore.Qt.PenStyle.NoPen)
-            qp.setBrush(col)
-            qp.drawPolygon(QtGui.QPolygonF([QtCore.QPointF(x, ym - 6), QtCore.QPointF(x - 6, ym + 6),
-                                            QtCore.QPointF(x + 6, ym + 6)]))
-        if self.cursor is not None:
-            qp.setPen(QtGui.QPen(QtGui.QColor("black"), 2))
-            x = self._x(self.cursor)
-            qp.drawLine(QtCore.QPointF(x, 0), QtCore.QPointF(x, h))
-        qp.end()
-
-    def _hit(self, pos) -> int | None:
-        if self.targets is None or abs(pos.y() - self.marker_y()) > 12:
-            return None
-        xs = np.array([self._x(tg.frame) for tg in self.targets.targets])
-        if xs.size == 0:
-            return None
-        i = int(np.argmin(np.abs(xs - pos.x())))
-        return i if abs(xs[i] - pos.x()) <= self.GRAB else None
-
-    def mousePressEvent(self, ev):
-        self._drag = self._hit(ev.position())
-        self.update()
-
-    def mouseMoveEvent(self, ev):
-        if self._drag is None:
-            self.setCursor(QtCore.Qt.CursorShape.SizeHorCursor if self._hit(ev.position()) is not None
-                           else QtCore.Qt.CursorShape.ArrowCursor)
-            return
-        self.targets = move_target(self.targets, self._drag, self._frame(ev.position().x()))
-        self.update()
-
-    def mouseReleaseEvent(self, ev):
-        if self._drag is not None:
-            self._drag = None
-            self.update()
-            self.targetsChanged.emit(self.targets)
+    def undo(self):
+        self.editor._apply_targets(self.before, f"undone: {self.text()}")
 
 
 # ============================================================================ the editor
@@ -196,6 +54,9 @@ class TrajectoryEditor(QtWidgets.QWidget):
         super().__init__(parent)
         self.state = state
         self.targets = None
+        self.loaded_targets = None  # as loaded: what Reset targets goes back to
+        self.undo_stack = QtGui.QUndoStack(self)
+        self.zoom = 1.0
         self.synthesizers: dict = {}
         self._runner = None
         self.last_error = None
@@ -218,6 +79,20 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.add_state_btn.setToolTip(f"Insert a target holding the state selected in the manifold view at the "
                                       f"playback cursor, or after the last target ({ADD_STATE_SHORTCUT})")
         self.add_state_btn.setEnabled(False)
+        self.remove_btn = QtWidgets.QPushButton("Remove target")
+        self.remove_btn.setToolTip(f"Remove the chosen target (click its triangle first; {REMOVE_SHORTCUT} in the "
+                                   "timeline)")
+        self.reset_btn = QtWidgets.QPushButton("Reset targets")
+        self.reset_btn.setToolTip("Back to the targets as loaded (undo with Ctrl+Z)")
+        self.zoom_in_btn = QtWidgets.QToolButton()
+        self.zoom_in_btn.setText("+")
+        self.zoom_in_btn.setToolTip("Zoom the timeline in (or the mouse wheel over it)")
+        self.zoom_out_btn = QtWidgets.QToolButton()
+        self.zoom_out_btn.setText("−")
+        self.zoom_out_btn.setToolTip("Zoom the timeline out")
+        self.fit_btn = QtWidgets.QToolButton()
+        self.fit_btn.setText("Fit")
+        self.fit_btn.setToolTip("Show the whole trajectory")
         self.method_box = QtWidgets.QComboBox()
         self.synth_btn = QtWidgets.QPushButton("Synthesise")
         self.play_btn = QtWidgets.QPushButton("Play")
@@ -225,6 +100,18 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.readout.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
         self.readout.setWordWrap(True)
         self.timeline = PhoneTimeline()
+        self.scroll = QtWidgets.QScrollArea()
+        self.scroll.setWidget(self.timeline)
+        self.scroll.setWidgetResizable(False)
+        self.scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)
+        self.scroll.setVerticalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.scroll.setFixedHeight(PhoneTimeline.HEIGHT + self.scroll.horizontalScrollBar().sizeHint().height() + 4)
+        self.scroll.setMinimumWidth(200)
+        self.scroll.viewport().installEventFilter(self)
+        self.warnings_list = QtWidgets.QListWidget()
+        self.warnings_list.setToolTip("Every warning of the last synthesis")
+        self.warnings_list.setMaximumHeight(72)
+        self.warnings_list.setVisible(False)
 
         row1 = QtWidgets.QHBoxLayout()
         for w in (QtWidgets.QLabel("Input:"), self.source_box, self.utt_box, self.text_edit, self.browse_btn,
@@ -233,14 +120,18 @@ class TrajectoryEditor(QtWidgets.QWidget):
         row1.setStretchFactor(self.text_edit, 1)
         row1.addStretch(0)
         row2 = QtWidgets.QHBoxLayout()
-        for w in (QtWidgets.QLabel("Method:"), self.method_box, self.synth_btn, self.play_btn):
+        for w in (QtWidgets.QLabel("Method:"), self.method_box, self.synth_btn, self.play_btn, self.remove_btn,
+                  self.reset_btn, QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn, self.fit_btn):
             row2.addWidget(w)
         row2.addWidget(self.readout, 1)
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
+        lay.setSpacing(3)
         lay.addLayout(row1)
-        lay.addWidget(self.timeline)
+        lay.addWidget(self.scroll)
+        lay.addWidget(self.warnings_list)
         lay.addLayout(row2)
+        lay.addStretch(1)
 
         self.source_box.currentIndexChanged.connect(lambda _i: self._sync_inputs())
         self.utt_box.activated.connect(lambda _i: self.load())
@@ -251,12 +142,23 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.oracle_box.toggled.connect(lambda _on: self.load() if self.source == "utterance" else None)
         self.synth_btn.clicked.connect(self.synthesize)
         self.play_btn.clicked.connect(lambda: self.state.set_playing(True))
+        self.remove_btn.clicked.connect(self.remove_selected)
+        self.reset_btn.clicked.connect(self.reset_targets)
+        self.zoom_in_btn.clicked.connect(lambda: self.zoom_by(1.25))
+        self.zoom_out_btn.clicked.connect(lambda: self.zoom_by(0.8))
+        self.fit_btn.clicked.connect(lambda: self.set_zoom(1.0))
         self.timeline.targetsChanged.connect(self._on_dragged)
+        self.timeline.selectionChanged.connect(lambda _i: self._sync_buttons())
+        self.timeline.deleteRequested.connect(self.remove_selected)
+        self.timeline.playToggled.connect(self.toggle_playing)
+        self.timeline.stepRequested.connect(self.step)
+        self.timeline.zoomRequested.connect(lambda f, x: self.zoom_by(f, x))
         ev = state.events
         # the cursor follows playback a few times a second (each repaint composes the whole window)
         self._cursor_readout = Throttle(self.timeline.set_cursor, 0.2, parent=self)
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.playback, self._cursor_readout),
                              (ev.utterance, self._on_utterance),
+                             (ev.trajectory, lambda _o, syn: self._show_warnings(syn)),
                              (ev.state, lambda st: self.add_state_btn.setEnabled(st is not None))]
         connect_all(self._connections)
         self.rebuild()  # fills the methods once a manifold is there
@@ -309,7 +211,10 @@ class TrajectoryEditor(QtWidgets.QWidget):
             self._fill_methods()
         self.synthesizers = {}
         self.targets = None
+        self.loaded_targets = None
+        self.undo_stack.clear()
         self.timeline.set_targets(None)
+        self._sync_buttons()
         self.utt_box.blockSignals(True)
         self.utt_box.clear()
         if m is not None:
@@ -384,26 +289,118 @@ class TrajectoryEditor(QtWidgets.QWidget):
             tg = self.state.selected_state_target(self.targets, frame=cursor)
         except ValueError as exc:
             return self._show_error(exc)
-        return self._set_targets(tg, f"state {self.state.state} added as a target: {len(tg.targets)} targets "
-                                     f"over {tg.n_frames} frames; press Synthesise")
+        self.edit_targets(tg, f"add state {self.state.state}")
+        self.readout.setText(f"state {self.state.state} added as a target: {len(tg.targets)} targets over "
+                             f"{tg.n_frames} frames; press Synthesise")
+        return True
 
     def _show_error(self, exc) -> bool:
-        self.readout.setText(f"<span style='color:#b00'>{exc}</span>")
+        import html
+
+        from app.user_messages import user_message
+
+        text = user_message(exc, doing="make targets") if isinstance(exc, BaseException) else str(exc)
+        self.readout.setText(f"<span style='color:#b00'>{html.escape(text)}</span>")
         return False
 
     def _set_targets(self, targets, message: str) -> bool:
+        """New targets from an input (Load): the baseline of Reset; the undo history starts again."""
+        self.undo_stack.clear()
+        self.loaded_targets = targets
+        self._apply_targets(targets, message)
+        return True
+
+    def restore_targets(self, targets, message: str = "targets restored from the session") -> None:
+        """Targets from a session file (as edited then): shown, with a fresh undo history."""
+        self._set_targets(targets, message)
+
+    def _apply_targets(self, targets, message: str) -> None:
         self.targets = targets
         self.timeline.set_targets(targets)
         self.readout.setText(message)
+        self._sync_buttons()
+
+    def edit_targets(self, targets, text: str) -> None:
+        """Replace the targets by an edit ``text`` ("move target 3") that Edit > Undo takes back."""
+        self.undo_stack.push(TargetsEdit(self, self.targets, targets, text))
+
+    def _sync_buttons(self) -> None:
+        t = self.targets
+        self.remove_btn.setEnabled(t is not None and self.timeline.selected is not None and len(t.targets) > 1)
+        self.reset_btn.setEnabled(self.loaded_targets is not None and t != self.loaded_targets)
+
+    def _on_dragged(self, before, after):
+        i = self.timeline.selected
+        label = after.targets[i].label if i is not None else ""
+        self.undo_stack.push(TargetsEdit(self, before, after, f"move target {'' if i is None else i + 1}"
+                                                              f"{f' ({label})' if label else ''}"))
+
+    def remove_selected(self) -> bool:
+        """Remove the target chosen in the timeline (an undoable edit)."""
+        i = self.timeline.selected
+        if self.targets is None or i is None:
+            return self._show_error("choose a target first: click its triangle in the timeline")
+        try:
+            tg = remove_target(self.targets, i)
+        except (ValueError, IndexError) as exc:
+            return self._show_error(exc)
+        self.timeline.select(None)
+        self.edit_targets(tg, f"remove target {i + 1}")
         return True
 
-    def _on_dragged(self, targets):
-        self.targets = targets
-        self.readout.setText("targets moved: press Synthesise")
+    def reset_targets(self) -> bool:
+        """Back to the targets as loaded (an undoable edit)."""
+        if self.loaded_targets is None or self.targets == self.loaded_targets:
+            return False
+        self.edit_targets(self.loaded_targets, "reset targets")
+        return True
+
+    # ------------------------------------------------------------------ timeline zoom and keys
+    def set_zoom(self, zoom: float, anchor_x: float | None = None) -> float:
+        """Show the timeline ``zoom`` times as wide as the view (clamped to :data:`ZOOM_RANGE`).
+
+        ``anchor_x`` (a pixel of the timeline) stays under the same time.
+        """
+        lo, hi = ZOOM_RANGE
+        tl, bar = self.timeline, self.scroll.horizontalScrollBar()
+        anchor = None
+        if anchor_x is not None:
+            anchor = (tl.frame_at(anchor_x), anchor_x - bar.value())  # (time, pixel on screen)
+        self.zoom = float(min(max(zoom, lo), hi))
+        view_w = self.scroll.viewport().width()
+        tl.resize(max(int(round(view_w * self.zoom)), 1), PhoneTimeline.HEIGHT)
+        if anchor is not None and tl.targets is not None:
+            bar.setValue(int(round(tl._x(anchor[0]) - anchor[1])))
+        return self.zoom
+
+    def zoom_by(self, factor: float, anchor_x: float | None = None) -> float:
+        if anchor_x is None:
+            bar = self.scroll.horizontalScrollBar()
+            anchor_x = bar.value() + self.scroll.viewport().width() / 2
+        return self.set_zoom(self.zoom * factor, anchor_x)
+
+    def eventFilter(self, obj, ev):
+        if obj is self.scroll.viewport() and ev.type() == QtCore.QEvent.Type.Resize:
+            self.set_zoom(self.zoom)
+        return super().eventFilter(obj, ev)
+
+    def toggle_playing(self) -> None:
+        """Space in the timeline: play or pause (through the state, as the Play buttons do)."""
+        self.state.set_playing(not self.state.playing)
+
+    def step(self, delta: int) -> None:
+        """Left / Right in the timeline: pause and show the previous / next frame."""
+        s = self.state
+        if s.n_playback == 0:
+            return
+        s.set_playing(False)
+        k = 0 if s.playback is None else s.playback + int(delta)
+        s.set_playback(min(max(k, 0), s.n_playback - 1))
 
     # ------------------------------------------------------------------ synthesis
     def synthesize(self):
         """Synthesise the current targets with the chosen method in a worker thread."""
+        from app.user_messages import plain_errors
         from app.workers import run_task
 
         if self.targets is None and not self.load():
@@ -424,7 +421,8 @@ class TrajectoryEditor(QtWidgets.QWidget):
 
         self.synth_btn.setEnabled(False)
         self.readout.setText(f"synthesising with {method}…")
-        self._runner = run_task(task, parent=self, title="Synthesising", on_done=self._on_synth,
+        self._runner = run_task(plain_errors(task, doing=f"synthesise with {method}"), parent=self,
+                                title="Synthesising", on_done=self._on_synth,
                                 on_error=self._on_synth_error, on_cancel=lambda: self._on_synth_error("cancelled", ""))
         return self._runner
 
@@ -438,13 +436,23 @@ class TrajectoryEditor(QtWidgets.QWidget):
                      f"/ max {err['max_point_error']:.3g} (corpus units)")
         warns = data.extra.get("warnings") or []
         if warns:
-            text += f"; {len(warns)} warning(s): {warns[0]}"
+            text += f"; {len(warns)} warning{'s' * (len(warns) != 1)}, listed above"
         self.last_error = err
         self.readout.setText(text)
 
+    def _show_warnings(self, synthetic) -> None:
+        """List every warning of the synthetic trajectory shown (none: the list hides)."""
+        warns = [] if synthetic is None else [str(w) for w in (synthetic.extra or {}).get("warnings") or []]
+        self.warnings_list.clear()
+        for w in warns:
+            self.warnings_list.addItem(f"⚠ {w}")
+        self.warnings_list.setVisible(bool(warns))
+
     def _on_synth_error(self, message, _tb=""):
         self.synth_btn.setEnabled(True)
-        self.readout.setText(f"<span style='color:#b00'>synthesis failed: {message}</span>")
+        import html
+
+        self.readout.setText(f"<span style='color:#b00'>synthesis failed: {html.escape(message)}</span>")
 
     def settings(self) -> dict:
         """Editor settings for session files."""

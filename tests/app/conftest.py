@@ -77,3 +77,15 @@ def pytest_runtest_setup(item):
 def app_manifold(small_manifold):
     """The small synthetic manifold shared by the app tests (built once per session)."""
     return small_manifold
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _window_settings_in_tmp(tmp_path_factory):
+    """Windows of the tests keep geometry, layout and recent files in a temporary folder, not the user's."""
+    old = os.environ.get("LIPSPACE_CONFIG_DIR")
+    os.environ["LIPSPACE_CONFIG_DIR"] = str(tmp_path_factory.mktemp("config"))
+    yield
+    if old is None:
+        os.environ.pop("LIPSPACE_CONFIG_DIR", None)
+    else:
+        os.environ["LIPSPACE_CONFIG_DIR"] = old

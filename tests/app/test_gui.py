@@ -77,6 +77,7 @@ def test_click_selects_frame_colours_hemisphere_and_links_lips(win, qtbot, app_m
     m, view, s = app_manifold, win.manifold_view, win.state
     Y = np.asarray(m.Fy_[:, :3], np.float64)
     before = win.lip_view.main.points.copy()
+    s.set_horizon(None)  # every reachable state coloured (the default horizon dims states beyond it)
     i = _front_frame(view, Y)
     x, y = pick_display_point(view.plotter, Y[i])
     # a real mouse click on the VTK widget (Qt y runs down, VTK display y up from the window's bottom row)
@@ -104,8 +105,9 @@ def test_click_selects_frame_colours_hemisphere_and_links_lips(win, qtbot, app_m
     # past hemisphere recolours from the same state
     s.set_hemisphere("past")
     past = m.states_.past(s.state)[m.states_.labels_]
-    np.testing.assert_allclose(np.nan_to_num(view.handles["points"].values, nan=-1),
-                               np.nan_to_num(np.where(np.isfinite(past), past, np.nan), nan=-1))
+    # (past hops are shown signed, -1, -2, ...: one scale for the past and future hemispheres)
+    np.testing.assert_allclose(np.nan_to_num(view.handles["points"].values, nan=999),
+                               np.nan_to_num(np.where(np.isfinite(past), -past, np.nan), nan=999))
     # shift-click on a far state draws the minimum-distance path over centroids
     d = m.states_.future(s.state)
     far = int(np.flatnonzero(np.isfinite(d) & (d == np.nanmax(np.where(np.isfinite(d), d, np.nan))))[0])
@@ -356,7 +358,7 @@ def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
     from engine import targets as T
     from engine.io.meshfile import read_obj
     from app.trajectories import lip_frames
-    from app.views.trajectory_editor import synthesize_targets
+    from app.trajectories import synthesize_targets
 
     m, s = app_manifold, win.state
     u = m.corpus_.utterances[0]

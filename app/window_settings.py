@@ -1,0 +1,104 @@
+"""What the window remembers between runs: its geometry, the dock layout and the recent files (QSettings).
+
+Stored with :class:`QtCore.QSettings` in the user's configuration (INI format):
+``$LIPSPACE_CONFIG_DIR/lipspace.ini`` when that variable is set (tests point it at a
+temporary folder), else Qt's per-user location for organisation and application
+"Lipspace". Keys:
+
+``window/geometry``, ``window/state``
+    :meth:`QMainWindow.saveGeometry` / :meth:`QMainWindow.saveState` (docks: where,
+    how big, shown or hidden, tabbed), written when the window closes, restored when it
+    opens. ``window/layout_version`` guards the state: a layout saved by a build with
+    other docks is ignored rather than restored half.
+``recent/files``
+    Up to :data:`MAX_RECENT` paths of files opened, most recent first.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from PySide6 import QtCore
+
+__all__ = ["CONFIG_DIR_ENV", "MAX_RECENT", "LAYOUT_VERSION", "open_settings", "WindowSettings"]
+
+CONFIG_DIR_ENV = "LIPSPACE_CONFIG_DIR"
+MAX_RECENT = 10
+#: bump when the docks change, so that an old saved layout is not restored over new docks
+LAYOUT_VERSION = 1
+
+
+def open_settings() -> QtCore.QSettings:
+    """The user's Lipspace settings (``$LIPSPACE_CONFIG_DIR/lipspace.ini`` or Qt's user location)."""
+    env = os.environ.get(CONFIG_DIR_ENV)
+    if env:
+        return QtCore.QSettings(str(Path(env) / "lipspace.ini"), QtCore.QSettings.Format.IniFormat)
+    return QtCore.QSettings(QtCore.QSettings.Format.IniFormat, QtCore.QSettings.Scope.UserScope, "Lipspace",
+                            "lipspace")
+
+
+class WindowSettings:
+    """Geometry, dock layout and recent files of the main window.
+
+    Parameters
+    ----------
+    settings : QtCore.QSettings, optional
+        Where to keep them (default :func:`open_settings`).
+    """
+
+    def __init__(self, settings: QtCore.QSettings | None = None):
+        self.qsettings = settings if settings is not None else open_settings()
+
+    # ------------------------------------------------------------------ layout
+    def save_layout(self, window) -> None:
+        """Remember ``window``'s geometry and dock layout."""
+        s = self.qsettings
+        s.setValue("window/geometry", window.saveGeometry())
+        s.setValue("window/state", window.saveState(LAYOUT_VERSION))
+        s.setValue("window/layout_version", LAYOUT_VERSION)
+        s.sync()
+
+    def restore_layout(self, window) -> bool:
+        """Restore what :meth:`save_layout` kept; False when nothing (usable) was saved."""
+        s = self.qsettings
+        geometry, state = s.value("window/geometry"), s.value("window/state")
+        try:
+            version = int(s.value("window/layout_version", -1))
+        except (TypeError, ValueError):
+            version = -1
+        if not isinstance(geometry, QtCore.QByteArray) or not isinstance(state, QtCore.QByteArray):
+            return False
+        if version != LAYOUT_VERSION:
+            return False
+        ok = window.restoreGeometry(geometry)
+        return bool(window.restoreState(state, LAYOUT_VERSION)) and bool(ok)
+
+    def forget_layout(self) -> None:
+        for key in ("window/geometry", "window/state", "window/layout_version"):
+            self.qsettings.remove(key)
+        self.qsettings.sync()
+
+    # ------------------------------------------------------------------ recent files
+    def recent_files(self) -> list[str]:
+        """Recently opened files, most recent first (at most :data:`MAX_RECENT`)."""
+        v = self.qsettings.value("recent/files", [])
+        if isinstance(v, str):  # QSettings gives one string for a one-element list in INI files
+            v = [v]
+        return [str(p) for p in (v or []) if p][:MAX_RECENT]
+
+    def add_recent(self, path) -> list[str]:
+        """Put ``path`` (made absolute) first in the recent files; returns the new list."""
+        p = str(Path(path).resolve())
+        files = [p] + [f for f in self.recent_files() if f != p]
+        self.qsettings.setValue("recent/files", files[:MAX_RECENT])
+        self.qsettings.sync()
+        return files[:MAX_RECENT]
+
+    def remove_recent(self, path) -> None:
+        p = str(Path(path).resolve())
+        self.qsettings.setValue("recent/files", [f for f in self.recent_files() if f != p])
+        self.qsettings.sync()
+
+    def clear_recent(self) -> None:
+        self.qsettings.setValue("recent/files", [])
+        self.qsettings.sync()

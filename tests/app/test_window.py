@@ -1,0 +1,229 @@
+"""The main window: remembered geometry and layout, Reset layout, recent files, a minimum size at which no
+dock collapses, the user guide, the shortcut sheet, About, sessions that keep the editor's work, and a
+quiet console (needs a display: Xvfb is started if absent)."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture(scope="module")
+def manifold_file(app_manifold, tmp_path_factory):
+    path = tmp_path_factory.mktemp("window") / "small.npz"
+    app_manifold.save(path)
+    return path
+
+
+def _settings(path):
+    from PySide6 import QtCore
+
+    from app.window_settings import WindowSettings
+
+    return WindowSettings(QtCore.QSettings(str(path), QtCore.QSettings.Format.IniFormat))
+
+
+def _window(qapp, settings, manifold=None):
+    from app.main_window import MainWindow
+
+    w = MainWindow(manifold, source={"path": None, "preset": "small"} if manifold is not None else None,
+                   settings=settings)
+    w.show()
+    for _ in range(5):
+        qapp.processEvents()
+    return w
+
+
+def test_geometry_and_dock_layout_are_remembered(qapp, tmp_path):
+    from PySide6 import QtCore
+
+    ini = tmp_path / "lipspace.ini"
+    w1 = _window(qapp, _settings(ini))
+    assert not w1.layout_restored  # nothing saved yet
+    size = (w1.minimumWidth() + 57, w1.minimumHeight() + 111)
+    w1.resize(*size)
+    w1.docks["clusters"].close()
+    w1.addDockWidget(QtCore.Qt.DockWidgetArea.LeftDockWidgetArea, w1.docks["lips"])
+    qapp.processEvents()
+    w1.close()
+    assert ini.is_file()
+
+    w2 = _window(qapp, _settings(ini))
+    try:
+        assert w2.layout_restored
+        assert (w2.width(), w2.height()) == size
+        assert w2.docks["clusters"].isHidden() and not w2.docks["scree"].isHidden()
+        assert w2.dockWidgetArea(w2.docks["lips"]) == QtCore.Qt.DockWidgetArea.LeftDockWidgetArea
+        # View > Reset layout: every dock back where it started, shown
+        reset = next(a for a in w2.menuBar().actions()[2].menu().actions() if a.text() == "Reset &layout")
+        reset.trigger()
+        qapp.processEvents()
+        assert all(not d.isHidden() and not d.isFloating() for d in w2.docks.values())
+        assert w2.dockWidgetArea(w2.docks["lips"]) == QtCore.Qt.DockWidgetArea.RightDockWidgetArea
+        assert w2.dockWidgetArea(w2.docks["editor"]) == QtCore.Qt.DockWidgetArea.BottomDockWidgetArea
+        assert w2.docks["scree"] in w2.tabifiedDockWidgets(w2.docks["clusters"])
+    finally:
+        w2.close()
+
+
+def test_at_its_minimum_size_every_dock_keeps_a_usable_size(qapp, app_manifold, tmp_path):
+    w = _window(qapp, _settings(tmp_path / "s.ini"), app_manifold)
+    try:
+        w.resize(1179, 407)  # where the Lips dock used to vanish
+        qapp.processEvents()
+        w.resize(1, 1)
+        for _ in range(5):
+            qapp.processEvents()
+        mn = w.minimumSize()
+        assert (w.width(), w.height()) == (mn.width(), mn.height())
+        assert mn.width() <= 1600 and mn.height() <= 1000  # still fits an ordinary screen
+        for key in ("clusters", "scree"):  # the tabbed pair: each in turn
+            w.docks[key].raise_()
+            for _ in range(3):
+                qapp.processEvents()
+            for k, dock in w.docks.items():
+                if k in ("clusters", "scree") and k != key:
+                    continue
+                view = dock.widget()
+                assert dock.isVisible() and view.isVisible(), k
+                assert view.width() >= view.minimumWidth() > 0 and view.height() >= view.minimumHeight() > 0, k
+        mv = w.manifold_view
+        assert mv.width() >= mv.minimumWidth() > 0 and mv.height() >= mv.minimumHeight() > 0
+        assert w.editor.timeline.isVisible() and w.editor.synth_btn.isVisible()
+    finally:
+        w.close()
+
+
+def test_recent_files_list_opened_files_and_drop_missing_ones(qapp, qtbot, tmp_path, manifold_file):
+    from app.window_settings import MAX_RECENT
+
+    settings = _settings(tmp_path / "s.ini")
+    w = _window(qapp, settings)
+    try:
+        assert [a.isEnabled() for a in w.recent_menu.actions()] == [False]  # "(no recent files)"
+        runner = w.open_source(str(manifold_file))
+        qtbot.waitUntil(lambda: runner.state != "running", timeout=60000)
+        assert runner.state == "done" and w.state.manifold is not None
+        assert settings.recent_files() == [str(manifold_file.resolve())]
+        w.recent_menu.aboutToShow.emit()
+        first = w.recent_menu.actions()[0]
+        assert first.data() == str(manifold_file.resolve()) and manifold_file.name in first.text()
+        gone = tmp_path / "gone.npz"
+        settings.add_recent(gone)
+        for i in range(MAX_RECENT + 3):
+            settings.add_recent(tmp_path / f"f{i}.npz")
+        assert len(settings.recent_files()) == MAX_RECENT
+        assert w.open_recent(str(gone)) is None
+        assert str(gone.resolve()) not in settings.recent_files()
+        assert "no longer there" in w.last_error_message
+    finally:
+        w.close()
+
+
+def test_user_guide_shortcut_sheet_and_about(qapp, tmp_path):
+    from PySide6 import QtGui
+
+    from app.help import CITATION, SHORTCUTS
+    from engine import __version__
+
+    w = _window(qapp, _settings(tmp_path / "s.ini"))
+    try:
+        help_menu = w.menuBar().actions()[-1].menu()
+        guide = next(a for a in help_menu.actions() if a.text() == "&User guide")
+        assert guide.shortcut() == QtGui.QKeySequence(QtGui.QKeySequence.StandardKey.HelpContents)
+        guide.trigger()
+        page = w._help.browser.toPlainText()
+        assert w._help.isVisible() and "Lipspace user guide" in page
+        for words in ("Trajectory editor", "Undo", "Reset layout", "Citing the method"):
+            assert words in page
+        assert not w._help.browser.openExternalLinks()
+        next(a for a in help_menu.actions() if a.text() == "&Keyboard shortcuts").trigger()
+        sheet = w._help.browser.toPlainText()
+        assert all(keys in sheet and what in sheet for keys, _where, what in SHORTCUTS)
+        # each window shortcut of the sheet is really bound to an action of the window
+        bound = {k.toString() for a in w.findChildren(QtGui.QAction) for k in a.shortcuts()}
+        for keys, where, _what in SHORTCUTS:
+            if where == "window":
+                assert keys in bound, keys
+        assert w.editor.add_state_btn.shortcut().toString() == next(k for k, _w, t in SHORTCUTS if "Add the selected state" in t)
+        about = w.about_text()
+        assert __version__ in about and "Edge" in about and "Hilton" in about and "Jackson" in about
+        assert "Parameterisation of Speech Lip Movements" in about and "Parameterisation" in CITATION
+    finally:
+        w.close()
+
+
+def test_a_session_keeps_the_edited_targets_and_the_synthesised_trajectory(qapp, qtbot, tmp_path, app_manifold):
+    from PySide6 import QtCore
+
+    w1 = _window(qapp, _settings(tmp_path / "a.ini"), app_manifold)
+    w2 = None
+    try:
+        ed = w1.editor
+        assert ed.set_text("m 0.2 aa 0.3 p 0.2", source="phones")
+        tl = ed.timeline
+        start = QtCore.QPoint(int(tl.marker_x(1)), int(tl.marker_y()))
+        qtbot.mousePress(tl, QtCore.Qt.MouseButton.LeftButton, pos=start)
+        qtbot.mouseMove(tl, start + QtCore.QPoint(30, 0))
+        qtbot.mouseRelease(tl, QtCore.Qt.MouseButton.LeftButton, pos=start + QtCore.QPoint(30, 0))
+        edited = list(ed.targets.frames)
+        ed.set_method("linear")
+        runner = ed.synthesize()
+        qtbot.waitUntil(lambda: runner.state != "running", timeout=60000)
+        syn = w1.state.synthetic
+        assert syn is not None and list(syn.extra["target_frames"]) == edited
+        path = w1.save_session(tmp_path / "work.lipspace.json")
+
+        w2 = _window(qapp, _settings(tmp_path / "b.ini"), app_manifold)
+        assert w2.editor.targets is None and w2.state.synthetic is None
+        assert w2.open_session(path) is None  # same source: applied at once
+        assert list(w2.editor.targets.frames) == edited
+        assert [t.label for t in w2.editor.targets.targets] == [t.label for t in ed.targets.targets]
+        got = w2.state.synthetic
+        np.testing.assert_array_equal(got.Fx, syn.Fx)
+        np.testing.assert_array_equal(got.Y, syn.Y)
+        assert got.extra["method"] == "linear" and w2.editor.method == "linear"
+        assert w2.editor.undo_stack.count() == 0  # a restored session starts a new history
+    finally:
+        w1.close()
+        if w2 is not None:
+            w2.close()
+
+
+def test_started_and_closed_window_leaves_the_console_quiet(manifold_file, tmp_path):
+    script = textwrap.dedent("""
+        import sys
+        from PySide6 import QtCore, QtWidgets
+        from app.main_window import MainWindow
+
+        show = MainWindow.show
+
+        def show_then_close(self):
+            show(self)
+
+            def poll():
+                if self.state.manifold is not None:
+                    self.close()
+                else:
+                    QtCore.QTimer.singleShot(50, poll)
+
+            QtCore.QTimer.singleShot(50, poll)
+
+        MainWindow.show = show_then_close
+        from app.cli import main
+        sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
+    """)
+    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
+    env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"),
+               LIPSPACE_CACHE_DIR=str(tmp_path / "cache"))
+    r = subprocess.run([sys.executable, "-c", script, str(manifold_file)], capture_output=True, text=True,
+                       env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == ""
+    assert (tmp_path / "config" / "lipspace.ini").is_file()  # it did open and close a window
