@@ -284,10 +284,14 @@ class AppState:
         self.frame = self.state = self.target = self.path = self.hover = None
         self.utterance = self.original = self.synthetic = self.playback = self.component = None
         self.playing = False
-        self.visible_phones = self.phone_filter = frozenset()
+        self.visible_phones = frozenset()
         # a new file starts from the default view: no colouring or readout of the previous one survives
-        self.color_mode, self.hemisphere, self.horizon_ms = "density", "future", DEFAULT_HORIZON_MS
-        self.path_mode = False
+        # (announced, so every observer of these fields hears of it in the same action)
+        self._set("phone_filter", frozenset())
+        self._set("color_mode", "density")
+        self._set("hemisphere", "future")
+        self._set("horizon_ms", DEFAULT_HORIZON_MS)
+        self._set("path_mode", False)
         self._emit("manifold")
 
     @_batched
