@@ -114,6 +114,9 @@ def _user_message(exc: BaseException, *, doing: str = "open the file", path=None
             return plain
     elif isinstance(exc, OSError) and exc.strerror:
         return f"Lipspace could not {doing}: {name}: {exc.strerror.lower()}."
+    if name == "the file":  # no file concerned: an internal problem
+        return (f"Lipspace could not {doing}: something unexpected went wrong inside Lipspace. Try again; if "
+                "it happens again, save the session (File › Save session) and report what you did.")
     return (f"Lipspace could not {doing}: {name} does not hold what Lipspace expected, or Lipspace met an "
             "internal problem. Check that it is a manifold from 'lipspace build', a corpus, or a recording "
             "Lipspace imports, and try again.")

@@ -54,6 +54,8 @@ def test_unexpected_failures_never_show_a_class_name():
         msg = user_message(exc, doing="open the file", path="/data/x.npz")
         assert "x.npz" in msg and "could not open the file" in msg
         assert not looks_technical(msg) and "NoneType" not in msg and "axis 0" not in msg
+    inner = user_message(TypeError("unsupported operand type(s) for +: 'int' and 'str'"), doing="synthesise")
+    assert inner.startswith("Lipspace could not synthesise: something unexpected") and "operand" not in inner
     assert "no such file" in user_message(FileNotFoundError(2, "No such file or directory", "/data/y.npz"))
     assert "not enough memory" in user_message(MemoryError())
     # a message the engine wrote for the user keeps its file, place and expectation
