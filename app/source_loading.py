@@ -131,7 +131,7 @@ def _load_manifold(path, preset, progress, use_cache):
             pass  # stale or damaged cache: rebuild below
     from engine.synthetic import load_synthetic
 
-    corpus = load_synthetic(preset=preset, progress=progress)
+    corpus = load_synthetic(preset=preset, progress=progress, audio=True)  # speech audio when espeak-ng is installed
     m = Manifold().fit(corpus, progress=progress)
     if use_cache:
         try:
