@@ -58,8 +58,11 @@ def run_build(preset) -> dict:
         m = Manifold().fit(corpus)
     wall, cpu = time.perf_counter() - t, time.process_time() - c0
     sh, emb = m.shape_, m.embedding_
-    widths = {"r_shape": int(sh.n_range_), "n_iter": int(sh.n_iter), "m": int(sh.n_components_),
-              "r_emb": int(emb.n_range_), "n_passes": int(emb.n_passes_), "L": int(emb.reference_.shape[0])}
+    N, C = corpus.frames.shape
+    widths = {"r_shape": int(getattr(sh, "n_range_", min(sh.max_components, N - 1, C) + 10)),  # older trees
+              "n_iter": int(getattr(sh, "n_iter_", sh.n_iter)), "m": int(sh.n_components_),
+              "r_emb": int(getattr(emb, "n_range_", emb.n_components + emb.oversample)),
+              "n_passes": int(emb.n_passes_), "L": int(emb.reference_.shape[0])}
     return {"wall_s": wall, "cpu_s": cpu, "stages": m.timings_, "widths": widths, "load": load0,
             "shape": list(corpus.frames.shape), "blas": blas_kernel(),
             "max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
@@ -72,12 +75,16 @@ def _child(args) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def _build(preset):
-    return _child([os.path.abspath(__file__), "--child-build", "--preset", preset])
+def _build(preset, tree=None):
+    return _child([os.path.abspath(__file__), "--child-build", "--preset", preset, *(["--root", tree] if tree else [])])
 
 
 def _floor(preset, widths):
     return _child([os.path.join(HERE, "floor_build.py"), "--json", "--preset", preset, "--widths", json.dumps(widths)])
+
+
+def _label(job):
+    return job if "build" in job else f"{job} floor"
 
 
 def main(argv=None) -> int:
@@ -85,36 +92,43 @@ def main(argv=None) -> int:
     ap.add_argument("--pairs", type=int, default=3)
     ap.add_argument("--preset", default="paper")
     ap.add_argument("--no-issue-floor", action="store_true", help="run only the floor of the build's own widths")
+    ap.add_argument("--vs-tree", metavar="PATH", help="also build with the engine of another checkout in every pair "
+                                                      "(e.g. the previous commit) and report build / that build")
     ap.add_argument("--child-build", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--root", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child_build:
+        if args.root:
+            sys.path.insert(0, os.path.abspath(args.root))
+            for name in [n for n in sys.modules if n == "engine" or n.startswith("engine.")]:
+                del sys.modules[name]
         print(json.dumps(run_build(args.preset)))
         return 0
     subprocess.run([sys.executable, "-c", f"from engine.synthetic import load_synthetic; "
                     f"load_synthetic(preset={args.preset!r})"], check=True, cwd=ROOT)  # fill the cache
     load_before = os.getloadavg()
-    widths = None
+    widths = None  # read from pair 0's build, which runs first
     rows = []
     for i in range(args.pairs):
-        floors = {}
-        if i % 2 == 1 and widths is not None:  # odd pairs: floors first
-            floors["own"] = _floor(args.preset, widths)
-            if not args.no_issue_floor:
-                floors["issue"] = _floor(args.preset, dict(ISSUE_WIDTHS, m=widths["m"], L=widths["L"]))
-            b = _build(args.preset)
-        else:
-            b = _build(args.preset)
-        widths = b["widths"]
-        if "own" not in floors:
-            floors["own"] = _floor(args.preset, widths)
-            if not args.no_issue_floor:
-                floors["issue"] = _floor(args.preset, dict(ISSUE_WIDTHS, m=widths["m"], L=widths["L"]))
+        jobs = ["build", "own"] + ([] if args.no_issue_floor else ["issue"]) + (["vs-tree build"] if args.vs_tree else [])
+        if i % 2 == 1:  # odd pairs: the same runs in reverse order (widths from the previous pair's build)
+            jobs.reverse()
+        floors, b = {}, None
+        for job in jobs:
+            if job == "build":
+                b = _build(args.preset)
+                widths = b["widths"]
+            elif job == "vs-tree build":
+                floors[job] = dict(_build(args.preset, args.vs_tree), work={"gflop": float("nan"), "gb_read": float("nan")})
+            else:
+                w = widths if job == "own" else dict(ISSUE_WIDTHS, m=widths["m"], L=widths["L"])
+                floors[job] = _floor(args.preset, w)
         ratios = {k: b["wall_s"] / f["wall_s"] for k, f in floors.items()}
         rows.append((b, floors, ratios))
         st = ", ".join(f"{k} {v:.1f}" for k, v in b["stages"].items())
-        fl = "; ".join(f"{k} floor {f['wall_s']:.1f} s wall / {f['cpu_s']:.1f} s CPU ({f['work']['gflop']:.0f} "
+        fl = "; ".join(f"{_label(k)} {f['wall_s']:.1f} s wall / {f['cpu_s']:.1f} s CPU ({f['work']['gflop']:.0f} "
                        f"GFLOP, {f['work']['gb_read']:.1f} GB), ratio {ratios[k]:.2f}" for k, f in floors.items())
-        print(f"pair {i} ({'floor' if i % 2 else 'build'} first): build {b['wall_s']:.1f} s wall / "
+        print(f"pair {i} ({' -> '.join(jobs)}): build {b['wall_s']:.1f} s wall / "
               f"{b['cpu_s']:.1f} s CPU ({st}), max RSS {b['max_rss_mib']:.0f} MiB; {fl}; load average at start "
               f"{b['load']:.1f} (build) / {floors['own']['load']:.1f} (own floor)", flush=True)
     med = statistics.median
@@ -128,8 +142,8 @@ def main(argv=None) -> int:
     for k in rows[0][2]:
         rs = [r[2][k] for r in rows]
         fw = [r[1][k]["wall_s"] for r in rows]
-        print(f"{k} floor: wall min {min(fw):.1f} s, median {med(fw):.1f} s; build/floor min {min(rs):.2f}, "
-              f"median {med(rs):.2f} (goal <= 2)")
+        print(f"{_label(k)}: wall min {min(fw):.1f} s, median {med(fw):.1f} s; build / {_label(k)} min "
+              f"{min(rs):.2f}, median {med(rs):.2f}{'' if 'build' in k else ' (goal <= 2)'}")
     print(f"load average (1/5/15 min) before {'/'.join(f'{x:.1f}' for x in load_before)}, after "
           f"{'/'.join(f'{x:.1f}' for x in os.getloadavg())}; {os.cpu_count()} cores\nBLAS: {b0['blas']}")
     return 0

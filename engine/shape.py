@@ -39,6 +39,36 @@ def one_thread():
     return one_blas_thread()
 
 
+def kept_count(s, variance: float) -> int:
+    """Components kept: the smallest m whose squared singular values ``s`` (k,) hold ``variance``
+    of their sum (at least 1, at most k)."""
+    ev = np.asarray(s, dtype=np.float64) ** 2
+    cum = np.cumsum(ev) / ev.sum() if ev.sum() > 0 else np.ones_like(ev)
+    return max(1, min(int(np.searchsorted(cum, variance - 1e-12) + 1), len(ev)))
+
+
+def _kept_estimate(Bt, k: int, variance: float):
+    """(m, V) of the range finder's current estimate: the kept count and the kept axes (m, C),
+    from the small Gram matrix of ``Bt`` (C, r) instead of a full SVD."""
+    B = Bt.T.astype(np.float64)
+    with one_blas_thread():
+        lam, U = np.linalg.eigh(B @ B.T)
+    order = np.argsort(lam)[::-1][:k]
+    s = np.sqrt(np.clip(lam[order], 0.0, None))
+    m = kept_count(s, variance)
+    V = (U[:, order[:m]].T @ B) / np.maximum(s[:m], 1e-300)[:, None]
+    return m, V
+
+
+def _moved_degrees(a, b) -> float:
+    """Largest angle (degrees) between the kept subspaces of two estimates; inf if m differs."""
+    (ma, Va), (mb, Vb) = a, b
+    if ma != mb:
+        return float("inf")
+    cos = np.linalg.svd(Va @ Vb.T, compute_uv=False)
+    return float(np.degrees(np.arccos(np.clip(cos.min(), -1.0, 1.0))))
+
+
 def orthonormal_basis(M):
     """Q of the reduced QR decomposition of ``M`` (n, r), same dtype, on one BLAS thread.
 
@@ -69,7 +99,13 @@ class ShapeSpace(BaseEstimator):
         Keep the smallest ``m`` whose components hold this fraction of the variance
         of the components computed (the paper: 30 components hold 99%).
     n_iter : int, default=3
-        Power iterations of the randomized range finder.
+        Most power iterations of the randomized range finder.
+    tol : float or None, default=0.05
+        Stop iterating early once an iteration changes neither the number of kept
+        components nor their subspace by ``tol`` degrees or more (each iteration costs
+        two passes over F; the check costs an r x r eigenproblem). The range finder has
+        ``max_components + 10`` columns while a few tens are kept, so it converges
+        in one or two iterations; None or 0 always runs ``n_iter``.
     block_size : int, default=4096
         Rows of F multiplied at once (memory is ``block_size * C`` floats).
     random_state : int, default=0
@@ -89,15 +125,19 @@ class ShapeSpace(BaseEstimator):
         Cumulative fraction of the variance of the computed components.
     total_variance_ : float
     n_components_ : int
+    n_iter_ : int
+        Power iterations done (at most ``n_iter``).
     n_range_ : int
         Columns of the randomized range finder (computed components + oversampling):
         every product with F is an (N, C) x (C, n_range_) GEMM.
     """
 
-    def __init__(self, *, max_components=100, variance=0.99, n_iter=3, block_size=4096, random_state=0):
+    def __init__(self, *, max_components=100, variance=0.99, n_iter=3, tol=0.05, block_size=4096,
+                 random_state=0):
         self.max_components = max_components
         self.variance = variance
         self.n_iter = n_iter
+        self.tol = tol
         self.block_size = block_size
         self.random_state = random_state
 
@@ -109,6 +149,10 @@ class ShapeSpace(BaseEstimator):
             raise ValueError(f"need at least 3 frames to fit a shape space, got {F.shape[0]}")
         if not (0 < float(self.variance) <= 1):
             raise ValueError(f"variance must be in (0, 1], got {self.variance}; e.g. 0.99 keeps 99%")
+        if int(self.n_iter) < 0:
+            raise ValueError(f"n_iter must be >= 0, got {self.n_iter}; e.g. 3")
+        if self.tol is not None and not float(self.tol) >= 0:
+            raise ValueError(f"tol must be >= 0 degrees or None, got {self.tol}; e.g. 0.05")
         if int(self.max_components) < 1:
             raise ValueError(f"max_components must be >= 1, got {self.max_components}")
         if not np.isfinite(F).all():
@@ -159,23 +203,31 @@ class ShapeSpace(BaseEstimator):
         step += 1
         report(progress, "shape space", step, total_steps)
         Q = orthonormal_basis(Q)
-        for _ in range(self.n_iter):
-            Z = orthonormal_basis(At_mat(Q))
+        tol = float(self.tol or 0.0)
+        previous, it = None, 0
+        while True:
+            Bt = At_mat(Q)  # (C, k+p): B^T for this Q, and the next iteration's input
             step += 1
             report(progress, "shape space", step, total_steps)
-            Q = orthonormal_basis(A_mat(Z))
+            if it >= self.n_iter:
+                break
+            if tol > 0:  # stop once an iteration no longer moves the kept components
+                estimate = _kept_estimate(Bt, k, float(self.variance))
+                if previous is not None and _moved_degrees(previous, estimate) < tol:
+                    break
+                previous = estimate
+            Q = orthonormal_basis(A_mat(orthonormal_basis(Bt)))
+            it += 1
             step += 1
             report(progress, "shape space", step, total_steps)
-        B = At_mat(Q).T  # (k+p, C)
-        step += 1
-        report(progress, "shape space", step, total_steps)
+        B = Bt.T  # (k+p, C)
+        self.n_iter_ = it
         _, s, Vt = thin_svd(B.astype(np.float64))
         s, Vt = s[:k], Vt[:k]
         total = 0.0
         for sl in _row_blocks(N, block):
             total += float(((F[sl] - mean32).astype(np.float64) ** 2).sum())
-        step += 1
-        report(progress, "shape space", step, total_steps)
+        report(progress, "shape space", total_steps, total_steps)
         self.n_range_ = k + p
         return self._set_fitted(s, Vt, total, N, mean)
 
@@ -187,8 +239,7 @@ class ShapeSpace(BaseEstimator):
         total_var = total / (N - 1)
         scree = ev / total_var if total_var > 0 else np.zeros_like(ev)
         cum = np.cumsum(ev) / ev.sum() if ev.sum() > 0 else np.ones_like(ev)
-        m = int(np.searchsorted(cum, float(self.variance) - 1e-12) + 1)
-        m = max(1, min(m, k))
+        m = kept_count(s, float(self.variance))
         Vt = self._orient(Vt, mean)
         self.mean_ = np.asarray(mean, dtype=np.float32)
         self.components_ = Vt[:m].astype(np.float32)
