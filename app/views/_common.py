@@ -4,7 +4,13 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 __all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all",
-           "RenderScheduler", "Throttle"]
+           "RenderScheduler", "Throttle", "READOUT_INTERVAL_S"]
+
+#: seconds between two repaints of the readouts that follow playback (caption, slider, the
+#: editor's timeline cursor): each repaint of an ordinary widget composes the main window
+#: and, measured, often the 3-D views' windows with it (docs/DECISIONS.md, "Playback at the
+#: corpus rate"); the manifold view's playback markers render at the same rate
+READOUT_INTERVAL_S = 0.5
 
 
 @contextmanager

@@ -32,13 +32,9 @@ from app.audio import AudioPlayer, resolve_audio_path
 from app.playback import PlaybackClock
 from app.trajectories import lip_frames
 from app.views._common import (camera_of, close_plotter, connect_all, disconnect_all,
-                               make_plotter, RenderScheduler, set_camera, Throttle)
+                               make_plotter, READOUT_INTERVAL_S, RenderScheduler, set_camera, Throttle)
 
 __all__ = ["LipView", "READOUT_INTERVAL_S"]
-
-#: seconds between two updates of the caption and slider while playing (and of the
-#: trajectory editor's cursor, which uses the same value)
-READOUT_INTERVAL_S = 0.2
 
 MAIN_COLOUR = (0.86, 0.55, 0.55)
 SYNTH_COLOUR = (0.95, 0.15, 0.1)
