@@ -20,7 +20,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.target_editing import remove_target
 from app.trajectories import METHOD_LABELS, synthesize_targets, trajectory_error
-from app.views._common import connect_all, disconnect_all, Throttle
+from app.views._common import connect_all, disconnect_all, READOUT_INTERVAL_S, Throttle
 from app.views.phone_timeline import PhoneTimeline
 
 __all__ = ["TrajectoryEditor", "TargetsEdit", "ZOOM_RANGE", "ADD_STATE_SHORTCUT", "REMOVE_SHORTCUT"]
@@ -155,7 +155,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.timeline.zoomRequested.connect(lambda f, x: self.zoom_by(f, x))
         ev = state.events
         # the cursor follows playback a few times a second (each repaint composes the whole window)
-        self._cursor_readout = Throttle(self.timeline.set_cursor, 0.2, parent=self)
+        self._cursor_readout = Throttle(self.timeline.set_cursor, READOUT_INTERVAL_S, parent=self)
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.playback, self._cursor_readout),
                              (ev.utterance, self._on_utterance),
                              (ev.trajectory, lambda _o, syn: self._show_warnings(syn)),
