@@ -20,6 +20,7 @@ import warnings
 
 from PySide6 import QtCore, QtWidgets
 
+from app.user_messages import UserError
 from engine.corpus import CorpusWarning
 from engine.progress import Cancelled
 
@@ -115,9 +116,10 @@ class Worker(QtCore.QObject):
     cancelled = QtCore.Signal()
     warned = QtCore.Signal(str)  # an engine warning about the user's data
 
-    def __init__(self, task):
+    def __init__(self, task, *, doing: str = "finish this task"):
         super().__init__()
         self.task = task
+        self.doing = doing  # completes "ran out of memory while trying to ..."
         self._cancel = threading.Event()
 
     def cancel(self) -> None:
@@ -144,7 +146,15 @@ class Worker(QtCore.QObject):
         except Cancelled:
             self.cancelled.emit()
         except Exception as exc:  # noqa: BLE001 - shown to the user, with the traceback
-            self.failed.emit(f"{type(exc).__name__}: {exc}", traceback.format_exc())
+            oom = exc if isinstance(exc, MemoryError) else exc.__cause__
+            if isinstance(oom, MemoryError):  # also under a plain-language wrapper: the size and what lowers it
+                from app.out_of_memory import memory_message
+
+                self.failed.emit(memory_message(oom, doing=self.doing), traceback.format_exc())
+                return
+            # a UserError (app.user_messages) is already written for the user: shown as it is
+            msg = str(exc) if isinstance(exc, UserError) else f"{type(exc).__name__}: {exc}"
+            self.failed.emit(msg, traceback.format_exc())
         else:
             if self._cancel.is_set():
                 self.cancelled.emit()
@@ -169,7 +179,7 @@ class TaskRunner(QtCore.QObject):
         self.result = None
         self.error = None
         self.state = "running"
-        self.worker = Worker(task)
+        self.worker = Worker(task, doing=f"finish this task ({title.rstrip('.…')})")
         self.thread = QtCore.QThread()
         self.worker.moveToThread(self.thread)
         self.thread.started.connect(self.worker.run)

@@ -131,3 +131,37 @@ def test_other_warnings_in_a_worker_keep_the_process_filters(qapp, qtbot):
     r = TaskRunner(task, dialog=False).start()
     assert r.wait(10000) and r.state == "failed" and "RuntimeWarning: not about the data" in r.error[0]
     assert r.warnings == []
+
+
+@pytest.mark.gui
+@pytest.mark.parametrize("wrapped", [False, True], ids=["bare", "under-plain-errors"])
+def test_memory_error_in_a_task_is_one_plain_message_with_the_size_and_a_hint(qapp, qtbot, wrapped):
+    """numpy's 'Unable to allocate ... for an array with shape ...' never reaches the window."""
+    import numpy as np
+
+    from app.out_of_memory import installed_bytes
+    from app.workers import TaskRunner
+
+    def task(progress):
+        progress("embedding", 0, 1)
+        return np.empty((10**7, 10**6))  # 80 TB: refused by the allocator at once
+
+    if wrapped:  # the window's tasks go through a plain-language wrapper whose cause is the MemoryError
+        inner = task
+
+        def task(progress):
+            try:
+                return inner(progress)
+            except MemoryError as exc:
+                raise RuntimeError("There is not enough memory.") from exc
+
+    r = TaskRunner(task, dialog=False, title="Building the manifold…").start()
+    assert r.wait(10000) and r.state == "failed"
+    msg = r.error[0]
+    assert msg.startswith("Lipspace ran out of memory while trying to finish this task (Building the manifold)")
+    assert "it needed 80000.0 GB more at once" in msg and "--landmarks 2000" in msg and "--resample 30" in msg
+    if installed_bytes():
+        assert "this computer has" in msg
+    assert "MemoryError" not in msg and "allocate" not in msg and "dtype" not in msg and "\n" not in msg
+    assert "MemoryError" in r.error[1]  # the traceback is kept for the details
+
