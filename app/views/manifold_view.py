@@ -20,6 +20,7 @@ from app.scene.colour_bar import add_scalar_bar, configure_scalar_bar
 from app.picking import PointLocator, handle_pick, hover_text
 from app.scene.projection import nearest_on_screen, project, standard_camera, view_transform
 from app.state import COLOR_MODES, HEMISPHERES
+from app.views.flow_layout import FlowLayout
 from app.views._common import (blocked, camera_of, close_plotter, connect_all,
                                disconnect_all, make_plotter, RenderScheduler, set_camera)
 
@@ -91,13 +92,13 @@ class ManifoldView(QtWidgets.QWidget):
         self.horizon_box.setToolTip("Colour only the states reachable within the time horizon (untick: every "
                                     "reachable state)")
         self.horizon_slider = QtWidgets.QSlider(QtCore.Qt.Orientation.Horizontal)
-        self.horizon_slider.setMinimumWidth(120)
+        self.horizon_slider.setMinimumWidth(90)
         self.horizon_slider.setToolTip("Time horizon of the hemisphere in ms: states more hops away than fit in "
                                        "this time at the corpus frame rate are dimmed")
         self.horizon_label = QtWidgets.QLabel("")
         self.phone_edit = QtWidgets.QLineEdit()
-        self.phone_edit.setPlaceholderText("all phones")
-        self.phone_edit.setMaximumWidth(140)
+        self.phone_edit.setPlaceholderText("all phones: type e.g. p b m")
+        self.phone_edit.setMaximumWidth(170)
         self.phone_edit.setToolTip("Phones to colour, separated by spaces (e.g. 'p b m'); the others are dimmed. "
                                    "Empty: all phones")
         self.view_btns = {}
@@ -115,13 +116,22 @@ class ManifoldView(QtWidgets.QWidget):
         self.hover_label = QtWidgets.QLabel("")
         self.hover_label.setStyleSheet("color: #444")
 
-        bar = QtWidgets.QHBoxLayout()
-        bar.setContentsMargins(4, 2, 4, 2)
-        for w in (QtWidgets.QLabel("Colour:"), self.color_box, self.phone_edit, self.hemi_box, self.horizon_box,
-                  self.horizon_slider, self.horizon_label, self.path_box, self.points_box, self.plane_box,
-                  self.axes_box, *self.view_btns.values(), self.clear_btn):
-            bar.addWidget(w)
-        bar.addStretch(1)
+        # controls in groups that wrap to a new row in a narrow window (FlowLayout): the view's minimum
+        # width is that of its widest group, not of every control side by side
+        bar = FlowLayout(spacing=10)
+        for group in ((QtWidgets.QLabel("Colour:"), self.color_box, self.phone_edit),
+                      (self.hemi_box, self.horizon_box, self.horizon_slider, self.horizon_label),
+                      (self.path_box, self.points_box, self.plane_box, self.axes_box),
+                      (*self.view_btns.values(), self.clear_btn)):
+            box = QtWidgets.QWidget()
+            row = QtWidgets.QHBoxLayout(box)
+            row.setContentsMargins(0, 0, 0, 0)
+            row.setSpacing(4)
+            for w in group:
+                row.addWidget(w)
+            bar.addWidget(box)
+        for label in (self.info, self.hover_label):  # long readouts wrap instead of widening the view
+            label.setWordWrap(True)
         self.plotter = make_plotter(self)
         self.renderer = RenderScheduler(self.plotter)
         lay = QtWidgets.QVBoxLayout(self)
