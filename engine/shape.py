@@ -155,9 +155,11 @@ class ShapeSpace(BaseEstimator):
             raise ValueError(f"tol must be >= 0 degrees or None, got {self.tol}; e.g. 0.05")
         if int(self.max_components) < 1:
             raise ValueError(f"max_components must be >= 1, got {self.max_components}")
-        if not np.isfinite(F).all():
-            bad = int(np.argwhere(~np.isfinite(F))[0, 0])
-            raise ValueError(f"frame {bad} holds NaN or inf; clean the corpus before fitting")
+        for sl in _row_blocks(F.shape[0], max(1, int(self.block_size))):  # no N x C boolean copy
+            ok = np.isfinite(F[sl]).all(axis=1)
+            if not ok.all():
+                bad = sl.start + int(np.flatnonzero(~ok)[0])
+                raise ValueError(f"frame {bad} holds NaN or inf; clean the corpus before fitting")
         return F
 
     def fit(self, F, *, progress: ProgressFn = None):

@@ -64,3 +64,10 @@ def test_smaller_blocks_of_D_give_the_same_embedding(small_manifold, monkeypatch
         c = abs(np.corrcoef(new.embedding_[:, i], old.embedding_[:, i])[0, 1])
         assert c > 1 - 1e-6, f"Y{i + 1}: |corr| {c}"
     np.testing.assert_allclose(new.embedding_, old.embedding_, rtol=1e-3, atol=1e-4 * np.abs(old.embedding_).max())
+
+
+def test_non_finite_frame_found_in_a_later_block_is_named():
+    F = np.zeros((50, 6), np.float32)
+    F[37, 2] = np.nan
+    with pytest.raises(ValueError, match="frame 37 holds NaN or inf"):
+        ShapeSpace(block_size=16).fit(F)  # the check runs block by block: frame 37 is in the third block
