@@ -188,3 +188,17 @@ def test_exported_view_is_vector_with_the_hop_bar_title_clear_of_its_ticks(fresh
     root = ET.fromstring(save_plotter_vector(v.plotter, tmp_path / "view.SVG").read_bytes())
     tags = [el.tag.rsplit("}", 1)[-1] for el in root.iter()]
     assert "image" not in tags and tags.count("path") + tags.count("use") > app_manifold.Fy_.shape[0]
+
+
+def test_controls_wrap_so_a_narrow_dock_still_fits(fresh, qapp):
+    v = fresh
+    assert v.minimumSizeHint().width() <= 480        # one row of every control needed over 1,000 px
+    rows = {w.parentWidget().y() for w in (v.color_box, v.hemi_box, v.path_box, v.clear_btn)}
+    v.resize(440, 500)
+    qapp.processEvents()
+    narrow = {w.parentWidget().y() for w in (v.color_box, v.hemi_box, v.path_box, v.clear_btn)}
+    assert len(narrow) > len(rows) or len(narrow) == 4   # the groups went to new rows
+    for w in (v.color_box, v.hemi_box, v.path_box, v.clear_btn):
+        assert w.parentWidget().geometry().right() <= v.width()   # nothing pushed out of the view
+    v.resize(1000, 750)
+    qapp.processEvents()
