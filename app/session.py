@@ -55,6 +55,8 @@ def session_dict(state, *, cameras: dict | None = None, extra: dict | None = Non
         "selection": {"frame": state.frame, "state": state.state, "target": state.target},
         "color_mode": state.color_mode,
         "hemisphere": state.hemisphere,
+        "horizon_ms": state.horizon_ms,
+        "phone_filter": sorted(state.phone_filter),
         "path_mode": bool(state.path_mode),
         "utterance": state.utterance,
         "visible_phones": sorted(state.visible_phones),
@@ -283,6 +285,8 @@ def apply_session(state, d: dict):
         if d.get("utterance") is not None:
             state.set_utterance(d["utterance"])
         state.set_hemisphere(d.get("hemisphere", "future"))
+        state.set_horizon(d.get("horizon_ms", state.horizon_ms))  # older sessions: the current horizon
+        state.set_phone_filter(d.get("phone_filter", []))
         state.set_path_mode(d.get("path_mode", False))
         if sel.get("frame") is not None:
             state.select_frame(sel["frame"], as_target=False)

@@ -21,6 +21,8 @@ def test_session_round_trip(app_manifold, tmp_path):
     s.set_target(int(m.states_.labels_[900]))
     s.set_visible_phones(["m", "p"])
     s.set_color_mode("class")
+    s.set_horizon(50.0)
+    s.set_phone_filter(["p", "b"])
     cams = {"manifold": [[1, 2, 3], [0, 0, 0], [0, 0, 1]]}
     path = save_session(s, tmp_path / "a.lipspace.json", cameras=cams, extra={"editor": {"text": "hello"}})
     assert not list(tmp_path.glob("*.part*"))  # written atomically, no temporary left
@@ -32,6 +34,7 @@ def test_session_round_trip(app_manifold, tmp_path):
     assert (t.frame, t.state, t.target) == (s.frame, s.state, s.target)
     assert t.color_mode == "class" and t.hemisphere == "past"
     assert t.utterance == uid and t.visible_phones == {"m", "p"}
+    assert t.horizon_ms == 50.0 and t.phone_filter == {"p", "b"}
     assert (t.path == s.path).all()
 
 
