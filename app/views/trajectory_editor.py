@@ -307,6 +307,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
         """New targets from an input (Load): the baseline of Reset; the undo history starts again."""
         self.undo_stack.clear()
         self.loaded_targets = targets
+        self.timeline.select(None)  # a chosen target of other targets means nothing here
         self._apply_targets(targets, message)
         return True
 

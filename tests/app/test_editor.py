@@ -208,3 +208,23 @@ def test_space_plays_and_arrows_step_through_the_state(ed, qtbot, editor_window)
     s.set_playback(s.n_playback - 1)
     qtbot.keyClick(ed.timeline, QtCore.Qt.Key.Key_Right)
     assert s.playback == s.n_playback - 1  # the last frame is the end
+
+
+@pytest.mark.gui
+def test_delete_and_plus_minus_keys_in_the_timeline(ed, qtbot, editor_window):
+    from PySide6 import QtCore
+
+    n = len(ed.targets.targets)
+    ed.timeline.setFocus()
+    qtbot.keyClick(ed.timeline, QtCore.Qt.Key.Key_Delete)  # nothing chosen: nothing removed, and it says why
+    assert len(ed.targets.targets) == n and "choose a target" in ed.readout.text()
+    ed.timeline.select(2)
+    assert ed.remove_btn.isEnabled()
+    qtbot.keyClick(ed.timeline, QtCore.Qt.Key.Key_Delete)
+    assert len(ed.targets.targets) == n - 1 and ed.timeline.selected is None
+    editor_window.undo_action.trigger()
+    assert len(ed.targets.targets) == n
+    qtbot.keyClick(ed.timeline, QtCore.Qt.Key.Key_Plus)
+    assert ed.zoom == pytest.approx(1.25)
+    qtbot.keyClick(ed.timeline, QtCore.Qt.Key.Key_Minus)
+    assert ed.zoom == pytest.approx(1.0)
