@@ -5,8 +5,8 @@ Usage: python benchmarks/campaign_bad_input.py [--root TREE] [--cap-gb 3] [--tim
 
 ``--root`` runs the cases against another checkout of the project (e.g. an older commit
 extracted with ``git archive REV | tar -x -C DIR``) to compare before and after; the
-inputs are made by that tree's own code. Each line: the case, exit status, wall time,
-peak memory of the process, and the verdict:
+inputs are made by that tree's own code. Each line: the verdict, exit status, wall time,
+peak resident memory of the case's process, the case and the first line it printed:
 
 * ``ok``          exit 0 or 2 as expected, one clean line, nothing left behind, the
                   expected refusal or warning said
@@ -207,6 +207,13 @@ def cases(d: Path):
     ]
 
 
+#: runs the case as a child and reports its peak resident memory (MiB x 1024) and exit status on stderr
+_PEAK = ("import resource, signal, subprocess, sys\n"
+         "signal.signal(signal.SIGTERM, lambda *a: None)  # the case gets it (a handler, not SIG_IGN: reset by exec)\n"
+         "r = subprocess.run(sys.argv[1:])\n"
+         "print('@@PEAK', resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, r.returncode, file=sys.stderr)")
+
+
 def run_case(argv, cwd, cap, timeout, root):
     env = dict(os.environ, PYTHONPATH=str(root), LIPSPACE_CACHE_DIR=str(cwd / "cache"),
                LIPSPACE_STATE_DIR=str(cwd / "state"))
@@ -215,28 +222,34 @@ def run_case(argv, cwd, cap, timeout, root):
     if argv[-1].startswith("@SIGTERM"):
         sig, argv = float(argv[-1].split()[1]), argv[:-1]
     cmd = [sys.executable, "-c", argv[1]] if argv[0] == "@py" else [sys.executable, "-m", "app.cli", *argv]
+    cmd = [sys.executable, "-c", _PEAK, *cmd]  # the case's own peak memory, not this script's children's
 
     def limit():
         resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
 
     t = time.perf_counter()
     p = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         preexec_fn=limit)
+                         preexec_fn=limit, start_new_session=True)
     try:
         if sig is not None:
             try:
                 p.wait(sig)
             except subprocess.TimeoutExpired:
-                p.send_signal(signal.SIGTERM)
+                os.killpg(p.pid, signal.SIGTERM)
         out, err = p.communicate(timeout=timeout)
         code = p.returncode
     except subprocess.TimeoutExpired:
-        p.kill()
+        os.killpg(p.pid, signal.SIGKILL)  # the case and its wrapper
         out, err = p.communicate()
         code = "hang"
     wall = time.perf_counter() - t
-    ru = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024  # the largest child so far (MiB)
-    return code, wall, ru, out, err
+    peak = float("nan")
+    if "@@PEAK " in err:
+        err, _, tail = err.rpartition("@@PEAK ")
+        peak = float(tail.split()[0]) / 1024
+        if code not in ("hang",) and tail.split()[1:]:
+            code = int(tail.split()[1])
+    return code, wall, peak, out, err
 
 
 def verdict(code, out, err, expect, says, must_not_exist, d):
@@ -293,11 +306,12 @@ def main() -> int:
             if args.only and args.only not in name:
                 continue
             (d / "out").mkdir(exist_ok=True)
-            code, wall, rss, out, err = run_case(argv, d, cap, args.timeout, root)
+            code, wall, peak, out, err = run_case(argv, d, cap, args.timeout, root)
             v = verdict(code, out, err, expect, says, gone, d)
             first = (err.strip().splitlines() or out.strip().splitlines() or [""])[-1 if "Traceback" in err else 0]
-            rows.append({"case": name, "exit": code, "wall_s": round(wall, 2), "verdict": v, "said": first[:160]})
-            print(f"{v:10s} {str(code):>5s} {wall:6.1f} s  {name:42s} {first[:110]!r}", flush=True)
+            rows.append({"case": name, "exit": code, "wall_s": round(wall, 2), "peak_mb": round(peak),
+                         "verdict": v, "said": first[:160]})
+            print(f"{v:10s} {str(code):>5s} {wall:6.1f} s {peak:6.0f} MB  {name:42s} {first[:100]!r}", flush=True)
             for p in (d / "out").rglob("*"):
                 if p.is_file():
                     p.unlink()
