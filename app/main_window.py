@@ -448,8 +448,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # ------------------------------------------------------------------ misc
     def reset_cameras(self):
-        self.manifold_view.plotter.reset_camera()
-        self.manifold_view.plotter.render()
+        self.manifold_view.standard_view("default")  # both halves of the manifold, the plane slightly from above
         self.lip_view.plotter.view_xy()
         self.lip_view.plotter.reset_camera()
         self.lip_view.plotter.render()

@@ -202,3 +202,21 @@ def test_controls_wrap_so_a_narrow_dock_still_fits(fresh, qapp):
         assert w.parentWidget().geometry().right() <= v.width()   # nothing pushed out of the view
     v.resize(1000, 750)
     qapp.processEvents()
+
+
+def test_view_menu_reset_uses_the_default_standard_view(qapp, app_manifold):
+    from app.main_window import MainWindow
+
+    w = MainWindow(app_manifold, source={"path": None, "preset": "small"})
+    try:
+        w.show()
+        qapp.processEvents()
+        view = w.manifold_view
+        cam = view.plotter.renderer.GetActiveCamera()
+        view.standard_view("top")
+        w.reset_cameras()
+        V = app_manifold.tangent_.plane_normal_ / np.linalg.norm(app_manifold.tangent_.plane_normal_)
+        d = np.subtract(cam.GetFocalPoint(), cam.GetPosition()) / cam.GetDistance()
+        assert -0.6 < d @ V < -0.2     # from slightly above the plane, not looking down on it
+    finally:
+        w.close()
