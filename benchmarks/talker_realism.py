@@ -2,7 +2,8 @@
 and the tangent classes' agreement with the exact ground truth next to the trivial
 Delta F^x_1 rule (engine.talker_report), for the default and the held-out talker.
 
-Run: .venv/bin/python benchmarks/talker_realism.py [--preset default] [--repeats 3]
+Run: .venv/bin/python benchmarks/talker_realism.py [--preset default] [--repeats 3] [--skip-heldout]
+     [--generation-only]
 Generation is timed cold (a fresh process per repeat, no cache) and warm (in-process).
 """
 from __future__ import annotations
@@ -29,6 +30,7 @@ def main(argv=None):
     ap.add_argument("--preset", default="default")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--skip-heldout", action="store_true")
+    ap.add_argument("--generation-only", action="store_true", help="time the generation, skip the manifold")
     args = ap.parse_args(argv)
     import os
 
@@ -57,6 +59,8 @@ def main(argv=None):
         print(f"generation cold (fresh process, imports included): min {min(cold):.1f} s, median "
               f"{statistics.median(cold):.1f} s; warm: min {min(warm):.1f} s, median {statistics.median(warm):.1f} s; "
               f"peak RSS {max(peak):.0f} MB ({args.repeats} repeats)")
+        if args.generation_only:
+            continue
         t = time.perf_counter()
         m = Manifold().fit(corpus)
         print(f"Manifold().fit {time.perf_counter() - t:.1f} s")
