@@ -89,3 +89,19 @@ def _window_settings_in_tmp(tmp_path_factory):
         os.environ.pop("LIPSPACE_CONFIG_DIR", None)
     else:
         os.environ["LIPSPACE_CONFIG_DIR"] = old
+
+
+def _forget_window_settings():
+    (Path(os.environ["LIPSPACE_CONFIG_DIR"]) / "lipspace.ini").unlink(missing_ok=True)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _fresh_window_settings_per_module(_window_settings_in_tmp):
+    """A module's shared window starts from default settings, whatever an earlier module's window left."""
+    _forget_window_settings()
+
+
+@pytest.fixture(autouse=True)
+def _fresh_window_settings_per_test(_window_settings_in_tmp):
+    """So does every window a test opens (a dock hidden by one test never hides it in the next)."""
+    _forget_window_settings()
