@@ -6,22 +6,12 @@ from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
 from PySide6 import QtWidgets
 
+from app.scree import scree_series
 from app.views._common import blocked, connect_all, disconnect_all
 
-__all__ = ["ScreePanel", "scree_series"]
+__all__ = ["ScreePanel"]
 
 MAX_SHOWN = 30
-
-
-def scree_series(manifold) -> dict:
-    """The numbers the panel plots: per-component and cumulative explained variance of X and Y.
-
-    Returns dict with ``x``, ``x_cum`` (from ``shape_.scree_``, of the total variance of F)
-    and ``y``, ``y_cum`` (from ``embedding_.explained_variance_ratio_``), each ndarray.
-    """
-    x = np.asarray(manifold.shape_.scree_, dtype=np.float64)
-    y = np.asarray(manifold.embedding_.explained_variance_ratio_, dtype=np.float64)
-    return {"x": x, "x_cum": np.cumsum(x), "y": y, "y_cum": np.cumsum(y)}
 
 
 class ScreePanel(QtWidgets.QWidget):

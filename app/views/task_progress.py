@@ -13,13 +13,9 @@ import time
 
 from PySide6 import QtCore, QtWidgets
 
-__all__ = ["TaskProgress", "stage_text", "attach_status_progress"]
+from app.task_status import stage_text
 
-
-def stage_text(stage: str, done: int, total: int, seconds: float) -> str:
-    """The label for one progress report: ``"embedding 3/10 · 4 s"``, or without a count."""
-    count = f" {done}/{total}" if total > 1 and done < total else ""
-    return f"{stage}{count} · {seconds:.0f} s"
+__all__ = ["TaskProgress", "attach_status_progress"]
 
 
 class TaskProgress(QtWidgets.QWidget):

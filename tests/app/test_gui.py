@@ -405,7 +405,7 @@ def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
 
 
 def test_scree_panel_and_component_deformation(win, app_manifold):
-    from app.views.scree_panel import scree_series
+    from app.scree import scree_series
 
     m, s, sc = app_manifold, win.state, win.scree
     lines = sc.figure.axes[0].get_lines()
@@ -511,7 +511,8 @@ def test_worker_shows_engine_warnings_in_the_status_bar(win, qtbot):
 def test_open_runs_in_a_worker_with_status_bar_progress_and_cancel(win, qtbot, tmp_path, app_manifold):
     from PySide6 import QtWidgets
 
-    from app.views.task_progress import TaskProgress, stage_text
+    from app.task_status import stage_text
+    from app.views.task_progress import TaskProgress
 
     corpus = tmp_path / "c.npz"
     app_manifold.corpus_.save(corpus)
