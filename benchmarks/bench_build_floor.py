@@ -119,15 +119,18 @@ def main(argv=None) -> int:
                 b = _build(args.preset)
                 widths = b["widths"]
             elif job == "vs-tree build":
-                floors[job] = dict(_build(args.preset, args.vs_tree), work={"gflop": float("nan"), "gb_read": float("nan")})
+                floors[job] = _build(args.preset, args.vs_tree)
             else:
                 w = widths if job == "own" else dict(ISSUE_WIDTHS, m=widths["m"], L=widths["L"])
                 floors[job] = _floor(args.preset, w)
         ratios = {k: b["wall_s"] / f["wall_s"] for k, f in floors.items()}
         rows.append((b, floors, ratios))
         st = ", ".join(f"{k} {v:.1f}" for k, v in b["stages"].items())
-        fl = "; ".join(f"{_label(k)} {f['wall_s']:.1f} s wall / {f['cpu_s']:.1f} s CPU ({f['work']['gflop']:.0f} "
-                       f"GFLOP, {f['work']['gb_read']:.1f} GB), ratio {ratios[k]:.2f}" for k, f in floors.items())
+        fl = "; ".join(f"{_label(k)} {f['wall_s']:.1f} s wall / {f['cpu_s']:.1f} s CPU (" + (
+            f"shape {f['parts']['shape']:.1f}, embedding {f['parts']['embedding']:.1f}; {f['work']['gflop']:.0f} GFLOP, "
+            f"{f['work']['gb_read']:.1f} GB read" if "parts" in f else
+            ", ".join(f"{s} {v:.1f}" for s, v in f["stages"].items())) + f"), ratio {ratios[k]:.2f}"
+            for k, f in floors.items())
         print(f"pair {i} ({' -> '.join(jobs)}): build {b['wall_s']:.1f} s wall / "
               f"{b['cpu_s']:.1f} s CPU ({st}), max RSS {b['max_rss_mib']:.0f} MiB; {fl}; load average at start "
               f"{b['load']:.1f} (build) / {floors['own']['load']:.1f} (own floor)", flush=True)
