@@ -237,7 +237,9 @@ class DaskExecutor:
         from distributed import Client, LocalCluster
 
         if address == "local":
-            cluster = LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, dashboard_address=None)
+            # ":0": the scheduler's HTTP server (it starts one even without a dashboard) on a free port, not
+            # 8787, which another cluster on the machine may hold ("Cluster failed to start: Port 8787 is in use")
+            cluster = LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, dashboard_address=":0")
             return cls(Client(cluster), own_cluster=True, **kwargs)
         try:
             client = Client(address, timeout="20s")

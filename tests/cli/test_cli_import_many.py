@@ -53,7 +53,7 @@ def test_import_many_on_dask_equals_in_process(inputs, tmp_path, capsys):
 
     ref, out = tmp_path / "ref.npz", tmp_path / "dask.npz"
     assert _import(inputs, ref, "--jobs", "1") == 0
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
         assert _import(inputs, out, "--dask", cluster.scheduler_address) == 0
     err = capsys.readouterr().err
     assert "Dask 2 workers" in err and f"skipped {inputs[3]}: " in err

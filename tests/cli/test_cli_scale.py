@@ -15,7 +15,7 @@ def test_build_on_a_running_scheduler(tmp_path, small_corpus, capsys):
     corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1500])
     src = corpus.save(tmp_path / "c.npz")
     out = tmp_path / "m.npz"
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
         assert main(["build", str(src), "-o", str(out), "-q", "--states", "30", "--dask", cluster.scheduler_address,
                      "--dask-blocks", str(tmp_path / "blocks")]) == 0
     text = capsys.readouterr().out

@@ -45,7 +45,7 @@ def test_import_in_blocks_then_build_on_dask_reads_them_in_place(corpus, tmp_pat
     n_blocks = len(list(blocks_folder(blocked).glob("block_*.npy")))
     assert n_blocks >= 2
     out, scratch = tmp_path / "m.npz", tmp_path / "scratch"
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
         assert main(["build", str(blocked), "-o", str(out), "-q", "--states", "30", "--dask",
                      cluster.scheduler_address, "--dask-blocks", str(scratch)]) == 0
     assert not (scratch / "frames").exists()  # F was not written out again: the workers read the import's blocks

@@ -20,7 +20,7 @@ def executor(tmp_path_factory):
 
     from engine.scale import DaskExecutor
 
-    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None)
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0")
     ex = DaskExecutor(Client(cluster), chunk_dir=tmp_path_factory.mktemp("blocks"), block_frames=512,
                       own_cluster=True)
     yield ex
