@@ -311,9 +311,10 @@ def main() -> int:
             code, wall, peak, out, err = run_case(argv, d, cap, args.timeout, root)
             v = verdict(code, out, err, expect, says, gone, d)
             first = (err.strip().splitlines() or out.strip().splitlines() or [""])[-1 if "Traceback" in err else 0]
-            rows.append({"case": name, "exit": code, "wall_s": round(wall, 2), "peak_mb": round(peak),
+            rows.append({"case": name, "exit": code, "wall_s": round(wall, 2), "peak_mb": None if peak != peak else round(peak),
                          "verdict": v, "said": first[:160]})
-            print(f"{v:10s} {str(code):>5s} {wall:6.1f} s {peak:6.0f} MB  {name:42s} {first[:100]!r}", flush=True)
+            mem = "     - " if peak != peak else f"{peak:6.0f} MB"  # a case killed at the timeout reports none
+            print(f"{v:10s} {str(code):>5s} {wall:6.1f} s {mem}  {name:42s} {first[:100]!r}", flush=True)
             for p in (d / "out").rglob("*"):
                 if p.is_file():
                     p.unlink()
