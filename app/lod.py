@@ -6,13 +6,14 @@ more than the eye separates. The view draws every state (its centroid) and at mo
 keeps its shape and density, with every state represented by at least one frame.
 Below the cap every frame is drawn. The choice is deterministic (seeded), so the same
 manifold always shows the same frames; selections stay frame indices (the picked
-point's index in the drawn cloud maps back through the returned indices).
+point's index in the drawn cloud maps back through the returned indices: the manifold
+scene's ``PointsHandle.frame_of``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["cloud_subsample", "DEFAULT_MAX_FRAMES"]
+__all__ = ["cloud_subsample", "cloud_frames", "DEFAULT_MAX_FRAMES"]
 
 #: frames drawn at most (all of them below this)
 DEFAULT_MAX_FRAMES = 150_000
@@ -55,3 +56,13 @@ def cloud_subsample(labels, *, max_frames: int = DEFAULT_MAX_FRAMES, random_stat
     keep = order[by_state[rank < quota[lab[by_state]]]]
     keep.sort()
     return keep.astype(np.int64)
+
+
+def cloud_frames(labels, *, max_frames: int | None = None):
+    """:func:`cloud_subsample`'s frames, or None when every frame is drawn (what the scene takes).
+
+    ``max_frames`` None: :data:`DEFAULT_MAX_FRAMES`, read when called.
+    """
+    labels = np.asarray(labels)
+    max_frames = DEFAULT_MAX_FRAMES if max_frames is None else max_frames
+    return None if labels.shape[0] <= max_frames else cloud_subsample(labels, max_frames=max_frames)

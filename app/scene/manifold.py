@@ -64,9 +64,20 @@ class PointsHandle(Handle):
     unreachable state), so tests and tools can read what is drawn.
     """
 
+    #: frame index of each drawn point (None: point i is frame i); see :func:`app.lod.cloud_subsample`
+    frames = None
+
+    def frame_of(self, point_id) -> int:
+        """The frame a drawn point (its id in the mesh) shows."""
+        return int(point_id) if self.frames is None else int(self.frames[int(point_id)])
+
     def set_colors(self, rgb, values=None) -> None:
+        """Colours (and values) of the drawn points, or of every frame when only some are drawn."""
         rgb8 = to_rgb8(rgb)
         n = self.mesh.n_points
+        if self.frames is not None and rgb8.shape[0] != n:  # one colour per frame: keep the drawn frames'
+            rgb8 = rgb8[self.frames]
+            values = None if values is None else np.asarray(values)[self.frames]
         if rgb8.shape != (n, 3):
             raise ValueError(f"colours must have shape ({n}, 3), got {rgb8.shape}")
         self.mesh.point_data["rgb"][:] = rgb8
@@ -86,7 +97,7 @@ class PointsHandle(Handle):
 
 
 def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: float = 6.0, spheres: bool = True,
-                        name: str = "manifold_points") -> PointsHandle:
+                        name: str = "manifold_points", frames=None) -> PointsHandle:
     """Draw F^y as points coloured per point.
 
     Parameters
@@ -100,8 +111,17 @@ def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: floa
     spheres : bool, default=True
         Shade each point as a small sphere; False draws flat dots, several times cheaper
         per frame in software OpenGL (the explorer's choice for large clouds).
+    frames : ndarray of int, optional
+        Draw only these frames (level of detail, :func:`app.lod.cloud_subsample`); the
+        handle's ``frame_of`` maps a drawn point back to its frame and ``set_colors``
+        accepts one colour per frame.
     """
     Y = _xyz(Fy3, "Fy3", 1)
+    if frames is not None:
+        frames = np.asarray(frames, dtype=np.int64)
+        Y = Y[frames]
+        rgb = None if rgb is None or len(rgb) == len(Y) else np.asarray(rgb)[frames]
+        values = None if values is None or len(values) == len(Y) else np.asarray(values)[frames]
     mesh = pv.PolyData(Y.astype(np.float32))
     n = len(Y)
     mesh.point_data["rgb"] = np.full((n, 3), 160, np.uint8) if rgb is None else np.zeros((n, 3), np.uint8)
@@ -109,6 +129,7 @@ def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: floa
     actor = plotter.add_mesh(mesh, scalars="rgb", rgb=True, point_size=point_size,
                              render_points_as_spheres=bool(spheres), name=name, pickable=True, show_scalar_bar=False, reset_camera=False, render=False)
     h = PointsHandle(plotter, mesh, actor)
+    h.frames = frames
     if rgb is not None:
         h.set_colors(rgb, values)
     return h

@@ -16,6 +16,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app import scene
 from app.colouring import CLASS_LABELS, ellipsoid_colors, point_colors
+from app.lod import cloud_frames
 from app.scene.colour_bar import add_scalar_bar, configure_scalar_bar
 from app.picking import PointLocator, handle_pick, hover_text
 from app.scene.projection import nearest_on_screen, project, standard_camera, view_transform
@@ -199,7 +200,8 @@ class ManifoldView(QtWidgets.QWidget):
         # shaded spheres cost ~4x flat dots per frame in software GL; at 3.5 px they are hardly
         # distinguishable, so large clouds (the default talker's 28,800 frames) use dots
         small = len(Y) <= self.SPHERE_POINTS_MAX
-        h["points"] = scene.add_manifold_points(p, Y, point_size=5.0 if small else 3.5, spheres=small)
+        h["points"] = scene.add_manifold_points(p, Y, point_size=5.0 if small else 3.5, spheres=small,
+                                                frames=cloud_frames(m.states_.labels_))  # level of detail
         h["plane"] = scene.add_zero_velocity_plane(p, t.plane_point_, t.plane_normal_, 1.1 * L)
         h["axes"] = scene.add_global_axes(p, axes_origin(Y, t.plane_point_, t.S_, t.plane_normal_, L), t.S_,
                                           t.plane_normal_, 0.45 * L)
@@ -279,11 +281,13 @@ class ManifoldView(QtWidgets.QWidget):
         _, xy, depth = self._hover_cache
         if not self.handles["points"].visible:
             return None
-        return nearest_on_screen(xy, depth, display_xy, radius)
+        i = nearest_on_screen(xy, depth, display_xy, radius)
+        return None if i is None else self.handles["points"].frame_of(i)
 
     # --------------------------------------------------------------- events
     def _on_pick(self, point_id, xyz, shift):
-        handle_pick(self.state, int(point_id), self.locator, as_target=True if shift else None)
+        handle_pick(self.state, self.handles["points"].frame_of(point_id), self.locator,
+                    as_target=True if shift else None)
 
     def _sync_box(self, box, on):
         with blocked(box):
