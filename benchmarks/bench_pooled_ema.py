@@ -28,13 +28,12 @@ import json
 import os
 import subprocess
 import sys
-import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import blas_kernel, current_rss_mb  # noqa: E402
+from _common import blas_kernel  # noqa: E402
 
 N_FRAMES = 276_927
 RATE = 250.0
@@ -82,32 +81,12 @@ def pooled_corpus(n_frames: int = N_FRAMES, seed: int = 0):
 
 
 def one(dask: str | None) -> dict:
-    import warnings
-
-    from bench_scale import _PeakSampler, _worker_peak_mb
-
-    from engine.manifold import Manifold
+    from bench_scale import measured_build
 
     load0 = os.getloadavg()
     corpus = pooled_corpus()
-    executor = None
-    if dask:
-        from engine.scale import DaskExecutor
-
-        executor = DaskExecutor.connect(dask)
-    start = current_rss_mb()
-    sampler = _PeakSampler()
-    sampler.start()
-    c0, t = time.process_time(), time.perf_counter()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the graph's connectivity warning is not the point here
-        m = Manifold().fit(corpus, executor=executor)
-    wall, cpu = time.perf_counter() - t, time.process_time() - c0
-    peak = sampler.stop()
-    workers = None
-    if executor is not None:
-        workers = sorted(executor.client.run(_worker_peak_mb).values())
-        executor.close()
+    b = measured_build(corpus, dask)
+    m, wall, cpu, start, peak, workers = b["manifold"], b["wall"], b["cpu"], b["start"], b["peak"], b["workers"]
     return {"n_frames": corpus.n_frames, "coords": corpus.frames.shape[1], "utterances": len(corpus.utterances),
             "K": int(m.states_.centroids_.shape[0]), "L": m.embedding_.reference_.shape[0],
             "wall_s": wall, "client_cpu_s": cpu, "stages": m.timings_, "rss_start_mb": start, "rss_peak_mb": peak,

@@ -66,17 +66,13 @@ def _worker_peak_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def one(n_frames: int, resolution: str, dask: str | None) -> dict:
-    """Generate N frames, build, and measure (run in a fresh process)."""
+def measured_build(corpus, dask: str | None) -> dict:
+    """``Manifold().fit(corpus)`` (on Dask when ``dask`` names a cluster), measured: the manifold,
+    wall and client CPU seconds, resident memory at the start and peak (MB), the workers' peaks."""
     import warnings
 
-    from engine.buildplan import plan_build
     from engine.manifold import Manifold
-    from engine.synthetic import SyntheticTalker
 
-    t = time.perf_counter()
-    corpus = SyntheticTalker(duration=n_frames / 60.0, resolution=resolution).generate()
-    t_gen = time.perf_counter() - t
     executor = None
     if dask:
         from engine.scale import DaskExecutor
@@ -85,16 +81,29 @@ def one(n_frames: int, resolution: str, dask: str | None) -> dict:
     start = current_rss_mb()
     sampler = _PeakSampler()
     sampler.start()
-    t = time.perf_counter()
+    c0, t = time.process_time(), time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # connectivity warnings of the state graph are not the point here
         m = Manifold().fit(corpus, executor=executor)
-    wall = time.perf_counter() - t
+    wall, cpu = time.perf_counter() - t, time.process_time() - c0
     peak = sampler.stop()
     workers = None
     if executor is not None:
         workers = sorted(executor.client.run(_worker_peak_mb).values())
         executor.close()
+    return {"manifold": m, "wall": wall, "cpu": cpu, "start": start, "peak": peak, "workers": workers}
+
+
+def one(n_frames: int, resolution: str, dask: str | None) -> dict:
+    """Generate N frames, build, and measure (run in a fresh process)."""
+    from engine.buildplan import plan_build
+    from engine.synthetic import SyntheticTalker
+
+    t = time.perf_counter()
+    corpus = SyntheticTalker(duration=n_frames / 60.0, resolution=resolution).generate()
+    t_gen = time.perf_counter() - t
+    b = measured_build(corpus, dask)
+    m, wall, start, peak, workers = b["manifold"], b["wall"], b["start"], b["peak"], b["workers"]
     return {"n_frames": corpus.n_frames, "coords": corpus.frames.shape[1], "generate_s": t_gen,
             "plan": plan_build(corpus.n_frames).describe(), "wall_s": wall, "stages": m.timings_,
             "rss_start_mb": start, "rss_peak_mb": peak, "build_mb": peak - start,
