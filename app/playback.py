@@ -118,6 +118,7 @@ class PlaybackClock:
         self._last_position = None
         self.following_audio = False
         self.n_resyncs = 0
+        self._latest = -1  # the latest frame chosen since the last start or re-sync
 
     def start(self, frame: int = 0) -> None:
         """Start (or restart) playback at ``frame`` now (media time ``frame / rate``)."""
@@ -129,6 +130,7 @@ class PlaybackClock:
         self._last_position = self._read_position()  # a position left from before Play is not news
         self.following_audio = False
         self.n_resyncs = 0
+        self._latest = -1
 
     @property
     def running(self) -> bool:
@@ -165,6 +167,7 @@ class PlaybackClock:
             self.n_resyncs += self.following_audio
             self.following_audio = True
             self._anchor = (now, p)
+            self._latest = -1  # a real jump may go back; small corrections may not
         else:
             t, m = self._anchor
             self._anchor = (t, m + self.slew * err)
@@ -186,14 +189,19 @@ class PlaybackClock:
         Syncs to the audio first. Nearest rather than the one already begun, and the
         latency taken at its upper quartile: a frame then errs towards being early by
         less than a frame period rather than late (sight ahead of sound is tolerated far
-        better than behind it).
+        better than behind it). Between a start (or an audio re-sync jump) and the end the
+        chosen frames never decrease: when the look-ahead shrinks the latest one is held.
         """
         self.sync()
         now = self.clock()
         if self.due(now) >= self.n_frames:
             return None
         k = int(math.floor(self.media_time(now + self.latency_s) * self.rate + 0.5))
-        return min(max(k, 0), self.n_frames - 1)
+        # a shorter look-ahead or a small audio correction must not step the picture back:
+        # hold the latest frame instead (only start() or a re-sync jump may go back)
+        k = min(max(k, 0, self._latest), self.n_frames - 1)
+        self._latest = k
+        return k
 
     def next_tick_in(self, shown: int | None) -> float:
         """Clock seconds until a frame other than ``shown`` becomes the one to choose.

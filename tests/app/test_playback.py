@@ -68,6 +68,22 @@ def test_clock_looks_ahead_by_the_measured_display_latency():
     assert c.latency_s == pytest.approx(0.02)
 
 
+def test_clock_never_steps_back_when_the_look_ahead_shrinks():
+    fake = FakeClock()
+    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=1)
+    c.start(0)
+    fake.t += 1.0
+    c.shown(chosen_at=fake.t, shown_at=fake.t + 0.1)  # a slow frame: look 6 frames ahead
+    assert c.frame() == 66
+    c.shown(chosen_at=fake.t, shown_at=fake.t)  # the next was fast: no look-ahead
+    fake.t += 1 / 60
+    assert c.frame() == 66  # held (61 is due), never back to a frame already passed
+    fake.t += 6 / 60
+    assert c.frame() == 67  # the clock catches up and the picture moves on
+    c.start(10)  # a new start may go back
+    assert c.frame() == 10
+
+
 def test_clock_speed_and_validation():
     fake = FakeClock()
     c = PlaybackClock(60.0, 1000, speed=0.5, clock=fake)
