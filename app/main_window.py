@@ -362,7 +362,20 @@ class MainWindow(QtWidgets.QMainWindow):
                                                         150, 30, 1200, 10)
                 if not ok:
                     return
-            self._report(lambda: self.export_view(which, path, dpi=dpi), f"wrote {path}", f"export the {which} view")
+                self._report(lambda: self.export_view(which, path, dpi=dpi), f"wrote {path}",
+                             f"export the {which} view")
+                return
+            # vector: the scene is read here (VTK, GUI thread); writing the file, most of the time, runs in a worker
+            from app.figures.export import save_vector_figure
+            from app.figures.view_vector import scene_figure
+            from app.user_messages import plain_errors
+            from app.workers import run_task
+
+            plotter = {"manifold": self.manifold_view.plotter, "lips": self.lip_view.plotter}[which]
+            fig = scene_figure(plotter)
+            run_task(plain_errors(lambda progress: save_vector_figure(fig, path), doing=f"export the {which} view"),
+                     parent=self, title=f"Writing {path.name}",
+                     on_done=lambda p: self.statusBar().showMessage(f"wrote {p}", 5000))
 
     def export_figure_dialog(self, name):
         if self.state.manifold is None:

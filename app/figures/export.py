@@ -9,7 +9,7 @@ from pathlib import Path
 
 from engine._atomic import atomic_write
 
-__all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure", "suffix_from_filter",
+__all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure", "suffix_from_filter", "save_vector_figure",
            "save_plotter_image", "save_plotter_vector", "vector_export_available"]
 
 #: suffix -> matplotlib format name for 2-D figures
@@ -157,17 +157,23 @@ def save_plotter_vector(plotter, path, *, title: str | None = None) -> Path:
     title : str, optional
         A title drawn above the view.
     """
-    suf = _suffix(path, VECTOR_3D_FORMATS, "a 3-D view as vector graphics")
+    _suffix(path, VECTOR_3D_FORMATS, "a 3-D view as vector graphics")
     if getattr(plotter, "render_window", None) is None:
         raise ValueError("this plotter is closed; save the view before closing it")
     from app.figures.view_vector import scene_figure
 
-    fig = scene_figure(plotter, title=title)
-    fmt = suf.lstrip(".")
+    return save_vector_figure(scene_figure(plotter, title=title), path)
+
+
+def save_vector_figure(fig, path) -> Path:
+    """Write a view's vector figure (:func:`app.figures.view_vector.scene_figure`) as .svg/.pdf/.eps,
+    atomically. Touches no VTK or Qt object, so a worker thread may run it (most of an export's time)
+    while the window stays responsive."""
+    suf = _suffix(path, VECTOR_3D_FORMATS, "a 3-D view as vector graphics")
     from matplotlib import rc_context
 
     with rc_context({"svg.hashsalt": "lipspace", "svg.fonttype": "path"}), atomic_write(path) as tmp:
-        fig.savefig(tmp, format=fmt, metadata=_METADATA.get(suf, {}), facecolor=fig.get_facecolor())
+        fig.savefig(tmp, format=suf.lstrip("."), metadata=_METADATA.get(suf, {}), facecolor=fig.get_facecolor())
     return Path(path)
 
 

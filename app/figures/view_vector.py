@@ -179,6 +179,8 @@ def _scalar_bar(fig, bar, size):
         ticks = None
         norm = Normalize(lo, hi)
     cb = ColorbarBase(cax, cmap=cmap, norm=norm, ticks=ticks, orientation="vertical")
+    if cb.solids is not None:
+        cb.solids.set_rasterized(False)  # matplotlib rasterises bars of 50+ colours: keep them vector
     if ticks is not None:
         cb.set_ticklabels([f"{t:.0f}" for t in ticks])
     cb.ax.tick_params(labelsize=8)
@@ -241,6 +243,8 @@ def scene_figure(plotter, *, title: str | None = None):
     main = plotter.renderer
     M, size = view_transform(plotter)
     w, h = size
+    if w < 2 or h < 2:
+        raise ValueError(f"the 3-D view is {w}x{h} pixels on screen; show it (open its dock) before exporting it")
     fig = Figure(figsize=(w / DPI, h / DPI), dpi=DPI)
     FigureCanvasAgg(fig)
     bg = main.GetBackground()

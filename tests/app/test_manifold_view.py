@@ -74,11 +74,13 @@ def test_selection_path_and_trajectories_are_drawn_over_the_cloud(fresh, app_man
     from app.scene import pick_display_point
 
     x, y = pick_display_point(v.plotter, m.Fy_[i, :3])
+    v.plotter.render_window.Render()  # a synchronous frame of the current scene (Qt may hold a stale one)
     img = v.plotter.screenshot()
     h = img.shape[0]
     patch = img[h - 1 - int(y) - 2:h - 1 - int(y) + 3, int(x) - 2:int(x) + 3].reshape(-1, 3).astype(int)
     yellow = (patch[:, 0] > 200) & (patch[:, 1] > 170) & (patch[:, 2] < 80)
-    assert yellow.any(), patch
+    vis = {k: (v.handles[k].visible if hasattr(v.handles[k], "visible") else None) for k in v.OVERLAY}
+    assert yellow.any(), (patch, vis, img.shape, v.plotter.render_window.GetSize(), (x, y))
 
 
 def test_hover_reads_out_the_frame_under_the_pointer(fresh, qtbot, app_manifold):
@@ -204,11 +206,36 @@ def test_controls_wrap_so_a_narrow_dock_still_fits(fresh, qapp):
     qapp.processEvents()
 
 
-def test_view_menu_reset_uses_the_default_standard_view(qapp, app_manifold):
+def test_window_reset_camera_and_export_dialog(qapp, qtbot, app_manifold, tmp_path, monkeypatch):
+    import xml.etree.ElementTree as ET
+
+    from PySide6 import QtWidgets
+
     from app.main_window import MainWindow
 
     w = MainWindow(app_manifold, source={"path": None, "preset": "small"})
     try:
+        w.resize(1200, 800)
+        w.show()
+        qapp.processEvents()
+        # File > Export figure > Manifold view: no suffix typed, the SVG filter chosen -> view.svg, vector,
+        # written by a worker thread
+        monkeypatch.setattr(QtWidgets.QFileDialog, "getSaveFileName",
+                            staticmethod(lambda *a, **k: (str(tmp_path / "view"), "SVG (*.svg)")))
+        w.export_view_dialog("manifold")
+        qtbot.waitUntil(lambda: "wrote" in w.statusBar().currentMessage(), timeout=60000)
+        qtbot.waitUntil(lambda: QtWidgets.QApplication.activeModalWidget() is None, timeout=10000)
+        tags = [el.tag.rsplit("}", 1)[-1] for el in ET.parse(tmp_path / "view.svg").getroot().iter()]
+        assert "image" not in tags and "path" in tags
+        # PNG: the DPI asked for is the DPI written
+        monkeypatch.setattr(QtWidgets.QFileDialog, "getSaveFileName",
+                            staticmethod(lambda *a, **k: (str(tmp_path / "v.PNG"), "SVG (*.svg)")))
+        monkeypatch.setattr(QtWidgets.QInputDialog, "getInt", staticmethod(lambda *a, **k: (200, True)))
+        w.export_view_dialog("manifold")
+        from PIL import Image
+
+        with Image.open(tmp_path / "v.PNG") as im:
+            assert im.info["dpi"] == pytest.approx((200, 200), abs=0.01)
         w.show()
         qapp.processEvents()
         view = w.manifold_view
