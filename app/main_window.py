@@ -374,8 +374,9 @@ class MainWindow(QtWidgets.QMainWindow):
             plotter = {"manifold": self.manifold_view.plotter, "lips": self.lip_view.plotter}[which]
             fig = scene_figure(plotter)
             run_task(plain_errors(lambda progress: save_vector_figure(fig, path), doing=f"export the {which} view"),
-                     parent=self, title=f"Writing {path.name}",
+                     parent=self, title=f"Writing {path.name}", dialog=False,
                      on_done=lambda p: self.statusBar().showMessage(f"wrote {p}", 5000))
+            self.statusBar().showMessage(f"writing {path.name}…")
 
     def export_figure_dialog(self, name):
         if self.state.manifold is None:
