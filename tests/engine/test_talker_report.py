@@ -1,0 +1,58 @@
+"""engine.talker_report: scree counts, the trivial rule's classes and the realism report on the small talker."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from engine.synthetic import gesture_phases
+from engine.talker_report import components_for, format_realism, rule_classes, talker_realism
+
+
+def test_components_for_counts_leading_components():
+    assert components_for([0.5, 0.3, 0.15, 0.05]) == (2, 3, 4)
+    assert components_for([5.0, 3.0, 1.5, 0.5], fractions=(0.5, 0.8)) == (1, 2)  # fractions of the sum
+    with pytest.raises(ValueError, match="non-empty 1-D"):
+        components_for([])
+
+
+def test_rule_classes_read_the_same_convention_as_the_ground_truth():
+    x = np.array([0, 1, 3, 4, 4.5, 4.0, 3.0, 2.9])
+    bounds = np.array([[0, 8]])
+    o, a = rule_classes(x, bounds)
+    ph = gesture_phases(x, bounds)
+    ok = ph >= 0
+    ok[0] = False  # an utterance's first frame has no step into it: not scored by the report
+    np.testing.assert_array_equal(o[ok], ph[ok] <= 1)
+    np.testing.assert_array_equal(a[ok], np.isin(ph[ok], (0, 2)))
+
+
+def test_realism_report_on_the_small_talker(small_manifold):
+    r = talker_realism(small_manifold)
+    assert r["x_recovered"][0] <= r["x_recovered"][1] <= r["x_recovered"][2] <= r["x_computed"]
+    assert 0.8 < r["y3"] <= 1.0 and r["sign"] == 1.0
+    # the report's ground truth is the talker's exact gesture phases: with the exact aperture as
+    # "F^x_1" the rule reproduces them on every scored frame
+    m = small_manifold
+
+    class _Exact:  # the attributes talker_realism reads, with the exact aperture as F^x_1
+        corpus_, shape_, embedding_, tangent_ = m.corpus_, m.shape_, m.embedding_, m.tangent_
+        Fx_ = np.column_stack([m.corpus_.latent["aperture"], m.Fx_[:, 1:]])
+
+    e = talker_realism(_Exact)
+    assert e["rule"] == {"opening": 1.0, "accelerating": 1.0, "classes": 1.0}
+    # on the noisy frames the rule and the method both find opening far above chance,
+    # acceleration well below opening (capture noise in the second difference)
+    for who in ("method", "rule"):
+        assert r[who]["opening"] > 0.85 and 0.55 < r[who]["accelerating"] < r[who]["opening"]
+    lines = format_realism(r)
+    assert any("Delta F^x_1 rule" in ln for ln in lines) and any("Y1-3 hold" in ln for ln in lines)
+
+
+def test_realism_report_needs_the_ground_truth(small_manifold):
+    class _M:
+        corpus_ = dataclasses.replace(small_manifold.corpus_, latent={})
+
+    with pytest.raises(ValueError, match="no ground-truth 'aperture'"):
+        talker_realism(_M)
