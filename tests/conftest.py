@@ -42,3 +42,18 @@ def shared_data():
     if not SHARED_DATA.is_dir():
         pytest.skip(f"real sample data not found at {SHARED_DATA} (../shared/data beside the project)")
     return SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def dask_cluster():
+    """One two-worker in-process Dask LocalCluster for every Dask test (starting one costs seconds).
+
+    Threads, not processes (``processes=False``); the scheduler's HTTP server on a free port.
+    Tests connect with ``Client(dask_cluster)`` or pass ``dask_cluster.scheduler_address`` to a command.
+    """
+    pytest.importorskip("distributed")
+    from distributed import LocalCluster
+
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0")
+    yield cluster
+    cluster.close()

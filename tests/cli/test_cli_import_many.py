@@ -47,14 +47,10 @@ def test_import_many_in_processes_skips_the_unreadable_file_with_its_reason(inpu
     np.testing.assert_array_equal(a.frames, b.frames)
 
 
-def test_import_many_on_dask_equals_in_process(inputs, tmp_path, capsys):
-    pytest.importorskip("distributed")
-    from distributed import LocalCluster
-
+def test_import_many_on_dask_equals_in_process(inputs, tmp_path, capsys, dask_cluster):
     ref, out = tmp_path / "ref.npz", tmp_path / "dask.npz"
     assert _import(inputs, ref, "--jobs", "1") == 0
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
-        assert _import(inputs, out, "--dask", cluster.scheduler_address) == 0
+    assert _import(inputs, out, "--dask", dask_cluster.scheduler_address) == 0
     err = capsys.readouterr().err
     assert "Dask 2 workers" in err and f"skipped {inputs[3]}: " in err
     np.testing.assert_array_equal(Corpus.load(out).frames, Corpus.load(ref).frames)

@@ -7,19 +7,16 @@ from app.cli import main
 pytest.importorskip("distributed")
 
 
-def test_build_on_a_running_scheduler(tmp_path, small_corpus, capsys):
-    from distributed import LocalCluster
-
+def test_build_on_a_running_scheduler(tmp_path, small_corpus, capsys, dask_cluster):
     from engine.manifold import Manifold
 
     corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1500])
     src = corpus.save(tmp_path / "c.npz")
     out = tmp_path / "m.npz"
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
-        assert main(["build", str(src), "-o", str(out), "-q", "--states", "30", "--dask", cluster.scheduler_address,
-                     "--dask-blocks", str(tmp_path / "blocks")]) == 0
+    assert main(["build", str(src), "-o", str(out), "-q", "--states", "30", "--dask",
+                 dask_cluster.scheduler_address, "--dask-blocks", str(tmp_path / "blocks")]) == 0
     text = capsys.readouterr().out
-    assert "Dask 2 workers, 2 threads at " + cluster.scheduler_address in text
+    assert "Dask 2 workers, 2 threads at " + dask_cluster.scheduler_address in text
     assert sorted(p.name for p in (tmp_path / "blocks" / "frames").iterdir())[0] == "block_00000.npy"
     m = Manifold.load(out)
     assert m.Fy_.shape == (corpus.n_frames, 10) and np.isfinite(m.Fy_).all()

@@ -32,10 +32,7 @@ def test_round_trip_and_faults_name_the_block(corpus, tmp_path):
         save_blocked(corpus, path, block_frames=10)
 
 
-def test_import_in_blocks_then_build_on_dask_reads_them_in_place(corpus, tmp_path, capsys):
-    pytest.importorskip("distributed")
-    from distributed import LocalCluster
-
+def test_import_in_blocks_then_build_on_dask_reads_them_in_place(corpus, tmp_path, capsys, dask_cluster):
     from engine.manifold import Manifold
 
     src = corpus.save(tmp_path / "whole.npz")
@@ -45,14 +42,13 @@ def test_import_in_blocks_then_build_on_dask_reads_them_in_place(corpus, tmp_pat
     n_blocks = len(list(blocks_folder(blocked).glob("block_*.npy")))
     assert n_blocks >= 2
     out, scratch = tmp_path / "m.npz", tmp_path / "scratch"
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
-        assert main(["build", str(blocked), "-o", str(out), "-q", "--states", "30", "--dask",
-                     cluster.scheduler_address, "--dask-blocks", str(scratch)]) == 0
+    assert main(["build", str(blocked), "-o", str(out), "-q", "--states", "30", "--dask",
+                 dask_cluster.scheduler_address, "--dask-blocks", str(scratch)]) == 0
     assert not (scratch / "frames").exists()  # F was not written out again: the workers read the import's blocks
-    d = Manifold.load(out)
-    ref = Manifold(n_states=30).fit(Corpus.load(src))
+    assert main(["build", str(blocked), "-o", str(tmp_path / "m2.npz"), "-q", "--states", "30"]) == 0  # in-process
+    d, ref = Manifold.load(out), Manifold.load(tmp_path / "m2.npz")
+    np.testing.assert_array_equal(ref.corpus_.frames, Corpus.load(src).frames)  # the blocks hold the corpus
     assert d.Fx_.shape == ref.Fx_.shape
     from scipy.linalg import subspace_angles
 
     assert np.degrees(subspace_angles(d.Fx_.astype(np.float64), ref.Fx_.astype(np.float64)).max()) < 0.01
-    assert main(["build", str(blocked), "-o", str(tmp_path / "m2.npz"), "-q", "--states", "30"]) == 0  # in-process

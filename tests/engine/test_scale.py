@@ -15,16 +15,14 @@ CLASS_AGREEMENT_MIN = 0.995  # measured 1.0
 
 
 @pytest.fixture(scope="module")
-def executor(tmp_path_factory):
-    from distributed import Client, LocalCluster
+def executor(tmp_path_factory, dask_cluster):
+    from distributed import Client
 
     from engine.scale import DaskExecutor
 
-    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0")
-    ex = DaskExecutor(Client(cluster), chunk_dir=tmp_path_factory.mktemp("blocks"), block_frames=512,
-                      own_cluster=True)
+    ex = DaskExecutor(Client(dask_cluster), chunk_dir=tmp_path_factory.mktemp("blocks"), block_frames=512)
     yield ex
-    ex.close()
+    ex.close()  # the client only: the session's cluster stays
 
 
 @pytest.fixture(scope="module")
