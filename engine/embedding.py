@@ -16,6 +16,7 @@ N^2 work.
 from __future__ import annotations
 
 import os
+from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -90,19 +91,24 @@ class _DistanceOperator:
     def _map(self, fn, reduce):
         """Run ``fn`` on every block of rows; ``reduce(sl, result)`` in block order.
 
-        Blocks are submitted a few per worker at a time and each result is reduced and
-        dropped before the next group starts, so memory holds O(workers) block results,
+        At most a few blocks per worker are in flight (a sliding window) and each result
+        is reduced, in block order, and dropped, so memory holds O(workers) block results,
         never one per block (with N^2/block blocks that grew as N^3), and sums are
         taken in a fixed order (results do not depend on thread timing).
         """
         N = self.G.shape[0]
-        slices = [slice(s, min(N, s + self.block)) for s in range(0, N, self.block)]
-        group = 4 * self.workers
+        in_flight = 4 * self.workers
+        pending = deque()
         with one_blas_thread(), ThreadPoolExecutor(self.workers) as ex:
-            for g in range(0, len(slices), group):
-                part = slices[g:g + group]
-                for sl, res in zip(part, ex.map(fn, part)):
-                    reduce(sl, res)
+            for s in range(0, N, self.block):
+                sl = slice(s, min(N, s + self.block))
+                pending.append((sl, ex.submit(fn, sl)))
+                if len(pending) >= in_flight:  # a sliding window: no worker waits for a whole group
+                    done, fut = pending.popleft()
+                    reduce(done, fut.result())
+            while pending:
+                done, fut = pending.popleft()
+                reduce(done, fut.result())
         self.passes += 1
         report(self.progress, self.stage, self.passes, 0)
 

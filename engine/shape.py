@@ -227,8 +227,9 @@ class ShapeSpace(BaseEstimator):
         _, s, Vt = thin_svd(B.astype(np.float64))
         s, Vt = s[:k], Vt[:k]
         total = 0.0
-        for sl in _row_blocks(N, block):
-            total += float(((F[sl] - mean32).astype(np.float64) ** 2).sum())
+        for sl in _row_blocks(N, block):  # squares summed in float64 without a float64 copy of the block
+            d = F[sl] - mean32
+            total += float(np.einsum("ij,ij->", d, d, dtype=np.float64))
         report(progress, "shape space", total_steps, total_steps)
         self.n_range_ = k + p
         return self._set_fitted(s, Vt, total, N, mean)
