@@ -11,7 +11,8 @@ import pyvista as pv
 
 from app.scene.handles import Handle
 
-__all__ = ["lip_mesh", "LipsHandle", "ContourHandle", "add_lips", "add_lip_contour", "lip_colours", "SKIN"]
+__all__ = ["lip_mesh", "LipsHandle", "ContourHandle", "add_lips", "add_lip_contour", "lip_colours", "SKIN",
+           "mouth_interior", "MOUTH"]
 
 
 def _points(points):
@@ -47,11 +48,24 @@ class LipsHandle(Handle):
     """A lip mesh (or marker set) whose points are moved in place, frame by frame.
 
     ``offset`` (3,) is added to every frame (to show two trajectories side by side).
+    ``extras``: further actors shown, hidden and removed with the lips (the mouth's dark
+    interior behind a synthetic lip mesh).
     """
 
-    def __init__(self, plotter, mesh, actor, offset):
+    def __init__(self, plotter, mesh, actor, offset, extras=()):
         super().__init__(plotter, mesh, actor)
         self.offset = np.asarray(offset, np.float32)
+        self.extras = tuple(extras)
+
+    def set_visible(self, visible: bool) -> None:
+        super().set_visible(visible)
+        for a in self.extras:
+            a.SetVisibility(bool(visible))
+
+    def remove(self) -> None:
+        super().remove()
+        for a in self.extras:
+            self.plotter.remove_actor(a, render=False)
 
     def update(self, points) -> None:
         P = _points(points)
@@ -164,8 +178,9 @@ def add_lips(plotter, points, faces=None, *, color=(0.85, 0.45, 0.45), offset=(0
 
     Without ``faces``, markers with roles (or names) that can form a lip contour are
     drawn as one (:func:`add_lip_contour`); otherwise as spheres. A mesh is smooth-shaded;
-    with the synthetic lip model's point names its vermilion takes ``color`` and the skin
-    around it a skin tone (:func:`lip_colours`).
+    with the synthetic lip model's point names its vermilion takes ``color``, the skin
+    around it a skin tone (:func:`lip_colours`), and a dark mouth interior is drawn behind
+    it (:func:`mouth_interior`).
     """
     if (faces is None or len(faces) == 0) and (roles is not None or names is not None):
         try:
@@ -182,14 +197,40 @@ def add_lips(plotter, points, faces=None, *, color=(0.85, 0.45, 0.45), offset=(0
         # point: no facets, and no per-triangle colour steps that show as seams in exports
         mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
         rgb = lip_colours(mesh.n_points, color, names)
+        extras = []
         if rgb is None:
             kw = {"color": color}
         else:
             mesh.point_data["lip_rgb"] = rgb
             kw = {"scalars": "lip_rgb", "rgb": True}
+            extras.append(plotter.add_mesh(mouth_interior(np.asarray(mesh.points)), color=MOUTH, lighting=False,
+                                           name=f"{name}_interior", pickable=False, reset_camera=False,
+                                           render=False))
         actor = plotter.add_mesh(mesh, specular=0.25, specular_power=12.0, smooth_shading=True, name=name,
                                  pickable=False, reset_camera=False, render=False, show_scalar_bar=False, **kw)
+        return LipsHandle(plotter, mesh, actor, offset, extras)
     return LipsHandle(plotter, mesh, actor, offset)
+
+
+#: colour of the mouth's interior seen through the lips' aperture
+MOUTH = (0.16, 0.05, 0.06)
+
+
+def mouth_interior(points) -> pv.PolyData:
+    """A dark rounded rectangle (superellipse) behind a synthetic lip mesh (points (V, 3) of one
+    frame, mm): 0.84 of the mesh's width across, from 8 mm above to 24 mm below its vertical
+    centre, 3 mm behind its deepest point. The skin of the mesh hides it everywhere but
+    through the aperture."""
+    P = np.asarray(points, np.float64)
+    lo, hi = P.min(0), P.max(0)
+    cx = 0.5 * (lo[0] + hi[0])
+    cy = float(np.median(P[:, 1]))
+    t = np.linspace(0, 2 * np.pi, 96, endpoint=False)
+    rx, ry = 0.42 * (hi[0] - lo[0]), 16.0
+    c, sn = np.cos(t), np.sin(t)
+    sx, sy = np.sign(c) * np.abs(c) ** 0.5, np.sign(sn) * np.abs(sn) ** 0.5  # superellipse, exponent 4
+    ring = np.column_stack([cx + rx * sx, cy - 8.0 + ry * sy, np.full(len(t), lo[2] - 3.0)])
+    return pv.PolyData(ring.astype(np.float32), np.r_[len(t), np.arange(len(t))])
 
 
 #: the skin colour the lip colour is blended towards outside the vermilion
