@@ -213,6 +213,10 @@ def test_bad_parameters_are_rejected():
         SyntheticTalker(preset="small", rate=-1.0).generate()
     with pytest.raises(ValueError, match="n_sentences"):
         SyntheticTalker(preset="small", n_sentences=0).generate()
+    with pytest.raises(ValueError, match="speakers must be an integer in 1..100"):
+        SyntheticTalker(preset="small", speakers=0).generate()
+    with pytest.raises(ValueError, match=r"registration must be in \[0, 5\]"):
+        SyntheticTalker(preset="small", registration=-0.1).generate()
 
 
 # ------------------------------------------------------------------ cache
