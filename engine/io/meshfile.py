@@ -163,11 +163,22 @@ _CHUNK = 1 << 20
 
 
 def _gather(u8, starts, dt):
-    """Values of dtype ``dt`` at the (unaligned) byte offsets ``starts`` of ``u8``."""
-    if dt.itemsize == 1:
+    """Values of dtype ``dt`` at the (unaligned) byte offsets ``starts`` of ``u8``.
+
+    One zero-copy view of the buffer per byte phase (offset modulo the item size): a
+    value at byte p is item p // size of the view starting at p % size.
+    """
+    k = dt.itemsize
+    if k == 1:
         return u8[starts].view(dt)
-    idx = starts[:, None] + np.arange(dt.itemsize)
-    return np.ascontiguousarray(u8[idx]).view(dt).reshape(-1)
+    out = np.empty(len(starts), dt)
+    phase = starts % k
+    for o in range(k):
+        sel = phase == o
+        if sel.any():
+            view = np.frombuffer(u8, dt, count=(len(u8) - o) // k, offset=o)
+            out[sel] = view[starts[sel] // k]
+    return out
 
 
 def _row_lengths(u8, p, props, endian):
