@@ -5,8 +5,9 @@ VTK's gl2ps exporter, with the OpenGL2 backend of every current VTK wheel, write
 module instead reads what each visible actor draws (points, lines, triangles, their
 colours, opacity and placement), projects it with the view's camera exactly as on
 screen, and draws it with matplotlib as vector primitives: points as markers, lines as
-polylines, surfaces as flat-shaded polygons sorted back to front (painter's
-algorithm; back faces culled where the actor culls them). The colour bar, the legend,
+polylines, surfaces as shaded polygons sorted back to front (painter's
+algorithm; back faces culled where the actor culls them); opaque smooth-shaded
+surfaces (the lips) as Gouraud triangles shaded from their vertex normals, as on screen. The colour bar, the legend,
 3-D text labels and plain text overlays are redrawn as matplotlib text and patches.
 Layered renderers (the manifold view's overlay) are drawn after the main one, as on
 screen.
@@ -103,6 +104,9 @@ def _actor_primitives(actor, M, size, view_dir):
         tri = [ids for ids in polys if len(ids) >= 3]
         if tri:
             cull = bool(prop.GetBackfaceCulling())
+            # smooth-shaded opaque surfaces (the lips) are drawn as Gouraud triangles: flat facets
+            # showed where the window shows a smooth surface; see-through ones stay flat polygons
+            smooth = prop.GetInterpolation() != 0 and base[3] >= 1.0 and (per_point is None or col[:, 3].min() >= 1.0)
             edges = bool(prop.GetEdgeVisibility())
             edge_col = np.array([*prop.GetEdgeColor(), base[3]])
             tri3 = [ids for ids in tri if len(ids) == 3]
@@ -123,6 +127,13 @@ def _actor_primitives(actor, M, size, view_dir):
                 nn = np.linalg.norm(nrm, axis=1)
                 cosv = np.where(nn > 0, np.abs(nrm @ view_dir) / np.where(nn > 0, nn, 1.0), 1.0)
                 shade = 0.45 + 0.55 * cosv
+                if smooth and T.shape[1] == 3:
+                    # as on screen: the shade interpolated over each triangle from its corners' normals
+                    vshade = 0.45 + 0.55 * np.abs(_vertex_normals(W, tri3) @ view_dir)
+                    vc = col[T].copy()
+                    vc[..., :3] = np.clip(vc[..., :3] * vshade[T][..., None], 0, 1)
+                    out.append(("gouraud", p2, depth[T].mean(axis=1), vc))
+                    continue
                 c = col[T].mean(axis=1)
                 faces.extend(list(p2))
                 fdepth.extend(depth[T].mean(axis=1))
@@ -130,6 +141,37 @@ def _actor_primitives(actor, M, size, view_dir):
             if faces:
                 out.append(("polys", faces, np.asarray(fdepth), np.asarray(fcol), edge_col if edges else None))
     return out, (float(depth.max()) if n else 0.0, float(depth.mean()) if n else 0.0)
+
+
+def _vertex_normals(W, triangles):
+    """Unit normals at the vertices: area-weighted sums of the faces around each, shape (n, 3)."""
+    T = np.asarray(triangles, dtype=np.intp).reshape(-1, 3)
+    fn = np.cross(W[T[:, 1]] - W[T[:, 0]], W[T[:, 2]] - W[T[:, 0]])
+    vn = np.zeros_like(W)
+    for j in range(3):
+        np.add.at(vn, T[:, j], fn)
+    nn = np.linalg.norm(vn, axis=1, keepdims=True)
+    return np.divide(vn, nn, out=np.zeros_like(vn), where=nn > 0)
+
+
+def _gouraud_artist(verts, colours, zorder):
+    """An artist drawing triangles (m, 3, 2) with corner colours (m, 3, 4) interpolated over each.
+
+    The PDF/EPS backends write one Gouraud shading; SVG approximates it with gradients.
+    """
+    from matplotlib.artist import Artist
+
+    class GouraudTriangles(Artist):
+        def draw(self, renderer):
+            if not self.get_visible():
+                return
+            gc = renderer.new_gc()
+            renderer.draw_gouraud_triangles(gc, verts, colours, self.axes.transData.frozen())
+            gc.restore()
+
+    a = GouraudTriangles()
+    a.set_zorder(zorder)
+    return a
 
 
 def _draw(ax, prims, zbase):
@@ -147,6 +189,10 @@ def _draw(ax, prims, zbase):
             _, xy, depth, col, width = prim
             ax.add_collection(LineCollection([xy], colors=[col], linewidths=max(width, 0.5) * 72.0 / DPI,
                                              capstyle="round", joinstyle="round", zorder=z))
+        elif kind == "gouraud":
+            _, tris, depth, vcol = prim
+            order = np.argsort(-depth)  # far first
+            ax.add_artist(_gouraud_artist(tris[order], vcol[order], z))
         else:
             _, faces, depth, fcol, edge = prim
             order = np.argsort(-depth)

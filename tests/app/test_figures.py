@@ -550,3 +550,32 @@ def test_fig2a_panels_fill_their_cells(figs):
     box = {ax.get_xlabel() + ax.get_ylabel(): ax.get_window_extent(r) for ax in flat}
     assert box["$Y_1$$Y_2$"].width == pytest.approx(box["$Y_1$$Y_3$"].width, rel=0.03)
     assert box["$Y_1$$Y_3$"].height == pytest.approx(box["$Y_2$$Y_3$"].height, rel=0.03)
+
+
+@pytest.mark.gui
+def test_vector_export_shades_smooth_surfaces_smoothly(can_render, tmp_path):
+    """A smooth-shaded opaque surface (the lips) is exported as Gouraud triangles, not flat facets."""
+    import pyvista as pv
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from app.figures.view_vector import scene_figure
+
+    def export(smooth):
+        p = pv.Plotter(off_screen=True, window_size=(200, 200))
+        p.add_mesh(pv.Sphere(theta_resolution=10, phi_resolution=10), color=(0.8, 0.8, 0.8), smooth_shading=smooth)
+        p.camera.zoom(0.7)
+        p.render()
+        fig = scene_figure(p)
+        out = F.save_plotter_vector(p, tmp_path / f"s{int(smooth)}.pdf")
+        p.close()
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        grey = np.asarray(canvas.buffer_rgba())[85:115, 85:115, 0].astype(float)  # inside the sphere
+        # facet edges: the largest steps between neighbouring pixels
+        return out.read_bytes(), fig.lipspace["n_polygons"], np.percentile(np.abs(np.diff(grey, axis=1)), 99)
+
+    pdf_s, n_s, step_s = export(True)
+    pdf_f, n_f, step_f = export(False)
+    assert b"/ShadingType 4" in pdf_s and b"/ShadingType 4" not in pdf_f   # a Gouraud mesh vs polygons
+    assert n_s > 50 and n_f > 50 and b"/Subtype /Image" not in pdf_s
+    assert step_f >= 3 and step_s <= 0.5 * step_f, (step_s, step_f)
