@@ -79,6 +79,28 @@ def app_manifold(small_manifold):
     return small_manifold
 
 
+def shown_main_window(qapp, manifold, size=(1300, 850)):
+    """Yield the explorer window on ``manifold`` (the small preset), shown at ``size``; closed after.
+
+    Module-scoped window fixtures reach it through the ``main_window_factory`` fixture.
+    """
+    from app.main_window import MainWindow
+
+    w = MainWindow(manifold, source={"path": None, "preset": "small"})
+    w.resize(*size)
+    w.show()
+    for _ in range(5):
+        qapp.processEvents()
+    yield w
+    w.close()
+
+
+@pytest.fixture(scope="session")
+def main_window_factory():
+    """:func:`shown_main_window`, for ``yield from main_window_factory(qapp, app_manifold)``."""
+    return shown_main_window
+
+
 @pytest.fixture(scope="session", autouse=True)
 def _window_settings_in_tmp(tmp_path_factory):
     """Windows of the tests keep geometry, layout and recent files in a temporary folder, not the user's."""

@@ -48,16 +48,8 @@ def test_time_ticks_are_whole_milliseconds_spaced_for_the_width():
 # ------------------------------------------------------------------ the widget
 
 @pytest.fixture(scope="module")
-def editor_window(qapp, app_manifold):
-    from app.main_window import MainWindow
-
-    w = MainWindow(app_manifold, source={"path": None, "preset": "small"})
-    w.resize(1300, 850)
-    w.show()
-    for _ in range(5):
-        qapp.processEvents()
-    yield w
-    w.close()
+def editor_window(qapp, app_manifold, main_window_factory):
+    yield from main_window_factory(qapp, app_manifold)
 
 
 @pytest.fixture

@@ -8,16 +8,8 @@ pytestmark = pytest.mark.gui
 
 
 @pytest.fixture(scope="module")
-def window(qapp, app_manifold):
-    from app.main_window import MainWindow
-
-    w = MainWindow(app_manifold, source={"path": None, "preset": "small"})
-    w.resize(1300, 850)
-    w.show()
-    for _ in range(5):
-        qapp.processEvents()
-    yield w
-    w.close()
+def window(qapp, app_manifold, main_window_factory):
+    yield from main_window_factory(qapp, app_manifold)
 
 
 @pytest.fixture
