@@ -45,12 +45,9 @@ _SESSION = "autosave-{run}.lipspace.json"
 
 def state_dir() -> Path:
     """Lipspace's state directory (``$LIPSPACE_STATE_DIR`` or the platform user state dir)."""
-    env = os.environ.get(STATE_DIR_ENV)
-    if env:
-        return Path(env)
-    from platformdirs import user_state_dir
+    from engine.userdirs import user_dir
 
-    return Path(user_state_dir("lipspace"))
+    return user_dir("state", STATE_DIR_ENV)
 
 
 def _start_ticks(pid: int) -> int | None:

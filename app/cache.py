@@ -15,7 +15,6 @@ be one the user named with ``$LIPSPACE_CACHE_DIR``.
 """
 from __future__ import annotations
 
-import os
 import re
 import shutil
 from dataclasses import dataclass
@@ -32,12 +31,9 @@ CACHE_DIR_ENV = "LIPSPACE_CACHE_DIR"
 
 def cache_dir() -> Path:
     """The cache folder: ``$LIPSPACE_CACHE_DIR``, else the platform's user cache folder."""
-    env = os.environ.get(CACHE_DIR_ENV)
-    if env:
-        return Path(env)
-    from platformdirs import user_cache_dir
+    from engine.userdirs import user_dir
 
-    return Path(user_cache_dir("lipspace"))
+    return user_dir("cache", CACHE_DIR_ENV)
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,6 @@ import hashlib
 import json
 import math
 import numbers
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -603,12 +602,9 @@ def cache_folder(override=None) -> Path:
     platform's user cache folder for ``lipspace``."""
     if override is not None:
         return Path(override)
-    env = os.environ.get("LIPSPACE_CACHE_DIR")
-    if env:
-        return Path(env)
-    import platformdirs
+    from engine.userdirs import user_dir
 
-    return Path(platformdirs.user_cache_dir("lipspace"))
+    return user_dir("cache", "LIPSPACE_CACHE_DIR")
 
 
 def generator_fingerprint() -> str:

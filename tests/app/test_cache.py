@@ -98,3 +98,14 @@ def test_window_cache_uses_the_current_entry_rebuilds_a_damaged_one_and_prunes(s
     from engine.manifold import Manifold
 
     assert Manifold.load(cur).Fy_.shape[0] == tiny.n_frames  # the damaged entry was replaced
+
+
+def test_cache_and_state_folders_follow_one_rule(monkeypatch, tmp_path):
+    from app.autosave import state_dir
+    from app.cache import cache_dir
+    from engine.synthetic import cache_folder
+
+    monkeypatch.setenv("LIPSPACE_CACHE_DIR", str(tmp_path / "c"))
+    monkeypatch.setenv("LIPSPACE_STATE_DIR", str(tmp_path / "s"))
+    assert cache_dir() == cache_folder() == tmp_path / "c" and state_dir() == tmp_path / "s"
+    assert cache_folder(tmp_path / "o") == tmp_path / "o"
