@@ -8,6 +8,7 @@ are skipped with the reason.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import os
 import shutil
 import subprocess
@@ -79,25 +80,25 @@ def app_manifold(small_manifold):
     return small_manifold
 
 
+@contextlib.contextmanager
 def shown_main_window(qapp, manifold, size=(1300, 850)):
-    """Yield the explorer window on ``manifold`` (the small preset), shown at ``size``; closed after.
-
-    Module-scoped window fixtures reach it through the ``main_window_factory`` fixture.
-    """
+    """The explorer window on ``manifold`` (the small preset), shown at ``size``; closed on exit."""
     from app.main_window import MainWindow
 
     w = MainWindow(manifold, source={"path": None, "preset": "small"})
-    w.resize(*size)
-    w.show()
-    for _ in range(5):
-        qapp.processEvents()
-    yield w
-    w.close()
+    try:
+        w.resize(*size)
+        w.show()
+        for _ in range(5):
+            qapp.processEvents()
+        yield w
+    finally:
+        w.close()
 
 
 @pytest.fixture(scope="session")
 def main_window_factory():
-    """:func:`shown_main_window`, for ``yield from main_window_factory(qapp, app_manifold)``."""
+    """:func:`shown_main_window`: ``with main_window_factory(qapp, manifold) as w: ...``."""
     return shown_main_window
 
 

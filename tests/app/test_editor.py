@@ -49,7 +49,8 @@ def test_time_ticks_are_whole_milliseconds_spaced_for_the_width():
 
 @pytest.fixture(scope="module")
 def editor_window(qapp, app_manifold, main_window_factory):
-    yield from main_window_factory(qapp, app_manifold)
+    with main_window_factory(qapp, app_manifold) as w:
+        yield w
 
 
 @pytest.fixture

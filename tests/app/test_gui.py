@@ -9,7 +9,8 @@ pytestmark = pytest.mark.gui
 
 @pytest.fixture(scope="module")
 def window(qapp, app_manifold, main_window_factory):
-    yield from main_window_factory(qapp, app_manifold)
+    with main_window_factory(qapp, app_manifold) as w:
+        yield w
 
 
 @pytest.fixture

@@ -34,17 +34,11 @@ def ema_manifold():
         return Manifold(n_states=16).fit(corpus)
 
 
-def test_unlabelled_sparse_markers_in_the_explorer(qapp, qtbot, ema_manifold):
-    from app.main_window import MainWindow
+def test_unlabelled_sparse_markers_in_the_explorer(qapp, qtbot, ema_manifold, main_window_factory):
     from app.scene import ContourHandle
 
     m = ema_manifold
-    w = MainWindow(m, source={"path": None, "preset": "small"})
-    w.resize(1100, 800)
-    w.show()
-    try:
-        for _ in range(5):
-            qapp.processEvents()
+    with main_window_factory(qapp, m, size=(1100, 800)) as w:
         lv = w.lip_view
         assert isinstance(lv.main, ContourHandle) and lv.main.labels is not None
         u = m.corpus_.utterances[1]
@@ -59,5 +53,3 @@ def test_unlabelled_sparse_markers_in_the_explorer(qapp, qtbot, ema_manifold):
         from engine.corpus import frame_points
 
         np.testing.assert_allclose(lv.main.points, frame_points(m.corpus_.frames[u.start + 10], 3), atol=1e-4)
-    finally:
-        w.close()

@@ -163,17 +163,11 @@ def test_live_window_draws_trail_future_and_counts(video_world, qtbot):
 
 
 @pytest.mark.gui
-def test_explorer_lip_view_shows_the_lip_surface_of_a_video_corpus(qapp, video_world):
-    from app.main_window import MainWindow
+def test_explorer_lip_view_shows_the_lip_surface_of_a_video_corpus(qapp, video_world, main_window_factory):
     from app.scene.lips import ContourHandle
 
     m = video_world["manifold"]
-    w = MainWindow(m, source={"path": None, "preset": "small"})
-    w.resize(1100, 800)
-    w.show()
-    try:
-        for _ in range(5):
-            qapp.processEvents()
+    with main_window_factory(qapp, m, size=(1100, 800)) as w:
         lv = w.lip_view
         assert not isinstance(lv.main, ContourHandle)  # the FaceMesh surface, not a marker contour
         assert lv.main.mesh.n_cells == 120 and "Normals" in lv.main.mesh.point_data
@@ -182,5 +176,3 @@ def test_explorer_lip_view_shows_the_lip_surface_of_a_video_corpus(qapp, video_w
             qapp.processEvents()
         P = m.corpus_.frames.reshape(m.corpus_.n_frames, -1, 3)
         np.testing.assert_allclose(lv.main.points, P[10], atol=1e-4)  # it moves with the frames
-    finally:
-        w.close()
