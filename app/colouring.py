@@ -21,7 +21,7 @@ import numpy as np
 
 __all__ = ["Coloring", "CLASS_COLOURS", "CLASS_LABELS", "UNREACHABLE_RGB", "OUTSIDE_RGB", "DENSITY_CMAP",
            "FUTURE_CMAP", "PAST_CMAP", "RESERVED_COLOURS", "ELLIPSOID_COLOURS", "point_colors",
-           "hop_distances", "hop_table", "hemisphere_coloring", "categorical_palette", "phone_palette",
+           "hop_table", "hemisphere_coloring", "categorical_palette", "phone_palette",
            "ellipsoid_colors", "dim", "delta_e", "LEGEND_MAX"]
 
 #: the four tangent classes (engine.tangent classes_ 0..3), as in the figure set
@@ -153,21 +153,6 @@ def ellipsoid_colors(visible) -> dict:
 
 
 # ------------------------------------------------------------------------- hop distance
-def hop_distances(manifold, state: int, hemisphere: str) -> np.ndarray:
-    """Directed hop distance of every state from ``state`` (future) or to it (past).
-
-    Returns ndarray of shape (K,) float, inf where unreachable. ``hemisphere="off"``
-    gives 0 at ``state`` and inf elsewhere.
-    """
-    from engine.horizon import directed_hops
-
-    if hemisphere == "off":
-        d = np.full(manifold.states_.centroids_.shape[0], np.inf)
-        d[state] = 0.0
-        return d
-    return directed_hops(manifold.states_, state, hemisphere)
-
-
 def hop_table(max_hops: int, direction: str) -> tuple[np.ndarray, float, float]:
     """The discrete colour scale of signed hop distances.
 

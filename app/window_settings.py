@@ -73,11 +73,6 @@ class WindowSettings:
         ok = window.restoreGeometry(geometry)
         return bool(window.restoreState(state, LAYOUT_VERSION)) and bool(ok)
 
-    def forget_layout(self) -> None:
-        for key in ("window/geometry", "window/state", "window/layout_version"):
-            self.qsettings.remove(key)
-        self.qsettings.sync()
-
     # ------------------------------------------------------------------ recent files
     def recent_files(self) -> list[str]:
         """Recently opened files, most recent first (at most :data:`MAX_RECENT`)."""
