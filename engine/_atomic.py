@@ -6,7 +6,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write"]
+__all__ = ["atomic_write", "write_text_atomic", "write_wav_atomic"]
 
 
 @contextlib.contextmanager
@@ -100,4 +100,26 @@ def write_text_atomic(path, text: str) -> Path:
     """Write ``text`` to ``path`` atomically (UTF-8)."""
     with atomic_write(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
+    return Path(path)
+
+
+def write_wav_atomic(path, samples, rate) -> Path:
+    """Write 16-bit PCM ``samples`` to the WAV file ``path`` atomically.
+
+    Parameters
+    ----------
+    samples : ndarray of shape (n,) or (n, channels)
+        int16 samples are written as they are; float samples are full scale at ±1
+        (clipped there, rounded to int16).
+    rate : float
+        Sample rate in Hz (rounded to an integer).
+    """
+    import numpy as np
+    import scipy.io.wavfile
+
+    x = np.asarray(samples)
+    if x.dtype != np.int16:
+        x = np.round(np.clip(x.astype(np.float64), -1.0, 1.0) * 32767).astype(np.int16)
+    with atomic_write(path) as tmp:
+        scipy.io.wavfile.write(tmp, int(round(float(rate))), x)
     return Path(path)

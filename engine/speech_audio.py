@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from engine._atomic import atomic_write
+from engine._atomic import write_wav_atomic
 from engine.phonetics import PAUSE, pronounce
 from engine.progress import report
 
@@ -230,16 +230,6 @@ def _trim(x):
     return int(idx[0]), int(idx[-1]) + 1
 
 
-def _write_wav(path, samples):
-    pcm = np.clip(np.round(samples * 32767.0), -32768, 32767).astype("<i2")
-    with atomic_write(path) as tmp:
-        with wave.open(str(tmp), "wb") as w:
-            w.setnchannels(1)
-            w.setsampwidth(2)
-            w.setframerate(SAMPLE_RATE)
-            w.writeframes(pcm.tobytes())
-
-
 def add_speech_audio(corpus, folder, *, progress=None, workers: int = 2):
     """Write one WAV per utterance into ``folder`` and return the corpus with ``audio`` set.
 
@@ -274,7 +264,7 @@ def add_speech_audio(corpus, folder, *, progress=None, workers: int = 2):
 
     def one(k):
         samples, _ = utterance_audio(utts[k], exe)
-        _write_wav(paths[k], samples)
+        write_wav_atomic(paths[k], samples, SAMPLE_RATE)
 
     with ThreadPoolExecutor(max_workers=max(1, int(workers))) as pool:
         for _ in pool.map(one, todo):

@@ -56,18 +56,15 @@ def write_audio_beside(audio, path) -> Path:
         raise FileNotFoundError(f"{src}: no such audio file")
     if src.resolve() == dst.resolve():
         return dst
-    with atomic_write(dst) as tmp:
-        if src.suffix.lower() == ".wav":
+    if src.suffix.lower() == ".wav":
+        with atomic_write(dst) as tmp:
             shutil.copyfile(src, tmp)
-        else:
-            from app.export.video import decode_audio
+        return dst
+    from app.export.video import decode_audio
+    from engine._atomic import write_wav_atomic
 
-            import scipy.io.wavfile
-
-            samples, rate = decode_audio(src)
-            pcm = np.round(np.clip(samples, -1.0, 1.0) * 32767).astype(np.int16)
-            scipy.io.wavfile.write(tmp, int(rate), pcm.T if pcm.shape[0] > 1 else pcm[0])
-    return dst
+    samples, rate = decode_audio(src)  # (channels, n) floats
+    return write_wav_atomic(dst, samples.T if samples.shape[0] > 1 else samples[0], rate)
 
 
 def export_animation(manifold, Fx, path, *, rate: float, audio=None, scale: float = DEFAULT_SCALE,

@@ -197,9 +197,7 @@ def write_audio(path, wav_path=None) -> Path:
     -------
     Path of the WAV written. Samples are scaled by the peak only if it exceeds 1.
     """
-    import scipy.io.wavfile
-
-    from engine._atomic import atomic_write
+    from engine._atomic import write_wav_atomic
 
     x, r = read_mview_audio(path)
     wav_path = Path(wav_path) if wav_path is not None else Path(path).with_suffix(".wav")
@@ -207,7 +205,5 @@ def write_audio(path, wav_path=None) -> Path:
     peak = float(np.max(np.abs(x))) if x.size else 0.0
     if peak > 1.0:
         x = x / peak
-    pcm = np.round(x * 32767).astype(np.int16)
-    with atomic_write(wav_path) as tmp:
-        scipy.io.wavfile.write(tmp, int(round(r)), pcm)
+    write_wav_atomic(wav_path, x, r)
     return wav_path

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine._atomic import write_wav_atomic
 from engine.io.errors import ImportFormatError
 
 __all__ = ["read_video", "read_videos", "head_pose_model", "iter_video_frames", "track_video", "VIDEO_EXTENSIONS", "DEFAULT_BRIDGE_S",
@@ -212,16 +213,6 @@ def read_audio_track(path, rate: int = AUDIO_RATE) -> np.ndarray | None:
     return np.concatenate(chunks).astype(np.int16) if chunks else np.zeros(0, np.int16)
 
 
-def _write_wav(path, pcm, rate):
-    import scipy.io.wavfile
-
-    from engine._atomic import atomic_write
-
-    with atomic_write(path) as tmp:
-        scipy.io.wavfile.write(tmp, int(rate), pcm)
-    return Path(path).resolve()
-
-
 def _span(a, b, rate):
     frames = f"frame {a}" if b - a == 1 else f"frames {a}-{b - 1}"
     return f"{frames} ({a / rate:.3f}-{b / rate:.3f} s)"
@@ -395,7 +386,7 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
         wav = None
         if pcm is not None:
             s0, s1 = int(round(t0 * audio_rate)), int(round(t1 * audio_rate))
-            wav = str(_write_wav(Path(audio_dir) / f"{uid}.wav", pcm[s0:s1], audio_rate))
+            wav = str(write_wav_atomic(Path(audio_dir) / f"{uid}.wav", pcm[s0:s1], audio_rate).resolve())
         utts.append(Utterance(uid, start, start + b - a, fit_phones(ph, b - a, native), wav, ""))
         rows.append(lips[a:b])
         start += b - a
