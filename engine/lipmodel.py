@@ -411,11 +411,11 @@ class LipModel:
             out = np.empty((n, 3 * self.n_points), dtype=np.float32)
         if chunk is None:
             chunk = max(16, 2_000_000 // (3 * self.n_points))
-        from threadpoolctl import threadpool_limits
+        from engine.threads import one_blas_thread
 
         # many small products (K = 17 inner size): one BLAS thread is 10x faster than two
         # that spin against each other on a busy machine (measured 0.08 s vs 1.3 s per block)
-        with threadpool_limits(1, "blas"):
+        with one_blas_thread():
             for s in range(0, n, chunk):
                 blk = c[s:s + chunk]
                 Ft = np.ascontiguousarray(self._fields(blk).transpose(2, 0, 1), dtype=np.float32)  # (C, b, K)

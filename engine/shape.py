@@ -33,12 +33,6 @@ def _row_blocks(n: int, block: int):
         yield slice(s, min(n, s + block))
 
 
-def one_thread():
-    """Context manager: BLAS/LAPACK on one thread, for the small factorisations of a build
-    (see :func:`engine.threads.one_blas_thread`; the big GEMMs over F keep every thread)."""
-    return one_blas_thread()
-
-
 def kept_count(s, variance: float) -> int:
     """Components kept: the smallest m whose squared singular values ``s`` (k,) hold ``variance``
     of their sum (at least 1, at most k)."""
@@ -78,13 +72,13 @@ def orthonormal_basis(M):
     """
     from scipy.linalg import qr
 
-    with one_thread():
+    with one_blas_thread():  # small factorisations; the GEMMs over F keep every thread
         return qr(M, mode="economic", check_finite=False)[0]
 
 
 def thin_svd(B):
     """``numpy.linalg.svd(B, full_matrices=False)`` of a short-wide (or small) matrix, on one BLAS thread."""
-    with one_thread():
+    with one_blas_thread():
         return np.linalg.svd(B, full_matrices=False)
 
 

@@ -33,13 +33,13 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import lfilter
 from sklearn.base import BaseEstimator
-from threadpoolctl import threadpool_limits
 
 from engine.assets import asset_path
 from engine.corpus import Corpus, CorpusError, PhoneInterval, Utterance
 from engine.lipmodel import CONTROL_NAMES, SIGNED_CONTROLS, Anatomy, LipModel
 from engine.phonetics import PAUSE, DurationModel, pronounce
 from engine.progress import report
+from engine.threads import one_blas_thread
 
 __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker", "load_synthetic", "cache_folder",
            "phone_gestures", "gesture_phases", "speaker_anatomy"]
@@ -495,7 +495,7 @@ class SyntheticTalker(BaseEstimator):
                 x, y, z = P[..., 0].copy(), P[..., 1].copy(), P[..., 2].copy()
                 for d, (a, b, u, v) in enumerate(((1, 2, z, y), (2, 0, x, z), (0, 1, y, x))):
                     P[..., d] += om[:, a, None] * u - om[:, b, None] * v + tr[:, d, None]
-                with threadpool_limits(1, "blas"):  # small products: one thread beats two contending ones
+                with one_blas_thread():  # small products: one thread beats two contending ones
                     blk += field[0][s:s + chunk] @ field[1]
             if self.noise > 0:  # uniform capture noise of s.d. `noise` (7x cheaper than normal)
                 buf = rng.random(blk.shape, dtype=np.float32)

@@ -20,20 +20,6 @@ def default_utterance(corpus, *, min_phones: int = 8) -> str:
     return utts[order[len(order) // 2]].id
 
 
-def _one_blas_thread():
-    """Single-threaded BLAS/LAPACK for the synthesis (the inverse map's Delaunay set-up).
-
-    scipy's ``Delaunay.transform`` makes one tiny LAPACK call per simplex; with a
-    multi-threaded OpenBLAS on a busy machine that is ~40x slower (seconds instead of
-    0.1 s for 30k simplices).
-    """
-    import scipy.linalg  # noqa: F401  (load the BLAS libraries before limiting them)
-    import scipy.spatial  # noqa: F401
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(limits=1, user_api="blas")
-
-
 def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = True, width: float = 6.0,
               height: float = 5.0):
     """Fig. 3: a generated trajectory in the first two components of Y.
@@ -70,7 +56,9 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     except KeyError as exc:
         raise ValueError(exc.args[0]) from None
     targets = targets_from_utterance(manifold, uid, on_collision="merge")
-    with _one_blas_thread():
+    from engine.threads import one_blas_thread
+
+    with one_blas_thread():  # the inverse map's Delaunay set-up: one tiny LAPACK call per simplex
         traj = ManifoldSynthesizer(strict=False).fit(manifold).synthesize(targets)
     orig = np.asarray(manifold.Fy_[u.start:u.stop], dtype=np.float64)
     gen = np.asarray(traj.Fy, dtype=np.float64)
