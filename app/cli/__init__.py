@@ -39,9 +39,9 @@ SUBCOMMANDS = {
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
-    """The ``lipspace`` parser. With ``command``, only that subcommand's module is imported
-    (the others are listed with their help line): ``lipspace synthesize`` does not pay
-    for the figure modules' imports."""
+    """The ``lipspace`` parser. Only ``command``'s module is imported (the others, and
+    all of them for ``lipspace --help``, are listed with their help line): ``lipspace
+    synthesize`` does not pay for the figure modules' imports."""
     parser = argparse.ArgumentParser(
         prog="lipspace",
         description="Explore the visual speech manifold: lip shape and velocity in one space.",
@@ -49,7 +49,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (modname, help_) in SUBCOMMANDS.items():
         p = sub.add_parser(name, help=help_, description=help_)
-        if command is not None and name != command:
+        if name != command:  # `lipspace --help` lists the commands without importing any of them
             continue
         mod = importlib.import_module(modname)
         mod.add_arguments(p)

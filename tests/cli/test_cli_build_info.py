@@ -243,3 +243,17 @@ def test_a_subcommand_imports_only_its_own_module():
             "if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "['app.cli.synthesize']"
+
+
+def test_top_level_help_imports_no_command_and_no_numpy():
+    """`lipspace --help` built every subcommand's parser (matplotlib, numpy: 26x bare Python's start-up)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from app.cli import main\n"
+            "try:\n    main(['--help'])\nexcept SystemExit as e:\n    assert e.code == 0, e.code\n"
+            "print(sorted(m for m in sys.modules if m.startswith('app.cli.') or m.split('.')[0] in "
+            "('numpy', 'matplotlib', 'scipy')), file=sys.stderr)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert "synthesize" in r.stdout and "cache" in r.stdout  # every command listed
+    assert r.stderr.strip() == "[]", r.stderr
