@@ -164,16 +164,16 @@ class _DaskDistanceOperator:
         self.passes = 0
         self.client = client
         self.slices = _block_slices(G.shape[0], block)
-        self._blocks = [client.scatter(np.ascontiguousarray(G[sl])) for sl in self.slices]
-        self._cols = client.scatter(np.ascontiguousarray(cols, dtype=np.float32), broadcast=True)
-        self._cols_sq = client.scatter(np.einsum("ij,ij->i", cols, cols), broadcast=True)
+        self._blocks = [client.scatter(np.ascontiguousarray(G[sl]), hash=False) for sl in self.slices]
+        self._cols = client.scatter(np.ascontiguousarray(cols, dtype=np.float32), broadcast=True, hash=False)
+        self._cols_sq = client.scatter(np.einsum("ij,ij->i", cols, cols), broadcast=True, hash=False)
 
     def _done(self):
         self.passes += 1
         report(self.progress, self.stage, self.passes, 0)
 
     def matmat(self, X, extra=None):
-        X32 = self.client.scatter(np.asarray(X, dtype=np.float32), broadcast=True)
+        X32 = self.client.scatter(np.asarray(X, dtype=np.float32), broadcast=True, hash=False)
         futs = [self.client.submit(_dist_times, b, self._cols, self._cols_sq, X32, self.squared, extra,
                                    pure=False) for b in self._blocks]
         out = np.empty((self.G.shape[0], np.shape(X)[1]), dtype=np.float64)
@@ -357,7 +357,7 @@ class DaskExecutor:
 
     # --------------------------------------------------------- out-of-sample
     def _map_rows(self, fn, fixed, X, block):
-        fixed_f = self.client.scatter(fixed, broadcast=True)
+        fixed_f = self.client.scatter(fixed, broadcast=True, hash=False)
         slices = _block_slices(X.shape[0], block) if X.shape[0] else []
         futs = [self.client.submit(fn, fixed_f, np.ascontiguousarray(X[sl]), pure=False) for sl in slices]
         return self.client.gather(futs)
@@ -378,7 +378,10 @@ class DaskExecutor:
         """
         if int(block) < 1:
             raise ValueError(f"block must be a positive number of rows, got {block}")
-        futs = [self.client.scatter(a, broadcast=True) for a in shared]
+        # hash=False: a random key per scatter. With content keys, identical data scattered by
+        # a client that has just closed (an earlier build on the same scheduler) can be released
+        # while this client's tasks wait for it ("lost dependencies")
+        futs = [self.client.scatter(a, broadcast=True, hash=False) for a in shared]
         starts = range(0, int(n_rows), int(block))
         tasks = [self.client.submit(fn, a, min(int(n_rows), a + int(block)), *futs, pure=False) for a in starts]
         return self.client.gather(tasks)
