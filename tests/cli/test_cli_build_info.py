@@ -24,6 +24,14 @@ def test_info_reports_classes_and_connectivity(built, capsys):
     assert "Lipspace manifold" in out
     assert "opening/accelerating" in out and "closing/decelerating" in out
     assert "first 3 dims hold" in out
+    # the two scree figures, each named, agree with the fitted shape space
+    sh = Manifold.load(built).shape_
+    n_rec = int(np.argmax(sh.recovered_ratio_ >= 0.95 - 1e-12)) + 1
+    total = f"{int(np.argmax(np.cumsum(sh.scree_) >= 0.95 - 1e-12)) + 1}" if sh.scree_.sum() >= 0.95 \
+        else f"more than {len(sh.scree_)}"
+    assert f"95% of the total variance takes {total} components" in out
+    assert f"95% of the {len(sh.scree_)} computed components' variance (the paper's \"recovered variance\") " \
+           f"takes {n_rec}" in out
     pcts = [float(t.split()[-1].rstrip("%;")) for t in out.split("classes")[1].splitlines()[0].split(";")]
     assert abs(sum(pcts) - 100) < 0.5
 
