@@ -1,49 +1,66 @@
-"""Speech audio for the synthetic talker: espeak-ng, word by word, stretched to the talker's timing.
+"""Speech audio for the synthetic talker: espeak-ng, each phone placed on the talker's phone.
 
 The talker's utterances carry phone timings but no sound. :func:`add_speech_audio`
 gives each utterance a WAV file (22,050 Hz, 16-bit mono) that plays in the explorer
-like the audio of a recorded corpus (``Utterance.audio``):
+like the audio of a recorded corpus (``Utterance.audio``). Two methods:
 
-1. espeak-ng (a system package; optional) speaks the sentence once, as SSML with a
-   250 ms break between words, so the words come out separated by silence;
-2. the words are cut at the longest silences (one fewer than there are words; a
-   sentence whose silences cannot be matched to its words is stretched as a whole);
-3. each word is time-stretched (WSOLA: overlap-add of 23 ms Hann windows whose
-   positions are adjusted by cross-correlation, so the pitch is kept) to exactly the
-   span its phones take in the talker's timing, and placed at its first phone's start.
+``"phones"`` (espeak-ng's library, :mod:`engine.espeak_phones`; the default)
+    1. the utterance's own phones are spoken as espeak-ng phoneme input
+       (``[[D@ k'at s'at]]``: :data:`~engine.espeak_phones.ESPEAK_PHONE` maps every
+       talker phone to one espeak-ng phone; the stress marks come from the CMU
+       dictionary's stress digits), so espeak-ng says exactly the talker's phones;
+    2. its phoneme events give the sample at which each phone starts;
+    3. one WSOLA pass (:func:`time_warp`: overlap-add of 23 ms Hann windows placed by
+       cross-correlation within ±6 ms, so the pitch is kept) stretches the sound
+       piecewise linearly so that each phone's start lands on the talker's phone start
+       and the last phone ends with the talker's last phone. There are no joins
+       between phones (one continuous pass), so none can click.
 
-Each word's sound therefore starts at its first phone and ends with its last phone
-(to the sample, by construction); inside a word the phones keep espeak-ng's own
-relative timing, not the talker's (``info["stretch"]`` of :func:`utterance_audio`
-says how far each word was stretched to fit). espeak-ng pronounces from its own lexicon, which
-differs from the CMU dictionary the talker uses in a few words.
+``"words"`` (the espeak-ng program; the fallback without the library)
+    espeak-ng speaks the sentence's text as SSML with a 250 ms break between words;
+    the words are cut at the longest silences and each is time-stretched to exactly the
+    span its phones take (a sentence whose silences cannot be matched to its words is
+    stretched as a whole). Inside a word espeak-ng's own phone timing remains, and it
+    pronounces from its own lexicon.
 
-Without espeak-ng, :func:`espeak_path` is None and :func:`add_speech_audio` raises
-:class:`SpeechAudioUnavailable` with one line saying how to install it.
+Without either, :func:`add_speech_audio` raises :class:`SpeechAudioUnavailable` with one
+line saying how to install espeak-ng. The audio folder holds ``speech-audio.json``
+(:data:`AUDIO_VERSION` and the method); files made by another version or method are
+made again, not reused.
 """
 from __future__ import annotations
 
 import dataclasses
 import io
+import json
 import shutil
 import subprocess
+import threading
 import wave
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
-from engine._atomic import write_wav_atomic
-from engine.phonetics import PAUSE, pronounce
+from engine import espeak_phones
+from engine._atomic import write_text_atomic, write_wav_atomic
+from engine.phonetics import PAUSE, is_vowel, pronounce
 from engine.progress import report
 
-__all__ = ["SpeechAudioUnavailable", "espeak_path", "word_spans", "time_stretch", "utterance_audio",
-           "add_speech_audio", "read_wav", "SAMPLE_RATE"]
+__all__ = ["SpeechAudioUnavailable", "AUDIO_VERSION", "espeak_path", "audio_method", "word_spans",
+           "phone_mnemonics", "time_stretch", "time_warp", "utterance_audio", "add_speech_audio", "read_wav",
+           "SAMPLE_RATE"]
 
 SAMPLE_RATE = 22050
+#: Version of the audio files: 1 = words placed on their spans, 2 = every phone on its start.
+AUDIO_VERSION = 2
+_MANIFEST = "speech-audio.json"
 _BREAK_MS = 250
 _MIN_GAP_S = 0.12
 _WIN = 512
+_FADE_S = 0.005
+#: how many unexpected espeak-ng phone events may come between two expected ones
+_LOOKAHEAD = 3
 
 
 class SpeechAudioUnavailable(RuntimeError):
@@ -53,6 +70,21 @@ class SpeechAudioUnavailable(RuntimeError):
 def espeak_path() -> str | None:
     """Path of the ``espeak-ng`` program, or None when it is not installed."""
     return shutil.which("espeak-ng")
+
+
+def audio_method() -> str:
+    """``"phones"`` when espeak-ng's library can be loaded, else ``"words"`` when its program
+    is installed.
+
+    Raises
+    ------
+    SpeechAudioUnavailable
+        When neither is installed.
+    """
+    if espeak_phones.espeak_library() is not None:
+        return "phones"
+    _require_espeak()
+    return "words"
 
 
 def _require_espeak() -> str:
@@ -154,52 +186,273 @@ def time_stretch(x, n_out: int) -> np.ndarray:
     """
     x = np.asarray(x, np.float32)
     n_out = int(n_out)
+    h = _WIN // 2
+    if len(x) < 2 * _WIN or n_out < 2 * _WIN:
+        return time_warp(x, [0, len(x)], [0, n_out], n_out)
+    # frame centres h ... len - h onto h ... n_out - h: the first and last frames are x's own
+    return time_warp(x, [h, len(x) - h], [h, n_out - h], n_out)
+
+
+def time_warp(x, source, target, n_out: int) -> np.ndarray:
+    """Warp ``x`` in time so that sample ``source[i]`` comes out at ``target[i]``, keeping the pitch.
+
+    Between anchors time is stretched linearly (and beyond the ends with the nearest
+    piece's rate). WSOLA: 23 ms Hann windows every 11.6 ms of output, each taken from
+    where the warp maps its centre, moved by up to ±5.8 ms to continue the previous
+    window's waveform (the largest error of any anchor, by construction).
+
+    Parameters
+    ----------
+    x : ndarray of shape (n,) float32
+    source : sequence of float, shape (k,)
+        Sample positions in ``x`` (non-decreasing).
+    target : sequence of float, shape (k,)
+        Where they go in the output (increasing).
+    n_out : int
+
+    Returns
+    -------
+    ndarray of shape (n_out,) float32
+    """
+    x = np.asarray(x, np.float32)
+    src, dst = np.asarray(source, np.float64), np.asarray(target, np.float64)
+    if src.shape != dst.shape or src.ndim != 1 or len(src) < 2:
+        raise ValueError(f"source and target need the same length, at least 2 anchors; got {src.shape} and {dst.shape}")
+    if np.any(np.diff(dst) <= 0) or np.any(np.diff(src) < 0):
+        raise ValueError("time_warp anchors must increase (target strictly, source never decreasing)")
+    n_out = int(n_out)
     if n_out <= 0:
         return np.zeros(0, np.float32)
-    win, hop, tol = _WIN, _WIN // 2, _WIN // 4
-    if len(x) < 2 * win or n_out < 2 * win:  # too short to overlap-add: plain resampling
-        t = np.linspace(0, max(len(x) - 1, 0), n_out)
-        return np.interp(t, np.arange(len(x)), x).astype(np.float32) if len(x) else np.zeros(n_out, np.float32)
-    alpha = (len(x) - win) / max(n_out - win, 1)
-    pad = np.concatenate([np.zeros(tol, np.float32), x, np.zeros(win + tol, np.float32)])
+    if not len(x):
+        return np.zeros(n_out, np.float32)
+
+    def warp(t):  # output sample -> input sample, linear beyond the end anchors
+        t = np.asarray(t, np.float64)
+        r0 = (src[1] - src[0]) / (dst[1] - dst[0])
+        r1 = (src[-1] - src[-2]) / (dst[-1] - dst[-2])
+        return np.where(t < dst[0], src[0] + (t - dst[0]) * r0,
+                        np.where(t > dst[-1], src[-1] + (t - dst[-1]) * r1, np.interp(t, dst, src)))
+
+    win, tol = _WIN, _WIN // 4
+    if len(x) < 2 * win or n_out < 2 * win:  # too short to overlap-add: plain resampling through the warp
+        return np.interp(np.clip(warp(np.arange(n_out)), 0, len(x) - 1), np.arange(len(x)), x).astype(np.float32)
+    centres, fixed = _frame_centres(np.round(dst).astype(np.int64), n_out, win // 2)
+    h, edge = win // 2, win + tol
+    nominal = np.round(warp(centres)).astype(np.int64) - h  # first input sample of each frame
+    nominal = np.clip(nominal, -win, len(x))
+    # a frame reads no input at or beyond the next anchor's source sample, so no phone's sound is heard
+    # before its start (WSOLA's pre-echo when a frame near a stretched phone's end reaches into the next)
+    nxt = np.searchsorted(np.round(dst), centres, side="right")
+    limit = np.where(nxt < len(src), np.round(src[np.minimum(nxt, len(src) - 1)]), len(x) + edge).astype(np.int64)
+    pad = np.concatenate([np.zeros(edge, np.float32), x, np.zeros(edge, np.float32)])
     w = np.hanning(win + 1)[:win].astype(np.float32)
-    out = np.zeros(n_out + win, np.float32)
-    norm = np.zeros(n_out + win, np.float32)
-    prev = 0
-    for k in range(0, n_out, hop):
-        nominal = min(int(round(k * alpha)), len(x) - win)
-        if k == 0:
-            pos = nominal
-        else:
-            target = pad[tol + prev + hop: tol + prev + hop + win]   # natural continuation of the last frame
-            seg = pad[nominal: nominal + win + 2 * tol]
-            c = np.correlate(seg, target, mode="valid")
-            pos = nominal - tol + int(np.argmax(c))
-            pos = min(max(pos, 0), len(x) - win)
-        out[k:k + win] += w * pad[tol + pos: tol + pos + win]
-        norm[k:k + win] += w
-        prev = pos
+    ramp = np.arange(win)
+    out = np.zeros(n_out + 2 * win, np.float32)   # output sample t at out[t + win]
+    norm = np.zeros(n_out + 2 * win, np.float32)
+    prev_pos = prev_k = None
+    for c, pos, exact, lim in zip(centres, nominal, fixed, limit):
+        k = int(c) - h
+        pos = int(pos)
+        hi = min(pos + tol, int(lim) - win)
+        if prev_pos is not None and not exact and hi > pos - tol:
+            # the input that would continue the previous frame naturally over this output hop
+            follow = pad[edge + prev_pos + k - prev_k: edge + prev_pos + k - prev_k + win]
+            corr = np.correlate(pad[edge + pos - tol: edge + hi + win], follow, mode="valid")
+            pos = pos - tol + int(np.argmax(corr))
+        wk = w if pos + win <= lim else w * (pos + ramp < lim)
+        out[k + win:k + 2 * win] += wk * pad[edge + pos: edge + pos + win]
+        norm[k + win:k + 2 * win] += wk
+        prev_pos, prev_k = pos, k
     norm[norm < 1e-3] = 1.0
-    return (out / norm)[:n_out]
+    return (out / norm)[win:win + n_out]
 
 
-def utterance_audio(utterance, exe=None) -> tuple[np.ndarray, dict]:
+def _frame_centres(anchors, n_out, h):
+    """Output frame centres: one on every anchor (marked True: taken exactly, not searched), and
+    between and beyond them evenly at most ``h`` apart, covering ``0 ... n_out``."""
+    inside = anchors[(anchors >= 0) & (anchors < n_out)]
+    inside = np.unique(inside)
+    if not len(inside):
+        c = np.arange(0, n_out + h, h)
+        return c, np.zeros(len(c), bool)
+    parts, marks = [], []
+    head = np.arange(inside[0] - h, -h, -h)[::-1]
+    parts.append(head)
+    marks.append(np.zeros(len(head), bool))
+    for a, b in zip(inside[:-1], inside[1:]):
+        m = int(np.ceil((b - a) / h))
+        parts.append(a + np.round(np.arange(m) * (b - a) / m).astype(np.int64))
+        marks.append(np.arange(m) == 0)
+    tail = inside[-1] + np.arange(0, n_out + h - inside[-1], h)
+    parts.append(tail)
+    marks.append(np.arange(len(tail)) == 0)
+    return np.concatenate(parts).astype(np.int64), np.concatenate(marks)
+
+
+def phone_mnemonics(utterance) -> list[str]:
+    """espeak-ng's phoneme for each phone of ``utterance`` (pauses included), with stress marks.
+
+    A vowel carries ``'`` (primary) or ``,`` (secondary stress) as the CMU dictionary
+    stresses it in its word. Phones are grouped into words by :func:`word_spans`.
+
+    Returns
+    -------
+    list of str, one per phone of ``utterance.phones``
+    """
+    from engine.phonetics import _cmu
+
+    words = iter(word_spans(utterance))
+    out: list[str] = []
+    word_left = 0
+    marks: list[str] = []
+    for p in utterance.phones:
+        if p.label == PAUSE:
+            out.append(espeak_phones.ESPEAK_PHONE[PAUSE])
+            continue
+        if word_left == 0:
+            w = next(words)[0]
+            pron = pronounce(w)
+            word_left = len(pron)
+            marks = _stress_marks(pron, _cmu().get(w, ""))
+        out.append(marks[len(marks) - word_left] + espeak_phones.ESPEAK_PHONE[p.label])
+        word_left -= 1
+    return out
+
+
+def _stress_marks(phones, cmu: str) -> list[str]:
+    """The stress mark ('', "'" or ",") of each phone of a word, from its CMU stress digits."""
+    digits = [t[-1] for t in cmu.split() if t[-1:].isdigit()]
+    vowels = [k for k, p in enumerate(phones) if is_vowel(p) or p in ("uw", "er")]
+    if len(vowels) > len(digits):  # 'fire' AY1 ER0 -> ay ax: the extra schwa after ay/aw is unstressed
+        vowels = [k for k in vowels if not (phones[k] == "ax" and k and phones[k - 1] in ("ay", "aw"))]
+    marks = [""] * len(phones)
+    if len(vowels) != len(digits):
+        if vowels:
+            marks[vowels[0]] = "'"
+        return marks
+    for k, d in zip(vowels, digits):
+        marks[k] = {"1": "'", "2": ","}.get(d, "")
+    return marks
+
+
+def _match_events(expected, events):
+    """Sample at which each expected phone starts, and the end of the last one; None if they differ."""
+    bare = [m.lstrip("',") for m in expected]
+    starts, e = [], 0
+    for m in bare:
+        for d in range(_LOOKAHEAD + 1):
+            if e + d < len(events) and (events[e + d][0] == m or (m == "_" and events[e + d][0].startswith("_"))):
+                starts.append(events[e + d][1])
+                e += d + 1
+                break
+        else:
+            return None
+    end = events[e][1] if e < len(events) else None
+    return starts, end
+
+
+def _phones_audio(utterance, worker) -> tuple[np.ndarray, dict] | None:
+    """The phone method; None when espeak-ng's phone events do not follow the talker's phones."""
+    phones = utterance.phones
+    duration = phones[-1].end if phones else 0.0
+    out = np.zeros(int(round(duration * SAMPLE_RATE)), np.float32)
+    speech = [k for k, p in enumerate(phones) if p.label != PAUSE]
+    if not speech:
+        return out, {"method": "phones", "phones": 0, "stretch": np.zeros(0), "source": np.zeros(0),
+                     "target": np.zeros(0)}
+    k0, k1 = speech[0], speech[-1] + 1
+    mnem = phone_mnemonics(utterance)[k0:k1]
+    word_starts = {s for _, s, _ in word_spans(utterance)}
+    groups, prev_pause = [], True
+    for p, m in zip(phones[k0:k1], mnem):
+        if p.label == PAUSE or prev_pause or p.start in word_starts:
+            groups.append(m)
+        else:
+            groups[-1] += m
+        prev_pause = p.label == PAUSE
+    raw, rate, events = worker.speak("[[" + " ".join(groups) + "]]")
+    x = np.frombuffer(raw, "<i2").astype(np.float32) / 32768.0
+    if rate != SAMPLE_RATE:
+        raise espeak_phones.EspeakLibraryError(f"espeak-ng library speaks at {rate} Hz, expected {SAMPLE_RATE}")
+    matched = _match_events(mnem, events)
+    if matched is None:
+        return None
+    starts, end = matched
+    src = np.array(starts + [end if end is not None else len(x)], np.float64)
+    dst = np.array([p.start for p in phones[k0:k1]] + [phones[k1 - 1].end]) * SAMPLE_RATE
+    i0, i1 = int(round(dst[0])), min(int(round(dst[-1])), len(out))
+    y = time_warp(x, src, dst - i0, i1 - i0) if i1 - i0 >= 2 else np.zeros(max(i1 - i0, 0), np.float32)
+    f = min(int(_FADE_S * SAMPLE_RATE), len(y) // 2)
+    if f:
+        ramp = np.linspace(0, 1, f, dtype=np.float32)
+        y[:f] *= ramp
+        y[-f:] *= ramp[::-1]
+    out[i0:i1] = y
+    _limit(out)
+    stretch = np.diff(dst) / np.maximum(np.diff(src), 1.0)
+    return out, {"method": "phones", "phones": k1 - k0, "stretch": stretch, "source": src, "target": dst,
+                 "espeak": x}
+
+
+def _limit(out):
+    peak = float(np.abs(out).max()) if len(out) else 0.0
+    if peak > 0.98:
+        out *= 0.98 / peak
+
+
+def utterance_audio(utterance, exe=None, *, method=None, worker=None) -> tuple[np.ndarray, dict]:
     """The speech of one synthetic utterance, aligned to its phones.
+
+    Parameters
+    ----------
+    utterance : Utterance
+        A synthetic talker's utterance (text and phones).
+    exe : str or None
+        The espeak-ng program (the word method; found when None).
+    method : {"phones", "words"} or None
+        None: :func:`audio_method`. ``"phones"`` falls back to ``"words"`` for an
+        utterance whose phones espeak-ng does not speak as given.
+    worker : EspeakWorker or None
+        A running espeak-ng library process (the phone method); one is started when None.
 
     Returns
     -------
     samples : ndarray of shape (round(duration * 22050),) float32
     info : dict
-        ``words`` (count), ``split`` (True when every word was cut and placed on its own,
-        False when the sentence was stretched as a whole), ``stretch`` (per placed
-        segment, its duration in the talker's timing / espeak-ng's).
+        ``method`` (the one used). Phone method: ``phones`` (count), ``stretch`` (per
+        phone, its duration in the talker's timing / espeak-ng's), ``source`` /
+        ``target`` (shape (phones + 1,): espeak-ng's phone starts and end, in samples of
+        ``espeak``, and where they were put, in samples of the output), ``espeak`` (its
+        unwarped sound). Word method: ``words``, ``split`` (True when every word was cut
+        and placed on its own), ``stretch`` (per placed segment).
     """
-    exe = exe or _require_espeak()
+    method = method or audio_method()
+    if method not in ("phones", "words"):
+        raise ValueError(f"method must be 'phones' or 'words', got {method!r}")
+    if method == "phones":
+        own = worker is None
+        worker = worker or espeak_phones.EspeakWorker()
+        try:
+            got = _phones_audio(utterance, worker)
+        except espeak_phones.EspeakLibraryError:
+            if espeak_path() is None and exe is None:
+                raise
+            got = None  # the library failed: the program may still speak the words
+        finally:
+            if own:
+                worker.close()
+        if got is not None:
+            return got
+    return _words_audio(utterance, exe or _require_espeak())
+
+
+def _words_audio(utterance, exe) -> tuple[np.ndarray, dict]:
+    """The word method (espeak-ng program): each word stretched to its span in the talker's timing."""
     spans = word_spans(utterance)
     duration = utterance.phones[-1].end if utterance.phones else 0.0
     out = np.zeros(int(round(duration * SAMPLE_RATE)), np.float32)
     if not spans:
-        return out, {"words": 0, "split": True, "stretch": np.zeros(0)}
+        return out, {"method": "words", "words": 0, "split": True, "stretch": np.zeros(0)}
     x = _speak([w for w, _, _ in spans], exe)
     parts = _split_words(x, len(spans))
     placed = ([(x[a:b], s, e) for (a, b), (_, s, e) in zip(parts, spans)] if parts is not None else
@@ -221,7 +474,8 @@ def utterance_audio(utterance, exe=None) -> tuple[np.ndarray, dict]:
     peak = float(np.abs(out).max())
     if peak > 0.98:
         out *= 0.98 / peak
-    return out, {"words": len(spans), "split": parts is not None, "stretch": np.array(stretch)}
+    return out, {"method": "words", "words": len(spans), "split": parts is not None,
+                 "stretch": np.array(stretch)}
 
 
 def _trim(x):
@@ -238,37 +492,79 @@ def add_speech_audio(corpus, folder, *, progress=None, workers: int = 2):
     corpus : Corpus
         The synthetic talker's corpus (text and phones of its utterances).
     folder : path
-        Created if missing; files ``<utterance id>.wav``. Existing files are reused.
+        Created if missing; files ``<utterance id>.wav`` and ``speech-audio.json``.
+        Existing files are reused when that file names this :data:`AUDIO_VERSION` and
+        method; otherwise they are made again.
     progress : callable(stage, done, total) or None
+        May raise :class:`~engine.progress.Cancelled` to stop (files written so far stay).
     workers : int, default=2
         espeak-ng processes at once.
 
     Returns
     -------
     Corpus
-        The same frames and labels; each utterance's ``audio`` is its WAV's absolute path.
+        The same frames and labels; each utterance's ``audio`` is its WAV's absolute
+        path; one ``history`` line says which method made the audio.
 
     Raises
     ------
     SpeechAudioUnavailable
         When espeak-ng is not installed.
     """
-    exe = _require_espeak()
+    method = audio_method()
+    exe = espeak_path()
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     utts = list(corpus.utterances)
     paths = [(folder / f"{u.id}.wav").resolve() for u in utts]
+    state = {"version": AUDIO_VERSION, "method": method}
+    manifest = folder / _MANIFEST
+    try:
+        fresh = json.loads(manifest.read_text()) == state
+    except (OSError, ValueError):
+        fresh = False
+    if not fresh:  # made by another version or method: not reused
+        for p in paths:
+            p.unlink(missing_ok=True)
+        write_text_atomic(manifest, json.dumps(state))
     todo = [k for k, p in enumerate(paths) if not p.is_file()]
     done = 0
     report(progress, "speech audio", 0, len(todo))
+    local, started, lock = threading.local(), [], threading.Lock()
 
     def one(k):
-        samples, _ = utterance_audio(utts[k], exe)
+        worker = None
+        if method == "phones":
+            worker = getattr(local, "worker", None)
+            if worker is None:
+                worker = local.worker = espeak_phones.EspeakWorker()
+                with lock:
+                    started.append(worker)
+        samples, info = utterance_audio(utts[k], exe, method=method, worker=worker)
         write_wav_atomic(paths[k], samples, SAMPLE_RATE)
+        return info["method"]
 
-    with ThreadPoolExecutor(max_workers=max(1, int(workers))) as pool:
-        for _ in pool.map(one, todo):
+    used = []
+    pool = ThreadPoolExecutor(max_workers=max(1, int(workers)))
+    try:
+        for m in pool.map(one, todo):
+            used.append(m)
             done += 1
             report(progress, "speech audio", done, len(todo))
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+        for w in started:
+            w.close()
     new = [dataclasses.replace(u, audio=str(p)) for u, p in zip(utts, paths)]
-    return dataclasses.replace(corpus, utterances=new)
+    history = list(corpus.history) + [_history_line(method, len(utts), used.count("words"), len(todo))]
+    return dataclasses.replace(corpus, utterances=new, history=history)
+
+
+def _history_line(method, n, fell_back, made) -> str:
+    reused = f"{n - made} reused, {made} made" if made < n else f"{n} made"
+    if method == "phones":
+        back = f"; {fell_back} of the {made} made now word by word (the library did not speak their phones as given)" if fell_back else ""
+        return (f"speech audio: espeak-ng library, every phone placed on the talker's phone start "
+                f"({n} utterances, {reused}{back})")
+    return (f"speech audio: espeak-ng program, each word stretched to the talker's word span, phones inside a "
+            f"word not aligned ({espeak_phones.LIBRARY_NAME} not found; {n} utterances, {reused})")
