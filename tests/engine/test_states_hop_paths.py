@@ -1,0 +1,128 @@
+"""Fewest-hop state paths by bidirectional search (engine.hop_paths, StateGraph.min_path; issue 13 item 8).
+
+References: scipy's Dijkstra (unit weights) for the number of hops and unreachability,
+scipy's breadth-first search from ``a`` (the previous implementation of ``min_path``)
+for which path is returned among ties, and, on tiny graphs, every simple path
+enumerated by brute force for the claim that this is the lexicographically smallest.
+"""
+import itertools
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.sparse.csgraph import breadth_first_order, dijkstra
+
+from engine.hop_paths import fewest_hop_path
+from engine.states import UnreachableError
+
+
+def _bfs_tree_path(G, a, b):
+    """The path of the predecessor tree of a breadth-first search from a (None: unreachable)."""
+    if a == b:
+        return np.array([a])
+    pred = breadth_first_order(G, a, directed=True, return_predecessors=True)[1]
+    if pred[b] < 0:
+        return None
+    path = [b]
+    while path[-1] != a:
+        path.append(int(pred[path[-1]]))
+    return np.array(path[::-1])
+
+
+def _graph(K, n_edges, rng, *, sink_block=0):
+    """Random directed graph (csr, sorted, no self-loops) and its transpose; the last
+    ``sink_block`` nodes have edges only among themselves (unreachable from the rest)."""
+    src = rng.integers(0, K, n_edges)
+    dst = rng.integers(0, K, n_edges)
+    if sink_block:
+        inside = src >= K - sink_block
+        dst = np.where(inside, rng.integers(K - sink_block, K, n_edges), dst % (K - sink_block))
+    keep = src != dst
+    G = sp.csr_matrix((np.ones(keep.sum()), (src[keep], dst[keep])), shape=(K, K))
+    G.sum_duplicates()
+    G.sort_indices()
+    GT = sp.csr_matrix(G.T)
+    GT.sort_indices()
+    return G, GT
+
+
+@pytest.mark.parametrize("K, degree, sink", [(30, 2.5, 0), (60, 3.0, 10), (200, 4.0, 0), (400, 8.0, 40)])
+def test_paths_match_dijkstra_and_breadth_first_tree_on_random_graphs(K, degree, sink):
+    rng = np.random.default_rng(K)
+    G, GT = _graph(K, int(K * degree), rng, sink_block=sink)
+    hops = dijkstra(G, directed=True, unweighted=True)
+    A = G.toarray() > 0
+    n_paths = n_ties = n_none = 0
+    for a in rng.choice(K, size=min(K, 12), replace=False):
+        a = int(a)
+        tree = breadth_first_order(G, a, directed=True, return_predecessors=True)[1]
+        for b in map(int, rng.choice(K, size=min(K, 40), replace=False)):
+            got = fewest_hop_path(G, GT, a, b)
+            if not np.isfinite(hops[a, b]):
+                assert got is None, (a, b)
+                n_none += 1
+                continue
+            assert got.dtype == np.int64 and got[0] == a and got[-1] == b
+            assert len(got) - 1 == hops[a, b], (a, b)
+            assert A[got[:-1], got[1:]].all(), "every hop is an edge"
+            want = [b]
+            while want[-1] != a:
+                want.append(int(tree[want[-1]]))
+            np.testing.assert_array_equal(got, want[::-1])
+            n_paths += 1
+            if b != a:  # several fewest-hop predecessors: a tie the search had to break
+                n_ties += int(((hops[a] == hops[a, b] - 1) & A[:, b]).sum() > 1)
+    assert n_paths > 100 and n_ties > 5, (n_paths, n_ties)
+    assert (n_none > 0) == (sink > 0 or not np.isfinite(hops).all())
+
+
+def test_tie_broken_to_the_lexicographically_smallest_path_by_brute_force():
+    rng = np.random.default_rng(7)
+    checked = 0
+    for _ in range(15):
+        K = 7
+        G, GT = _graph(K, 16, rng)
+        A = G.toarray() > 0
+        for a, b in itertools.permutations(range(K), 2):
+            walks = [p for n in range(K - 1) for p in itertools.permutations(set(range(K)) - {a, b}, n)
+                     if all(A[x, y] for x, y in zip((a,) + p, p + (b,)))]
+            got = fewest_hop_path(G, GT, a, b)
+            if not walks:
+                assert got is None
+                continue
+            fewest = min(len(p) for p in walks)
+            best = min((a,) + p + (b,) for p in walks if len(p) == fewest)
+            assert tuple(got) == best
+            checked += 1
+    assert checked > 50
+
+
+def test_same_node_and_unsorted_rows():
+    G, GT = _graph(10, 30, np.random.default_rng(1))
+    np.testing.assert_array_equal(fewest_hop_path(G, GT, 4, 4), [4])
+    U = G.copy()
+    U.indices = U.indices.copy()
+    for i in range(U.shape[0]):  # reverse each row: still the same graph, rows no longer sorted
+        lo, hi = U.indptr[i], U.indptr[i + 1]
+        U.indices[lo:hi] = U.indices[lo:hi][::-1]
+    U.has_sorted_indices = False
+    if (np.diff(U.indptr) > 1).any():
+        with pytest.raises(ValueError, match="sorted indices"):
+            fewest_hop_path(U, GT, 0, 5)
+
+
+def test_state_graph_min_path_is_the_breadth_first_tree_path(small_manifold):
+    g = small_manifold.states_
+    G = g._graph(False)
+    K = g.centroids_.shape[0]
+    hops = dijkstra(G, directed=True, unweighted=True)
+    rng = np.random.default_rng(3)
+    for a, b in rng.integers(0, K, size=(150, 2)):
+        want = _bfs_tree_path(G, int(a), int(b))
+        if want is None:
+            with pytest.raises(UnreachableError, match=f"state {b} is unreachable from state {a}"):
+                g.min_path(int(a), int(b))
+            continue
+        got = g.min_path(int(a), int(b))
+        np.testing.assert_array_equal(got, want)
+        assert len(got) - 1 == hops[a, b]
