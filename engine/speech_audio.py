@@ -61,6 +61,8 @@ _WIN = 512
 _FADE_S = 0.005
 #: how many unexpected espeak-ng phone events may come between two expected ones
 _LOOKAHEAD = 3
+#: an espeak-ng phone shorter than this shares its neighbour's span (espeak-ng folds some /l/ into the vowel)
+_MIN_PHONE_S = 0.002
 
 
 class SpeechAudioUnavailable(RuntimeError):
@@ -336,19 +338,49 @@ def _stress_marks(phones, cmu: str) -> list[str]:
 
 
 def _match_events(expected, events):
-    """Sample at which each expected phone starts, and the end of the last one; None if they differ."""
+    """Sample at which each expected phone starts (None for the second of two phones espeak-ng
+    spoke as one, e.g. ``aI`` + ``@`` as ``aI@``), and the end of the last; None if they differ."""
     bare = [m.lstrip("',") for m in expected]
-    starts, e = [], 0
-    for m in bare:
+    starts: list[int | None] = []
+    e = i = 0
+    while i < len(bare):
+        m = bare[i]
+        pair = m + bare[i + 1] if i + 1 < len(bare) else None
         for d in range(_LOOKAHEAD + 1):
-            if e + d < len(events) and (events[e + d][0] == m or (m == "_" and events[e + d][0].startswith("_"))):
+            name = events[e + d][0] if e + d < len(events) else None
+            if name == m or (m == "_" and name is not None and name.startswith("_")):
                 starts.append(events[e + d][1])
-                e += d + 1
+                i += 1
+                break
+            if pair is not None and name == pair:
+                starts += [events[e + d][1], None]
+                i += 2
                 break
         else:
             return None
+        e += d + 1
     end = events[e][1] if e < len(events) else None
     return starts, end
+
+
+def _share_spans(src, dst, min_len):
+    """Phone starts in espeak-ng's sound, the gaps filled: a phone espeak-ng spoke together with
+    the one before it (start None: one event for both) or gave less than ``min_len`` samples
+    (espeak-ng folds some /l/ into the vowel before) shares the two phones' joint span in
+    proportion to their durations in the talker's timing."""
+    src = list(src)
+
+    def share(i):
+        a, b = src[i - 1], src[i + 1]
+        src[i] = a + (b - a) * (dst[i] - dst[i - 1]) / (dst[i + 1] - dst[i - 1])
+
+    for i in range(1, len(src) - 1):
+        if src[i] is None:
+            share(i)
+    for i in range(1, len(src) - 1):
+        if src[i + 1] - src[i] < min_len <= (src[i + 1] - src[i - 1]) / 2:
+            share(i)
+    return np.array(src, np.float64)
 
 
 def _phones_audio(utterance, worker) -> tuple[np.ndarray, dict] | None:
@@ -378,8 +410,8 @@ def _phones_audio(utterance, worker) -> tuple[np.ndarray, dict] | None:
     if matched is None:
         return None
     starts, end = matched
-    src = np.array(starts + [end if end is not None else len(x)], np.float64)
     dst = np.array([p.start for p in phones[k0:k1]] + [phones[k1 - 1].end]) * SAMPLE_RATE
+    src = _share_spans(starts + [end if end is not None else len(x)], dst, _MIN_PHONE_S * SAMPLE_RATE)
     i0, i1 = int(round(dst[0])), min(int(round(dst[-1])), len(out))
     y = time_warp(x, src, dst - i0, i1 - i0) if i1 - i0 >= 2 else np.zeros(max(i1 - i0, 0), np.float32)
     f = min(int(_FADE_S * SAMPLE_RATE), len(y) // 2)

@@ -124,7 +124,8 @@ def test_each_phone_starts_at_the_talkers_phone_start(talker, worker):
             energy = np.sqrt(np.convolve(seg ** 2, np.ones(n), mode="valid"))
             score = c / np.maximum(energy * np.linalg.norm(tmpl), 1e-9)
             if score.max() > 0.8:  # the template was copied (not stretched past recognition)
-                errors.append((int(np.argmax(score)) - search) / SR)
+                # its earliest copy: stretching repeats a phone's first pitch periods a period or two later
+                errors.append((int(np.flatnonzero(score >= score.max() - 0.05)[0]) - search) / SR)
     errors = np.abs(np.array(errors))
     assert len(errors) >= 40
     assert np.median(errors) < 0.002 and np.percentile(errors, 95) < 0.0065, np.sort(errors)[-5:]
@@ -190,3 +191,20 @@ def test_files_of_an_older_version_are_made_again_and_current_ones_reused(tmp_pa
     stamp = old.stat().st_mtime_ns
     again = sa.add_speech_audio(talker, tmp_path)
     assert old.stat().st_mtime_ns == stamp and "0 made" in again.history[-1]
+
+
+@needs_library
+def test_phones_espeak_speaks_as_one_or_folds_away_still_get_their_own_start(worker):
+    # espeak-ng says 'ay ax' of "society" as one phone (aI@) and folds the /l/ of "fills" into the vowel
+    from engine.corpus import PhoneInterval, Utterance
+    from engine.phonetics import pronounce
+
+    labels = pronounce("Society fills.", pauses=True)
+    bounds = np.cumsum([0.0] + [0.3 if p == PAUSE else 0.08 for p in labels])
+    ph = tuple(PhoneInterval(float(a), float(b), p) for a, b, p in zip(bounds[:-1], bounds[1:], labels))
+    u = Utterance("u1", 0, int(bounds[-1] * 60), ph, None, "Society fills.")
+    y, info = sa.utterance_audio(u, worker=worker)
+    assert info["method"] == "phones" and info["phones"] == len(labels) - 2
+    src = info["source"]
+    assert np.all(np.diff(src) >= 0.002 * SR)  # every phone has its own stretch of espeak-ng's sound
+    assert 0.2 < np.min(info["stretch"]) and np.max(info["stretch"]) < 10
