@@ -39,6 +39,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _gui_bench as gb  # noqa: E402
+from _playback_trace import CAUSES, frame_table, late_causes, PlaybackTrace  # noqa: E402
 
 
 def load_default(preset):
@@ -55,6 +56,20 @@ def load_default(preset):
     return m, src
 
 
+def run_loop(app, s, max_seconds):
+    """Run the Qt event loop (as the explorer does) until playback stops or ``max_seconds`` pass."""
+    from PySide6 import QtCore
+
+    loop = QtCore.QEventLoop()
+    t0 = time.perf_counter()
+    poll = QtCore.QTimer()
+    poll.setInterval(20)
+    poll.timeout.connect(lambda: (not s.playing or time.perf_counter() - t0 > max_seconds) and loop.quit())
+    poll.start()
+    loop.exec()
+    poll.stop()
+
+
 def play_once(app, win, max_seconds):
     import numpy as np
 
@@ -64,59 +79,51 @@ def play_once(app, win, max_seconds):
     s.set_playing(False)
     s.set_playback(0)
     gb.settle(app, 0.5)
-    in_mesh = []  # (time, frame in the lip meshes) at each lip render
-    swaps, main_swaps, m_renders = [], [], []
-    frame_now = (lambda: lv.shown_frame) if hasattr(lv, "shown_frame") else (lambda: s.playback)
-    rw, mrw = lv.plotter.render_window, win.manifold_view.plotter.render_window
-    obs = rw.AddObserver("StartEvent", lambda *_a: in_mesh.append((time.perf_counter(), frame_now())))
-    mobs = mrw.AddObserver("EndEvent", lambda *_a: m_renders.append(time.perf_counter()))
-    on_swap = lambda: swaps.append(time.perf_counter())  # noqa: E731
+    trace = PlaybackTrace()
+    main_swaps = []
     on_main = lambda: main_swaps.append(time.perf_counter())  # noqa: E731
-    lv.plotter.interactor.frameSwapped.connect(on_swap)
     win.manifold_view.plotter.interactor.frameSwapped.connect(on_main)
+    trace.attach(win)
     load0 = os.getloadavg()[0]
     c0 = time.process_time()
     t0 = time.perf_counter()
     lv.play_btn.click()  # the user presses Play
-    while s.playing and time.perf_counter() - t0 < max_seconds:
-        app.processEvents()
-        time.sleep(0.0005)
+    run_loop(app, s, max_seconds)
     t_end = time.perf_counter()
     cpu = time.process_time() - c0
     s.set_playing(False)
-    rw.RemoveObserver(obs)
-    mrw.RemoveObserver(mobs)
-    lv.plotter.interactor.frameSwapped.disconnect(on_swap)
+    trace.detach()
     win.manifold_view.plotter.interactor.frameSwapped.disconnect(on_main)
-    # each swap shows the frame of the latest lip render before it
-    r_times = np.array([t for t, _ in in_mesh])
-    rows = []
-    for t_swap in swaps:
-        j = int(np.searchsorted(r_times, t_swap)) - 1
-        if j >= 0 and in_mesh[j][1] is not None and t_swap >= t0:
-            rows.append((t_swap, in_mesh[j][1]))
-    # distinct frames, at the time each first reached the screen
-    first = {}
-    for t_swap, k in rows:
-        first.setdefault(k, t_swap)
-    order = sorted(first.items(), key=lambda kv: kv[1])
-    ks = np.array([k for k, _ in order], float)
-    ts = np.array([t for _, t in order])
-    lag = (ts - t0) * rate - ks
+    tab = frame_table(trace.ticks, trace.render_start, trace.render_end, trace.swaps, trace.m_start, trace.m_end,
+                      trace.gcs, t0=t0, rate=rate)
+    ks, ts, lag = tab["frame"], tab["swap"], tab["lag"]
+    causes = late_causes(tab, rate=rate)
     # held lag: the clock when the next frame replaced this one (or playback ended)
     t_next = np.append(ts[1:], min(t_end, t0 + n / rate))
     held = (t_next - t0) * rate - ks
     duration = t_end - t0
     dropped = int(ks.max() + 1 - len(ks)) if len(ks) else 0
-    pct = (lambda a, q: float(np.percentile(a, q)) if len(a) else float("nan"))
+    pct = (lambda a, q: float(np.nanpercentile(a, q)) if np.isfinite(a).any() else float("nan"))
+    late = lag > 1
     return {"fps": len(ks) / duration, "frames": len(ks), "last": int(ks.max()) if len(ks) else -1, "n": n,
-            "duration": duration, "lag_med": pct(lag, 50), "lag_p95": pct(lag, 95),
+            "duration": duration, "lag_med": pct(lag, 50), "lag_p95": pct(lag, 95), "lag_p99": pct(lag, 99),
             "lag_max": float(lag.max()) if len(lag) else float("nan"),
             "lag_min": float(lag.min()) if len(lag) else float("nan"),
-            "late": float((lag > 1).mean()) if len(lag) else float("nan"),
+            "late": float(late.mean()) if len(lag) else float("nan"),
             "early": float((lag < -1).mean()) if len(lag) else float("nan"),
             "held_p95": pct(held, 95), "held_max": float(held.max()) if len(held) else float("nan"),
-            "dropped": dropped, "main_swaps": sum(t >= t0 for t in main_swaps), "m_renders": len(m_renders),
+            "dropped": dropped, "main_swaps": sum(t >= t0 for t in main_swaps), "m_renders": len(trace.m_end),
+            "causes": {c: causes.count(c) for c in CAUSES},
+            "timer_late_p95": 1e3 * pct(tab["timer_late"], 95), "timer_late_max": 1e3 * float(np.nanmax(
+                tab["timer_late"])) if np.isfinite(tab["timer_late"]).any() else float("nan"),
+            "render_med": 1e3 * pct(tab["render"], 50), "render_max": 1e3 * pct(tab["render"], 100),
+            "queue_med": 1e3 * pct(tab["queue"], 50), "compose_med": 1e3 * pct(tab["compose"], 50),
+            "latency_med": 1e3 * pct(tab["swap"] - tab["chosen"], 50),
+            "gcs": [g for g in trace.gcs if g[0] >= t0], "run_wait": 1e3 * float(np.nansum(tab["run_wait"])),
+            "late_wait_cpu": [(1e3 * tab["run_wait"][i], 1e3 * tab["helper_wait"][i], 1e3 * tab["cpu"][i],
+                               1e3 * (tab["swap"][i] - tab["chosen"][i]), 1e3 * tab["lookahead"][i])
+                              for i in np.flatnonzero(late)],
+            "helper_wait": 1e3 * float(np.nansum(tab["helper_wait"])),
             "cpu": cpu, "cpu_ms": 1e3 * cpu / max(len(ks), 1), "load": (load0 + os.getloadavg()[0]) / 2}
 
 
@@ -160,10 +167,21 @@ def main():
         res.append(x)
         print(f"   repeat {r + 1} ({'cold' if r == 0 else 'warm'}, load {x['load']:.1f}): {x['fps']:5.1f} frames/s "
               f"shown ({x['frames']} distinct, up to {x['last'] + 1}/{x['n']} in {x['duration']:.2f} s, "
-              f"{x['dropped']} dropped); lag median {x['lag_med']:.2f}, p95 {x['lag_p95']:.2f}, max {x['lag_max']:.2f}, "
-              f"min {x['lag_min']:.2f} periods, {100 * x['late']:.1f} % > 1 late, {100 * x['early']:.1f} % > 1 early; "
-              f"held lag p95 {x['held_p95']:.2f}, max {x['held_max']:.2f}; {x['main_swaps']} main-window "
-              f"compositions, {x['m_renders']} manifold renders; CPU {x['cpu_ms']:.1f} ms per frame shown", flush=True)
+              f"{x['dropped']} dropped); lag median {x['lag_med']:.2f}, p95 {x['lag_p95']:.2f}, p99 {x['lag_p99']:.2f}, "
+              f"max {x['lag_max']:.2f}, min {x['lag_min']:.2f} periods, {100 * x['late']:.1f} % > 1 late, "
+              f"{100 * x['early']:.1f} % > 1 early; held lag p95 {x['held_p95']:.2f}, max {x['held_max']:.2f}; "
+              f"{x['main_swaps']} main-window compositions, {x['m_renders']} manifold renders; "
+              f"CPU {x['cpu_ms']:.1f} ms per frame shown", flush=True)
+        print(f"      stages (median ms): chosen->render {x['queue_med']:.1f}, render {x['render_med']:.1f} "
+              f"(max {x['render_max']:.1f}), render->swap {x['compose_med']:.1f}, chosen->swap {x['latency_med']:.1f}; "
+              f"timer late p95 {x['timer_late_p95']:.1f}, max {x['timer_late_max']:.1f} ms; GUI thread waited "
+              f"{x['run_wait']:.0f} ms for a core between choice and swap (helpers + X server {x['helper_wait']:.0f} ms); "
+              f"{len(x['gcs'])} collections ({', '.join(f'gen {g} {1e3 * (b - a):.1f} ms' for a, b, g in x['gcs'][:6])})")
+        print(f"      late frames by cause: " + ", ".join(f"{c} {n}" for c, n in x["causes"].items())
+              + "; per late frame, ms (GUI thread waited for a core / rasteriser thread + X server waited / "
+              "GUI CPU / chosen->swap / look-ahead): "
+              + " ".join(f"{w:.0f}/{h:.0f}/{c:.0f}/{d:.0f}/{la:.0f}" for w, h, c, d, la in x["late_wait_cpu"][:10]),
+              flush=True)
 
     def mm(key, scale=1.0, fmt=".2f"):
         v = [scale * x[key] for x in res]
@@ -171,10 +189,13 @@ def main():
 
     print(f"frames/s shown:               {mm('fps', fmt='.1f')} (goal >= 30)")
     print(f"lag max (frame periods):      {mm('lag_max')} (goal <= 1)")
+    print(f"lag p99 (frame periods):      {mm('lag_p99')}")
     print(f"lag p95 (frame periods):      {mm('lag_p95')}")
     print(f"lag median (frame periods):   {mm('lag_med')}")
     print(f"% frames > 1 period late:     {mm('late', 100, '.1f')}")
     print(f"CPU per frame shown (ms):     {mm('cpu_ms', fmt='.1f')}")
+    total = {c: sum(x["causes"][c] for x in res) for c in CAUSES}
+    print(f"late frames by cause (all repeats): " + ", ".join(f"{c} {n}" for c, n in total.items()))
     print(f"load average during repeats:  {mm('load', fmt='.1f')}")
     # asked for only now: querying the GL capabilities of a shown widget made the window
     # compose ~13 times a second more for the rest of the process (measured)

@@ -4,7 +4,7 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 __all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all",
-           "RenderScheduler", "Throttle", "READOUT_INTERVAL_S"]
+           "RenderScheduler", "Throttle", "READOUT_INTERVAL_S", "drawing_frame"]
 
 #: seconds between two repaints of the readouts that follow playback (caption, slider, the
 #: editor's timeline cursor): each repaint of an ordinary widget composes the main window
@@ -170,6 +170,39 @@ class RenderScheduler:
         self.pending = False
 
 
+#: throttles holding a call until the playback frame being drawn is on screen (see drawing_frame)
+_after_frame: list = []
+_frame_depth = 0
+
+
+@contextmanager
+def drawing_frame():
+    """Draw one playback frame: readouts called meanwhile show only once it is on screen.
+
+    A :class:`Throttle` called inside holds its call (even the first of a slot) until the
+    outermost ``drawing_frame`` exits; then the held calls run, and their layout and
+    repaint are done at once (one composition of the main window, right after the
+    frame's swap). A readout's repaint composes the whole main window (15-25 ms in
+    software OpenGL): painted in the same pass as the lip frame it made that frame late
+    by as much (docs/DECISIONS.md, "Playback lag within one frame period").
+    """
+    global _frame_depth
+    _frame_depth += 1
+    try:
+        yield
+    finally:
+        _frame_depth -= 1
+        if _frame_depth == 0 and _after_frame:
+            from PySide6 import QtCore
+
+            held = list(_after_frame)
+            _after_frame.clear()
+            for throttle in held:
+                throttle.flush()
+            for kind in (QtCore.QEvent.Type.LayoutRequest, QtCore.QEvent.Type.UpdateRequest):
+                QtCore.QCoreApplication.sendPostedEvents(None, int(kind.value))
+
+
 class Throttle:
     """Call ``callback`` at most once per slot of ``interval_s``, always ending on the latest arguments.
 
@@ -180,7 +213,9 @@ class Throttle:
     interval share the slot boundaries, so they repaint in the same turn of the event loop
     — one composition of the window every ``interval_s`` instead of one per readout per
     frame. In software OpenGL a composition of the whole window costs more than a lip
-    frame (docs/DECISIONS.md, "Playback at the corpus rate").
+    frame (docs/DECISIONS.md, "Playback at the corpus rate"). Called while a playback
+    frame is drawn (:func:`drawing_frame`), the call runs just after that frame is on
+    screen.
 
     Parameters
     ----------
@@ -214,6 +249,13 @@ class Throttle:
 
         now = self.clock()
         slot = math.floor(now / self.interval_s)
+        if slot != self.last_slot and _frame_depth:  # a playback frame is being drawn: run after it
+            self._timer.stop()
+            self._held = args
+            self.last_slot = slot
+            if self not in _after_frame:
+                _after_frame.append(self)
+            return
         if slot != self.last_slot:
             self._timer.stop()
             self._held = None

@@ -31,7 +31,7 @@ from app import scene
 from app.audio import AudioPlayer, resolve_audio_path
 from app.playback import PlaybackClock
 from app.trajectories import lip_frames
-from app.views._common import (camera_of, close_plotter, connect_all, disconnect_all,
+from app.views._common import (camera_of, close_plotter, connect_all, disconnect_all, drawing_frame,
                                make_plotter, READOUT_INTERVAL_S, RenderScheduler, set_camera, Throttle)
 
 __all__ = ["LipView", "READOUT_INTERVAL_S"]
@@ -274,8 +274,11 @@ class LipView(QtWidgets.QWidget):
         """Show the frame due now (dropping those whose time has passed), then wait for the next one.
 
         The frame is the one due when it will reach the screen: the clock looks ahead by
-        the latency measured from choosing a frame to its ``frameSwapped``. The timer is
-        single-shot, set to the moment the next frame becomes the one to choose.
+        the latency measured from choosing a frame to its ``frameSwapped``. It is painted
+        at once, alone: the readouts it changes repaint just after its
+        swap (:func:`app.views._common.drawing_frame`), so nothing else's painting sits
+        between a frame's choice and its arrival on screen. The timer is single-shot, set
+        to the moment the next frame becomes the one to choose.
         """
         s, clock = self.state, self.clock
         if clock is None or not s.playing:
@@ -288,8 +291,10 @@ class LipView(QtWidgets.QWidget):
             return
         if k != s.playback:
             self._chosen_at = clock.clock()
-            s.set_playback(k)
-            self.renderer.flush()  # paint this widget (a native window: it alone) on the next turn
+            with drawing_frame():  # the readouts wait until the frame is on screen
+                s.set_playback(k)
+                # paint this widget (a native window: it alone) now, nothing else in between
+                self.renderer.flush(sync=True)
         self.timer.start(max(1, math.ceil(1000.0 * clock.next_tick_in(k))))
 
     def _on_swapped(self) -> None:

@@ -280,3 +280,87 @@ def test_throttle_runs_at_most_once_per_slot_and_ends_on_the_latest(qapp):
     assert calls == [1, 4, 5]
     with pytest.raises(ValueError, match="interval_s"):
         Throttle(calls.append, 0.0)
+
+
+@pytest.mark.gui
+def test_readouts_called_while_a_frame_is_drawn_repaint_just_after_it(qapp):
+    from PySide6 import QtCore, QtWidgets
+
+    from app.views._common import drawing_frame, Throttle
+
+    label = QtWidgets.QLabel("")
+    label.resize(200, 40)
+    label.show()
+    for _ in range(5):
+        qapp.processEvents()
+    paints = []
+
+    class PaintLog(QtCore.QObject):
+        def eventFilter(self, obj, event):  # noqa: N802 - Qt override
+            if event.type() == QtCore.QEvent.Type.Paint:
+                paints.append(label.text())
+            return False
+
+    log = PaintLog()
+    label.installEventFilter(log)
+    now = [10.0]
+    th = Throttle(label.setText, 0.5, clock=lambda: now[0])
+    try:
+        with drawing_frame():
+            with drawing_frame():  # nested: only the outermost exit releases
+                th("frame 1")  # the first call of a slot, yet held while the frame is drawn
+                assert label.text() == "" and paints == []
+            th("frame 2")  # the latest call wins
+            assert label.text() == ""
+        # released at the exit, and painted there (not left for a later turn of the event loop)
+        assert label.text() == "frame 2"
+        assert paints and paints[-1] == "frame 2"
+        th("frame 3")  # same slot, outside a frame: held for the next slot as before
+        assert label.text() == "frame 2"
+        now[0] = 10.6
+        th("frame 4")
+        assert label.text() == "frame 4"
+    finally:
+        th.cancel()
+        label.removeEventFilter(log)
+        label.close()
+
+
+@pytest.mark.gui
+def test_no_readout_paints_between_a_frames_choice_and_its_swap(qapp, lip_view):
+    import time
+
+    from PySide6 import QtCore
+
+    s = lip_view.state
+    marks = []  # (time, what)
+    s.events.playback.connect(lambda _k: marks.append((time.monotonic(), "chosen")))
+    lip_view.plotter.interactor.frameSwapped.connect(lambda: marks.append((time.monotonic(), "swap")))
+
+    class PaintLog(QtCore.QObject):
+        def eventFilter(self, obj, event):  # noqa: N802 - Qt override
+            if event.type() == QtCore.QEvent.Type.Paint:
+                marks.append((time.monotonic(), "readout"))
+            return False
+
+    log = PaintLog()
+    for w in (lip_view.caption, lip_view.slider):
+        w.installEventFilter(log)
+    try:
+        _play(qapp, lip_view, 1.2)
+        s.set_playing(False)
+    finally:
+        for w in (lip_view.caption, lip_view.slider):
+            w.removeEventFilter(log)
+    kinds = [m for _, m in sorted(marks)]
+    kinds = kinds[kinds.index("swap") + 1:]  # from the first frame on screen (Play itself set frame 0)
+    assert kinds.count("readout") >= 2  # the readouts do follow playback
+    assert kinds.count("swap") >= 5
+    pending = False  # a frame chosen and not yet on screen
+    for kind in kinds:
+        if kind == "chosen":
+            pending = True
+        elif kind == "swap":
+            pending = False
+        else:
+            assert not pending, f"a readout painted between a frame's choice and its swap: {kinds}"
