@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from engine._atomic import atomic_write
+from engine.frame_blocks import BlockFrames
 
 __all__ = ["CorpusError", "CorpusWarning", "PhoneInterval", "Utterance", "Corpus"]
 
@@ -134,7 +135,8 @@ class Corpus:
     history: list[str] = field(default_factory=list)
 
     def __post_init__(self):
-        self.frames = np.asarray(self.frames, dtype=np.float32)
+        if not isinstance(self.frames, BlockFrames):  # frames stored in blocks stay there (engine.frame_blocks)
+            self.frames = np.asarray(self.frames, dtype=np.float32)
         self.utterances = [replace(u, phones=_as_phones(u.phones)) for u in self.utterances]
         self.rate = float(self.rate)
         if self.faces is not None:
@@ -164,7 +166,8 @@ class Corpus:
             raise CorpusError(f"{self.name}: need at least 2 frames, got {F.shape[0]}")
         if not np.isfinite(self.rate) or self.rate <= 0:
             raise CorpusError(f"{self.name}: rate must be a positive number of Hz, got {self.rate}")
-        bad = ~np.isfinite(F)
+        # frames stored in blocks are checked where they are read (the shape stage), not gathered here
+        bad = np.zeros((0, 0), bool) if isinstance(F, BlockFrames) else ~np.isfinite(F)
         if bad.any():
             i, j = np.argwhere(bad)[0]
             raise CorpusError(

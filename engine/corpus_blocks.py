@@ -8,22 +8,30 @@ Layout, written by :func:`save_blocked` (``lipspace import --block-frames N``)::
     OUT.blocks/         block_00000.npy, block_00001.npy, ... : F in row blocks, float32,
                         each a plain .npy that a worker memory-maps (np.load(mmap_mode="r"))
 
-:func:`load_blocked` reads it back as an ordinary :class:`engine.corpus.Corpus` (the
-frames gathered from the blocks) together with the block paths, which
-:meth:`engine.scale.DaskExecutor.use_frame_blocks` hands to the workers so that the
-shape stage reads the blocks in place instead of writing F out again. For a cluster
-the folder must be on storage every worker can read.
+:func:`load_blocked` reads it back as an :class:`engine.corpus.Corpus` whose frames are
+an :class:`engine.frame_blocks.BlockFrames`: the block paths and row counts, never the
+frames gathered into memory. Every stage of a build reads them a window (in-process) or
+a block file (Dask workers) at a time. For a cluster the folder must be on storage every
+worker can read.
+
+A manifold built from such a corpus does not copy its frames: its file references the
+corpus file (:func:`frames_reference`: the path as given, and relative to the manifold's
+folder) with the per-speaker normalisation as small matrices, and
+:func:`frames_from_reference` reopens the blocks when the manifold is loaded; a missing
+corpus file is an error naming it.
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 
 from engine._atomic import atomic_write
 from engine.corpus import Corpus, CorpusError
+from engine.frame_blocks import BlockFrames, SpeakerAffine
 
-__all__ = ["save_blocked", "load_blocked", "is_blocked", "blocks_folder"]
+__all__ = ["save_blocked", "load_blocked", "is_blocked", "blocks_folder", "frames_reference", "frames_from_reference"]
 
 
 def blocks_folder(path) -> Path:
@@ -81,9 +89,12 @@ def is_blocked(path) -> bool:
 def load_blocked(path) -> tuple[Corpus, list[Path]]:
     """Read a corpus written by :func:`save_blocked`: ``(corpus, block paths)``.
 
-    Every block is checked against the corpus file (present, 2-D float32, the recorded
-    number of frames, the corpus's number of coordinates) before it is used; a fault
-    raises :class:`engine.corpus.CorpusError` naming the block file.
+    The corpus's frames are an :class:`engine.frame_blocks.BlockFrames` over the block
+    files (nothing is gathered). Every block's header is checked against the corpus file
+    (present, 2-D float32, the recorded number of frames, the corpus's number of
+    coordinates) before it is used; a fault raises :class:`engine.corpus.CorpusError`
+    naming the block file. NaN/inf in the blocks are found where they are read (the
+    shape stage names the frame).
     """
     from engine._persist import NpzReadError, read_npz
 
@@ -92,15 +103,21 @@ def load_blocked(path) -> tuple[Corpus, list[Path]]:
         d = read_npz(path)
     except NpzReadError as exc:
         raise CorpusError(f"{path}: not a readable .npz corpus file ({exc.reason})") from None
+    frames = _open_blocks(path, d)
+    return Corpus.from_arrays(d, frames=frames, source=str(path)), [Path(p) for p in frames.paths]
+
+
+def _open_blocks(path: Path, d) -> BlockFrames:
+    """The :class:`BlockFrames` of the blocked corpus file ``path`` whose arrays are ``d``."""
     if "blocks_files" not in d:
         raise CorpusError(f"{path}: not a corpus stored in blocks (no 'blocks_files'); read it with Corpus.load")
     folder = blocks_folder(path)
-    names, counts = [str(n) for n in d["blocks_files"]], np.asarray(d["blocks_frames"])
+    names, counts = [str(n) for n in d["blocks_files"]], np.asarray(d["blocks_frames"]).reshape(-1)
     n_cols = int(d["corpus_n_columns"])
     if len(names) != len(counts) or not names:
         raise CorpusError(f"{path}: field 'blocks_files' names {len(names)} blocks but 'blocks_frames' has "
                           f"{len(counts)} counts")
-    paths, parts = [], []
+    paths = []
     for name, n in zip(names, counts):
         p = folder / name
         if Path(name).name != name or not p.is_file():
@@ -112,10 +129,93 @@ def load_blocked(path) -> tuple[Corpus, list[Path]]:
         if b.dtype != np.float32 or b.ndim != 2 or b.shape != (int(n), n_cols):
             raise CorpusError(f"{p}: expected a float32 block of shape ({int(n)}, {n_cols}), got {b.dtype} "
                               f"{b.shape}")
+        del b
         paths.append(p)
-        parts.append(b)
-    frames = np.concatenate(parts)
-    if frames.shape[0] != int(d["corpus_n_frames"]):
-        raise CorpusError(f"{path}: the blocks hold {frames.shape[0]} frames but the corpus has "
+    if int(counts.sum()) != int(d["corpus_n_frames"]):
+        raise CorpusError(f"{path}: the blocks hold {int(counts.sum())} frames but the corpus has "
                           f"{int(d['corpus_n_frames'])}")
-    return Corpus.from_arrays(d, frames=frames, source=str(path)), paths
+    return BlockFrames(paths, counts, n_cols, source=path.resolve())
+
+
+# ------------------------------------------------------------ manifold files
+#: fields of a manifold file that reference a blocked corpus instead of holding its frames
+REFERENCE_FIELDS = ("corpus_blocks_source", "corpus_blocks_relative")
+_NORM = ("corpus_blocks_norm_mean", "corpus_blocks_norm_grand", "corpus_blocks_norm_code")
+
+
+def frames_reference(frames: BlockFrames, manifold_path) -> dict[str, np.ndarray]:
+    """Fields for a manifold file at ``manifold_path`` standing for ``frames`` (read from a blocked
+    corpus file): the corpus file's absolute path and its path relative to the manifold's folder
+    (tried first, so the two can move together), and the per-speaker normalisation, if any."""
+    if frames.source is None:
+        raise ValueError("these frames were not read from a blocked corpus file; save the manifold with "
+                         "include_frames=True")
+    src = Path(frames.source)
+    try:
+        rel = os.path.relpath(src, Path(manifold_path).resolve().parent)
+    except ValueError:  # another drive (Windows): the absolute path only
+        rel = ""
+    d = {"corpus_blocks_source": np.array(str(src)), "corpus_blocks_relative": np.array(rel)}
+    norm = frames.normalisation
+    if norm is not None:
+        d["corpus_blocks_norm_mean"] = np.asarray(norm.mean, np.float64)
+        d["corpus_blocks_norm_grand"] = np.asarray(norm.grand, np.float64)
+        d["corpus_blocks_norm_code"] = np.asarray(norm.utt_code, np.int64)
+        if norm.factor is not None:
+            d["corpus_blocks_norm_factor"] = np.asarray(norm.factor, np.float64)
+    return d
+
+
+def frames_from_reference(d, manifold_path, *, n_frames: int, n_columns: int) -> BlockFrames:
+    """Reopen the frames a manifold file references (see :func:`frames_reference`).
+
+    Raises
+    ------
+    engine.corpus.CorpusError
+        Naming the corpus file when it is missing or no longer holds ``n_frames`` x
+        ``n_columns`` frames, or naming the field when the normalisation fields do not fit.
+    """
+    from engine._persist import NpzReadError, read_npz
+
+    manifold_path = Path(manifold_path)
+    src = Path(str(d["corpus_blocks_source"]))
+    rel = str(d["corpus_blocks_relative"]) if "corpus_blocks_relative" in d else ""
+    candidates = ([manifold_path.resolve().parent / rel] if rel else []) + [src]
+    found = next((c for c in candidates if c.is_file()), None)
+    if found is None:
+        raise CorpusError(f"{manifold_path}: the frames of this manifold are in the blocked corpus {src} (with "
+                          f"{blocks_folder(src).name}/ beside it), which is missing; put the corpus back there "
+                          "(or beside the manifold as when it was built) or rebuild the manifold")
+    try:
+        cd = read_npz(found)
+    except NpzReadError as exc:
+        raise CorpusError(f"{found}: not a readable .npz corpus file ({exc.reason}); this manifold's frames "
+                          "are stored there") from None
+    frames = _open_blocks(found, cd)
+    if frames.shape != (int(n_frames), int(n_columns)):
+        raise CorpusError(f"{found}: holds {frames.shape[0]} x {frames.shape[1]} frames but the manifold "
+                          f"{manifold_path.name} was built on {n_frames} x {n_columns}: not the corpus it was "
+                          "built from; rebuild the manifold")
+    if "corpus_blocks_norm_mean" not in d:
+        return frames
+    mean, grand = np.asarray(d["corpus_blocks_norm_mean"]), np.asarray(d["corpus_blocks_norm_grand"])
+    code = np.asarray(d["corpus_blocks_norm_code"])
+    factor = np.asarray(d["corpus_blocks_norm_factor"]) if "corpus_blocks_norm_factor" in d else None
+    bounds = np.asarray(d["corpus_utt_bounds"])
+    S = mean.shape[0] if mean.ndim == 2 else -1
+    checks = [("corpus_blocks_norm_mean", mean.ndim == 2 and mean.shape[1] == n_columns and mean.dtype.kind == "f",
+               f"float ({S}, {n_columns})"),
+              ("corpus_blocks_norm_grand", grand.shape == (n_columns,) and grand.dtype.kind == "f",
+               f"float ({n_columns},)"),
+              ("corpus_blocks_norm_code", code.shape == (len(bounds),) and code.dtype.kind == "i"
+               and (not code.size or (code.min() >= 0 and code.max() < S)), f"int ({len(bounds)},) in 0..{S - 1}"),
+              ("corpus_blocks_norm_factor", factor is None or (factor.shape == (S,) and factor.dtype.kind == "f"),
+               f"float ({S},)")]
+    for field, ok, want in checks:
+        if not ok:
+            raise CorpusError(f"{manifold_path}: field {field!r} is not {want}")
+    finite = all(np.isfinite(a).all() for a in (mean, grand) + (() if factor is None else (factor,)))
+    if not finite:
+        raise CorpusError(f"{manifold_path}: the speaker normalisation fields hold NaN or inf")
+    return frames.with_normalisation(SpeakerAffine(bounds[:, 0].astype(np.int64), code.astype(np.int64), mean,
+                                                   factor, grand))

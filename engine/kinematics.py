@@ -29,12 +29,15 @@ LANDMARK_LABELS = ("open", "closed", "opening", "closing")
 AGREEMENT_WARN_BELOW = 0.75
 
 
-def lip_aperture(corpus) -> np.ndarray | None:
+def lip_aperture(corpus, *, executor=None) -> np.ndarray | None:
     """Distance between the upper- and lower-lip point centroids per frame.
 
     Parameters
     ----------
     corpus : Corpus
+    executor : engine.scale.DaskExecutor or None
+        With frames stored in blocks, one task per block file computes its frames'
+        aperture; otherwise a loop over windows of frames here (same values).
 
     Returns
     -------
@@ -44,9 +47,19 @@ def lip_aperture(corpus) -> np.ndarray | None:
     up, lo = corpus.role_points("upper_lip"), corpus.role_points("lower_lip")
     if up.size == 0 or lo.size == 0:
         return None
+    from functools import partial
+
+    from engine.frame_blocks import map_frames
+
+    parts = map_frames(partial(_aperture_rows, up=up, lo=lo, dims=corpus.dims), corpus.frames, executor=executor)
+    return np.concatenate(parts)
+
+
+def _aperture_rows(F, a, b, *, up, lo, dims):
+    """Lip aperture of the frames ``F`` (n, C) (rows ``[a, b)`` of the corpus), float64 (n,)."""
     from engine.corpus import frame_points
 
-    P = frame_points(corpus.frames, corpus.dims).astype(np.float64)  # (N, V, 3)
+    P = frame_points(F, dims).astype(np.float64)  # (n, V, 3)
     return np.linalg.norm(P[:, up].mean(axis=1) - P[:, lo].mean(axis=1), axis=1)
 
 

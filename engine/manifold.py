@@ -140,7 +140,7 @@ class Manifold(BaseEstimator):
         from engine.kinematics import lip_aperture
         from engine.registration import normalise_speakers, warn_if_split
 
-        corpus = normalise_speakers(corpus, mode=self.speaker_normalisation)
+        corpus = normalise_speakers(corpus, mode=self.speaker_normalisation, executor=executor)
         N = corpus.n_frames
         if N < max(12, self.n_embedding + 2):
             raise ValueError(f"{corpus.name}: {N} frames are too few to build a manifold "
@@ -175,7 +175,7 @@ class Manifold(BaseEstimator):
         t = time.perf_counter()
         report(progress, "tangent frames", 0, 1)
         tangent = TangentFrames(n_neighbors=self.n_neighbors, n_dims=min(3, self.n_embedding)).fit(
-            Fy, Fx, Fxv, bounds, opening=lip_aperture(corpus), executor=executor)  # "opening": the lips part
+            Fy, Fx, Fxv, bounds, opening=lip_aperture(corpus, executor=executor), executor=executor)  # "opening": the lips part
         report(progress, "tangent frames", 1, 1)
         timings["tangent"] = time.perf_counter() - t
 
@@ -255,10 +255,21 @@ class Manifold(BaseEstimator):
 
         ``include_frames=None`` stores the corpus frames when they take at most
         512 MiB; otherwise only F^x is stored and :meth:`load` reconstructs the frames
-        as ``mean + F^x X^T`` (the shape space's filtered reconstruction).
+        as ``mean + F^x X^T`` (the shape space's filtered reconstruction). Frames read
+        from a corpus stored in blocks (``engine.corpus_blocks``) are never copied
+        (unless ``include_frames=True``): the file references that corpus file instead
+        (:func:`engine.corpus_blocks.frames_reference`), and :meth:`load` reads the
+        blocks from it.
         """
+        from engine.frame_blocks import BlockFrames
+
         check_is_fitted(self, "Fy_")
         path = Path(path)
+        reference = {}
+        if include_frames is None and isinstance(self.corpus_.frames, BlockFrames):
+            from engine.corpus_blocks import frames_reference
+
+            reference, include_frames = frames_reference(self.corpus_.frames, path), False
         if include_frames is None:
             include_frames = self.corpus_.frames.nbytes <= MAX_SAVED_FRAME_BYTES
         d = {"manifold_version": np.array(FILE_VERSION),
@@ -268,6 +279,7 @@ class Manifold(BaseEstimator):
         if getattr(self, "state_x_", None) is not None:
             d["state_x"] = self.state_x_
         d.update(self.corpus_.to_arrays(include_frames=include_frames))
+        d.update(reference)
         for name, attr in self._PARTS.items():
             d.update(dump_estimator(getattr(self, attr), name))
         with atomic_write(path) as tmp:
@@ -332,6 +344,11 @@ class Manifold(BaseEstimator):
         frames = None
         if "corpus_frames" in d:
             check_array(d, "corpus_frames", source=path, shape=("N", "C"), dims=dims, finite=False)  # see Corpus
+        elif "corpus_blocks_source" in d:  # the frames stay in the blocked corpus the manifold was built from
+            from engine.corpus_blocks import frames_from_reference
+
+            check_scalar(d, "corpus_blocks_source", source=path, kind="str")
+            frames = frames_from_reference(d, path, n_frames=dims["N"], n_columns=self.shape_.mean_.shape[0])
         else:
             frames = self.shape_.inverse_transform(self.Fx_)
         self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path))

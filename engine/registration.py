@@ -143,7 +143,7 @@ def register(corpus: Corpus, *, method: str = "auto", drop_reference: bool = Tru
                    history=list(corpus.history) + [f"registration: {desc}"])
 
 
-def normalise_speakers(corpus: Corpus, *, mode: str = "auto") -> Corpus:
+def normalise_speakers(corpus: Corpus, *, mode: str = "auto", executor=None) -> Corpus:
     """Per-speaker normalisation before the shape space.
 
     Parameters
@@ -153,12 +153,20 @@ def normalise_speakers(corpus: Corpus, *, mode: str = "auto") -> Corpus:
         ``mean``: subtract each speaker's mean frame and add the pooled mean frame back;
         ``mean+scale``: also scale each speaker's deviations to the pooled RMS spread;
         ``auto``: ``mean`` when utterances name two or more speakers, else nothing.
+    executor : engine.scale.DaskExecutor or None
+        With a corpus stored in blocks (``engine.frame_blocks.BlockFrames``), the
+        per-speaker sums are computed by one task per block file; None: in-process.
 
     Returns
     -------
     Corpus
         The input itself when nothing is done, else a new corpus (``history`` says so).
+        Frames stored in blocks stay in their files: the new corpus reads them through
+        the per-speaker map (:class:`engine.frame_blocks.SpeakerAffine`), which the
+        shape stage's block tasks apply; in-memory frames are normalised into a copy.
     """
+    from engine.frame_blocks import BlockFrames, row_windows
+
     if mode not in SPEAKER_MODES:
         raise ValueError(f"speaker normalisation {mode!r}; expected one of {', '.join(SPEAKER_MODES)}")
     speakers = corpus.speakers
@@ -166,23 +174,79 @@ def normalise_speakers(corpus: Corpus, *, mode: str = "auto") -> Corpus:
         return corpus
     if mode == "auto":
         mode = "mean"
-    F = corpus.frames.astype(np.float64)
-    grand = F.mean(axis=0)
-    spk = np.array([u.speaker for u in corpus.utterances])[corpus.utterance_index]
-    dev = {}
-    for s in speakers:
-        g = spk == s
-        F[g] -= F[g].mean(axis=0)
-        dev[s] = float(np.sqrt((F[g] ** 2).mean()))
-    if mode == "mean+scale":
-        pooled = float(np.sqrt((F ** 2).mean()))
-        for s in speakers:
-            if dev[s] > 0:
-                F[spk == s] *= pooled / dev[s]
-    F += grand
+    affine = speaker_affine(corpus, scale=mode == "mean+scale", executor=executor)
+    F = corpus.frames
+    if isinstance(F, BlockFrames):
+        frames = F.with_normalisation(affine)
+    else:
+        frames = np.empty(F.shape, dtype=np.float32)
+        for a, b in row_windows(F.shape[0]):
+            frames[a:b] = affine.apply(F[a:b], a)
     names = ", ".join(s or "(unnamed)" for s in speakers)
     note = f"speaker normalisation {mode} over {len(speakers)} speakers ({names})"
-    return replace(corpus, frames=F.astype(np.float32), history=list(corpus.history) + [note])
+    return replace(corpus, frames=frames, history=list(corpus.history) + [note])
+
+
+def speaker_affine(corpus: Corpus, *, scale: bool, executor=None):
+    """The per-speaker normalisation of :func:`normalise_speakers` as a map of rows.
+
+    Two passes over the frames (window by window in-process, or one task per block file
+    on ``executor``): per-speaker sums and counts, then (``scale``) per-speaker sums of
+    squared deviations; the partial sums are added on the client in row order.
+
+    Returns
+    -------
+    engine.frame_blocks.SpeakerAffine
+    """
+    from functools import partial
+
+    from engine.frame_blocks import SpeakerAffine, map_frames
+
+    speakers = corpus.speakers
+    code_of = {s: k for k, s in enumerate(speakers)}
+    starts = np.asarray(corpus.bounds[:, 0], dtype=np.int64)
+    code = np.array([code_of[u.speaker] for u in corpus.utterances], dtype=np.int64)
+    S, C = len(speakers), corpus.frames.shape[1]
+    sums, counts = np.zeros((S, C)), np.zeros(S, dtype=np.int64)
+    for part_sums, part_counts in map_frames(partial(_speaker_sums, utt_starts=starts, utt_code=code, n_speakers=S),
+                                             corpus.frames, executor=executor):
+        sums += part_sums
+        counts += part_counts
+    mean = sums / np.maximum(counts, 1)[:, None]
+    grand = sums.sum(axis=0) / corpus.n_frames
+    factor = None
+    if scale:
+        ssd = np.zeros(S)
+        for part in map_frames(partial(_speaker_squares, utt_starts=starts, utt_code=code, mean=mean),
+                               corpus.frames, executor=executor):
+            ssd += part
+        dev = np.sqrt(ssd / (np.maximum(counts, 1) * C))
+        pooled = float(np.sqrt(ssd.sum() / (corpus.n_frames * C)))
+        factor = np.where(dev > 0, pooled / np.where(dev > 0, dev, 1.0), 1.0)
+    return SpeakerAffine(starts, code, mean, factor, grand)
+
+
+def _speaker_sums(x, a, b, *, utt_starts, utt_code, n_speakers):
+    """Per-speaker float64 column sums (S, C) and row counts (S,) of rows ``[a, b)`` given as ``x``."""
+    from engine.frame_blocks import speaker_runs
+
+    sums, counts = np.zeros((n_speakers, x.shape[1])), np.zeros(n_speakers, dtype=np.int64)
+    for s, r0, r1 in speaker_runs(utt_starts, utt_code, a, b):
+        sums[s] += x[r0 - a:r1 - a].sum(axis=0, dtype=np.float64)
+        counts[s] += r1 - r0
+    return sums, counts
+
+
+def _speaker_squares(x, a, b, *, utt_starts, utt_code, mean, rows=1024):
+    """Per-speaker sums (S,) of squared deviations from the speaker's mean frame, rows ``[a, b)``."""
+    from engine.frame_blocks import speaker_runs
+
+    out = np.zeros(len(mean))
+    for s, r0, r1 in speaker_runs(utt_starts, utt_code, a, b):
+        for c0 in range(r0, r1, rows):
+            d = x[c0 - a:min(r1, c0 + rows) - a].astype(np.float64) - mean[s]
+            out[s] += float(np.einsum("ij,ij->", d, d))
+    return out
 
 
 def explain_split(states, corpus: Corpus) -> str | None:

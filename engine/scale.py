@@ -2,9 +2,14 @@
 
 :class:`DaskExecutor` runs, on a ``distributed`` cluster,
 
+* per-frame work over a corpus stored in blocks (:meth:`DaskExecutor.map_frame_blocks`:
+  the per-speaker sums of the speaker normalisation, the lip aperture): the
+  :class:`engine.frame_blocks.BlockFrames` (paths, row counts, the per-speaker map)
+  travels once to each worker, every task reads its own block file;
 * the shape space PCA over F: F is stored on disk as one memory-mapped ``.npy`` file
-  per block of frames (:func:`store_frame_blocks`) and every worker reads its own
-  blocks (:func:`open_frame_blocks`); the randomized range finder's tall products
+  per block of frames (the corpus's own blocks, or :func:`store_frame_blocks` for a
+  corpus in memory) and every worker reads its own blocks, speaker-normalised inside
+  the task (:func:`open_frame_blocks`); the randomized range finder's tall products
   ``F X`` stay on the workers (``persist``), only thin ``C x r`` products come back;
   F^x (N x m) is gathered at the end;
 * the embedding's products with the distance matrix D (distances to all frames or to
@@ -44,6 +49,7 @@ from scipy.spatial import cKDTree
 
 from engine._atomic import atomic_write
 from engine.embedding import pairwise_distance_block
+from engine.frame_blocks import BlockFrames
 from engine.progress import ProgressFn, report
 from engine.shape import orthonormal_basis, thin_svd
 
@@ -87,31 +93,37 @@ def store_frame_blocks(frames, directory, *, block_frames: int = DEFAULT_BLOCK_F
     return paths
 
 
-def _load_block(path):
-    return np.load(path, mmap_mode="r")
+def _frame_rows(frames, a, b):
+    return frames.rows(a, b)
 
 
-def open_frame_blocks(paths):
-    """A dask array (N, C) float32 over block files; each block is memory-mapped by the
-    worker that reads it (nothing passes through the client)."""
+def open_frame_blocks(frames):
+    """A dask array (N, C) float32 over block files: ``frames`` is an
+    :class:`engine.frame_blocks.BlockFrames` (read through its speaker normalisation, if
+    any) or a list of block file paths. Each block is read by the worker that computes
+    it (nothing passes through the client)."""
     import dask
     import dask.array as da
 
-    parts = []
-    for p in paths:
-        hdr = np.load(p, mmap_mode="r")
-        if hdr.ndim != 2 or hdr.dtype != np.float32:
-            raise ValueError(f"{p}: expected a 2-D float32 block of frames, got {hdr.dtype} {hdr.shape}")
-        parts.append(da.from_delayed(dask.delayed(_load_block)(str(p)), shape=hdr.shape, dtype=np.float32))
-    if not parts:
-        raise ValueError("no block files given")
-    widths = {p.shape[1] for p in parts}
-    if len(widths) != 1:
-        raise ValueError(f"block files disagree on the number of coordinates: {sorted(widths)}")
+    if not isinstance(frames, BlockFrames):
+        frames = BlockFrames.from_files(list(frames))
+    C = frames.shape[1]
+    parts = [da.from_delayed(dask.delayed(_frame_rows, pure=True)(frames, a, b), shape=(b - a, C), dtype=np.float32)
+             for a, b in frames.block_bounds]
     return da.concatenate(parts, axis=0)
 
 
+def _first_nonfinite(block, a, b) -> int:
+    """First frame (global index) of rows ``[a, b)`` holding NaN or inf, or -1."""
+    ok = np.isfinite(block).all(axis=1)
+    return -1 if ok.all() else a + int(np.flatnonzero(~ok)[0])
+
+
 # ------------------------------------------------------------------ block tasks
+def _frames_task(fn, frames, a, b):
+    return fn(frames.rows(a, b), a, b)
+
+
 def _dist_times(Gb, cols, cols_sq, X, squared, extra):
     Db = pairwise_distance_block(Gb, cols, cols_sq, squared=squared)
     return Db @ X, (extra(Db) if extra is not None else None)
@@ -269,11 +281,17 @@ class DaskExecutor:
     def __exit__(self, *exc):
         self.close()
 
-    def use_frame_blocks(self, frames, paths) -> None:
-        """Let the shape stage read F from existing block files (``engine.corpus_blocks``)
-        instead of writing it out: used when :meth:`fit_shape` is given this very
-        ``frames`` array (not a normalised copy of it)."""
-        self._frame_blocks = (frames, [Path(p) for p in paths])
+    def map_frame_blocks(self, fn, frames) -> list:
+        """``[fn(F[a:b], a, b) for each block file [a, b) of frames]``, one task per block, in order.
+
+        ``frames`` (an :class:`engine.frame_blocks.BlockFrames`: paths and small matrices)
+        travels once to every worker; each task reads its own block file (through the
+        speaker normalisation, if any) and returns only ``fn``'s result. Used by the
+        speaker normalisation's sums and the lip aperture (:func:`engine.frame_blocks.map_frames`).
+        """
+        ff = self.client.scatter(frames, broadcast=True, hash=False)
+        futs = [self.client.submit(_frames_task, fn, ff, a, b, pure=False) for a, b in frames.block_bounds]
+        return self.client.gather(futs)
 
     # ------------------------------------------------------------ shape space
     def fit_shape(self, shape, frames, *, progress: ProgressFn = None) -> np.ndarray:
@@ -285,21 +303,20 @@ class DaskExecutor:
         import dask
         import dask.array as da
 
-        F0 = shape._validate(frames)
-        N, C = F0.shape
-        given = getattr(self, "_frame_blocks", None)
-        if given is not None and given[0] is frames:  # the corpus is stored in blocks already: read them in place
-            paths = given[1]
-        else:
-            paths = store_frame_blocks(F0, self.chunk_dir / "frames", block_frames=self.block_frames)
-        F = open_frame_blocks(paths)
-        if F.shape != F0.shape:
-            raise ValueError(f"the frame blocks hold {F.shape} frames x coordinates but the corpus has {F0.shape}")
-        del F0
+        if isinstance(frames, BlockFrames):  # stored in blocks already: the workers read them in place
+            shape._validate(frames, finite=False)  # finiteness: checked by the workers below
+        else:  # in memory: written out once as blocks for the workers
+            frames = BlockFrames.from_files(store_frame_blocks(shape._validate(frames), self.chunk_dir / "frames",
+                                                               block_frames=self.block_frames))
+        F = open_frame_blocks(frames)
+        N, C = F.shape
         rng = np.random.default_rng(shape.random_state)
         k = int(min(shape.max_components, N - 1, C))
         p = min(10, min(N, C) - k)
         mean = F.sum(axis=0, dtype=np.float64).compute() / N
+        if not np.isfinite(mean).all():  # NaN/inf somewhere: name the first frame, as in-process
+            bad = [i for i in self.map_frame_blocks(_first_nonfinite, frames) if i >= 0]
+            raise ValueError(f"frame {bad[0] if bad else '?'} holds NaN or inf; clean the corpus before fitting")
         mean32 = mean.astype(np.float32)
         steps, step = 2 * int(shape.n_iter) + 3, 0
 

@@ -13,6 +13,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.frame_blocks import BlockFrames
 from engine.progress import ProgressFn, report
 from engine.threads import one_blas_thread
 
@@ -135,8 +136,10 @@ class ShapeSpace(BaseEstimator):
         self.block_size = block_size
         self.random_state = random_state
 
-    def _validate(self, F):
-        F = np.asarray(F)
+    def _validate(self, F, *, finite=True):
+        """Parameters, and F (N, C): 2-D, enough frames, (``finite``) no NaN/inf. F stored in
+        blocks (``engine.frame_blocks.BlockFrames``) is read a window at a time, never gathered."""
+        F = F if isinstance(F, BlockFrames) else np.asarray(F)
         if F.ndim != 2:
             raise ValueError(f"frames must be 2-D (n_frames, n_coordinates), got shape {F.shape}")
         if F.shape[0] < 3:
@@ -149,7 +152,7 @@ class ShapeSpace(BaseEstimator):
             raise ValueError(f"tol must be >= 0 degrees or None, got {self.tol}; e.g. 0.05")
         if int(self.max_components) < 1:
             raise ValueError(f"max_components must be >= 1, got {self.max_components}")
-        for sl in _row_blocks(F.shape[0], max(1, int(self.block_size))):  # no N x C boolean copy
+        for sl in _row_blocks(F.shape[0], max(1, int(self.block_size))) if finite else ():  # no N x C bool copy
             ok = np.isfinite(F[sl]).all(axis=1)
             if not ok.all():
                 bad = sl.start + int(np.flatnonzero(~ok)[0])
@@ -268,7 +271,7 @@ class ShapeSpace(BaseEstimator):
     def transform(self, F):
         """Project frames: ndarray (n, C) -> F^x, ndarray (n, m) float32."""
         check_is_fitted(self, "components_")
-        F = np.asarray(F, dtype=np.float32)
+        F = F if isinstance(F, BlockFrames) else np.asarray(F, dtype=np.float32)
         if F.ndim != 2 or F.shape[1] != self.mean_.shape[0]:
             raise ValueError(f"frames must have shape (n, {self.mean_.shape[0]}), got {F.shape}")
         out = np.empty((F.shape[0], self.n_components_), dtype=np.float32)

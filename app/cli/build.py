@@ -51,9 +51,8 @@ def run(args) -> int:
         raise CliError(f"{out}: the manifold file must end in .npz")
     t0 = time.perf_counter()
     with progress_bar(disable=True if args.quiet else None) as progress:
-        blocks = None
         if args.corpus is not None and _is_blocked(args.corpus):  # written by 'lipspace import --block-frames'
-            corpus, blocks = _load_blocked(args.corpus)
+            corpus = _load_blocked(args.corpus)  # frames stay in their block files, read where they are needed
         else:
             corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress)
         if abs(corpus.rate - 60.0) > 3.0:  # the analysis rate (README, "Real recordings")
@@ -66,8 +65,6 @@ def run(args) -> int:
             plan = plan_build(corpus.n_frames, n_landmarks=args.landmarks, landmarks_above=args.landmarks_above)
             print(f"lipspace build: {plan.describe()}", file=sys.stdout)
             executor = _dask_executor(args)
-            if executor is not None and blocks is not None:
-                executor.use_frame_blocks(corpus.frames, blocks)
             manifold = Manifold(variance=args.variance, n_embedding=args.embedding_dims,
                                 embedding_method=args.method, n_landmarks=args.landmarks,
                                 n_states=args.states, n_neighbors=args.neighbors,
@@ -100,7 +97,7 @@ def _load_blocked(path):
     from engine.corpus_blocks import load_blocked
 
     try:
-        return load_blocked(path)
+        return load_blocked(path)[0]
     except CorpusError as exc:
         raise CliError(str(exc)) from None
 
