@@ -171,8 +171,6 @@ def main() -> None:
         return
     from _common import blas_kernel
 
-    import engine.espeak_phones  # noqa: F401  (the library's presence decides the method)
-
     print(f"preset {args.preset}; BLAS {blas_kernel()}; load average at start {os.getloadavg()}")
     _corpus(args.preset)  # generated and cached once, not timed
     methods = ["phones"] + ([] if args.no_words else ["words"])

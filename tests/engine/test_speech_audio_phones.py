@@ -194,15 +194,16 @@ def test_files_of_an_older_version_are_made_again_and_current_ones_reused(tmp_pa
 
 
 @needs_library
-def test_phones_espeak_speaks_as_one_or_folds_away_still_get_their_own_start(worker):
-    # espeak-ng says 'ay ax' of "society" as one phone (aI@) and folds the /l/ of "fills" into the vowel
+def test_phones_espeak_merges_folds_or_assimilates_still_get_their_own_start(worker):
+    # espeak-ng says 'ay ax' of "society" as one phone (aI@), folds the /l/ of "fills" into the vowel
+    # and says the 'n' of "increase" as 'N' (before k)
     from engine.corpus import PhoneInterval, Utterance
     from engine.phonetics import pronounce
 
-    labels = pronounce("Society fills.", pauses=True)
+    labels = pronounce("Society fills increase.", pauses=True)
     bounds = np.cumsum([0.0] + [0.3 if p == PAUSE else 0.08 for p in labels])
     ph = tuple(PhoneInterval(float(a), float(b), p) for a, b, p in zip(bounds[:-1], bounds[1:], labels))
-    u = Utterance("u1", 0, int(bounds[-1] * 60), ph, None, "Society fills.")
+    u = Utterance("u1", 0, int(bounds[-1] * 60), ph, None, "Society fills increase.")
     y, info = sa.utterance_audio(u, worker=worker)
     assert info["method"] == "phones" and info["phones"] == len(labels) - 2
     src = info["source"]
