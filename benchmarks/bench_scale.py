@@ -1,28 +1,31 @@
-"""Wall time and peak memory of the whole build at growing N (issue 13).
+"""Wall time and memory per stage of the whole build at growing N, the client's apart from the workers' (issue 13).
 
-For each N the synthetic talker speaks N frames (60 Hz) and ``Manifold().fit`` builds
-its manifold, each size in a fresh process (cold). The build follows the size rule of
-``engine.buildplan``: the exact embedding up to 50,000 frames, 2,000 landmarks above.
-Printed per size: the path taken, wall time per stage (shape, dynamics, embedding,
-tangent, states), the process's resident memory when the build starts (corpus loaded,
-libraries imported), the build's peak resident memory (sampled every 10 ms during the
-build only, so the corpus generator's own peak does not count), their difference, and
-at the end the fitted exponent b of ``build memory ~ N^b`` and ``time ~ N^b`` over the
-sizes. Memory linear in N means b <= 1.
+For each N the synthetic talker speaks N frames (60 Hz) in a fresh process that writes
+them as a corpus stored in blocks (``engine.corpus_blocks.save_blocked``, 8,192 frames
+per block, kept in ``--work`` and reused by later runs); then a second fresh process
+(cold) opens that corpus lazily (``load_blocked``: block paths and per-utterance
+metadata, no frames), builds its manifold with ``Manifold().fit`` and saves it (the file
+references the blocked corpus). The build follows the size rule of ``engine.buildplan``:
+the exact embedding up to 50,000 frames, 2,000 landmarks above.
+
+Printed per size: the path taken; wall time per stage; the client process's resident
+memory after opening the corpus, and its peak in every stage (sampled every 10 ms;
+the stage is the one the build last reported through its progress callback: "setup"
+is the speaker normalisation before the shape space, the lip aperture falls in
+"tangent frames"); the size of N x C float32 frames beside it (what the client would
+hold if it gathered the corpus); with ``--dask`` the workers' peak resident memory, each
+over the worker's whole life; the saved file's size. At the end the fitted exponent b
+of ``memory ~ N^b`` and ``time ~ N^b`` over the sizes (memory linear in N: b <= 1).
 
 Points per frame: ``--resolution small`` (156 points, 468 coordinates) by default for
 every size so that the sizes are comparable; ``--resolution paper`` gives the paper's
 4,260 points (12,780 coordinates; 1.5 GB of frames at 30k).
 
-``--dask local`` runs the shape space and the embedding on a LocalCluster (one worker
-per core); the workers' peak resident memory is then printed beside the client's.
-
 Usage::
 
-    python benchmarks/bench_scale.py                          # 30k, 100k, 300k
-    python benchmarks/bench_scale.py --sizes 30000 100000 300000 1000000
-    python benchmarks/bench_scale.py --sizes 30000 --resolution paper
-    python benchmarks/bench_scale.py --sizes 100000 --dask local
+    python benchmarks/bench_scale.py                          # 30k, 100k, 300k, in-process
+    python benchmarks/bench_scale.py --sizes 30000 100000 300000 1000000 --dask local
+    python benchmarks/bench_scale.py --sizes 30000 --resolution paper --dask local
 """
 from __future__ import annotations
 
@@ -66,9 +69,30 @@ def _worker_peak_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def measured_build(corpus, dask: str | None) -> dict:
+class _StagePeaks(_PeakSampler):
+    """A peak sampler that also keeps the peak of every stage the build reports (``progress``)."""
+
+    def __init__(self, interval=0.01):
+        super().__init__(interval)
+        self.stage, self.stages = "setup", {}
+
+    def progress(self, stage, done, total):
+        if stage and stage != self.stage:
+            self.stages[self.stage] = max(self.stages.get(self.stage, 0.0), current_rss_mb())
+            self.stage = stage
+
+    def run(self):
+        while not self._halt.is_set():
+            rss = current_rss_mb()
+            self.peak = max(self.peak, rss)
+            self.stages[self.stage] = max(self.stages.get(self.stage, 0.0), rss)
+            time.sleep(self.interval)
+
+
+def measured_build(corpus, dask: str | None, *, save_to=None) -> dict:
     """``Manifold().fit(corpus)`` (on Dask when ``dask`` names a cluster), measured: the manifold,
-    wall and client CPU seconds, resident memory at the start and peak (MB), the workers' peaks."""
+    wall and client CPU seconds, resident memory at the start and peak (MB), the client's peak per
+    stage, the workers' peaks; with ``save_to`` the manifold is saved there too (stage "save")."""
     import warnings
 
     from engine.manifold import Manifold
@@ -79,36 +103,59 @@ def measured_build(corpus, dask: str | None) -> dict:
 
         executor = DaskExecutor.connect(dask)
     start = current_rss_mb()
-    sampler = _PeakSampler()
+    sampler = _StagePeaks()
     sampler.start()
     c0, t = time.process_time(), time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # connectivity warnings of the state graph are not the point here
-        m = Manifold().fit(corpus, executor=executor)
+        m = Manifold().fit(corpus, executor=executor, progress=sampler.progress)
     wall, cpu = time.perf_counter() - t, time.process_time() - c0
+    saved = None
+    if save_to is not None:
+        sampler.progress("save", 0, 1)
+        t = time.perf_counter()
+        m.save(save_to)
+        saved = {"s": time.perf_counter() - t, "mb": os.path.getsize(save_to) / 2**20}
     peak = sampler.stop()
     workers = None
     if executor is not None:
         workers = sorted(executor.client.run(_worker_peak_mb).values())
         executor.close()
-    return {"manifold": m, "wall": wall, "cpu": cpu, "start": start, "peak": peak, "workers": workers}
+    return {"manifold": m, "wall": wall, "cpu": cpu, "start": start, "peak": peak, "workers": workers,
+            "stage_peaks": sampler.stages, "saved": saved}
 
 
-def one(n_frames: int, resolution: str, dask: str | None) -> dict:
-    """Generate N frames, build, and measure (run in a fresh process)."""
-    from engine.buildplan import plan_build
+def generate(n_frames: int, resolution: str, path: str) -> dict:
+    """The talker's N frames written as a blocked corpus at ``path`` (run in a fresh process)."""
+    from engine.corpus_blocks import save_blocked
     from engine.synthetic import SyntheticTalker
 
     t = time.perf_counter()
     corpus = SyntheticTalker(duration=n_frames / 60.0, resolution=resolution).generate()
-    t_gen = time.perf_counter() - t
-    b = measured_build(corpus, dask)
-    m, wall, start, peak, workers = b["manifold"], b["wall"], b["start"], b["peak"], b["workers"]
-    return {"n_frames": corpus.n_frames, "coords": corpus.frames.shape[1], "generate_s": t_gen,
-            "plan": plan_build(corpus.n_frames).describe(), "wall_s": wall, "stages": m.timings_,
-            "rss_start_mb": start, "rss_peak_mb": peak, "build_mb": peak - start,
-            "worker_peak_mb": workers, "frames_mb": corpus.frames.nbytes / 2**20, "blas": blas_kernel(),
-            "dask": dask}
+    save_blocked(corpus, path)
+    return {"generate_s": time.perf_counter() - t}
+
+
+def one(path: str, dask: str | None) -> dict:
+    """Open the blocked corpus at ``path`` lazily, build, save, and measure (run in a fresh process)."""
+    from engine.buildplan import plan_build
+    from engine.corpus_blocks import load_blocked
+
+    load0 = os.getloadavg()
+    rss0 = current_rss_mb()
+    t = time.perf_counter()
+    corpus, blocks = load_blocked(path)
+    t_open = time.perf_counter() - t
+    out = path[:-len(".npz")] + "-manifold.npz"
+    b = measured_build(corpus, dask, save_to=out)
+    m = b["manifold"]
+    return {"n_frames": corpus.n_frames, "coords": corpus.frames.shape[1], "blocks": len(blocks),
+            "speakers": len(corpus.speakers), "open_s": t_open, "rss_before_open_mb": rss0,
+            "plan": plan_build(corpus.n_frames).describe(), "wall_s": b["wall"], "cpu_s": b["cpu"],
+            "stages": m.timings_, "rss_start_mb": b["start"], "rss_peak_mb": b["peak"],
+            "build_mb": b["peak"] - b["start"], "stage_peaks_mb": b["stage_peaks"], "saved": b["saved"],
+            "worker_peak_mb": b["workers"], "frames_mb": corpus.frames.nbytes / 2**20, "blas": blas_kernel(),
+            "dask": dask, "load_before": load0, "load_after": os.getloadavg()}
 
 
 def _exponent(ns, ys):
@@ -118,40 +165,61 @@ def _exponent(ns, ys):
     return float(np.polyfit(ns, ys, 1)[0]) if len(ns) > 1 else float("nan")
 
 
+def _run(cmd) -> dict:
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    if out.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)}: failed\n{out.stderr[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[30000, 100000, 300000])
     ap.add_argument("--resolution", default="small", help="lip model resolution (small: 156 points, paper: 4,260)")
     ap.add_argument("--dask", default=None, help="'local' or a scheduler address (default: in-process)")
-    ap.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--work", default=os.path.join(os.environ.get("TMPDIR", "/tmp"), "lipspace-bench-scale"),
+                    help="folder for the blocked corpora (reused) and the manifolds (default: %(default)s)")
+    ap.add_argument("--one", help=argparse.SUPPRESS)
+    ap.add_argument("--generate", type=int, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    if args.one:
-        print(json.dumps(one(args.one, args.resolution, args.dask)))
+    if args.generate:
+        print(json.dumps(generate(args.generate, args.resolution, args.one)))
         return 0
+    if args.one:
+        print(json.dumps(one(args.one, args.dask)))
+        return 0
+    os.makedirs(args.work, exist_ok=True)
     runs = []
+    me = [sys.executable, os.path.abspath(__file__)]
     for n in args.sizes:
-        cmd = [sys.executable, os.path.abspath(__file__), "--one", str(n), "--resolution", args.resolution]
-        if args.dask:
-            cmd += ["--dask", args.dask]
-        out = subprocess.run(cmd, capture_output=True, text=True)
-        if out.returncode != 0:
-            print(f"N={n}: failed\n{out.stderr[-2000:]}", file=sys.stderr)
-            return 1
-        r = json.loads(out.stdout.strip().splitlines()[-1])
+        path = os.path.join(args.work, f"talker-{n}-{args.resolution}.npz")
+        gen = "reused"
+        if not os.path.isfile(path):
+            gen = f"generated in {_run(me + ['--generate', str(n), '--one', path, '--resolution', args.resolution])['generate_s']:.1f} s"
+        r = _run(me + ["--one", path] + (["--dask", args.dask] if args.dask else []))
         runs.append(r)
         st = ", ".join(f"{k} {v:.1f}" for k, v in r["stages"].items())
-        wk = f"; workers' peak {', '.join(f'{w:.0f}' for w in r['worker_peak_mb'])} MB" if r["worker_peak_mb"] else ""
-        print(f"{r['plan']}\n  {r['coords']} coordinates ({r['frames_mb']:.0f} MB of frames), generated in "
-              f"{r['generate_s']:.1f} s; build {r['wall_s']:.1f} s wall ({st}); RSS at start "
-              f"{r['rss_start_mb']:.0f} MB, peak {r['rss_peak_mb']:.0f} MB, build +{r['build_mb']:.0f} MB{wk}",
-              flush=True)
+        peaks = ", ".join(f"{k} {v:.0f}" for k, v in r["stage_peaks_mb"].items())
+        wk = f"\n  workers' peak RSS {', '.join(f'{w:.0f}' for w in r['worker_peak_mb'])} MB" if r["worker_peak_mb"] else ""
+        sv = r["saved"]
+        print(f"{r['plan']}\n  {r['coords']} coordinates, {r['speakers']} speaker(s), {r['blocks']} blocks "
+              f"({r['frames_mb']:.0f} MB of frames, {gen}); opened in {r['open_s']:.2f} s\n"
+              f"  build {r['wall_s']:.1f} s wall, client CPU {r['cpu_s']:.1f} s ({st}); saved in {sv['s']:.1f} s "
+              f"({sv['mb']:.0f} MB file)\n"
+              f"  client RSS after opening the corpus {r['rss_start_mb']:.0f} MB, peak {r['rss_peak_mb']:.0f} MB "
+              f"(N x C frames would be {r['frames_mb']:.0f} MB); peak per stage (MB): {peaks}{wk}\n"
+              f"  load average {r['load_before'][0]:.1f} before, {r['load_after'][0]:.1f} after "
+              f"({os.cpu_count()} cores)", flush=True)
     if runs:
         print(f"BLAS: {runs[0]['blas']}; dask: {args.dask or 'no (in-process)'}")
     if len(runs) > 1:
         ns = [r["n_frames"] for r in runs]
-        print(f"fitted exponents over N = {ns}: build memory ~ N^{_exponent(ns, [r['build_mb'] for r in runs]):.2f}, "
-              f"peak RSS ~ N^{_exponent(ns, [r['rss_peak_mb'] for r in runs]):.2f}, "
-              f"wall ~ N^{_exponent(ns, [r['wall_s'] for r in runs]):.2f}")
+        print(f"fitted exponents over N = {ns}: client build memory ~ N^"
+              f"{_exponent(ns, [r['build_mb'] for r in runs]):.2f}, client peak RSS ~ N^"
+              f"{_exponent(ns, [r['rss_peak_mb'] for r in runs]):.2f}, wall ~ N^"
+              f"{_exponent(ns, [r['wall_s'] for r in runs]):.2f}")
+        if runs[0]["worker_peak_mb"]:
+            print(f"  workers' largest peak RSS ~ N^{_exponent(ns, [max(r['worker_peak_mb']) for r in runs]):.2f}")
         for k in runs[0]["stages"]:
             print(f"  {k}: wall ~ N^{_exponent(ns, [r['stages'][k] for r in runs]):.2f}")
     return 0
