@@ -20,3 +20,27 @@ def test_build_on_a_running_scheduler(tmp_path, small_corpus, capsys, dask_clust
     assert sorted(p.name for p in (tmp_path / "blocks" / "frames").iterdir())[0] == "block_00000.npy"
     m = Manifold.load(out)
     assert m.Fy_.shape == (corpus.n_frames, 10) and np.isfinite(m.Fy_).all()
+
+
+def test_manifold_of_a_blocked_corpus_reads_its_frames_from_it(tmp_path, small_corpus, capsys):
+    """build writes no copy of a blocked corpus's frames; synthesize reads them from the corpus's blocks, and
+    says which file is missing when the corpus is gone (exit 2)."""
+    from engine._persist import read_npz
+    from engine.corpus_blocks import save_blocked
+
+    corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1500])
+    src = tmp_path / "c.npz"
+    save_blocked(corpus, src, block_frames=512)
+    out = tmp_path / "m.npz"
+    assert main(["build", str(src), "-o", str(out), "-q", "--states", "30"]) == 0
+    assert "corpus_frames" not in read_npz(out, keys_only=True)
+    traj = tmp_path / "t.npy"
+    uid = corpus.utterances[0].id
+    assert main(["synthesize", "--utterance", uid, "--manifold", str(out), "-o", str(traj), "-q"]) == 0
+    got = np.load(traj)
+    assert got.shape[1] == corpus.frames.shape[1] and np.isfinite(got).all()
+    capsys.readouterr()
+    src.unlink()
+    assert main(["synthesize", "--utterance", uid, "--manifold", str(out), "-o", str(traj), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "c.npz" in err[0] and "which is missing" in err[0], err
