@@ -32,6 +32,7 @@ import warnings as _warnings
 
 import numpy as np
 
+from engine.bridges import bridge
 from engine.inverse_local import LocalLinearInverse, StateMeanInverse
 from engine.trajectory import smooth
 
@@ -159,9 +160,10 @@ class StateModel:
         cur, missed = s[0], 0
         for i in range(len(f) - 1):
             n = int(f[i + 1] - f[i] + 1)
-            scores, hist = g.viterbi(cur, n)
             end = s[i + 1]
-            if not np.isfinite(scores[end]):
+            seg = bridge(g, cur, end, n)  # the Viterbi path, scored only where it can pass
+            if seg is None:
+                scores, hist = g.viterbi(cur, n)
                 missed += 1
                 ok = np.flatnonzero(np.isfinite(scores))
                 if ok.size == 0:
@@ -172,7 +174,7 @@ class StateModel:
                     continue
                 c = self.state_y_
                 end = int(ok[np.argmin(np.linalg.norm(c[ok] - c[end], axis=1))])
-            seg = g.backtrack(hist, end)
+                seg = g.backtrack(hist, end)
             path[f[i]: f[i + 1] + 1] = seg
             cur = int(seg[-1])
         path[f[-1]:] = path[f[-1]]

@@ -31,6 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 
+from engine.bridges import bridge, forward_to
 from engine.targets import TargetSequence
 from engine.threads import single_blas_thread
 from engine.threads import single_blas_thread
@@ -469,9 +470,10 @@ class ManifoldSynthesizer(BaseEstimator):
         for g in range(len(f) - 1):
             n = int(f[g + 1] - f[g] + 1)
             goal = states[g + 1]
-            scores, back = g_.viterbi(cur, n)
+            seg = bridge(g_, cur, goal, n)  # the Viterbi path, scored only where it can pass
             end = goal
-            if not np.isfinite(scores[goal]):
+            if seg is None:
+                scores, back = g_.viterbi(cur, n)
                 exc = NoPathError(_no_path_message(g_, cur, goal, n))
                 if self.strict:
                     raise self._gap_error(targets, f, g, exc)
@@ -487,8 +489,6 @@ class ManifoldSynthesizer(BaseEstimator):
                                     f"to state {goal}")
                     seg = np.full(n, cur)
                     seg[-1] = end
-            else:
-                seg = g_.backtrack(back, end)
             path[f[g]: f[g + 1] + 1] = seg
             cur = int(seg[-1])
         path[f[-1]:] = path[f[-1]]
@@ -507,7 +507,7 @@ class ManifoldSynthesizer(BaseEstimator):
         backs = []
         for g in range(len(f) - 1):
             n = int(f[g + 1] - f[g] + 1)
-            S = self._graph.forward(cands[g], n)[:, cands[g + 1]]  # (Mg, Mg+1)
+            S = forward_to(self._graph, cands[g], n, cands[g + 1])  # (Mg, Mg+1), as forward(...)[:, cands[g + 1]]
             if not self.strict:
                 # an unbridgeable pair stays possible at a prohibitive cost (nearer pairs cheaper);
                 # _join then undershoots that gap
