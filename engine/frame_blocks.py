@@ -9,7 +9,7 @@ drops the mapping, so the reading process never keeps N x C in memory. The objec
 small and picklable: a Dask worker given it reads its own block (:meth:`BlockFrames.rows`).
 
 :func:`map_frames` runs a per-row function over F window by window: in-process over
-fixed windows of :data:`WINDOW_ROWS` global rows (the same windows for an in-memory
+fixed windows of global rows (:func:`row_windows`: the same windows for an in-memory
 array and for block files, so in-process results do not depend on how F is stored),
 or, given an executor with ``map_frame_blocks`` (``engine.scale.DaskExecutor``), as one
 task per block file.
@@ -23,18 +23,20 @@ import uuid
 from dataclasses import dataclass
 import numpy as np
 
-__all__ = ["BlockFrames", "SpeakerAffine", "map_frames", "row_windows", "speaker_runs", "WINDOW_ROWS"]
+__all__ = ["BlockFrames", "SpeakerAffine", "map_frames", "row_windows", "speaker_runs", "WINDOW_ROWS", "WINDOW_BYTES"]
 
-#: rows per window of the in-process loops over F (:func:`row_windows`)
+#: rows per window of the in-process loops over F (:func:`row_windows`), at most
 WINDOW_ROWS = 8192
+#: bytes of float32 rows per window at most (wide frames: fewer rows)
+WINDOW_BYTES = 32 * 2**20
 #: rows converted to float64 at once when the speaker normalisation is applied
 _AFFINE_ROWS = 1024
 
 
-def row_windows(n: int, rows: int | None = None):
-    """``(start, stop)`` of consecutive windows of ``rows`` rows (default :data:`WINDOW_ROWS`) covering
-    ``range(n)``."""
-    rows = WINDOW_ROWS if rows is None else rows
+def row_windows(n: int, n_columns: int):
+    """``(start, stop)`` of consecutive windows covering ``range(n)``: :data:`WINDOW_ROWS` rows, fewer
+    when rows of ``n_columns`` float32 values would exceed :data:`WINDOW_BYTES` (at least 64)."""
+    rows = max(64, min(WINDOW_ROWS, WINDOW_BYTES // (4 * max(1, int(n_columns)))))
     for a in range(0, int(n), int(rows)):
         yield a, min(int(n), a + int(rows))
 
@@ -304,7 +306,7 @@ class BlockFrames:
         if axis != 0:
             raise ValueError("BlockFrames.mean computes only the mean frame (axis=0)")
         total = np.zeros(self.shape[1], dtype=np.float64)
-        for a, b in row_windows(self.shape[0]):
+        for a, b in row_windows(*self.shape):
             total += self.rows(a, b).sum(axis=0, dtype=np.float64)
         return (total / self.shape[0]).astype(dtype or np.float32)
 
@@ -313,13 +315,13 @@ def map_frames(fn, frames, *, executor=None) -> list:
     """``[fn(F[a:b], a, b), ...]`` over F in row order.
 
     ``frames`` is an ndarray or a :class:`BlockFrames`. Without an executor (or one
-    without ``map_frame_blocks``, or for an in-memory F) the loop runs here over windows
-    of :data:`WINDOW_ROWS` rows; with ``engine.scale.DaskExecutor`` and block files, one
+    without ``map_frame_blocks``, or for an in-memory F) the loop runs here over the
+    windows of :func:`row_windows`; with ``engine.scale.DaskExecutor`` and block files, one
     task per block file runs on the worker that reads it. ``fn`` must be picklable for
     Dask (a module-level function or a ``functools.partial`` of one).
     """
     if executor is not None and isinstance(frames, BlockFrames) and hasattr(executor, "map_frame_blocks"):
         return executor.map_frame_blocks(fn, frames)
     if isinstance(frames, BlockFrames):
-        return [fn(frames.rows(a, b), a, b) for a, b in row_windows(frames.shape[0])]
-    return [fn(frames[a:b], a, b) for a, b in row_windows(len(frames))]
+        return [fn(frames.rows(a, b), a, b) for a, b in row_windows(*frames.shape)]
+    return [fn(frames[a:b], a, b) for a, b in row_windows(*frames.shape)]

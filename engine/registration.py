@@ -180,7 +180,7 @@ def normalise_speakers(corpus: Corpus, *, mode: str = "auto", executor=None) -> 
         frames = F.with_normalisation(affine)
     else:
         frames = np.empty(F.shape, dtype=np.float32)
-        for a, b in row_windows(F.shape[0]):
+        for a, b in row_windows(*F.shape):
             frames[a:b] = affine.apply(F[a:b], a)
     names = ", ".join(s or "(unnamed)" for s in speakers)
     note = f"speaker normalisation {mode} over {len(speakers)} speakers ({names})"
