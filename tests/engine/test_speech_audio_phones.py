@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import time
 
 import numpy as np
 import pytest
@@ -209,3 +210,47 @@ def test_phones_espeak_merges_folds_or_assimilates_still_get_their_own_start(wor
     src = info["source"]
     assert np.all(np.diff(src) >= 0.002 * SR)  # every phone has its own stretch of espeak-ng's sound
     assert 0.2 < np.min(info["stretch"]) and np.max(info["stretch"]) < 10
+
+
+@needs_library
+def test_cancelling_stops_and_ends_the_library_processes(tmp_path, talker, monkeypatch):
+    from engine.progress import Cancelled
+
+    started = []
+    real = ep.EspeakWorker.__init__
+
+    def spy(self, **kw):
+        real(self, **kw)
+        started.append(self)
+
+    monkeypatch.setattr(ep.EspeakWorker, "__init__", spy)
+    speak = ep.EspeakWorker.speak
+
+    def slow(self, phonemes):  # each utterance takes long enough for the cancel to find some queued
+        time.sleep(0.3)
+        return speak(self, phonemes)
+
+    monkeypatch.setattr(ep.EspeakWorker, "speak", slow)
+
+    def progress(stage, done, total):
+        if done >= 1:
+            raise Cancelled()
+
+    with pytest.raises(Cancelled):
+        sa.add_speech_audio(talker, tmp_path, progress=progress, workers=1)
+    assert started and all(w._proc.poll() is not None for w in started)
+    assert 1 <= len(list(tmp_path.glob("*.wav"))) < len(talker.utterances)
+
+
+@needs_library
+@needs_espeak
+def test_an_utterance_the_library_fails_on_is_made_word_by_word(tmp_path, talker, monkeypatch):
+    def broken(self, phonemes):
+        raise ep.EspeakLibraryError("espeak-ng library process ended: test")
+
+    monkeypatch.setattr(ep.EspeakWorker, "speak", broken)
+    c = sa.add_speech_audio(talker, tmp_path)
+    n = len(talker.utterances)
+    assert f"{n} of the {n} made now word by word" in c.history[-1]
+    x, _ = sa.read_wav(c.utterances[0].audio)
+    assert np.abs(x).max() > 0.1
