@@ -61,13 +61,11 @@ class EspeakLibraryError(OSError):
 
 
 def espeak_library() -> str | None:
-    """The espeak-ng library to load (a name ``ctypes`` finds), or None when it is not installed."""
-    try:
-        ctypes.CDLL(LIBRARY_NAME)
-        return LIBRARY_NAME
-    except OSError:
-        found = ctypes.util.find_library("espeak-ng")
-        return found or None
+    """The espeak-ng library to load (a name ``ctypes`` finds), or None when it is not installed.
+
+    Looked up without loading it (``ctypes.util.find_library``: the linker's cache).
+    """
+    return ctypes.util.find_library("espeak-ng") or None
 
 
 # ------------------------------------------------------------------ worker process side
