@@ -3,7 +3,7 @@ and the tangent classes' agreement with the exact ground truth next to the trivi
 Delta F^x_1 rule (engine.talker_report), for the default and the held-out talker.
 
 Run: .venv/bin/python benchmarks/talker_realism.py [--preset default] [--repeats 3] [--skip-heldout]
-     [--generation-only]
+     [--generation-only] [--tissue]
 Generation is timed cold (a fresh process per repeat, no cache) and warm (in-process).
 """
 from __future__ import annotations
@@ -31,6 +31,8 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--skip-heldout", action="store_true")
     ap.add_argument("--generation-only", action="store_true", help="time the generation, skip the manifold")
+    ap.add_argument("--tissue", action="store_true", help="both talkers with the lip tissue's own variation "
+                    "(SyntheticTalker(tissue=True))")
     args = ap.parse_args(argv)
     import os
 
@@ -42,6 +44,8 @@ def main(argv=None):
     print(f"load average {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
     root = Path(__file__).resolve().parent.parent
     talkers = [("default talker", {})] + ([] if args.skip_heldout else [("held-out talker", HELD_OUT_TALKER)])
+    if args.tissue:
+        talkers = [(f"{label} with tissue variation", {**extra, "tissue": True}) for label, extra in talkers]
     for label, extra in talkers:
         cold, peak = [], []
         for _ in range(args.repeats):

@@ -1,4 +1,4 @@
-"""A parametric 3D lip surface driven by eleven articulatory controls and a speaker's anatomy.
+"""A parametric 3D lip surface driven by thirteen articulatory controls and a speaker's anatomy.
 
 The surface is two grids of ``rows x cols`` points, the upper and the lower lip. Row 0
 of each grid is the inner lip contour (where the lips meet), the next rows cross the
@@ -21,8 +21,8 @@ left-right asymmetry. The mean values are adult anthropometric norms (Farkas 199
 mouth width ch-ch about 50 mm, upper vermilion ls-sto about 8 mm, lower sto-li about
 9-10 mm, philtrum sn-ls about 12-14 mm and 10 mm wide).
 
-The controls (:data:`CONTROL_NAMES`; the first eight about 0..1, the last three
-signed, about -1..1):
+The controls (:data:`CONTROL_NAMES`; the signed ones, :data:`SIGNED_CONTROLS`, about
+-1..1, the others about 0..1):
 
 ``jaw``          jaw opening: the lower lip and chin go down (up to ~14.4 mm) and back,
                  the upper lip goes up a little (~3.6 mm); the largest motion.
@@ -47,6 +47,13 @@ signed, about -1..1):
                  protrudes up to 15 % more (+) or less (-) than the right; the corners
                  tilt by up to 1 mm. The midline is unchanged.
 ``jaw_lateral``  lateral jaw shift: the lower lip and chin move sideways up to 1.5 mm.
+``roll``         vermilion eversion (+) / inversion (-) (the lip tissue rolling out or
+                 in about the inner contour, orbicularis oris pars marginalis): the
+                 visible red lip grows or shrinks by up to 30 % and its border moves
+                 forward or back by up to 2 mm; the inner contour is unchanged.
+``mentalis``     chin raise (mentalis): the soft tissue of the chin goes up (3 mm) and
+                 forward (1.5 mm), the mentolabial sulcus deepens, and the lower
+                 vermilion is pushed up and out (1 mm); the inner contour is unchanged.
 
 The inner-lip gap is kept non-negative with a soft contact (a softplus of width
 0.3 mm), so the lips never pass through each other and the aperture is a smooth,
@@ -61,9 +68,9 @@ import numpy as np
 __all__ = ["CONTROL_NAMES", "SIGNED_CONTROLS", "RESOLUTIONS", "Anatomy", "LipModel", "vermilion_weight"]
 
 CONTROL_NAMES = ("jaw", "round", "spread", "raise", "closure", "labiodental", "protrude", "depress", "corner",
-                 "asymmetry", "jaw_lateral")
+                 "asymmetry", "jaw_lateral", "roll", "mentalis")
 #: controls that range over -1..1 (the others over 0..1)
-SIGNED_CONTROLS = ("corner", "asymmetry", "jaw_lateral")
+SIGNED_CONTROLS = ("corner", "asymmetry", "jaw_lateral", "roll")
 _NC = len(CONTROL_NAMES)
 
 #: Named resolutions: (rows per lip, columns). Points = 2 * rows * cols.
@@ -137,6 +144,11 @@ _VR = 0.08         # vermilion thickening (eversion) by full rounding
 _VP = 0.10         # vermilion eversion by full protrusion
 _VS = 0.08         # vermilion thinning by full spreading
 _RMID = 0.5        # upper-lip raise on the midline relative to its lateral peak
+_RLH = 0.30        # vermilion height change by full eversion / inversion (fraction)
+_RLZ = 2.0         # forward / backward motion of the vermilion border by full roll
+_MTY, _MTZ = 3.0, 1.5  # chin soft tissue up / forward by full mentalis
+_MTL = 1.0         # lower vermilion pushed up and out by full mentalis
+_MTS = 0.8         # mentolabial sulcus deepening by full mentalis (fraction of its depth)
 _TV = 0.4          # row parameter of the vermilion border
 
 
@@ -318,12 +330,12 @@ class LipModel:
     # fields, probing it with unit fields once gives a coefficient tensor A (cols, K, 6*rows)
     # and deform() is then one batched matrix product per block of frames.
     _FIELDS = ("one", "x", "up_in", "low_in", "comp", "vfac_u", "vfac_l", "jaw", "round", "spread", "raise",
-               "labiodental", "rise", "prot_u", "prot_l", "corner", "jlat")
+               "labiodental", "rise", "prot_u", "prot_l", "corner", "jlat", "roll", "ment")
 
     def _fields(self, c):
-        """Fields (n, K, cols) of controls ``c`` (n, 11)."""
+        """Fields (n, K, cols) of controls ``c`` (n, 13)."""
         n = c.shape[0]
-        jaw, rnd, spr, rai, clo, lab, pro, dep, cor, asy, jl = (c[:, k:k + 1] for k in range(_NC))
+        jaw, rnd, spr, rai, clo, lab, pro, dep, cor, asy, jl, rol, mnt = (c[:, k:k + 1] for k in range(_NC))
         up_in, low_in, comp, rise = self._inner(c)
         s = self._asym(c)
         wscale = 1.0 - _WR * rnd + _WSP * spr
@@ -337,14 +349,14 @@ class LipModel:
         corner = (_COR * cor * s + 1.0 * a_tot * self._side[None, :]) * self._cw[None, :]
         F = np.empty((n, len(self._FIELDS), self.cols))
         for k, f in enumerate((1.0, fx, up_in, low_in, comp, vfac_u, vfac_l, jaw, rnd, spr, rai, lab, rise,
-                               prot_u, prot_l, corner, jl)):
+                               prot_u, prot_l, corner, jl, rol * m, mnt * s)):
             F[:, k, :] = f
         return F
 
     def _assemble(self, F):
         """Points (n, 2, rows, cols, 3) from fields (n, K, cols); elementwise, linear in F."""
         (one, fx, up_in, low_in, comp, vfu, vfl, jaw, rnd, spr, rai, lab, rise, pru, prl, cor,
-         jl) = (F[:, k, None, :] for k in range(F.shape[1]))
+         jl, rol, mnt) = (F[:, k, None, :] for k in range(F.shape[1]))
         an = self.anatomy
         W = self._W
         x = self._x[None, None, :]
@@ -363,20 +375,33 @@ class LipModel:
         phil = an.philtrum + an.upper_vermilion - hvu    # the skin ends level at the nose base
         y_rest = hvu * tv + phil * ts
         out[:, 0, ..., 0] = fx
+        # vermilion roll (eversion / inversion): the red lip's height and its border's depth
+        # change, growing across the vermilion (tv) and fading over the skin beyond its border
+        # (so the skin rows stay in order); the inner contour stays
+        rl_p = np.where(ts == 0, tv, np.exp(-ts / 0.2))
+        rl_y, rl_z = _RLH * rol * rl_p, _RLZ * rol * rl_p
         out[:, 0, ..., 1] = fol * (up_in + hvu * tv * (vfu - 0.12 * comp) + phil * ts * one) \
-            + (1 - fol) * (y_rest * one + 0.15 * _GR * rai * m) + cy
+            + (1 - fol) * (y_rest * one + 0.15 * _GR * rai * m) + cy + hvu * rl_y
         out[:, 0, ..., 2] = one * (z_rest + self._philtrum[None]) + z_common + pru * prot \
-            + (rai + 0.4 * comp) * prot * m + 1.5 * (vfu - one) * roll * m
+            + (rai + 0.4 * comp) * prot * m + 1.5 * (vfu - one) * roll * m + rl_z
         # lower lip: the lip follows its inner contour, the chin follows the jaw rigidly; the
         # skin between them also takes the lip's own rise towards contact (mentalis), fading
         # linearly to nothing at the chin
         jaw_drop = (1 - _JU) * _GJ * jaw * self._jb[None, None, :]
         out[:, 1, ..., 0] = fx + _JL * jl * (0.6 + 0.4 * ts)
+        # mentalis: the chin's soft tissue rises and bunches forward (most at the chin, fading
+        # up to the vermilion border), the sulcus deepens, the lower vermilion is pushed up
+        # and out (most at its border); zero on the inner contour
+        chin = _smoothstep(ts / 0.6)
+        mt_y = mnt * (_MTY * chin + _MTL * tv * (ts == 0) + _MTL * (ts > 0) * (1 - chin)) * m
+        mt_z = mnt * (_MTZ * chin + _MTL * tv * (ts == 0) + _MTL * (ts > 0) * (1 - chin)) * m \
+            + _MTS * mnt * self._sulcus[None]
         out[:, 1, ..., 1] = fol * (low_in - hvl * tv * (vfl - 0.12 * comp - 0.3 * lab) - an.chin * ts * one) \
-            + (1 - fol) * (-(hvl * tv + an.chin * ts) * one - jaw_drop + (1 - ts) * rise) + cy
+            + (1 - fol) * (-(hvl * tv + an.chin * ts) * one - jaw_drop + (1 - ts) * rise) + cy \
+            - hvl * rl_y + mt_y
         out[:, 1, ..., 2] = one * (z_rest + self._sulcus[None]) + z_common + prl * prot \
             + 0.4 * comp * prot * m - 0.25 * jaw_drop * (0.3 + 0.7 * ts) \
-            - 5.0 * lab * (1.0 - tv) * fol * m + 1.5 * (vfl - one) * roll * m
+            - 5.0 * lab * (1.0 - tv) * fol * m + 1.5 * (vfl - one) * roll * m + rl_z + mt_z
         return out
 
     def _coefficients(self):
@@ -391,7 +416,7 @@ class LipModel:
 
         Parameters
         ----------
-        controls : array-like of shape (n_frames, 11)
+        controls : array-like of shape (n_frames, 13)
             Columns in the order of :data:`CONTROL_NAMES`.
         out : ndarray of shape (n_frames, 3 * n_points) float32, optional
             Written in place if given.

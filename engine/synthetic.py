@@ -3,21 +3,26 @@
 Sentences are random word sequences from ``assets/wordlist.txt`` pronounced with the
 CMU dictionary (:mod:`engine.phonetics`), with a pause ``sil`` at the start and end
 and durations from :class:`~engine.phonetics.DurationModel`. Each phone sets targets
-for six articulatory controls (:data:`engine.lipmodel.CONTROL_NAMES`); the targets of
+for the thirteen articulatory controls (:data:`engine.lipmodel.CONTROL_NAMES`); the targets of
 neighbouring phones are blended by Cohen & Massaro (1993) dominance functions
 (bilabials and labiodentals are protected: their closure / lip-to-teeth dominance is
 twenty times that of other phones), then passed through second-order, critically
 damped articulator dynamics (one natural frequency per control) with anticipation
-of the system's lag, plus small motor noise. The controls drive the parametric lip
-surface of :mod:`engine.lipmodel`; measurement noise is added to the points.
+of the system's lag, plus small motor noise, a vowel's emphasis on its jaw opening and a
+slow postural drift of the corners, asymmetry and lateral jaw. With ``tissue=True``
+(opt-in) the lip tissue varies on its own too: phones drive vermilion roll and the chin's
+mentalis, each token's lip gestures vary in size independently of one another, a vowel's
+emphasis scales its lip gestures with its jaw, and each sentence has its own tissue
+posture. The controls drive the parametric lip surface of :mod:`engine.lipmodel`; capture
+noise and registration error are added to the points.
 
 Plosives and the nasal differ in timing as the paper's Fig. 4 finds in real lips:
 the closure gesture of /p b/ peaks early in the phone and releases quickly (the
 burst), so their mid-points lie in the opening phase; /m/'s closure peaks late in
 the phone, so its mid-point lies in the closing phase.
 
-``Corpus.latent`` holds the controls after dynamics (``jaw``, ``round``, ``spread``,
-``raise``, ``closure``, ``labiodental``) and ``aperture``, the vertical distance (mm)
+``Corpus.latent`` holds the controls after dynamics (one entry per name of
+:data:`engine.lipmodel.CONTROL_NAMES`) and ``aperture``, the vertical distance (mm)
 between the upper and lower inner-lip midline points of the noise-free surface.
 """
 from __future__ import annotations
@@ -45,7 +50,7 @@ __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker",
            "phone_gestures", "gesture_phases", "speaker_anatomy"]
 
 #: Bumped whenever the generated corpus changes for the same parameters (cache key).
-GENERATOR_VERSION = 4
+GENERATOR_VERSION = 5
 
 #: Preset: seconds of speech (frames = seconds * rate) and lip-surface resolution.
 PRESETS = {
@@ -56,23 +61,34 @@ PRESETS = {
 }
 
 # ---------------------------------------------------------------- phone targets
-# control order: jaw, round, spread, raise, closure, labiodental, protrude, depress, corner, asymmetry, jaw_lateral
-_J, _R, _S, _U, _C, _L, _P, _D, _K, _A, _X = range(11)
+# control order: jaw, round, spread, raise, closure, labiodental, protrude, depress, corner, asymmetry, jaw_lateral,
+# roll, mentalis
+_J, _R, _S, _U, _C, _L, _P, _D, _K, _A, _X, _O, _M = range(13)
 _NC = len(CONTROL_NAMES)
+_NC_BASE = 11  # the controls that move without the tissue variation (generator 4's)
 #: Time to reach 63 % of a step (s) per control; natural frequency w = 2.146 / T63.
 #: Protrusion is slower than rounding (Perkell 1986); corners, asymmetry and the lateral
-#: jaw follow slow postural changes.
-T63 = np.array([0.060, 0.080, 0.070, 0.065, 0.060, 0.045, 0.100, 0.060, 0.150, 0.300, 0.120])
+#: jaw follow slow postural changes; vermilion roll is as fast as rounding (the same muscle),
+#: the chin (mentalis) as slow as protrusion.
+T63 = np.array([0.060, 0.080, 0.070, 0.065, 0.060, 0.045, 0.100, 0.060, 0.150, 0.300, 0.120, 0.080, 0.100])
 _WINDOW = 8  # gestures either side of a sample that contribute to its blend
 _TIMING_SD = 0.08  # s.d. of a gesture's timing, as a fraction of its phone's duration
-_SHAPE = np.array([1.5, 1.5, 1.5, 1.5, 2.0, 2.0, 1.5, 1.5, 1.5, 1.5, 1.5])  # dominance exponent c per control
+_SHAPE = np.array([1.5, 1.5, 1.5, 1.5, 2.0, 2.0, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5])  # dominance exponent c per control
 _LOOKAHEAD = (1.0, 0.15)  # dominance width (a * duration + b s) before a rounded / protruded phone
 _EMPHASIS_SD = 0.15  # s.d. of log jaw opening of a vowel (stress and emphasis)
 _TEMPO_SD = 0.08     # s.d. of log speaking rate between sentences
 #: slow postural drift per control (s.d. in control units; 0 = none), first-order, 0.4 Hz corner
-_DRIFT_SD = np.array([0.0, 0.05, 0.06, 0.05, 0.0, 0.0, 0.06, 0.05, 0.25, 0.25, 0.3])
+_DRIFT_SD = np.array([0.0, 0.05, 0.06, 0.05, 0.0, 0.0, 0.06, 0.05, 0.25, 0.25, 0.3, 0.0, 0.0])
 _DRIFT_HZ = 0.4
 _LATERAL_JAW = 0.3   # s.d. over speakers of the lateral jaw shift per unit of jaw opening
+#: token-to-token variability of the lip gestures: a gesture's round, spread, raise, protrude,
+#: depress, corner, roll and mentalis targets each times exp(_TOKEN_SD * N(0, 1)), independently
+_TOKEN_SD = 0.25
+_TOKEN_CONTROLS = np.array([_R, _S, _U, _P, _D, _K, _O, _M])
+#: a vowel's emphasis factor (on its jaw opening) also scales its round, spread and protrude targets
+_EMPHASIS_CONTROLS = np.array([_J, _R, _S, _P])
+#: per-sentence posture of the lip tissue: roll offset N(0, s.d.), mentalis offset |N(0, s.d.)|
+_POSTURE_ROLL_SD, _POSTURE_MENTALIS_SD = 0.15, 0.10
 
 #: A second, independently parameterised talker (``SyntheticTalker(**HELD_OUT_TALKER)``):
 #: another seed (so another speaker's anatomy), faster speech, sloppier gesture timing,
@@ -84,7 +100,7 @@ HELD_OUT_TALKER = {"seed": 7, "tempo": 1.15, "timing_sd": 0.12, "dynamics_scale"
 #: defaults of the keyword-only generator-variant parameters (left out of the cache key at
 #: these values, so the default talker's cache files keep their names)
 _VARIANT_DEFAULTS = {"timing_sd": _TIMING_SD, "dynamics_scale": 1.0, "coarticulation": 1.0, "speakers": None,
-                     "registration": 0.3}
+                     "registration": 0.3, "tissue": False}
 
 
 @dataclass(frozen=True)
@@ -93,22 +109,23 @@ class Gesture:
     (a number, or one per control)."""
 
     frac: float | tuple
-    target: tuple  # (11,)
-    alpha: tuple   # (11,) dominance magnitudes
-    before: tuple  # (11,) (a, b): dominance width = a * duration + b before the centre
-    after: tuple   # (11,) same after the centre
+    target: tuple  # (13,)
+    alpha: tuple   # (13,) dominance magnitudes
+    before: tuple  # (13,) (a, b): dominance width = a * duration + b before the centre
+    after: tuple   # (13,) same after the centre
 
 
 def _vowel(*subs):
     """Vowel gestures from (jaw, round, spread, raise) targets, one or two (diphthong).
 
     Protrusion goes with rounding (0.85 of it), the corners rise with spreading and fall
-    a little with rounding, open vowels depress the lower lip a little."""
+    a little with rounding, open vowels depress the lower lip a little, rounded vowels
+    evert the vermilion (0.3 of the rounding) and pout with the chin (mentalis, 0.2)."""
     fracs = (0.5,) if len(subs) == 1 else (0.3, 0.8)
     out = []
     for f, (j, r, s, u) in zip(fracs, subs):
-        tgt = (j, r, s, u, 0.0, 0.0, 0.85 * r, 0.3 * max(j - 0.5, 0.0), 0.4 * s - 0.2 * r, 0.0, 0.0)
-        alpha = (1.0, 1.0, 1.0, 0.8, 1.0, 1.0, 1.0, 0.8, 0.6, 0.05, 0.05)
+        tgt = (j, r, s, u, 0.0, 0.0, 0.85 * r, 0.3 * max(j - 0.5, 0.0), 0.4 * s - 0.2 * r, 0.0, 0.0, 0.3 * r, 0.2 * r)
+        alpha = (1.0, 1.0, 1.0, 0.8, 1.0, 1.0, 1.0, 0.8, 0.6, 0.05, 0.05, 0.5, 0.5)
         w = ((0.5, 0.03),) * _NC
         wb = _with(_with(w, _R, _LOOKAHEAD), _P, _LOOKAHEAD) if r > 0.4 else w
         out.append(Gesture(f, tgt, alpha, wb, w))
@@ -116,13 +133,13 @@ def _vowel(*subs):
 
 
 def _cons(jaw=(0.2, 0.4), rnd=(0.1, 0.15), spr=(0.1, 0.15), rai=(0.1, 0.3), clo=(0.0, 0.6),
-          lab=(0.0, 0.6), pro=None, dep=(0.0, 0.2), cor=(0.0, 0.2), frac=0.5, before=None, after=None,
-          jaw_frac=None):
+          lab=(0.0, 0.6), pro=None, dep=(0.0, 0.2), cor=(0.0, 0.2), rol=(0.0, 0.2), mnt=(0.0, 0.2), frac=0.5,
+          before=None, after=None, jaw_frac=None):
     if pro is None:
         pro = (0.85 * rnd[0], rnd[1])
     drift = ((0.0, 0.05), (0.0, 0.05))
-    tgt = tuple(v[0] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift)
-    alpha = tuple(v[1] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift)
+    tgt = tuple(v[0] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift + (rol, mnt))
+    alpha = tuple(v[1] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift + (rol, mnt))
     w = ((0.5, 0.03),) * _NC
     wb = w
     if rnd[0] > 0.4 or pro[0] > 0.4:  # anticipatory (look-ahead) rounding and protrusion
@@ -163,32 +180,35 @@ PHONE_GESTURES = {
     # bilabial plosives: closure peaks early and releases fast (the burst)
     # (all bilabials are made with the jaw raised, with a dominant jaw target, so the jaw
     # does much of the closing as in real speech instead of the lips alone)
+    # (the pressed lips roll the vermilion in, and the chin's mentalis helps raise the lower lip)
     **dict.fromkeys(("p", "b"), _cons(jaw=(0.02, 2.5), rnd=(0.1, 0.1), spr=(0.1, 0.1), rai=(0.0, 0.3),
-                                      clo=(1.0, _PROTECT), frac=0.3,
+                                      clo=(1.0, _PROTECT), rol=(-0.5, 1.0), mnt=(0.35, 0.8), frac=0.3,
                                       before=_with(_W0, _C, (0.45, 0.01)), after=_with(_W0, _C, (0.2, 0.004)))),
     # bilabial nasal: closure approached through the phone and reached late; the jaw
     # keeps rising past the phone's end, so the whole lip-jaw complex is still closing
     "m": _cons(jaw=(0.02, 2.5), rnd=(0.1, 0.1), spr=(0.1, 0.1), rai=(0.0, 0.3), clo=(1.0, _PROTECT),
-               frac=0.75, jaw_frac=1.3, before=_with(_W0, _C, (0.5, 0.01)), after=_with(_W0, _C, (0.45, 0.02))),
-    **dict.fromkeys(("f", "v"), _cons(jaw=(0.12, 0.6), rai=(0.25, 0.5), lab=(1.0, _PROTECT), frac=0.45,
+               rol=(-0.4, 1.0), mnt=(0.3, 0.8), frac=0.75, jaw_frac=1.3, before=_with(_W0, _C, (0.5, 0.01)), after=_with(_W0, _C, (0.45, 0.02))),
+    **dict.fromkeys(("f", "v"), _cons(jaw=(0.12, 0.6), rai=(0.25, 0.5), lab=(1.0, _PROTECT), rol=(-0.3, 0.6),
+                                      frac=0.45,
                                       before=_with(_W0, _L, (0.4, 0.01)), after=_with(_W0, _L, (0.35, 0.01)))),
     # dental fricatives: the lower lip drops to let the tongue tip show
     **dict.fromkeys(("th", "dh"), _cons(jaw=(0.22, 0.5), spr=(0.2, 0.2), rai=(0.25, 0.3), dep=(0.35, 0.5))),
     **dict.fromkeys(("s", "z"), _cons(jaw=(0.08, 1.2), spr=(0.35, 0.4), rai=(0.2, 0.3), cor=(0.15, 0.3))),
     **dict.fromkeys(("t", "d"), _cons(jaw=(0.15, 0.7))),
     **dict.fromkeys(("n", "l"), _cons(jaw=(0.2, 0.5))),
-    # postalveolars: strong protrusion with moderate rounding, lower lip everted (funnel)
+    # postalveolars: strong protrusion with moderate rounding, both lips everted (funnel)
     **dict.fromkeys(("sh", "zh", "ch", "jh"), _cons(jaw=(0.12, 0.8), rnd=(0.5, 1.2), rai=(0.35, 0.6),
-                                                    pro=(0.9, 1.5), dep=(0.4, 0.8))),
+                                                    pro=(0.9, 1.5), dep=(0.4, 0.8), rol=(0.5, 0.8),
+                                                    mnt=(0.2, 0.5))),
     "r": _cons(jaw=(0.2, 0.4), rnd=(0.55, 1.0), pro=(0.45, 0.8)),
-    "w": _cons(jaw=(0.12, 0.8), rnd=(1.0, 3.0), pro=(0.8, 2.0)),
+    "w": _cons(jaw=(0.12, 0.8), rnd=(1.0, 3.0), pro=(0.8, 2.0), rol=(0.3, 0.5), mnt=(0.2, 0.5)),
     "y": _cons(jaw=(0.12, 0.6), spr=(0.55, 0.8), cor=(0.2, 0.4)),
     **dict.fromkeys(("k", "g", "ng"), _cons(jaw=(0.25, 0.3))),
     "hh": _cons(jaw=(0.3, 0.1), rnd=(0.1, 0.05), spr=(0.1, 0.05), rai=(0.1, 0.05), clo=(0.0, 0.3), lab=(0.0, 0.3),
-                pro=(0.1, 0.05), dep=(0.0, 0.05), cor=(0.0, 0.05)),
+                pro=(0.1, 0.05), dep=(0.0, 0.05), cor=(0.0, 0.05), rol=(0.0, 0.05), mnt=(0.0, 0.05)),
     # pause: lips lightly together, jaw almost closed
     PAUSE: _cons(jaw=(0.02, 1.5), rnd=(0.05, 0.6), spr=(0.1, 0.6), rai=(0.05, 0.6), clo=(0.7, 1.5), lab=(0.0, 1.0),
-                 pro=(0.0, 0.6), dep=(0.0, 0.6), cor=(0.0, 0.3)),
+                 pro=(0.0, 0.6), dep=(0.0, 0.6), cor=(0.0, 0.3), rol=(0.0, 0.3), mnt=(0.1, 0.3)),
 }
 
 
@@ -257,11 +277,19 @@ class SyntheticTalker(BaseEstimator):
         varying displacement field over the surface of RMS ``registration`` per
         coordinate (correspondence drift of dense registration), plus residual rigid
         head motion of s.d. ``0.6 * registration`` mm and degrees (0 = perfect).
+    tissue : bool, default=False
+        The lip tissue's own variation (opt-in): phones drive the ``roll`` and
+        ``mentalis`` controls (bilabials press the lips in and raise the chin,
+        postalveolars and rounded vowels evert the lips), each token's lip gestures
+        vary in size independently (log-normal, s.d. 0.25), a vowel's emphasis scales
+        its lip gestures with its jaw opening, and each sentence has its own tissue
+        posture. False: ``roll`` and ``mentalis`` stay 0 and the other controls are
+        those of generator 4.
     """
 
     def __init__(self, *, preset="default", n_sentences=None, duration=None, resolution=None, rate=60.0,
                  seed=0, noise=0.2, jitter=0.04, tempo=1.0, timing_sd=_TIMING_SD, dynamics_scale=1.0,
-                 coarticulation=1.0, speakers=None, registration=0.3):
+                 coarticulation=1.0, speakers=None, registration=0.3, tissue=False):
         self.preset = preset
         self.n_sentences = n_sentences
         self.duration = duration
@@ -276,6 +304,7 @@ class SyntheticTalker(BaseEstimator):
         self.coarticulation = coarticulation
         self.speakers = speakers
         self.registration = registration
+        self.tissue = tissue
 
     # -------------------------------------------------------------- validation
     def _validate(self):
@@ -302,6 +331,8 @@ class SyntheticTalker(BaseEstimator):
             raise ValueError(f"speakers must be an integer in 1..100 or None, got {self.speakers!r}")
         if not (np.isfinite(self.registration) and 0 <= self.registration <= 5):
             raise ValueError(f"registration must be in [0, 5] (mm and degrees), got {self.registration!r}")
+        if not isinstance(self.tissue, (bool, np.bool_)):
+            raise ValueError(f"tissue must be True or False, got {self.tissue!r}")
         res = PRESETS[self.preset]["resolution"] if self.resolution is None else self.resolution
         return dur, res
 
@@ -373,7 +404,7 @@ class SyntheticTalker(BaseEstimator):
 
     # -------------------------------------------------------------- articulation
     def _controls(self, rng, phones, durs, n_frames, lateral=0.0):
-        """Controls after dynamics for one utterance, ndarray (n_frames, 11)."""
+        """Controls after dynamics for one utterance, ndarray (n_frames, 13)."""
         rate = float(self.rate)
         sub = max(1, math.ceil(240.0 / rate))
         fs = rate * sub
@@ -390,14 +421,23 @@ class SyntheticTalker(BaseEstimator):
                 wb.append([(a * d + b) * self.coarticulation for a, b in g.before])
                 wa.append([(a * d + b) * self.coarticulation for a, b in g.after])
                 vow.append(p in _VOWELS)
-        cen = np.array(cen)                                                      # (E, 11)
-        tgt = np.array(tgt) + self.jitter * rng.standard_normal((len(cen), _NC))
-        # stress and emphasis: a vowel's jaw opening varies by a log-normal factor
+        # without the tissue variation only the first eleven controls move (generator 4's
+        # talker, drawing the same random numbers); roll and mentalis stay 0
+        nc = _NC if self.tissue else _NC_BASE
+        cen = np.array(cen)[:, :nc]                                              # (E, nc)
+        tgt = np.array(tgt)[:, :nc]
+        if self.tissue:  # token-to-token variability: each lip gesture's size has its own log-normal factor
+            tgt[:, _TOKEN_CONTROLS] *= np.exp(_TOKEN_SD * rng.standard_normal((len(cen), len(_TOKEN_CONTROLS))))
+        tgt += self.jitter * rng.standard_normal((len(cen), nc))
+        # stress and emphasis: a vowel's jaw opening (with the tissue variation: and its lip
+        # gestures) varies by one log-normal factor
         vow = np.array(vow)
-        tgt[vow, _J] *= np.exp(_EMPHASIS_SD * rng.standard_normal(int(vow.sum())))
-        tgt = np.clip(tgt, _LOW, 1.0)                                          # the controls' ranges
-        alp, wb, wa = np.array(alp), np.array(wb), np.array(wa)
-        omega = 2.146 / (T63 * float(self.dynamics_scale))
+        emph = _EMPHASIS_CONTROLS if self.tissue else np.array([_J])
+        tgt[np.ix_(vow, emph)] *= np.exp(_EMPHASIS_SD * rng.standard_normal(int(vow.sum())))[:, None]
+        low = _LOW[:nc]
+        tgt = np.clip(tgt, low, 1.0)                                           # the controls' ranges
+        alp, wb, wa = np.array(alp)[:, :nc], np.array(wb)[:, :nc], np.array(wa)[:, :nc]
+        omega = 2.146 / (T63[:nc] * float(self.dynamics_scale))
         lead = 2.0 / omega                                   # group delay of the dynamics
         n_sub = n_frames * sub
         t = np.arange(n_sub) / fs
@@ -407,20 +447,23 @@ class SyntheticTalker(BaseEstimator):
         near = np.searchsorted(cen.mean(1), t)[:, None] + np.arange(-_WINDOW, _WINDOW)[None, :]   # (n, 2W)
         valid = (near >= 0) & (near < len(cen))
         near = np.clip(near, 0, len(cen) - 1)
-        tau = t[:, None, None] + lead[None, None, :] - cen[near]                 # (n, 2W, 11)
+        tau = t[:, None, None] + lead[None, None, :] - cen[near]                 # (n, 2W, 13)
         w = np.where(tau < 0, wb[near], wa[near])
-        dom = alp[near] * np.exp(-(np.abs(tau) / w) ** _SHAPE) * valid[:, :, None]
-        u = (dom * tgt[near]).sum(1) / (dom.sum(1) + 1e-12)                    # (n, 11)
+        dom = alp[near] * np.exp(-(np.abs(tau) / w) ** _SHAPE[:nc]) * valid[:, :, None]
+        u = (dom * tgt[near]).sum(1) / (dom.sum(1) + 1e-12)                    # (n, 13)
         u += 0.02 * rng.standard_normal(u.shape)                               # motor noise
         # slow postural drift (expression, corners, asymmetry, lateral jaw), stationary from the start
         pd = math.exp(-2 * math.pi * _DRIFT_HZ / fs)
-        drift = lfilter([1.0], [1.0, -pd], rng.standard_normal((n_sub, _NC)) * math.sqrt(1 - pd * pd), axis=0,
-                        zi=(rng.standard_normal(_NC) * pd)[None, :])[0]
-        u += drift * _DRIFT_SD
+        drift = lfilter([1.0], [1.0, -pd], rng.standard_normal((n_sub, nc)) * math.sqrt(1 - pd * pd), axis=0,
+                        zi=(rng.standard_normal(nc) * pd)[None, :])[0]
+        u += drift * _DRIFT_SD[:nc]
+        if self.tissue:  # this sentence's posture of the lip tissue (rolled in or out, chin raised)
+            u[:, _O] += _POSTURE_ROLL_SD * rng.standard_normal()
+            u[:, _M] += abs(_POSTURE_MENTALIS_SD * rng.standard_normal())
         u[:, _X] += lateral * u[:, _J]                                         # this speaker's jaw path
         p = np.exp(-omega / fs)
-        out = np.empty_like(u)
-        for k in range(_NC):
+        out = np.zeros((len(u), _NC))
+        for k in range(nc):
             b, a = [1 - p[k]], [1.0, -p[k]]
             zi = np.array([p[k]])  # = lfilter_zi(b, a): the state that holds a constant input
             y, _ = lfilter(b, a, u[:, k], zi=zi * u[0, k])
@@ -441,7 +484,7 @@ class SyntheticTalker(BaseEstimator):
         Corpus
             ``frames`` (n_frames, 3 * n_points) float32 in mm, ``faces``,
             ``point_names``, phone-aligned utterances ``s0001``..., and ``latent``:
-            the eleven controls, ``aperture`` (mm) and ``phase`` (see :func:`gesture_phases`).
+            the thirteen controls, ``aperture`` (mm) and ``phase`` (see :func:`gesture_phases`).
         """
         dur, res = self._validate()
         rng = np.random.default_rng(self.seed)
