@@ -24,6 +24,8 @@ import os
 import struct
 import subprocess
 import sys
+import tempfile
+import threading
 
 __all__ = ["ESPEAK_PHONE", "PAUSE_MNEMONIC", "LIBRARY_NAME", "espeak_library", "EspeakWorker", "EspeakLibraryError"]
 
@@ -140,6 +142,10 @@ class EspeakWorker:
         When the library is not installed.
     """
 
+    #: Seconds one :meth:`speak` may take before the process is ended as hung (a sentence
+    #: takes well under one second; the word method's program call has the same limit).
+    timeout_s = 60.0
+
     def __init__(self, *, voice: str = "en", library: str | None = None):
         library = library or espeak_library()
         if library is None:
@@ -147,8 +153,11 @@ class EspeakWorker:
         env = dict(os.environ)
         root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
         env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+        # stderr goes to a file, not a pipe: a pipe nobody reads fills and stalls the process
+        self._stderr = tempfile.TemporaryFile()
+        self._hung = False
         self._proc = subprocess.Popen([sys.executable, "-m", "engine.espeak_phones", library, voice],
-                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._stderr,
                                       env=env)
 
     def speak(self, phonemes: str):
@@ -164,6 +173,9 @@ class EspeakWorker:
             Each phone spoken, in order: its mnemonic and its first sample.
         """
         p = self._proc
+        watchdog = threading.Timer(self.timeout_s, self._end_hung)  # a hung library: its reads end short
+        watchdog.daemon = True
+        watchdog.start()
         try:
             p.stdin.write((json.dumps(phonemes) + "\n").encode())
             p.stdin.flush()
@@ -175,26 +187,41 @@ class EspeakWorker:
             samples = p.stdout.read(2 * n_samples)
         except (OSError, ValueError) as exc:
             raise EspeakLibraryError(f"espeak-ng library process failed: {exc}; {self._failure()}") from exc
+        finally:
+            watchdog.cancel()
         if info["error"] != 0 or len(samples) != 2 * n_samples:
             raise EspeakLibraryError(f"espeak-ng could not speak {phonemes!r} (error {info['error']})")
         return samples, int(info["rate"]), [(m, int(s)) for m, s in info["events"]]
 
-    def _failure(self) -> str:
+    def _end_hung(self) -> None:
+        self._hung = True
         self._proc.kill()
-        err = self._proc.stderr.read().decode(errors="replace").strip().splitlines()
+
+    def _failure(self) -> str:
+        if self._hung:
+            self._proc.wait()
+            return f"espeak-ng library process gave no answer within {self.timeout_s:g} s and was ended"
+        self._proc.kill()
+        self._proc.wait()
+        self._stderr.seek(0)
+        err = self._stderr.read().decode(errors="replace").strip().splitlines()
         return f"espeak-ng library process ended: {err[-1] if err else 'no message'}"
 
     def close(self) -> None:
         """End the process."""
-        if self._proc.poll() is None:
+        running = self._proc.poll() is None
+        try:
             self._proc.stdin.close()
+        except OSError:  # a killed process's pipe may fail to flush
+            pass
+        if running:
             try:
                 self._proc.wait(timeout=5)
             except subprocess.TimeoutExpired:
                 self._proc.kill()
                 self._proc.wait()
-        for f in (self._proc.stdout, self._proc.stderr):
-            f.close()
+        self._proc.stdout.close()
+        self._stderr.close()
 
     def __enter__(self):
         return self

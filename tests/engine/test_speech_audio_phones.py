@@ -256,3 +256,28 @@ def test_an_utterance_the_library_fails_on_is_made_word_by_word(tmp_path, talker
     assert f"{n} of the {n} made now word by word" in c.history[-1]
     x, _ = sa.read_wav(c.utterances[0].audio)
     assert np.abs(x).max() > 0.1
+
+
+@needs_library
+def test_a_hung_library_process_is_ended_with_a_clear_error(monkeypatch):
+    """A library process that never answers is killed after the worker's time limit and
+    the call fails with EspeakLibraryError (so the sentence falls back to the word method)
+    instead of blocking the corpus build for ever."""
+    import subprocess
+    import sys
+
+    monkeypatch.setattr(ep.EspeakWorker, "timeout_s", 1.0)
+    w = ep.EspeakWorker()
+    w._proc.kill()
+    w._proc.wait()
+    w._proc.stdin.close()
+    w._proc.stdout.close()
+    # a stand-in that reads requests and never answers
+    w._proc = subprocess.Popen([sys.executable, "-c", "import sys, time; sys.stdin.readline(); time.sleep(60)"],
+                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=w._stderr)
+    t0 = time.perf_counter()
+    with pytest.raises(ep.EspeakLibraryError, match="no answer within 1 s"):
+        w.speak("[[h'Vt]]")
+    assert time.perf_counter() - t0 < 10
+    assert w._proc.poll() is not None
+    w.close()
