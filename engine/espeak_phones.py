@@ -193,6 +193,11 @@ class EspeakWorker:
             raise EspeakLibraryError(f"espeak-ng could not speak {phonemes!r} (error {info['error']})")
         return samples, int(info["rate"]), [(m, int(s)) for m, s in info["events"]]
 
+    @property
+    def running(self) -> bool:
+        """Whether the library process is still there to answer (False once it failed or was ended)."""
+        return self._proc.poll() is None
+
     def _end_hung(self) -> None:
         self._hung = True
         self._proc.kill()

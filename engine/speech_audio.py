@@ -461,7 +461,7 @@ def add_speech_audio(corpus, folder, *, progress=None, workers: int = 2):
         worker = None
         if method == "phones":
             worker = getattr(local, "worker", None)
-            if worker is None:
+            if worker is None or not worker.running:  # none yet, or the last one failed (hung, crashed)
                 worker = local.worker = espeak_phones.EspeakWorker()
                 with lock:
                     started.append(worker)
