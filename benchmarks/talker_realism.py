@@ -16,6 +16,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the engine, from a checkout
 
 from _common import blas_kernel  # noqa: E402
@@ -37,8 +39,9 @@ def main(argv=None):
     import os
 
     from engine.manifold import Manifold
-    from engine.synthetic import HELD_OUT_TALKER, SyntheticTalker
-    from engine.talker_report import format_realism, talker_realism
+    from engine.lipmodel import CONTROL_NAMES, LipModel
+    from engine.synthetic import HELD_OUT_TALKER, PRESETS, SyntheticTalker, speaker_anatomy
+    from engine.talker_report import articulation_report, format_articulation, format_realism, talker_realism
 
     print(f"BLAS: {blas_kernel()}")
     print(f"load average {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
@@ -65,6 +68,11 @@ def main(argv=None):
               f"peak RSS {max(peak):.0f} MB ({args.repeats} repeats)")
         if args.generation_only:
             continue
+        if PRESETS[args.preset]["speakers"] == 1:  # what the controls alone make of the surface
+            lip = LipModel(PRESETS[args.preset]["resolution"], speaker_anatomy(extra.get("seed", 0), 0))
+            C = np.column_stack([corpus.latent[k] for k in CONTROL_NAMES])
+            for line in format_articulation(articulation_report(lip, C)):
+                print(line)
         t = time.perf_counter()
         m = Manifold().fit(corpus)
         print(f"Manifold().fit {time.perf_counter() - t:.1f} s")

@@ -15,12 +15,17 @@ that carries the synthetic talker's exact ground truth (``Corpus.latent``: the
 
 Scored frames: a forward and a backward step inside the utterance, and a true aperture
 speed above its 20th percentile (nearly still lips have no meaningful phase).
+
+:func:`articulation_report` says where the X scree comes from: what the talker's
+controls alone make of the lip surface (no capture noise, no registration error), how
+much of that variance each control brings, how often each moves, and which move together.
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["talker_realism", "components_for", "rule_classes", "format_realism"]
+__all__ = ["talker_realism", "components_for", "rule_classes", "format_realism", "articulation_report",
+           "format_articulation"]
 
 
 def components_for(ratios, fractions=(0.80, 0.95, 0.99)) -> tuple[int, ...]:
@@ -133,3 +138,88 @@ def format_realism(r: dict) -> list[str]:
         lines.append(f"  {label:16s} opening {100 * m['opening']:.1f} %, accelerating {100 * m['accelerating']:.1f} %, "
                      f"all four classes {100 * m['classes']:.1f} %")
     return lines
+
+
+_BLOCK = 4096  # frames per block
+
+
+def _mean_frame(lip, controls):
+    s1 = np.zeros(3 * lip.n_points)
+    for a in range(0, len(controls), _BLOCK):
+        s1 += lip.deform(controls[a:a + _BLOCK]).sum(0, dtype=np.float64)
+    return s1 / len(controls)
+
+
+def _sum_squares(lip, controls):
+    """Sum of squared deviations from the mean frame of ``lip.deform(controls)``."""
+    mu = _mean_frame(lip, controls)
+    return sum(float(np.square(lip.deform(controls[a:a + _BLOCK]) - mu).sum(dtype=np.float64))
+               for a in range(0, len(controls), _BLOCK))
+
+
+def articulation_report(lip, controls, names=None, *, active=0.1, correlated=0.4) -> dict:
+    """What the controls alone make of the lip surface (noise-free), per control.
+
+    Parameters
+    ----------
+    lip : engine.lipmodel.LipModel
+        The talker's lip surface (its speaker's anatomy and resolution).
+    controls : ndarray of shape (n_frames, n_controls)
+        The controls per frame (``Corpus.latent``'s, in the order of ``names``).
+    names : sequence of str or None
+        Control names (default :data:`engine.lipmodel.CONTROL_NAMES`).
+    active : float
+        A control counts as moving on a frame more than ``active`` from its median.
+    correlated : float
+        Pairs of controls whose correlation magnitude exceeds this are listed.
+
+    Returns
+    -------
+    dict
+        ``components`` (components for 80/95/99 % of the noise-free surface's variance),
+        ``scree`` (its first ten fractions), ``share`` (per name: the variance of the
+        surface when only that control moves, the others held at their mean, as a fraction
+        of the noise-free variance), ``active`` (per name: fraction of frames where it
+        moves) and ``pairs`` ((name, name, correlation) above ``correlated``, largest first).
+    """
+    from engine.lipmodel import CONTROL_NAMES
+
+    names = tuple(CONTROL_NAMES if names is None else names)
+    C = np.asarray(controls, np.float64)
+    if C.ndim != 2 or C.shape[1] != len(names) or len(C) < 2:
+        raise ValueError(f"controls must have shape (n_frames >= 2, {len(names)}) in the order {names}, got {C.shape}")
+    n, D = len(C), 3 * lip.n_points
+    # the noise-free surface's covariance (D x D, D = 3 * points), accumulated over blocks
+    mu = _mean_frame(lip, C).astype(np.float32)
+    xtx = np.zeros((D, D))
+    for a in range(0, n, _BLOCK):
+        F = lip.deform(C[a:a + _BLOCK]) - mu
+        xtx += F.T @ F
+    ev = np.linalg.eigvalsh(xtx / (n - 1))[::-1].clip(0.0)
+    total = float(ev.sum()) * (n - 1)
+    mean = C.mean(0)
+    share, act = {}, {}
+    for k, name in enumerate(names):
+        Ck = np.tile(mean, (n, 1))
+        Ck[:, k] = C[:, k]
+        share[name] = _sum_squares(lip, Ck) / total if total > 0 else 0.0
+        act[name] = float(np.mean(np.abs(C[:, k] - np.median(C[:, k])) > active))
+    sd = C.std(0)
+    moving = np.flatnonzero(sd > 0)
+    R = np.corrcoef(C[:, moving].T) if len(moving) > 1 else np.ones((1, 1))
+    pairs = [(names[moving[i]], names[moving[j]], float(R[i, j])) for i in range(len(moving))
+             for j in range(i + 1, len(moving)) if abs(R[i, j]) > correlated]
+    pairs.sort(key=lambda p: -abs(p[2]))
+    return {"components": components_for(ev), "scree": [float(v) for v in (ev / ev.sum())[:10]],
+            "share": share, "active": act, "pairs": pairs}
+
+
+def format_articulation(r: dict) -> list[str]:
+    """Plain-text lines of an :func:`articulation_report` result."""
+    return [f"noise-free surface (controls alone): components for 80/95/99 % of its variance: "
+            f"{', '.join(map(str, r['components']))}; scree " + " ".join(f"{100 * v:.2f}" for v in r["scree"][:7]),
+            "variance share when only one control moves (% of the noise-free variance): "
+            + ", ".join(f"{k} {100 * v:.1f}" for k, v in sorted(r["share"].items(), key=lambda kv: -kv[1])),
+            "frames where a control moves: " + ", ".join(f"{k} {100 * v:.0f} %" for k, v in r["active"].items()),
+            "controls that move together (correlation): "
+            + (", ".join(f"{a}-{b} {c:+.2f}" for a, b, c in r["pairs"]) or "none")]

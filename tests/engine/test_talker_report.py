@@ -56,3 +56,33 @@ def test_realism_report_needs_the_ground_truth(small_manifold):
 
     with pytest.raises(ValueError, match="no ground-truth 'aperture'"):
         talker_realism(_M)
+
+
+def test_articulation_report_shares_activity_and_pairs():
+    from engine.lipmodel import CONTROL_NAMES, LipModel
+    from engine.talker_report import articulation_report, format_articulation
+
+    lip = LipModel("small")
+    rng = np.random.default_rng(0)
+    n = 3000
+    C = np.zeros((n, len(CONTROL_NAMES)))
+    j, r, p, c = (CONTROL_NAMES.index(k) for k in ("jaw", "round", "protrude", "corner"))
+    C[:, j] = rng.random(n)                       # moves on every frame
+    C[:, r] = 0.5 * rng.random(n)
+    C[:, p] = 0.8 * C[:, r] + 0.02 * rng.standard_normal(n)   # protrusion follows rounding
+    C[: n // 10, c] = 0.8                         # corners on a tenth of the frames
+    out = articulation_report(lip, C)
+    # the jaw is the largest source; shares are fractions of the noise-free variance
+    assert max(out["share"], key=out["share"].get) == "jaw"
+    assert all(0 <= v <= 1 for v in out["share"].values()) and out["share"]["closure"] < 1e-9
+    assert 0.95 < sum(out["share"].values()) < 1.05  # the surface is nearly linear in independent controls (0.99)
+    assert out["active"]["jaw"] > 0.7 and out["active"]["corner"] == pytest.approx(0.1)
+    assert out["active"]["closure"] == 0
+    assert [(a, b) for a, b, _ in out["pairs"]] == [("round", "protrude")] and out["pairs"][0][2] > 0.95
+    # three sources that move independently (jaw, round+protrude, corner): 99 % in at most three
+    # components (measured 1, 1, 2: the jaw holds 95 %)
+    assert out["components"][2] <= 3 and out["scree"][0] == pytest.approx(out["share"]["jaw"], abs=0.02)
+    lines = format_articulation(out)
+    assert "round-protrude" in lines[-1] and lines[1].split(": ")[1].startswith("jaw")
+    with pytest.raises(ValueError, match="controls must have shape"):
+        articulation_report(lip, C[:, :5])
