@@ -79,6 +79,9 @@ class PlaybackClock:
         (a seek or a stall); a nearer one is slewed in.
     slew : float, default=0.2
         Fraction of a small audio-position error corrected at each new position (0 < slew <= 1).
+    latencies : iterable of float, default=()
+        Display latencies (s) measured before, e.g. by the previous playback's clock
+        (:attr:`latencies`): the first frames look ahead by them instead of by nothing.
 
     Attributes
     ----------
@@ -93,7 +96,7 @@ class PlaybackClock:
     """
 
     def __init__(self, rate: float, n_frames: int, *, speed: float = 1.0, clock=time.monotonic, position=None,
-                 latency_window: int = 15, resync_s: float = 0.1, slew: float = 0.2):
+                 latency_window: int = 15, resync_s: float = 0.1, slew: float = 0.2, latencies=()):
         playback_frame(0.0, rate, speed=speed)  # validates rate and speed
         if int(n_frames) < 1:
             raise ValueError(f"n_frames must be >= 1 (a trajectory to play), got {n_frames!r}")
@@ -112,6 +115,8 @@ class PlaybackClock:
         self.slew = float(slew)
         self.latency_s = 0.0
         self._latencies = deque(maxlen=int(latency_window))
+        for v in latencies:
+            self._record_latency(v)
         self.start_frame = 0
         self.t0 = None
         self._anchor = (0.0, 0.0)  # (clock time, media time) the clock runs on from
@@ -223,9 +228,19 @@ class PlaybackClock:
         """How many frame periods ``frame`` is behind the media time at ``at`` (negative: early)."""
         return self.media_time(at) * self.rate - int(frame)
 
+    @property
+    def latencies(self) -> tuple:
+        """The display latencies (s) the look-ahead is taken from, oldest first (to seed another clock)."""
+        return tuple(self._latencies)
+
     def shown(self, chosen_at: float, shown_at: float) -> None:
         """Record that a frame chosen at ``chosen_at`` reached the screen at ``shown_at``."""
+        self._record_latency(float(shown_at) - float(chosen_at))
+
+    def _record_latency(self, seconds: float) -> None:
+        if not math.isfinite(seconds):
+            raise ValueError(f"a display latency must be a finite number of seconds, got {seconds!r}")
         # never plan for more than a quarter second ahead
-        self._latencies.append(min(max(0.0, float(shown_at) - float(chosen_at)), 0.25))
+        self._latencies.append(min(max(0.0, float(seconds)), 0.25))
         ordered = sorted(self._latencies)
         self.latency_s = ordered[int(round(0.75 * (len(ordered) - 1)))]  # the upper quartile

@@ -94,6 +94,7 @@ class PlaybackTrace:
         self._planned = float("nan")
         self._undo = []
         self.helpers = None
+        self.clock_start = None  # (monotonic time, frame) the playback clock started at
 
     # ----------------------------------------------------------------- hooks
     def _on_gc(self, phase, info):
@@ -121,6 +122,7 @@ class PlaybackTrace:
                 cpu, wait = read_schedstat()
                 k = original(clock)
                 trace.ticks.append((t, k, clock.latency_s, trace._planned, cpu, wait, *trace.helpers()))
+                trace.clock_start = (clock.t0, clock.start_frame)
                 trace._planned = float("nan")
                 return k
 

@@ -94,6 +94,11 @@ def play_once(app, win, max_seconds):
     s.set_playing(False)
     trace.detach()
     win.manifold_view.plotter.interactor.frameSwapped.disconnect(on_main)
+    # the reference is the playback clock (what a sound track would follow: media time 0 when the
+    # clock started, in Play's handler), not the button press; the press -> start delay is printed
+    t_press = t0
+    if trace.clock_start is not None:
+        t0 = trace.clock_start[0] - trace.clock_start[1] / rate
     tab = frame_table(trace.ticks, trace.render_start, trace.render_end, trace.swaps, trace.m_start, trace.m_end,
                       trace.gcs, t0=t0, rate=rate)
     ks, ts, lag = tab["frame"], tab["swap"], tab["lag"]
@@ -101,7 +106,7 @@ def play_once(app, win, max_seconds):
     # held lag: the clock when the next frame replaced this one (or playback ended)
     t_next = np.append(ts[1:], min(t_end, t0 + n / rate))
     held = (t_next - t0) * rate - ks
-    duration = t_end - t0
+    duration = t_end - t_press
     dropped = int(ks.max() + 1 - len(ks)) if len(ks) else 0
     pct = (lambda a, q: float(np.nanpercentile(a, q)) if np.isfinite(a).any() else float("nan"))
     late = lag > 1
@@ -112,7 +117,7 @@ def play_once(app, win, max_seconds):
             "late": float(late.mean()) if len(lag) else float("nan"),
             "early": float((lag < -1).mean()) if len(lag) else float("nan"),
             "held_p95": pct(held, 95), "held_max": float(held.max()) if len(held) else float("nan"),
-            "dropped": dropped, "main_swaps": sum(t >= t0 for t in main_swaps), "m_renders": len(trace.m_end),
+            "dropped": dropped, "main_swaps": sum(t >= t_press for t in main_swaps), "m_renders": len(trace.m_end),
             "causes": {c: causes.count(c) for c in CAUSES},
             "timer_late_p95": 1e3 * pct(tab["timer_late"], 95), "timer_late_max": 1e3 * float(np.nanmax(
                 tab["timer_late"])) if np.isfinite(tab["timer_late"]).any() else float("nan"),
@@ -124,7 +129,7 @@ def play_once(app, win, max_seconds):
                                1e3 * (tab["swap"][i] - tab["chosen"][i]), 1e3 * tab["lookahead"][i])
                               for i in np.flatnonzero(late)],
             "helper_wait": 1e3 * float(np.nansum(tab["helper_wait"])),
-            "cpu": cpu, "cpu_ms": 1e3 * cpu / max(len(ks), 1), "load": (load0 + os.getloadavg()[0]) / 2}
+            "press_ms": 1e3 * (t0 - t_press), "cpu": cpu, "cpu_ms": 1e3 * cpu / max(len(ks), 1), "load": (load0 + os.getloadavg()[0]) / 2}
 
 
 def main():
@@ -172,7 +177,7 @@ def main():
               f"{100 * x['early']:.1f} % > 1 early; held lag p95 {x['held_p95']:.2f}, max {x['held_max']:.2f}; "
               f"{x['main_swaps']} main-window compositions, {x['m_renders']} manifold renders; "
               f"CPU {x['cpu_ms']:.1f} ms per frame shown", flush=True)
-        print(f"      stages (median ms): chosen->render {x['queue_med']:.1f}, render {x['render_med']:.1f} "
+        print(f"      clock started {x['press_ms']:.1f} ms after Play was pressed; stages (median ms): chosen->render {x['queue_med']:.1f}, render {x['render_med']:.1f} "
               f"(max {x['render_max']:.1f}), render->swap {x['compose_med']:.1f}, chosen->swap {x['latency_med']:.1f}; "
               f"timer late p95 {x['timer_late_p95']:.1f}, max {x['timer_late_max']:.1f} ms; GUI thread waited "
               f"{x['run_wait']:.0f} ms for a core between choice and swap (helpers + X server {x['helper_wait']:.0f} ms); "

@@ -98,7 +98,8 @@ class RenderScheduler:
     painted in the same turn into one window update. ``request(min_interval_s=...)``
     throttles: the render waits until that long after the previous one (the manifold
     view follows playback this way while the lip view renders every frame).
-    ``flush(sync=True)`` renders and composes now.
+    ``flush(sync=True)`` renders and composes now (always: a ``repaint()`` is deferred by
+    Qt when the window was composed less than a screen refresh before).
 
     Attributes
     ----------
@@ -160,7 +161,13 @@ class RenderScheduler:
         self.last_flush = time.perf_counter()
         widget = self.plotter.interactor
         if sync:
-            widget.repaint()
+            from PySide6 import QtCore
+
+            # not widget.repaint(): in a window Qt composes through OpenGL, a repaint() less than
+            # a screen refresh after the window's last composition is silently deferred to the next
+            # turn of the event loop (Qt's anti-starvation rule), where other widgets' paints join it
+            widget.update()
+            QtCore.QCoreApplication.sendPostedEvents(widget.window(), int(QtCore.QEvent.Type.UpdateRequest.value))
             self.last_duration = time.perf_counter() - self.last_flush
         else:
             widget.update()
@@ -169,6 +176,10 @@ class RenderScheduler:
         self._timer.stop()
         self.pending = False
 
+
+#: fraction of a slot a readout held by playback frames waits past the slot's start for a frame
+#: to run after, before it runs on its own (see drawing_frame)
+FRAME_GRACE = 0.25
 
 #: throttles holding a call until the playback frame being drawn is on screen (see drawing_frame)
 _after_frame: list = []
@@ -180,11 +191,13 @@ def drawing_frame():
     """Draw one playback frame: readouts called meanwhile show only once it is on screen.
 
     A :class:`Throttle` called inside holds its call (even the first of a slot) until the
-    outermost ``drawing_frame`` exits; then the held calls run, and their layout and
-    repaint are done at once (one composition of the main window, right after the
-    frame's swap). A readout's repaint composes the whole main window (15-25 ms in
-    software OpenGL): painted in the same pass as the lip frame it made that frame late
-    by as much (docs/DECISIONS.md, "Playback lag within one frame period").
+    outermost ``drawing_frame`` exits; then the held calls whose slot has come run, and
+    their layout and repaint are done at once (one composition of the main window, right
+    after the frame's swap). Calls of a slot not yet come wait for the first frame drawn
+    after its start (or, when none is, ``FRAME_GRACE`` of a slot later). A readout's
+    repaint composes the whole main window (15-25 ms in software OpenGL): painted in the
+    same pass as the lip frame it made that frame late by as much (docs/DECISIONS.md,
+    "Playback lag within one frame period").
     """
     global _frame_depth
     _frame_depth += 1
@@ -195,10 +208,8 @@ def drawing_frame():
         if _frame_depth == 0 and _after_frame:
             from PySide6 import QtCore
 
-            held = list(_after_frame)
-            _after_frame.clear()
-            for throttle in held:
-                throttle.flush()
+            for throttle in list(_after_frame):
+                throttle._after_frame()  # leaves the list once its call has run
             for kind in (QtCore.QEvent.Type.LayoutRequest, QtCore.QEvent.Type.UpdateRequest):
                 QtCore.QCoreApplication.sendPostedEvents(None, int(kind.value))
 
@@ -243,16 +254,15 @@ class Throttle:
         self._timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
         self._timer.setSingleShot(True)
         self._timer.timeout.connect(self.flush)
+        self._timer.destroyed.connect(lambda *_a: self._unlist())  # its owner is gone: never run it again
 
     def __call__(self, *args) -> None:
         import math
 
         now = self.clock()
         slot = math.floor(now / self.interval_s)
-        if slot != self.last_slot and _frame_depth:  # a playback frame is being drawn: run after it
-            self._timer.stop()
+        if _frame_depth:  # a playback frame is being drawn: run after it (drawing_frame)
             self._held = args
-            self.last_slot = slot
             if self not in _after_frame:
                 _after_frame.append(self)
             return
@@ -266,11 +276,27 @@ class Throttle:
         if not self._timer.isActive():
             self._timer.start(max(1, math.ceil(1000 * ((slot + 1) * self.interval_s - now))))
 
+    def _after_frame(self) -> None:
+        """A playback frame is on screen: run the held call if its slot has come, else wait for a later frame."""
+        import math
+
+        if self._held is None:
+            self._unlist()
+            return
+        now = self.clock()
+        slot = math.floor(now / self.interval_s)
+        if slot != self.last_slot:
+            self.flush()
+        else:  # the first frame after the slot's start runs it; this timer in case none comes
+            wait = (slot + 1 + FRAME_GRACE) * self.interval_s - now
+            self._timer.start(max(1, math.ceil(1000 * wait)))
+
     def flush(self) -> None:
         """Run the held call now (nothing when none is held)."""
         import math
 
         self._timer.stop()
+        self._unlist()
         if self._held is not None:
             args, self._held = self._held, None
             self.last_slot = math.floor(self.clock() / self.interval_s)
@@ -279,7 +305,12 @@ class Throttle:
     def cancel(self) -> None:
         """Drop the held call."""
         self._timer.stop()
+        self._unlist()
         self._held = None
+
+    def _unlist(self) -> None:
+        if self in _after_frame:
+            _after_frame.remove(self)
 
 
 def connect_all(connections) -> list:

@@ -56,6 +56,9 @@ class LipView(QtWidgets.QWidget):
         self.position_source = self.audio.position_s
         self.shown_frame = None  # the playback frame the lip meshes hold (None outside playback)
         self._chosen_at = None
+        # display latencies the last playback measured (and the clock source they were measured on):
+        # the next playback looks ahead by them from its first frame
+        self._latencies = ((), None)
         self.timer = QtCore.QTimer(self)
         self.timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
         self.timer.setSingleShot(True)  # each tick sets the next deadline; a late tick is never queued
@@ -238,6 +241,8 @@ class LipView(QtWidgets.QWidget):
             self._start_audio()
         else:
             self.timer.stop()
+            if self.clock is not None:
+                self._latencies = (self.clock.latencies, self.clock.clock)
             self.clock = None
             self.audio.stop()
             self._caption_readout.flush()  # paused: the readouts show where it stopped, now
@@ -255,8 +260,10 @@ class LipView(QtWidgets.QWidget):
             c.speed = self.speed  # a new speed: keep what was measured of the display latency
             self.audio.set_rate(self.speed)  # the clock takes the sound's position again once it moves
         else:
+            seen, source = self._latencies
             self.clock = PlaybackClock(rate, s.n_playback, speed=self.speed, clock=self.clock_source,
-                                       position=self.position_source)
+                                       position=self.position_source,
+                                       latencies=seen if source is self.clock_source else ())
         self.clock.start(s.playback or 0)
         self.timer.start(0)
 

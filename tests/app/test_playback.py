@@ -84,6 +84,19 @@ def test_clock_never_steps_back_when_the_look_ahead_shrinks():
     assert c.frame() == 10
 
 
+def test_clock_seeded_with_earlier_latencies_looks_ahead_from_its_first_frame():
+    fake = FakeClock()
+    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=2, latencies=(0.2, 0.05, 0.02))
+    assert c.latencies == (0.05, 0.02)  # the window keeps the latest
+    assert c.latency_s == pytest.approx(0.05)
+    c.start(0)
+    fake.t += 1.0
+    assert c.frame() == 63  # looks 3 frames ahead from the first frame on
+    assert PlaybackClock(60.0, 10, clock=fake).latency_s == 0.0  # unseeded: no look-ahead until measured
+    with pytest.raises(ValueError, match="finite"):
+        PlaybackClock(60.0, 10, latencies=(float("nan"),))
+
+
 def test_clock_speed_and_validation():
     fake = FakeClock()
     c = PlaybackClock(60.0, 1000, speed=0.5, clock=fake)
@@ -315,11 +328,22 @@ def test_readouts_called_while_a_frame_is_drawn_repaint_just_after_it(qapp):
         # released at the exit, and painted there (not left for a later turn of the event loop)
         assert label.text() == "frame 2"
         assert paints and paints[-1] == "frame 2"
-        th("frame 3")  # same slot, outside a frame: held for the next slot as before
+        with drawing_frame():
+            th("frame 3")  # the same slot: still held after this frame
         assert label.text() == "frame 2"
-        now[0] = 10.6
-        th("frame 4")
+        now[0] = 10.45
+        with drawing_frame():
+            th("frame 4")
+        assert label.text() == "frame 2"
+        now[0] = 10.51  # the next slot has come: the first frame drawn in it releases the latest call
+        with drawing_frame():
+            pass
+        assert label.text() == "frame 4" and paints[-1] == "frame 4"
+        th("frame 5")  # same slot, outside a frame: held for the next slot as before
         assert label.text() == "frame 4"
+        now[0] = 11.1
+        th("frame 6")
+        assert label.text() == "frame 6"
     finally:
         th.cancel()
         label.removeEventFilter(log)
@@ -334,7 +358,8 @@ def test_no_readout_paints_between_a_frames_choice_and_its_swap(qapp, lip_view):
 
     s = lip_view.state
     marks = []  # (time, what)
-    s.events.playback.connect(lambda _k: marks.append((time.monotonic(), "chosen")))
+    # frames chosen while playing (the last frame, shown as playback stops, comes with the readouts)
+    s.events.playback.connect(lambda _k: s.playing and marks.append((time.monotonic(), "chosen")))
     lip_view.plotter.interactor.frameSwapped.connect(lambda: marks.append((time.monotonic(), "swap")))
 
     class PaintLog(QtCore.QObject):
@@ -364,3 +389,16 @@ def test_no_readout_paints_between_a_frames_choice_and_its_swap(qapp, lip_view):
             pending = False
         else:
             assert not pending, f"a readout painted between a frame's choice and its swap: {kinds}"
+
+
+@pytest.mark.gui
+def test_next_playback_looks_ahead_by_the_latencies_the_last_one_measured(qapp, lip_view):
+    s = lip_view.state
+    _play(qapp, lip_view, 0.5)
+    measured = lip_view.clock.latencies
+    s.set_playing(False)
+    assert measured and all(0 < v <= 0.25 for v in measured)
+    s.set_playback(0)
+    s.set_playing(True)
+    assert lip_view.clock.latencies == measured  # a new clock, seeded: its first frame looks ahead too
+    s.set_playing(False)
