@@ -140,7 +140,8 @@ def prepare_derived(manifold, progress=None) -> None:
     """Compute what the views derive from ``manifold`` ahead of showing it (Qt-free, any thread).
 
     The k-NN density of every frame, the phone of every frame and the phone clusters
-    (together about a second of work at 28,800 frames) are computed here, e.g. in the
+    (together about a second of work at 28,800 frames) and the state graph's cached forms
+    for hemisphere and path queries are computed here, e.g. in the
     loading worker, and picked up by :meth:`AppState.set_manifold`, so that showing a
     manifold does not freeze the window. Reports stage ``"preparing the views"``.
     A corpus whose phone clusters cannot be fitted is left for the clusters panel to
@@ -151,6 +152,7 @@ def prepare_derived(manifold, progress=None) -> None:
     stage = "preparing the views"
     report(progress, stage, 0, 3)
     out = {"density": knn_density(manifold.Fy_)}
+    manifold.states_.prepare_queries()  # the state graph's csr forms, so the first click's hemisphere does not build them
     report(progress, stage, 1, 3)
     out["phones"] = frame_phones(manifold.corpus_)
     report(progress, stage, 2, 3)

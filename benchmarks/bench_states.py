@@ -24,9 +24,10 @@ minutes and does not change the queries); then for each K
   path runs one leg per change of selection or target),
 
 each **warm** (the same process, after one query has built the cached csr forms: min and
-median of ``--repeats`` queries) and **cold** (``--cold-runs`` fresh processes, each
-loading the saved graph and timing its first query, cache building included; loading is
-timed apart). Also the state path ``lipspace synthesize`` and ``StateModel.path`` find:
+median of ``--repeats`` queries, wall and CPU time) and **cold** (``--cold-runs`` fresh
+processes, each loading the saved graph and timing its first query: right after loading,
+so building A and A^T as csr is included, and after ``StateGraph.prepare_queries``, which
+the explorer's loading worker calls; loading is timed apart). Also the state path ``lipspace synthesize`` and ``StateModel.path`` find:
 10 targets (the states of every 6th frame of a training utterance, 0.1 s apart at
 60 Hz), each gap the most probable path of exactly its length (``engine.bridges.bridge``),
 beside the full recursion over every edge it replaced (``MaxProductGraph.viterbi`` +
@@ -115,8 +116,9 @@ def synthetic(preset):
     return Fy, Fx, Fxv, b, corpus
 
 
-def _child(path, query, seed):
-    """Fresh process: load the saved graph, time the first ``query``; prints one JSON line."""
+def _child(path, query, seed, prepared):
+    """Fresh process: load the saved graph (and ``prepare_queries`` if ``prepared``), time
+    the first ``query``; prints one JSON line."""
     import json
 
     t = time.perf_counter()
@@ -124,6 +126,8 @@ def _child(path, query, seed):
     from engine.states import StateGraph
 
     g = load_estimator(StateGraph, read_npz(path), "states")
+    if prepared:
+        g.prepare_queries()
     t_load = time.perf_counter() - t
     big = np.flatnonzero(g.scc_labels_ == g.largest_scc_)
     rng = np.random.default_rng(seed)
@@ -144,24 +148,32 @@ def _load_avg():
     return f"load average {os.getloadavg()[0]:.1f}"
 
 
-def _stats(times):
+def _stats(times, cpu=None):
     t = np.asarray(times) * 1e3
-    return f"min {t.min():7.2f} ms, median {np.median(t):7.2f} ms, max {t.max():7.2f} ms over {t.size}"
+    out = f"min {t.min():7.2f} ms, median {np.median(t):7.2f} ms, max {t.max():7.2f} ms over {t.size}"
+    if cpu is not None:  # the process's CPU time: what the query costs, without the wait for a core
+        c = np.asarray(cpu) * 1e3
+        out += f" (CPU min {c.min():.2f} ms, median {np.median(c):.2f} ms)"
+    return out
 
 
 def _cold(path, query, runs):
+    """First query in fresh processes: right after loading, and after ``prepare_queries``
+    (what the explorer's loading worker does), alternating."""
     import json
     import subprocess
     import sys
 
-    load, first = [], []
+    load, first = {0: [], 1: []}, {0: [], 1: []}
     for seed in range(runs):
-        out = subprocess.run([sys.executable, __file__, "--child", str(path), query, str(seed)],
-                             capture_output=True, text=True, check=True).stdout
-        r = json.loads(out.strip().splitlines()[-1])
-        load.append(r["load_s"]), first.append(r["query_s"])
-    return (f"first query {_stats(first)} fresh processes (import + load of the graph: median "
-            f"{np.median(load):.2f} s, not included); {_load_avg()}")
+        for prepared in (0, 1):
+            out = subprocess.run([sys.executable, __file__, "--child", str(path), query, str(seed), str(prepared)],
+                                 capture_output=True, text=True, check=True).stdout
+            r = json.loads(out.strip().splitlines()[-1])
+            load[prepared].append(r["load_s"]), first[prepared].append(r["query_s"])
+    return (f"first query right after loading {_stats(first[0])} fresh processes; after prepare_queries() "
+            f"(the explorer's loader) {_stats(first[1])} (import + load of the graph: median "
+            f"{np.median(load[0]):.2f} s, with prepare_queries {np.median(load[1]):.2f} s, not included); {_load_avg()}")
 
 
 def _synthesis_path(g, bounds, rng, repeats, gap=6, n_targets=10):
@@ -199,8 +211,8 @@ def _synthesis_path(g, bounds, rng, repeats, gap=6, n_targets=10):
 def main():
     import sys
 
-    if len(sys.argv) == 5 and sys.argv[1] == "--child":
-        return _child(sys.argv[2], sys.argv[3], int(sys.argv[4]))
+    if len(sys.argv) == 6 and sys.argv[1] == "--child":
+        return _child(sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5] == "1")
     ap = argparse.ArgumentParser()
     ap.add_argument("--source", choices=("synthetic", "standin"), default=None)
     ap.add_argument("--preset", default="paper")
@@ -275,22 +287,22 @@ def main():
 
         print(f"  future+past hemispheres, cold: {_cold(saved, 'hemisphere', args.cold_runs)}")
         g.hemispheres(int(big[0]))  # build the cached csr forms once
-        times = []
+        times, cpu = [], []
         for s in rng.choice(big, size=args.repeats):
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             g.hemispheres(int(s))
-            times.append(time.perf_counter() - t)
-        print(f"  future+past hemispheres, warm: {_stats(times)} states; {_load_avg()}")
+            times.append(time.perf_counter() - t), cpu.append(time.process_time() - c)
+        print(f"  future+past hemispheres, warm: {_stats(times, cpu)} states; {_load_avg()}")
 
         print(f"  10-state path (9 min_path legs), cold: {_cold(saved, 'path', args.cold_runs)}")
-        times, hops = [], []
+        times, cpu, hops = [], [], []
         for _ in range(args.repeats):
             way = rng.choice(big, size=10, replace=False)
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             path = _ten_state_path(g, way)
-            times.append(time.perf_counter() - t)
+            times.append(time.perf_counter() - t), cpu.append(time.process_time() - c)
             hops.append(len(path) - 1)
-        print(f"  10-state path (9 min_path legs), warm: {_stats(times)} paths (median {int(np.median(hops))} "
+        print(f"  10-state path (9 min_path legs), warm: {_stats(times, cpu)} paths (median {int(np.median(hops))} "
               f"hops per path); {_load_avg()}")
 
         if args.synthesis_repeats > 0:

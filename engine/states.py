@@ -310,8 +310,7 @@ class StateGraph(BaseEstimator):
         cache = self.__dict__.setdefault("_cache", {})
         key = "AT" if transpose else "A"
         if key not in cache:
-            A = sp.csr_matrix(self.adjacency_, dtype=np.float64)
-            G = sp.csr_matrix(A.T) if transpose else A
+            G = sp.csr_matrix(self._graph(False).T) if transpose else sp.csr_matrix(self.adjacency_, dtype=np.float64)
             G.sort_indices()
             cache[key] = G
         return cache[key]
@@ -325,6 +324,16 @@ class StateGraph(BaseEstimator):
                 "K": K}
 
     # ------------------------------------------------------------------ query
+    def prepare_queries(self):
+        """Build now what the first hemisphere or path query would build: A and A^T as csr.
+
+        Both are cached on the object (not saved). At K = 20,000 states (525k edges) they
+        take 5-30 ms, mostly the transpose; a loader calls this in its worker so that the
+        first click does not pay for them. Returns self.
+        """
+        self._graph(False), self._graph(True)
+        return self
+
     def predict(self, Y) -> np.ndarray:
         """Nearest state of each point.
 

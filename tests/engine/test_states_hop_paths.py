@@ -126,3 +126,22 @@ def test_state_graph_min_path_is_the_breadth_first_tree_path(small_manifold):
         got = g.min_path(int(a), int(b))
         np.testing.assert_array_equal(got, want)
         assert len(got) - 1 == hops[a, b]
+
+
+def test_prepare_queries_builds_the_cached_graphs_queries_then_use(small_manifold):
+    from engine._persist import dump_estimator, load_estimator
+    from engine.states import StateGraph
+
+    g = load_estimator(StateGraph, dump_estimator(small_manifold.states_, "states"), "states")  # a fresh cache
+    assert not g.__dict__.get("_cache")
+    assert g.prepare_queries() is g
+    A, AT = g._cache["A"], g._cache["AT"]
+    assert A.has_sorted_indices and AT.has_sorted_indices
+    np.testing.assert_array_equal(A.toarray(), g.adjacency_.toarray())
+    np.testing.assert_array_equal(AT.toarray(), g.adjacency_.toarray().T)
+    K = g.centroids_.shape[0]
+    a, b = 0, K - 1
+    fut = g.future(a)
+    if np.isfinite(fut[b]):
+        assert len(g.min_path(a, b)) - 1 == fut[b]
+    assert g._cache["A"] is A and g._cache["AT"] is AT  # the queries used them, built nothing new
