@@ -21,7 +21,8 @@ minutes and does not change the queries); then for each K
   explorer colours on a click), and
 * a 10-state minimum-distance path: 10 states of the largest strongly connected
   component in sequence, 9 legs, ``StateGraph.min_path`` per leg (the explorer's state
-  path runs one leg per change of selection or target),
+  path runs one leg per change of selection or target), beside the same paths by one
+  whole breadth-first search per leg (``min_path`` before the bidirectional search),
 
 each **warm** (the same process, after one query has built the cached csr forms: min and
 median of ``--repeats`` queries, wall and CPU time) and **cold** (``--cold-runs`` fresh
@@ -142,6 +143,21 @@ def _child(path, query, seed, prepared):
 def _ten_state_path(g, way):
     legs = [g.min_path(int(a), int(c)) for a, c in zip(way[:-1], way[1:])]
     return np.concatenate([legs[0]] + [leg[1:] for leg in legs[1:]])
+
+
+def _ten_state_path_before(g, way):
+    """The same path as ``min_path`` gave before the bidirectional search: one whole
+    breadth-first search per leg, the path read off its predecessor tree."""
+    from scipy.sparse.csgraph import breadth_first_order
+
+    G, out = g._graph(False), [int(way[0])]
+    for a, c in zip(way[:-1], way[1:]):
+        pred = breadth_first_order(G, int(a), directed=True, return_predecessors=True)[1]
+        leg = [int(c)]
+        while leg[-1] != a:
+            leg.append(int(pred[leg[-1]]))
+        out += leg[::-1][1:]
+    return np.array(out)
 
 
 def _load_avg():
@@ -295,15 +311,19 @@ def main():
         print(f"  future+past hemispheres, warm: {_stats(times, cpu)} states; {_load_avg()}")
 
         print(f"  10-state path (9 min_path legs), cold: {_cold(saved, 'path', args.cold_runs)}")
-        times, cpu, hops = [], [], []
+        times, cpu, hops, before = [], [], [], []
         for _ in range(args.repeats):
             way = rng.choice(big, size=10, replace=False)
             t, c = time.perf_counter(), time.process_time()
             path = _ten_state_path(g, way)
             times.append(time.perf_counter() - t), cpu.append(time.process_time() - c)
             hops.append(len(path) - 1)
+            t = time.perf_counter()
+            assert np.array_equal(_ten_state_path_before(g, way), path), "min_path differs from the tree path"
+            before.append(time.perf_counter() - t)
         print(f"  10-state path (9 min_path legs), warm: {_stats(times, cpu)} paths (median {int(np.median(hops))} "
-              f"hops per path); {_load_avg()}")
+              f"hops per path); the same paths by a whole breadth-first search per leg (before), alternating: "
+              f"{_stats(before)}; {_load_avg()}")
 
         if args.synthesis_repeats > 0:
             setup, now, full = _synthesis_path(g, np.asarray(b), rng, args.synthesis_repeats)

@@ -26,15 +26,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine.hop_paths import concat_ranges, mark_level
+
 __all__ = ["bridge", "forward_to"]
-
-
-def _ranges(lo, n):
-    """Concatenated ``arange(lo[i], lo[i] + n[i])``."""
-    total = int(n.sum())
-    if total == 0:
-        return np.zeros(0, dtype=np.int64)
-    return np.arange(total) + np.repeat(lo - (np.cumsum(n) - n), n)
 
 
 def _out_csr(g):
@@ -69,21 +63,14 @@ def _balls(g, sources, targets, hops):
         if cost_a <= cost_b:
             ha += 1
             if fa.size:
-                nxt = out_dst[_ranges(out_ptr[fa], out_ptr[fa + 1] - out_ptr[fa])]
-                fa = _mark(nxt, da, ha)
+                nxt = out_dst[concat_ranges(out_ptr[fa], out_ptr[fa + 1] - out_ptr[fa])]
+                fa = mark_level(nxt, da, ha)
         else:
             hb += 1
             if fb.size:
-                nxt = g.src[_ranges(in_lo[fb], in_n[fb])]
-                fb = _mark(nxt, db, hb)
+                nxt = g.src[concat_ranges(in_lo[fb], in_n[fb])]
+                fb = mark_level(nxt, db, hb)
     return da, db, ha, hb
-
-
-def _mark(nxt, dist, level):
-    """The nodes of ``nxt`` not yet reached, marked ``level`` in ``dist``: the next frontier (sorted)."""
-    nxt = nxt[dist[nxt] < 0]
-    dist[nxt] = level
-    return np.unique(nxt) if nxt.size * 16 < dist.size else np.flatnonzero(dist == level)
 
 
 def _scored(da, db, ha, hb, n, t):
@@ -108,7 +95,7 @@ def _steps(g, scores, n, da, db, ha, hb, history=None):
         nxt = np.full((cur.shape[0], K), -np.inf)
         if D.size:
             ln = g.seglen[seg]
-            e = _ranges(g.starts[seg], ln)
+            e = concat_ranges(g.starts[seg], ln)
             vals = np.take(cur, g.src[e], axis=1)
             vals += g.logp[e]
             nxt[:, D] = np.maximum.reduceat(vals, np.cumsum(ln) - ln, axis=1)

@@ -25,30 +25,38 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["fewest_hop_path"]
+__all__ = ["fewest_hop_path", "concat_ranges", "mark_level"]
+
+
+def concat_ranges(lo, n) -> np.ndarray:
+    """``concatenate([arange(lo[i], lo[i] + n[i]) for i ...])`` without a Python loop (int64)."""
+    total = int(n.sum())
+    if total == 0:
+        return np.zeros(0, dtype=np.int64)
+    return np.arange(total) + np.repeat(lo - (np.cumsum(n) - n), n)
 
 
 def _rows(G: sp.csr_matrix, nodes: np.ndarray) -> np.ndarray:
     """Column indices of the rows ``nodes`` of csr ``G``, concatenated in row order."""
     lo = G.indptr[nodes]
-    n = G.indptr[nodes + 1] - lo
-    total = int(n.sum())
-    if total == 0:
-        return G.indices[:0]
-    start = np.cumsum(n) - n
-    return G.indices[np.arange(total) + np.repeat(lo - start, n)]
+    return G.indices[concat_ranges(lo, G.indptr[nodes + 1] - lo)]
+
+
+def mark_level(reached, dist, level) -> np.ndarray:
+    """The nodes of ``reached`` with ``dist < 0`` (not yet reached), marked ``level`` in
+    ``dist`` (in place): the next breadth-first frontier, sorted, without repeats."""
+    new = reached[dist[reached] < 0]
+    if new.size == 0:
+        return new
+    dist[new] = level
+    if new.size * 16 < dist.size:
+        return np.unique(new)
+    return np.flatnonzero(dist == level)
 
 
 def _grow(G, frontier, dist, level):
-    """One breadth-first level: the nodes first reached from ``frontier`` (sorted), marked ``level`` in ``dist``."""
-    nxt = _rows(G, frontier)
-    nxt = nxt[dist[nxt] < 0]
-    if nxt.size == 0:
-        return nxt
-    dist[nxt] = level
-    if nxt.size * 16 < dist.size:
-        return np.unique(nxt)
-    return np.flatnonzero(dist == level)
+    """One breadth-first level over csr ``G`` from ``frontier`` (see :func:`mark_level`)."""
+    return mark_level(_rows(G, frontier), dist, level)
 
 
 def fewest_hop_path(G, GT, a: int, b: int):
