@@ -72,8 +72,10 @@ class PlaybackClock:
         The audio device's position in media seconds (what is being heard now), or None
         while it has none (no audio, not started). None: the monotonic clock alone.
     latency_window : int, default=15
-        The look-ahead is the upper quartile of the latency of this many latest frames (a
-        quantile, so that one stall does not make the following frames run early).
+        The look-ahead is the second-largest latency of this many latest frames (about
+        their 90th percentile: one stall does not make the following frames run early,
+        and the frames' common delays, preemption by other processes included, are
+        covered more often than by the upper quartile).
     resync_s : float, default=0.1
         An audio position further than this from the clock's media time is taken at once
         (a seek or a stall); a nearer one is slewed in.
@@ -192,9 +194,9 @@ class PlaybackClock:
         """The frame nearest the clock when the one rendered now reaches the screen; None at the end.
 
         Syncs to the audio first. Nearest rather than the one already begun, and the
-        latency taken at its upper quartile: a frame then errs towards being early by
-        less than a frame period rather than late (sight ahead of sound is tolerated far
-        better than behind it). Between a start (or an audio re-sync jump) and the end the
+        latency taken near its top (second-largest of the window): a frame then errs
+        towards being early by less than a frame period rather than late (sight ahead of
+        sound is tolerated far better than behind it). Between a start (or an audio re-sync jump) and the end the
         chosen frames never decrease: when the look-ahead shrinks the latest one is held.
         """
         self.sync()
@@ -243,4 +245,4 @@ class PlaybackClock:
         # never plan for more than a quarter second ahead
         self._latencies.append(min(max(0.0, float(seconds)), 0.25))
         ordered = sorted(self._latencies)
-        self.latency_s = ordered[int(round(0.75 * (len(ordered) - 1)))]  # the upper quartile
+        self.latency_s = ordered[max(0, len(ordered) - 2)]  # the second-largest

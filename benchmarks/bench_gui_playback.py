@@ -7,22 +7,30 @@ Drives ``app.main_window.MainWindow`` on the default synthetic talker (28,800 fr
 60 Hz) under an X server (re-runs itself under ``xvfb-run`` without one; software
 OpenGL). Loads the longest utterance, synthesises it with the linear method (so the
 lip view shows the original and the synthetic lips side by side, as a user would
-compare them) and presses Play. There is no sound device here, so the clock a sound
-track would follow is the reference: media time ``t`` seconds after Play was pressed,
-frame ``k`` due at ``k / rate``.
+compare them) and presses Play, then runs the Qt event loop as the explorer does. There
+is no sound device here, so the reference is the clock a sound track would set:
+the playback clock's media time (``app.playback.PlaybackClock``, started in Play's
+handler; the delay from the press to that start is printed separately), frame ``k``
+due at ``k / rate``.
 
 For every lip-view frame that reaches the screen (the widget's ``frameSwapped``) the
 script records the frame on screen (the frame in the lip meshes when the lip view last
 rendered) and its **lag**: ``clock * rate - k`` in frame periods at the swap (0 = on
 time, 1 = a whole frame period late, negative = early). Printed per repeat: distinct
-frames shown per second, the lag's median, 95th percentile, max and min, the fraction of
-frames more than one period late (and more than one early), the *held* lag (the lag just
-before the next frame replaced it: how stale the screen got), frames dropped,
-compositions of the main window (frame swaps of the manifold view's widget, which Qt
-composes with the main window) and manifold-view renders, the process's CPU time per
-frame shown (all threads, the software rasteriser's included) and the load average.
-Then min / median over repeats; repeat 1 is the first playback in a fresh process
-(cold), the others warm.
+frames shown per second, the lag's median, 95th and 99th percentiles, max and min, the
+fraction of frames more than one period late (and more than one early), the *held* lag
+(the lag just before the next frame replaced it: how stale the screen got), frames
+dropped, compositions of the main window (frame swaps of the manifold view's widget,
+which Qt composes with the main window) and manifold-view renders, the process's CPU
+time per frame shown (all threads, the software rasteriser's included) and the load
+average. Then each frame's stages (``_playback_trace``): choice -> render start, the
+VTK render, render end -> swap; how late the playback timer fired; garbage collections
+(``gc.callbacks``); how long the GUI thread, the rasteriser thread that waited most and
+the X server were runnable but waiting for a core (``/proc/.../schedstat``: other
+processes held it); and each frame more than one period late attributed to the largest
+of: gc, preempted, other view (a manifold render between its choice and swap), long
+render, long compose, queued. Then min / median over repeats; repeat 1 is the first
+playback in a fresh process (cold), the others warm.
 
 ``--tree DIR`` runs the explorer code of another checkout with this same script (e.g.
 the commit before a change, extracted with ``git archive REV | tar -x -C DIR``), for
@@ -182,7 +190,7 @@ def main():
               f"timer late p95 {x['timer_late_p95']:.1f}, max {x['timer_late_max']:.1f} ms; GUI thread waited "
               f"{x['run_wait']:.0f} ms for a core between choice and swap (helpers + X server {x['helper_wait']:.0f} ms); "
               f"{len(x['gcs'])} collections ({', '.join(f'gen {g} {1e3 * (b - a):.1f} ms' for a, b, g in x['gcs'][:6])})")
-        print(f"      late frames by cause: " + ", ".join(f"{c} {n}" for c, n in x["causes"].items())
+        print("      late frames by cause: " + ", ".join(f"{c} {n}" for c, n in x["causes"].items())
               + "; per late frame, ms (GUI thread waited for a core / rasteriser thread + X server waited / "
               "GUI CPU / chosen->swap / look-ahead): "
               + " ".join(f"{w:.0f}/{h:.0f}/{c:.0f}/{d:.0f}/{la:.0f}" for w, h, c, d, la in x["late_wait_cpu"][:10]),
@@ -200,7 +208,7 @@ def main():
     print(f"% frames > 1 period late:     {mm('late', 100, '.1f')}")
     print(f"CPU per frame shown (ms):     {mm('cpu_ms', fmt='.1f')}")
     total = {c: sum(x["causes"][c] for x in res) for c in CAUSES}
-    print(f"late frames by cause (all repeats): " + ", ".join(f"{c} {n}" for c, n in total.items()))
+    print("late frames by cause (all repeats): " + ", ".join(f"{c} {n}" for c, n in total.items()))
     print(f"load average during repeats:  {mm('load', fmt='.1f')}")
     # asked for only now: querying the GL capabilities of a shown widget made the window
     # compose ~13 times a second more for the rest of the process (measured)

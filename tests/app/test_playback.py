@@ -68,6 +68,17 @@ def test_clock_looks_ahead_by_the_measured_display_latency():
     assert c.latency_s == pytest.approx(0.02)
 
 
+def test_look_ahead_covers_all_but_the_slowest_recent_frame():
+    c = PlaybackClock(60.0, 1000, latency_window=15)
+    for v in [0.010] * 10 + [0.020, 0.030, 0.040]:
+        c.shown(chosen_at=0.0, shown_at=v)
+    assert c.latency_s == pytest.approx(0.030)  # not the upper quartile (10 ms): 2 of 13 frames slower
+    c.shown(chosen_at=0.0, shown_at=1.0)  # one stall is ignored ...
+    assert c.latency_s == pytest.approx(0.040)
+    c.shown(chosen_at=0.0, shown_at=0.2)  # ... two are not: the machine has become slow
+    assert c.latency_s == pytest.approx(0.2)
+
+
 def test_clock_never_steps_back_when_the_look_ahead_shrinks():
     fake = FakeClock()
     c = PlaybackClock(60.0, 1000, clock=fake, latency_window=1)
@@ -86,8 +97,8 @@ def test_clock_never_steps_back_when_the_look_ahead_shrinks():
 
 def test_clock_seeded_with_earlier_latencies_looks_ahead_from_its_first_frame():
     fake = FakeClock()
-    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=2, latencies=(0.2, 0.05, 0.02))
-    assert c.latencies == (0.05, 0.02)  # the window keeps the latest
+    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=3, latencies=(0.2, 0.05, 0.05, 0.02))
+    assert c.latencies == (0.05, 0.05, 0.02)  # the window keeps the latest
     assert c.latency_s == pytest.approx(0.05)
     c.start(0)
     fake.t += 1.0
