@@ -31,14 +31,19 @@ from engine.hop_paths import concat_ranges, mark_level
 __all__ = ["bridge", "forward_to"]
 
 
-def _out_csr(g):
-    """Out-edges of ``g`` by source (built once per graph): (indptr, destinations)."""
-    cached = getattr(g, "_bridges_out", None)
+def _index(g):
+    """Edge index of ``g``, built once per graph: out-edges by source (indptr, destinations)
+    and each state's run of incoming edges in ``g``'s edge order (first edge, count; 0 for none)."""
+    cached = getattr(g, "_bridges_index", None)
     if cached is None:
+        K = g.n_states
         order = np.argsort(g.src, kind="stable")
-        ptr = np.zeros(g.n_states + 1, dtype=np.int64)
-        np.cumsum(np.bincount(g.src, minlength=g.n_states), out=ptr[1:])
-        cached = g._bridges_out = (ptr, g.dst[order])
+        ptr = np.zeros(K + 1, dtype=np.int64)
+        np.cumsum(np.bincount(g.src, minlength=K), out=ptr[1:])
+        in_lo = np.zeros(K, dtype=np.int64)
+        in_n = np.zeros(K, dtype=np.int64)
+        in_lo[g.targets], in_n[g.targets] = g.starts, g.seglen
+        cached = g._bridges_index = (ptr, g.dst[order], in_lo, in_n)
     return cached
 
 
@@ -48,10 +53,7 @@ def _balls(g, sources, targets, hops):
     Returns ``(da, db, ha, hb)``: da and db int32 arrays of shape (K,), -1 beyond the ball.
     """
     K = g.n_states
-    out_ptr, out_dst = _out_csr(g)
-    in_lo = np.zeros(K, dtype=np.int64)
-    in_n = np.zeros(K, dtype=np.int64)
-    in_lo[g.targets], in_n[g.targets] = g.starts, g.seglen
+    out_ptr, out_dst, in_lo, in_n = _index(g)
     da = np.full(K, -1, dtype=np.int32)
     db = np.full(K, -1, dtype=np.int32)
     fa, fb = np.unique(sources), np.unique(targets)
@@ -87,15 +89,15 @@ def _scored(da, db, ha, hb, n, t):
 def _steps(g, scores, n, da, db, ha, hb, history=None):
     """``n - 1`` max-plus steps from ``scores`` (M, K) over the scored states; in place."""
     K = g.n_states
+    _, _, in_lo, in_n = _index(g)
     cur = scores
     for t in range(1, n):
         D = _scored(da, db, ha, hb, n, t)
-        seg = g._segment[D]
-        D, seg = D[seg >= 0], seg[seg >= 0]
+        D = D[in_n[D] > 0]  # a state no edge enters keeps -inf
         nxt = np.full((cur.shape[0], K), -np.inf)
         if D.size:
-            ln = g.seglen[seg]
-            e = concat_ranges(g.starts[seg], ln)
+            ln = in_n[D]
+            e = concat_ranges(in_lo[D], ln)
             vals = np.take(cur, g.src[e], axis=1)
             vals += g.logp[e]
             nxt[:, D] = np.maximum.reduceat(vals, np.cumsum(ln) - ln, axis=1)
