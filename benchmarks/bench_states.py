@@ -32,7 +32,9 @@ the explorer's loading worker calls; loading is timed apart). Also the state pat
 10 targets (the states of every 6th frame of a training utterance, 0.1 s apart at
 60 Hz), each gap the most probable path of exactly its length (``engine.bridges.bridge``),
 beside the full recursion over every edge it replaced (``MaxProductGraph.viterbi`` +
-``backtrack``) on the same targets, min / median of ``--synthesis-repeats``. Every line carries the load average; the BLAS kernel is printed
+``backtrack``) on the same targets, min / median of ``--synthesis-repeats``; and the
+phone lattice of ``synthesize --text`` (scores from up to 8 candidate states per target
+to the next target's, ``engine.bridges.forward_to`` beside ``MaxProductGraph.forward``). Every line carries the load average; the BLAS kernel is printed
 once (no query calls BLAS). Target (issue 13 item 8): hemisphere and path <= 20 ms at
 K = 20,000.
 """
@@ -224,6 +226,35 @@ def _synthesis_path(g, bounds, rng, repeats, gap=6, n_targets=10):
     return setup, now, full
 
 
+def _lattice_scores(g, bounds, rng, repeats, gap=6, n_targets=10, n_candidates=8):
+    """The phone lattice of ``synthesize --text``: for each gap, the best ``gap + 1``-frame
+    path scores from every candidate state of one target to every candidate of the next
+    (candidates: the distinct states of the 8 frames around each target frame), by
+    ``engine.bridges.forward_to`` and by the full ``MaxProductGraph.forward``, alternating."""
+    from engine.bridges import forward_to
+    from engine.synthesis import MaxProductGraph, log_transitions, observed_transitions
+
+    mg = MaxProductGraph(log_transitions(observed_transitions(g)))
+    span = gap * (n_targets - 1)
+    h = n_candidates // 2
+    long = bounds[(bounds[:, 1] - bounds[:, 0]) > span + n_candidates]
+    now, full = [], []
+    for r in range(repeats + 1):
+        u = long[rng.integers(len(long))]
+        f0 = int(rng.integers(u[0] + h, u[1] - span - h))
+        cands = [np.unique(g.labels_[f - h: f + h]) for f in range(f0, f0 + span + 1, gap)]
+        t = time.perf_counter()
+        S = [forward_to(mg, a, gap + 1, b) for a, b in zip(cands[:-1], cands[1:])]
+        t_now = time.perf_counter() - t
+        t = time.perf_counter()
+        R = [mg.forward(a, gap + 1)[:, b] for a, b in zip(cands[:-1], cands[1:])]
+        t_full = time.perf_counter() - t
+        assert all(np.array_equal(x, y) for x, y in zip(S, R)), "forward_to differs from the full recursion"
+        if r:
+            now.append(t_now), full.append(t_full)
+    return now, full
+
+
 def main():
     import sys
 
@@ -330,6 +361,9 @@ def main():
             print(f"  synthesis state path (10 targets 6 frames apart, exact-length Viterbi per gap), warm: "
                   f"{_stats(now)}; the full recursion over every edge, same targets: {_stats(full)} "
                   f"(graph set-up {setup * 1e3:.0f} ms, once); {_load_avg()}")
+            now, full = _lattice_scores(g, np.asarray(b), rng, args.synthesis_repeats)
+            print(f"  phone lattice of synthesize --text (10 targets 6 frames apart, <= 8 candidate states each), "
+                  f"warm: {_stats(now)}; the full recursion, same candidates: {_stats(full)}; {_load_avg()}")
         tracemalloc.start()
         g.hemispheres(int(big[0]))
         peak = tracemalloc.get_traced_memory()[1] / 2**20
