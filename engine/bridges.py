@@ -3,7 +3,7 @@
 Synthesis (paper 4.1) bridges each gap between two targets with the most probable
 state path of exactly the gap's ``n`` frames: a Viterbi recursion of ``n - 1`` max-plus
 steps over the transition graph (:class:`engine.synthesis.MaxProductGraph`). Each full
-step touches every edge: at K = 20,000 states (545,000 edges with self-transitions) a
+step touches every edge: at K = 20,000 states (about 545,000 edges with the self-transitions) a
 gap of 7 frames costs six passes over all of them, though a path of 7 frames from
 ``a`` to ``b`` can only visit states within ``t`` hops of ``a`` at its frame ``t`` and
 within ``n - 1 - t`` hops of ``b``.
@@ -107,6 +107,15 @@ def _steps(g, scores, n, da, db, ha, hb, history=None):
     return cur
 
 
+def _check(g, states, n):
+    K = g.n_states
+    bad = [int(s) for s in states if not 0 <= int(s) < K]
+    if bad:
+        raise ValueError(f"state {bad[0]} is out of range: the graph has {K} states (0..{K - 1})")
+    if n < 1:
+        raise ValueError(f"a path needs at least 1 frame, got n={n}")
+
+
 def bridge(g, a: int, b: int, n: int):
     """The maximum-probability path of exactly ``n`` frames from ``a`` to ``b``, or None.
 
@@ -127,6 +136,7 @@ def bridge(g, a: int, b: int, n: int):
         None when no path of exactly ``n`` frames joins ``a`` to ``b``.
     """
     a, b, n = int(a), int(b), int(n)
+    _check(g, [a, b], n)
     if n <= 1:
         return np.array([a], dtype=np.int64) if a == b else None
     da, db, ha, hb = _balls(g, [a], [b], n - 1)
@@ -157,6 +167,7 @@ def forward_to(g, sources, n: int, targets) -> np.ndarray:
     sources = np.asarray(sources, dtype=np.int64).reshape(-1)
     targets = np.asarray(targets, dtype=np.int64).reshape(-1)
     n = int(n)
+    _check(g, np.r_[sources, targets], n)
     scores = np.full((sources.size, g.n_states), -np.inf)
     scores[np.arange(sources.size), sources] = 0.0
     if n <= 1:

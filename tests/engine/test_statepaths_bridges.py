@@ -102,3 +102,13 @@ def test_synthesis_paths_unchanged(small_manifold):
                 compared += 1
             cur = int(got[frames[i + 1]])
     assert compared > 15
+
+
+def test_out_of_range_states_and_lengths_are_refused():
+    g = _random_graph(np.random.default_rng(2), 6, 20, ties=False)
+    with pytest.raises(ValueError, match=r"state 6 is out of range: the graph has 6 states \(0..5\)"):
+        bridge(g, 0, 6, 3)
+    with pytest.raises(ValueError, match="state -1 is out of range"):
+        forward_to(g, [0, -1], 3, [1])
+    with pytest.raises(ValueError, match="at least 1 frame, got n=0"):
+        bridge(g, 0, 0, 0)
