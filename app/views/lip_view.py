@@ -57,7 +57,8 @@ class LipView(QtWidgets.QWidget):
         self.shown_frame = None  # the playback frame the lip meshes hold (None outside playback)
         self._chosen_at = None
         # display latencies the last playback measured (and the clock source they were measured on):
-        # the next playback looks ahead by them from its first frame
+        # the next playback looks ahead by them from its first frame (the first one in a window by
+        # one frame drawn at Play)
         self._latencies = ((), None)
         self.timer = QtCore.QTimer(self)
         self.timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
@@ -261,11 +262,19 @@ class LipView(QtWidgets.QWidget):
             self.audio.set_rate(self.speed)  # the clock takes the sound's position again once it moves
         else:
             seen, source = self._latencies
+            if source is not self.clock_source:  # nothing measured on this clock: measure one frame now
+                seen = (self._measure_latency(),)
             self.clock = PlaybackClock(rate, s.n_playback, speed=self.speed, clock=self.clock_source,
-                                       position=self.position_source,
-                                       latencies=seen if source is self.clock_source else ())
+                                       position=self.position_source, latencies=seen)
         self.clock.start(s.playback or 0)
         self.timer.start(0)
+
+    def _measure_latency(self) -> float:
+        """Seconds to draw the shown frame and put it on screen now: the first look-ahead of a playback."""
+        t = self.clock_source()
+        self.renderer.request()
+        self.renderer.flush(sync=True)
+        return max(0.0, self.clock_source() - t)
 
     def _start_audio(self):
         s = self.state

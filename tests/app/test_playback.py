@@ -405,6 +405,11 @@ def test_no_readout_paints_between_a_frames_choice_and_its_swap(qapp, lip_view):
 @pytest.mark.gui
 def test_next_playback_looks_ahead_by_the_latencies_the_last_one_measured(qapp, lip_view):
     s = lip_view.state
+    lip_view._latencies = ((), None)  # nothing measured yet: Play draws the shown frame once to measure
+    s.set_playback(0)
+    s.set_playing(True)
+    assert len(lip_view.clock.latencies) == 1 and 0 < lip_view.clock.latency_s <= 0.25
+    s.set_playing(False)
     _play(qapp, lip_view, 0.5)
     measured = lip_view.clock.latencies
     s.set_playing(False)
