@@ -81,9 +81,12 @@ def fewest_hop_path(G, GT, a: int, b: int):
         breadth-first search from ``a`` (the lexicographically smallest sequence).
     """
     a, b = int(a), int(b)
+    K = G.shape[0]
+    for name, s in (("a", a), ("b", b)):
+        if not 0 <= s < K:
+            raise ValueError(f"{name}={s} is out of range: the graph has {K} nodes (0..{K - 1})")
     if a == b:
         return np.array([a], dtype=np.int64)
-    K = G.shape[0]
     if not G.has_sorted_indices:
         raise ValueError("the graph's rows must have sorted indices (call G.sort_indices() once)")
     da = np.full(K, -1, dtype=np.int32)  # hops from a (forward ball)

@@ -100,6 +100,8 @@ def test_tie_broken_to_the_lexicographically_smallest_path_by_brute_force():
 def test_same_node_and_unsorted_rows():
     G, GT = _graph(10, 30, np.random.default_rng(1))
     np.testing.assert_array_equal(fewest_hop_path(G, GT, 4, 4), [4])
+    with pytest.raises(ValueError, match=r"b=10 is out of range: the graph has 10 nodes \(0..9\)"):
+        fewest_hop_path(G, GT, 0, 10)
     U = G.copy()
     U.indices = U.indices.copy()
     for i in range(U.shape[0]):  # reverse each row: still the same graph, rows no longer sorted
