@@ -43,7 +43,9 @@ def two_speakers(corpus):
     F = corpus.frames.astype(np.float64)
     for u in utts[1::2]:
         F[u.start:u.stop] = 1.3 * F[u.start:u.stop] + 0.7
-    return replace(corpus, frames=F.astype(np.float32), utterances=utts)
+    roles = [""] * corpus.n_points  # upper and lower lip points named: "opening" is the aperture growing
+    roles[:6], roles[6:12] = ["upper_lip"] * 6, ["lower_lip"] * 6
+    return replace(corpus, frames=F.astype(np.float32), utterances=utts, point_roles=roles)
 
 
 @pytest.fixture(scope="module")
@@ -167,3 +169,23 @@ def test_import_in_blocks_then_build_on_dask_reads_them_in_place(two_speakers, w
     for a, b in ((d.Fx_, whole.Fx_), (d.Fy_[:, :3], whole.Fy_[:, :3])):
         assert np.degrees(subspace_angles(a.astype(np.float64), b.astype(np.float64)).max()) < 0.01
     assert np.mean(d.tangent_.opening_ == whole.tangent_.opening_) > 0.99
+
+
+def test_dask_block_tasks_normalise_and_measure_the_aperture_as_in_process(two_speakers, blocked_two_speakers,
+                                                                          dask_cluster):
+    """Per-block tasks on the workers: the speaker sums (reduced on the client) and the lip aperture."""
+    from distributed import Client
+
+    from engine.kinematics import lip_aperture
+    from engine.registration import normalise_speakers
+    from engine.scale import DaskExecutor
+
+    lazy, _ = load_blocked(blocked_two_speakers)
+    whole = normalise_speakers(two_speakers, mode="mean+scale")
+    with DaskExecutor(Client(dask_cluster), block_frames=512) as ex:
+        normed = normalise_speakers(lazy, mode="mean+scale", executor=ex)
+        np.testing.assert_allclose(np.asarray(normed.frames), whole.frames, rtol=1e-6, atol=1e-5)
+        got = lip_aperture(normed, executor=ex)
+    ref = lip_aperture(whole)
+    assert ref is not None and np.ptp(ref) > 0
+    np.testing.assert_allclose(got, ref, rtol=1e-5, atol=1e-6)
