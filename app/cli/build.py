@@ -12,7 +12,9 @@ PRESETS = ("small", "default", "paper")
 
 def add_arguments(p):
     p.add_argument("corpus", nargs="?", help="native corpus file (.npz, frames inside or in blocks beside it: "
-                                             "'lipspace import --block-frames'); omit for the synthetic talker")
+                                             "'lipspace import --block-frames'; a manifold built from blocks reads "
+                                             "its frames from them, so keep the corpus); omit for the synthetic "
+                                             "talker")
     p.add_argument("--preset", choices=PRESETS, default="default",
                    help="synthetic talker preset when no corpus is given (default: %(default)s)")
     p.add_argument("-o", "--output", required=True, help="manifold file to write (.npz)")
