@@ -62,7 +62,10 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None):
         raise CliError(f"{p}: no such file")
     try:
         if p.suffix.lower() == ".npz":
-            return Corpus.load(p)
+            from engine.corpus_blocks import is_blocked, load_blocked
+
+            # frames in blocks beside it ('lipspace import --block-frames'): read from there when needed
+            return load_blocked(p)[0] if is_blocked(p) else Corpus.load(p)
         # Any foreign format the importers know (Haskins .mat, MOCHA .ema, C3D, ...).
         from engine.io import ImportFormatError, read_corpus
 

@@ -136,7 +136,6 @@ def _refuse_foreign(path: Path) -> None:
 
 def run(args) -> int:
     from app.cli import CliError
-    from engine.corpus import Corpus, CorpusError
     from engine.manifold import Manifold, ManifoldFileError
 
     path = Path(args.file)
@@ -148,10 +147,9 @@ def run(args) -> int:
     except ManifoldFileError as exc:
         if "corpus file" not in str(exc):
             raise CliError(str(exc)) from None
-        try:
-            c = Corpus.load(path)
-        except CorpusError as exc2:
-            raise CliError(str(exc2)) from None
+        from app.cli._common import load_corpus_arg
+
+        c = load_corpus_arg(path)  # a corpus stored in blocks is read from them, not gathered
         print(f"{path}: Lipspace corpus")
         print("\n".join(_corpus_lines(c)))
         return 0

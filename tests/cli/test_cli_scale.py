@@ -44,3 +44,13 @@ def test_manifold_of_a_blocked_corpus_reads_its_frames_from_it(tmp_path, small_c
     assert main(["synthesize", "--utterance", uid, "--manifold", str(out), "-o", str(traj), "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "c.npz" in err[0] and "which is missing" in err[0], err
+
+
+def test_info_reads_a_corpus_stored_in_blocks(tmp_path, small_corpus, capsys):
+    from engine.corpus_blocks import save_blocked
+
+    corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1500])
+    save_blocked(corpus, tmp_path / "c.npz", block_frames=512)
+    assert main(["info", str(tmp_path / "c.npz")]) == 0
+    out = capsys.readouterr().out
+    assert "Lipspace corpus" in out and f"frames      {corpus.n_frames} at 60 Hz" in out
