@@ -158,7 +158,7 @@ class TangentFrames(BaseEstimator):
         Where s_i and v_i live. ``"gradients"``: they are the full local gradients of
         F^x_1 and F^x'_1 in F^y, and the local tangent plane is their span.
         ``"pca"``: they are restricted to the plane of the neighbourhood's top two
-        principal axes (DESIGN.md's literal reading). See Notes for why the default
+        principal axes (the in-plane reading). See Notes for why the default
         differs.
 
     Attributes
