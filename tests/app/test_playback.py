@@ -307,14 +307,18 @@ def test_throttle_runs_at_most_once_per_slot_and_ends_on_the_latest(qapp):
 
 
 @pytest.mark.gui
-def test_readouts_called_while_a_frame_is_drawn_repaint_just_after_it(qapp):
+def test_readouts_called_while_a_frame_is_drawn_repaint_just_after_it(qapp, qtbot):
     from PySide6 import QtCore, QtWidgets
 
     from app.views._common import drawing_frame, Throttle
 
     label = QtWidgets.QLabel("")
+    qtbot.addWidget(label)
     label.resize(200, 40)
-    label.show()
+    # on screen first: X maps and exposes the window asynchronously, and Qt paints no window
+    # before it is exposed (a few processEvents() were not always enough on a busy machine)
+    with qtbot.waitExposed(label, timeout=10000):
+        label.show()
     for _ in range(5):
         qapp.processEvents()
     paints = []
