@@ -11,6 +11,8 @@ is read out as it moves; Side / Top / Reset give the standard views; Esc resets 
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
@@ -58,6 +60,7 @@ class ManifoldView(QtWidgets.QWidget):
     def __init__(self, state, parent=None):
         super().__init__(parent)
         self.state = state
+        self._play_started = 0.0  # perf_counter() when playback last started
         self.handles: dict = {}
         self.ellipsoids: dict = {}
         self.members: dict = {}
@@ -353,6 +356,8 @@ class ManifoldView(QtWidgets.QWidget):
         if recolor or selection or names & {"path", "trajectory", "visible_phones", "horizon_ms", "phone_filter"}:
             self.renderer.request()
         elif names & {"playback", "playing"}:
+            if "playing" in names and self.state.playing:
+                self._play_started = time.perf_counter()
             self._request_playback_render()
 
     def _sync_mode_boxes(self):
@@ -527,6 +532,9 @@ class ManifoldView(QtWidgets.QWidget):
         wait = 0.0
         if self.state.playing:
             wait = max(self.PLAYBACK_RENDER_INTERVAL_S, self.renderer.last_duration / self.PLAYBACK_RENDER_SHARE)
+            # counted from Play too, not only from the last render: rendered just as the clock
+            # starts, the markers held back the first lip frames (the first tick came ~90 ms late)
+            wait += max(0.0, self._play_started - self.renderer.last_flush)
         self.renderer.request(min_interval_s=wait)
 
     def _on_phones(self, render=True):

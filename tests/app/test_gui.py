@@ -193,6 +193,35 @@ def test_playback_shows_the_frame_due_by_the_clock_and_leaves_the_cloud_alone(wi
         s.set_playing(False)
 
 
+def test_play_leaves_the_first_frames_to_the_lip_view(win, qapp, app_manifold):
+    """Pressing Play after a pause does not render the manifold's playback markers at once: that
+    render (25-30 ms in software GL) landed just as the clock started and held back the first lip
+    frames. The markers' first render waits one throttle interval from Play."""
+    import time
+
+    m, s, view = app_manifold, win.state, win.manifold_view
+    u = max(m.corpus_.utterances, key=lambda u: u.stop - u.start)
+    s.set_utterance(u.id)
+    qapp.processEvents()
+    time.sleep(view.PLAYBACK_RENDER_INTERVAL_S + 0.05)  # idle longer than the throttle interval
+    win.lip_view.timer.stop()
+    try:
+        t0 = time.perf_counter()
+        s.set_playing(True)  # the lip view draws the shown frame in here
+        win.lip_view.timer.stop()  # no lip frames: only the manifold view's request is looked at
+        assert view.renderer.pending
+        # due no sooner than one interval after Play (was: at once, the last render being long ago)
+        due_ms = view.renderer._timer.remainingTime() + 1000 * (time.perf_counter() - t0)
+        assert due_ms >= 1000 * view.PLAYBACK_RENDER_INTERVAL_S - 20, due_ms
+        n = view.renderer.n_renders
+        qapp.processEvents()
+        assert view.renderer.n_renders == n
+    finally:
+        s.set_playing(False)
+    qapp.processEvents()
+    assert not view.renderer.pending  # stopped: the markers are drawn at once
+
+
 def test_synthesise_typed_text_draws_red_trajectory(win, qtbot, app_manifold):
     m, view, s, ed = app_manifold, win.manifold_view, win.state, win.editor
     ed.set_method("manifold")
