@@ -118,9 +118,10 @@ def prune(keep, folder=None) -> list[CacheEntry]:
     """
     keeps = [Path(k) for k in ([keep] if isinstance(keep, (str, Path)) else keep)]
     keep_names = {k.name for k in keeps} | {k.stem + "-audio" for k in keeps}
-    current = [e for e in entries(folder) if e.path.name in keep_names]
+    found = entries(folder)
+    current = [e for e in found if e.path.name in keep_names]
     gone = []
-    for e in entries(folder):
+    for e in found:
         if e.path.name in keep_names or e.kind == "partial":
             continue
         if any(c.preset == e.preset and (c.kind == e.kind or {c.kind, e.kind} == {"corpus", "audio"})
