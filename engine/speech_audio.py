@@ -207,7 +207,7 @@ def phone_mnemonics(utterance) -> list[str]:
 def _stress_marks(phones, cmu: str) -> list[str]:
     """The stress mark ('', "'" or ",") of each phone of a word, from its CMU stress digits."""
     digits = [t[-1] for t in cmu.split() if t[-1:].isdigit()]
-    vowels = [k for k, p in enumerate(phones) if is_vowel(p) or p in ("uw", "er")]
+    vowels = [k for k, p in enumerate(phones) if is_vowel(p)]  # uw, er included
     if len(vowels) > len(digits):  # 'fire' AY1 ER0 -> ay ax: the extra schwa after ay/aw is unstressed
         vowels = [k for k in vowels if not (phones[k] == "ax" and k and phones[k - 1] in ("ay", "aw"))]
     marks = [""] * len(phones)
@@ -307,16 +307,21 @@ def _phones_audio(utterance, worker) -> tuple[np.ndarray, dict] | None:
     src = _share_spans(starts + [end if end is not None else len(x)], dst, _MIN_PHONE_S * SAMPLE_RATE)
     i0, i1 = int(round(dst[0])), min(int(round(dst[-1])), len(out))
     y = time_warp(x, src, dst - i0, i1 - i0) if i1 - i0 >= 2 else np.zeros(max(i1 - i0, 0), np.float32)
+    out[i0:i1] = _fade(y)
+    _limit(out)
+    stretch = np.diff(dst) / np.maximum(np.diff(src), 1.0)
+    return out, {"method": "phones", "phones": k1 - k0, "stretch": stretch, "source": src, "target": dst,
+                 "espeak": x}
+
+
+def _fade(y):
+    """``y`` faded in and out over :data:`_FADE_S` (at most half its length each), in place."""
     f = min(int(_FADE_S * SAMPLE_RATE), len(y) // 2)
     if f:
         ramp = np.linspace(0, 1, f, dtype=np.float32)
         y[:f] *= ramp
         y[-f:] *= ramp[::-1]
-    out[i0:i1] = y
-    _limit(out)
-    stretch = np.diff(dst) / np.maximum(np.diff(src), 1.0)
-    return out, {"method": "phones", "phones": k1 - k0, "stretch": stretch, "source": src, "target": dst,
-                 "espeak": x}
+    return y
 
 
 def _limit(out):
@@ -382,23 +387,14 @@ def _words_audio(utterance, exe) -> tuple[np.ndarray, dict]:
     parts = _split_words(x, len(spans))
     placed = ([(x[a:b], s, e) for (a, b), (_, s, e) in zip(parts, spans)] if parts is not None else
               [(x[slice(*_trim(x))], spans[0][1], spans[-1][2])])
-    fade = int(0.005 * SAMPLE_RATE)
     stretch = []
     for seg, s, e in placed:
         i0, i1 = int(round(s * SAMPLE_RATE)), min(int(round(e * SAMPLE_RATE)), len(out))
         if i1 - i0 < 2:
             continue
-        y = time_stretch(seg, i1 - i0)
         stretch.append((i1 - i0) / max(len(seg), 1))
-        f = min(fade, len(y) // 2)
-        if f:
-            ramp = np.linspace(0, 1, f, dtype=np.float32)
-            y[:f] *= ramp
-            y[-f:] *= ramp[::-1]
-        out[i0:i1] += y
-    peak = float(np.abs(out).max())
-    if peak > 0.98:
-        out *= 0.98 / peak
+        out[i0:i1] += _fade(time_stretch(seg, i1 - i0))
+    _limit(out)
     return out, {"method": "words", "words": len(spans), "split": parts is not None,
                  "stretch": np.array(stretch)}
 
