@@ -341,11 +341,15 @@ class MainWindow(QtWidgets.QMainWindow):
         return True
 
     # ------------------------------------------------------------------ exports
+    def _view_plotter(self, which: str):
+        """The plotter of the ``"manifold"`` or ``"lips"`` view."""
+        return {"manifold": self.manifold_view.plotter, "lips": self.lip_view.plotter}[which]
+
     def export_view(self, which: str, path, *, dpi=None) -> Path:
         """Save the manifold or lip view as PNG (at ``dpi``) or SVG/PDF (vector, from the scene's data)."""
         from app.figures import save_plotter_image, save_plotter_vector
 
-        plotter = {"manifold": self.manifold_view.plotter, "lips": self.lip_view.plotter}[which]
+        plotter = self._view_plotter(which)
         if Path(path).suffix.lower() == ".png":
             return save_plotter_image(plotter, path, dpi=dpi)
         return save_plotter_vector(plotter, path)
@@ -371,8 +375,7 @@ class MainWindow(QtWidgets.QMainWindow):
             from app.user_messages import plain_errors
             from app.workers import run_task
 
-            plotter = {"manifold": self.manifold_view.plotter, "lips": self.lip_view.plotter}[which]
-            fig = scene_figure(plotter)
+            fig = scene_figure(self._view_plotter(which))
             run_task(plain_errors(lambda progress: save_vector_figure(fig, path), doing=f"export the {which} view"),
                      parent=self, title=f"Writing {path.name}", dialog=False,
                      on_done=lambda p: self.statusBar().showMessage(f"wrote {p}", 5000))
