@@ -194,16 +194,23 @@ def _cold(path, query, runs):
             f"{np.median(load[0]):.2f} s, with prepare_queries {np.median(load[1]):.2f} s, not included); {_load_avg()}")
 
 
-def _synthesis_path(g, bounds, rng, repeats, gap=6, n_targets=10):
-    """Per repeat: the 9 gaps' state paths by ``engine.bridges.bridge`` (what ``lipspace
-    synthesize`` and ``StateModel.path`` run) and by the full recursion over every edge
-    (``viterbi`` + ``backtrack``, before), same targets, alternating; the paths must agree."""
-    from engine.bridges import bridge
+def _max_product_graph(g):
+    """The state graph ``g``'s observed transitions as the ``MaxProductGraph`` synthesis runs
+    on, and the seconds it took to set up."""
     from engine.synthesis import MaxProductGraph, log_transitions, observed_transitions
 
     t = time.perf_counter()
     mg = MaxProductGraph(log_transitions(observed_transitions(g)))
-    setup = time.perf_counter() - t
+    return mg, time.perf_counter() - t
+
+
+def _synthesis_path(mg, g, bounds, rng, repeats, gap=6, n_targets=10):
+    """Per repeat: the 9 gaps' state paths on ``mg`` (:func:`_max_product_graph` of ``g``) by
+    ``engine.bridges.bridge`` (what ``lipspace synthesize`` and ``StateModel.path`` run) and by
+    the full recursion over every edge (``viterbi`` + ``backtrack``, before), same targets,
+    alternating; the paths must agree."""
+    from engine.bridges import bridge
+
     span = gap * (n_targets - 1)
     long = bounds[(bounds[:, 1] - bounds[:, 0]) > span]
     now, full = [], []
@@ -223,18 +230,17 @@ def _synthesis_path(g, bounds, rng, repeats, gap=6, n_targets=10):
         assert all(np.array_equal(p, q) for p, q in zip(paths, ref)), "bridge differs from the full recursion"
         if r:
             now.append(t_now), full.append(t_full)
-    return setup, now, full
+    return now, full
 
 
-def _lattice_scores(g, bounds, rng, repeats, gap=6, n_targets=10, n_candidates=8):
+def _lattice_scores(mg, g, bounds, rng, repeats, gap=6, n_targets=10, n_candidates=8):
     """The phone lattice of ``synthesize --text``: for each gap, the best ``gap + 1``-frame
     path scores from every candidate state of one target to every candidate of the next
     (candidates: the distinct states of the 8 frames around each target frame), by
-    ``engine.bridges.forward_to`` and by the full ``MaxProductGraph.forward``, alternating."""
+    ``engine.bridges.forward_to`` and by the full ``MaxProductGraph.forward`` on ``mg``
+    (:func:`_max_product_graph` of ``g``), alternating."""
     from engine.bridges import forward_to
-    from engine.synthesis import MaxProductGraph, log_transitions, observed_transitions
 
-    mg = MaxProductGraph(log_transitions(observed_transitions(g)))
     span = gap * (n_targets - 1)
     h = n_candidates // 2
     long = bounds[(bounds[:, 1] - bounds[:, 0]) > span + n_candidates]
@@ -357,11 +363,12 @@ def main():
               f"{_stats(before)}; {_load_avg()}")
 
         if args.synthesis_repeats > 0:
-            setup, now, full = _synthesis_path(g, np.asarray(b), rng, args.synthesis_repeats)
+            mg, setup = _max_product_graph(g)
+            now, full = _synthesis_path(mg, g, np.asarray(b), rng, args.synthesis_repeats)
             print(f"  synthesis state path (10 targets 6 frames apart, exact-length Viterbi per gap), warm: "
                   f"{_stats(now)}; the full recursion over every edge, same targets: {_stats(full)} "
                   f"(graph set-up {setup * 1e3:.0f} ms, once); {_load_avg()}")
-            now, full = _lattice_scores(g, np.asarray(b), rng, args.synthesis_repeats)
+            now, full = _lattice_scores(mg, g, np.asarray(b), rng, args.synthesis_repeats)
             print(f"  phone lattice of synthesize --text (10 targets 6 frames apart, <= 8 candidate states each), "
                   f"warm: {_stats(now)}; the full recursion, same candidates: {_stats(full)}; {_load_avg()}")
         tracemalloc.start()
