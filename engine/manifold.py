@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import time
-from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -20,8 +19,7 @@ from engine.corpus import Corpus, CorpusError
 from engine.dynamics import DynamicFeatures, velocities
 from engine.embedding import Embedding
 from engine.progress import ProgressFn, report
-from engine.shape import SMALL_QUERY_ROWS, ShapeSpace
-from engine.threads import one_blas_thread
+from engine.shape import ShapeSpace, small_query_blas
 
 __all__ = ["Manifold", "ManifoldFileError", "algorithm_fingerprint"]
 
@@ -217,7 +215,7 @@ class Manifold(BaseEstimator):
         frames = np.atleast_2d(np.asarray(frames, dtype=np.float32))
         if bounds is None:
             bounds = np.array([[0, frames.shape[0]]])
-        with one_blas_thread() if frames.shape[0] <= SMALL_QUERY_ROWS else nullcontext():  # live mirror: a frame
+        with small_query_blas(frames.shape[0]):  # live mirror: a frame
             Fx = self.shape_.transform(frames)
             G = self.dynamics_.transform(Fx, bounds)
             return self.embedding_.transform(G)

@@ -24,7 +24,7 @@ __all__ = ["ShapeSpace"]
 SMALL_QUERY_ROWS = 4096
 
 
-def _small(n_rows: int):
+def small_query_blas(n_rows: int):
     """One BLAS thread for a small query (a click, a synthesised utterance); every thread above."""
     return one_blas_thread() if n_rows <= SMALL_QUERY_ROWS else nullcontext()
 
@@ -234,7 +234,6 @@ class ShapeSpace(BaseEstimator):
     def _set_fitted(self, s, Vt, total, N, mean):
         """Fitted attributes from the top singular values ``s`` (k,) and axes ``Vt`` (k, C) of
         the centred F, its total sum of squares ``total``, N and the mean frame (C,)."""
-        k = len(s)
         ev = s**2 / (N - 1)
         total_var = total / (N - 1)
         scree = ev / total_var if total_var > 0 else np.zeros_like(ev)
@@ -289,7 +288,7 @@ class ShapeSpace(BaseEstimator):
         m = Fx.shape[1]
         if m > self.n_components_:
             raise ValueError(f"F^x has {m} columns but the shape space has {self.n_components_} components")
-        with _small(Fx.shape[0]):
+        with small_query_blas(Fx.shape[0]):
             return self.mean_ + Fx @ self.components_[:m]
 
     def component_deformation(self, index: int, amount_sd: float = 2.0):

@@ -34,7 +34,6 @@ from sklearn.base import BaseEstimator
 from engine.bridges import bridge, forward_to
 from engine.targets import TargetSequence
 from engine.threads import single_blas_thread
-from engine.threads import single_blas_thread
 from engine.trajectory import Synthesizer, Trajectory, smooth
 from engine.trajectory import check_fitted_manifold as _check_fitted_manifold
 from engine.trajectory import target_frames as _target_frames
