@@ -53,10 +53,8 @@ def run(args) -> int:
         raise CliError(f"{out}: the manifold file must end in .npz")
     t0 = time.perf_counter()
     with progress_bar(disable=True if args.quiet else None) as progress:
-        if args.corpus is not None and _is_blocked(args.corpus):  # written by 'lipspace import --block-frames'
-            corpus = _load_blocked(args.corpus)  # frames stay in their block files, read where they are needed
-        else:
-            corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress)
+        # a corpus stored in blocks ('lipspace import --block-frames') keeps its frames in the block files
+        corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress)
         if abs(corpus.rate - 60.0) > 3.0:  # the analysis rate (README, "Real recordings")
             print(f"lipspace build: warning: {corpus.name} is at {corpus.rate:g} Hz; the method's analysis rate is "
                   "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "
@@ -85,23 +83,6 @@ def run(args) -> int:
           f"Y {s['embedding_dims']}-D (first 3 hold {100 * s['Y_first3_recovered']:.1f}% of recovered variance), "
           f"K={s['n_states']} states, {time.perf_counter() - t0:.1f} s", file=sys.stdout)
     return 0
-
-
-def _is_blocked(path) -> bool:
-    from engine.corpus_blocks import is_blocked
-
-    return Path(path).suffix.lower() == ".npz" and Path(path).is_file() and is_blocked(path)
-
-
-def _load_blocked(path):
-    from app.cli import CliError
-    from engine.corpus import CorpusError
-    from engine.corpus_blocks import load_blocked
-
-    try:
-        return load_blocked(path)[0]
-    except CorpusError as exc:
-        raise CliError(str(exc)) from None
 
 
 def _dask_executor(args):
