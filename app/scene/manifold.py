@@ -119,9 +119,7 @@ def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: floa
     Y = _xyz(Fy3, "Fy3", 1)
     if frames is not None:
         frames = np.asarray(frames, dtype=np.int64)
-        Y = Y[frames]
-        rgb = None if rgb is None or len(rgb) == len(Y) else np.asarray(rgb)[frames]
-        values = None if values is None or len(values) == len(Y) else np.asarray(values)[frames]
+        Y = Y[frames]  # colours per frame are cut to the drawn frames by set_colors below
     mesh = pv.PolyData(Y.astype(np.float32))
     n = len(Y)
     mesh.point_data["rgb"] = np.full((n, 3), 160, np.uint8) if rgb is None else np.zeros((n, 3), np.uint8)

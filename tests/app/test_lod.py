@@ -55,6 +55,9 @@ def test_scene_draws_the_subsample_and_maps_points_back_to_frames():
         assert [h.frame_of(i) for i in (0, 7, len(idx) - 1)] == [idx[0], idx[7], idx[-1]]
         h.set_colors(rgb[::-1], values[::-1])
         np.testing.assert_array_equal(h.rgb, rgb[::-1][idx])
+        drawn = add_manifold_points(p, Y, rgb[idx], values[idx], frames=idx, name="drawn")
+        np.testing.assert_array_equal(drawn.rgb, rgb[idx])  # one colour per drawn point is kept as given
+        np.testing.assert_array_equal(drawn.values, values[idx])
         whole = add_manifold_points(p, Y, name="all")
         assert whole.mesh.n_points == N and whole.frame_of(5) == 5
     finally:
