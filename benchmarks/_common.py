@@ -18,13 +18,24 @@ def blas_kernel() -> str:
     return f"{'; '.join(libs) or 'none found'}; OPENBLAS_* env {env or 'unset'}"
 
 
-def current_rss_mb() -> float:
-    """Resident memory of this process now (MiB), from /proc (NaN where there is none)."""
+def _status_mb(field: str, pid="self") -> float:
+    """One memory field of /proc/PID/status (MiB; NaN where there is none)."""
     try:
-        with open("/proc/self/status") as fh:
+        with open(f"/proc/{pid}/status") as fh:
             for line in fh:
-                if line.startswith("VmRSS:"):
+                if line.startswith(field + ":"):
                     return int(line.split()[1]) / 1024
     except OSError:
         pass
     return float("nan")
+
+
+def current_rss_mb() -> float:
+    """Resident memory of this process now (MiB), from /proc (NaN where there is none)."""
+    return _status_mb("VmRSS")
+
+
+def peak_rss_mb(pid="self") -> float:
+    """Peak resident memory (VmHWM, MiB) of this process or of process ``pid``, from /proc
+    (NaN where there is none); unlike getrusage's maximum it does not survive exec from the parent."""
+    return _status_mb("VmHWM", pid)

@@ -72,15 +72,6 @@ def make(case: str, folder: Path, mb: float) -> Path:
     return p
 
 
-def _peak_rss_mb() -> float:
-    """This process's peak resident memory (VmHWM; getrusage's maximum survives exec from the parent)."""
-    with open("/proc/self/status") as fh:
-        for line in fh:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024
-    return float("nan")
-
-
 def one(path: str, impl: str | None, repeats: int) -> dict:
     sys.path.insert(0, str(ROOT))
     if impl:
@@ -98,11 +89,11 @@ def one(path: str, impl: str | None, repeats: int) -> dict:
         except ValueError as exc:
             outcome = f"refused: {str(exc)[len(path) + 2:][:70]}"
         times.append(time.perf_counter() - t)
-    from _common import blas_kernel
+    from _common import blas_kernel, peak_rss_mb
 
     return {"cold_s": times[0], "warm_min_s": min(times[1:]) if repeats else float("nan"),
             "warm_median_s": statistics.median(times[1:]) if repeats else float("nan"),
-            "peak_rss_mb": _peak_rss_mb(), "outcome": outcome,
+            "peak_rss_mb": peak_rss_mb(), "outcome": outcome,
             "blas": blas_kernel()}
 
 

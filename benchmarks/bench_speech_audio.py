@@ -103,15 +103,9 @@ def hiss_onset(y, t, sr, search=0.04):
     return (a + n // 2 + int(np.argmax(rise)) - t) / sr
 
 
-def _peak_mib(pid) -> float:
-    try:
-        with open(f"/proc/{pid}/status") as fh:
-            return next(int(line.split()[1]) / 1024 for line in fh if line.startswith("VmHWM:"))
-    except (OSError, StopIteration):
-        return float("nan")
-
-
 def analyse(preset: str, words: bool) -> dict:
+    from _common import peak_rss_mb
+
     from engine import espeak_phones
     from engine import speech_audio as sa
     from engine.phonetics import PAUSE
@@ -153,7 +147,7 @@ def analyse(preset: str, words: bool) -> dict:
                 for prev, p in zip(u.phones[:-1], u.phones[1:]):
                     if p.label in FRICATIVES and prev.label != PAUSE:
                         hiss[name].append(hiss_onset(yy, int(round(p.start * sr)), sr))
-        worker_mib = _peak_mib(w._proc.pid)
+        worker_mib = peak_rss_mb(w._proc.pid)
     inside = np.concatenate(inside)
     a = np.abs(np.array(errs))
     st = np.array(stretch)
