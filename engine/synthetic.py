@@ -42,7 +42,7 @@ from sklearn.base import BaseEstimator
 from engine.assets import asset_path
 from engine.corpus import Corpus, CorpusError, PhoneInterval, Utterance
 from engine.lipmodel import CONTROL_NAMES, SIGNED_CONTROLS, Anatomy, LipModel
-from engine.phonetics import PAUSE, DurationModel, pronounce
+from engine.phonetics import EXTRA_VOWELS, PAUSE, VOWELS, DurationModel, pronounce
 from engine.progress import report
 from engine.threads import one_blas_thread
 
@@ -212,8 +212,7 @@ PHONE_GESTURES = {
 }
 
 
-_VOWELS = frozenset(("iy", "ih", "eh", "ae", "aa", "ah", "ax", "ao", "oh", "uh", "uw", "er", "ey", "ay", "aw", "oy",
-                     "ow", "ia", "ea", "ua"))
+_VOWELS = frozenset(VOWELS + EXTRA_VOWELS)
 
 
 def phone_gestures(phone: str) -> tuple:
@@ -454,9 +453,7 @@ class SyntheticTalker(BaseEstimator):
         u += 0.02 * rng.standard_normal(u.shape)                               # motor noise
         # slow postural drift (expression, corners, asymmetry, lateral jaw), stationary from the start
         pd = math.exp(-2 * math.pi * _DRIFT_HZ / fs)
-        drift = lfilter([1.0], [1.0, -pd], rng.standard_normal((n_sub, nc)) * math.sqrt(1 - pd * pd), axis=0,
-                        zi=(rng.standard_normal(nc) * pd)[None, :])[0]
-        u += drift * _DRIFT_SD[:nc]
+        u += _slow_process(rng, n_sub, nc, pd) * _DRIFT_SD[:nc]
         if self.tissue:  # this sentence's posture of the lip tissue (rolled in or out, chin raised)
             u[:, _O] += _POSTURE_ROLL_SD * rng.standard_normal()
             u[:, _M] += abs(_POSTURE_MENTALIS_SD * rng.standard_normal())
@@ -580,9 +577,7 @@ class SyntheticTalker(BaseEstimator):
         ph = math.exp(-2 * math.pi * 1.0 / rate)
         coef = np.empty((n, len(B)), np.float32)
         for utt in utts:
-            e = rng.standard_normal((utt.stop - utt.start, len(B))) * math.sqrt(1 - ph * ph)
-            coef[utt.start:utt.stop] = lfilter([1.0], [1.0, -ph], e, axis=0,
-                                               zi=rng.standard_normal(len(B))[None, :] * ph)[0]
+            coef[utt.start:utt.stop] = _slow_process(rng, utt.stop - utt.start, len(B), ph)
         return coef, B
 
     def _head_motion(self, rng, utts, n):
@@ -595,15 +590,20 @@ class SyntheticTalker(BaseEstimator):
         ph = math.exp(-2 * math.pi * 0.3 / rate)
         out = np.empty((n, 6), np.float32)
         for u in utts:
-            m = u.stop - u.start
-            e = rng.standard_normal((m, 6)) * math.sqrt(1 - ph * ph)
-            out[u.start:u.stop] = lfilter([1.0], [1.0, -ph], e, axis=0, zi=rng.standard_normal(6)[None, :] * ph)[0]
+            out[u.start:u.stop] = _slow_process(rng, u.stop - u.start, 6, ph)
         out *= np.float32(0.6 * self.registration)
         out[:, :3] *= np.float32(np.pi / 180.0)
         return out[:, :3], out[:, 3:]
 
 
 _LOW = np.array([-1.0 if n in SIGNED_CONTROLS else 0.0 for n in CONTROL_NAMES])
+
+
+def _slow_process(rng, n, k, pole):
+    """(n, k) independent first-order (AR(1)) processes of unit variance with ``pole``,
+    stationary from the first sample (its state drawn from the stationary distribution)."""
+    e = rng.standard_normal((n, k)) * math.sqrt(1 - pole * pole)
+    return lfilter([1.0], [1.0, -pole], e, axis=0, zi=rng.standard_normal(k)[None, :] * pole)[0]
 
 
 def speaker_anatomy(seed: int, speaker: int) -> Anatomy:
