@@ -438,7 +438,7 @@ class LipModel:
             chunk = max(16, 2_000_000 // (3 * self.n_points))
         from engine.threads import one_blas_thread
 
-        # many small products (K = 17 inner size): one BLAS thread is 10x faster than two
+        # many small products (K = 19 fields inner size): one BLAS thread is 10x faster than two
         # that spin against each other on a busy machine (measured 0.08 s vs 1.3 s per block)
         with one_blas_thread():
             for s in range(0, n, chunk):
