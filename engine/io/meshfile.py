@@ -158,6 +158,11 @@ class _Ragged:
         return len(self.counts)
 
 
+def _empty_columns(props):
+    """The columns of an element of 0 rows: an empty :class:`_Ragged` per list property, else (0,)."""
+    return {p[0]: (_Ragged(np.zeros(0, np.int64), np.zeros(0, np.int64)) if p[2] else np.zeros(0)) for p in props}
+
+
 #: positions handled per pass of the binary row finder (its arrays are a few times this, int64)
 _CHUNK = 1 << 20
 
@@ -256,8 +261,7 @@ def _read_binary_element(el, buf, pos, endian, path):
             cols = {p[0]: rec[f"p{k}"].astype(np.float64) for k, p in enumerate(props)}
         return cols, pos + n * dt.itemsize
     if n == 0:
-        return {p[0]: (_Ragged(np.zeros(0, np.int64), np.zeros(0, np.int64)) if p[2] else np.zeros(0))
-                for p in props}, pos
+        return _empty_columns(props), pos
     u8 = np.frombuffer(buf, np.uint8)
     if len(props) == 1:  # e.g. faces: one list; fast path when every row has the same length
         name, ct, it = props[0]
@@ -327,8 +331,7 @@ def _read_ascii_element(el, data, lines, li, path):
         raise ImportFormatError(path, f"element {el['name']!r} declares {n} rows but only {len(begins) - li} "
                                 "lines follow; truncated file?", line=last + 1)
     if n == 0:
-        return {p[0]: (_Ragged(np.zeros(0, np.int64), np.zeros(0, np.int64)) if p[2] else np.zeros(0))
-                for p in props}, li
+        return _empty_columns(props), li
     rows = slice(li, li + n)
     a, b, counts = int(begins[rows][0]), int(ends[rows][-1]), ntok[rows]
     if all(p[2] is None for p in props):  # scalars only (vertices): one C parse
