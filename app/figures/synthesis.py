@@ -86,16 +86,14 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     notes = []
     if traj.warnings:
         notes.append(f"{len(traj.warnings)} gap(s) not reachable in time; ended at the nearest reachable state")
+    if notes:
+        below(ax, "; ".join(notes))
     left_out = 0
     if label_phones:  # placed last, against the final layout, so that no two labels collide
-        if notes:
-            below(ax, "; ".join(notes))
         left_out = place_labels(ax, orig[tf][:, [a, b]], traj.target_labels, fontsize=7)
         if left_out:
             fig.text(0.01, 0.005, f"{left_out} phone label(s) left out where they would overlap", fontsize=6.5,
                      color="0.35", ha="left", va="bottom").set_in_layout(False)
-    elif notes:
-        below(ax, "; ".join(notes))
     fig.lipspace.update(utterance=u.id, target_frames=tf, labels=list(traj.target_labels), rmse_x=rmse_x,
                         rmse_y=rmse_y, warnings=list(traj.warnings), labels_left_out=left_out)
     return fig
