@@ -97,14 +97,8 @@ class SpeakerAffine:
         for s, r0, r1 in speaker_runs(self.utt_starts, self.utt_code, a, a + x.shape[0]):
             for c0 in range(r0, r1, _AFFINE_ROWS):  # float64 temporaries of a bounded size
                 c1 = min(r1, c0 + _AFFINE_ROWS)
-                y = x[c0 - a:c1 - a].astype(np.float64)
-                y -= self.mean[s]
-                if self.factor is not None:
-                    y *= self.factor[s]
-                y += self.grand
-                out[c0 - a:c1 - a] = y
+                out[c0 - a:c1 - a] = self._speaker_rows(x[c0 - a:c1 - a], s)
         return out
-
 
     def apply_at(self, x, index) -> np.ndarray:
         """Normalised rows ``index`` (n,) of F from their raw values ``x`` (n, C), any order."""
@@ -115,13 +109,17 @@ class SpeakerAffine:
             sel = np.flatnonzero(code == s)
             for c0 in range(0, sel.size, _AFFINE_ROWS):
                 rows = sel[c0:c0 + _AFFINE_ROWS]
-                y = x[rows].astype(np.float64)
-                y -= self.mean[s]
-                if self.factor is not None:
-                    y *= self.factor[s]
-                y += self.grand
-                out[rows] = y
+                out[rows] = self._speaker_rows(x[rows], s)
         return out
+
+    def _speaker_rows(self, x, s) -> np.ndarray:
+        """Raw rows ``x`` (n, C) of speaker ``s`` normalised, float64 (n, C)."""
+        y = x.astype(np.float64)
+        y -= self.mean[s]
+        if self.factor is not None:
+            y *= self.factor[s]
+        y += self.grand
+        return y
 
 
 class BlockFrames:
@@ -322,6 +320,4 @@ def map_frames(fn, frames, *, executor=None) -> list:
     """
     if executor is not None and isinstance(frames, BlockFrames) and hasattr(executor, "map_frame_blocks"):
         return executor.map_frame_blocks(fn, frames)
-    if isinstance(frames, BlockFrames):
-        return [fn(frames.rows(a, b), a, b) for a, b in row_windows(*frames.shape)]
     return [fn(frames[a:b], a, b) for a, b in row_windows(*frames.shape)]
