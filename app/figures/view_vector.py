@@ -122,11 +122,6 @@ def _actor_primitives(actor, M, size, view_dir):
                 T, p2 = T[keep], p2[keep]
                 if len(T) == 0:
                     continue
-                w3 = W[T[:, :3]]
-                nrm = np.cross(w3[:, 1] - w3[:, 0], w3[:, 2] - w3[:, 0])
-                nn = np.linalg.norm(nrm, axis=1)
-                cosv = np.where(nn > 0, np.abs(nrm @ view_dir) / np.where(nn > 0, nn, 1.0), 1.0)
-                shade = 0.45 + 0.55 * cosv
                 if smooth and T.shape[1] == 3:
                     # as on screen: the shade interpolated over each triangle from its corners' normals
                     vshade = 0.45 + 0.55 * np.abs(_vertex_normals(W, tri3) @ view_dir)
@@ -134,6 +129,12 @@ def _actor_primitives(actor, M, size, view_dir):
                     vc[..., :3] = np.clip(vc[..., :3] * vshade[T][..., None], 0, 1)
                     out.append(("gouraud", p2, depth[T].mean(axis=1), vc))
                     continue
+                # flat: each face shaded by its own normal
+                w3 = W[T[:, :3]]
+                nrm = np.cross(w3[:, 1] - w3[:, 0], w3[:, 2] - w3[:, 0])
+                nn = np.linalg.norm(nrm, axis=1)
+                cosv = np.where(nn > 0, np.abs(nrm @ view_dir) / np.where(nn > 0, nn, 1.0), 1.0)
+                shade = 0.45 + 0.55 * cosv
                 c = col[T].mean(axis=1)
                 faces.extend(list(p2))
                 fdepth.extend(depth[T].mean(axis=1))
