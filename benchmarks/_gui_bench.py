@@ -65,7 +65,10 @@ def header(title: str) -> None:
 
 def default_manifold(preset: str = "default"):
     """The synthetic talker's manifold from the explorer's cache (built and cached when missing)."""
-    from app.source_loading import cached_manifold_path, load_source
+    try:
+        from app.source_loading import cached_manifold_path, load_source
+    except ImportError:  # trees before app.source_loading (bench_gui_playback.py --tree)
+        from app.cli.explore import cached_manifold_path, load_source
 
     path = cached_manifold_path(preset)
     t = time.perf_counter()

@@ -50,20 +50,6 @@ import _gui_bench as gb  # noqa: E402
 from _playback_trace import CAUSES, frame_table, late_causes, PlaybackTrace  # noqa: E402
 
 
-def load_default(preset):
-    """The default talker's manifold through whichever loader the tree under test has."""
-    try:
-        from app.source_loading import cached_manifold_path, load_source
-    except ImportError:  # trees before app.source_loading
-        from app.cli.explore import cached_manifold_path, load_source
-    path = cached_manifold_path(preset)
-    t = time.perf_counter()
-    m, src = load_source(None, preset)
-    print(f"   manifold: synthetic talker '{preset}', {m.Fy_.shape[0]} frames, "
-          f"{'loaded from' if path.exists() else 'built; cache'} {path} ({time.perf_counter() - t:.1f} s)")
-    return m, src
-
-
 def run_loop(app, s, max_seconds):
     """Run the Qt event loop (as the explorer does) until playback stops or ``max_seconds`` pass."""
     from PySide6 import QtCore
@@ -160,7 +146,7 @@ def main():
 
     print(f"   explorer code: {os.path.dirname(os.path.dirname(os.path.abspath(app.__file__)))}")
     t_all = time.perf_counter()
-    m, src = load_default(args.preset)
+    m, src = gb.default_manifold(args.preset)  # through whichever loader the tree under test has
     app_, win = gb.open_window(m, src)
     c = m.corpus_
     u = max(c.utterances, key=lambda u: u.stop - u.start)
