@@ -44,36 +44,19 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _common import blas_kernel, current_rss_mb  # noqa: E402
 
 
-class _PeakSampler(threading.Thread):
-    """Highest VmRSS seen while running (sampled every ``interval`` s)."""
-
-    def __init__(self, interval=0.01):
-        super().__init__(daemon=True)
-        self.interval, self.peak, self._halt = interval, current_rss_mb(), threading.Event()
-
-    def run(self):
-        while not self._halt.is_set():
-            self.peak = max(self.peak, current_rss_mb())
-            time.sleep(self.interval)
-
-    def stop(self) -> float:
-        self._halt.set()
-        self.join()
-        self.peak = max(self.peak, current_rss_mb())
-        return self.peak
-
-
 def _worker_peak_mb():
     import resource
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-class _StagePeaks(_PeakSampler):
-    """A peak sampler that also keeps the peak of every stage the build reports (``progress``)."""
+class _StagePeaks(threading.Thread):
+    """Highest VmRSS seen while running (sampled every ``interval`` s), overall and in every
+    stage the build reports (``progress``)."""
 
     def __init__(self, interval=0.01):
-        super().__init__(interval)
+        super().__init__(daemon=True)
+        self.interval, self.peak, self._halt = interval, current_rss_mb(), threading.Event()
         self.stage, self.stages = "setup", {}
 
     def progress(self, stage, done, total):
@@ -87,6 +70,12 @@ class _StagePeaks(_PeakSampler):
             self.peak = max(self.peak, rss)
             self.stages[self.stage] = max(self.stages.get(self.stage, 0.0), rss)
             time.sleep(self.interval)
+
+    def stop(self) -> float:
+        self._halt.set()
+        self.join()
+        self.peak = max(self.peak, current_rss_mb())
+        return self.peak
 
 
 def measured_build(corpus, dask: str | None, *, save_to=None) -> dict:
