@@ -51,9 +51,10 @@ def cloud_subsample(labels, *, max_frames: int = DEFAULT_MAX_FRAMES, random_stat
     order = np.random.default_rng(random_state).permutation(N)
     lab = labels[order]
     by_state = np.argsort(lab, kind="stable")  # frames of each state, in random order
+    state_of = lab[by_state]  # the state of each of them (sorted)
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    rank = np.arange(N) - starts[lab[by_state]]  # position of each frame within its state
-    keep = order[by_state[rank < quota[lab[by_state]]]]
+    rank = np.arange(N) - starts[state_of]  # position of each frame within its state
+    keep = order[by_state[rank < quota[state_of]]]
     keep.sort()
     return keep.astype(np.int64)
 
