@@ -51,7 +51,7 @@ from engine._atomic import atomic_write
 from engine.embedding import pairwise_distance_block
 from engine.frame_blocks import BlockFrames
 from engine.progress import ProgressFn, report
-from engine.shape import orthonormal_basis, thin_svd
+from engine.shape import _kept_estimate, _moved_degrees, orthonormal_basis, thin_svd
 
 __all__ = ["DaskExecutor", "store_frame_blocks", "open_frame_blocks", "DEFAULT_BLOCK_FRAMES"]
 
@@ -335,16 +335,26 @@ class DaskExecutor:
         Q = orth(A_mat(rng.standard_normal((C, k + p)).astype(np.float32)))
         step += 1
         report(progress, "shape space", step, steps)
-        for _ in range(int(shape.n_iter)):
-            Z = orthonormal_basis(At_mat(Q))  # C x r: small, in-process, one BLAS thread
+        tol = float(shape.tol or 0.0)
+        previous, it = None, 0
+        while True:  # ShapeSpace.fit's loop: the same iterations and the same early stop
+            Bt = At_mat(Q)  # (C, k+p): B^T for this Q, and the next iteration's input
             step += 1
             report(progress, "shape space", step, steps)
-            Q = orth(A_mat(Z))
+            if it >= int(shape.n_iter):
+                break
+            if tol > 0:  # stop once an iteration no longer moves the kept components
+                estimate = _kept_estimate(Bt, k, float(shape.variance))
+                if previous is not None and _moved_degrees(previous, estimate) < tol:
+                    break
+                previous = estimate
+            Q = orth(A_mat(orthonormal_basis(Bt)))  # the C x r basis: small, in-process, one BLAS thread
+            it += 1
             step += 1
             report(progress, "shape space", step, steps)
-        B = At_mat(Q).T
-        step += 1
-        report(progress, "shape space", step, steps)
+        B = Bt.T
+        shape.n_iter_ = it
+        shape.n_range_ = k + p
         _, s, Vt = thin_svd(B.astype(np.float64))
         total = float(F.map_blocks(_centred_sumsq, mean32, chunks=((1,) * F.numblocks[0],), drop_axis=1,
                                    dtype=np.float64).sum().compute())

@@ -69,6 +69,8 @@ def test_dask_build_matches_in_process(dask_manifold, in_process):
     np.testing.assert_allclose(d.embedding_.explained_variance_[:3], m.embedding_.explained_variance_[:3],
                                rtol=1e-3)
     assert "_operator_factory" not in vars(d.embedding_)  # the Dask operator is not kept
+    # the same range finder: the same power iterations (early stop included) and range width
+    assert (d.shape_.n_iter_, d.shape_.n_range_) == (m.shape_.n_iter_, m.shape_.n_range_)
 
 
 def test_dask_projection_and_assignment_match(executor, in_process):
