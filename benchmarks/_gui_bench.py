@@ -71,9 +71,9 @@ def default_manifold(preset: str = "default"):
         from app.cli.explore import cached_manifold_path, load_source
 
     path = cached_manifold_path(preset)
+    how = "loaded from" if path.exists() else "built; cache"  # asked before loading writes the cache
     t = time.perf_counter()
     m, src = load_source(None, preset)
-    how = "loaded from" if path.exists() else "built; cache"
     print(f"   manifold: synthetic talker '{preset}', {m.Fy_.shape[0]} frames, {how} {path} "
           f"({time.perf_counter() - t:.1f} s)")
     return m, src
