@@ -51,7 +51,7 @@ from engine._atomic import atomic_write
 from engine.embedding import pairwise_distance_block
 from engine.frame_blocks import BlockFrames
 from engine.progress import ProgressFn, report
-from engine.shape import _kept_estimate, _moved_degrees, orthonormal_basis, thin_svd
+from engine.shape import _range_settled, orthonormal_basis, thin_svd
 
 __all__ = ["DaskExecutor", "store_frame_blocks", "open_frame_blocks", "DEFAULT_BLOCK_FRAMES"]
 
@@ -343,11 +343,9 @@ class DaskExecutor:
             report(progress, "shape space", step, steps)
             if it >= int(shape.n_iter):
                 break
-            if tol > 0:  # stop once an iteration no longer moves the kept components
-                estimate = _kept_estimate(Bt, k, float(shape.variance))
-                if previous is not None and _moved_degrees(previous, estimate) < tol:
-                    break
-                previous = estimate
+            settled, previous = _range_settled(Bt, k, float(shape.variance), tol, previous)
+            if settled:  # an iteration no longer moves the kept components
+                break
             Q = orth(A_mat(orthonormal_basis(Bt)))  # the C x r basis: small, in-process, one BLAS thread
             it += 1
             step += 1

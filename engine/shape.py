@@ -64,6 +64,18 @@ def _moved_degrees(a, b) -> float:
     return float(np.degrees(np.arccos(np.clip(cos.min(), -1.0, 1.0))))
 
 
+def _range_settled(Bt, k: int, variance: float, tol: float, previous):
+    """The range finder's early stop: ``(settled, estimate)`` for this iteration's ``Bt`` (C, r).
+
+    Settled when the kept components moved less than ``tol`` degrees since ``previous``
+    (the last call's estimate; None at first). ``tol <= 0``: never settled, no estimate.
+    """
+    if tol <= 0:
+        return False, None
+    estimate = _kept_estimate(Bt, k, variance)
+    return previous is not None and _moved_degrees(previous, estimate) < tol, estimate
+
+
 def orthonormal_basis(M):
     """Q of the reduced QR decomposition of ``M`` (n, r), same dtype, on one BLAS thread.
 
@@ -210,11 +222,9 @@ class ShapeSpace(BaseEstimator):
             report(progress, "shape space", step, total_steps)
             if it >= self.n_iter:
                 break
-            if tol > 0:  # stop once an iteration no longer moves the kept components
-                estimate = _kept_estimate(Bt, k, float(self.variance))
-                if previous is not None and _moved_degrees(previous, estimate) < tol:
-                    break
-                previous = estimate
+            settled, previous = _range_settled(Bt, k, float(self.variance), tol, previous)
+            if settled:  # an iteration no longer moves the kept components
+                break
             Q = orthonormal_basis(A_mat(orthonormal_basis(Bt)))
             it += 1
             step += 1
