@@ -93,9 +93,10 @@ def _user_message(exc: BaseException, *, doing: str = "open the file", path=None
         return text
     if isinstance(exc, Cancelled):
         return "Cancelled: nothing was changed."
-    if isinstance(exc, MemoryError):
-        return (f"There is not enough memory to {doing}. Close other programs, or choose a smaller file "
-                "(or fewer states).")
+    if isinstance(exc, MemoryError):  # the one out-of-memory text: the size asked for and what lowers it
+        from app.out_of_memory import memory_message
+
+        return memory_message(exc, doing=doing)
     if isinstance(exc, FileNotFoundError):
         return f"{name}: there is no such file. It may have been moved, renamed or deleted."
     if isinstance(exc, IsADirectoryError):

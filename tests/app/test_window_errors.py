@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from app.out_of_memory import MEMORY_HINT
 from app.user_messages import UserError, looks_technical, plain_errors, user_message
 
 TECHNICAL = ("BadZipFile", "allow_pickle", "Error", "Traceback", "Exception", "pickled", "KeyError", "zipfile")
@@ -57,7 +58,12 @@ def test_unexpected_failures_never_show_a_class_name():
     inner = user_message(TypeError("unsupported operand type(s) for +: 'int' and 'str'"), doing="synthesise")
     assert inner.startswith("Lipspace could not synthesise: something unexpected") and "operand" not in inner
     assert "no such file" in user_message(FileNotFoundError(2, "No such file or directory", "/data/y.npz"))
-    assert "not enough memory" in user_message(MemoryError())
+    # out of memory: the same text as a worker task's (app.out_of_memory.memory_message), with the size
+    oom = user_message(MemoryError("Unable to allocate 15.6 GiB for an array with shape (461000, 4540)"))
+    assert oom.startswith("Lipspace ran out of memory while trying to open the file: it needed 16.8 GB more at once")
+    assert oom.endswith(MEMORY_HINT) and not looks_technical(oom) and "allocate" not in oom
+    assert user_message(MemoryError(), doing="synthesise") == (
+        f"Lipspace ran out of memory while trying to synthesise. {MEMORY_HINT}")
     # a message the engine wrote for the user keeps its file, place and expectation
     plain = "/d/a.csv, line 3: expected 4 numbers, got 2"
     assert user_message(ValueError(plain)) == plain
