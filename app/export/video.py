@@ -89,15 +89,16 @@ def _mover(handle, faces):
 
     The mesh is drawn flat-shaded (as in the lip view), so VTK takes the normals from the
     triangles themselves; with smooth shading the vertex normals are recomputed in numpy
-    (the unit-face-normal average ``compute_normals`` gives, within 0.05 degrees). Markers
+    (:func:`app.scene.lips.point_normals`, the normals ``compute_normals`` gives). Markers
     and contour tubes use the handle's own ``update``.
     """
+    from app.scene.lips import point_normals
+
     mesh = handle.mesh
     if hasattr(handle, "contour") or faces is None or not len(faces) or "Normals" not in mesh.point_data:
         return handle.update
     smooth = handle.actor.GetProperty().GetInterpolationAsString() != "Flat"
     F = np.asarray(faces, np.int64)
-    corner = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
     n_points = mesh.n_points
     offset = np.asarray(handle.offset, np.float32)
 
@@ -108,20 +109,10 @@ def _mover(handle, faces):
         P = P + offset
         mesh.points[:] = P
         if smooth:
-            mesh.point_data["Normals"][:] = _vertex_normals(P, F, corner)
+            mesh.point_data["Normals"][:] = point_normals(P, F)
         mesh.Modified()
 
     return move
-
-
-def _vertex_normals(P, F, corner):
-    """Unit vertex normals: the average of the unit normals of the triangles around each point."""
-    fn = np.cross(P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]])
-    fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), np.finfo(np.float32).tiny)
-    w = np.concatenate([fn, fn, fn]).astype(np.float64)
-    n = np.stack([np.bincount(corner, weights=w[:, d], minlength=len(P)) for d in range(3)], 1)
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), np.finfo(np.float64).tiny)
-    return n
 
 
 class _Scene:

@@ -124,7 +124,10 @@ def _actor_primitives(actor, M, size, view_dir):
                     continue
                 if smooth and T.shape[1] == 3:
                     # as on screen: the shade interpolated over each triangle from its corners' normals
-                    vshade = 0.45 + 0.55 * np.abs(_vertex_normals(W, tri3) @ view_dir)
+                    # (the window's own normals: VTK's filter, unweighted, as app.scene.lips.point_normals)
+                    from app.scene.lips import point_normals
+
+                    vshade = 0.45 + 0.55 * np.abs(point_normals(W, np.asarray(tri3)) @ view_dir)
                     vc = col[T].copy()
                     vc[..., :3] = np.clip(vc[..., :3] * vshade[T][..., None], 0, 1)
                     out.append(("gouraud", p2, depth[T].mean(axis=1), vc))
@@ -142,17 +145,6 @@ def _actor_primitives(actor, M, size, view_dir):
             if faces:
                 out.append(("polys", faces, np.asarray(fdepth), np.asarray(fcol), edge_col if edges else None))
     return out, (float(depth.max()) if n else 0.0, float(depth.mean()) if n else 0.0)
-
-
-def _vertex_normals(W, triangles):
-    """Unit normals at the vertices: area-weighted sums of the faces around each, shape (n, 3)."""
-    T = np.asarray(triangles, dtype=np.intp).reshape(-1, 3)
-    fn = np.cross(W[T[:, 1]] - W[T[:, 0]], W[T[:, 2]] - W[T[:, 0]])
-    vn = np.zeros_like(W)
-    for j in range(3):
-        np.add.at(vn, T[:, j], fn)
-    nn = np.linalg.norm(vn, axis=1, keepdims=True)
-    return np.divide(vn, nn, out=np.zeros_like(vn), where=nn > 0)
 
 
 def _gouraud_artist(verts, colours, zorder):

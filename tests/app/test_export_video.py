@@ -3,17 +3,30 @@ import numpy as np
 import pytest
 
 
-def test_vertex_normals_match_vtk(app_manifold):
-    from app.export.video import _vertex_normals
-    from app.scene.lips import lip_mesh
+@pytest.mark.gui
+def test_fast_move_gives_vtks_normals(app_manifold):
+    """The renderer's per-frame move of a smooth lip mesh leaves VTK's normals filter's normals."""
+    import pyvista as pv
+
+    from app.export.video import _mover
+    from app.scene.lips import add_lips
 
     c = app_manifold.corpus_
-    P = c.points(57).astype(np.float32)
     F = np.asarray(c.faces, np.int64)
-    mesh = lip_mesh(P, F)
-    mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
-    n = _vertex_normals(P, F, np.concatenate([F[:, 0], F[:, 1], F[:, 2]]))
-    angle = np.degrees(np.arccos(np.clip((n * np.asarray(mesh.point_data["Normals"])).sum(1), -1, 1)))
+    pl = pv.Plotter(off_screen=True, window_size=(96, 64))
+    try:
+        h = add_lips(pl, c.points(0), F, offset=(5.0, 0.0, 0.0))
+        move = _mover(h, F)
+        assert move != h.update  # the fast path is the one taken
+        before = np.asarray(h.mesh.point_data["Normals"]).copy()
+        move(c.points(57))
+        ours = np.asarray(h.mesh.point_data["Normals"]).copy()
+        ref = pv.PolyData(h.mesh.points.copy(), h.mesh.faces.copy())
+        ref.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
+    finally:
+        pl.close()
+    assert np.abs(ours - before).max() > 0.05  # the frame moved the normals
+    angle = np.degrees(np.arccos(np.clip((ours * np.asarray(ref.point_data["Normals"])).sum(1), -1, 1)))
     assert angle.max() < 0.1
 
 

@@ -579,3 +579,37 @@ def test_vector_export_shades_smooth_surfaces_smoothly(can_render, tmp_path):
     assert b"/ShadingType 4" in pdf_s and b"/ShadingType 4" not in pdf_f   # a Gouraud mesh vs polygons
     assert n_s > 50 and n_f > 50 and b"/Subtype /Image" not in pdf_s
     assert step_f >= 3 and step_s <= 0.5 * step_f, (step_s, step_f)
+
+
+@pytest.mark.gui
+def test_vector_export_shades_a_smooth_surface_with_the_windows_normals(can_render):
+    """The Gouraud corners are shaded by VTK's point normals (unweighted mean of the face normals, as the
+    window draws them), not by area-weighted ones: a fold of a large and a small triangle tells them apart."""
+    import pyvista as pv
+
+    from app.figures.view_vector import _actor_primitives
+    from app.scene.projection import view_transform
+
+    P = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.1]], float)
+    mesh = pv.PolyData(P, np.array([3, 0, 1, 2, 3, 0, 3, 1]))
+    p = pv.Plotter(off_screen=True, window_size=(120, 120))
+    try:
+        actor = p.add_mesh(mesh, color=(0.8, 0.8, 0.8), smooth_shading=True)
+        p.camera_position = [(2.0, 3.0, 1.0), (0.2, 0.2, 0.0), (0, 0, 1)]
+        p.render()
+        cam = p.renderer.GetActiveCamera()
+        view_dir = np.subtract(cam.GetFocalPoint(), cam.GetPosition())
+        view_dir /= np.linalg.norm(view_dir)
+        prims, _ = _actor_primitives(actor, *view_transform(p), view_dir)
+    finally:
+        p.close()
+    (kind, _, _, vc), = [q for q in prims if q[0] == "gouraud"]
+    ref = mesh.compute_normals(cell_normals=False, split_vertices=False)
+    n_vtk = np.asarray(ref.point_data["Normals"], float)
+    fn = np.cross(P[[1, 3]] - P[0], P[[2, 1]] - P[0])   # the two faces' normals, length = 2 x area
+    n_area = fn.sum(0) / np.linalg.norm(fn.sum(0))       # area-weighted at the shared point 0
+    shade = lambda n: 0.8 * (0.45 + 0.55 * abs(n @ view_dir))  # noqa: E731
+    assert abs(shade(n_vtk[0]) - shade(n_area)) > 0.02        # the weighting shows at point 0
+    assert vc[0, 0, :3] == pytest.approx([shade(n_vtk[0])] * 3, abs=1e-5)   # face 0's corner at point 0
+    assert vc[1, 0, :3] == pytest.approx([shade(n_vtk[0])] * 3, abs=1e-5)   # face 1's corner at point 0
+    assert vc[0, 2, :3] == pytest.approx([shade(n_vtk[2])] * 3, abs=1e-5)
