@@ -138,8 +138,8 @@ class ContourHandle(LipsHandle):
         if P.shape[0] != self._n:
             raise ValueError(f"frame has {P.shape[0]} points, the lip markers are {self._n}")
         self.mesh.points[:] = self.contour.transform(P) + self.offset
-        self.mesh.point_data.pop("Normals", None)  # else VTK's normals filter keeps the old ones
-        self.mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
+        # the tube's triangles as add_lip_contour's normals filter ordered them: VTK's normals, in numpy
+        self.mesh.point_data["Normals"][:] = point_normals(self.mesh.points, self._triangles)
         self.mesh.Modified()
         self.markers.points[:] = P + self.offset
         self.markers.Modified()

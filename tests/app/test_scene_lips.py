@@ -37,6 +37,21 @@ def test_markers_with_roles_draw_a_labelled_contour(plotter):
         h.update(P[:3])
 
 
+def test_contour_tube_normals_follow_the_frame_as_vtks_normals_filter(plotter):
+    from app.scene import add_lips
+
+    roles, names = ["upper_lip", "lower_lip", "left_corner", "jaw"], ["UL", "LL", "ML", "JAW"]
+    h = add_lips(plotter, P, None, roles=roles, names=names, offset=(1.0, 0, 0))
+    first = np.asarray(h.mesh.point_data["Normals"]).copy()
+    for Q in (P + [0, 0, 2.0], P * [1.0, 0.4, 1.3], P + [[0, 3.0, 0], [0, -4.0, 2.0], [5.0, 0, 0], [0, 0, 0]]):
+        h.update(Q)
+        ours = np.asarray(h.mesh.point_data["Normals"]).copy()
+        ref = pv.PolyData(np.array(h.mesh.points), np.array(h.mesh.faces))
+        ref.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
+        np.testing.assert_allclose(ours, np.asarray(ref.point_data["Normals"]), atol=1e-4)
+    assert np.abs(ours - first).max() > 0.1  # the last frame's shape turned the normals
+
+
 def test_points_without_lip_roles_stay_spheres(plotter):
     from app.scene import ContourHandle, add_lips
 
