@@ -174,11 +174,17 @@ def _split_words(x, n_words) -> list[tuple[int, int]] | None:
     return bounds
 
 
-def phone_mnemonics(utterance) -> list[str]:
+def phone_mnemonics(utterance, spans=None) -> list[str]:
     """espeak-ng's phoneme for each phone of ``utterance`` (pauses included), with stress marks.
 
     A vowel carries ``'`` (primary) or ``,`` (secondary stress) as the CMU dictionary
     stresses it in its word. Phones are grouped into words by :func:`word_spans`.
+
+    Parameters
+    ----------
+    utterance : Utterance
+    spans : list of (word, start s, end s) or None
+        ``word_spans(utterance)`` when the caller has it already; computed when None.
 
     Returns
     -------
@@ -186,7 +192,7 @@ def phone_mnemonics(utterance) -> list[str]:
     """
     from engine.phonetics import _cmu
 
-    words = iter(word_spans(utterance))
+    words = iter(word_spans(utterance) if spans is None else spans)
     out: list[str] = []
     word_left = 0
     marks: list[str] = []
@@ -276,8 +282,11 @@ def _share_spans(src, dst, min_len):
     return np.array(src, np.float64)
 
 
-def _phones_audio(utterance, worker) -> tuple[np.ndarray, dict] | None:
-    """The phone method; None when espeak-ng's phone events do not follow the talker's phones."""
+def _phones_audio(utterance, worker, spans) -> tuple[np.ndarray, dict] | None:
+    """The phone method; None when espeak-ng's phone events do not follow the talker's phones.
+
+    ``spans``: ``word_spans(utterance)``.
+    """
     phones = utterance.phones
     duration = phones[-1].end if phones else 0.0
     out = np.zeros(int(round(duration * SAMPLE_RATE)), np.float32)
@@ -286,8 +295,8 @@ def _phones_audio(utterance, worker) -> tuple[np.ndarray, dict] | None:
         return out, {"method": "phones", "phones": 0, "stretch": np.zeros(0), "source": np.zeros(0),
                      "target": np.zeros(0)}
     k0, k1 = speech[0], speech[-1] + 1
-    mnem = phone_mnemonics(utterance)[k0:k1]
-    word_starts = {s for _, s, _ in word_spans(utterance)}
+    mnem = phone_mnemonics(utterance, spans)[k0:k1]
+    word_starts = {s for _, s, _ in spans}
     groups, prev_pause = [], True
     for p, m in zip(phones[k0:k1], mnem):
         if p.label == PAUSE or prev_pause or p.start in word_starts:
@@ -359,11 +368,12 @@ def utterance_audio(utterance, exe=None, *, method=None, worker=None) -> tuple[n
     method = method or audio_method()
     if method not in ("phones", "words"):
         raise ValueError(f"method must be 'phones' or 'words', got {method!r}")
+    spans = word_spans(utterance)  # once: both methods place the words by it
     if method == "phones":
         own = worker is None
         worker = worker or espeak_phones.EspeakWorker()
         try:
-            got = _phones_audio(utterance, worker)
+            got = _phones_audio(utterance, worker, spans)
         except espeak_phones.EspeakLibraryError:
             if espeak_path() is None and exe is None:
                 raise
@@ -373,12 +383,12 @@ def utterance_audio(utterance, exe=None, *, method=None, worker=None) -> tuple[n
                 worker.close()
         if got is not None:
             return got
-    return _words_audio(utterance, exe or _require_espeak())
+    return _words_audio(utterance, exe or _require_espeak(), spans)
 
 
-def _words_audio(utterance, exe) -> tuple[np.ndarray, dict]:
-    """The word method (espeak-ng program): each word stretched to its span in the talker's timing."""
-    spans = word_spans(utterance)
+def _words_audio(utterance, exe, spans) -> tuple[np.ndarray, dict]:
+    """The word method (espeak-ng program): each word stretched to its span (``word_spans(utterance)``)
+    in the talker's timing."""
     duration = utterance.phones[-1].end if utterance.phones else 0.0
     out = np.zeros(int(round(duration * SAMPLE_RATE)), np.float32)
     if not spans:

@@ -281,3 +281,25 @@ def test_a_hung_library_process_is_ended_with_a_clear_error(monkeypatch):
     assert time.perf_counter() - t0 < 10
     assert not w.running
     w.close()
+
+
+@needs_library
+@needs_espeak
+def test_a_sentence_is_split_into_words_once_whichever_method_speaks_it(talker, worker, monkeypatch):
+    u = talker.utterances[0]
+    calls = []
+    real = sa.word_spans
+
+    def counted(utt):
+        calls.append(utt.id)
+        return real(utt)
+
+    monkeypatch.setattr(sa, "word_spans", counted)
+    y, info = sa.utterance_audio(u, worker=worker, method="phones")
+    assert info["method"] == "phones" and calls == [u.id]
+    # the phone method giving up on this sentence falls back to the word method: still one split
+    monkeypatch.setattr(sa, "_match_events", lambda expected, events: None)
+    calls.clear()
+    y2, info2 = sa.utterance_audio(u, worker=worker, method="phones")
+    assert info2["method"] == "words" and info2["words"] == len(real(u)) and calls == [u.id]
+    assert len(y2) == len(y) and np.abs(y2).max() > 0.1
