@@ -65,41 +65,51 @@ def _open(path):
     return container
 
 
+def _frames(container, path, audio=None):
+    """Yield ``(index, rgb (H, W, 3) uint8)`` for each frame of the open ``container``'s video stream.
+
+    With ``audio`` (an :class:`_AudioTrack` of the same container), its stream's packets
+    are decoded in the same pass. Decoding errors become an :class:`ImportFormatError`
+    naming the frame (video) or saying the audio is damaged.
+    """
+    av = _require_av()
+    stream = container.streams.video[0]
+    stream.thread_type = "AUTO"
+    streams = [stream] + ([audio.stream] if audio is not None and audio.stream is not None else [])
+    k = 0
+    try:
+        for packet in container.demux(*streams):
+            if packet.stream.index != stream.index:
+                audio.add(packet, path)
+                continue
+            for frame in packet.decode():
+                yield k, frame.to_ndarray(format="rgb24")
+                k += 1
+    except av.error.FFmpegError as exc:
+        raise ImportFormatError(path, f"video data is damaged ({exc}); {k} frames could be decoded",
+                                frame=k) from None
+
+
 def iter_video_frames(path):
     """Yield ``(index, rgb (H, W, 3) uint8)`` for each frame of ``path``, decoding one at a time.
 
     The rate is :func:`video_rate`. Decoding errors become an
     :class:`ImportFormatError` naming the frame.
     """
-    av = _require_av()
     container = _open(path)
     try:
-        stream = container.streams.video[0]
-        stream.thread_type = "AUTO"
-        k = 0
-        try:
-            for frame in container.decode(stream):
-                yield k, frame.to_ndarray(format="rgb24")
-                k += 1
-        except av.error.FFmpegError as exc:
-            raise ImportFormatError(path, f"video data is damaged ({exc}); {k} frames could be decoded",
-                                    frame=k) from None
+        yield from _frames(container, path)
     finally:
         container.close()
 
 
-def video_info(path) -> tuple[float, int]:
-    """``(rate, frames)``: the video stream's frame rate (Hz; its average rate, else its guessed
-    rate) and its stated frame count (else duration x rate; 0 when unknown, for progress only)."""
-    container = _open(path)
-    try:
-        st = container.streams.video[0]
-        r = st.average_rate or st.guessed_rate or st.base_rate
-        n = int(st.frames or 0)
-        if not n and st.duration and st.time_base and r:
-            n = int(float(st.duration * st.time_base) * float(r))
-    finally:
-        container.close()
+def _stream_info(container, path) -> tuple[float, int]:
+    """:func:`video_info` of an open container."""
+    st = container.streams.video[0]
+    r = st.average_rate or st.guessed_rate or st.base_rate
+    n = int(st.frames or 0)
+    if not n and st.duration and st.time_base and r:
+        n = int(float(st.duration * st.time_base) * float(r))
     if not r or float(r) <= 0:
         raise ImportFormatError(path, "the video stream states no frame rate; expected a constant-rate video")
     rate = float(r)
@@ -107,30 +117,32 @@ def video_info(path) -> tuple[float, int]:
     return (float(k) if abs(rate - k) < 1e-3 * k else rate), n
 
 
+def video_info(path) -> tuple[float, int]:
+    """``(rate, frames)``: the video stream's frame rate (Hz; its average rate, else its guessed
+    rate) and its stated frame count (else duration x rate; 0 when unknown, for progress only)."""
+    container = _open(path)
+    try:
+        return _stream_info(container, path)
+    finally:
+        container.close()
+
+
 def video_rate(path) -> float:
     """The video stream's frame rate (Hz), see :func:`video_info`."""
     return video_info(path)[0]
 
 
-def track_video(path, *, tracker=None, progress=None):
-    """Track the face in every frame of ``path``.
-
-    Returns
-    -------
-    landmarks : ndarray (N, P, 3) float32
-        :data:`engine.io.facemesh.TRACKED_POINTS` per frame (NaN where no face was found).
-    found : ndarray (N,) bool
-    """
+def _track(frames, path, total, tracker, progress):
+    """:func:`track_video` over ``frames`` (``(index, rgb)`` pairs); ``total``: the stated frame count."""
     from engine.io.facemesh import TRACKED_POINTS, FaceTracker
     from engine.progress import report
 
-    total = video_info(path)[1] if progress is not None else 0
     own = tracker is None
     tracker = tracker or FaceTracker()
     rows, found = [], []
     nan = np.full((len(TRACKED_POINTS), 3), np.nan, dtype=np.float32)
     try:
-        for k, rgb in iter_video_frames(path):
+        for k, rgb in frames:
             lm = tracker.track(rgb)
             rows.append(nan if lm is None else lm)
             found.append(lm is not None)
@@ -143,6 +155,23 @@ def track_video(path, *, tracker=None, progress=None):
         raise ImportFormatError(path, "holds no decodable video frames; expected a video of a face")
     report(progress, f"tracking the face in {Path(path).name}", len(rows), len(rows))
     return np.stack(rows), np.asarray(found, dtype=bool)
+
+
+def track_video(path, *, tracker=None, progress=None):
+    """Track the face in every frame of ``path``.
+
+    Returns
+    -------
+    landmarks : ndarray (N, P, 3) float32
+        :data:`engine.io.facemesh.TRACKED_POINTS` per frame (NaN where no face was found).
+    found : ndarray (N,) bool
+    """
+    container = _open(path)
+    try:
+        total = _stream_info(container, path)[1] if progress is not None else 0
+        return _track(_frames(container, path), path, total, tracker, progress)
+    finally:
+        container.close()
 
 
 def find_gaps(found) -> list[tuple[int, int]]:
@@ -190,27 +219,60 @@ def segments(found, max_bridge: int) -> tuple[list[tuple[int, int]], list[tuple[
     return parts, gaps
 
 
-def read_audio_track(path, rate: int = AUDIO_RATE) -> np.ndarray | None:
-    """The video's first audio stream as mono int16 at ``rate`` Hz, or None when it has none."""
-    av = _require_av()
-    container = _open(path)
-    try:
-        if not container.streams.audio:
-            return None
-        stream = container.streams.audio[0]
-        res = av.AudioResampler(format="s16", layout="mono", rate=int(rate))
-        chunks = []
+class _AudioTrack:
+    """The first audio stream of an open container (``stream``, None when it has none), decoded
+    packet by packet to mono int16 at ``rate`` Hz."""
+
+    def __init__(self, container, rate: int):
+        av = _require_av()
+        self.stream = container.streams.audio[0] if container.streams.audio else None
+        self._resampler = av.AudioResampler(format="s16", layout="mono", rate=int(rate))
+        self._chunks = []
+
+    def _keep(self, frame):
+        for out in self._resampler.resample(frame):
+            self._chunks.append(out.to_ndarray().reshape(-1))
+
+    def add(self, packet, path) -> None:
+        """Decode one packet of :attr:`stream`."""
+        av = _require_av()
         try:
-            for frame in container.decode(stream):
-                for out in res.resample(frame):
-                    chunks.append(out.to_ndarray().reshape(-1))
-            for out in res.resample(None):
-                chunks.append(out.to_ndarray().reshape(-1))
+            for frame in packet.decode():
+                self._keep(frame)
         except av.error.FFmpegError as exc:
             raise ImportFormatError(path, f"audio data is damaged ({exc})") from None
+
+    def samples(self, path) -> np.ndarray | None:
+        """All samples decoded (the resampler flushed), or None when there is no audio stream."""
+        if self.stream is None:
+            return None
+        av = _require_av()
+        try:
+            self._keep(None)
+        except av.error.FFmpegError as exc:
+            raise ImportFormatError(path, f"audio data is damaged ({exc})") from None
+        return np.concatenate(self._chunks).astype(np.int16) if self._chunks else np.zeros(0, np.int16)
+
+    def read(self, container, path) -> np.ndarray | None:
+        """Decode the whole stream from ``container`` (nothing else decoded) and return :meth:`samples`."""
+        if self.stream is None:
+            return None
+        av = _require_av()
+        try:
+            for packet in container.demux(self.stream):
+                self.add(packet, path)
+        except av.error.FFmpegError as exc:
+            raise ImportFormatError(path, f"audio data is damaged ({exc})") from None
+        return self.samples(path)
+
+
+def read_audio_track(path, rate: int = AUDIO_RATE) -> np.ndarray | None:
+    """The video's first audio stream as mono int16 at ``rate`` Hz, or None when it has none."""
+    container = _open(path)
+    try:
+        return _AudioTrack(container, rate).read(container, path)
     finally:
         container.close()
-    return np.concatenate(chunks).astype(np.int16) if chunks else np.zeros(0, np.int16)
 
 
 def _span(a, b, rate):
@@ -333,9 +395,19 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
     bridge_s = float(bridge_s)
     if not np.isfinite(bridge_s) or bridge_s < 0:
         raise ValueError(f"bridge_s={bridge_s!r}; expected a duration in seconds >= 0 (default {DEFAULT_BRIDGE_S})")
-    native = video_rate(path)
-    native = check_rate(path, native, rate)
-    lm, found = track_video(path, tracker=tracker, progress=progress) if landmarks is None else landmarks
+    container = _open(path)  # once: the rate, the frames tracked and the audio track in one pass
+    try:
+        native, total = _stream_info(container, path)
+        native = check_rate(path, native, rate)
+        track = _AudioTrack(container, audio_rate) if audio_dir is not None else None
+        if landmarks is None:
+            lm, found = _track(_frames(container, path, track), path, total, tracker, progress)
+            pcm = track.samples(path) if track is not None else None
+        else:
+            lm, found = landmarks
+            pcm = track.read(container, path) if track is not None else None
+    finally:
+        container.close()
     n = len(found)
     if not found.any():
         raise ImportFormatError(path, f"no face found in any of its {n} frames; expected a video of one face seen "
@@ -372,7 +444,6 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
             f"{float(pose.interocular_mm):g} mm")
     history.append(f"registration: {desc}")
     phones, _ = resolve_alignment(path, alignment, tier=tier)
-    pcm = read_audio_track(path, audio_rate) if audio_dir is not None else None
     if audio_dir is not None and pcm is None:
         history.append(f"{path.name}: no audio track")
     utts, rows = [], []

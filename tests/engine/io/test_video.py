@@ -104,6 +104,36 @@ def test_audio_track_round_trips(videos):
     assert np.abs(stored.astype(int) - pcm[:len(stored)]).max() == 0
 
 
+def _wav(path):
+    import scipy.io.wavfile
+
+    rate, x = scipy.io.wavfile.read(path)
+    assert rate == SR and len(x) == N / RATE * SR
+    return x
+
+
+def test_a_video_is_opened_once_for_its_rate_frames_and_audio(videos, tmp_path, monkeypatch):
+    import av
+
+    from engine.io.video import track_video
+
+    opened = []
+    real_open = av.open
+    monkeypatch.setattr(av, "open", lambda *a, **k: opened.append(a[0]) or real_open(*a, **k))
+    path = videos["dir"] / "moving.mp4"
+    c = read_video(path, audio_dir=tmp_path / "a")
+    assert opened == [str(path)]
+    np.testing.assert_array_equal(c.frames, videos["moving"].frames)
+    np.testing.assert_array_equal(_wav(tmp_path / "a" / "moving.wav"), _wav(videos["moving"].utterances[0].audio))
+    # already tracked (a folder's videos): the rate and the audio, still one open
+    opened.clear()
+    tracked = track_video(path)
+    again = read_video(path, audio_dir=tmp_path / "b", landmarks=tracked)
+    assert opened == [str(path)] * 2
+    np.testing.assert_array_equal(again.frames, c.frames)
+    np.testing.assert_array_equal(_wav(tmp_path / "b" / "moving.wav"), _wav(tmp_path / "a" / "moving.wav"))
+
+
 def test_no_face_corrupt_and_empty_files(tmp_path):
     rng = np.random.default_rng(0)
     frames = (rng.integers(0, 255, (8, 64, 64, 3))).astype(np.uint8)
