@@ -11,7 +11,13 @@ A :class:`PlaybackTrace` attached to the explorer's lip view records, on one clo
 * the manifold view's renders (the other view sharing the GUI thread);
 * Python's garbage collections (``gc.callbacks``: start, stop, generation);
 * the GUI thread's CPU time and run-queue wait (``/proc/thread-self/schedstat``: time it
-  was runnable but another process held the core) at each tick and each swap.
+  was runnable but another process held the core) at each tick and each swap;
+* at each tick and each swap, what happened on the machine outside the process
+  (:func:`read_counters`): the core the GUI thread is on, its exact CPU clock
+  (``time.thread_time``), its user / system ticks and page faults
+  (``/proc/thread-self/stat``), each core's **steal** (time the hypervisor ran something
+  else on that virtual core, ``/proc/stat``) and interrupt ticks, and the kernel's page
+  migration, compaction and huge-page counters (``/proc/vmstat``).
 
 :func:`frame_table` turns the records into one row per distinct frame shown, and
 :func:`late_causes` says, for each frame more than one period late at its swap, which of
@@ -20,15 +26,93 @@ the recorded causes took the most of its delay (pure numpy: tested without Qt).
 from __future__ import annotations
 
 import gc
+import os
 import threading
 import time
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["PlaybackTrace", "frame_table", "late_causes", "CAUSES", "read_schedstat"]
+__all__ = ["PlaybackTrace", "frame_table", "late_causes", "long_frames", "CAUSES", "read_schedstat",
+           "read_counters", "Counters", "LONG_FRAME_CPU_S"]
 
 #: causes of a late frame, in the order they are reported
-CAUSES = ("gc", "preempted", "other view", "long render", "long compose", "queued")
+CAUSES = ("gc", "preempted", "steal", "other view", "long render", "long compose", "queued")
+
+#: a frame whose GUI thread used more CPU than this between its choice and its swap is a "long frame"
+#: (the per-frame median is about 6 ms)
+LONG_FRAME_CPU_S = 0.040
+
+#: /proc/vmstat counters read with each tick and swap (page migration, compaction, huge pages)
+VMSTAT_KEYS = ("pgmigrate_success", "compact_stall", "thp_fault_alloc", "thp_collapse_alloc", "thp_split_pmd")
+
+
+class Counters(NamedTuple):
+    """One reading of the GUI thread's and the machine's counters (:func:`read_counters`).
+
+    ``processor`` is the core the thread last ran on; ``thread_cpu`` its CPU clock (s,
+    exact); ``utime`` / ``stime`` its user / system CPU in clock ticks' seconds (10 ms
+    steps); ``minflt`` / ``majflt`` its page faults; ``steal`` and ``irq`` per core (s,
+    10-ms steps of ``/proc/stat``: hypervisor steal, and interrupt + softirq ticks);
+    ``vm`` the :data:`VMSTAT_KEYS` counters.
+    """
+
+    processor: int
+    thread_cpu: float
+    utime: float
+    stime: float
+    minflt: int
+    majflt: int
+    steal: tuple
+    irq: tuple
+    vm: tuple
+
+
+def parse_proc_stat(text: str, hz: float = 100.0) -> tuple[tuple, tuple]:
+    """(steal per core, irq + softirq per core), seconds, from the text of ``/proc/stat``.
+
+    Each ``cpuN`` line is ``user nice system idle iowait irq softirq steal ...`` in
+    ``1/hz`` s (USER_HZ); core N's values are at index N.
+    """
+    steal, irq = {}, {}
+    for line in text.splitlines():
+        if line.startswith("cpu") and len(line) > 3 and line[3].isdigit():
+            f = line.split()
+            n = int(f[0][3:])
+            irq[n] = (int(f[6]) + int(f[7])) / hz
+            steal[n] = int(f[8]) / hz
+    n = max(steal) + 1 if steal else 0
+    return tuple(steal.get(i, 0.0) for i in range(n)), tuple(irq.get(i, 0.0) for i in range(n))
+
+
+def parse_task_stat(text: str, hz: float = 100.0) -> tuple[int, float, float, int, int]:
+    """(processor, utime s, stime s, minflt, majflt) from the text of ``/proc/<pid>/task/<tid>/stat``.
+
+    Fields after the parenthesised command name: state is field 3, minflt 10, majflt 12,
+    utime 14, stime 15, processor 39 (proc(5) numbering).
+    """
+    rest = text[text.rindex(")") + 2:].split()
+    return int(rest[36]), int(rest[11]) / hz, int(rest[12]) / hz, int(rest[7]), int(rest[9])
+
+
+def read_counters() -> Counters | None:
+    """The calling thread's and the machine's counters now (None where /proc cannot be read)."""
+    hz = float(os.sysconf("SC_CLK_TCK")) if hasattr(os, "sysconf") else 100.0
+    try:
+        cpu = time.thread_time()
+        with open("/proc/thread-self/stat") as fh:
+            proc, ut, st, mf, jf = parse_task_stat(fh.read(), hz)
+        with open("/proc/stat") as fh:
+            steal, irq = parse_proc_stat(fh.read(), hz)
+        vm = dict.fromkeys(VMSTAT_KEYS, 0)
+        with open("/proc/vmstat") as fh:
+            for line in fh:
+                key, _, val = line.partition(" ")
+                if key in vm:
+                    vm[key] = int(val)
+    except (OSError, ValueError, IndexError):
+        return None
+    return Counters(proc, cpu, ut, st, mf, jf, steal, irq, tuple(vm[k] for k in VMSTAT_KEYS))
 
 
 def read_schedstat(path: str = "/proc/thread-self/schedstat") -> tuple[float, float]:
@@ -85,9 +169,11 @@ class PlaybackTrace:
     """
 
     def __init__(self):
-        self.ticks = []  # (t, frame chosen or None, look-ahead s, planned t or nan, thread cpu, run wait)
+        # (t, frame chosen or None, look-ahead s, planned t or nan, thread cpu, run wait, helper wait,
+        #  X server wait, Counters or None)
+        self.ticks = []
         self.render_start, self.render_end = [], []
-        self.swaps = []  # (t, thread cpu, run wait)
+        self.swaps = []  # (t, thread cpu, run wait, helper wait, X server wait, Counters or None)
         self.m_start, self.m_end = [], []
         self.gcs = []  # (t start, t stop, generation)
         self._gc_t0 = None
@@ -120,8 +206,9 @@ class PlaybackTrace:
             def frame(clock):
                 t = time.perf_counter()
                 cpu, wait = read_schedstat()
+                counters = read_counters()
                 k = original(clock)
-                trace.ticks.append((t, k, clock.latency_s, trace._planned, cpu, wait, *trace.helpers()))
+                trace.ticks.append((t, k, clock.latency_s, trace._planned, cpu, wait, *trace.helpers(), counters))
                 trace.clock_start = (clock.t0, clock.start_frame)
                 trace._planned = float("nan")
                 return k
@@ -148,7 +235,7 @@ class PlaybackTrace:
 
         def on_swap():
             t = time.perf_counter()
-            self.swaps.append((t, *read_schedstat(), *self.helpers()))
+            self.swaps.append((t, *read_schedstat(), *self.helpers(), read_counters()))
 
         lv.plotter.interactor.frameSwapped.connect(on_swap)
         self._undo.append(lambda: lv.plotter.interactor.frameSwapped.disconnect(on_swap))
@@ -174,13 +261,13 @@ def frame_table(ticks, render_start, render_end, swaps, m_start, m_end, gcs, *, 
 
     Parameters
     ----------
-    ticks : sequence of (t, k, lookahead_s, planned_t, cpu_s, wait_s[, helper_wait_s, x_wait_s])
+    ticks : sequence of (t, k, lookahead_s, planned_t, cpu_s, wait_s[, helper_wait_s, x_wait_s[, counters]])
         Playback clock calls (``k`` None at the end); the GUI thread's cumulative CPU and
         run-queue wait then, optionally the largest cumulative wait of one helper thread
-        (the rasteriser's) and the X server's.
+        (the rasteriser's) and the X server's, and a :class:`Counters` reading (or None).
     render_start, render_end : sequence of float
         The lip view's VTK render start and end times (paired in order).
-    swaps : sequence of (t, cpu_s, wait_s[, helper_wait_s, x_wait_s])
+    swaps : sequence of (t, cpu_s, wait_s[, helper_wait_s, x_wait_s[, counters]])
         The lip view's ``frameSwapped`` times with the same counters then.
     m_start, m_end : sequence of float
         The manifold view's render start and end times.
@@ -200,10 +287,19 @@ def frame_table(ticks, render_start, render_end, swaps, m_start, m_end, gcs, *, 
         swap, s), ``other_view``, ``gc`` (s of manifold renders / collections between
         choice and swap), ``run_wait`` (s the GUI thread waited for a core between choice
         and swap), ``helper_wait`` (the same for the helper thread that waited most, plus
-        the X server), ``cpu`` (s of GUI-thread CPU between choice and swap).
+        the X server), ``cpu`` (s of GUI-thread CPU between choice and swap). From the
+        :class:`Counters` readings (nan without them), between choice and swap:
+        ``thread_cpu`` (the GUI thread's CPU clock, s), ``utime`` / ``stime`` (its user /
+        system CPU, 10-ms steps), ``minflt``, ``steal`` (s of hypervisor steal on the
+        core(s) the GUI thread was on at choice and at swap; 10-ms steps), ``steal_all``
+        (all cores), ``irq`` (interrupt ticks' s on those cores), ``migrated`` (1 when the
+        two cores differ), ``core`` (the core at the swap) and ``vm_<key>`` for each of
+        :data:`VMSTAT_KEYS` (machine-wide).
     """
     def pad(row, n):
-        return tuple(row) + (0.0,) * (n - len(row))
+        row = tuple(row)
+        counters = row[n] if len(row) > n else None
+        return row[:n] + (0.0,) * (n - len(row[:n])) + (counters,)
 
     rs = np.asarray(render_start, float)
     re = np.asarray(render_end, float)
@@ -232,11 +328,12 @@ def frame_table(ticks, render_start, render_end, swaps, m_start, m_end, gcs, *, 
     rows = sorted(first.items(), key=lambda kv: kv[1][0][0])
     out = {key: np.full(len(rows), np.nan) for key in
            ("frame", "swap", "lag", "chosen", "lookahead", "timer_late", "queue", "render", "compose",
-            "other_view", "gc", "run_wait", "helper_wait", "cpu")}
+            "other_view", "gc", "run_wait", "helper_wait", "cpu", "thread_cpu", "utime", "stime", "minflt",
+            "steal", "steal_all", "irq", "migrated", "core") + tuple(f"vm_{k}" for k in VMSTAT_KEYS)}
     gs = [g[0] for g in gcs]
     ge = [g[1] for g in gcs]
-    for i, (k, ((sw, cpu, wait, hw, xw), tick, r0, r1)) in enumerate(rows):
-        t, _, la, planned, c0, w0, hw0, xw0 = tick
+    for i, (k, ((sw, cpu, wait, hw, xw, n1), tick, r0, r1)) in enumerate(rows):
+        t, _, la, planned, c0, w0, hw0, xw0, n0 = tick
         out["frame"][i] = k
         out["swap"][i] = sw
         out["lag"][i] = (sw - t0) * rate - k
@@ -251,6 +348,19 @@ def frame_table(ticks, render_start, render_end, swaps, m_start, m_end, gcs, *, 
         out["run_wait"][i] = wait - w0
         out["helper_wait"][i] = (hw - hw0) + (xw - xw0)
         out["cpu"][i] = cpu - c0
+        if n0 is not None and n1 is not None:
+            cores = sorted({n0.processor, n1.processor})
+            out["thread_cpu"][i] = n1.thread_cpu - n0.thread_cpu
+            out["utime"][i] = n1.utime - n0.utime
+            out["stime"][i] = n1.stime - n0.stime
+            out["minflt"][i] = n1.minflt - n0.minflt
+            out["steal"][i] = sum(n1.steal[c] - n0.steal[c] for c in cores if c < min(len(n0.steal), len(n1.steal)))
+            out["steal_all"][i] = sum(n1.steal) - sum(n0.steal)
+            out["irq"][i] = sum(n1.irq[c] - n0.irq[c] for c in cores if c < min(len(n0.irq), len(n1.irq)))
+            out["migrated"][i] = float(len(cores) > 1)
+            out["core"][i] = n1.processor
+            for j, key in enumerate(VMSTAT_KEYS):
+                out[f"vm_{key}"][i] = n1.vm[j] - n0.vm[j]
     return out
 
 
@@ -260,7 +370,9 @@ def late_causes(table: dict, *, rate: float, late: float = 1.0) -> list[str]:
     The delay of a frame is the time from its choice to its swap beyond the look-ahead
     it was chosen with. Candidate shares of it: ``gc`` (collections between choice and
     swap), ``preempted`` (the GUI thread, the helper thread that waited most and the X
-    server runnable but waiting for a core: other processes held it), ``other view``
+    server runnable but waiting for a core: other processes held it), ``steal`` (the
+    hypervisor ran something else on the GUI thread's core: its steal counter, in 10-ms
+    steps, between choice and swap; absent readings count 0), ``other view``
     (the manifold view rendering in between), ``long render`` and ``long compose`` (the
     lip render, or compose + swap, beyond their medians over the run), ``queued`` (choice
     -> render start beyond its median, less the collections and other view's renders in
@@ -287,6 +399,7 @@ def late_causes(table: dict, *, rate: float, late: float = 1.0) -> list[str]:
     med = {key: float(np.nanmedian(table[key])) for key in ("queue", "render", "compose")}
     helper = np.nan_to_num(np.asarray(table.get("helper_wait", np.zeros(len(lag))), float))
     run_wait = np.nan_to_num(np.asarray(table["run_wait"], float))
+    steal = np.nan_to_num(np.asarray(table.get("steal", np.zeros(len(lag))), float))
     causes = []
     for i in idx:
         gc_s = table["gc"][i]
@@ -294,6 +407,7 @@ def late_causes(table: dict, *, rate: float, late: float = 1.0) -> list[str]:
         share = {
             "gc": gc_s,
             "preempted": run_wait[i] + helper[i],
+            "steal": steal[i],
             "other view": other,
             "long render": table["render"][i] - med["render"],
             "long compose": table["compose"][i] - med["compose"],
@@ -301,3 +415,53 @@ def late_causes(table: dict, *, rate: float, late: float = 1.0) -> list[str]:
         }
         causes.append(max(CAUSES, key=lambda c: (share[c], -CAUSES.index(c))))
     return causes
+
+
+def long_frames(table: dict, *, threshold_s: float = LONG_FRAME_CPU_S) -> list[dict]:
+    """The frames whose GUI thread used more than ``threshold_s`` of CPU between choice and swap.
+
+    For each, what the counters say about where that CPU went: the thread's own CPU
+    (its exact clock, ``thread_cpu``, or the schedstat ``cpu`` without it), its excess
+    over the median frame's, the steal on its core in the same interval, and whether
+    that steal is enough to explain the excess (``steal_explains``: steal >= excess
+    minus one 10-ms step of the counter). The kernel here subtracts steal from a
+    thread's CPU clock (``CONFIG_PARAVIRT_TIME_ACCOUNTING``), so steal that was
+    accounted cannot show as the thread's own CPU; a long frame with no steal to
+    match is CPU the kernel charged to the thread.
+
+    Parameters
+    ----------
+    table : dict
+        From :func:`frame_table`.
+    threshold_s : float
+        CPU seconds between choice and swap above which a frame is long.
+
+    Returns
+    -------
+    list of dict
+        One per long frame, in the order shown, with ``index`` (row of the table),
+        ``frame``, ``lag``, ``chosen`` (time), ``latency`` (choice -> swap, s), ``cpu``, ``excess``,
+        ``utime``, ``stime``, ``steal``, ``steal_all``, ``irq``, ``run_wait``, ``minflt``,
+        ``core``, ``migrated``, ``steal_explains`` and the ``vm_*`` deltas (s and counts;
+        nan where a reading is missing).
+    """
+    cpu = np.asarray(table["thread_cpu"], float)
+    if not np.isfinite(cpu).any():
+        cpu = np.asarray(table["cpu"], float)
+    if not np.isfinite(cpu).any():
+        return []
+    median = float(np.nanmedian(cpu))
+    out = []
+    for i in np.flatnonzero(np.nan_to_num(cpu) > threshold_s):
+        excess = cpu[i] - median
+        steal = float(table["steal"][i])
+        row = {"index": int(i), "frame": int(table["frame"][i]), "lag": float(table["lag"][i]),
+               "chosen": float(table["chosen"][i]), "latency": float(table["swap"][i] - table["chosen"][i]),
+               "cpu": float(cpu[i]), "excess": excess,
+               "steal_explains": bool(np.isfinite(steal) and steal >= excess - 0.010)}
+        for key in ("utime", "stime", "steal", "steal_all", "irq", "run_wait", "minflt", "core", "migrated"):
+            row[key] = float(table[key][i])
+        for key in VMSTAT_KEYS:
+            row[f"vm_{key}"] = float(table[f"vm_{key}"][i])
+        out.append(row)
+    return out

@@ -47,7 +47,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _gui_bench as gb  # noqa: E402
-from _playback_trace import CAUSES, frame_table, late_causes, PlaybackTrace  # noqa: E402
+from _playback_trace import CAUSES, LONG_FRAME_CPU_S, frame_table, late_causes, long_frames, PlaybackTrace  # noqa: E402
 
 
 def run_loop(app, s, max_seconds):
@@ -97,6 +97,13 @@ def play_once(app, win, max_seconds):
                       trace.gcs, t0=t0, rate=rate)
     ks, ts, lag = tab["frame"], tab["swap"], tab["lag"]
     causes = late_causes(tab, rate=rate)
+    longs = long_frames(tab)
+    for lf in longs:
+        lf["cause"] = causes[int(np.sum(tab["lag"][:lf["index"]] > 1))] if lf["lag"] > 1 else "on time"
+    # steal over the whole playback, all cores: first tick's reading to the last swap's
+    readings = [x[8] for x in trace.ticks if len(x) > 8 and x[8] is not None] + \
+        [x[5] for x in trace.swaps if len(x) > 5 and x[5] is not None]
+    steal_s = (sum(readings[-1].steal) - sum(readings[0].steal)) if len(readings) > 1 else float("nan")
     # held lag: the clock when the next frame replaced this one (or playback ended)
     t_next = np.append(ts[1:], min(t_end, t0 + n / rate))
     held = (t_next - t0) * rate - ks
@@ -126,7 +133,23 @@ def play_once(app, win, max_seconds):
             "press_ms": 1e3 * (t0 - t_press),
             # what the user sees of the start: Play pressed -> the first frame after frame 0 on screen
             "first_move_ms": 1e3 * (float(ts[np.flatnonzero(ks > 0)[0]]) - t_press) if (ks > 0).any() else float("nan"),
-            "cpu": cpu, "cpu_ms": 1e3 * cpu / max(len(ks), 1), "load": (load0 + os.getloadavg()[0]) / 2}
+            "cpu": cpu, "cpu_ms": 1e3 * cpu / max(len(ks), 1), "load": (load0 + os.getloadavg()[0]) / 2,
+            "longs": longs, "steal_s": steal_s, "steal_late": 1e3 * np.nan_to_num(tab["steal"][late]),
+            "thread_cpu_med": 1e3 * pct(tab["thread_cpu"], 50), "thread_cpu_p99": 1e3 * pct(tab["thread_cpu"], 99)}
+
+
+def _long_line(lf) -> str:
+    """One printed line for a long frame (:func:`_playback_trace.long_frames`)."""
+    vm = ", ".join(f"{k[3:]} {lf[k]:.0f}" for k in lf if k.startswith("vm_") and lf[k])
+    return (f"        long frame {lf['frame']} ({lf['cause']}, lag {lf['lag']:.2f}; chosen at monotonic "
+            f"{lf['chosen']:.3f} s): chosen->swap "
+            f"{1e3 * lf['latency']:.0f} ms, own CPU {1e3 * lf['cpu']:.0f} ms ({1e3 * lf['excess']:+.0f} over the "
+            f"median; user {1e3 * lf['utime']:.0f} / system {1e3 * lf['stime']:.0f} ms in 10-ms ticks), "
+            f"steal on its core {1e3 * lf['steal']:.0f} ms (all cores {1e3 * lf['steal_all']:.0f}), interrupt "
+            f"ticks {1e3 * lf['irq']:.0f} ms, waited for a core {1e3 * lf['run_wait']:.0f} ms, {lf['minflt']:.0f} "
+            f"page faults, core {lf['core']:.0f}{' (migrated)' if lf['migrated'] else ''}; machine: "
+            f"{vm or 'no page migration, compaction or huge-page events'}; "
+            + ("steal covers the excess" if lf["steal_explains"] else "steal does NOT cover the excess"))
 
 
 def main():
@@ -183,8 +206,14 @@ def main():
         print("      late frames by cause: " + ", ".join(f"{c} {n}" for c, n in x["causes"].items())
               + "; per late frame, ms (GUI thread waited for a core / rasteriser thread + X server waited / "
               "GUI CPU / chosen->swap / look-ahead): "
-              + " ".join(f"{w:.0f}/{h:.0f}/{c:.0f}/{d:.0f}/{la:.0f}" for w, h, c, d, la in x["late_wait_cpu"][:10]),
-              flush=True)
+              + " ".join(f"{w:.0f}/{h:.0f}/{c:.0f}/{d:.0f}/{la:.0f}" for w, h, c, d, la in x["late_wait_cpu"][:10])
+              + "; steal on the GUI thread's core per late frame, ms: "
+              + " ".join(f"{v:.0f}" for v in x["steal_late"][:10]), flush=True)
+        print(f"      GUI thread CPU choice->swap (its clock) median {x['thread_cpu_med']:.1f} ms, p99 "
+              f"{x['thread_cpu_p99']:.1f} ms; steal on all cores during the playback {1e3 * x['steal_s']:.0f} ms; "
+              f"long frames (GUI CPU > {1e3 * LONG_FRAME_CPU_S:.0f} ms): {len(x['longs'])}", flush=True)
+        for lf in x["longs"]:
+            print(_long_line(lf), flush=True)
 
     def mm(key, scale=1.0, fmt=".2f"):
         v = [scale * x[key] for x in res]
@@ -200,6 +229,15 @@ def main():
     print(f"Play -> first new frame (ms): {mm('first_move_ms', fmt='.1f')}")
     total = {c: sum(x["causes"][c] for x in res) for c in CAUSES}
     print("late frames by cause (all repeats): " + ", ".join(f"{c} {n}" for c, n in total.items()))
+    longs = [lf for x in res for lf in x["longs"]]
+    n_steal = sum(lf["steal_explains"] for lf in longs)
+    print(f"long frames (GUI thread CPU > {1e3 * LONG_FRAME_CPU_S:.0f} ms between choice and swap): {len(longs)} in "
+          f"{len(res)} playbacks, {sum(x['frames'] for x in res)} frames; steal on their core covers the excess CPU "
+          f"in {n_steal}, not in {len(longs) - n_steal}" + (
+              "; own CPU " + ", ".join(f"{1e3 * lf['cpu']:.0f}" for lf in longs) + " ms, steal on their core "
+              + ", ".join(f"{1e3 * lf['steal']:.0f}" for lf in longs) + " ms" if longs else ""))
+    print(f"steal on all cores per playback (ms): {mm('steal_s', 1e3, '.0f')} "
+          "(/proc/stat; this kernel subtracts steal from a thread's CPU clock, so steal is never the thread's own CPU)")
     print(f"load average during repeats:  {mm('load', fmt='.1f')}")
     # asked for only now: querying the GL capabilities of a shown widget made the window
     # compose ~13 times a second more for the rest of the process (measured)

@@ -66,3 +66,66 @@ def test_a_frame_rendered_twice_counts_once_at_its_first_swap():
     assert list(tab["frame"]) == [0, 1]
     assert np.allclose(tab["swap"], [0.008, 0.018])
     assert late_causes(tab, rate=RATE) == []
+
+
+def _counters(core, cpu, steal, irq=(0.0, 0.0), utime=0.0, minflt=0, vm=(0, 0, 0, 0, 0)):
+    from _playback_trace import Counters
+
+    return Counters(core, cpu, utime, 0.0, minflt, 0, tuple(steal), tuple(irq), tuple(vm))
+
+
+def test_proc_text_parsing():
+    from _playback_trace import parse_proc_stat, parse_task_stat
+
+    stat = ("cpu  3090495 130233 571964 1126664 11559 0 4189 68160 0 0\n"
+            "cpu0 1474983 65911 267514 655070 3065 7 759 34064 0 0\n"
+            "cpu1 1615512 64322 304450 471594 8494 0 3430 34096 0 0\n"
+            "intr 20620274 0 0\nctxt 44081423\n")
+    steal, irq = parse_proc_stat(stat)
+    assert steal == (340.64, 340.96) and irq == (7.66, 34.30)
+    # a command name with spaces and a parenthesis must not shift the fields
+    task = ("4242 (python (x) y) R 1 2 3 0 -1 4194304 1500 0 7 0 250 36 0 0 20 0 9 0 100 1000 200 "
+            "18446744073709551615 1 1 0 0 0 0 0 16781312 17642 0 0 0 17 1 0 0 0 0 0")
+    assert parse_task_stat(task) == (1, 2.50, 0.36, 1500, 7)
+
+
+def test_steal_on_the_gui_threads_core_is_a_cause_and_long_frames_are_split_by_it():
+    from _playback_trace import long_frames
+
+    frames = [(0.000, 0.01, 4, 2, 0), (0.010, 0.01, 4, 2, 0), (0.020, 0.01, 4, 2, 0), (0.030, 0.01, 4, 2, 0),
+              (0.080, 0.01, 4, 2, 0), (0.200, 0.01, 4, 2, 0)]
+    ticks, rs, re, swaps = _run(frames)
+    # frame 3: 30 ms longer to its swap, and core 1 (where the GUI thread is) lost 40 ms to steal by the counter
+    # (10-ms steps); core 0 lost more, but the GUI thread was not on it
+    swaps[3] = (swaps[3][0] + 0.030, *swaps[3][1:])
+    # frame 4: 90 ms of the GUI thread's own CPU more than usual, with no steal (a long frame not explained by it)
+    swaps[4] = (swaps[4][0] + 0.090, *swaps[4][1:])
+    # frame 5: a long frame whose excess CPU the steal on its core covers (the thread migrated 0 -> 1)
+    steal0 = {0: (0.0, 0.0), 1: (0.0, 0.0), 2: (0.0, 0.0), 3: (0.50, 0.0), 4: (0.6, 0.04), 5: (0.6, 0.04)}
+    steal1 = {0: (0.0, 0.0), 1: (0.0, 0.0), 2: (0.0, 0.0), 3: (0.60, 0.04), 4: (0.6, 0.04), 5: (0.61, 0.09)}
+    cpu0 = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]
+    cpu1 = [0.006, 1.006, 2.006, 3.006, 4.096, 5.056]
+    core0 = [1, 1, 1, 1, 1, 0]
+    # with the helper threads' and X server's waits (0 here) before the readings, as PlaybackTrace records them
+    ticks = [(*x, 0.0, 0.0, _counters(core0[i], cpu0[i], steal0[i])) for i, x in enumerate(ticks)]
+    swaps = [(*x, 0.0, 0.0, _counters(1, cpu1[i], steal1[i])) for i, x in enumerate(swaps)]
+    tab = frame_table(ticks, rs, re, swaps, [], [], [], t0=0.0, rate=RATE)
+    assert np.allclose(tab["steal"], [0, 0, 0, 0.04, 0, 0.06])
+    assert np.allclose(tab["steal_all"], [0, 0, 0, 0.14, 0, 0.06])
+    assert list(tab["migrated"]) == [0, 0, 0, 0, 0, 1]
+    assert np.allclose(tab["thread_cpu"], [0.006] * 4 + [0.096, 0.056])
+    late = np.flatnonzero(tab["lag"] > 1)
+    assert list(late) == [3, 4, 5]
+    assert late_causes(tab, rate=RATE)[0] == "steal"
+    longs = long_frames(tab)
+    assert [lf["frame"] for lf in longs] == [4, 5]
+    assert [lf["steal_explains"] for lf in longs] == [False, True]
+    assert np.isclose(longs[0]["excess"], 0.090)
+
+
+def test_without_counter_readings_steal_is_not_blamed():
+    ticks, rs, re, swaps = _run([(0.0, 0.01, 4, 2, 0), (0.010, 0.01, 4, 2, 25)])
+    swaps[1] = (swaps[1][0] + 0.025, *swaps[1][1:])
+    tab = frame_table(ticks, rs, re, swaps, [], [], [], t0=0.0, rate=RATE)
+    assert np.isnan(tab["steal"]).all()
+    assert late_causes(tab, rate=RATE) == ["preempted"]
