@@ -291,7 +291,10 @@ def frame_table(ticks, render_start, render_end, swaps, m_start, m_end, gcs, *, 
         :class:`Counters` readings (nan without them), between choice and swap:
         ``thread_cpu`` (the GUI thread's CPU clock, s), ``utime`` / ``stime`` (its user /
         system CPU, 10-ms steps), ``minflt``, ``steal`` (s of hypervisor steal on the
-        core(s) the GUI thread was on at choice and at swap; 10-ms steps), ``steal_all``
+        core(s) the GUI thread was on at choice and at swap; 10-ms steps), ``steal_next`` (the
+        same from the choice to the first tick after the swap: the kernel adds steal to
+        ``/proc/stat`` at its next timer tick on that core, so steal near the swap may
+        show only then), ``steal_all``
         (all cores), ``irq`` (interrupt ticks' s on those cores), ``migrated`` (1 when the
         two cores differ), ``core`` (the core at the swap) and ``vm_<key>`` for each of
         :data:`VMSTAT_KEYS` (machine-wide).
@@ -329,7 +332,14 @@ def frame_table(ticks, render_start, render_end, swaps, m_start, m_end, gcs, *, 
     out = {key: np.full(len(rows), np.nan) for key in
            ("frame", "swap", "lag", "chosen", "lookahead", "timer_late", "queue", "render", "compose",
             "other_view", "gc", "run_wait", "helper_wait", "cpu", "thread_cpu", "utime", "stime", "minflt",
-            "steal", "steal_all", "irq", "migrated", "core") + tuple(f"vm_{k}" for k in VMSTAT_KEYS)}
+            "steal", "steal_next", "steal_all", "irq", "migrated", "core") + tuple(f"vm_{k}" for k in VMSTAT_KEYS)}
+    tk_n = [x for x in tk if x[8] is not None]
+    tk_n_t = np.array([x[0] for x in tk_n])
+
+    def steal_on(a, b, cores):
+        n = min(len(a.steal), len(b.steal))
+        return sum(b.steal[c] - a.steal[c] for c in cores if c < n)
+
     gs = [g[0] for g in gcs]
     ge = [g[1] for g in gcs]
     for i, (k, ((sw, cpu, wait, hw, xw, n1), tick, r0, r1)) in enumerate(rows):
@@ -354,7 +364,10 @@ def frame_table(ticks, render_start, render_end, swaps, m_start, m_end, gcs, *, 
             out["utime"][i] = n1.utime - n0.utime
             out["stime"][i] = n1.stime - n0.stime
             out["minflt"][i] = n1.minflt - n0.minflt
-            out["steal"][i] = sum(n1.steal[c] - n0.steal[c] for c in cores if c < min(len(n0.steal), len(n1.steal)))
+            out["steal"][i] = steal_on(n0, n1, cores)
+            j = int(np.searchsorted(tk_n_t, sw, side="right"))
+            n2 = tk_n[j][8] if j < len(tk_n) else n1
+            out["steal_next"][i] = steal_on(n0, n2, sorted(set(cores) | {n2.processor}))
             out["steal_all"][i] = sum(n1.steal) - sum(n0.steal)
             out["irq"][i] = sum(n1.irq[c] - n0.irq[c] for c in cores if c < min(len(n0.irq), len(n1.irq)))
             out["migrated"][i] = float(len(cores) > 1)
@@ -424,10 +437,11 @@ def long_frames(table: dict, *, threshold_s: float = LONG_FRAME_CPU_S) -> list[d
     (its exact clock, ``thread_cpu``, or the schedstat ``cpu`` without it), its excess
     over the median frame's, the steal on its core in the same interval, and whether
     that steal is enough to explain the excess (``steal_explains``: steal >= excess
-    minus one 10-ms step of the counter). The kernel here subtracts steal from a
-    thread's CPU clock (``CONFIG_PARAVIRT_TIME_ACCOUNTING``), so steal that was
-    accounted cannot show as the thread's own CPU; a long frame with no steal to
-    match is CPU the kernel charged to the thread.
+    minus one 10-ms step of the counter). Steal can show as a thread's own CPU: on the
+    virtual machine measured (``CONFIG_PARAVIRT_TIME_ACCOUNTING=y``) a fixed piece of
+    work was charged up to 100 times its CPU when steal hit its core. A long frame
+    whose excess the steal does not cover was charged time the counter did not report
+    as steal (the steal may also show one tick later: ``steal_next``).
 
     Parameters
     ----------
@@ -441,8 +455,9 @@ def long_frames(table: dict, *, threshold_s: float = LONG_FRAME_CPU_S) -> list[d
     list of dict
         One per long frame, in the order shown, with ``index`` (row of the table),
         ``frame``, ``lag``, ``chosen`` (time), ``latency`` (choice -> swap, s), ``cpu``, ``excess``,
-        ``utime``, ``stime``, ``steal``, ``steal_all``, ``irq``, ``run_wait``, ``minflt``,
-        ``core``, ``migrated``, ``steal_explains`` and the ``vm_*`` deltas (s and counts;
+        ``utime``, ``stime``, ``steal``, ``steal_next``, ``steal_all``, ``irq``, ``run_wait``, ``minflt``,
+        ``core``, ``migrated``, ``steal_explains``, ``steal_next_explains`` (the same with
+        ``steal_next``) and the ``vm_*`` deltas (s and counts;
         nan where a reading is missing).
     """
     cpu = np.asarray(table["thread_cpu"], float)
@@ -458,8 +473,11 @@ def long_frames(table: dict, *, threshold_s: float = LONG_FRAME_CPU_S) -> list[d
         row = {"index": int(i), "frame": int(table["frame"][i]), "lag": float(table["lag"][i]),
                "chosen": float(table["chosen"][i]), "latency": float(table["swap"][i] - table["chosen"][i]),
                "cpu": float(cpu[i]), "excess": excess,
-               "steal_explains": bool(np.isfinite(steal) and steal >= excess - 0.010)}
-        for key in ("utime", "stime", "steal", "steal_all", "irq", "run_wait", "minflt", "core", "migrated"):
+               "steal_explains": bool(np.isfinite(steal) and steal >= excess - 0.010),
+               "steal_next_explains": bool(np.isfinite(table["steal_next"][i])
+                                           and table["steal_next"][i] >= excess - 0.010)}
+        for key in ("utime", "stime", "steal", "steal_next", "steal_all", "irq", "run_wait", "minflt", "core",
+                    "migrated"):
             row[key] = float(table[key][i])
         for key in VMSTAT_KEYS:
             row[f"vm_{key}"] = float(table[f"vm_{key}"][i])

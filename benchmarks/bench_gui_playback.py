@@ -1,7 +1,7 @@
 """Benchmark: playback in the real explorer window — frames per second and lag behind the clock.
 
 Usage: python benchmarks/bench_gui_playback.py [--repeats 4] [--max-seconds 15] [--preset default]
-       [--tree DIR]
+       [--tree DIR] [--probe]
 
 Drives ``app.main_window.MainWindow`` on the default synthetic talker (28,800 frames,
 60 Hz) under an X server (re-runs itself under ``xvfb-run`` without one; software
@@ -31,6 +31,15 @@ processes held it); and each frame more than one period late attributed to the l
 of: gc, preempted, other view (a manifold render between its choice and swap), long
 render, long compose, queued. Then min / median over repeats; repeat 1 is the first
 playback in a fresh process (cold), the others warm.
+
+Each frame's GUI-thread CPU is also read with the hypervisor's steal on its core
+(``/proc/stat``; this is a virtual machine): a late frame can be attributed to
+``steal``, and each *long frame* (GUI thread CPU > 40 ms between choice and swap) is
+listed with its own CPU, the steal on its core and the machine's counters. ``--probe``
+runs ``steal_probe.py`` (a fixed 0.2-ms piece of work every 10 ms, in a process of its
+own) beside the repeats and prints, for each long frame, how much CPU the probe's pieces
+were charged meanwhile: if a fixed piece of work elsewhere is charged many times its
+CPU at the same moment, the time was taken from the machine, not by the explorer.
 
 ``--tree DIR`` runs the explorer code of another checkout with this same script (e.g.
 the commit before a change, extracted with ``git archive REV | tar -x -C DIR``), for
@@ -138,6 +147,44 @@ def play_once(app, win, max_seconds):
             "thread_cpu_med": 1e3 * pct(tab["thread_cpu"], 50), "thread_cpu_p99": 1e3 * pct(tab["thread_cpu"], 99)}
 
 
+def _start_probe():
+    """``steal_probe.py`` in a process of its own, saving its pieces to a temporary file."""
+    import subprocess
+    import tempfile
+
+    fd, out = tempfile.mkstemp(suffix=".npy", prefix="steal_probe_")
+    os.close(fd)
+    script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "steal_probe.py")
+    proc = subprocess.Popen([sys.executable, script, "--seconds", "86400", "--out", out],
+                            stdout=subprocess.PIPE, text=True)
+    return proc, out
+
+
+def _probe_report(probe, longs) -> None:
+    """Stop the probe; print its summary and, for each long frame, its pieces' own CPU meanwhile."""
+    import numpy as np
+
+    proc, out = probe
+    proc.terminate()
+    text, _ = proc.communicate(timeout=30)
+    print(text.rstrip())
+    try:
+        rows = np.load(out)
+    finally:
+        os.unlink(out)
+    if len(rows) == 0:
+        return
+    med = float(np.median(rows[:, 2]))
+    for lf in longs:
+        sel = (rows[:, 1] >= lf["chosen"]) & (rows[:, 0] <= lf["chosen"] + lf["latency"])
+        cpu = rows[sel, 2]
+        print(f"   during long frame {lf['frame']} (own CPU {1e3 * lf['cpu']:.0f} ms, steal on its core "
+              f"{1e3 * lf['steal']:.0f}/{1e3 * lf['steal_next']:.0f} ms): {int(sel.sum())} probe pieces, "
+              + (f"their own CPU max {1e3 * cpu.max():.2f} ms = {cpu.max() / med:.0f}x the probe's median, "
+                 f"{int((cpu > 10 * med).sum())} above 10x, on cores {sorted(set(rows[sel, 4].astype(int)))}"
+                 if sel.any() else "none (the probe did not run then)"))
+
+
 def _long_line(lf) -> str:
     """One printed line for a long frame (:func:`_playback_trace.long_frames`)."""
     vm = ", ".join(f"{k[3:]} {lf[k]:.0f}" for k in lf if k.startswith("vm_") and lf[k])
@@ -145,7 +192,8 @@ def _long_line(lf) -> str:
             f"{lf['chosen']:.3f} s): chosen->swap "
             f"{1e3 * lf['latency']:.0f} ms, own CPU {1e3 * lf['cpu']:.0f} ms ({1e3 * lf['excess']:+.0f} over the "
             f"median; user {1e3 * lf['utime']:.0f} / system {1e3 * lf['stime']:.0f} ms in 10-ms ticks), "
-            f"steal on its core {1e3 * lf['steal']:.0f} ms (all cores {1e3 * lf['steal_all']:.0f}), interrupt "
+            f"steal on its core {1e3 * lf['steal']:.0f} ms (by the next tick {1e3 * lf['steal_next']:.0f}; all cores "
+            f"{1e3 * lf['steal_all']:.0f}), interrupt "
             f"ticks {1e3 * lf['irq']:.0f} ms, waited for a core {1e3 * lf['run_wait']:.0f} ms, {lf['minflt']:.0f} "
             f"page faults, core {lf['core']:.0f}{' (migrated)' if lf['migrated'] else ''}; machine: "
             f"{vm or 'no page migration, compaction or huge-page events'}; "
@@ -158,6 +206,8 @@ def main():
     ap.add_argument("--max-seconds", type=float, default=15.0, help="stop a repeat after this long")
     ap.add_argument("--preset", default="default")
     ap.add_argument("--tree", default=None, help="run the explorer code of this checkout instead of this one")
+    ap.add_argument("--probe", action="store_true",
+                    help="run steal_probe.py beside the repeats and give its pieces during each long frame")
     args = ap.parse_args()
     gb.ensure_display()
     if args.tree:
@@ -187,6 +237,7 @@ def main():
     print(f"   utterance {u.id}: {u.stop - u.start} frames at {c.rate:g} Hz ({(u.stop - u.start) / c.rate:.2f} s), "
           f"original + synthetic (linear) side by side, {c.n_points} points per lip frame")
     res = []
+    probe = _start_probe() if args.probe else None
     for r in range(args.repeats):
         x = play_once(app_, win, args.max_seconds)
         res.append(x)
@@ -233,17 +284,19 @@ def main():
     n_steal = sum(lf["steal_explains"] for lf in longs)
     print(f"long frames (GUI thread CPU > {1e3 * LONG_FRAME_CPU_S:.0f} ms between choice and swap): {len(longs)} in "
           f"{len(res)} playbacks, {sum(x['frames'] for x in res)} frames; steal on their core covers the excess CPU "
-          f"in {n_steal}, not in {len(longs) - n_steal}" + (
+          f"in {n_steal}, not in {len(longs) - n_steal} (counting steal up to the next tick after the swap: in "
+          f"{sum(lf['steal_next_explains'] for lf in longs)})" + (
               "; own CPU " + ", ".join(f"{1e3 * lf['cpu']:.0f}" for lf in longs) + " ms, steal on their core "
               + ", ".join(f"{1e3 * lf['steal']:.0f}" for lf in longs) + " ms" if longs else ""))
-    print(f"steal on all cores per playback (ms): {mm('steal_s', 1e3, '.0f')} "
-          "(/proc/stat; this kernel subtracts steal from a thread's CPU clock, so steal is never the thread's own CPU)")
+    print(f"steal on all cores per playback (ms): {mm('steal_s', 1e3, '.0f')} (/proc/stat, 10-ms steps)")
     print(f"load average during repeats:  {mm('load', fmt='.1f')}")
     # asked for only now: querying the GL capabilities of a shown widget made the window
     # compose ~13 times a second more for the rest of the process (measured)
     print(f"OpenGL renderer: {gb.gl_renderer(lips)}")
     print(f"wall {time.perf_counter() - t_all:.1f} s; peak RSS {gb.peak_rss_mb():.0f} MiB; "
           f"load average {os.getloadavg()[0]:.1f} at end")
+    if probe is not None:
+        _probe_report(probe, [lf for x in res for lf in x["longs"]])
     win.close()
 
 

@@ -100,9 +100,10 @@ def test_steal_on_the_gui_threads_core_is_a_cause_and_long_frames_are_split_by_i
     swaps[3] = (swaps[3][0] + 0.030, *swaps[3][1:])
     # frame 4: 90 ms of the GUI thread's own CPU more than usual, with no steal (a long frame not explained by it)
     swaps[4] = (swaps[4][0] + 0.090, *swaps[4][1:])
-    # frame 5: a long frame whose excess CPU the steal on its core covers (the thread migrated 0 -> 1)
-    steal0 = {0: (0.0, 0.0), 1: (0.0, 0.0), 2: (0.0, 0.0), 3: (0.50, 0.0), 4: (0.6, 0.04), 5: (0.6, 0.04)}
-    steal1 = {0: (0.0, 0.0), 1: (0.0, 0.0), 2: (0.0, 0.0), 3: (0.60, 0.04), 4: (0.6, 0.04), 5: (0.61, 0.09)}
+    # frame 5: a long frame whose excess CPU the steal on its core covers (the thread migrated 0 -> 1); frame 4's
+    # core shows 100 ms of steal only at the next tick (frame 5's choice): by then it covers frame 4's excess
+    steal0 = {0: (0.0, 0.0), 1: (0.0, 0.0), 2: (0.0, 0.0), 3: (0.50, 0.0), 4: (0.6, 0.04), 5: (0.6, 0.14)}
+    steal1 = {0: (0.0, 0.0), 1: (0.0, 0.0), 2: (0.0, 0.0), 3: (0.60, 0.04), 4: (0.6, 0.04), 5: (0.61, 0.19)}
     cpu0 = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]
     cpu1 = [0.006, 1.006, 2.006, 3.006, 4.096, 5.056]
     core0 = [1, 1, 1, 1, 1, 0]
@@ -120,6 +121,8 @@ def test_steal_on_the_gui_threads_core_is_a_cause_and_long_frames_are_split_by_i
     longs = long_frames(tab)
     assert [lf["frame"] for lf in longs] == [4, 5]
     assert [lf["steal_explains"] for lf in longs] == [False, True]
+    assert np.allclose(tab["steal_next"][3:5], [0.04, 0.10])
+    assert [lf["steal_next_explains"] for lf in longs] == [True, True]
     assert np.isclose(longs[0]["excess"], 0.090)
 
 
@@ -129,3 +132,22 @@ def test_without_counter_readings_steal_is_not_blamed():
     tab = frame_table(ticks, rs, re, swaps, [], [], [], t0=0.0, rate=RATE)
     assert np.isnan(tab["steal"]).all()
     assert late_causes(tab, rate=RATE) == ["preempted"]
+
+
+def test_steal_probe_splits_charged_pieces_by_reported_steal():
+    import steal_probe
+
+    rows = steal_probe.probe(0.15, 0.0)
+    assert len(rows) > 10 and (rows[:, 1] >= rows[:, 0]).all() and (rows[:, 2] >= 0).all()
+    assert set(rows[:, 4].astype(int)) <= set(range(os.cpu_count()))
+    # made up: 0.2-ms pieces; one charged 50 ms with 40 ms of steal on its core seen only at the next piece,
+    # one charged 30 ms with none
+    fake = np.zeros((20, 7))
+    fake[:, 0] = np.arange(20) * 0.01
+    fake[:, 1] = fake[:, 0] + 0.0002
+    fake[:, 2] = 0.0002
+    fake[3, 2], fake[3, 6] = 0.050, 0.040
+    fake[9, 2] = 0.030
+    line = steal_probe.summary(fake)[2]
+    assert "charged > 10x the median own CPU: 2 (80 ms beyond the median)" in line
+    assert line.endswith("by the next piece: 1, without: 1")
