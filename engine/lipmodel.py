@@ -1,4 +1,4 @@
-"""A parametric 3D lip surface driven by thirteen articulatory controls and a speaker's anatomy.
+"""A parametric 3D lip surface driven by fourteen articulatory controls and a speaker's anatomy.
 
 The surface is two grids of ``rows x cols`` points, the upper and the lower lip. Row 0
 of each grid is the inner lip contour (where the lips meet), the next rows cross the
@@ -25,7 +25,13 @@ The controls (:data:`CONTROL_NAMES`; the signed ones, :data:`SIGNED_CONTROLS`, a
 -1..1, the others about 0..1):
 
 ``jaw``          jaw opening: the lower lip and chin go down (up to ~14.4 mm) and back,
-                 the upper lip goes up a little (~3.6 mm); the largest motion.
+                 the upper lip goes up a little (~3.6 mm); the largest motion. With
+                 ``kinematics="calibrated"`` (see below) the mandible rotates about the
+                 condyle (90 mm behind and 40 mm above the lower lip): the lower lip (up to
+                 12 mm) and chin go down and back on an arc, more the lower the point; the
+                 upper lip goes up by half the lower lip's drop (6 mm); the corners go down
+                 by 30 % of it; the vermilion of both lips thins as wide opening stretches
+                 it (up to 20 %).
 ``round``        rounding (orbicularis oris): the mouth narrows (corners in by ~16 %),
                  the opening becomes rounder at the corners, the vermilion thickens,
                  with only a little forward push (1 mm).
@@ -47,6 +53,9 @@ The controls (:data:`CONTROL_NAMES`; the signed ones, :data:`SIGNED_CONTROLS`, a
                  protrudes up to 15 % more (+) or less (-) than the right; the corners
                  tilt by up to 1 mm. The midline is unchanged.
 ``jaw_lateral``  lateral jaw shift: the lower lip and chin move sideways up to 1.5 mm.
+``jaw_forward``  jaw protrusion (+) / retraction (-), the mandible's translation, which
+                 in speech is controlled apart from its rotation: the chin and, less,
+                 the lower lip move forward or back by up to 3 mm (``"calibrated"`` only).
 ``roll``         vermilion eversion (+) / inversion (-) (the lip tissue rolling out or
                  in about the inner contour, orbicularis oris pars marginalis): the
                  visible red lip grows or shrinks by up to 30 % and its border moves
@@ -54,6 +63,15 @@ The controls (:data:`CONTROL_NAMES`; the signed ones, :data:`SIGNED_CONTROLS`, a
 ``mentalis``     chin raise (mentalis): the soft tissue of the chin goes up (3 mm) and
                  forward (1.5 mm), the mentolabial sulcus deepens, and the lower
                  vermilion is pushed up and out (1 mm); the inner contour is unchanged.
+
+Kinematics (:data:`KINEMATICS`). ``"classic"`` (the default) is the surface of generator 5,
+unchanged. ``"calibrated"`` moves the jaw, the upper lip and the corners as articulograph
+recordings of real speakers show (docs/DECISIONS.md, "A talker calibrated on real
+articulograph lips"): the jaw's arc and protrusion, the upper lip's larger share of the
+opening, corners that descend with the jaw, narrow and widen whole (the mouth's width
+change reaches 95 % at the commissure instead of 50 %) and slide forward and back over the
+curved face as they do, the upper and lower lips moving as one where they meet beyond the
+corners.
 
 The inner-lip gap is kept non-negative with a soft contact (a softplus of width
 0.3 mm), so the lips never pass through each other and the aperture is a smooth,
@@ -65,13 +83,24 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-__all__ = ["CONTROL_NAMES", "SIGNED_CONTROLS", "RESOLUTIONS", "Anatomy", "LipModel", "vermilion_weight"]
+__all__ = ["CONTROL_NAMES", "SIGNED_CONTROLS", "RESOLUTIONS", "KINEMATICS", "Anatomy", "LipModel",
+           "vermilion_weight"]
 
 CONTROL_NAMES = ("jaw", "round", "spread", "raise", "closure", "labiodental", "protrude", "depress", "corner",
-                 "asymmetry", "jaw_lateral", "roll", "mentalis")
+                 "asymmetry", "jaw_lateral", "jaw_forward", "roll", "mentalis")
 #: controls that range over -1..1 (the others over 0..1)
-SIGNED_CONTROLS = ("corner", "asymmetry", "jaw_lateral", "roll")
+SIGNED_CONTROLS = ("corner", "asymmetry", "jaw_lateral", "jaw_forward", "roll")
 _NC = len(CONTROL_NAMES)
+
+#: How the jaw, upper lip and corners move: per kinematics, the upper lip's share of the
+#: opening and closing, the corners' descent with the jaw (a fraction of the lower lip's
+#: drop), the vermilion's thinning by full opening (times jaw squared), how far beyond the
+#: corner (mm) the mouth's width change fades, and whether the jaw turns on an arc (with
+#: protrusion, the curved face and corners shared by both lips) instead of dropping straight
+KINEMATICS = {
+    "classic": {"upper_share": 0.2, "corner_drop": 0.0, "stretch": 0.0, "width_reach": 0.0, "arc": False},
+    "calibrated": {"upper_share": 1.0 / 3.0, "corner_drop": 0.3, "stretch": 0.2, "width_reach": 9.0, "arc": True},
+}
 
 #: Named resolutions: (rows per lip, columns). Points = 2 * rows * cols.
 RESOLUTIONS = {
@@ -138,8 +167,9 @@ _DEP = 3.0         # lower-lip depression
 _COR = 2.5         # corner raise / lower
 _ASY = 0.15        # left-right asymmetry of the displacements
 _JL = 1.5          # lateral jaw shift
+_JF = 3.0          # jaw protrusion / retraction (translation) by full jaw_forward
+_PIV_Y, _PIV_Z = 40.0, 90.0  # the jaw's pivot (condyle): above and behind the lower lip's inner midline
 _EPS = 0.3         # soft-contact width
-_JU = 0.2          # share of the opening (and of the closing) carried by the upper lip
 _VR = 0.08         # vermilion thickening (eversion) by full rounding
 _VP = 0.10         # vermilion eversion by full protrusion
 _VS = 0.08         # vermilion thinning by full spreading
@@ -188,6 +218,8 @@ class LipModel:
         Rows per lip and columns; ``cols`` odd puts a column on the midline.
     anatomy : Anatomy or None
         The speaker (default: the mean :class:`Anatomy`).
+    kinematics : {"classic", "calibrated"}, default="classic"
+        How the jaw, upper lip and corners move (:data:`KINEMATICS`).
 
     Attributes
     ----------
@@ -204,7 +236,7 @@ class LipModel:
         Indices of the upper and lower inner-contour points on the midline.
     """
 
-    def __init__(self, resolution="default", anatomy=None):
+    def __init__(self, resolution="default", anatomy=None, *, kinematics="classic"):
         if isinstance(resolution, str):
             if resolution not in RESOLUTIONS:
                 raise ValueError(f"unknown resolution {resolution!r}; use one of {sorted(RESOLUTIONS)} or (rows, cols)")
@@ -217,6 +249,13 @@ class LipModel:
         if not isinstance(an, Anatomy):
             raise ValueError(f"anatomy must be an engine.lipmodel.Anatomy or None, got {type(an).__name__}")
         self.anatomy = an
+        if kinematics not in KINEMATICS:
+            raise ValueError(f"kinematics must be one of {sorted(KINEMATICS)}, got {kinematics!r}")
+        self.kinematics = kinematics
+        kin = KINEMATICS[kinematics]
+        self._ju, self._kj, self._str, self._arc = kin["upper_share"], kin["corner_drop"], kin["stretch"], kin["arc"]
+        # fields the surface depends on: classic has no arc, protrusion, curved-face or corner-drop fields
+        self._K = len(self._FIELDS) if self._arc else len(self._FIELDS) - 4
         self.rows, self.cols = rows, cols
         self.n_points = 2 * rows * cols
         W = an.half_width
@@ -231,6 +270,10 @@ class LipModel:
         self._e = np.clip(1.0 - ax ** 2, 0.0, None) ** 0.6                  # opening shape (cols,)
         self._er = self._e * (_RMID + (1 - _RMID) * 2.0 * np.minimum(ax, 1.0))  # upper-lip raise profile
         self._m = 1.0 / (1.0 + np.exp((np.abs(x) - W) / 3.0))              # mouth weight (cols,)
+        # the reach of the mouth's width change: classic, the mouth weight (half at the
+        # commissure); calibrated, the corners whole (95 %), fading over the skin beyond them
+        self._mw = self._m if not kin["width_reach"] else \
+            1.0 / (1.0 + np.exp((np.abs(x) - W - kin["width_reach"]) / 3.0))
         self._jb = np.exp(-(np.clip(np.abs(x) - 0.8 * W, 0, None) / 10.0) ** 2)  # jaw footprint
         self._cw = np.exp(-((np.abs(x) - W) / (0.28 * W)) ** 2)             # corner region (cols,)
         self._side = np.clip(x / W, -1.0, 1.0)                              # -1 right .. +1 left
@@ -254,6 +297,12 @@ class LipModel:
                                           - 0.5 * np.exp(-(x[None, :] / 2.5) ** 2))
         self._sulcus = -an.sulcus * np.exp(-((ts - 0.45) / 0.2) ** 2)[:, None] * (ts > 0)[:, None] \
             * np.clip(1.0 - ax ** 2, 0.0, None)[None, :] ** 0.5
+        # the lower lip's and chin's rest position relative to the jaw's pivot, (rows, cols):
+        # h below the pivot (negative), d in front of it; opening rotates them about it
+        y_low = -(0.5 * an.gap * self._e[None, :] + self._hvl[None, :] * tv[:, None] + an.chin * ts[:, None])
+        z_low = self._face_z[None, :] + self._bulge[:, None] * (0.6 + 0.4 * self._m[None, :]) + self._sulcus
+        self._jh = y_low - (_PIV_Y - 0.5 * an.gap)
+        self._jd = z_low + _PIV_Z
         mid = cols // 2
         self.midline = (0 * rows * cols + mid, 1 * rows * cols + mid)
         self._A = self._coefficients()
@@ -290,17 +339,17 @@ class LipModel:
         e = self._e[None, :] ** (1.0 - 0.35 * np.clip(rnd, 0.0, 1.0))
         s = self._asym(c)
         g0 = self.anatomy.gap
-        up_nom = e * (0.5 * g0 + s * (_JU * _GJ * jaw + 1.5 * lab)) + s * _GR * self._er[None, :] * rai
-        low_nom = -e * (0.5 * g0 + s * ((1 - _JU) * _GJ * jaw + _DEP * dep))
+        up_nom = e * (0.5 * g0 + s * (self._ju * _GJ * jaw + 1.5 * lab)) + s * _GR * self._er[None, :] * rai
+        low_nom = -e * (0.5 * g0 + s * ((1 - self._ju) * _GJ * jaw + _DEP * dep))
         low_nom = (1 - lab) * low_nom + lab * (up_nom - 2.0 * e)
         g_nom = up_nom - low_nom
-        yc = low_nom + (1 - _JU) * g_nom
+        yc = low_nom + (1 - self._ju) * g_nom
         g_raw = g_nom * (1 - clo) - clo * _KC * e
         eps = _EPS * e + 1e-3
         g = eps * np.logaddexp(0.0, g_raw / eps)
         comp = g - g_raw                                   # >= 0, ~0 when the lips are apart
-        low = yc - (1 - _JU) * g
-        return yc + _JU * g, low, comp, low - low_nom
+        low = yc - (1 - self._ju) * g
+        return yc + self._ju * g, low, comp, low - low_nom
 
     def aperture(self, controls) -> np.ndarray:
         """Vertical distance between the inner lips on the midline (mm), shape (n,).
@@ -329,34 +378,51 @@ class LipModel:
     # _FIELDS. _assemble() is the readable elementwise formula; since it is linear in the
     # fields, probing it with unit fields once gives a coefficient tensor A (cols, K, 6*rows)
     # and deform() is then one batched matrix product per block of frames.
-    _FIELDS = ("one", "x", "up_in", "low_in", "comp", "vfac_u", "vfac_l", "jaw", "round", "spread", "raise",
-               "labiodental", "rise", "prot_u", "prot_l", "corner", "jlat", "roll", "ment")
+    _FIELDS = ("one", "x", "up_in", "low_in", "comp", "vfac_u", "vfac_l", "rot_s", "round", "spread", "raise",
+               "labiodental", "rise", "prot_u", "prot_l", "corner", "jlat", "roll", "ment", "rot_c", "jfwd", "arch",
+               "cdrop")
 
     def _fields(self, c):
-        """Fields (n, K, cols) of controls ``c`` (n, 13)."""
+        """Fields (n, K, cols) of controls ``c`` (n, 14)."""
         n = c.shape[0]
-        jaw, rnd, spr, rai, clo, lab, pro, dep, cor, asy, jl, rol, mnt = (c[:, k:k + 1] for k in range(_NC))
+        jaw, rnd, spr, rai, clo, lab, pro, dep, cor, asy, jl, jf, rol, mnt = (c[:, k:k + 1] for k in range(_NC))
         up_in, low_in, comp, rise = self._inner(c)
         s = self._asym(c)
         wscale = 1.0 - _WR * rnd + _WSP * spr
-        fx = self._x[None, :] * (1.0 + (wscale - 1.0) * self._m[None, :])
+        fx = self._x[None, :] * (1.0 + (wscale - 1.0) * self._mw[None, :])
         vfac_u = 1.0 + _VR * rnd - _VS * spr + _VP * pro
+        if self._str:  # wide opening stretches the vermilion thin
+            vfac_u = vfac_u - self._str * np.clip(jaw, 0.0, None) ** 2
         vfac_l = vfac_u + 0.1 * dep
         m = self._m[None, :]
         prot_u = s * (_PRR * rnd + _PRU * pro) * m
         prot_l = s * (_PRR * rnd + _PRL * pro + 1.0 * dep) * m
         a_tot = asy + self.anatomy.asymmetry
         corner = (_COR * cor * s + 1.0 * a_tot * self._side[None, :]) * self._cw[None, :]
-        F = np.empty((n, len(self._FIELDS), self.cols))
-        for k, f in enumerate((1.0, fx, up_in, low_in, comp, vfac_u, vfac_l, jaw, rnd, spr, rai, lab, rise,
-                               prot_u, prot_l, corner, jl, rol * m, mnt * s)):
+        fields = [1.0, fx, up_in, low_in, comp, vfac_u, vfac_l, jaw, rnd, spr, rai, lab, rise, prot_u, prot_l, corner,
+                  jl, rol * m, mnt * s]
+        if self._arc:
+            # the jaw's rotation: the angle that lowers a point _PIV_Z in front of the pivot by
+            # the lower lip's share of the opening
+            rot_s = np.clip((1 - self._ju) * _GJ * jaw / _PIV_Z, -0.9, 0.9)
+            fields[7] = rot_s
+            # the lips lie on the curved face (over the dental arch): a column that moves in or
+            # out moves forward or back with the curve
+            arch = -0.012 * (25.0 / self._W) * (fx ** 2 - self._x[None, :] ** 2)
+            # the corners (modiolus) go down with the opening jaw, a fraction of the lower lip's drop
+            cdrop = -self._kj * (1 - self._ju) * _GJ * jaw * self._cw[None, :]
+            fields += [1.0 - np.sqrt(1.0 - rot_s ** 2), jf, arch, cdrop]
+        F = np.empty((n, self._K, self.cols))
+        for k, f in enumerate(fields):
             F[:, k, :] = f
         return F
 
     def _assemble(self, F):
         """Points (n, 2, rows, cols, 3) from fields (n, K, cols); elementwise, linear in F."""
+        if F.shape[1] < len(self._FIELDS):  # classic: no arc fields (they would add zeros)
+            F = np.concatenate([F, np.zeros((F.shape[0], len(self._FIELDS) - F.shape[1], F.shape[2]))], 1)
         (one, fx, up_in, low_in, comp, vfu, vfl, jaw, rnd, spr, rai, lab, rise, pru, prl, cor,
-         jl, rol, mnt) = (F[:, k, None, :] for k in range(F.shape[1]))
+         jl, rol, mnt, rot_c, jf, arch, cdrop) = (F[:, k, None, :] for k in range(F.shape[1]))
         an = self.anatomy
         W = self._W
         x = self._x[None, None, :]
@@ -367,10 +433,12 @@ class LipModel:
         out = np.empty((F.shape[0], 2, self.rows, self.cols, 3))
         z_rest = self._face_z[None, None, :] + self._bulge[None, :, None] * (0.6 + 0.4 * m)
         z_common = - 2.0 * spr * (x / W) ** 2 * m - 0.6 * cor * m
+        if self._arc:
+            z_common = z_common + arch
         # eversion: the vermilion rolls forward, most at its middle
         roll = (tv * (1.0 - tv) * 4.0) * (ts == 0)
         # corners: raised corners also draw back a little (a smile); both lips take the same shift
-        cy = cor * (1.0 - 0.7 * ts)
+        cy = ((cor + cdrop) if self._arc else cor) * (1.0 - 0.7 * ts)
         # upper lip: lip-local motion fades towards the nose base (fol: 1 -> 0 across the rows)
         phil = an.philtrum + an.upper_vermilion - hvu    # the skin ends level at the nose base
         y_rest = hvu * tv + phil * ts
@@ -384,10 +452,24 @@ class LipModel:
             + (1 - fol) * (y_rest * one + 0.15 * _GR * rai * m) + cy + hvu * rl_y
         out[:, 0, ..., 2] = one * (z_rest + self._philtrum[None]) + z_common + pru * prot \
             + (rai + 0.4 * comp) * prot * m + 1.5 * (vfu - one) * roll * m + rl_z
+        jb = self._jb[None, None, :]
+        if self._arc:
+            # the jaw turns the chin (and the lower lip's depth) about its pivot: a point h above
+            # (h < 0: below) and d in front of it moves by (-h (1 - cos) - d sin, h sin - d (1 - cos))
+            # (field jaw = sin); its protrusion (jaw_forward) translates it, the chin fully, the lip less
+            jh, jd = self._jh[None], self._jd[None]
+            rot_y = jb * (-jh * rot_c - jd * jaw)
+            rot_z = jb * (jh * jaw - jd * rot_c) + _JF * jf * jb * (0.6 + 0.4 * ts)
+            # where the lips meet at and beyond the corners they move as one: the upper lip
+            # there takes the lower lip's depth change by the jaw (none on the midline)
+            out[:, 0, ..., 2] += (1.0 - self._e[None, None, :]) * fol * rot_z[:, :1]
+        else:
+            jaw_drop = (1 - self._ju) * _GJ * jaw * jb
+            rot_y = -jaw_drop
+            rot_z = -0.25 * jaw_drop * (0.3 + 0.7 * ts)
         # lower lip: the lip follows its inner contour, the chin follows the jaw rigidly; the
         # skin between them also takes the lip's own rise towards contact (mentalis), fading
         # linearly to nothing at the chin
-        jaw_drop = (1 - _JU) * _GJ * jaw * self._jb[None, None, :]
         out[:, 1, ..., 0] = fx + _JL * jl * (0.6 + 0.4 * ts)
         # mentalis: the chin's soft tissue rises and bunches forward (most at the chin, fading
         # up to the vermilion border), the sulcus deepens, the lower vermilion is pushed up
@@ -397,15 +479,15 @@ class LipModel:
         mt_z = mnt * (_MTZ * chin + _MTL * tv * (ts == 0) + _MTL * (ts > 0) * (1 - chin)) * m \
             + _MTS * mnt * self._sulcus[None]
         out[:, 1, ..., 1] = fol * (low_in - hvl * tv * (vfl - 0.12 * comp - 0.3 * lab) - an.chin * ts * one) \
-            + (1 - fol) * (-(hvl * tv + an.chin * ts) * one - jaw_drop + (1 - ts) * rise) + cy \
+            + (1 - fol) * (-(hvl * tv + an.chin * ts) * one + rot_y + (1 - ts) * rise) + cy \
             - hvl * rl_y + mt_y
         out[:, 1, ..., 2] = one * (z_rest + self._sulcus[None]) + z_common + prl * prot \
-            + 0.4 * comp * prot * m - 0.25 * jaw_drop * (0.3 + 0.7 * ts) \
+            + 0.4 * comp * prot * m + rot_z \
             - 5.0 * lab * (1.0 - tv) * fol * m + 1.5 * (vfl - one) * roll * m + rl_z + mt_z
         return out
 
     def _coefficients(self):
-        K, R, C = len(self._FIELDS), self.rows, self.cols
+        K, R, C = self._K, self.rows, self.cols
         probe = np.zeros((K, K, C))
         probe[np.arange(K), np.arange(K), :] = 1.0
         P = self._assemble(probe)                       # (K, 2, R, C, 3)
@@ -416,7 +498,7 @@ class LipModel:
 
         Parameters
         ----------
-        controls : array-like of shape (n_frames, 13)
+        controls : array-like of shape (n_frames, 14)
             Columns in the order of :data:`CONTROL_NAMES`.
         out : ndarray of shape (n_frames, 3 * n_points) float32, optional
             Written in place if given.

@@ -3,7 +3,7 @@
 Sentences are random word sequences from ``assets/wordlist.txt`` pronounced with the
 CMU dictionary (:mod:`engine.phonetics`), with a pause ``sil`` at the start and end
 and durations from :class:`~engine.phonetics.DurationModel`. Each phone sets targets
-for the thirteen articulatory controls (:data:`engine.lipmodel.CONTROL_NAMES`); the targets of
+for the fourteen articulatory controls (:data:`engine.lipmodel.CONTROL_NAMES`); the targets of
 neighbouring phones are blended by Cohen & Massaro (1993) dominance functions
 (bilabials and labiodentals are protected: their closure / lip-to-teeth dominance is
 twenty times that of other phones), then passed through second-order, critically
@@ -41,7 +41,7 @@ from sklearn.base import BaseEstimator
 
 from engine.assets import asset_path
 from engine.corpus import Corpus, CorpusError, PhoneInterval, Utterance
-from engine.lipmodel import CONTROL_NAMES, SIGNED_CONTROLS, Anatomy, LipModel
+from engine.lipmodel import CONTROL_NAMES, KINEMATICS, SIGNED_CONTROLS, Anatomy, LipModel
 from engine.phonetics import EXTRA_VOWELS, PAUSE, VOWELS, DurationModel, pronounce
 from engine.progress import report
 from engine.threads import one_blas_thread
@@ -50,7 +50,7 @@ __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker",
            "phone_gestures", "gesture_phases", "speaker_anatomy"]
 
 #: Bumped whenever the generated corpus changes for the same parameters (cache key).
-GENERATOR_VERSION = 5
+GENERATOR_VERSION = 6
 
 #: Preset: seconds of speech (frames = seconds * rate) and lip-surface resolution.
 PRESETS = {
@@ -62,23 +62,23 @@ PRESETS = {
 
 # ---------------------------------------------------------------- phone targets
 # control order: jaw, round, spread, raise, closure, labiodental, protrude, depress, corner, asymmetry, jaw_lateral,
-# roll, mentalis
-_J, _R, _S, _U, _C, _L, _P, _D, _K, _A, _X, _O, _M = range(13)
+# jaw_forward, roll, mentalis
+_J, _R, _S, _U, _C, _L, _P, _D, _K, _A, _X, _F, _O, _M = range(14)
 _NC = len(CONTROL_NAMES)
-_NC_BASE = 11  # the controls that move without the tissue variation (generator 4's)
+_BASE = tuple(range(11))  # the controls that move in generator 4's talker (all but jaw_forward, roll, mentalis)
 #: Time to reach 63 % of a step (s) per control; natural frequency w = 2.146 / T63.
 #: Protrusion is slower than rounding (Perkell 1986); corners, asymmetry and the lateral
-#: jaw follow slow postural changes; vermilion roll is as fast as rounding (the same muscle),
-#: the chin (mentalis) as slow as protrusion.
-T63 = np.array([0.060, 0.080, 0.070, 0.065, 0.060, 0.045, 0.100, 0.060, 0.150, 0.300, 0.120, 0.080, 0.100])
+#: jaw follow slow postural changes, the jaw's protrusion as its lateral shift; vermilion roll is
+#: as fast as rounding (the same muscle), the chin (mentalis) as slow as protrusion.
+T63 = np.array([0.060, 0.080, 0.070, 0.065, 0.060, 0.045, 0.100, 0.060, 0.150, 0.300, 0.120, 0.120, 0.080, 0.100])
 _WINDOW = 8  # gestures either side of a sample that contribute to its blend
 _TIMING_SD = 0.08  # s.d. of a gesture's timing, as a fraction of its phone's duration
-_SHAPE = np.array([1.5, 1.5, 1.5, 1.5, 2.0, 2.0, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5])  # dominance exponent c per control
+_SHAPE = np.array([1.5, 1.5, 1.5, 1.5, 2.0, 2.0, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5])  # dominance exponent c per control
 _LOOKAHEAD = (1.0, 0.15)  # dominance width (a * duration + b s) before a rounded / protruded phone
 _EMPHASIS_SD = 0.15  # s.d. of log jaw opening of a vowel (stress and emphasis)
 _TEMPO_SD = 0.08     # s.d. of log speaking rate between sentences
 #: slow postural drift per control (s.d. in control units; 0 = none), first-order, 0.4 Hz corner
-_DRIFT_SD = np.array([0.0, 0.05, 0.06, 0.05, 0.0, 0.0, 0.06, 0.05, 0.25, 0.25, 0.3, 0.0, 0.0])
+_DRIFT_SD = np.array([0.0, 0.05, 0.06, 0.05, 0.0, 0.0, 0.06, 0.05, 0.25, 0.25, 0.3, 0.2, 0.0, 0.0])
 _DRIFT_HZ = 0.4
 _LATERAL_JAW = 0.3   # s.d. over speakers of the lateral jaw shift per unit of jaw opening
 #: token-to-token variability of the lip gestures: a gesture's round, spread, raise, protrude,
@@ -100,7 +100,7 @@ HELD_OUT_TALKER = {"seed": 7, "tempo": 1.15, "timing_sd": 0.12, "dynamics_scale"
 #: defaults of the keyword-only generator-variant parameters (left out of the cache key at
 #: these values, so the default talker's cache files keep their names)
 _VARIANT_DEFAULTS = {"timing_sd": _TIMING_SD, "dynamics_scale": 1.0, "coarticulation": 1.0, "speakers": None,
-                     "registration": 0.3, "tissue": False}
+                     "registration": 0.3, "tissue": False, "kinematics": "classic"}
 
 
 @dataclass(frozen=True)
@@ -109,10 +109,10 @@ class Gesture:
     (a number, or one per control)."""
 
     frac: float | tuple
-    target: tuple  # (13,)
-    alpha: tuple   # (13,) dominance magnitudes
-    before: tuple  # (13,) (a, b): dominance width = a * duration + b before the centre
-    after: tuple   # (13,) same after the centre
+    target: tuple  # (14,)
+    alpha: tuple   # (14,) dominance magnitudes
+    before: tuple  # (14,) (a, b): dominance width = a * duration + b before the centre
+    after: tuple   # (14,) same after the centre
 
 
 def _vowel(*subs):
@@ -124,8 +124,9 @@ def _vowel(*subs):
     fracs = (0.5,) if len(subs) == 1 else (0.3, 0.8)
     out = []
     for f, (j, r, s, u) in zip(fracs, subs):
-        tgt = (j, r, s, u, 0.0, 0.0, 0.85 * r, 0.3 * max(j - 0.5, 0.0), 0.4 * s - 0.2 * r, 0.0, 0.0, 0.3 * r, 0.2 * r)
-        alpha = (1.0, 1.0, 1.0, 0.8, 1.0, 1.0, 1.0, 0.8, 0.6, 0.05, 0.05, 0.5, 0.5)
+        tgt = (j, r, s, u, 0.0, 0.0, 0.85 * r, 0.3 * max(j - 0.5, 0.0), 0.4 * s - 0.2 * r, 0.0, 0.0, 0.0, 0.3 * r,
+               0.2 * r)
+        alpha = (1.0, 1.0, 1.0, 0.8, 1.0, 1.0, 1.0, 0.8, 0.6, 0.05, 0.05, 0.3, 0.5, 0.5)
         w = ((0.5, 0.03),) * _NC
         wb = _with(_with(w, _R, _LOOKAHEAD), _P, _LOOKAHEAD) if r > 0.4 else w
         out.append(Gesture(f, tgt, alpha, wb, w))
@@ -133,13 +134,13 @@ def _vowel(*subs):
 
 
 def _cons(jaw=(0.2, 0.4), rnd=(0.1, 0.15), spr=(0.1, 0.15), rai=(0.1, 0.3), clo=(0.0, 0.6),
-          lab=(0.0, 0.6), pro=None, dep=(0.0, 0.2), cor=(0.0, 0.2), rol=(0.0, 0.2), mnt=(0.0, 0.2), frac=0.5,
-          before=None, after=None, jaw_frac=None):
+          lab=(0.0, 0.6), pro=None, dep=(0.0, 0.2), cor=(0.0, 0.2), jfw=(0.0, 0.3), rol=(0.0, 0.2), mnt=(0.0, 0.2),
+          frac=0.5, before=None, after=None, jaw_frac=None):
     if pro is None:
         pro = (0.85 * rnd[0], rnd[1])
     drift = ((0.0, 0.05), (0.0, 0.05))
-    tgt = tuple(v[0] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift + (rol, mnt))
-    alpha = tuple(v[1] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift + (rol, mnt))
+    tgt = tuple(v[0] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift + (jfw, rol, mnt))
+    alpha = tuple(v[1] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift + (jfw, rol, mnt))
     w = ((0.5, 0.03),) * _NC
     wb = w
     if rnd[0] > 0.4 or pro[0] > 0.4:  # anticipatory (look-ahead) rounding and protrusion
@@ -188,27 +189,29 @@ PHONE_GESTURES = {
     # keeps rising past the phone's end, so the whole lip-jaw complex is still closing
     "m": _cons(jaw=(0.02, 2.5), rnd=(0.1, 0.1), spr=(0.1, 0.1), rai=(0.0, 0.3), clo=(1.0, _PROTECT),
                rol=(-0.4, 1.0), mnt=(0.3, 0.8), frac=0.75, jaw_frac=1.3, before=_with(_W0, _C, (0.5, 0.01)), after=_with(_W0, _C, (0.45, 0.02))),
-    **dict.fromkeys(("f", "v"), _cons(jaw=(0.12, 0.6), rai=(0.25, 0.5), lab=(1.0, _PROTECT), rol=(-0.3, 0.6),
+    **dict.fromkeys(("f", "v"), _cons(jaw=(0.12, 0.6), rai=(0.25, 0.5), lab=(1.0, _PROTECT), jfw=(0.3, 0.5), rol=(-0.3, 0.6),
                                       frac=0.45,
                                       before=_with(_W0, _L, (0.4, 0.01)), after=_with(_W0, _L, (0.35, 0.01)))),
     # dental fricatives: the lower lip drops to let the tongue tip show
-    **dict.fromkeys(("th", "dh"), _cons(jaw=(0.22, 0.5), spr=(0.2, 0.2), rai=(0.25, 0.3), dep=(0.35, 0.5))),
-    **dict.fromkeys(("s", "z"), _cons(jaw=(0.08, 1.2), spr=(0.35, 0.4), rai=(0.2, 0.3), cor=(0.15, 0.3))),
-    **dict.fromkeys(("t", "d"), _cons(jaw=(0.15, 0.7))),
-    **dict.fromkeys(("n", "l"), _cons(jaw=(0.2, 0.5))),
+    **dict.fromkeys(("th", "dh"), _cons(jaw=(0.22, 0.5), spr=(0.2, 0.2), rai=(0.25, 0.3), dep=(0.35, 0.5),
+                                        jfw=(0.4, 0.5))),
+    **dict.fromkeys(("s", "z"), _cons(jaw=(0.08, 1.2), spr=(0.35, 0.4), rai=(0.2, 0.3), cor=(0.15, 0.3),
+                                      jfw=(0.6, 0.8))),
+    **dict.fromkeys(("t", "d"), _cons(jaw=(0.15, 0.7), jfw=(0.2, 0.3))),
+    **dict.fromkeys(("n", "l"), _cons(jaw=(0.2, 0.5), jfw=(0.2, 0.3))),
     # postalveolars: strong protrusion with moderate rounding, both lips everted (funnel)
     **dict.fromkeys(("sh", "zh", "ch", "jh"), _cons(jaw=(0.12, 0.8), rnd=(0.5, 1.2), rai=(0.35, 0.6),
-                                                    pro=(0.9, 1.5), dep=(0.4, 0.8), rol=(0.5, 0.8),
+                                                    pro=(0.9, 1.5), dep=(0.4, 0.8), jfw=(0.5, 0.8), rol=(0.5, 0.8),
                                                     mnt=(0.2, 0.5))),
     "r": _cons(jaw=(0.2, 0.4), rnd=(0.55, 1.0), pro=(0.45, 0.8)),
     "w": _cons(jaw=(0.12, 0.8), rnd=(1.0, 3.0), pro=(0.8, 2.0), rol=(0.3, 0.5), mnt=(0.2, 0.5)),
     "y": _cons(jaw=(0.12, 0.6), spr=(0.55, 0.8), cor=(0.2, 0.4)),
-    **dict.fromkeys(("k", "g", "ng"), _cons(jaw=(0.25, 0.3))),
+    **dict.fromkeys(("k", "g", "ng"), _cons(jaw=(0.25, 0.3), jfw=(-0.2, 0.3))),
     "hh": _cons(jaw=(0.3, 0.1), rnd=(0.1, 0.05), spr=(0.1, 0.05), rai=(0.1, 0.05), clo=(0.0, 0.3), lab=(0.0, 0.3),
-                pro=(0.1, 0.05), dep=(0.0, 0.05), cor=(0.0, 0.05), rol=(0.0, 0.05), mnt=(0.0, 0.05)),
+                pro=(0.1, 0.05), dep=(0.0, 0.05), cor=(0.0, 0.05), jfw=(0.0, 0.05), rol=(0.0, 0.05), mnt=(0.0, 0.05)),
     # pause: lips lightly together, jaw almost closed
     PAUSE: _cons(jaw=(0.02, 1.5), rnd=(0.05, 0.6), spr=(0.1, 0.6), rai=(0.05, 0.6), clo=(0.7, 1.5), lab=(0.0, 1.0),
-                 pro=(0.0, 0.6), dep=(0.0, 0.6), cor=(0.0, 0.3), rol=(0.0, 0.3), mnt=(0.1, 0.3)),
+                 pro=(0.0, 0.6), dep=(0.0, 0.6), cor=(0.0, 0.3), jfw=(0.0, 0.5), rol=(0.0, 0.3), mnt=(0.1, 0.3)),
 }
 
 
@@ -284,11 +287,19 @@ class SyntheticTalker(BaseEstimator):
         its lip gestures with its jaw opening, and each sentence has its own tissue
         posture. False: ``roll`` and ``mentalis`` stay 0 and the other controls are
         those of generator 4.
+    kinematics : {"classic", "calibrated"}, default="classic"
+        How the jaw, upper lip and corners move (:data:`engine.lipmodel.KINEMATICS`).
+        ``"calibrated"`` (opt-in) moves them as real speakers' articulograph sensors do:
+        the jaw turns on an arc and protrudes on its own (the ``jaw_forward`` control,
+        driven by phones: forward for sibilants, dentals and labiodentals, back for
+        velars), the upper lip takes a third of the opening, and the corners descend with
+        the jaw and narrow and widen whole. ``"classic"``: ``jaw_forward`` stays 0 and the
+        frames are those of generator 5.
     """
 
     def __init__(self, *, preset="default", n_sentences=None, duration=None, resolution=None, rate=60.0,
                  seed=0, noise=0.2, jitter=0.04, tempo=1.0, timing_sd=_TIMING_SD, dynamics_scale=1.0,
-                 coarticulation=1.0, speakers=None, registration=0.3, tissue=False):
+                 coarticulation=1.0, speakers=None, registration=0.3, tissue=False, kinematics="classic"):
         self.preset = preset
         self.n_sentences = n_sentences
         self.duration = duration
@@ -304,6 +315,7 @@ class SyntheticTalker(BaseEstimator):
         self.speakers = speakers
         self.registration = registration
         self.tissue = tissue
+        self.kinematics = kinematics
 
     # -------------------------------------------------------------- validation
     def _validate(self):
@@ -332,6 +344,8 @@ class SyntheticTalker(BaseEstimator):
             raise ValueError(f"registration must be in [0, 5] (mm and degrees), got {self.registration!r}")
         if not isinstance(self.tissue, (bool, np.bool_)):
             raise ValueError(f"tissue must be True or False, got {self.tissue!r}")
+        if self.kinematics not in KINEMATICS:
+            raise ValueError(f"kinematics must be one of {sorted(KINEMATICS)}, got {self.kinematics!r}")
         res = PRESETS[self.preset]["resolution"] if self.resolution is None else self.resolution
         return dur, res
 
@@ -403,7 +417,7 @@ class SyntheticTalker(BaseEstimator):
 
     # -------------------------------------------------------------- articulation
     def _controls(self, rng, phones, durs, n_frames, lateral=0.0):
-        """Controls after dynamics for one utterance, ndarray (n_frames, 13)."""
+        """Controls after dynamics for one utterance, ndarray (n_frames, 14)."""
         rate = float(self.rate)
         sub = max(1, math.ceil(240.0 / rate))
         fs = rate * sub
@@ -420,23 +434,27 @@ class SyntheticTalker(BaseEstimator):
                 wb.append([(a * d + b) * self.coarticulation for a, b in g.before])
                 wa.append([(a * d + b) * self.coarticulation for a, b in g.after])
                 vow.append(p in _VOWELS)
-        # without the tissue variation only the first eleven controls move (generator 4's
-        # talker, drawing the same random numbers); roll and mentalis stay 0
-        nc = _NC if self.tissue else _NC_BASE
-        cen = np.array(cen)[:, :nc]                                              # (E, nc)
-        tgt = np.array(tgt)[:, :nc]
+        # the controls that move (the rest stay 0): generator 4's eleven, drawing the same random
+        # numbers, plus jaw_forward with the calibrated kinematics and roll and mentalis with
+        # the tissue variation; columns of the arrays below are these, in order
+        act = np.array(_BASE + ((_F,) if self.kinematics == "calibrated" else ()) + ((_O, _M) if self.tissue else ()))
+        col = {int(k): i for i, k in enumerate(act)}
+        nc = len(act)
+        cen = np.array(cen)[:, act]                                              # (E, nc)
+        tgt = np.array(tgt)[:, act]
         if self.tissue:  # token-to-token variability: each lip gesture's size has its own log-normal factor
-            tgt[:, _TOKEN_CONTROLS] *= np.exp(_TOKEN_SD * rng.standard_normal((len(cen), len(_TOKEN_CONTROLS))))
+            tok = [col[k] for k in _TOKEN_CONTROLS]
+            tgt[:, tok] *= np.exp(_TOKEN_SD * rng.standard_normal((len(cen), len(tok))))
         tgt += self.jitter * rng.standard_normal((len(cen), nc))
         # stress and emphasis: a vowel's jaw opening (with the tissue variation: and its lip
         # gestures) varies by one log-normal factor
         vow = np.array(vow)
-        emph = _EMPHASIS_CONTROLS if self.tissue else np.array([_J])
+        emph = [col[k] for k in (_EMPHASIS_CONTROLS if self.tissue else [_J])]
         tgt[np.ix_(vow, emph)] *= np.exp(_EMPHASIS_SD * rng.standard_normal(int(vow.sum())))[:, None]
-        low = _LOW[:nc]
+        low = _LOW[act]
         tgt = np.clip(tgt, low, 1.0)                                           # the controls' ranges
-        alp, wb, wa = np.array(alp)[:, :nc], np.array(wb)[:, :nc], np.array(wa)[:, :nc]
-        omega = 2.146 / (T63[:nc] * float(self.dynamics_scale))
+        alp, wb, wa = np.array(alp)[:, act], np.array(wb)[:, act], np.array(wa)[:, act]
+        omega = 2.146 / (T63[act] * float(self.dynamics_scale))
         lead = 2.0 / omega                                   # group delay of the dynamics
         n_sub = n_frames * sub
         t = np.arange(n_sub) / fs
@@ -446,25 +464,25 @@ class SyntheticTalker(BaseEstimator):
         near = np.searchsorted(cen.mean(1), t)[:, None] + np.arange(-_WINDOW, _WINDOW)[None, :]   # (n, 2W)
         valid = (near >= 0) & (near < len(cen))
         near = np.clip(near, 0, len(cen) - 1)
-        tau = t[:, None, None] + lead[None, None, :] - cen[near]                 # (n, 2W, 13)
+        tau = t[:, None, None] + lead[None, None, :] - cen[near]                 # (n, 2W, 14)
         w = np.where(tau < 0, wb[near], wa[near])
-        dom = alp[near] * np.exp(-(np.abs(tau) / w) ** _SHAPE[:nc]) * valid[:, :, None]
-        u = (dom * tgt[near]).sum(1) / (dom.sum(1) + 1e-12)                    # (n, 13)
+        dom = alp[near] * np.exp(-(np.abs(tau) / w) ** _SHAPE[act]) * valid[:, :, None]
+        u = (dom * tgt[near]).sum(1) / (dom.sum(1) + 1e-12)                    # (n, 14)
         u += 0.02 * rng.standard_normal(u.shape)                               # motor noise
         # slow postural drift (expression, corners, asymmetry, lateral jaw), stationary from the start
         pd = math.exp(-2 * math.pi * _DRIFT_HZ / fs)
-        u += _slow_process(rng, n_sub, nc, pd) * _DRIFT_SD[:nc]
+        u += _slow_process(rng, n_sub, nc, pd) * _DRIFT_SD[act]
         if self.tissue:  # this sentence's posture of the lip tissue (rolled in or out, chin raised)
-            u[:, _O] += _POSTURE_ROLL_SD * rng.standard_normal()
-            u[:, _M] += abs(_POSTURE_MENTALIS_SD * rng.standard_normal())
-        u[:, _X] += lateral * u[:, _J]                                         # this speaker's jaw path
+            u[:, col[_O]] += _POSTURE_ROLL_SD * rng.standard_normal()
+            u[:, col[_M]] += abs(_POSTURE_MENTALIS_SD * rng.standard_normal())
+        u[:, col[_X]] += lateral * u[:, col[_J]]                               # this speaker's jaw path
         p = np.exp(-omega / fs)
         out = np.zeros((len(u), _NC))
-        for k in range(nc):
-            b, a = [1 - p[k]], [1.0, -p[k]]
-            zi = np.array([p[k]])  # = lfilter_zi(b, a): the state that holds a constant input
-            y, _ = lfilter(b, a, u[:, k], zi=zi * u[0, k])
-            y, _ = lfilter(b, a, y, zi=zi * u[0, k])
+        for i, k in enumerate(act):
+            b, a = [1 - p[i]], [1.0, -p[i]]
+            zi = np.array([p[i]])  # = lfilter_zi(b, a): the state that holds a constant input
+            y, _ = lfilter(b, a, u[:, i], zi=zi * u[0, i])
+            y, _ = lfilter(b, a, y, zi=zi * u[0, i])
             out[:, k] = y
         return np.clip(out[::sub], _LOW, 1.0)
 
@@ -481,7 +499,7 @@ class SyntheticTalker(BaseEstimator):
         Corpus
             ``frames`` (n_frames, 3 * n_points) float32 in mm, ``faces``,
             ``point_names``, phone-aligned utterances ``s0001``..., and ``latent``:
-            the thirteen controls, ``aperture`` (mm) and ``phase`` (see :func:`gesture_phases`).
+            the fourteen controls, ``aperture`` (mm) and ``phase`` (see :func:`gesture_phases`).
         """
         dur, res = self._validate()
         rng = np.random.default_rng(self.seed)
@@ -490,7 +508,7 @@ class SyntheticTalker(BaseEstimator):
         anat = [speaker_anatomy(self.seed, k) for k in range(n_spk)]
         lateral = [float(_LATERAL_JAW * np.random.default_rng([int(self.seed), 2000 + k]).standard_normal())
                    for k in range(n_spk)]
-        lips = [LipModel(res, a) for a in anat]
+        lips = [LipModel(res, a, kinematics=self.kinematics) for a in anat]
         lip = lips[0]
         total = int(round(dur * rate))
         report(progress, "sentences", 0, 1)
