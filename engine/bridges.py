@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from engine.hop_paths import concat_ranges, mark_level
+from engine.hop_paths import concat_ranges, grow_balls
 
 __all__ = ["bridge", "forward_to"]
 
@@ -59,19 +59,11 @@ def _balls(g, sources, targets, hops):
     fa, fb = np.unique(sources), np.unique(targets)
     da[fa], db[fb] = 0, 0
     ha = hb = 0
-    while ha + hb < hops:
-        cost_a = out_ptr[fa + 1].sum() - out_ptr[fa].sum() if fa.size else np.inf
-        cost_b = in_n[fb].sum() if fb.size else np.inf
-        if cost_a <= cost_b:
-            ha += 1
-            if fa.size:
-                nxt = out_dst[concat_ranges(out_ptr[fa], out_ptr[fa + 1] - out_ptr[fa])]
-                fa = mark_level(nxt, da, ha)
-        else:
-            hb += 1
-            if fb.size:
-                nxt = g.src[concat_ranges(in_lo[fb], in_n[fb])]
-                fb = mark_level(nxt, db, hb)
+    if hops > 0:
+        forward = (out_ptr[:-1], np.diff(out_ptr), out_dst)
+        for ha, hb, _, _ in grow_balls(forward, (in_lo, in_n, g.src), da, db, fa, fb):
+            if ha + hb == hops:
+                break
     return da, db, ha, hb
 
 

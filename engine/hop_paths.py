@@ -1,4 +1,10 @@
-"""Fewest-hop paths between two states of a directed graph, by a bidirectional breadth-first search.
+"""Hop counts over a directed graph: distances from one state, and fewest-hop paths between two.
+
+:func:`hop_distances` gives the fewest hops from one state to every other (the
+future and past hemispheres of :class:`engine.states.StateGraph`).
+:func:`fewest_hop_path` finds a fewest-hop path between two states by a bidirectional
+breadth-first search; :func:`grow_balls` is that search's growth of two balls, shared
+with the exact-length bridges of synthesis (:mod:`engine.bridges`).
 
 The explorer's state path (:meth:`engine.states.StateGraph.min_path`) is a path of
 fewest hops (one hop ~ one frame) from the selected state to the target state. A
@@ -18,14 +24,42 @@ lexicographic order of tree paths). It is rebuilt greedily from ``a``: at each h
 the smallest next state that still lies on a fewest-hop path to ``b``. So the result
 is exactly the path of the full search, found from the two balls only.
 
-Pure numpy; every step is a vectorised gather over the rows of the current frontier.
+Pure numpy (and scipy's compiled breadth-first search for the distances); every step
+is a vectorised gather over the rows of the current frontier.
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import breadth_first_order
 
-__all__ = ["fewest_hop_path", "concat_ranges", "mark_level"]
+__all__ = ["hop_distances", "fewest_hop_path", "grow_balls", "csr_rows", "concat_ranges", "mark_level"]
+
+
+def hop_distances(G, source: int) -> np.ndarray:
+    """Fewest hops from ``source`` to every node of the directed graph G (csr), float64, inf where unreachable.
+
+    The same distances as ``dijkstra(G, indices=source, unweighted=True)``, about ten
+    times faster at K = 20,000 states: a breadth-first search (compiled, scipy) gives
+    each reached node's predecessor, and the depth of every node in that tree is found
+    by pointer jumping (log2 K vectorised steps, each node's hop count doubled along
+    its ancestors) instead of a heap.
+    """
+    order, pred = breadth_first_order(G, source, directed=True, return_predecessors=True)
+    K = G.shape[0]
+    reached = np.zeros(K, bool)
+    reached[order] = True
+    anc = np.where(reached, pred, source)
+    anc[source] = source
+    depth = (anc != np.arange(K)).astype(np.int64)
+    for _ in range(max(1, int(K).bit_length())):
+        if not (anc != source).any():
+            break
+        depth += depth[anc]
+        anc = anc[anc]
+    out = depth.astype(np.float64)
+    out[~reached] = np.inf
+    return out
 
 
 def concat_ranges(lo, n) -> np.ndarray:
@@ -54,9 +88,54 @@ def mark_level(reached, dist, level) -> np.ndarray:
     return np.flatnonzero(dist == level)
 
 
-def _grow(G, frontier, dist, level):
-    """One breadth-first level over csr ``G`` from ``frontier`` (see :func:`mark_level`)."""
-    return mark_level(_rows(G, frontier), dist, level)
+def csr_rows(G):
+    """``(lo, n, indices)`` of csr ``G``: node i's neighbours are ``indices[lo[i]:lo[i] + n[i]]``."""
+    return G.indptr[:-1], np.diff(G.indptr), G.indices
+
+
+def grow_balls(forward, backward, da, db, fa, fb):
+    """Grow a ball forward from ``fa`` and one backward from ``fb``, one breadth-first level at a time.
+
+    Each level grows the ball whose frontier has fewer edges to follow (ties: the
+    forward one); an empty frontier counts as endless, and growing it only adds to
+    its radius.
+
+    Parameters
+    ----------
+    forward, backward : tuple (lo, n, indices)
+        The edges followed by each ball (:func:`csr_rows`): node i's next nodes are
+        ``indices[lo[i]:lo[i] + n[i]]`` (out-edges forward, in-edges backward).
+    da, db : ndarray of shape (K,) int32
+        Hops from ``fa`` / to ``fb``, -1 outside the balls; ``fa`` and ``fb`` marked 0
+        by the caller, each level marked in place (:func:`mark_level`).
+    fa, fb : ndarray of int
+        The start frontiers, sorted, without repeats.
+
+    Yields
+    ------
+    ka, kb : int
+        The radii of the two balls after this level.
+    forward_grew : bool
+        Which ball grew.
+    frontier : ndarray of int
+        Its new frontier (sorted; empty when it reached no new node).
+    """
+    ka = kb = 0
+    while True:
+        cost_a = forward[1][fa].sum() if fa.size else np.inf
+        cost_b = backward[1][fb].sum() if fb.size else np.inf
+        if cost_a <= cost_b:
+            ka += 1
+            if fa.size:
+                lo, n, ind = forward
+                fa = mark_level(ind[concat_ranges(lo[fa], n[fa])], da, ka)
+            yield ka, kb, True, fa
+        else:
+            kb += 1
+            if fb.size:
+                lo, n, ind = backward
+                fb = mark_level(ind[concat_ranges(lo[fb], n[fb])], db, kb)
+            yield ka, kb, False, fb
 
 
 def fewest_hop_path(G, GT, a: int, b: int):
@@ -92,22 +171,10 @@ def fewest_hop_path(G, GT, a: int, b: int):
     da = np.full(K, -1, dtype=np.int32)  # hops from a (forward ball)
     db = np.full(K, -1, dtype=np.int32)  # hops to b (backward ball)
     da[a], db[b] = 0, 0
-    fa, fb = np.array([a]), np.array([b])
-    ka = kb = 0
-    while True:
-        # grow the ball whose frontier has fewer edges to follow
-        if G.indptr[fa + 1].sum() - G.indptr[fa].sum() <= GT.indptr[fb + 1].sum() - GT.indptr[fb].sum():
-            ka += 1
-            fa = _grow(G, fa, da, ka)
-            if fa.size == 0:
-                return None
-            meet = fa[db[fa] >= 0]
-        else:
-            kb += 1
-            fb = _grow(GT, fb, db, kb)
-            if fb.size == 0:
-                return None
-            meet = fb[da[fb] >= 0]
+    for ka, kb, forward_grew, front in grow_balls(csr_rows(G), csr_rows(GT), da, db, np.array([a]), np.array([b])):
+        if front.size == 0:  # one ball stopped growing before they met
+            return None
+        meet = front[(db if forward_grew else da)[front] >= 0]
         if meet.size:
             break
     # Before this level the two balls were disjoint, so no path is shorter than

@@ -8,7 +8,7 @@ C_jk of frame transitions j -> k inside utterances (self-transitions included) g
 
 Distances are directed hop counts (one hop ~ one frame) over A — the *future
 hemisphere* of a state — and over A^T — its *past hemisphere*: Dijkstra's distances
-with unit weights, found by a breadth-first search (:func:`hop_distances`).
+with unit weights, found by a breadth-first search (:func:`engine.hop_paths.hop_distances`).
 Unreachable is ``inf``. There is no transition across an utterance boundary.
 """
 from __future__ import annotations
@@ -17,7 +17,7 @@ import warnings
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, connected_components
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.cluster import KMeans, MiniBatchKMeans
@@ -26,7 +26,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from engine.corpus import CorpusWarning
 from engine.dynamics import check_bounds
-from engine.hop_paths import fewest_hop_path
+from engine.hop_paths import fewest_hop_path, hop_distances
 from engine.progress import ProgressFn, report
 
 __all__ = ["StateGraph", "UnreachableError", "StateGraphConnectivityWarning", "default_n_states",
@@ -89,32 +89,6 @@ def assign_and_count(start, stop, centroids, Y, has_next, *, workers=1):
     src, dst = lab[:-1][step], lab[1:][step]
     counts = sp.coo_matrix((np.ones(len(src), np.int64), (src, dst)), shape=(K, K))
     return lab[: stop - start], counts
-
-
-def hop_distances(G, source: int) -> np.ndarray:
-    """Fewest hops from ``source`` to every node of the directed graph G (csr), float64, inf where unreachable.
-
-    The same distances as ``dijkstra(G, indices=source, unweighted=True)``, about ten
-    times faster at K = 20,000 states: a breadth-first search (compiled, scipy) gives
-    each reached node's predecessor, and the depth of every node in that tree is found
-    by pointer jumping (log2 K vectorised steps, each node's hop count doubled along
-    its ancestors) instead of a heap.
-    """
-    order, pred = breadth_first_order(G, source, directed=True, return_predecessors=True)
-    K = G.shape[0]
-    reached = np.zeros(K, bool)
-    reached[order] = True
-    anc = np.where(reached, pred, source)
-    anc[source] = source
-    depth = (anc != np.arange(K)).astype(np.int64)
-    for _ in range(max(1, int(K).bit_length())):
-        if not (anc != source).any():
-            break
-        depth += depth[anc]
-        anc = anc[anc]
-    out = depth.astype(np.float64)
-    out[~reached] = np.inf
-    return out
 
 
 class StateGraph(BaseEstimator):

@@ -283,22 +283,3 @@ def test_bad_input_is_rejected_with_the_fix():
         g.past(1.5)
     with pytest.raises(ValueError, match="at least n_dims=3"):
         g.predict(np.zeros((4, 2)))
-
-
-def test_hop_distances_equal_dijkstra_with_unit_weights():
-    """The breadth-first hop counts behind future/past are Dijkstra's, inf where unreachable (issue 13 item 8)."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import dijkstra
-
-    from engine.states import hop_distances
-
-    rng = np.random.default_rng(4)
-    K = 400
-    src, dst = rng.integers(0, K - 20, 2400), rng.integers(0, K - 20, 2400)  # the last 20 states: no edge in
-    chain = np.arange(K - 20, K - 1)  # ... except a chain among themselves, reachable only from its head
-    A = sp.csr_matrix((np.ones(2400 + len(chain)), (np.r_[src, chain], np.r_[dst, chain + 1])), shape=(K, K))
-    for s in [0, 7, K - 20, K - 1]:
-        want = dijkstra(A, directed=True, indices=s, unweighted=True)
-        got = hop_distances(A, s)
-        np.testing.assert_array_equal(got, want)
-    assert np.isinf(hop_distances(A, 0)[K - 20:]).all() and hop_distances(A, K - 20)[K - 1] == 19

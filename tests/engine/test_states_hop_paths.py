@@ -12,7 +12,7 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, dijkstra
 
-from engine.hop_paths import fewest_hop_path
+from engine.hop_paths import fewest_hop_path, hop_distances
 from engine.states import UnreachableError
 
 
@@ -147,3 +147,49 @@ def test_prepare_queries_builds_the_cached_graphs_queries_then_use(small_manifol
     if np.isfinite(fut[b]):
         assert len(g.min_path(a, b)) - 1 == fut[b]
     assert g._cache["A"] is A and g._cache["AT"] is AT  # the queries used them, built nothing new
+
+
+def test_hop_distances_equal_dijkstra_with_unit_weights():
+    """The breadth-first hop counts behind future/past are Dijkstra's, inf where unreachable (issue 13 item 8)."""
+    rng = np.random.default_rng(4)
+    K = 400
+    src, dst = rng.integers(0, K - 20, 2400), rng.integers(0, K - 20, 2400)  # the last 20 states: no edge in
+    chain = np.arange(K - 20, K - 1)  # ... except a chain among themselves, reachable only from its head
+    A = sp.csr_matrix((np.ones(2400 + len(chain)), (np.r_[src, chain], np.r_[dst, chain + 1])), shape=(K, K))
+    for s in [0, 7, K - 20, K - 1]:
+        want = dijkstra(A, directed=True, indices=s, unweighted=True)
+        got = hop_distances(A, s)
+        np.testing.assert_array_equal(got, want)
+    assert np.isinf(hop_distances(A, 0)[K - 20:]).all() and hop_distances(A, K - 20)[K - 1] == 19
+
+
+def test_grown_balls_hold_the_hop_distances_and_grow_the_cheaper_side():
+    """grow_balls (shared by min_path and the synthesis bridges): after each level, the balls hold exactly the
+    states within their radius of a (forward) and of b (backward), and the ball grown had the frontier with
+    fewer edges to follow."""
+    from engine.hop_paths import csr_rows, grow_balls
+
+    rng = np.random.default_rng(7)
+    K = 300
+    A = sp.csr_matrix((np.ones(900), (rng.integers(0, K, 900), rng.integers(0, K, 900))), shape=(K, K))
+    AT = A.T.tocsr()
+    a, b = 3, 250
+    want_a, want_b = hop_distances(A, a), hop_distances(AT, b)
+    da, db = np.full(K, -1, np.int32), np.full(K, -1, np.int32)
+    da[a], db[b] = 0, 0
+    fronts = {True: np.array([a]), False: np.array([b])}
+    out_n, in_n = np.diff(A.indptr), np.diff(AT.indptr)
+    sides = []
+    for ka, kb, forward_grew, front in grow_balls(csr_rows(A), csr_rows(AT), da, db, fronts[True], fronts[False]):
+        cost_a = out_n[fronts[True]].sum() if fronts[True].size else np.inf
+        cost_b = in_n[fronts[False]].sum() if fronts[False].size else np.inf
+        assert forward_grew == (cost_a <= cost_b)
+        fronts[forward_grew] = front
+        sides.append(forward_grew)
+        for d, want, k in ((da, want_a, ka), (db, want_b, kb)):
+            inside = want <= k
+            np.testing.assert_array_equal(d[inside], want[inside])
+            assert (d[~inside] == -1).all()
+        if ka + kb == 12:
+            break
+    assert any(sides) and not all(sides)  # both balls grew
