@@ -234,16 +234,27 @@ def add_lips(plotter, points, faces=None, *, color=(0.85, 0.45, 0.45), offset=(0
         mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
         rgb = lip_colours(mesh.n_points, color, names)
         extras = []
-        if rgb is None:
-            kw = {"color": color}
-        else:
+        if rgb is not None:
             mesh.point_data["lip_rgb"] = rgb
-            kw = {"scalars": "lip_rgb", "rgb": True}
+            mesh.point_data.active_scalars_name = "lip_rgb"
             extras.append(plotter.add_mesh(mouth_interior(np.asarray(mesh.points)), color=MOUTH, lighting=False,
                                            name=f"{name}_interior", pickable=False, reset_camera=False,
                                            render=False))
-        actor = plotter.add_mesh(mesh, specular=0.25, specular_power=12.0, smooth_shading=True, name=name,
-                                 pickable=False, reset_camera=False, render=False, show_scalar_bar=False, **kw)
+        # the mesh goes to the mapper as it is: pyvista's smooth_shading=True and scalars= would put its
+        # Python smooth-shading and active-scalars filters in between, which re-run at every render of a
+        # moved frame (2.4 ms of a playback frame's two meshes) for the same picture. The mesh carries
+        # its own point normals (LipsHandle.update keeps them): Phong-shaded, as smooth_shading sets it.
+        # (coloured by the per-point RGB, the property keeps the colour pyvista gives a scalar-coloured
+        # mesh: it tints the specular highlight, as before)
+        actor = plotter.add_mesh(mesh, color=color if rgb is None else plotter.renderer.next_color, specular=0.25,
+                                 specular_power=12.0, name=name, pickable=False, reset_camera=False, render=False)
+        actor.prop.interpolation = "phong"
+        if rgb is not None:  # coloured by the per-point RGB itself, as scalars="lip_rgb", rgb=True did
+            mapper = actor.GetMapper()
+            mapper.SetScalarModeToUsePointData()
+            mapper.SetColorModeToDirectScalars()
+            mapper.SetArrayName("lip_rgb")
+            mapper.ScalarVisibilityOn()
         return LipsHandle(plotter, mesh, actor, offset, extras)
     return LipsHandle(plotter, mesh, actor, offset)
 

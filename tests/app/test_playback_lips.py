@@ -45,3 +45,47 @@ def test_point_normals_of_a_folded_sheet():
     assert np.allclose(N[2], [0, 0, 1]) and np.allclose(N[3], [0, 1, 0])
     assert np.allclose(N[0], [0, np.sqrt(0.5), np.sqrt(0.5)]) and np.allclose(N[1], N[0])
     assert np.allclose(N[4], 0)
+
+
+def test_lip_mesh_goes_to_the_mapper_without_a_python_filter_and_looks_the_same():
+    """A playback frame renders the moved mesh itself: no pyvista smooth-shading filter re-runs per render
+    (it cost about 1 ms a mesh a frame), and the picture is the one that filter gave, pixel for pixel."""
+    lip = LipModel("default")
+    frames = [_frame(lip, jaw=0.3), _frame(lip, jaw=1.0, protrude=1.0), _frame(lip, round=0.8, closure=0.6)]
+
+    def draw(smooth_filter):
+        add_mesh = pv.Plotter.add_mesh
+
+        def through_filter(self, mesh, *a, **kw):  # the previous code's call, through pyvista's filters
+            if "lip_rgb" not in mesh.point_data:
+                return add_mesh(self, mesh, *a, **kw)
+            kw.pop("color")
+            return add_mesh(self, mesh, *a, smooth_shading=True, scalars="lip_rgb", rgb=True, show_scalar_bar=False,
+                            **kw)
+
+        pl = pv.Plotter(off_screen=True, window_size=(200, 140))
+        try:
+            pv.Plotter.add_mesh = through_filter if smooth_filter else add_mesh
+            try:
+                h = add_lips(pl, frames[0], lip.faces, color=(0.8, 0.3, 0.3), names=lip.point_names)
+            finally:
+                pv.Plotter.add_mesh = add_mesh
+            pl.view_xy()
+            pl.reset_camera()
+            shots = []
+            for P in frames[1:]:
+                h.update(P)
+                shots.append(np.asarray(pl.screenshot(return_img=True)).copy())
+            producer = h.actor.GetMapper().GetInputAlgorithm()
+            return shots, producer.GetClassName(), h.actor.GetProperty().GetInterpolation()
+        finally:
+            pl.close()
+
+    shots, producer, interpolation = draw(smooth_filter=False)
+    assert producer == "vtkTrivialProducer"  # the mesh itself, no Python algorithm in between
+    assert interpolation == 2  # VTK_PHONG, as smooth_shading=True sets it
+    ref, ref_producer, _ = draw(smooth_filter=True)
+    assert ref_producer != "vtkTrivialProducer"  # the reference did go through pyvista's filter
+    for a, b in zip(shots, ref):
+        assert a.std() > 5  # the lips are drawn
+        assert np.array_equal(a, b)
