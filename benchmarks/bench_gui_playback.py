@@ -144,7 +144,8 @@ def play_once(app, win, max_seconds):
             "first_move_ms": 1e3 * (float(ts[np.flatnonzero(ks > 0)[0]]) - t_press) if (ks > 0).any() else float("nan"),
             "cpu": cpu, "cpu_ms": 1e3 * cpu / max(len(ks), 1), "load": (load0 + os.getloadavg()[0]) / 2,
             "longs": longs, "steal_s": steal_s, "steal_late": 1e3 * np.nan_to_num(tab["steal"][late]),
-            "thread_cpu_med": 1e3 * pct(tab["thread_cpu"], 50), "thread_cpu_p99": 1e3 * pct(tab["thread_cpu"], 99)}
+            "thread_cpu_med": 1e3 * pct(tab["thread_cpu"], 50), "thread_cpu_p99": 1e3 * pct(tab["thread_cpu"], 99),
+            "thread_cpu_sum": float(np.nansum(tab["thread_cpu"]))}
 
 
 def _start_probe():
@@ -160,12 +161,15 @@ def _start_probe():
     return proc, out
 
 
-def _probe_report(probe, longs) -> None:
+def _probe_report(probe, res) -> None:
     """Stop the probe; print its summary and, for each long frame, its pieces' own CPU meanwhile."""
     import numpy as np
 
+    longs = [lf for x in res for lf in x["longs"]]
     proc, out = probe
     proc.terminate()
+    gui_cpu = sum(x["thread_cpu_sum"] for x in res)
+    excess = sum(lf["excess"] for lf in longs)
     text, _ = proc.communicate(timeout=30)
     print(text.rstrip())
     try:
@@ -175,6 +179,12 @@ def _probe_report(probe, longs) -> None:
     if len(rows) == 0:
         return
     med = float(np.median(rows[:, 2]))
+    charged = rows[:, 2] > 10 * med
+    # if the machine takes the time, each thread is charged in proportion to the time it runs
+    print(f"   share of own CPU charged beyond the usual: GUI thread {100 * excess / max(gui_cpu, 1e-9):.1f} % "
+          f"(long frames' excess {1e3 * excess:.0f} ms of {gui_cpu:.1f} s between choices and swaps), probe "
+          f"{100 * float(np.sum(rows[charged, 2] - med)) / max(float(rows[:, 2].sum()), 1e-9):.1f} % (pieces over "
+          f"10x the median: {1e3 * float(np.sum(rows[charged, 2] - med)):.0f} ms of {float(rows[:, 2].sum()):.2f} s)")
     for lf in longs:
         sel = (rows[:, 1] >= lf["chosen"]) & (rows[:, 0] <= lf["chosen"] + lf["latency"])
         cpu = rows[sel, 2]
@@ -296,7 +306,7 @@ def main():
     print(f"wall {time.perf_counter() - t_all:.1f} s; peak RSS {gb.peak_rss_mb():.0f} MiB; "
           f"load average {os.getloadavg()[0]:.1f} at end")
     if probe is not None:
-        _probe_report(probe, [lf for x in res for lf in x["longs"]])
+        _probe_report(probe, res)
     win.close()
 
 
