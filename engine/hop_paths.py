@@ -187,7 +187,7 @@ def fewest_hop_path(G, GT, a: int, b: int):
     on[good] = True
     for j in range(ka - 1, -1, -1):
         prev = _rows(GT, good)
-        good = prev[da[prev] == j]
+        good = np.unique(prev[da[prev] == j])  # once each: repeats would multiply level by level
         on[good] = True
     path = np.empty(d + 1, dtype=np.int64)
     path[0] = x = a

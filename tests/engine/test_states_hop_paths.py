@@ -193,3 +193,26 @@ def test_grown_balls_hold_the_hop_distances_and_grow_the_cheaper_side():
         if ka + kb == 12:
             break
     assert any(sides) and not all(sides)  # both balls grew
+
+
+def test_many_fewest_hop_paths_do_not_multiply_the_work(monkeypatch):
+    """Layers of 4 states, each joined to every state of the next: 4^9 fewest-hop paths from a to b. Rebuilding
+    the path reads each state of the forward ball at most once per level (it used to read a state once per path
+    through it, which grows as 4^level and ran out of memory on dense graphs)."""
+    import engine.hop_paths as hp
+
+    w, L = 4, 10
+    K = w * L + 2
+    a, b = 0, K - 1
+    layer = [np.array([a])] + [1 + w * i + np.arange(w) for i in range(L)] + [np.array([b])]
+    edges = np.array([(u, v) for x, y in zip(layer[:-1], layer[1:]) for u in x for v in y])
+    G = sp.csr_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(K, K))
+    G.sort_indices()
+    GT = G.T.tocsr()
+    GT.sort_indices()
+    read = []
+    real = hp._rows
+    monkeypatch.setattr(hp, "_rows", lambda M, nodes: read.append(len(nodes)) or real(M, nodes))
+    path = hp.fewest_hop_path(G, GT, a, b)
+    np.testing.assert_array_equal(path, _bfs_tree_path(G, a, b))
+    assert len(path) == L + 2 and read and max(read) <= w
