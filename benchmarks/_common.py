@@ -39,3 +39,31 @@ def peak_rss_mb(pid="self") -> float:
     """Peak resident memory (VmHWM, MiB) of this process or of process ``pid``, from /proc
     (NaN where there is none); unlike getrusage's maximum it does not survive exec from the parent."""
     return _status_mb("VmHWM", pid)
+
+
+def run_child_json(cmd, **kwargs):
+    """Run a benchmark's child process and return the JSON value it printed on its last stdout line.
+
+    Parameters
+    ----------
+    cmd : sequence of str or path
+        The command (``[sys.executable, __file__, "--child", ...]``).
+    **kwargs
+        Passed to :func:`subprocess.run` (``env``, ``cwd``, ``timeout``: a timeout raises
+        :class:`subprocess.TimeoutExpired`).
+
+    Raises
+    ------
+    SystemExit
+        When the child exits non-zero or prints nothing: its command and the end of its stderr.
+    """
+    import json
+    import subprocess
+
+    cmd = [str(c) for c in cmd]
+    r = subprocess.run(cmd, capture_output=True, text=True, **kwargs)
+    lines = r.stdout.strip().splitlines()
+    if r.returncode == 0 and lines:
+        return json.loads(lines[-1])
+    why = f"exit {r.returncode}" if r.returncode else "printed nothing"
+    raise SystemExit(f"{' '.join(cmd)}: failed ({why})\n{r.stderr[-3000:]}")

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 import platform
-import resource
 import shutil
 import subprocess
 import sys
@@ -33,14 +32,17 @@ def ensure_display() -> None:
     sys.exit(subprocess.call([exe, *XVFB_ARGS, sys.executable, *sys.argv]))
 
 
-def peak_rss_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-
-
 def blas_kernel() -> str:
     from _common import blas_kernel as kernel
 
     return kernel()
+
+
+def peak_rss_mb() -> float:
+    """Peak resident memory of this process (MiB): :func:`_common.peak_rss_mb`."""
+    from _common import peak_rss_mb as peak
+
+    return peak()
 
 
 def gl_renderer(plotter) -> str:

@@ -8,16 +8,11 @@ on two cores with a few GB of memory.
 from __future__ import annotations
 
 import argparse
-import resource
 import time
 import tracemalloc
 
 import numpy as np
-from _common import blas_kernel
-
-
-def _rss_mb():
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+from _common import blas_kernel, peak_rss_mb
 
 
 def stage(name, fn, rows):
@@ -29,7 +24,7 @@ def stage(name, fn, rows):
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     rows.append((name, dt, peak / 2**20))
-    print(f"{name:<22} {dt:8.2f} s   peak traced {peak / 2**20:9.1f} MiB   process max RSS {_rss_mb():9.1f} MiB",
+    print(f"{name:<22} {dt:8.2f} s   peak traced {peak / 2**20:9.1f} MiB   process max RSS {peak_rss_mb():9.1f} MiB",
           flush=True)
     return out
 
@@ -69,7 +64,7 @@ def main():
           f"; Y first 3 dims hold {100 * emb.recovered_ratio_[2]:.1f}% of recovered variance; "
           f"{emb.n_passes_} passes over D")
     print(f"TOTAL build (excluding corpus generation): {total:.2f} s; max traced peak "
-          f"{max(r[2] for r in rows[1:]):.0f} MiB; process max RSS {_rss_mb():.0f} MiB")
+          f"{max(r[2] for r in rows[1:]):.0f} MiB; process max RSS {peak_rss_mb():.0f} MiB")
     print(f"(numpy {np.__version__}; BLAS {blas_kernel()})")
 
 

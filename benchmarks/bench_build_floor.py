@@ -38,13 +38,12 @@ ROOT = os.path.dirname(HERE)
 for p in (ROOT, HERE):
     if p not in sys.path:
         sys.path.insert(0, p)
-from _common import blas_kernel  # noqa: E402
+from _common import blas_kernel, peak_rss_mb, run_child_json  # noqa: E402
 from floor_build import ISSUE_WIDTHS, work  # noqa: E402
 
 
 def run_build(preset) -> dict:
     """Load the corpus, then time ``Manifold().fit`` in this process; report the widths it used."""
-    import resource
     import warnings
 
     from engine.manifold import Manifold
@@ -65,14 +64,11 @@ def run_build(preset) -> dict:
               "n_passes": int(emb.n_passes_), "L": int(emb.reference_.shape[0])}
     return {"wall_s": wall, "cpu_s": cpu, "stages": m.timings_, "widths": widths, "load": load0,
             "shape": list(corpus.frames.shape), "blas": blas_kernel(),
-            "max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+            "max_rss_mib": peak_rss_mb()}
 
 
 def _child(args) -> dict:
-    out = subprocess.run([sys.executable, *args], capture_output=True, text=True, cwd=ROOT)
-    if out.returncode != 0:
-        raise SystemExit(f"{' '.join(args)} failed:\n{out.stderr[-2000:]}")
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return run_child_json([sys.executable, *args], cwd=ROOT)
 
 
 def _build(preset, tree=None):

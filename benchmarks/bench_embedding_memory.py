@@ -26,9 +26,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import statistics
-import subprocess
 import sys
 import time
 
@@ -36,7 +34,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import blas_kernel, current_rss_mb  # noqa: E402
+from _common import blas_kernel, current_rss_mb, peak_rss_mb, run_child_json  # noqa: E402
 
 
 def features(n_frames: int, n_points: int, seed: int = 0):
@@ -68,12 +66,12 @@ def one(n_frames: int, n_points: int, n_iter: int) -> dict:
     from engine.embedding import Embedding
 
     G = np.ascontiguousarray(features(n_frames, n_points), dtype=np.float32)
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    before = peak_rss_mb()
     held = current_rss_mb()
     t = time.perf_counter()
     emb = Embedding(n_components=10, n_iter=n_iter).fit(G)
     wall = time.perf_counter() - t
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    peak = peak_rss_mb()
     return {"N": n_frames, "cols": int(G.shape[1]), "wall_s": wall, "peak_mb": peak, "held_mb": held,
             "peak_before_fit_mb": before, "passes": emb.n_passes_}
 
@@ -98,11 +96,9 @@ def main(argv=None) -> int:
     prev = None
     for n in args.sizes:
         runs = []
-        for _ in range(args.repeat):  # each run in a fresh process: ru_maxrss is per process
-            out = subprocess.run([sys.executable, os.path.abspath(__file__), "--one", str(n), "--points",
-                                  str(args.points), "--n-iter", str(args.n_iter)],
-                                 capture_output=True, text=True, check=True)
-            runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+        for _ in range(args.repeat):  # each run in a fresh process: the peak is per process
+            runs.append(run_child_json([sys.executable, os.path.abspath(__file__), "--one", str(n), "--points",
+                                        str(args.points), "--n-iter", str(args.n_iter)]))
         walls = [r["wall_s"] for r in runs]
         peak = max(r["peak_mb"] for r in runs)
         held = max(r["held_mb"] for r in runs)

@@ -16,8 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 import tempfile
 import time
@@ -31,8 +29,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 
-def _rss_mib():
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+from _common import peak_rss_mb, run_child_json  # noqa: E402
 
 
 def timed(name, fn, *, repeat=1, per=None):
@@ -54,7 +51,7 @@ def timed(name, fn, *, repeat=1, per=None):
     extra = f"   {per / lo:5.2f}x / {per / med:5.2f}x real time (min / median)" if per else ""
     print(f"  {name:<40} min {1000 * lo:8.1f} ms   median {1000 * med:8.1f} ms (of {repeat}; CPU median "
           f"{1000 * float(np.median(cpus)):8.1f} ms, all threads)   first run {1000 * first:8.1f} ms (traced)   "
-          f"peak traced {peak / 2**20:7.1f} MiB   max RSS {_rss_mib():6.0f} MiB{extra}   "
+          f"peak traced {peak / 2**20:7.1f} MiB   max RSS {peak_rss_mb():6.0f} MiB{extra}   "
           f"[load {os.getloadavg()[0]:.1f}]", flush=True)
     return lo, med
 
@@ -102,7 +99,7 @@ def _child(kind, manifold_path, seconds, size, out):
         c = m.corpus_
         render_video(out, traj.frames(m), rate=c.rate, faces=c.faces, dims=c.dims, size=size)
     t2 = time.perf_counter()
-    print(json.dumps({"load_and_synthesize": t1 - t0, "export": t2 - t1, "rss_mib": _rss_mib()}))
+    print(json.dumps({"load_and_synthesize": t1 - t0, "export": t2 - t1, "rss_mib": peak_rss_mb()}))
 
 
 def _cold(kind, manifold_path, args, tmp):
@@ -110,13 +107,9 @@ def _cold(kind, manifold_path, args, tmp):
     for k in range(args.cold):
         out = Path(tmp) / f"cold{k}.{'glb' if kind == 'glb' else 'mp4'}"
         t = time.perf_counter()
-        r = subprocess.run([sys.executable, __file__, "--child", kind, "--manifold", str(manifold_path),
-                            "--seconds", str(args.seconds), "--size", f"{args.size[0]}x{args.size[1]}",
-                            "--out", str(out)], capture_output=True, text=True, env=os.environ.copy())
+        d = run_child_json([sys.executable, __file__, "--child", kind, "--manifold", manifold_path,
+                            "--seconds", args.seconds, "--size", f"{args.size[0]}x{args.size[1]}", "--out", out])
         walls.append(time.perf_counter() - t)
-        if r.returncode:
-            raise SystemExit(f"cold run failed:\n{r.stderr}")
-        d = json.loads(r.stdout.strip().splitlines()[-1])
         exports.append(d["export"])
         rss.append(d["rss_mib"])
     print(f"  cold {kind:<39} process min {min(walls):6.2f} s  median {np.median(walls):6.2f} s; "

@@ -24,7 +24,6 @@ when set, slow small LAPACK calls, which is what made the old path slow.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import resource
 import subprocess
@@ -37,7 +36,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import blas_kernel  # noqa: E402
+from _common import blas_kernel, run_child_json  # noqa: E402
 
 _STAGES = r"""
 import json, sys, time
@@ -88,9 +87,7 @@ def main(argv=None):
             print(f"built the default talker's manifold in {time.perf_counter() - t:.1f} s", flush=True)
         stages = {}
         for _ in range(args.repeat):
-            r = subprocess.run([sys.executable, "-c", _STAGES, man], check=True, env=env, cwd=ROOT,
-                               capture_output=True, text=True)
-            for k, v in json.loads(r.stdout.strip().splitlines()[-1]).items():
+            for k, v in run_child_json([sys.executable, "-c", _STAGES, man], env=env, cwd=ROOT).items():
                 stages.setdefault(k, []).append(v)
         n_simp = stages.pop("simplices")[0]
         print(f"\nstages, fresh process each ({n_simp} simplices), min / median of {args.repeat}:")

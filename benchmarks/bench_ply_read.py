@@ -111,19 +111,20 @@ def main() -> int:
         return 0
     import os
 
+    from _common import run_child_json
+
     print(f"load average {os.getloadavg()[0]:.2f}; reader {args.impl or 'engine/io/meshfile.py'}")
     with tempfile.TemporaryDirectory() as d:
         for case in args.cases.split(","):
             p = make(case, Path(d), args.mb)
             cmd = [sys.executable, __file__, "--repeats", str(args.repeats), "--_one", str(p), args.impl or ""]
             try:
-                r = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout)
-                res = json.loads(r.stdout.strip().splitlines()[-1]) if r.returncode == 0 else None
+                res = run_child_json(cmd, timeout=args.timeout)
             except subprocess.TimeoutExpired:
                 print(f"{case:20s} {p.stat().st_size / 2**20:6.1f} MB  did not finish in {args.timeout:g} s")
                 continue
-            if res is None:
-                print(f"{case:20s} failed: {r.stderr.strip()[-300:]}")
+            except SystemExit as failed:  # the child's command and the end of its stderr
+                print(f"{case:20s} failed: {str(failed).strip()[-300:]}")
                 continue
             print(f"{case:20s} {p.stat().st_size / 2**20:6.1f} MB  cold {res['cold_s']:7.3f} s  warm min "
                   f"{res['warm_min_s']:7.3f} s  median {res['warm_median_s']:7.3f} s  peak RSS "

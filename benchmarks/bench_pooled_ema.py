@@ -26,14 +26,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import blas_kernel  # noqa: E402
+from _common import blas_kernel, run_child_json  # noqa: E402
 
 N_FRAMES = 276_927
 RATE = 250.0
@@ -105,11 +104,7 @@ def main(argv=None) -> int:
     walls = []
     for r in range(args.repeats):
         cmd = [sys.executable, os.path.abspath(__file__), "--one"] + (["--dask", args.dask] if args.dask else [])
-        out = subprocess.run(cmd, capture_output=True, text=True)
-        if out.returncode != 0:
-            print(f"repeat {r}: failed\n{out.stderr[-2000:]}", file=sys.stderr)
-            return 1
-        res = json.loads(out.stdout.strip().splitlines()[-1])
+        res = run_child_json(cmd)
         walls.append(res["wall_s"])
         st = ", ".join(f"{k} {v:.1f}" for k, v in res["stages"].items())
         wk = f"; workers' peak {', '.join(f'{w:.0f}' for w in res['worker_peak_mb'])} MB" if res["worker_peak_mb"] else ""

@@ -32,7 +32,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import threading
 import time
@@ -41,13 +40,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import blas_kernel, current_rss_mb  # noqa: E402
-
-
-def _worker_peak_mb():
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+from _common import blas_kernel, current_rss_mb, peak_rss_mb, run_child_json  # noqa: E402
 
 
 class _StagePeaks(threading.Thread):
@@ -108,7 +101,7 @@ def measured_build(corpus, dask: str | None, *, save_to=None) -> dict:
     peak = sampler.stop()
     workers = None
     if executor is not None:
-        workers = sorted(executor.client.run(_worker_peak_mb).values())
+        workers = sorted(peak_rss_mb(pid) for pid in executor.client.run(os.getpid).values())
         executor.close()
     return {"manifold": m, "wall": wall, "cpu": cpu, "start": start, "peak": peak, "workers": workers,
             "stage_peaks": sampler.stages, "saved": saved}
@@ -154,13 +147,6 @@ def _exponent(ns, ys):
     return float(np.polyfit(ns, ys, 1)[0]) if len(ns) > 1 else float("nan")
 
 
-def _run(cmd) -> dict:
-    out = subprocess.run(cmd, capture_output=True, text=True)
-    if out.returncode != 0:
-        raise SystemExit(f"{' '.join(cmd)}: failed\n{out.stderr[-3000:]}")
-    return json.loads(out.stdout.strip().splitlines()[-1])
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[30000, 100000, 300000])
@@ -184,8 +170,8 @@ def main(argv=None) -> int:
         path = os.path.join(args.work, f"talker-{n}-{args.resolution}.npz")
         gen = "reused"
         if not os.path.isfile(path):
-            gen = f"generated in {_run(me + ['--generate', str(n), '--one', path, '--resolution', args.resolution])['generate_s']:.1f} s"
-        r = _run(me + ["--one", path] + (["--dask", args.dask] if args.dask else []))
+            gen = f"generated in {run_child_json(me + ['--generate', str(n), '--one', path, '--resolution', args.resolution])['generate_s']:.1f} s"
+        r = run_child_json(me + ["--one", path] + (["--dask", args.dask] if args.dask else []))
         runs.append(r)
         st = ", ".join(f"{k} {v:.1f}" for k, v in r["stages"].items())
         peaks = ", ".join(f"{k} {v:.0f}" for k, v in r["stage_peaks_mb"].items())

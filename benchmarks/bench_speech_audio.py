@@ -29,8 +29,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 import tempfile
 import time
@@ -51,6 +49,8 @@ def _corpus(preset):
 
 def time_one(preset: str, method: str) -> dict:
     """In this (fresh) process: make the preset's audio with ``method`` into an empty folder."""
+    from _common import peak_rss_mb
+
     from engine import espeak_phones
     from engine import speech_audio as sa
 
@@ -64,7 +64,7 @@ def time_one(preset: str, method: str) -> dict:
         dt = time.perf_counter() - t
     return {"method": method, "seconds": dt, "speech_s": corpus.duration, "utterances": len(corpus.utterances),
             "history": c.history[-1],
-            "rss_MiB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+            "rss_MiB": peak_rss_mb()}
 
 
 def template_errors(y, info, sr, template=0.012, search=0.04, min_score=0.8):
@@ -181,7 +181,7 @@ def main() -> None:
     if args.time:
         print(json.dumps(time_one(*args.time)))
         return
-    from _common import blas_kernel
+    from _common import blas_kernel, run_child_json
 
     print(f"preset {args.preset}; BLAS {blas_kernel()}; load average at start {os.getloadavg()}")
     _corpus(args.preset)  # generated and cached once, not timed
@@ -190,9 +190,7 @@ def main() -> None:
         runs = []
         for _ in range(args.repeats):
             load = os.getloadavg()[0]
-            r = subprocess.run([sys.executable, __file__, "--time", args.preset, method], check=True,
-                               capture_output=True, text=True)
-            runs.append((json.loads(r.stdout.splitlines()[-1]), load))
+            runs.append((run_child_json([sys.executable, __file__, "--time", args.preset, method]), load))
         secs = [r["seconds"] for r, _ in runs]
         r0 = runs[0][0]
         print(f"{method:<7} cold {r0['utterances']} utterances, {r0['speech_s']:.0f} s of speech: "

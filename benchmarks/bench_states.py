@@ -42,18 +42,14 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import time
 import tracemalloc
 import warnings
 
 import numpy as np
+from _common import peak_rss_mb, run_child_json
 
 PAPER_FRAMES = 28833
-
-
-def _rss_mb():
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def _timed(fn):
@@ -178,16 +174,12 @@ def _stats(times, cpu=None):
 def _cold(path, query, runs):
     """First query in fresh processes: right after loading, and after ``prepare_queries``
     (what the explorer's loading worker does), alternating."""
-    import json
-    import subprocess
     import sys
 
     load, first = {0: [], 1: []}, {0: [], 1: []}
     for seed in range(runs):
         for prepared in (0, 1):
-            out = subprocess.run([sys.executable, __file__, "--child", str(path), query, str(seed), str(prepared)],
-                                 capture_output=True, text=True, check=True).stdout
-            r = json.loads(out.strip().splitlines()[-1])
+            r = run_child_json([sys.executable, __file__, "--child", path, query, seed, prepared])
             load[prepared].append(r["load_s"]), first[prepared].append(r["query_s"])
     return (f"first query right after loading {_stats(first[0])} fresh processes; after prepare_queries() "
             f"(the explorer's loader) {_stats(first[1])} (import + load of the graph: median "
@@ -312,7 +304,7 @@ def main():
     if not args.no_tangent:
         tan, dt, peak, cpu = _timed(lambda: TangentFrames().fit(Fy, Fx, Fxv, b))
         print(f"TangentFrames.fit (k=20)        {dt * 1e3:9.1f} ms   {cpu}   peak traced {peak:7.1f} MiB   "
-              f"max RSS {_rss_mb():7.1f} MiB")
+              f"max RSS {peak_rss_mb():7.1f} MiB")
         print("  classes " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in tan.class_proportions().items()))
 
     tmp = tempfile.TemporaryDirectory()
@@ -332,7 +324,7 @@ def main():
                 with atomic_write(saved) as part:
                     np.savez(part, **dump_estimator(g, "states"))
         print(f"\n{what:<31} {dt * 1e3:9.1f} ms   {cpu}   peak traced {peak:7.1f} MiB   "
-              f"max RSS {_rss_mb():7.1f} MiB")
+              f"max RSS {peak_rss_mb():7.1f} MiB")
         print("  " + g.connectivity_report().replace("\n", "\n  "))
         for w in caught:
             print(f"  warning: {w.message}")
@@ -375,7 +367,7 @@ def main():
         g.hemispheres(int(big[0]))
         peak = tracemalloc.get_traced_memory()[1] / 2**20
         tracemalloc.stop()
-        print(f"  peak traced memory of one hemisphere query {peak:.2f} MiB; max RSS {_rss_mb():.1f} MiB")
+        print(f"  peak traced memory of one hemisphere query {peak:.2f} MiB; max RSS {peak_rss_mb():.1f} MiB")
     tmp.cleanup()
 
 

@@ -11,15 +11,11 @@ timed separately).
 from __future__ import annotations
 
 import argparse
-import resource
 import time
 import tracemalloc
 
 import numpy as np
-
-
-def _rss_mb():
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+from _common import peak_rss_mb
 
 
 def timed(name, fn, *, repeat=1):
@@ -38,7 +34,7 @@ def timed(name, fn, *, repeat=1):
             tracemalloc.stop()
     med = float(np.median(times))
     print(f"{name:<46} {1000 * med:10.1f} ms (median of {repeat})   peak traced {peak / 2**20:8.1f} MiB   "
-          f"max RSS {_rss_mb():8.0f} MiB", flush=True)
+          f"max RSS {peak_rss_mb():8.0f} MiB", flush=True)
     return out, med
 
 

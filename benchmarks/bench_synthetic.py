@@ -2,7 +2,7 @@
 
 Usage: python benchmarks/bench_synthetic.py [small default paper] [--save DIR]
 
-Each preset runs in a fresh subprocess so its peak resident memory (getrusage) is its
+Each preset runs in a fresh subprocess so its peak resident memory (VmHWM) is its
 own; tracemalloc's peak of traced (numpy) allocations is printed as well. Targets:
 "small" in a few seconds, "default" well under a minute, "paper" within about a minute.
 With --save, the time to write the cache file (Corpus.save) is measured too.
@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
-import subprocess
 import sys
 import tempfile
 import time
 import tracemalloc
 from pathlib import Path
+
+from _common import peak_rss_mb, run_child_json
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -43,7 +43,7 @@ def one(preset: str, save_dir: str | None) -> dict:
         t = time.perf_counter()
         corpus.save(Path(save_dir) / f"{preset}.npz")
         out["save_s"] = time.perf_counter() - t
-    out["max_rss_MiB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    out["max_rss_MiB"] = peak_rss_mb()
     return out
 
 
@@ -61,7 +61,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for preset in args.presets:
             cmd = [sys.executable, __file__, "--one", preset] + (["--save", args.save or tmp] if args.save else [])
-            r = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout.splitlines()[-1])
+            r = run_child_json(cmd)
             print(f"{preset:<8} {r['frames']:>7} {r['points']:>6} {r['coords']:>6} {r['utterances']:>5} "
                   f"{r['seconds']:>8.1f} {r['lexicon_s']:>9.2f} {r['generate_s']:>10.2f} "
                   f"{r.get('save_s', float('nan')):>7.2f} {r['traced_peak_MiB']:>10.1f} {r['max_rss_MiB']:>11.1f}",

@@ -23,9 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -54,7 +52,7 @@ def make_video(path: Path, seconds: float, size: int) -> None:
 
 def child(path: str, audio_dir: str) -> dict:
     sys.path.insert(0, str(ROOT))
-    from _common import blas_kernel, current_rss_mb
+    from _common import blas_kernel, current_rss_mb, peak_rss_mb
 
     rss0 = current_rss_mb()
     t = time.perf_counter()
@@ -62,14 +60,14 @@ def child(path: str, audio_dir: str) -> dict:
 
     c = read_video(path, audio_dir=audio_dir)
     cold = time.perf_counter() - t
-    peak_cold = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    peak_cold = peak_rss_mb()
     t = time.perf_counter()
     c2 = read_video(path, audio_dir=audio_dir)
     warm = time.perf_counter() - t
     assert c2.n_frames == c.n_frames
     return {"frames": c.n_frames, "utterances": len(c.utterances), "cold_s": cold, "warm_s": warm,
             "peak_rss_cold_MiB": peak_cold, "rss_start_MiB": rss0,
-            "peak_rss_MiB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+            "peak_rss_MiB": peak_rss_mb(),
             "landmarks_MiB": c.frames.nbytes / 2**20, "blas": blas_kernel()}
 
 
@@ -140,6 +138,8 @@ def main() -> None:
         print(json.dumps(child(*a.child)))
         return
     sys.path.insert(0, str(ROOT))
+    from _common import run_child_json
+
     folder = Path(a.keep) if a.keep else Path(tempfile.mkdtemp(prefix="bench-video-"))
     folder.mkdir(parents=True, exist_ok=True)
     print(f"load average {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f}, {os.cpu_count()} cores; "
@@ -153,9 +153,7 @@ def main() -> None:
         runs = []
         for _ in range(a.repeats):
             with tempfile.TemporaryDirectory() as aud:
-                r = subprocess.run([sys.executable, __file__, "--child", str(path), aud], capture_output=True,
-                                   text=True, check=True)
-            runs.append(json.loads(r.stdout.strip().splitlines()[-1]))
+                runs.append(run_child_json([sys.executable, __file__, "--child", path, aud]))
         n = runs[0]["frames"]
         cold = [r["cold_s"] for r in runs]
         warm = [r["warm_s"] for r in runs]

@@ -39,7 +39,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import blas_kernel  # noqa: E402
+from _common import blas_kernel, peak_rss_mb  # noqa: E402
 
 ROWS = 4096  # rows of F per product block
 
@@ -129,8 +129,6 @@ def _corpus(preset):
 
 def run_floor(preset, widths) -> dict:
     """Load the corpus, then time :func:`floor` (wall and CPU seconds) in this process."""
-    import resource
-
     import numpy as np
 
     F = np.ascontiguousarray(_corpus(preset).frames, dtype=np.float32)
@@ -139,7 +137,7 @@ def run_floor(preset, widths) -> dict:
     parts = floor(F, **widths)
     wall, cpu = time.perf_counter() - t, time.process_time() - c0
     return {"wall_s": wall, "cpu_s": cpu, "parts": parts, "load": load0, "work": work(*F.shape, **widths),
-            "max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+            "max_rss_mib": peak_rss_mb()}
 
 
 def main(argv=None) -> int:

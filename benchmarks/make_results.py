@@ -23,7 +23,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import platform
-import resource
 import subprocess
 import sys
 import time
@@ -31,12 +30,9 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
+from _common import peak_rss_mb  # noqa: E402
 #: where the Haskins pair is looked for (the same place as ``lipspace evaluate --haskins``)
 DEFAULT_HASKINS = REPO.parent / "shared" / "data" / "haskins-ieee"
-
-
-def _rss_mb():
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def _blas():
@@ -96,7 +92,7 @@ def main():
         r = evaluate_protocols(corpus, random_state=args.seed, **kw)
         dt = time.perf_counter() - t
         timings.append((name, dt))
-        print(f"{name}: {dt:.1f} s, max RSS {_rss_mb():.0f} MiB", flush=True)
+        print(f"{name}: {dt:.1f} s, max RSS {peak_rss_mb():.0f} MiB", flush=True)
         return r
 
     talkers = [("Default synthetic talker", {}),
@@ -176,7 +172,7 @@ def main():
     text = "\n".join(head) + "\n" + "\n".join(sections) + "\n"
     with atomic_write(args.out) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
-    print(f"wrote {args.out} in {total:.0f} s; max RSS {_rss_mb():.0f} MiB")
+    print(f"wrote {args.out} in {total:.0f} s; max RSS {peak_rss_mb():.0f} MiB")
 
 
 def _offset(corpus):
