@@ -126,12 +126,12 @@ def one(path: str, dask: str | None) -> dict:
     load0 = os.getloadavg()
     rss0 = current_rss_mb()
     t = time.perf_counter()
-    corpus, blocks = load_blocked(path)
+    corpus = load_blocked(path)
     t_open = time.perf_counter() - t
     out = path[:-len(".npz")] + "-manifold.npz"
     b = measured_build(corpus, dask, save_to=out)
     m = b["manifold"]
-    return {"n_frames": corpus.n_frames, "coords": corpus.frames.shape[1], "blocks": len(blocks),
+    return {"n_frames": corpus.n_frames, "coords": corpus.frames.shape[1], "blocks": len(corpus.frames.paths),
             "speakers": len(corpus.speakers), "open_s": t_open, "rss_before_open_mb": rss0,
             "plan": plan_build(corpus.n_frames).describe(), "wall_s": b["wall"], "cpu_s": b["cpu"],
             "stages": m.timings_, "rss_start_mb": b["start"], "rss_peak_mb": b["peak"],

@@ -86,14 +86,14 @@ def is_blocked(path) -> bool:
     return "blocks_files" in keys and "corpus_frames" not in keys
 
 
-def load_blocked(path) -> tuple[Corpus, list[Path]]:
-    """Read a corpus written by :func:`save_blocked`: ``(corpus, block paths)``.
+def load_blocked(path) -> Corpus:
+    """Read a corpus written by :func:`save_blocked`.
 
     The corpus's frames are an :class:`engine.frame_blocks.BlockFrames` over the block
-    files (nothing is gathered). Every block's header is checked against the corpus file
-    (present, 2-D float32, the recorded number of frames, the corpus's number of
-    coordinates) before it is used; a fault raises :class:`engine.corpus.CorpusError`
-    naming the block file. NaN/inf in the blocks are found where they are read (the
+    files (nothing is gathered; ``corpus.frames.paths`` names them in frame order).
+    Every block's header is checked against the corpus file (present, 2-D float32, the
+    recorded number of frames, the corpus's number of coordinates) before it is used; a
+    fault raises :class:`engine.corpus.CorpusError` naming the block file. NaN/inf in the blocks are found where they are read (the
     shape stage names the frame).
     """
     from engine._persist import NpzReadError, read_npz
@@ -103,8 +103,7 @@ def load_blocked(path) -> tuple[Corpus, list[Path]]:
         d = read_npz(path)
     except NpzReadError as exc:
         raise CorpusError(f"{path}: not a readable .npz corpus file ({exc.reason})") from None
-    frames = _open_blocks(path, d)
-    return Corpus.from_arrays(d, frames=frames, source=str(path)), [Path(p) for p in frames.paths]
+    return Corpus.from_arrays(d, frames=_open_blocks(path, d), source=str(path))
 
 
 def _open_blocks(path: Path, d) -> BlockFrames:

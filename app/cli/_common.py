@@ -65,7 +65,7 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None):
             from engine.corpus_blocks import is_blocked, load_blocked
 
             # frames in blocks beside it ('lipspace import --block-frames'): read from there when needed
-            return load_blocked(p)[0] if is_blocked(p) else Corpus.load(p)
+            return load_blocked(p) if is_blocked(p) else Corpus.load(p)
         # Any foreign format the importers know (Haskins .mat, MOCHA .ema, C3D, ...).
         from engine.io import ImportFormatError, read_corpus
 

@@ -20,7 +20,7 @@ def blocked_manifold(tmp_path_factory, small_corpus):
     save_blocked(corpus, src, block_frames=512)
     from engine.corpus_blocks import load_blocked
 
-    lazy, _ = load_blocked(src)
+    lazy = load_blocked(src)
     Manifold(n_states=30, random_state=0).fit(lazy).save(folder / "m.npz")
     m, _ = load_source(folder / "m.npz", prepare_views=True)
     assert isinstance(m.corpus_.frames, BlockFrames)  # the window works from the blocks, not a copy

@@ -17,8 +17,8 @@ def test_round_trip_and_faults_name_the_block(corpus, tmp_path):
     paths = save_blocked(corpus, path, block_frames=512)
     assert [p.name for p in paths] == [f"block_{i:05d}.npy" for i in range(len(paths))] and len(paths) >= 2
     assert is_blocked(path) and not is_blocked(corpus.save(tmp_path / "whole.npz"))
-    back, got = load_blocked(path)
-    assert got == paths
+    back = load_blocked(path)
+    assert back.frames.paths == tuple(str(p) for p in paths)  # the block files, in frame order
     np.testing.assert_array_equal(back.frames, corpus.frames.astype(np.float32))
     np.testing.assert_array_equal(back.bounds, corpus.bounds)
     assert [u.id for u in back.utterances] == [u.id for u in corpus.utterances]
@@ -72,7 +72,7 @@ def whole_and_blocked_builds(two_speakers, blocked_two_speakers):
     params = dict(n_states=30, speaker_normalisation="mean+scale")
     try:
         whole = Manifold(**params).fit(two_speakers)
-        lazy, _ = load_blocked(blocked_two_speakers)
+        lazy = load_blocked(blocked_two_speakers)
         assert isinstance(lazy.frames, BlockFrames)
         mp.setattr(BlockFrames, "__array__", refuse)
         mp.setattr(BlockFrames, "astype", refuse)
@@ -83,9 +83,9 @@ def whole_and_blocked_builds(two_speakers, blocked_two_speakers):
 
 
 def test_block_frames_read_like_the_array(two_speakers, blocked_two_speakers):
-    lazy, paths = load_blocked(blocked_two_speakers)
+    lazy = load_blocked(blocked_two_speakers)
     F, L = two_speakers.frames, lazy.frames
-    assert L.shape == F.shape and len(paths) == len(L.block_bounds) >= 5
+    assert L.shape == F.shape and len(L.paths) == len(L.block_bounds) >= 5
     np.testing.assert_array_equal(L[250:530], F[250:530])  # across a block edge
     np.testing.assert_array_equal(L[-1], F[-1])
     idx = np.array([1300, 3, 257, 3, 900])
@@ -125,7 +125,7 @@ def test_manifold_file_references_the_blocked_corpus(whole_and_blocked_builds, b
     work.mkdir()
     shutil.copy(blocked_two_speakers, work / "two.npz")
     shutil.copytree(blocks_folder(blocked_two_speakers), blocks_folder(work / "two.npz"))
-    lazy, _ = load_blocked(work / "two.npz")
+    lazy = load_blocked(work / "two.npz")
     m = Manifold(n_states=30, speaker_normalisation="mean+scale").fit(lazy)
     m.save(work / "m.npz")
     keys = read_npz(work / "m.npz", keys_only=True)
@@ -180,7 +180,7 @@ def test_dask_block_tasks_normalise_and_measure_the_aperture_as_in_process(two_s
     from engine.registration import normalise_speakers
     from engine.scale import DaskExecutor
 
-    lazy, _ = load_blocked(blocked_two_speakers)
+    lazy = load_blocked(blocked_two_speakers)
     whole = normalise_speakers(two_speakers, mode="mean+scale")
     with DaskExecutor(Client(dask_cluster), block_frames=512) as ex:
         normed = normalise_speakers(lazy, mode="mean+scale", executor=ex)
