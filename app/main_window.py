@@ -71,9 +71,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.docks[key] = dock
         self.tabifyDockWidget(self.docks["clusters"], self.docks["scree"])
         self.docks["clusters"].raise_()
-        self.resizeDocks([self.docks["lips"]], [480], QtCore.Qt.Orientation.Horizontal)
-        self.resizeDocks([self.docks["lips"], self.docks["clusters"]], [420, 380], QtCore.Qt.Orientation.Vertical)
-        self.resizeDocks([self.docks["editor"]], [230], QtCore.Qt.Orientation.Vertical)
+        self._size_docks()
         self._set_minimum_sizes()
         self._default_layout = self.saveState()  # View > Reset layout goes back to this
 
@@ -470,14 +468,23 @@ class MainWindow(QtWidgets.QMainWindow):
         self.lip_view.plotter.reset_camera()
         self.lip_view.plotter.render()
 
+    #: the docks' first sizes (pixels), given at construction and again by View > Reset layout:
+    #: (docks, their sizes, the direction measured)
+    DOCK_SIZES = ((("lips",), (480,), QtCore.Qt.Orientation.Horizontal),
+                  (("lips", "clusters"), (420, 380), QtCore.Qt.Orientation.Vertical),
+                  (("editor",), (230,), QtCore.Qt.Orientation.Vertical))
+
+    def _size_docks(self) -> None:
+        for keys, sizes, direction in self.DOCK_SIZES:
+            self.resizeDocks([self.docks[k] for k in keys], list(sizes), direction)
+
     def reset_layout(self) -> None:
         """View > Reset layout: every dock back where it started, shown, at its first size."""
         for dock in self.docks.values():
             dock.setFloating(False)
             dock.show()
         self.restoreState(self._default_layout)
-        self.resizeDocks([self.docks["lips"]], [480], QtCore.Qt.Orientation.Horizontal)
-        self.resizeDocks([self.docks["editor"]], [230], QtCore.Qt.Orientation.Vertical)
+        self._size_docks()
 
     def _show_help(self, title, page):
         from app.help.browser import HelpBrowser

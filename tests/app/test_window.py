@@ -227,3 +227,33 @@ def test_started_and_closed_window_leaves_the_console_quiet(manifold_file, tmp_p
     assert r.returncode == 0, r.stderr
     assert r.stderr == ""
     assert (tmp_path / "config" / "lipspace.ini").is_file()  # it did open and close a window
+
+
+def test_reset_layout_gives_every_dock_its_first_size(qapp, tmp_path):
+    """View > Reset layout applies MainWindow.DOCK_SIZES, the sizes the window is built with, whatever was
+    moved before (a window on screen: the Lips dock 480 px wide, the editor 230 px high, Lips over the
+    phone clusters 420 : 380)."""
+    from PySide6 import QtCore
+
+    w = _window(qapp, _settings(tmp_path / "r.ini"))
+    shown = ("lips", "clusters", "editor")
+
+    def sizes():
+        for _ in range(5):
+            qapp.processEvents()
+        return {k: w.docks[k].size().toTuple() for k in shown}
+
+    try:
+        w.reset_layout()
+        first = sizes()
+        assert first["lips"][0] == 480 and first["editor"][1] == 230 and first["lips"][1] > first["clusters"][1]
+        H, V = QtCore.Qt.Orientation.Horizontal, QtCore.Qt.Orientation.Vertical
+        w.resizeDocks([w.docks["lips"]], [300], H)
+        w.resizeDocks([w.docks["lips"], w.docks["clusters"]], [200, 600], V)
+        w.resizeDocks([w.docks["editor"]], [320], V)
+        moved = sizes()
+        assert all(moved[k] != first[k] for k in shown)
+        w.reset_layout()
+        assert sizes() == first
+    finally:
+        w.close()
