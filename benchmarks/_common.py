@@ -1,4 +1,5 @@
-"""What every benchmark prints beside its figures: the BLAS kernel in use and memory now.
+"""What every benchmark prints beside its figures (the BLAS kernel in use, memory), how it runs a
+child measurement, and the speech it times synthesis on.
 
 The scripts run as ``python benchmarks/NAME.py``, so this folder is on ``sys.path``.
 """
@@ -67,3 +68,17 @@ def run_child_json(cmd, **kwargs):
         return json.loads(lines[-1])
     why = f"exit {r.returncode}" if r.returncode else "printed nothing"
     raise SystemExit(f"{' '.join(cmd)}: failed ({why})\n{r.stderr[-3000:]}")
+
+
+def first_phones(corpus, seconds: float):
+    """``([(label, duration s), ...], utterance)``: the phones of the first ``seconds`` of the
+    corpus's longest utterance, the last one cut at ``seconds``."""
+    u = max(corpus.utterances, key=lambda x: x.n_frames)
+    out, t = [], 0.0
+    for p in u.phones:
+        d = min(p.end - p.start, seconds - t)
+        if d <= 0:
+            break
+        out.append((p.label, d))
+        t += d
+    return out, u

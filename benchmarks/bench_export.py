@@ -29,7 +29,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 
-from _common import peak_rss_mb, run_child_json  # noqa: E402
+from _common import first_phones, peak_rss_mb, run_child_json  # noqa: E402
 
 
 def timed(name, fn, *, repeat=1, per=None):
@@ -56,24 +56,12 @@ def timed(name, fn, *, repeat=1, per=None):
     return lo, med
 
 
-def _phones(corpus, seconds):
-    """(label, duration) of the first ``seconds`` of the corpus's longest utterance."""
-    u = max(corpus.utterances, key=lambda x: x.n_frames)
-    out, t = [], 0.0
-    for p in u.phones:
-        d = min(p.end - p.start, seconds - t)
-        if d <= 0:
-            break
-        out.append((p.label, d))
-        t += d
-    return out
-
-
 def _synthesize(m, seconds):
     from engine.synthesis import make_synthesizer
     from engine.targets import targets_from_phones
 
-    return make_synthesizer("manifold", m, strict=False).synthesize(targets_from_phones(m, _phones(m.corpus_, seconds)))
+    phones, _ = first_phones(m.corpus_, seconds)
+    return make_synthesizer("manifold", m, strict=False).synthesize(targets_from_phones(m, phones))
 
 
 def _size(text):

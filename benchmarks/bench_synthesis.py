@@ -15,7 +15,7 @@ import time
 import tracemalloc
 
 import numpy as np
-from _common import peak_rss_mb
+from _common import first_phones, peak_rss_mb
 
 
 def timed(name, fn, *, repeat=1):
@@ -36,21 +36,6 @@ def timed(name, fn, *, repeat=1):
     print(f"{name:<46} {1000 * med:10.1f} ms (median of {repeat})   peak traced {peak / 2**20:8.1f} MiB   "
           f"max RSS {peak_rss_mb():8.0f} MiB", flush=True)
     return out, med
-
-
-def _three_seconds(corpus, seconds):
-    """Phones (label, duration) of the first ``seconds`` of speech of the corpus's longest utterance."""
-    u = max(corpus.utterances, key=lambda x: x.n_frames)
-    out, t = [], 0.0
-    for p in u.phones:
-        d = p.end - p.start
-        if t + d > seconds:
-            d = seconds - t
-        if d <= 0:
-            break
-        out.append((p.label, d))
-        t += d
-    return out, u
 
 
 def main():
@@ -88,7 +73,7 @@ def main():
         synths[meth], _ = timed(f"prepare {meth}", lambda meth=meth, kw=kw: make_synthesizer(meth, m, **kw))
     synths["manifold"].synthesize(targets_from_phones(m, "sil 0.1 m 0.1"))  # builds the phone table once
 
-    phones, u = _three_seconds(c, args.seconds)
+    phones, u = first_phones(c, args.seconds)
     tg_phones = targets_from_phones(m, phones)
     # oracle-style targets: the states of the corpus frames at the same mid-points
     frames = tg_phones.frames
