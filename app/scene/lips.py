@@ -193,8 +193,10 @@ def add_lip_contour(plotter, points, roles=None, names=None, *, color=(0.85, 0.4
     tube = pv.PolyData(contour.transform(P) + off,
                        np.hstack([np.full((len(contour.faces_), 1), 3, np.int64), contour.faces_]).ravel())
     tube.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
-    actor = plotter.add_mesh(tube, color=color, specular=0.3, smooth_shading=True, name=name, pickable=False,
-                             reset_camera=False, render=False)
+    # Phong over the tube's own normals, without pyvista's per-render smooth-shading filter (see add_lips)
+    actor = plotter.add_mesh(tube, color=color, specular=0.3, name=name, pickable=False, reset_camera=False,
+                             render=False)
+    actor.prop.interpolation = "phong"
     markers = pv.PolyData(P + off)
     marker_actor = plotter.add_mesh(markers, color=(0.15, 0.15, 0.15), point_size=point_size,
                                     render_points_as_spheres=True, name=f"{name}_markers", pickable=False,

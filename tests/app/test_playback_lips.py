@@ -89,3 +89,40 @@ def test_lip_mesh_goes_to_the_mapper_without_a_python_filter_and_looks_the_same(
     for a, b in zip(shots, ref):
         assert a.std() > 5  # the lips are drawn
         assert np.array_equal(a, b)
+
+
+def test_contour_tube_goes_to_the_mapper_without_a_python_filter_and_looks_the_same():
+    """Sparse markers' contour tube (real EMA corpora): the same as the lip mesh, no per-render Python filter."""
+    P = np.array([[10.0, 0.0, 6.0], [8.0, 0.0, -8.0], [-2.0, 25.0, -1.0], [-5.0, 0.0, -30.0]])
+    roles = ["upper_lip", "lower_lip", "left_corner", "jaw"]
+
+    def draw(smooth_filter):
+        add_mesh = pv.Plotter.add_mesh
+
+        def through_filter(self, mesh, *a, **kw):  # the previous code's call for the tube: smooth_shading=True
+            return add_mesh(self, mesh, *a, smooth_shading=mesh.GetNumberOfPolys() > 0, **kw)
+
+        pl = pv.Plotter(off_screen=True, window_size=(200, 160))
+        try:
+            pv.Plotter.add_mesh = through_filter if smooth_filter else add_mesh
+            try:
+                h = add_lips(pl, P, None, roles=roles)
+            finally:
+                pv.Plotter.add_mesh = add_mesh
+            pl.view_xz()
+            pl.reset_camera()
+            shots = []
+            for Q in (P + [0, 0, 2.0], P * [1.0, 0.4, 1.3]):
+                h.update(Q)
+                shots.append(np.asarray(pl.screenshot(return_img=True)).copy())
+            return shots, h.actor.GetMapper().GetInputAlgorithm().GetClassName()
+        finally:
+            pl.close()
+
+    shots, producer = draw(smooth_filter=False)
+    assert producer == "vtkTrivialProducer"
+    ref, ref_producer = draw(smooth_filter=True)
+    assert ref_producer != "vtkTrivialProducer"
+    for a, b in zip(shots, ref):
+        assert a.std() > 5
+        assert np.array_equal(a, b)
