@@ -191,14 +191,21 @@ def _probe_report(probe, res) -> None:
           f"(long frames' excess {1e3 * excess:.0f} ms of {gui_cpu:.1f} s between choices and swaps), probe "
           f"{100 * float(np.sum(rows[charged, 2] - med)) / max(float(rows[:, 2].sum()), 1e-9):.1f} % (pieces over "
           f"10x the median: {1e3 * float(np.sum(rows[charged, 2] - med)):.0f} ms of {float(rows[:, 2].sum()):.2f} s)")
+    probe_charged = []
     for lf in longs:
         sel = (rows[:, 1] >= lf["chosen"]) & (rows[:, 0] <= lf["chosen"] + lf["latency"])
         cpu = rows[sel, 2]
+        probe_charged.append(bool((cpu > 10 * med).any()))
         print(f"   during long frame {lf['frame']} (own CPU {1e3 * lf['cpu']:.0f} ms, steal on its core "
               f"{1e3 * lf['steal']:.0f}/{1e3 * lf['steal_next']:.0f} ms): {int(sel.sum())} probe pieces, "
               + (f"their own CPU max {1e3 * cpu.max():.2f} ms = {cpu.max() / med:.0f}x the probe's median, "
-                 f"{int((cpu > 10 * med).sum())} above 10x, on cores {sorted(set(rows[sel, 4].astype(int)))}"
+                 f"{int((cpu > 10 * med).sum())} above 10x, on cores {sorted(int(c) for c in set(rows[sel, 4]))}"
                  if sel.any() else "none (the probe did not run then)"))
+    if longs:
+        steal = [lf["steal_explains"] for lf in longs]
+        print(f"   long frames covered by steal on their core: {sum(steal)} of {len(longs)}; during which the probe "
+              f"too was charged > 10x its median: {sum(probe_charged)}; neither: "
+              f"{sum(not a and not b for a, b in zip(steal, probe_charged))}")
 
 
 def _long_line(lf) -> str:
