@@ -121,6 +121,9 @@ class RenderScheduler:
         self.last_duration = 0.0
         self._sync_next = False
         self._timer = QtCore.QTimer()
+        # precise: a coarse timer (Qt's default) may fire up to 5 % of its interval early,
+        # 25 ms of a 0.5-s throttle, and so render sooner than ``min_interval_s``
+        self._timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
         self._timer.setSingleShot(True)
         self._timer.setInterval(0)
         self._timer.timeout.connect(lambda: self.flush(sync=self._sync_next))
