@@ -47,6 +47,7 @@ from engine.progress import report
 from engine.threads import one_blas_thread
 
 __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker", "load_synthetic", "cache_folder",
+           "cache_token",
            "phone_gestures", "gesture_phases", "speaker_anatomy"]
 
 #: Bumped whenever the generated corpus changes for the same parameters (cache key).
@@ -682,6 +683,17 @@ def _cache_key(params: dict) -> str:
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 
+def cache_token(preset="default", **params) -> str:
+    """The preset part of a cached talker's file name: the preset, and the opt-in variants
+    (``_calibrated``, ``_tissue``) so that the cache keeps one entry of each apart."""
+    out = preset
+    if params.get("kinematics", "classic") != "classic":
+        out += f"_{params['kinematics']}"
+    if params.get("tissue", False):
+        out += "_tissue"
+    return out
+
+
 def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=False, **params) -> Corpus:
     """The synthetic corpus for ``preset``, generated once and cached.
 
@@ -706,7 +718,7 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=Fal
     talker._validate()
     folder = cache_folder(cache_dir)
     key = {k: v for k, v in talker.get_params().items() if not (k in _VARIANT_DEFAULTS and v == _VARIANT_DEFAULTS[k])}
-    path = folder / f"synthetic-{preset}-{_cache_key(key)}.npz"
+    path = folder / f"synthetic-{cache_token(preset, **params)}-{_cache_key(key)}.npz"
     if path.is_file():
         report(progress, "loading cache", 0, 1)
         try:

@@ -45,17 +45,18 @@ def progress_bar(*, disable: bool | None = None):
             b.close()
 
 
-def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None):
-    """A corpus from a native file, or the synthetic talker when ``path`` is None."""
+def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, kinematics: str = "classic"):
+    """A corpus from a native file, or the synthetic talker (with ``kinematics``) when ``path`` is None."""
     from app.cli import CliError
     from engine.corpus import Corpus, CorpusError
 
     if path is None:
         from app.cache import newest, prune
-        from engine.synthetic import load_synthetic
+        from engine.synthetic import cache_token, load_synthetic
 
-        corpus = load_synthetic(preset=synthetic_preset, progress=progress)
-        prune(newest("corpus", synthetic_preset))  # the corpora older code left behind
+        corpus = load_synthetic(preset=synthetic_preset, progress=progress, kinematics=kinematics)
+        # the corpora older code left behind (each variant is kept apart by its file name)
+        prune(newest("corpus", cache_token(synthetic_preset, kinematics=kinematics)))
         return corpus
     p = Path(path)
     if not p.exists():

@@ -17,6 +17,10 @@ def add_arguments(p):
                                              "talker")
     p.add_argument("--preset", choices=PRESETS, default="default",
                    help="synthetic talker preset when no corpus is given (default: %(default)s)")
+    p.add_argument("--kinematics", choices=("classic", "calibrated"), default="classic",
+                   help="the synthetic talker's kinematics when no corpus is given: 'calibrated' moves the jaw, "
+                        "upper lip and corners as real speakers' articulograph sensors do (opt-in; "
+                        "default: %(default)s)")
     p.add_argument("-o", "--output", required=True, help="manifold file to write (.npz)")
     p.add_argument("--variance", type=float, default=0.99, help="shape variance kept (default: %(default)s)")
     p.add_argument("--embedding-dims", type=int, default=10, help="dimensions of Y (default: %(default)s)")
@@ -54,7 +58,11 @@ def run(args) -> int:
     t0 = time.perf_counter()
     with progress_bar(disable=True if args.quiet else None) as progress:
         # a corpus stored in blocks ('lipspace import --block-frames') keeps its frames in the block files
-        corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress)
+        if args.corpus is not None and args.kinematics != "classic":
+            raise CliError("--kinematics chooses the synthetic talker's; it does nothing with a corpus file "
+                           f"({args.corpus}): leave it out")
+        corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress,
+                                 kinematics=args.kinematics)
         if abs(corpus.rate - 60.0) > 3.0:  # the analysis rate (README, "Real recordings")
             print(f"lipspace build: warning: {corpus.name} is at {corpus.rate:g} Hz; the method's analysis rate is "
                   "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "

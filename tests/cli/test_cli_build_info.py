@@ -265,3 +265,26 @@ def test_top_level_help_imports_no_command_and_no_numpy():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "synthesize" in r.stdout and "cache" in r.stdout  # every command listed
     assert r.stderr.strip() == "[]", r.stderr
+
+
+def test_build_the_calibrated_talker_keeps_the_classic_cache(tmp_path, monkeypatch, capsys):
+    """``lipspace build --kinematics calibrated`` builds the opt-in talker; the cache keeps the
+    classic talker's corpus beside it (each variant has its own file name), and a corpus file
+    with --kinematics is refused with the reason."""
+    from app.cache import entries
+    from engine.synthetic import load_synthetic
+
+    monkeypatch.setenv("LIPSPACE_CACHE_DIR", str(tmp_path / "cache"))
+    classic = load_synthetic(preset="small")
+    out = tmp_path / "cal.npz"
+    assert main(["build", "--preset", "small", "--kinematics", "calibrated", "-o", str(out), "-q"]) == 0
+    m = Manifold.load(out)
+    jf = m.corpus_.latent["jaw_forward"]
+    assert np.ptp(jf) > 0.5 and np.ptp(classic.latent["jaw_forward"]) == 0.0
+    corpora = sorted(e.preset for e in entries(tmp_path / "cache") if e.kind == "corpus")
+    assert corpora == ["small", "small_calibrated"]
+    assert main(["build", "--preset", "small", "-o", str(tmp_path / "c.npz"), "-q"]) == 0   # classic: both stay
+    assert sorted(e.preset for e in entries(tmp_path / "cache") if e.kind == "corpus") == corpora
+    p = classic.save(tmp_path / "corpus.npz")
+    assert main(["build", str(p), "--kinematics", "calibrated", "-o", str(tmp_path / "x.npz")]) == 2
+    assert "--kinematics chooses the synthetic talker's" in capsys.readouterr().err
