@@ -30,7 +30,6 @@ is a vectorised gather over the rows of the current frontier.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order
 
 __all__ = ["hop_distances", "fewest_hop_path", "grow_balls", "csr_rows", "concat_ranges", "mark_level"]
@@ -70,10 +69,10 @@ def concat_ranges(lo, n) -> np.ndarray:
     return np.arange(total) + np.repeat(lo - (np.cumsum(n) - n), n)
 
 
-def _rows(G: sp.csr_matrix, nodes: np.ndarray) -> np.ndarray:
-    """Column indices of the rows ``nodes`` of csr ``G``, concatenated in row order."""
-    lo = G.indptr[nodes]
-    return G.indices[concat_ranges(lo, G.indptr[nodes + 1] - lo)]
+def _next(rows, nodes: np.ndarray) -> np.ndarray:
+    """The next nodes of ``nodes`` over ``rows`` (:func:`csr_rows`), concatenated in node order."""
+    lo, n, ind = rows
+    return ind[concat_ranges(lo[nodes], n[nodes])]
 
 
 def mark_level(reached, dist, level) -> np.ndarray:
@@ -127,14 +126,12 @@ def grow_balls(forward, backward, da, db, fa, fb):
         if cost_a <= cost_b:
             ka += 1
             if fa.size:
-                lo, n, ind = forward
-                fa = mark_level(ind[concat_ranges(lo[fa], n[fa])], da, ka)
+                fa = mark_level(_next(forward, fa), da, ka)
             yield ka, kb, True, fa
         else:
             kb += 1
             if fb.size:
-                lo, n, ind = backward
-                fb = mark_level(ind[concat_ranges(lo[fb], n[fb])], db, kb)
+                fb = mark_level(_next(backward, fb), db, kb)
             yield ka, kb, False, fb
 
 
@@ -171,7 +168,8 @@ def fewest_hop_path(G, GT, a: int, b: int):
     da = np.full(K, -1, dtype=np.int32)  # hops from a (forward ball)
     db = np.full(K, -1, dtype=np.int32)  # hops to b (backward ball)
     da[a], db[b] = 0, 0
-    for ka, kb, forward_grew, front in grow_balls(csr_rows(G), csr_rows(GT), da, db, np.array([a]), np.array([b])):
+    back = csr_rows(GT)
+    for ka, kb, forward_grew, front in grow_balls(csr_rows(G), back, da, db, np.array([a]), np.array([b])):
         if front.size == 0:  # one ball stopped growing before they met
             return None
         meet = front[(db if forward_grew else da)[front] >= 0]
@@ -186,7 +184,7 @@ def fewest_hop_path(G, GT, a: int, b: int):
     good = meet[da[meet] == ka]
     on[good] = True
     for j in range(ka - 1, -1, -1):
-        prev = _rows(GT, good)
+        prev = _next(back, good)
         good = np.unique(prev[da[prev] == j])  # once each: repeats would multiply level by level
         on[good] = True
     path = np.empty(d + 1, dtype=np.int64)

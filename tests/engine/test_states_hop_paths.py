@@ -211,8 +211,8 @@ def test_many_fewest_hop_paths_do_not_multiply_the_work(monkeypatch):
     GT = G.T.tocsr()
     GT.sort_indices()
     read = []
-    real = hp._rows
-    monkeypatch.setattr(hp, "_rows", lambda M, nodes: read.append(len(nodes)) or real(M, nodes))
+    real = hp._next
+    monkeypatch.setattr(hp, "_next", lambda M, nodes: read.append(len(nodes)) or real(M, nodes))
     path = hp.fewest_hop_path(G, GT, a, b)
     np.testing.assert_array_equal(path, _bfs_tree_path(G, a, b))
     assert len(path) == L + 2 and read and max(read) <= w
