@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["talker_realism", "components_for", "rule_classes", "format_realism", "articulation_report",
+__all__ = ["talker_realism", "components_for", "components_of_total", "rule_classes", "format_realism", "articulation_report",
            "format_articulation"]
 
 
@@ -43,6 +43,14 @@ def components_for(ratios, fractions=(0.80, 0.95, 0.99)) -> tuple[int, ...]:
         raise ValueError(f"ratios must be a non-empty 1-D array of variances >= 0, got shape {r.shape}")
     cum = np.cumsum(r)
     return tuple(int(np.searchsorted(cum, f * cum[-1] - 1e-12) + 1) for f in fractions)
+
+
+def components_of_total(scree, fractions=(0.80, 0.95, 0.99)) -> tuple:
+    """Smallest number of leading components whose fractions of the total variance ``scree``
+    (k,) reach each fraction; None where the k computed components do not reach it."""
+    cum = np.cumsum(np.asarray(scree, np.float64))
+    return tuple(int(np.searchsorted(cum, f - 1e-12) + 1) if len(cum) and cum[-1] >= f else None
+                 for f in fractions)
 
 
 def _steps(x, bounds):
@@ -99,10 +107,7 @@ def talker_realism(manifold) -> dict:
     scree = np.asarray(sh.scree_, np.float64)
     out = {"x_recovered": components_for(scree), "x_computed": len(scree),
            "scree": [float(v) for v in scree[:10]]}
-    # of the total: None where the computed components do not reach the fraction
-    cum = np.cumsum(scree)
-    out["x_total"] = tuple(int(np.searchsorted(cum, f - 1e-12) + 1) if cum[-1] >= f else None
-                           for f in (0.80, 0.95, 0.99))
+    out["x_total"] = components_of_total(scree)
     ev = np.asarray(manifold.embedding_.explained_variance_ratio_, np.float64)
     out["y3"] = float(ev[:3].sum())
     bounds = corpus.bounds

@@ -160,8 +160,11 @@ def run(args) -> int:
     print(f"shape X     {k} components hold {100 * sh.recovered_ratio_[k - 1]:.2f}% of the variance of the "
           f"{len(sh.scree_)} computed ({100 * sh.explained_variance_ratio_.sum():.2f}% of the total); "
           f"scree {', '.join(f'{100 * v:.1f}' for v in sh.scree_[:5])}%")
-    n_comp, cum = len(sh.scree_), np.cumsum(sh.scree_)
-    n_total = f"{int(np.searchsorted(cum, 0.95 - 1e-12)) + 1}" if cum[-1] >= 0.95 else f"more than {n_comp}"
+    from engine.talker_report import components_of_total
+
+    n_comp = len(sh.scree_)
+    (n_total,) = components_of_total(sh.scree_, (0.95,))
+    n_total = f"more than {n_comp}" if n_total is None else str(n_total)
     n_rec = int(np.searchsorted(sh.recovered_ratio_, 0.95 - 1e-12)) + 1
     print(f"            95% of the total variance takes {n_total} components; 95% of the {n_comp} computed "
           f"components' variance (the paper's \"recovered variance\") takes {n_rec}")
