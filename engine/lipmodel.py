@@ -234,6 +234,10 @@ class LipModel:
         ``"U03_12"`` = upper lip, row 3, column 12 (``L`` for the lower lip).
     midline : tuple of int
         Indices of the upper and lower inner-contour points on the midline.
+    border_row : int
+        The grid row nearest the vermilion border (row 0 is the inner contour).
+    corner_column : int
+        The grid column nearest the talker's left commissure (+x).
     """
 
     def __init__(self, resolution="default", anatomy=None, *, kinematics="classic"):
@@ -305,6 +309,8 @@ class LipModel:
         self._jd = z_low + _PIV_Z
         mid = cols // 2
         self.midline = (0 * rows * cols + mid, 1 * rows * cols + mid)
+        self.border_row = int(np.argmin(np.abs(t - _TV)))
+        self.corner_column = int(np.argmin(np.abs(x - W)))
         self._A = self._coefficients()
         self.rest_vertices = self._assemble(self._fields(np.zeros((1, _NC))))[0].reshape(-1, 3)
         self.faces = self._make_faces()

@@ -36,12 +36,8 @@ def virtual_sensors(lip) -> dict[str, int]:
         commissure, on the talker's left, +x), and the chin's midline point at the grid's
         lower edge, which moves rigidly with the jaw.
     """
-    from engine.lipmodel import _TV
-
     R, C = lip.rows, lip.cols
-    mid = C // 2
-    border = int(np.argmin(np.abs(lip._t - _TV)))
-    corner = int(np.argmin(np.abs(lip._x - lip._W)))
+    mid, border, corner = C // 2, lip.border_row, lip.corner_column
     return {"UL": border * C + mid, "LL": R * C + border * C + mid, "ML": corner, "JAW": R * C + (R - 1) * C + mid}
 
 
