@@ -205,9 +205,12 @@ def articulation_report(lip, controls, names=None, *, active=0.1, correlated=0.4
     mean = C.mean(0)
     share, act = {}, {}
     for k, name in enumerate(names):
-        Ck = np.tile(mean, (n, 1))
-        Ck[:, k] = C[:, k]
-        share[name] = _sum_squares(lip, Ck) / total if total > 0 else 0.0
+        if total <= 0 or np.ptp(C[:, k]) == 0:  # a control that never moves adds nothing: no surface to deform
+            share[name] = 0.0
+        else:
+            Ck = np.tile(mean, (n, 1))
+            Ck[:, k] = C[:, k]
+            share[name] = _sum_squares(lip, Ck) / total
         act[name] = float(np.mean(np.abs(C[:, k] - np.median(C[:, k])) > active))
     sd = C.std(0)
     moving = np.flatnonzero(sd > 0)
