@@ -84,11 +84,22 @@ class PlaybackClock:
     latencies : iterable of float, default=()
         Display latencies (s) measured before, e.g. by the previous playback's clock
         (:attr:`latencies`): the first frames look ahead by them instead of by nothing.
+    lead_s : float, default=0.015
+        How far ahead of the sound the picture aims to be, at the typical (median) latency:
+        the look-ahead is at least the median latency plus this. 15 ms puts the typical
+        error, over the time a frame is on screen, near the centre of the broadcast
+        lip-sync window (ATSC IS-191: sound at most 15 ms before the picture, at most
+        45 ms after it), so a frame delayed by a stall has 15 ms more before it trails
+        the sound. 0 to aim at the median latency itself.
 
     Attributes
     ----------
     latency_s : float
-        Estimated time from choosing a frame to its being on screen.
+        Estimated time from choosing a frame to its being on screen: the second-largest
+        latency of the window (0 until one is measured).
+    look_ahead_s : float
+        How far ahead of the clock a frame is chosen: ``latency_s``, or the median
+        latency plus ``lead_s`` when that is larger (0 until a latency is measured).
     following_audio : bool
         True once the audio position has moved since :meth:`start`: the clock follows it
         from then on (taking that first moved position at once, so the audio's start-up
@@ -98,7 +109,8 @@ class PlaybackClock:
     """
 
     def __init__(self, rate: float, n_frames: int, *, speed: float = 1.0, clock=time.monotonic, position=None,
-                 latency_window: int = 15, resync_s: float = 0.1, slew: float = 0.2, latencies=()):
+                 latency_window: int = 15, resync_s: float = 0.1, slew: float = 0.2, latencies=(),
+                 lead_s: float = 0.015):
         playback_frame(0.0, rate, speed=speed)  # validates rate and speed
         if int(n_frames) < 1:
             raise ValueError(f"n_frames must be >= 1 (a trajectory to play), got {n_frames!r}")
@@ -108,6 +120,8 @@ class PlaybackClock:
             raise ValueError(f"resync_s must be a positive number of seconds, got {resync_s!r}")
         if not 0 < slew <= 1:
             raise ValueError(f"slew must be in (0, 1] (the fraction of an error corrected per position), got {slew!r}")
+        if not (math.isfinite(lead_s) and 0 <= lead_s <= 0.1):
+            raise ValueError(f"lead_s must be 0-0.1 s (how far the picture aims ahead of the sound), got {lead_s!r}")
         self.rate = float(rate)
         self.n_frames = int(n_frames)
         self.speed = float(speed)
@@ -115,7 +129,9 @@ class PlaybackClock:
         self.position = position
         self.resync_s = float(resync_s)
         self.slew = float(slew)
+        self.lead_s = float(lead_s)
         self.latency_s = 0.0
+        self.look_ahead_s = 0.0
         self._latencies = deque(maxlen=int(latency_window))
         for v in latencies:
             self._record_latency(v)
@@ -194,16 +210,17 @@ class PlaybackClock:
         """The frame nearest the clock when the one rendered now reaches the screen; None at the end.
 
         Syncs to the audio first. Nearest rather than the one already begun, and the
-        latency taken near its top (second-largest of the window): a frame then errs
-        towards being early by less than a frame period rather than late (sight ahead of
-        sound is tolerated far better than behind it). Between a start (or an audio re-sync jump) and the end the
+        look-ahead (:attr:`look_ahead_s`) the larger of the latency near its top
+        (second-largest of the window) and the median latency plus ``lead_s``: a frame
+        then errs towards being early rather than late (sight ahead of sound is tolerated
+        far better than behind it). Between a start (or an audio re-sync jump) and the end the
         chosen frames never decrease: when the look-ahead shrinks the latest one is held.
         """
         self.sync()
         now = self.clock()
         if self.due(now) >= self.n_frames:
             return None
-        k = int(math.floor(self.media_time(now + self.latency_s) * self.rate + 0.5))
+        k = int(math.floor(self.media_time(now + self.look_ahead_s) * self.rate + 0.5))
         # a shorter look-ahead or a small audio correction must not step the picture back:
         # hold the latest frame instead (only start() or a re-sync jump may go back)
         k = min(max(k, 0, self._latest), self.n_frames - 1)
@@ -223,7 +240,7 @@ class PlaybackClock:
         if shown is None:
             return 0.0
         now = self.clock()
-        frames_left = (int(shown) + 0.5) - self.media_time(now + self.latency_s) * self.rate
+        frames_left = (int(shown) + 0.5) - self.media_time(now + self.look_ahead_s) * self.rate
         return min(max(0.0, frames_left / (self.rate * self.speed)), period)
 
     def lag_frames(self, frame: int, at: float | None = None) -> float:
@@ -246,3 +263,4 @@ class PlaybackClock:
         self._latencies.append(min(max(0.0, float(seconds)), 0.25))
         ordered = sorted(self._latencies)
         self.latency_s = ordered[max(0, len(ordered) - 2)]  # the second-largest
+        self.look_ahead_s = max(self.latency_s, ordered[len(ordered) // 2] + self.lead_s)

@@ -208,7 +208,8 @@ class PlaybackTrace:
                 cpu, wait = read_schedstat()
                 counters = read_counters()
                 k = original(clock)
-                trace.ticks.append((t, k, clock.latency_s, trace._planned, cpu, wait, *trace.helpers(), counters))
+                ahead = getattr(clock, "look_ahead_s", clock.latency_s)  # older code: the latency alone
+                trace.ticks.append((t, k, ahead, trace._planned, cpu, wait, *trace.helpers(), counters))
                 trace.clock_start = (clock.t0, clock.start_frame)
                 trace._planned = float("nan")
                 return k

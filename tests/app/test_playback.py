@@ -51,7 +51,7 @@ def test_clock_drops_frames_when_ticks_come_late_and_stops_at_the_end():
 
 def test_clock_looks_ahead_by_the_measured_display_latency():
     fake = FakeClock()
-    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=5)
+    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=5, lead_s=0.0)
     c.start(0)
     fake.t += 1.0
     assert c.frame() == 60
@@ -79,9 +79,35 @@ def test_look_ahead_covers_all_but_the_slowest_recent_frame():
     assert c.latency_s == pytest.approx(0.2)
 
 
+def test_picture_aims_ahead_of_the_sound_by_the_lead_at_the_typical_latency():
+    """The look-ahead is the median latency plus lead_s (default 15 ms, the centre of the
+    broadcast lip-sync window) unless the second-largest latency is larger."""
+    fake = FakeClock()
+    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=15)
+    assert c.lead_s == pytest.approx(0.015) and c.look_ahead_s == 0.0  # nothing measured: no look-ahead
+    for _ in range(10):
+        c.shown(chosen_at=0.0, shown_at=0.020)  # steady 20-ms frames
+    assert c.latency_s == pytest.approx(0.020) and c.look_ahead_s == pytest.approx(0.035)
+    c.start(0)
+    fake.t += 1.0
+    # on screen at media 1.020 s (frame 61.2, nearest 61); aimed 15 ms ahead, at 1.035 s: frame 62
+    assert c.frame() == 62
+    # a slow stretch whose second-largest latency exceeds median + lead takes over
+    for v in (0.050, 0.060, 0.070):
+        c.shown(chosen_at=0.0, shown_at=v)
+    assert c.latency_s == pytest.approx(0.060) and c.look_ahead_s == pytest.approx(0.060)
+    # with no lead the same stretch aims at the percentile alone, steady frames at the median alone
+    d = PlaybackClock(60.0, 1000, latency_window=15, lead_s=0.0, latencies=[0.010] * 10)
+    assert d.look_ahead_s == pytest.approx(0.010)
+    with pytest.raises(ValueError, match="lead_s"):
+        PlaybackClock(60.0, 10, lead_s=-0.01)
+    with pytest.raises(ValueError, match="lead_s"):
+        PlaybackClock(60.0, 10, lead_s=float("nan"))
+
+
 def test_clock_never_steps_back_when_the_look_ahead_shrinks():
     fake = FakeClock()
-    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=1)
+    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=1, lead_s=0.0)
     c.start(0)
     fake.t += 1.0
     c.shown(chosen_at=fake.t, shown_at=fake.t + 0.1)  # a slow frame: look 6 frames ahead
@@ -97,7 +123,7 @@ def test_clock_never_steps_back_when_the_look_ahead_shrinks():
 
 def test_clock_seeded_with_earlier_latencies_looks_ahead_from_its_first_frame():
     fake = FakeClock()
-    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=3, latencies=(0.2, 0.05, 0.05, 0.02))
+    c = PlaybackClock(60.0, 1000, clock=fake, latency_window=3, latencies=(0.2, 0.05, 0.05, 0.02), lead_s=0.0)
     assert c.latencies == (0.05, 0.05, 0.02)  # the window keeps the latest
     assert c.latency_s == pytest.approx(0.05)
     c.start(0)
@@ -168,7 +194,7 @@ def test_clock_keeps_with_audio_that_runs_slow_where_the_wall_clock_drifts():
 
 def test_next_tick_is_when_the_next_frame_becomes_the_nearest_on_screen():
     fake = FakeClock(0.0)
-    c = PlaybackClock(50.0, 100, clock=fake)  # 20-ms frames
+    c = PlaybackClock(50.0, 100, clock=fake, lead_s=0.0)  # 20-ms frames
     c.start(0)
     c.shown(chosen_at=0.0, shown_at=0.004)  # 4 ms from choosing a frame to its being on screen
     assert c.frame() == 0
