@@ -29,7 +29,8 @@ class MainWindow(QtWidgets.QMainWindow):
         Shown at once when given; otherwise use :meth:`open_source`.
     state : AppState, optional
     source : dict, optional
-        Where ``manifold`` came from (``path``, ``preset``), for session files.
+        Where ``manifold`` came from (``path``, ``preset``, the synthetic talker's ``kinematics``),
+        for the title and session files.
     autosave : app.autosave.Autosaver, optional
         Saves the session a few seconds after it changes (:mod:`app.autosave`).
     settings : app.window_settings.WindowSettings, optional
@@ -102,6 +103,27 @@ class MainWindow(QtWidgets.QMainWindow):
         self.setMinimumSize(self.minimumSizeHint())
 
     # ------------------------------------------------------------------ menus
+    #: File > Open synthetic talker: (preset, kinematics) in menu order. The calibrated talker
+    #: (lips that move as real articulograph sensors do) at the quick and the default size; the
+    #: paper preset reproduces the paper's resolution with the classic talker only.
+    SYNTHETIC_TALKERS = (("small", "classic"), ("default", "classic"), ("paper", "classic"),
+                         ("small", "calibrated"), ("default", "calibrated"))
+
+    @staticmethod
+    def _talker_menu_text(preset: str, kinematics: str) -> str:
+        from app.source_loading import KINEMATICS_LABELS
+
+        return preset if kinematics == "classic" else f"{preset}, {KINEMATICS_LABELS[kinematics]}"
+
+    @staticmethod
+    def _talker_tooltip(preset: str, kinematics: str) -> str:
+        size = {"small": "75 s, 156 points: quick", "default": "8 minutes, 600 points",
+                "paper": "28,833 frames, 4,260 points: the paper's resolution"}[preset]
+        if kinematics == "classic":
+            return f"The synthetic talker ({size})."
+        return (f"The synthetic talker ({size}) whose jaw, upper lip and corners move as real speakers' "
+                "articulograph sensors do (opt-in, generator 6); compare it with the classic talker above.")
+
     def _make_menus(self):
         mb = self.menuBar()
         f = mb.addMenu("&File")
@@ -110,8 +132,17 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recent_menu.aboutToShow.connect(self._fill_recent_menu)
         self._fill_recent_menu()
         syn = f.addMenu("Open synthetic talker")
-        for preset in ("small", "default", "paper"):
-            self._act(syn, preset, lambda _=False, p=preset: self.open_source(None, preset=p))
+        syn.setToolTipsVisible(True)
+        self.synthetic_actions = {}
+        previous = self.SYNTHETIC_TALKERS[0][1]
+        for preset, kinematics in self.SYNTHETIC_TALKERS:
+            if kinematics != previous:
+                syn.addSeparator()  # the calibrated talkers below the classic ones
+            previous = kinematics
+            a = self._act(syn, self._talker_menu_text(preset, kinematics),
+                          lambda _=False, p=preset, k=kinematics: self.open_source(None, preset=p, kinematics=k))
+            a.setToolTip(self._talker_tooltip(preset, kinematics))
+            self.synthetic_actions[preset, kinematics] = a
         f.addSeparator()
         self._act(f, "&Save session…", self.save_session_dialog, QtGui.QKeySequence.StandardKey.Save)
         self._act(f, "Open s&ession…", self.open_session_dialog)
@@ -202,24 +233,31 @@ class MainWindow(QtWidgets.QMainWindow):
             f"{s['corpus']}: {s['frames']} frames, {s['utterances']} utterances, {s['points']} points · "
             f"X {s['shape_components']} comp. ({100 * s['shape_variance_kept']:.1f}%) · Y {s['embedding_dims']}-D, "
             f"first 3 hold {100 * s['Y_first3_recovered']:.0f}% · K={s['n_states']} states")
+        from app.source_loading import talker_name
+
         src = self.state.source
-        name = Path(src["path"]).name if src.get("path") else f"synthetic talker ({src.get('preset', 'default')})"
+        name = (Path(src["path"]).name if src.get("path")
+                else talker_name(src.get("preset", "default"), src.get("kinematics", "classic")))
         self.setWindowTitle(f"Lipspace — {name}")
 
-    def open_source(self, path=None, *, preset: str = "default", session: dict | None = None):
-        """Load a manifold / corpus file (or the synthetic talker) in a worker; returns the runner."""
-        from app.source_loading import load_source
+    def open_source(self, path=None, *, preset: str = "default", kinematics: str = "classic",
+                    session: dict | None = None):
+        """Load a manifold / corpus file (or the synthetic talker ``preset`` with ``kinematics``,
+        ``"classic"`` or ``"calibrated"``) in a worker; returns the runner."""
+        from app.source_loading import check_kinematics, load_source, talker_name
         from app.user_messages import plain_errors
         from app.views.task_progress import attach_status_progress
         from app.workers import run_task
 
+        check_kinematics(kinematics)  # a programming error, before anything is cancelled or started
         if self._runner is not None and self._runner.state == "running":
             self._runner.cancel()  # a newer choice replaces a load still running
         self._pending_session = session
-        what = Path(path).name if path else f"the synthetic talker ({preset})"
+        what = Path(path).name if path else f"the {talker_name(preset, kinematics)}"
         self.statusBar().showMessage(f"loading {what}…")
         # no modal dialog: the window stays usable; progress and Cancel sit in the status bar
-        task = plain_errors(lambda progress: load_source(path, preset, progress), doing=f"open {what}", path=path)
+        task = plain_errors(lambda progress: load_source(path, preset, progress, kinematics=kinematics),
+                            doing=f"open {what}", path=path)
         self._runner = run_task(task, parent=self,
                                 title=f"Loading {what}", on_done=self._on_loaded, on_error=self._on_load_error,
                                 on_cancel=lambda: self.statusBar().showMessage("loading cancelled", 5000),
@@ -302,16 +340,18 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def open_session(self, path):
         """Open a session file: reload its source if it differs from what is shown, then restore it."""
-        from app.session import load_session
+        from app.session import load_session, source_kinematics
 
         d = load_session(path)
         src, cur = d.get("source", {}), self.state.source
         same = self.state.manifold is not None and src.get("path") == cur.get("path") and (
-            src.get("path") is not None or src.get("preset") == cur.get("preset"))
+            src.get("path") is not None or (src.get("preset") == cur.get("preset") and
+                                            src.get("kinematics", "classic") == cur.get("kinematics", "classic")))
         if same:
             self.apply_session(d)
             return None
-        return self.open_source(src.get("path"), preset=src.get("preset", "default"), session=d)
+        return self.open_source(src.get("path"), preset=src.get("preset", "default"),
+                                kinematics=source_kinematics(d), session=d)
 
     def save_session_dialog(self):
         path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save session", self.last_dir,
@@ -548,15 +588,17 @@ def ask_restore(recovery, parent=None) -> str:
     return "restore" if clicked is yes else "discard" if clicked is no else "later"
 
 
-def launch(path=None, preset: str = "default", session: dict | None = None, restore: bool | None = None) -> int:
-    """Open the explorer on ``path`` (or the synthetic talker ``preset``) and run the event loop.
+def launch(path=None, preset: str = "default", session: dict | None = None, restore: bool | None = None, *,
+           kinematics: str = "classic") -> int:
+    """Open the explorer on ``path`` (or the synthetic talker ``preset`` with ``kinematics``)
+    and run the event loop; a session's (or a restored autosave's) source overrides them.
 
     ``restore`` answers the autosave question after an abnormal exit (None: ask in a
     dialog); see :mod:`app.autosave`.
     """
     from app.autosave import Autosaver, resolve_recovery
     from app.qt_app import make_application
-    from app.session import SessionError
+    from app.session import SessionError, source_kinematics
     from app.user_messages import user_message
 
     app = make_application(sys.argv[:1])
@@ -579,9 +621,11 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
     if session is not None and path is None and session.get("source", {}).get("path"):
         path = session["source"]["path"]
         preset = session["source"].get("preset", preset)
+        kinematics = "classic"
     elif session is not None and path is None:
         preset = session.get("source", {}).get("preset", preset)
-    win.open_source(path, preset=preset, session=session)
+        kinematics = source_kinematics(session)
+    win.open_source(path, preset=preset, kinematics=kinematics, session=session)
     code = int(app.exec())
     if autosaver is not None:
         autosaver.finish()  # a clean exit: nothing to offer next time

@@ -23,7 +23,7 @@ import numpy as np
 from engine._atomic import atomic_write, write_text_atomic
 
 __all__ = ["SESSION_VERSION", "SessionError", "session_dict", "session_arrays", "arrays_path", "save_session",
-           "load_session", "apply_session"]
+           "load_session", "apply_session", "source_kinematics"]
 
 #: 2 added the synthesised trajectory and edited targets (.npz beside); 1 is still read
 SESSION_VERSION = 2
@@ -182,6 +182,13 @@ def load_session(path) -> dict:
     src = d["source"]
     if not isinstance(src, dict):
         raise SessionError(f"{path}: field 'source' must be an object, got {type(src).__name__}")
+    if "kinematics" in src:  # the synthetic talker's (absent from sessions written before it had a choice)
+        from app.source_loading import check_kinematics
+
+        try:
+            check_kinematics(src["kinematics"])
+        except ValueError as exc:
+            raise SessionError(f"{path}: source {exc}") from None
     if src.get("path") is not None:  # only a data file the user chose; never opened to be checked
         from engine._validate import FieldError, check_source_path
 
@@ -195,6 +202,13 @@ def load_session(path) -> dict:
     d["_file"] = str(path)
     d["_synthetic"], d["_targets"] = _read_arrays(path, d)
     return d
+
+
+def source_kinematics(d: dict) -> str:
+    """The synthetic talker's kinematics session ``d`` was saved with: ``"classic"`` for a
+    file's session and for a session written before the talker had a choice (no key)."""
+    src = d.get("source", {})
+    return "classic" if src.get("path") is not None else src.get("kinematics", "classic")
 
 
 def _read_arrays(path: Path, d: dict):

@@ -7,6 +7,10 @@ and check a file the user names with :func:`source_kind` before opening anything
 The synthetic talker's manifold is cached in the user cache directory
 (``platformdirs.user_cache_dir("lipspace")`` or ``$LIPSPACE_CACHE_DIR``), keyed by
 preset, generator, fitting code and manifold file version, so the second start is quick.
+The talker comes in two kinematics (:data:`engine.lipmodel.KINEMATICS`): ``"classic"``
+and the opt-in ``"calibrated"`` (lips that move as real articulograph sensors do); each
+has its own cache entries (``synthetic-<preset>-...``, ``synthetic-<preset>_calibrated-...``),
+so opening one never prunes the other's.
 """
 from __future__ import annotations
 
@@ -14,25 +18,57 @@ from pathlib import Path
 
 from app.cache import CACHE_DIR_ENV, cache_dir
 
-__all__ = ["PRESETS", "CACHE_DIR_ENV", "cache_dir", "cached_manifold_path", "source_kind", "load_source"]
+__all__ = ["PRESETS", "KINEMATICS_CHOICES", "KINEMATICS_LABELS", "CACHE_DIR_ENV", "cache_dir", "cached_manifold_path",
+           "check_kinematics", "talker_name", "source_kind", "load_source"]
 
 #: synthetic talker presets (engine.synthetic)
 PRESETS = ("small", "default", "paper")
 
+#: the synthetic talker's kinematics (the keys of engine.lipmodel.KINEMATICS; checked against it)
+KINEMATICS_CHOICES = ("classic", "calibrated")
 
-def cached_manifold_path(preset: str) -> Path:
-    """Where the synthetic talker's manifold for ``preset`` is cached."""
+#: how the window and the command line name each kinematics (a phonetician's words, not the code's)
+KINEMATICS_LABELS = {"classic": "classic", "calibrated": "calibrated on articulograph lips"}
+
+
+def check_kinematics(kinematics) -> str:
+    """``kinematics`` if it is one of :data:`engine.lipmodel.KINEMATICS`, else ValueError naming it and the choices."""
+    from engine.lipmodel import KINEMATICS
+
+    if not isinstance(kinematics, str) or kinematics not in KINEMATICS:
+        raise ValueError(f"kinematics {kinematics!r} is not one of {sorted(KINEMATICS)}: give 'classic' (the "
+                         "default talker) or 'calibrated' (lips that move as real articulograph sensors do)")
+    return kinematics
+
+
+def talker_name(preset: str = "default", kinematics: str = "classic") -> str:
+    """The synthetic talker as the window names it: ``synthetic talker (default)``,
+    ``synthetic talker (default, calibrated on articulograph lips)``."""
+    if kinematics == "classic":
+        return f"synthetic talker ({preset})"
+    return f"synthetic talker ({preset}, {KINEMATICS_LABELS.get(kinematics, kinematics)})"
+
+
+def cached_manifold_path(preset: str, kinematics: str = "classic") -> Path:
+    """Where the synthetic talker's manifold for ``preset`` and ``kinematics`` is cached.
+
+    The name's preset part is :func:`engine.synthetic.cache_token` (``default``,
+    ``default_calibrated``), so the classic talker's name is the one it always had and
+    :func:`app.cache.prune` keeps the two talkers' entries apart.
+    """
     from engine import __version__
     from engine.manifold import FILE_VERSION
     from engine.synthetic import GENERATOR_VERSION
 
     if preset not in PRESETS:
         raise ValueError(f"preset must be one of {PRESETS}, got {preset!r}")
+    check_kinematics(kinematics)
     from engine.manifold import algorithm_fingerprint
-    from engine.synthetic import generator_fingerprint
+    from engine.synthetic import cache_token, generator_fingerprint
 
+    token = cache_token(preset, kinematics=kinematics)
     # keyed on the generator's and the fitting code and parameters: never a manifold made by older code
-    return cache_dir() / "manifolds" / (f"synthetic-{preset}-g{GENERATOR_VERSION}-{generator_fingerprint()}-"
+    return cache_dir() / "manifolds" / (f"synthetic-{token}-g{GENERATOR_VERSION}-{generator_fingerprint()}-"
                                         f"m{FILE_VERSION}-{algorithm_fingerprint()}-{__version__}.npz")
 
 
@@ -68,8 +104,8 @@ def source_kind(path) -> str:
     raise ValueError(f"{p}: neither a Lipspace manifold nor a corpus file (no manifold_version / corpus_version)")
 
 
-def load_source(path=None, preset: str = "default", progress=None, *, use_cache: bool = True,
-                prepare_views: bool = True):
+def load_source(path=None, preset: str = "default", progress=None, *, kinematics: str = "classic",
+                use_cache: bool = True, prepare_views: bool = True):
     """Load or build the manifold the explorer shows (Qt-free; runs in the worker thread).
 
     Parameters
@@ -77,8 +113,15 @@ def load_source(path=None, preset: str = "default", progress=None, *, use_cache:
     path : str or Path or None
         Manifold file (loaded), corpus file (fitted), or None (synthetic talker ``preset``,
         cached).
+    preset : {"small", "default", "paper"}, default="default"
+        The synthetic talker's preset when ``path`` is None.
     progress : callable(stage, done, total), optional
         Raising :class:`engine.progress.Cancelled` from it stops the build.
+    kinematics : {"classic", "calibrated"}, default="classic"
+        The synthetic talker's kinematics (:data:`engine.lipmodel.KINEMATICS`):
+        ``"calibrated"`` is the opt-in talker whose jaw, upper lip and corners move as real
+        speakers' articulograph sensors do. Only with ``path`` None: a file holds its own
+        frames, and anything but ``"classic"`` with a file is a ValueError.
     prepare_views : bool, default=True
         Also compute what the views derive from the manifold (density, phone of every
         frame, phone clusters: :func:`app.state.prepare_derived`), here in the worker, so
@@ -88,8 +131,13 @@ def load_source(path=None, preset: str = "default", progress=None, *, use_cache:
     -------
     manifold : engine.manifold.Manifold
     source : dict ``{"path": str or None, "preset": str, "kind": str}``
+        The synthetic talker's also holds ``"kinematics"``.
     """
-    m, src = _load_manifold(path, preset, progress, use_cache)
+    check_kinematics(kinematics)
+    if path is not None and kinematics != "classic":
+        raise ValueError(f"kinematics {kinematics!r} chooses the synthetic talker's; it does nothing with a file "
+                         f"({path}): leave it out, or open the synthetic talker (no file)")
+    m, src = _load_manifold(path, preset, progress, use_cache, kinematics)
     if prepare_views:
         from app.state import prepare_derived
 
@@ -97,7 +145,7 @@ def load_source(path=None, preset: str = "default", progress=None, *, use_cache:
     return m, src
 
 
-def _load_manifold(path, preset, progress, use_cache):
+def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
     from engine.manifold import Manifold, ManifoldFileError
     from engine.progress import report
 
@@ -118,32 +166,35 @@ def _load_manifold(path, preset, progress, use_cache):
 
             corpus = Corpus.load(path)
         return Manifold().fit(corpus, progress=progress), src
-    src = {"path": None, "preset": preset, "kind": "synthetic"}
-    cached = cached_manifold_path(preset)
+    src = {"path": None, "preset": preset, "kind": "synthetic", "kinematics": kinematics}
+    cached = cached_manifold_path(preset, kinematics)
     if use_cache and cached.exists():
         try:
             report(progress, "loading cached manifold", 0, 1)
             m = Manifold.load(cached)
             report(progress, "loading cached manifold", 1, 1)
-            _prune_cache(cached, preset)
+            _prune_cache(cached, preset, kinematics)
             return m, src
         except (ManifoldFileError, OSError):
             pass  # stale or damaged cache: rebuild below
     from engine.synthetic import load_synthetic
 
-    corpus = load_synthetic(preset=preset, progress=progress, audio=True)  # speech audio when espeak-ng is installed
+    # speech audio when espeak-ng is installed
+    corpus = load_synthetic(preset=preset, progress=progress, audio=True, kinematics=kinematics)
     m = Manifold().fit(corpus, progress=progress)
     if use_cache:
         try:
             m.save(cached)
         except OSError:
             pass  # a read-only cache only costs a rebuild next time
-        _prune_cache(cached, preset)
+        _prune_cache(cached, preset, kinematics)
     return m, src
 
 
-def _prune_cache(manifold_path, preset) -> None:
-    """Delete the cache entries older code left for ``preset`` (see :func:`app.cache.prune`)."""
+def _prune_cache(manifold_path, preset, kinematics="classic") -> None:
+    """Delete the cache entries older code left for ``preset`` with ``kinematics`` (see
+    :func:`app.cache.prune`); the other kinematics' entries have another preset token and stay."""
     from app.cache import newest, prune
+    from engine.synthetic import cache_token
 
-    prune([manifold_path, *newest("corpus", preset)])
+    prune([manifold_path, *newest("corpus", cache_token(preset, kinematics=kinematics))])

@@ -11,7 +11,7 @@ import argparse
 import os
 import sys
 
-from app.source_loading import PRESETS, source_kind
+from app.source_loading import KINEMATICS_CHOICES, PRESETS, source_kind
 
 __all__ = ["add_arguments", "run", "has_display", "NO_DISPLAY_MESSAGE", "EXIT_NO_DISPLAY"]
 
@@ -42,6 +42,10 @@ def add_arguments(p):
                                            "omit for the embedded synthetic talker")
     p.add_argument("--preset", choices=PRESETS, default="default",
                    help="synthetic talker preset when no file is given (default: %(default)s)")
+    p.add_argument("--kinematics", choices=KINEMATICS_CHOICES, default="classic",
+                   help="the synthetic talker's kinematics when no file is given: 'calibrated' opens the opt-in "
+                        "talker whose jaw, upper lip and corners move as real speakers' articulograph sensors do "
+                        "(default: %(default)s)")
     p.add_argument("--session", default=None, help="session file to reopen (from File > Save session)")
     p.add_argument("--restore", action=argparse.BooleanOptionalAction, default=None,
                    help="after an abnormal exit, reopen (--restore) or keep for later (--no-restore) the "
@@ -74,6 +78,9 @@ def run(args) -> int:
 
         return run_live(args.manifold or args.file, args.camera, interocular_mm=args.interocular_mm)
     if args.file is not None:
+        if args.kinematics != "classic":
+            raise CliError("--kinematics chooses the synthetic talker's; it does nothing with a file "
+                           f"({args.file}): leave it out")
         try:
             source_kind(args.file)
         except ValueError as exc:
@@ -88,4 +95,4 @@ def run(args) -> int:
             raise CliError(str(exc)) from None
     from app.main_window import launch
 
-    return launch(args.file, preset=args.preset, session=session, restore=args.restore)
+    return launch(args.file, preset=args.preset, session=session, restore=args.restore, kinematics=args.kinematics)

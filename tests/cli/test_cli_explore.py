@@ -77,7 +77,7 @@ def test_load_source_manifold_corpus_and_cache(small_manifold, small_corpus, mon
     small_manifold.save(cached_manifold_path("small"))
     stages = []
     m2, src2 = load_source(None, "small", lambda st, d, t: stages.append(st))
-    assert src2 == {"path": None, "preset": "small", "kind": "synthetic"}
+    assert src2 == {"path": None, "preset": "small", "kind": "synthetic", "kinematics": "classic"}
     assert stages and set(stages) == {"loading cached manifold", "preparing the views"}
     np.testing.assert_array_equal(m2.Fy_, small_manifold.Fy_)
     # a corpus file is fitted (a few utterances keep it quick); cancelling stops the fit
@@ -100,3 +100,36 @@ def test_lipspace_alone_is_explore(no_display, capsys):
 
     assert main([]) == EXIT_NO_DISPLAY
     assert "xvfb-run -a lipspace explore" in capsys.readouterr().err
+
+
+def test_kinematics_argument_reaches_the_window_and_is_refused_with_a_file(monkeypatch, tmp_path, small_manifold):
+    """``lipspace explore --kinematics calibrated`` opens the calibrated synthetic talker; with a
+    file it is refused with the reason before anything is opened."""
+    import app.main_window
+
+    p = argparse.ArgumentParser(prog="lipspace explore")
+    explore.add_arguments(p)
+    assert p.parse_args([]).kinematics == "classic"
+    assert p.parse_args(["--preset", "small", "--kinematics", "calibrated"]).kinematics == "calibrated"
+    with pytest.raises(SystemExit) as exc:
+        p.parse_args(["--kinematics", "realistic"])
+    assert exc.value.code == 2
+    monkeypatch.setenv("DISPLAY", ":0")  # inputs are checked before any window is opened
+    opened = []
+    monkeypatch.setattr(app.main_window, "launch", lambda *a, **k: opened.append((a, k)) or 0)
+    assert run_explore(["--preset", "small", "--kinematics", "calibrated"]) == 0
+    assert opened == [((None,), {"preset": "small", "session": None, "restore": None, "kinematics": "calibrated"})]
+    mfile = small_manifold.save(tmp_path / "m.npz")
+    with pytest.raises(CliError, match=r"--kinematics chooses the synthetic talker's; .*m\.npz.*leave it out"):
+        run_explore([str(mfile), "--kinematics", "calibrated"])
+    assert len(opened) == 1  # refused: no window
+    assert run_explore([str(mfile)]) == 0 and opened[-1][1]["kinematics"] == "classic"
+
+
+def test_explore_refusal_through_the_command_line(monkeypatch, tmp_path, capsys, small_manifold):
+    from app.cli import main
+
+    monkeypatch.setenv("DISPLAY", ":0")
+    mfile = small_manifold.save(tmp_path / "m.npz")
+    assert main(["explore", str(mfile), "--kinematics", "calibrated"]) == 2
+    assert "--kinematics chooses the synthetic talker's" in capsys.readouterr().err
