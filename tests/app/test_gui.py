@@ -173,17 +173,19 @@ def test_playback_shows_the_frame_due_by_the_clock_and_leaves_the_cloud_alone(wi
         s.set_playing(True)
         lv.timer.stop()  # tick by hand with the fake clock
         assert s.playback == 0
-        now[0] += 0.1  # 100 ms later at 60 Hz: frame 6, frames 1-5 dropped
+        # the fake clock measures no display latency: the picture looks ahead by the lead alone
+        assert lv.clock.look_ahead_s == pytest.approx(lv.clock.lead_s) and lv.clock.lead_s > 0
+        now[0] += 0.1  # 100 ms later at 60 Hz, aimed 15 ms ahead: frame 6.9 -> 7, frames 1-6 dropped
         lv._tick()
-        assert s.playback == 6
-        np.testing.assert_allclose(lv.main.points, _points(m, m.corpus_.frames[u.start + 6]), atol=1e-5)
-        now[0] += 0.5
+        assert s.playback == 7
+        np.testing.assert_allclose(lv.main.points, _points(m, m.corpus_.frames[u.start + 7]), atol=1e-5)
+        now[0] += 0.5  # 615 ms: frame 36.9 -> 37
         lv._tick()
-        assert s.playback == 36
+        assert s.playback == 37
         marker = view.handles["play_o"]
-        assert marker.visible and np.allclose(marker.center, m.Fy_[u.start + 36, :3])
+        assert marker.visible and np.allclose(marker.center, m.Fy_[u.start + 37, :3])
         lv._tick()  # no time passed: the same frame, nothing redrawn
-        assert s.playback == 36
+        assert s.playback == 37
         assert view.n_recolors == n_recolor and np.array_equal(view.handles["points"].rgb, rgb)
         now[0] += 60.0  # far past the end: the last frame, stopped
         lv._tick()
