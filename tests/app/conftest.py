@@ -128,3 +128,62 @@ def _fresh_window_settings_per_module(_window_settings_in_tmp):
 def _fresh_window_settings_per_test(_window_settings_in_tmp):
     """So does every window a test opens (a dock hidden by one test never hides it in the next)."""
     _forget_window_settings()
+
+
+@pytest.fixture
+def dead_pid():
+    """A function giving the id of a process that has just exited (a crashed explorer's, for autosave records)."""
+    import sys
+
+    def new() -> int:
+        p = subprocess.Popen([sys.executable, "-c", "pass"])
+        p.wait()
+        return p.pid
+
+    return new
+
+
+@pytest.fixture
+def run_cli_window(qapp):
+    """Run ``lipspace <argv>`` with its event loop until a shown main window is ``ready``.
+
+    ``run(argv, ready, look, *, each=None, timeout_s=60)`` calls ``each()`` at every poll
+    (every 100 ms; e.g. to answer a dialog), and once a visible ``MainWindow`` makes
+    ``ready(window)`` true, ``look(window)``, then closes it and ends the loop. Returns
+    ``(exit code, look's result)``; the result is None when no window was ready in time.
+    """
+    from PySide6 import QtCore, QtWidgets
+
+    from app.cli import main
+    from app.main_window import MainWindow
+
+    def run(argv, ready, look, *, each=None, timeout_s=60.0):
+        seen = []
+        timer = QtCore.QElapsedTimer()
+
+        def poll():
+            if each is not None:
+                each()
+            wins = [w for w in QtWidgets.QApplication.topLevelWidgets() if isinstance(w, MainWindow) and w.isVisible()]
+            done = [w for w in wins if ready(w)]
+            if done or timer.elapsed() > 1000 * timeout_s:
+                if done:
+                    seen.append(look(done[0]))
+                for w in wins:
+                    w.close()
+                qapp.quit()
+                return
+            QtCore.QTimer.singleShot(100, poll)
+
+        timer.start()
+        # the test ends the event loop itself, once: a second quit (closing the last window)
+        # would be left pending and end the next test's dialog loop at once
+        qapp.setQuitOnLastWindowClosed(False)
+        QtCore.QTimer.singleShot(100, poll)
+        try:
+            code = main(list(argv))
+        finally:
+            qapp.setQuitOnLastWindowClosed(True)
+        return code, (seen[0] if seen else None)
+
+    return run

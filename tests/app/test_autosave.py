@@ -31,12 +31,6 @@ def _session_json(frame: int, source: dict | None = None) -> str:
                        "selection": {"frame": frame, "state": None, "target": None}}) + "\n"
 
 
-def _dead_pid() -> int:
-    p = subprocess.Popen([sys.executable, "-c", "pass"])
-    p.wait()
-    return p.pid
-
-
 def test_saves_once_the_session_stays_unchanged_for_the_delay(tmp_path):
     clock = Clock()
     a = Autosaver(tmp_path, delay=3.0, clock=clock)
@@ -123,21 +117,21 @@ def test_crashed_run_is_detected_and_its_autosave_restored(tmp_path):
     assert Autosaver(tmp_path).begin() is None
 
 
-def test_running_and_cleanly_closed_runs_are_not_offered(tmp_path):
+def test_running_and_cleanly_closed_runs_are_not_offered(tmp_path, dead_pid):
     live = Autosaver(tmp_path, pid=os.getppid())  # another explorer that is still running
     live.begin()
     live.save(lambda p: p.write_text(_session_json(1)))
-    clean = Autosaver(tmp_path, pid=_dead_pid())
+    clean = Autosaver(tmp_path, pid=dead_pid())
     clean.begin()
     clean.save(lambda p: p.write_text(_session_json(2)))
     clean.finish()
-    nosave = Autosaver(tmp_path, pid=_dead_pid())  # crashed before its first autosave
+    nosave = Autosaver(tmp_path, pid=dead_pid())  # crashed before its first autosave
     nosave.begin()
     me = Autosaver(tmp_path)
     assert me.begin() is None
     assert live.marker.exists() and live.session.exists()  # untouched
     assert not nosave.marker.exists()  # its stale marker is tidied away
-    assert pid_alive(os.getpid()) and not pid_alive(_dead_pid())
+    assert pid_alive(os.getpid()) and not pid_alive(dead_pid())
     if sys.platform.startswith("linux"):  # a reused pid is told apart by its start time
         assert not pid_alive(os.getpid(), start_ticks=1)
 
@@ -155,9 +149,9 @@ def test_a_crashed_run_with_our_own_pid_is_still_offered(tmp_path):
     assert rec is not None and rec.session == old.session and new.session != old.session
 
 
-def test_restore_choices(tmp_path):
+def test_restore_choices(tmp_path, dead_pid):
     def crashed(frame):
-        dead = Autosaver(tmp_path, pid=_dead_pid())
+        dead = Autosaver(tmp_path, pid=dead_pid())
         dead.begin()
         dead.save(lambda p: p.write_text(_session_json(frame)))
         return dead
@@ -171,7 +165,7 @@ def test_restore_choices(tmp_path):
     asked = []
     assert resolve_recovery(me, rec, restore=None, ask=lambda r: asked.append(r) or "discard") is None
     assert asked == [rec] and not rec.session.exists() and not rec.marker.exists()
-    rec2 = Autosaver(tmp_path, pid=_dead_pid())
+    rec2 = Autosaver(tmp_path, pid=dead_pid())
     rec2.begin()
     rec2.save(lambda p: p.write_text("{damaged"))
     r = Autosaver(tmp_path).begin()
@@ -253,55 +247,34 @@ def test_window_autosaves_and_restores_targets_trajectory_and_camera(qapp, qtbot
 
 @pytest.mark.gui
 @pytest.mark.parametrize("how", ["--restore", "dialog"])
-def test_explore_restores_a_crashed_session(qapp, qtbot, app_manifold, tmp_path, monkeypatch, how):
+def test_explore_restores_a_crashed_session(app_manifold, tmp_path, monkeypatch, how, dead_pid, run_cli_window):
     """After a crash, ``lipspace explore --restore`` (or the dialog's Restore button) loads the
     autosave's source and applies the session."""
-    from PySide6 import QtCore, QtWidgets
-
-    from app.cli import main
-    from app.main_window import MainWindow
+    from PySide6 import QtWidgets
 
     mfile = app_manifold.save(tmp_path / "m.npz")
     monkeypatch.setenv("LIPSPACE_STATE_DIR", str(tmp_path / "state"))
-    dead = Autosaver(pid=_dead_pid())
+    dead = Autosaver(pid=dead_pid())
     dead.begin()
     dead.save(lambda p: p.write_text(_session_json(33, {"path": str(mfile), "preset": "default"})))
-    seen = {}
+    questions = []
 
-    def poll():
+    def answer():
         for box in QtWidgets.QApplication.topLevelWidgets():
             if isinstance(box, QtWidgets.QMessageBox) and box.isVisible():  # the restore question
-                seen["question"] = box.text()
+                questions.append(box.text())
                 next(b for b in box.buttons() if b.text() == "Restore").click()
-        wins = [w for w in QtWidgets.QApplication.topLevelWidgets()
-                if isinstance(w, MainWindow) and w.autosaver is not None and w.isVisible()]
-        if wins and wins[0].state.frame is not None:
-            w = wins[0]
-            seen.update(frame=w.state.frame, path=w.state.source.get("path"), marker=w.autosaver.marker.exists())
-            w.close()
-            qapp.quit()
-            return
-        if timer.elapsed() > 60000:
-            for w in wins:
-                w.close()
-            qapp.quit()
-            return
-        QtCore.QTimer.singleShot(100, poll)
 
-    timer = QtCore.QElapsedTimer()
-    timer.start()
-    # the test ends the event loop itself, once: a second quit (closing the last window)
-    # would be left pending and end the next test's dialog loop at once
-    qapp.setQuitOnLastWindowClosed(False)
-    QtCore.QTimer.singleShot(100, poll)
-    try:
-        assert main(["explore"] + (["--restore"] if how == "--restore" else [])) == 0
-    finally:
-        qapp.setQuitOnLastWindowClosed(True)
-    question = seen.pop("question", None)
+    code, seen = run_cli_window(
+        ["explore"] + (["--restore"] if how == "--restore" else []),
+        ready=lambda w: w.autosaver is not None and w.state.frame is not None,
+        look=lambda w: {"frame": w.state.frame, "path": w.state.source.get("path"),
+                        "marker": w.autosaver.marker.exists()},
+        each=answer)
+    assert code == 0
     if how == "--restore":
-        assert question is None  # no dialog
+        assert questions == []  # no dialog
     else:
-        assert "did not exit normally" in question and f"process {dead.pid}" in question
+        assert "did not exit normally" in questions[0] and f"process {dead.pid}" in questions[0]
     assert seen == {"frame": 33, "path": str(mfile.resolve()), "marker": True}
     assert not (tmp_path / "state" / "autosave").exists() or list((tmp_path / "state" / "autosave").iterdir()) == []

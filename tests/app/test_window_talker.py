@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -115,25 +113,15 @@ def test_sessions_reopen_the_talker_they_were_saved_with(win, qtbot, tmp_path):
     assert win.open_session(old) is None  # the same talker: only the selection is restored, nothing reloaded
 
 
-def _dead_pid() -> int:
-    p = subprocess.Popen([sys.executable, "-c", "pass"])
-    p.wait()
-    return p.pid
-
-
 @pytest.mark.parametrize("how", ["--kinematics", "autosave"])
-def test_explore_opens_the_calibrated_talker(qapp, talker_cache, tmp_path, monkeypatch, how):
+def test_explore_opens_the_calibrated_talker(talker_cache, tmp_path, monkeypatch, how, dead_pid, run_cli_window):
     """``lipspace explore --preset small --kinematics calibrated`` opens it; so does
     ``lipspace explore --restore`` of a crashed run that showed it."""
-    from PySide6 import QtCore, QtWidgets
-
     from app.autosave import Autosaver
-    from app.cli import main
-    from app.main_window import MainWindow
 
     monkeypatch.setenv("LIPSPACE_STATE_DIR", str(tmp_path / "state"))
     if how == "autosave":
-        dead = Autosaver(pid=_dead_pid())
+        dead = Autosaver(pid=dead_pid())
         dead.begin()
         src = {"path": None, "preset": "small", "kind": "synthetic", "kinematics": "calibrated"}
         dead.save(lambda p: p.write_text(json.dumps({"lipspace_session": 2, "source": src, "selection": {
@@ -141,32 +129,12 @@ def test_explore_opens_the_calibrated_talker(qapp, talker_cache, tmp_path, monke
         argv = ["explore", "--restore"]
     else:
         argv = ["explore", "--preset", "small", "--kinematics", "calibrated", "--no-restore"]
-    seen = {}
-
-    def poll():
-        wins = [w for w in QtWidgets.QApplication.topLevelWidgets() if isinstance(w, MainWindow) and w.isVisible()]
-        if wins and wins[0].state.manifold is not None and (how != "autosave" or wins[0].state.frame is not None):
-            w = wins[0]
-            seen.update(source=dict(w.state.source), title=w.windowTitle(), frame=w.state.frame,
-                        calibrated=_is_calibrated(w.state.manifold))
-            w.close()
-            qapp.quit()
-            return
-        if timer.elapsed() > 120000:
-            for w in wins:
-                w.close()
-            qapp.quit()
-            return
-        QtCore.QTimer.singleShot(100, poll)
-
-    timer = QtCore.QElapsedTimer()
-    timer.start()
-    qapp.setQuitOnLastWindowClosed(False)  # the test ends the event loop itself, once
-    QtCore.QTimer.singleShot(100, poll)
-    try:
-        assert main(argv) == 0
-    finally:
-        qapp.setQuitOnLastWindowClosed(True)
+    code, seen = run_cli_window(
+        argv, ready=lambda w: w.state.manifold is not None and (how != "autosave" or w.state.frame is not None),
+        look=lambda w: {"source": dict(w.state.source), "title": w.windowTitle(), "frame": w.state.frame,
+                        "calibrated": _is_calibrated(w.state.manifold)},
+        timeout_s=120.0)
+    assert code == 0 and seen is not None
     assert seen["source"] == {"path": None, "preset": "small", "kind": "synthetic", "kinematics": "calibrated"}
     assert seen["calibrated"] and seen["title"] == f"Lipspace — synthetic talker (small, {CALIBRATED})"
     assert seen["frame"] == (33 if how == "autosave" else None)
