@@ -6,8 +6,7 @@ import time
 from pathlib import Path
 
 from app.cli._common import load_corpus_arg, progress_bar
-
-PRESETS = ("small", "default", "paper")
+from app.source_loading import KINEMATICS_CHOICES, PRESETS
 
 
 def add_arguments(p):
@@ -17,7 +16,7 @@ def add_arguments(p):
                                              "talker")
     p.add_argument("--preset", choices=PRESETS, default="default",
                    help="synthetic talker preset when no corpus is given (default: %(default)s)")
-    p.add_argument("--kinematics", choices=("classic", "calibrated"), default="classic",
+    p.add_argument("--kinematics", choices=KINEMATICS_CHOICES, default="classic",
                    help="the synthetic talker's kinematics when no corpus is given: 'calibrated' moves the jaw, "
                         "upper lip and corners as real speakers' articulograph sensors do (opt-in; "
                         "default: %(default)s)")

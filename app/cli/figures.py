@@ -13,7 +13,7 @@ MAX_DPI = 1200
 
 
 def add_arguments(p):
-    from app.cli.build import PRESETS as BUILD_PRESETS
+    from app.source_loading import PRESETS as BUILD_PRESETS
 
     p.add_argument("manifold", nargs="?",
                    help="manifold file from 'lipspace build' (a corpus file is fitted first); "
