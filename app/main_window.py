@@ -5,18 +5,29 @@ loading (in a worker thread with a progress dialog), sessions and exports.
 """
 from __future__ import annotations
 
+import contextlib
+import signal
 import sys
+import threading
 from pathlib import Path
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.state import AppState
 
-__all__ = ["MainWindow", "launch"]
+__all__ = ["MainWindow", "launch", "stop_on_signals"]
 
 TRAJECTORY_FILTERS = "CSV table (*.csv);;NumPy array (*.npy);;OBJ mesh sequence (*.obj);;PLY mesh sequence (*.ply)"
 
-TRAJECTORY_FILTERS = "CSV table (*.csv);;NumPy array (*.npy);;OBJ mesh sequence (*.obj);;PLY mesh sequence (*.ply)"
+#: the suffixes File > Export trajectory / animation / cluster table write, in filter order
+TRAJECTORY_SUFFIXES = (".csv", ".npy", ".obj", ".ply")
+ANIMATION_FILTERS = "glTF binary (*.glb);;glTF (*.gltf);;MP4 video (*.mp4)"
+ANIMATION_SUFFIXES = (".glb", ".gltf", ".mp4")
+
+#: signals that stop the explorer from its terminal or the desktop session (Ctrl-C, kill, logout)
+STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
+#: how often the event loop hands control to Python so that a stop signal's handler runs (ms)
+SIGNAL_POLL_MS = 200
 
 
 # ============================================================================ the window
@@ -450,10 +461,14 @@ class MainWindow(QtWidgets.QMainWindow):
             QtWidgets.QMessageBox.information(self, "Lipspace", "No trajectory to export: choose an utterance or "
                                                                "synthesise one in the trajectory editor.")
             return
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, f"Export trajectory ({traj.label})", self.last_dir,
-                                                        TRAJECTORY_FILTERS)
+        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, f"Export trajectory ({traj.label})",
+                                                             self.last_dir, TRAJECTORY_FILTERS)
         if path:
+            from app.figures.export import suffix_from_filter
             from app.trajectories import export_trajectory
+
+            # a name typed without a suffix takes the chosen filter's, as the figure exports do
+            path = str(suffix_from_filter(path, chosen, TRAJECTORY_SUFFIXES))
 
             self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}",
                          "export the trajectory")
@@ -465,10 +480,13 @@ class MainWindow(QtWidgets.QMainWindow):
         return export_current_animation(self.state, path, progress=progress)
 
     def export_animation_dialog(self):
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export animation", self.last_dir,
-                                                        "glTF binary (*.glb);;glTF (*.gltf);;MP4 video (*.mp4)")
+        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, "Export animation", self.last_dir,
+                                                             ANIMATION_FILTERS)
         if not path:
             return
+        from app.figures.export import suffix_from_filter
+
+        path = str(suffix_from_filter(path, chosen, ANIMATION_SUFFIXES))
         from engine.progress import Cancelled
 
         dlg = QtWidgets.QProgressDialog("Rendering the video…", "Cancel", 0, 100, self)
@@ -496,9 +514,12 @@ class MainWindow(QtWidgets.QMainWindow):
     def export_clusters_dialog(self):
         if self.state.manifold is None:
             return
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export cluster table", self.last_dir,
-                                                        "CSV table (*.csv)")
+        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, "Export cluster table", self.last_dir,
+                                                             "CSV table (*.csv)")
         if path:
+            from app.figures.export import suffix_from_filter
+
+            path = str(suffix_from_filter(path, chosen, (".csv",)))
             self._report(lambda: self.export_clusters(path), f"wrote {path}", "export the cluster table")
 
     # ------------------------------------------------------------------ misc
@@ -626,7 +647,69 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
         preset = session.get("source", {}).get("preset", preset)
         kinematics = source_kinematics(session)
     win.open_source(path, preset=preset, kinematics=kinematics, session=session)
-    code = int(app.exec())
+    with stop_on_signals(app, win) as stopped:
+        code = int(app.exec())
+    if stopped:
+        # not a chosen Quit: no finish(), so a saved session (or a restored one not yet saved
+        # again) stays and the next start offers it back; a marker without one is pruned then
+        if autosaver is not None and autosaver.session.is_file():
+            kept = "the session was autosaved and is offered back at the next start"
+        else:
+            kept = "nothing was autosaved yet" if autosaver is not None else "autosave is off"
+        print(f"lipspace explore: stopped by {stopped[-1]}; the window was closed ({kept}).", file=sys.stderr)
+        return 128 + int(getattr(signal, stopped[-1]))
     if autosaver is not None:
         autosaver.finish()  # a clean exit: nothing to offer next time
     return code
+
+
+@contextlib.contextmanager
+def stop_on_signals(app, win):
+    """Ctrl-C in the terminal, SIGTERM or SIGHUP close ``win`` as File > Quit does and end the loop.
+
+    Python runs a signal handler only between its own bytecodes, and the Qt event loop
+    runs none while it waits: a timer hands control to Python every ``SIGNAL_POLL_MS``.
+    The handler only notes the signal; the timer's slot saves the session to the
+    autosave (when there is one and something is loaded), closes the window and quits,
+    from the event loop, never from inside whatever slot the signal interrupted.
+    Without this the command-line handler's ``KeyboardInterrupt`` was raised inside a
+    Qt slot, printed as a traceback and swallowed: the window could not be stopped.
+
+    Yields the list of signal names received (empty unless one stopped the window).
+    Only in the main thread; the previous handlers are restored on exit.
+    """
+    stopped: list = []
+    if threading.current_thread() is not threading.main_thread():
+        yield stopped
+        return
+
+    def handler(signum, _frame):
+        stopped.append(signal.Signals(signum).name)
+
+    def poll():
+        if not stopped or poll.done:
+            return
+        poll.done = True
+        a = win.autosaver
+        if a is not None and win.state.manifold is not None:
+            with contextlib.suppress(OSError, ValueError, RuntimeError):
+                a.save(win.save_session)
+        win.close()
+        app.quit()
+
+    poll.done = False
+    old = {}
+    for name in STOP_SIGNALS:
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            old[sig] = signal.signal(sig, handler)
+    timer = QtCore.QTimer()
+    timer.setInterval(SIGNAL_POLL_MS)
+    timer.timeout.connect(poll)
+    timer.start()
+    try:
+        yield stopped
+    finally:
+        timer.stop()
+        for sig, h in old.items():
+            signal.signal(sig, h)

@@ -257,3 +257,96 @@ def test_reset_layout_gives_every_dock_its_first_size(qapp, tmp_path):
         assert sizes() == first
     finally:
         w.close()
+
+
+@pytest.mark.parametrize("signame", ["SIGTERM", "SIGINT"])
+def test_a_stop_signal_closes_the_explorer_and_keeps_its_session(manifold_file, tmp_path, signame):
+    """`kill` or Ctrl-C in the terminal stops `lipspace explore`: exit 128 + signal within seconds, one
+    line and no traceback, and the session autosaved then is offered back by the next start (before,
+    the KeyboardInterrupt was raised inside a Qt slot, printed as a traceback and swallowed)."""
+    import signal
+    import time
+
+    from app.autosave import Autosaver
+
+    script = textwrap.dedent("""
+        import sys
+        from PySide6 import QtCore
+        from app.main_window import MainWindow
+
+        show = MainWindow.show
+
+        def show_then_tell(self):
+            show(self)
+
+            def poll():
+                if self.state.manifold is not None:
+                    self.state.select_frame(7)
+                    print("ready", flush=True)
+                else:
+                    QtCore.QTimer.singleShot(50, poll)
+
+            QtCore.QTimer.singleShot(50, poll)
+
+        MainWindow.show = show_then_tell
+        from app.cli import main
+        sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
+    """)
+    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
+    state = tmp_path / "state"
+    env.update(LIPSPACE_STATE_DIR=str(state), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"),
+               LIPSPACE_CACHE_DIR=str(tmp_path / "cache"))
+    proc = subprocess.Popen([sys.executable, "-c", script, str(manifold_file)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        assert proc.stdout.readline().strip() == "ready"
+        time.sleep(0.5)  # the event loop is idle, waiting in Qt
+        proc.send_signal(getattr(signal, signame))
+        sent = time.monotonic()
+        out, err = proc.communicate(timeout=30)
+        took = time.monotonic() - sent
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 128 + getattr(signal, signame), err
+    assert took < 10
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert err.strip() == (f"lipspace explore: stopped by {signame}; the window was closed (the session was "
+                           "autosaved and is offered back at the next start).")
+    recovery = Autosaver(state / "autosave").begin()
+    assert recovery is not None  # the next start offers it back
+    from app.session import load_session
+
+    assert load_session(recovery.session)["selection"]["frame"] == 7
+
+
+def test_export_dialogs_give_a_name_typed_without_suffix_the_chosen_filters_suffix(qapp, qtbot, tmp_path,
+                                                                                   app_manifold, monkeypatch):
+    """File > Export trajectory, animation and cluster table write what the chosen filter names when the
+    name has no suffix (before: an error dialog, 'cannot export a trajectory as a file without a suffix')."""
+    from PySide6 import QtWidgets
+
+    answer = {}
+    monkeypatch.setattr(QtWidgets.QFileDialog, "getSaveFileName", staticmethod(lambda *a, **k: answer["save"]))
+    w = _window(qapp, _settings(tmp_path / "s.ini"), app_manifold)
+    try:
+        w.state.set_utterance(app_manifold.corpus_.utterances[0].id)
+        assert w.current_trajectory() is not None
+        cases = [("traj", "NumPy array (*.npy)", w.export_trajectory_dialog, "traj.npy"),
+                 ("table", "CSV table (*.csv)", w.export_trajectory_dialog, "table.csv"),
+                 ("anim", "glTF binary (*.glb)", w.export_animation_dialog, "anim.glb"),
+                 ("kept.npy", "CSV table (*.csv)", w.export_trajectory_dialog, "kept.npy"),
+                 ("clusters", "CSV table (*.csv)", w.export_clusters_dialog, "clusters.csv")]
+        for name, chosen, dialog, written in cases:
+            answer["save"] = (str(tmp_path / name), chosen)
+            dialog()
+            qapp.processEvents()
+            assert getattr(w, "last_error_message", None) is None, w.last_error_message
+            assert (tmp_path / written).is_file(), (name, chosen, sorted(p.name for p in tmp_path.iterdir()))
+            assert w.statusBar().currentMessage() == f"wrote {tmp_path / written}"
+        n = len(w.current_trajectory())
+        assert np.load(tmp_path / "traj.npy").shape[0] == n
+        assert not (tmp_path / "traj").exists() and not (tmp_path / "kept.npy.csv").exists()
+    finally:
+        w.close()
