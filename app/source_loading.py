@@ -19,7 +19,7 @@ from pathlib import Path
 from app.cache import CACHE_DIR_ENV, cache_dir
 
 __all__ = ["PRESETS", "KINEMATICS_CHOICES", "KINEMATICS_LABELS", "CACHE_DIR_ENV", "cache_dir", "cached_manifold_path",
-           "check_kinematics", "talker_name", "source_kind", "load_source"]
+           "check_kinematics", "talker_name", "source_kind", "load_source", "read_recording", "ANALYSIS_RATE"]
 
 #: synthetic talker presets (engine.synthetic)
 PRESETS = ("small", "default", "paper")
@@ -158,9 +158,7 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
             report(progress, "loading manifold", 1, 1)
             return m, src
         if kind == "foreign":
-            from engine.io import read_corpus
-
-            corpus = read_corpus(path)
+            corpus = read_recording(path)
         else:
             from engine.corpus import Corpus
 
@@ -189,6 +187,41 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
             pass  # a read-only cache only costs a rebuild next time
         _prune_cache(cached, preset, kinematics)
     return m, src
+
+
+#: the method's analysis rate in Hz (the paper's), to which 'lipspace import' resamples by default
+ANALYSIS_RATE = 60.0
+
+
+def read_recording(path):
+    """A recording in a foreign format (Haskins .mat, MOCHA .ema, C3D, CSV, ...) as ``lipspace
+    import`` makes it with its defaults, so that opening the file itself in the window (or in
+    ``lipspace explore FILE``) fits the same corpus as ``import`` then ``build``.
+
+    The defaults applied: registration ``"auto"`` (rigid with 3 or more reference sensors,
+    else centring when there are several utterances; :func:`engine.registration.register`),
+    then resampling to :data:`ANALYSIS_RATE` (:func:`engine.io.resample`; a video keeps its
+    own rate, as ``import`` keeps it). Both are noted in the corpus history, which ``info``
+    and the session show.
+
+    Parameters
+    ----------
+    path : str or Path
+        The recording (any format :func:`engine.io.read_corpus` reads).
+
+    Returns
+    -------
+    engine.corpus.Corpus
+        Frames of shape (n_frames, dims * n_points) at 60 Hz (video: its own rate).
+    """
+    from engine.io import read_corpus, resample
+    from engine.io.dispatch import detect_format
+    from engine.registration import register
+
+    corpus = register(read_corpus(path), method="auto")
+    if detect_format(path) != "video" and abs(corpus.rate - ANALYSIS_RATE) > 1e-9 * ANALYSIS_RATE:
+        corpus = resample(corpus, ANALYSIS_RATE)
+    return corpus
 
 
 def _prune_cache(manifold_path, preset, kinematics="classic") -> None:

@@ -45,8 +45,16 @@ def progress_bar(*, disable: bool | None = None):
             b.close()
 
 
-def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, kinematics: str = "classic"):
-    """A corpus from a native file, or the synthetic talker (with ``kinematics``) when ``path`` is None."""
+def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, kinematics: str = "classic",
+                    audio: bool = False):
+    """A corpus from a native file, a foreign recording (as ``lipspace import`` makes it by default:
+    :func:`app.source_loading.read_recording`), or the synthetic talker (with ``kinematics``) when
+    ``path`` is None.
+
+    ``audio``: give the synthetic talker its speech audio (espeak-ng; without it the corpus
+    history says why), as the explorer's talker has it; ``lipspace build`` asks for it so that
+    a manifold file of the talker plays and exports with sound. Ignored for a file.
+    """
     from app.cli import CliError
     from engine.corpus import Corpus, CorpusError
 
@@ -54,7 +62,7 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, k
         from app.cache import newest, prune
         from engine.synthetic import cache_token, load_synthetic
 
-        corpus = load_synthetic(preset=synthetic_preset, progress=progress, kinematics=kinematics)
+        corpus = load_synthetic(preset=synthetic_preset, progress=progress, kinematics=kinematics, audio=audio)
         # the corpora older code left behind (each variant is kept apart by its file name)
         prune(newest("corpus", cache_token(synthetic_preset, kinematics=kinematics)))
         return corpus
@@ -67,11 +75,13 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, k
 
             # frames in blocks beside it ('lipspace import --block-frames'): read from there when needed
             return load_blocked(p) if is_blocked(p) else Corpus.load(p)
-        # Any foreign format the importers know (Haskins .mat, MOCHA .ema, C3D, ...).
-        from engine.io import ImportFormatError, read_corpus
+        # Any foreign format the importers know (Haskins .mat, MOCHA .ema, C3D, ...), with
+        # import's defaults (registration, 60 Hz), as the window opens it
+        from app.source_loading import read_recording
+        from engine.io import ImportFormatError
 
         try:
-            return read_corpus(p)
+            return read_recording(p)
         except ImportFormatError as exc:
             raise CliError(f"{exc} (convert it first with 'lipspace import')") from None
     except CorpusError as exc:
