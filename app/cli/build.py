@@ -61,7 +61,7 @@ def run(args) -> int:
             raise CliError("--kinematics chooses the synthetic talker's; it does nothing with a corpus file "
                            f"({args.corpus}): leave it out")
         corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress,
-                                 kinematics=args.kinematics)
+                                 kinematics=args.kinematics, audio=True)
         if abs(corpus.rate - 60.0) > 3.0:  # the analysis rate (README, "Real recordings")
             print(f"lipspace build: warning: {corpus.name} is at {corpus.rate:g} Hz; the method's analysis rate is "
                   "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "

@@ -17,9 +17,10 @@ def _corpus_lines(c):
     mids, labels, *_ = c.phone_table()
     uniq, counts = np.unique(labels, return_counts=True) if len(labels) else ([], [])
     top = ", ".join(f"{u} {n}" for u, n in sorted(zip(uniq, counts), key=lambda t: -t[1])[:12])
+    n_utt = len(c.utterances)
     return [
         f"corpus      {c.name}",
-        f"frames      {c.n_frames} at {c.rate:g} Hz ({c.duration:.1f} s), {len(c.utterances)} utterances"
+        f"frames      {c.n_frames} at {c.rate:g} Hz ({c.duration:.1f} s), {n_utt} utterance{'s' * (n_utt != 1)}"
         + ("" if abs(c.rate - ANALYSIS_RATE) <= 0.05 * ANALYSIS_RATE else
            f" (the method's analysis rate is {ANALYSIS_RATE:g} Hz: 'lipspace import --resample {ANALYSIS_RATE:g}')"),
         f"points      {c.n_points} ({c.dims}-D){', mesh with %d faces' % len(c.faces) if c.faces is not None else ''}",

@@ -28,6 +28,15 @@ INVERSES = ("delaunay", "state-mean", "local-linear")
 VALUES = ("frames", "fx", "fy")
 
 
+def _values_meaning(values: str, corpus) -> str:
+    """What each row of a written trajectory holds, in words: ``"x, y, z of 156 points"``,
+    ``"shape coordinates F^x"`` or ``"manifold coordinates F^y"`` (``--values``)."""
+    if values == "frames":
+        dim = corpus.frames.shape[1] // max(corpus.n_points, 1)
+        return f"{', '.join('xyz'[:dim])} of {corpus.n_points} points"
+    return "shape coordinates F^x" if values == "fx" else "manifold coordinates F^y"
+
+
 def add_arguments(p):
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--phones", metavar='"P DUR ..."', help='phone labels with durations in seconds, e.g. "p 0.08 ax 0.1"')
@@ -189,7 +198,7 @@ def run(args) -> int:
             write_trajectory_csv(out, values, times=traj.times, columns=cols)
         else:
             write_trajectory_npy(out, values)
-        print(f"wrote {out} ({values.shape[0]} x {values.shape[1]} {args.values})")
+        print(f"wrote {out} ({values.shape[0]} frames x {values.shape[1]} values: {_values_meaning(args.values, c)})")
     if args.mesh_dir:
         from app.cli._common import output_directory
         from engine.io.export import write_mesh_sequence

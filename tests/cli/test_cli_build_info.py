@@ -36,11 +36,36 @@ def test_info_reports_classes_and_connectivity(built, capsys):
     assert abs(sum(pcts) - 100) < 0.5
 
 
+def test_built_talker_speaks_as_the_explorers_does_or_info_says_why(built, capsys):
+    """`lipspace build` of the synthetic talker keeps its speech audio (README: the talker speaks when
+    espeak-ng is installed; without it `info` says why in its history line). Before, the built file was
+    silent with espeak-ng installed and its history said nothing."""
+    from pathlib import Path
+
+    c = Manifold.load(built).corpus_
+    audio = [u.audio for u in c.utterances]
+    if all(audio):
+        assert all(Path(a).is_file() for a in audio)
+        assert any(h.startswith("speech audio: espeak-ng") for h in c.history), c.history
+    else:
+        assert not any(audio) and any(h.startswith("speech audio: none;") for h in c.history), c.history
+    assert main(["info", str(built)]) == 0
+    assert "history     speech audio: " in capsys.readouterr().out
+
+
 def test_info_on_corpus_file(tmp_path, small_corpus, capsys):
     p = small_corpus.save(tmp_path / "c.npz")
     assert main(["info", str(p)]) == 0
     out = capsys.readouterr().out
     assert "Lipspace corpus" in out and f"{small_corpus.n_frames} at 60 Hz" in out
+    assert f"s), {len(small_corpus.utterances)} utterances\n" in out
+
+
+def test_info_counts_one_utterance_in_the_singular(tmp_path, small_corpus, capsys):
+    one = small_corpus.subset([small_corpus.utterances[0].id])
+    assert main(["info", str(one.save(tmp_path / "one.npz"))]) == 0
+    frames_line = next(ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("frames"))
+    assert frames_line.endswith("s), 1 utterance"), frames_line
 
 
 def test_cli_errors_are_clean(tmp_path, capsys):

@@ -20,6 +20,8 @@ def test_phones_to_csv_and_obj_meshes(mfile, small_manifold, tmp_path, capsys):
     assert "manifold: 35 frames" in text and "wrote 35 OBJ files" in text
     rows = list(csv.reader(out.read_text().splitlines()))
     c = small_manifold.corpus_
+    # rows and columns named for what they are (was "35 x 468 frames")
+    assert f"wrote {out} (35 frames x {c.frames.shape[1]} values: x, y, z of {c.n_points} points)" in text
     assert rows[0][0] == "time" and len(rows[0]) == 1 + c.frames.shape[1]
     assert len(rows) == 1 + 35
     vals = np.array(rows[1:], dtype=float)
