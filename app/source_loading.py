@@ -189,7 +189,8 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
     return m, src
 
 
-#: the method's analysis rate in Hz (the paper's), to which 'lipspace import' resamples by default
+#: the method's analysis rate in Hz (the paper's 60 Hz), to which 'lipspace import' and :func:`read_recording`
+#: resample by default (see docs/DECISIONS.md, "Real recordings")
 ANALYSIS_RATE = 60.0
 
 

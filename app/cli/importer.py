@@ -5,11 +5,11 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from app.source_loading import ANALYSIS_RATE
+
 #: which reader option ``--points`` sets, per format
 _POINT_OPTION = {"ema": "sensors", "mview": "sensors", "c3d": "markers", "csv": "points", "matrix": "points",
                  "pos": "points", "wave": "points"}
-#: the analysis rate: the paper's 60 Hz (see docs/DECISIONS.md, "Real recordings")
-ANALYSIS_RATE = 60.0
 
 
 #: highest --resample rate in Hz

@@ -196,34 +196,44 @@ def test_a_session_keeps_the_edited_targets_and_the_synthesised_trajectory(qapp,
             w2.close()
 
 
-def test_started_and_closed_window_leaves_the_console_quiet(manifold_file, tmp_path):
-    script = textwrap.dedent("""
+def _explore_script(when_shown: str) -> str:
+    """A script running ``lipspace explore <argv[1]> --no-restore`` whose window, once its manifold is
+    shown, runs the statements ``when_shown`` (with ``self`` the window)."""
+    return textwrap.dedent(("""
         import sys
-        from PySide6 import QtCore, QtWidgets
+        from PySide6 import QtCore
         from app.main_window import MainWindow
 
         show = MainWindow.show
 
-        def show_then_close(self):
+        def show_then_act(self):
             show(self)
 
             def poll():
                 if self.state.manifold is not None:
-                    self.close()
+                    %s
                 else:
                     QtCore.QTimer.singleShot(50, poll)
 
             QtCore.QTimer.singleShot(50, poll)
 
-        MainWindow.show = show_then_close
+        MainWindow.show = show_then_act
         from app.cli import main
         sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
-    """)
+    """) % "\n                    ".join(when_shown.strip().splitlines()))
+
+
+def _explore_env(tmp_path) -> dict:
+    """The environment of such a script: state, settings and cache under ``tmp_path``, Qt's logging as set."""
     env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
     env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"),
                LIPSPACE_CACHE_DIR=str(tmp_path / "cache"))
-    r = subprocess.run([sys.executable, "-c", script, str(manifold_file)], capture_output=True, text=True,
-                       env=env, timeout=120)
+    return env
+
+
+def test_started_and_closed_window_leaves_the_console_quiet(manifold_file, tmp_path):
+    r = subprocess.run([sys.executable, "-c", _explore_script("self.close()"), str(manifold_file)],
+                       capture_output=True, text=True, env=_explore_env(tmp_path), timeout=120)
     assert r.returncode == 0, r.stderr
     assert r.stderr == ""
     assert (tmp_path / "config" / "lipspace.ini").is_file()  # it did open and close a window
@@ -269,35 +279,10 @@ def test_a_stop_signal_closes_the_explorer_and_keeps_its_session(manifold_file, 
 
     from app.autosave import Autosaver
 
-    script = textwrap.dedent("""
-        import sys
-        from PySide6 import QtCore
-        from app.main_window import MainWindow
-
-        show = MainWindow.show
-
-        def show_then_tell(self):
-            show(self)
-
-            def poll():
-                if self.state.manifold is not None:
-                    self.state.select_frame(7)
-                    print("ready", flush=True)
-                else:
-                    QtCore.QTimer.singleShot(50, poll)
-
-            QtCore.QTimer.singleShot(50, poll)
-
-        MainWindow.show = show_then_tell
-        from app.cli import main
-        sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
-    """)
-    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
+    script = _explore_script("self.state.select_frame(7)\nprint('ready', flush=True)")
     state = tmp_path / "state"
-    env.update(LIPSPACE_STATE_DIR=str(state), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"),
-               LIPSPACE_CACHE_DIR=str(tmp_path / "cache"))
     proc = subprocess.Popen([sys.executable, "-c", script, str(manifold_file)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env)
+                            stderr=subprocess.PIPE, text=True, env=_explore_env(tmp_path))
     try:
         assert proc.stdout.readline().strip() == "ready"
         time.sleep(0.5)  # the event loop is idle, waiting in Qt
