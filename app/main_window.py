@@ -17,12 +17,10 @@ from app.state import AppState
 
 __all__ = ["MainWindow", "launch", "stop_on_signals"]
 
+#: File > Export dialogs' filters; the suffixes each writes are read from them (app.figures.export.filter_suffixes)
 TRAJECTORY_FILTERS = "CSV table (*.csv);;NumPy array (*.npy);;OBJ mesh sequence (*.obj);;PLY mesh sequence (*.ply)"
-
-#: the suffixes File > Export trajectory / animation / cluster table write, in filter order
-TRAJECTORY_SUFFIXES = (".csv", ".npy", ".obj", ".ply")
 ANIMATION_FILTERS = "glTF binary (*.glb);;glTF (*.gltf);;MP4 video (*.mp4)"
-ANIMATION_SUFFIXES = (".glb", ".gltf", ".mp4")
+FIGURE_FILTERS = "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)"
 
 #: signals that stop the explorer from its terminal or the desktop session (Ctrl-C, kill, logout)
 STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
@@ -403,13 +401,19 @@ class MainWindow(QtWidgets.QMainWindow):
             return save_plotter_image(plotter, path, dpi=dpi)
         return save_plotter_vector(plotter, path)
 
-    def export_view_dialog(self, which):
-        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, f"Export {which} view", self.last_dir,
-                                                             "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)")
-        if path:
-            from app.figures.export import suffix_from_filter
+    def _save_path(self, title: str, filters: str, start: str | None = None) -> Path | None:
+        """Ask where to save (None: cancelled). A name typed without one of the suffixes ``filters``
+        names takes the chosen filter's, so every File > Export dialog reads a typed name alike."""
+        from app.figures.export import filter_suffixes, suffix_from_filter
 
-            path, dpi = suffix_from_filter(path, chosen), None
+        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, title, self.last_dir if start is None else start,
+                                                             filters)
+        return suffix_from_filter(path, chosen, filter_suffixes(filters)) if path else None
+
+    def export_view_dialog(self, which):
+        path = self._save_path(f"Export {which} view", FIGURE_FILTERS)
+        if path:
+            dpi = None
             if path.suffix.lower() == ".png":
                 dpi, ok = QtWidgets.QInputDialog.getInt(self, "PNG resolution", "Dots per inch (96 = as on screen):",
                                                         150, 30, 1200, 10)
@@ -433,14 +437,9 @@ class MainWindow(QtWidgets.QMainWindow):
     def export_figure_dialog(self, name):
         if self.state.manifold is None:
             return
-        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, f"Export figure {name}",
-                                                             str(Path(self.last_dir) / f"{name}.png"),
-                                                             "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)")
+        path = self._save_path(f"Export figure {name}", FIGURE_FILTERS, str(Path(self.last_dir) / f"{name}.png"))
         if not path:
             return
-        from app.figures.export import suffix_from_filter
-
-        path = suffix_from_filter(path, chosen)
         from app.figures import UTTERANCE_FIGURES, export_figure
         from app.user_messages import plain_errors
         from app.workers import run_task
@@ -461,15 +460,11 @@ class MainWindow(QtWidgets.QMainWindow):
             QtWidgets.QMessageBox.information(self, "Lipspace", "No trajectory to export: choose an utterance or "
                                                                "synthesise one in the trajectory editor.")
             return
-        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, f"Export trajectory ({traj.label})",
-                                                             self.last_dir, TRAJECTORY_FILTERS)
+        path = self._save_path(f"Export trajectory ({traj.label})", TRAJECTORY_FILTERS)
         if path:
-            from app.figures.export import suffix_from_filter
             from app.trajectories import export_trajectory
 
-            # a name typed without a suffix takes the chosen filter's, as the figure exports do
-            path = str(suffix_from_filter(path, chosen, TRAJECTORY_SUFFIXES))
-
+            path = str(path)
             self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}",
                          "export the trajectory")
 
@@ -480,13 +475,10 @@ class MainWindow(QtWidgets.QMainWindow):
         return export_current_animation(self.state, path, progress=progress)
 
     def export_animation_dialog(self):
-        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, "Export animation", self.last_dir,
-                                                             ANIMATION_FILTERS)
+        path = self._save_path("Export animation", ANIMATION_FILTERS)
         if not path:
             return
-        from app.figures.export import suffix_from_filter
-
-        path = str(suffix_from_filter(path, chosen, ANIMATION_SUFFIXES))
+        path = str(path)
         from engine.progress import Cancelled
 
         dlg = QtWidgets.QProgressDialog("Rendering the video…", "Cancel", 0, 100, self)
@@ -514,12 +506,9 @@ class MainWindow(QtWidgets.QMainWindow):
     def export_clusters_dialog(self):
         if self.state.manifold is None:
             return
-        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, "Export cluster table", self.last_dir,
-                                                             "CSV table (*.csv)")
+        path = self._save_path("Export cluster table", "CSV table (*.csv)")
         if path:
-            from app.figures.export import suffix_from_filter
-
-            path = str(suffix_from_filter(path, chosen, (".csv",)))
+            path = str(path)
             self._report(lambda: self.export_clusters(path), f"wrote {path}", "export the cluster table")
 
     # ------------------------------------------------------------------ misc

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from engine._atomic import atomic_write
 
-__all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure", "suffix_from_filter", "save_vector_figure",
+__all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure", "suffix_from_filter", "filter_suffixes", "save_vector_figure",
            "save_plotter_image", "save_plotter_vector", "vector_export_available"]
 
 #: suffix -> matplotlib format name for 2-D figures
@@ -133,6 +133,14 @@ def suffix_from_filter(path, selected_filter: str, allowed=(".png", ".svg", ".pd
     m = re.search(r"\*(\.[A-Za-z0-9]+)", selected_filter or "")
     suf = m.group(1).lower() if m else allowed[0]
     return path.with_name(path.name + suf)
+
+
+def filter_suffixes(filters: str) -> tuple[str, ...]:
+    """The suffixes a save dialog's filter string names, in its order:
+    ``"CSV table (*.csv);;NumPy array (*.npy)"`` -> ``(".csv", ".npy")``."""
+    import re
+
+    return tuple(s.lower() for s in re.findall(r"\*(\.[A-Za-z0-9]+)", filters))
 
 
 def vector_export_available() -> bool:

@@ -495,6 +495,19 @@ def test_suffix_from_the_chosen_filter():
     assert suffix_from_filter("/d/fig.v2", "PDF (*.pdf)") == Path("/d/fig.v2.pdf")
 
 
+def test_export_dialogs_allow_exactly_the_suffixes_their_writers_take():
+    """Each File > Export dialog takes the suffixes it accepts from its filter string: they are the
+    ones the figure and animation writers know, in the filters' order."""
+    from app.export.current import ANIMATION_SUFFIXES
+    from app.figures.export import FIGURE_FORMATS, filter_suffixes
+    from app.main_window import ANIMATION_FILTERS, FIGURE_FILTERS, TRAJECTORY_FILTERS
+
+    assert filter_suffixes(FIGURE_FILTERS) == tuple(FIGURE_FORMATS)
+    assert filter_suffixes(ANIMATION_FILTERS) == ANIMATION_SUFFIXES
+    assert filter_suffixes(TRAJECTORY_FILTERS) == (".csv", ".npy", ".obj", ".ply")
+    assert filter_suffixes("PNG image (*.PNG);;no pattern") == (".png",)
+
+
 def _drawn_texts(fig):
     """Every text the figure draws: tick labels of the ticks in view (2-D axes), labels, titles,
     legends, notes, annotations whose point is drawn. mplot3d places its tick labels itself."""
