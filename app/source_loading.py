@@ -19,7 +19,8 @@ from pathlib import Path
 from app.cache import CACHE_DIR_ENV, cache_dir
 
 __all__ = ["PRESETS", "KINEMATICS_CHOICES", "KINEMATICS_LABELS", "CACHE_DIR_ENV", "cache_dir", "cached_manifold_path",
-           "check_kinematics", "talker_name", "source_kind", "load_source", "read_recording", "ANALYSIS_RATE"]
+           "check_kinematics", "talker_name", "prune_talker_cache", "source_kind", "load_source", "read_recording",
+           "ANALYSIS_RATE"]
 
 #: synthetic talker presets (engine.synthetic)
 PRESETS = ("small", "default", "paper")
@@ -171,7 +172,7 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
             report(progress, "loading cached manifold", 0, 1)
             m = Manifold.load(cached)
             report(progress, "loading cached manifold", 1, 1)
-            _prune_cache(cached, preset, kinematics)
+            prune_talker_cache(preset, kinematics, keep=[cached])
             return m, src
         except (ManifoldFileError, OSError):
             pass  # stale or damaged cache: rebuild below
@@ -185,7 +186,7 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
             m.save(cached)
         except OSError:
             pass  # a read-only cache only costs a rebuild next time
-        _prune_cache(cached, preset, kinematics)
+        prune_talker_cache(preset, kinematics, keep=[cached])
     return m, src
 
 
@@ -225,10 +226,11 @@ def read_recording(path):
     return corpus
 
 
-def _prune_cache(manifold_path, preset, kinematics="classic") -> None:
-    """Delete the cache entries older code left for ``preset`` with ``kinematics`` (see
-    :func:`app.cache.prune`); the other kinematics' entries have another preset token and stay."""
+def prune_talker_cache(preset, kinematics="classic", keep=()) -> None:
+    """Delete the cache entries older code left for the synthetic talker ``preset`` with
+    ``kinematics``, keeping its newest corpus and the files ``keep`` (see :func:`app.cache.prune`);
+    the other kinematics' entries have another preset token and stay."""
     from app.cache import newest, prune
     from engine.synthetic import cache_token
 
-    prune([manifold_path, *newest("corpus", cache_token(preset, kinematics=kinematics))])
+    prune([*keep, *newest("corpus", cache_token(preset, kinematics=kinematics))])

@@ -59,12 +59,11 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, k
     from engine.corpus import Corpus, CorpusError
 
     if path is None:
-        from app.cache import newest, prune
-        from engine.synthetic import cache_token, load_synthetic
+        from app.source_loading import prune_talker_cache
+        from engine.synthetic import load_synthetic
 
         corpus = load_synthetic(preset=synthetic_preset, progress=progress, kinematics=kinematics, audio=audio)
-        # the corpora older code left behind (each variant is kept apart by its file name)
-        prune(newest("corpus", cache_token(synthetic_preset, kinematics=kinematics)))
+        prune_talker_cache(synthetic_preset, kinematics)  # the corpora older code left behind
         return corpus
     p = Path(path)
     if not p.exists():

@@ -6,7 +6,7 @@ import time
 from pathlib import Path
 
 from app.cli._common import load_corpus_arg, progress_bar
-from app.source_loading import KINEMATICS_CHOICES, PRESETS
+from app.source_loading import ANALYSIS_RATE, KINEMATICS_CHOICES, PRESETS
 
 
 def add_arguments(p):
@@ -56,13 +56,13 @@ def run(args) -> int:
         raise CliError(f"{out}: the manifold file must end in .npz")
     t0 = time.perf_counter()
     with progress_bar(disable=True if args.quiet else None) as progress:
-        # a corpus stored in blocks ('lipspace import --block-frames') keeps its frames in the block files
         if args.corpus is not None and args.kinematics != "classic":
             raise CliError("--kinematics chooses the synthetic talker's; it does nothing with a corpus file "
                            f"({args.corpus}): leave it out")
+        # a corpus stored in blocks ('lipspace import --block-frames') keeps its frames in the block files
         corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress,
                                  kinematics=args.kinematics, audio=True)
-        if abs(corpus.rate - 60.0) > 3.0:  # the analysis rate (README, "Real recordings")
+        if abs(corpus.rate - ANALYSIS_RATE) > 3.0:  # README, "Real recordings"
             print(f"lipspace build: warning: {corpus.name} is at {corpus.rate:g} Hz; the method's analysis rate is "
                   "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "
                   "'lipspace import CORPUS --resample 60 -o OUT.npz'", file=sys.stderr)

@@ -5,8 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-#: the paper's frame rate, which velocities and the state graph are tuned to (see app.cli.importer)
-ANALYSIS_RATE = 60.0
+from app.source_loading import ANALYSIS_RATE  # the paper's 60 Hz, which velocities and the state graph are tuned to
 
 
 def add_arguments(p):
