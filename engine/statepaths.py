@@ -20,6 +20,16 @@ from the states, and the baselines that get the same information:
 :func:`anchor`
     A trajectory pulled onto given X at the target frames: the residuals at the targets
     are interpolated linearly over the frames between them and added.
+:meth:`StateModel.hermite_x`
+    The state-velocity Hermite spline: cubic Hermite through the target states' mean
+    F^x (or given X at the targets) with the states' mean velocity F^x'.
+:meth:`StateModel.learnt_x`
+    The manifold synthesis: the state-velocity Hermite spline plus, per shape component,
+    a validated share of the pooled training paths' deviation from it
+    (:func:`engine.learnt_paths.blend`).
+:meth:`StateModel.phone_states`
+    States of phone-only targets: a Viterbi over each phone's candidate states
+    (:func:`engine.synthesis.phone_lattice`).
 :func:`interpolate_targets`
     Direct interpolation of target X: ``"linear"``, ``"pchip"`` (shape-preserving
     monotone cubic) or ``"hermite"`` (cubic Hermite with given velocities).
@@ -34,6 +44,7 @@ import numpy as np
 
 from engine.bridges import bridge
 from engine.inverse_local import LocalLinearInverse, StateMeanInverse
+from engine.learnt_paths import BASES, NEIGHBOR_STEPS, LearntPaths, blend
 from engine.trajectory import smooth
 
 __all__ = ["StateModel", "anchor", "interpolate_targets", "smooth", "INTERPOLATIONS", "PATH_INVERSES"]
@@ -91,9 +102,12 @@ class StateModel:
     n_neighbors : int
         k of the local-linear inverse.
     random_state : int
+    n_pool, duration_tolerance
+        Of the learnt paths (:class:`engine.learnt_paths.LearntPaths`).
 
-    Use ``fit(Fy, Fx, Fxv, bounds)``; the frames given are the only ones the model
-    sees (a validation split passes its fitting part).
+    Use ``fit(Fy, Fx, Fxv, bounds, phones=None)``; the frames given are the only ones
+    the model sees (a validation split passes its fitting part). ``phones`` =
+    (mid-point frames (P,) into those rows, labels (P,)) enables :meth:`phone_states`.
 
     Attributes
     ----------
@@ -105,15 +119,21 @@ class StateModel:
         Mean F^y (first ``state_dims``) per state.
     connectivity_warnings_ : list of str
         Warnings of the state graph (e.g. not strongly connected), kept, not raised.
+    paths_ : LearntPaths
+    phone_table_ : dict or None
+        Phone label -> (candidate states, their log P(state | phone)), most frequent first.
     """
 
-    def __init__(self, *, state_dims=5, n_states=None, n_neighbors=40, random_state=0):
+    def __init__(self, *, state_dims=5, n_states=None, n_neighbors=40, random_state=0, n_pool=128,
+                 duration_tolerance=0.35):
         self.state_dims = state_dims
         self.n_states = n_states
         self.n_neighbors = n_neighbors
         self.random_state = random_state
+        self.n_pool = n_pool
+        self.duration_tolerance = duration_tolerance
 
-    def fit(self, Fy, Fx, Fxv, bounds):
+    def fit(self, Fy, Fx, Fxv, bounds, phones=None):
         from engine.states import StateGraph, default_n_states
         from engine.synthesis import MaxProductGraph, log_transitions, observed_transitions
 
@@ -133,6 +153,16 @@ class StateModel:
         k = min(int(self.n_neighbors), Fy.shape[0])
         self.local_ = LocalLinearInverse(n_neighbors=max(k, d + 2), n_dims=d).fit(Fy, Fx)
         self._graph = MaxProductGraph(log_transitions(observed_transitions(self.graph_)))
+        self.paths_ = LearntPaths(n_pool=self.n_pool, duration_tolerance=self.duration_tolerance).fit(
+            Fy, Fx, bounds, lab, self.state_y_)
+        self.phone_table_ = None
+        if phones is not None:
+            from engine.synthesis import phone_state_table
+
+            mids, labels = phones
+            mids = np.asarray(mids, dtype=np.int64)
+            if mids.size:
+                self.phone_table_ = phone_state_table(lab[mids], np.asarray(labels))
         return self
 
     @property
@@ -187,3 +217,73 @@ class StateModel:
         if how == "local-linear":
             return self.local_.transform(smooth(self.state_y_[np.asarray(path)], sigma))
         raise ValueError(f"unknown path inverse {how!r}; choose from {', '.join(PATH_INVERSES)}")
+
+    def hermite_x(self, frames, states, n_frames, x_targets=None) -> np.ndarray:
+        """State-velocity Hermite (n_frames, m): through the states' mean F^x (or ``x_targets``)
+        with their mean velocities."""
+        st = np.asarray(states, dtype=np.int64)
+        X = self.inverse_.means_[st] if x_targets is None else np.asarray(x_targets, dtype=np.float64)
+        return interpolate_targets("hermite", frames, X, n_frames, self.inverse_.velocity_means_[st])
+
+    def pooled_x(self, frames, states, n_frames, x_targets=None, neighbors=NEIGHBOR_STEPS) -> np.ndarray:
+        """Pooled training paths between the target states (len(neighbors), n_frames, m)
+        (:meth:`engine.learnt_paths.LearntPaths.pooled`), pulled onto ``x_targets`` if given."""
+        st = np.asarray(states, dtype=np.int64)
+        return self.paths_.pooled(frames, self.state_y_[st], n_frames, neighbors, x_targets=x_targets,
+                                  fallback=self.hermite_x(frames, st, n_frames, x_targets))
+
+    def bases_x(self, frames, states, n_frames, x_targets=None, which=BASES) -> np.ndarray:
+        """The base interpolations of :data:`engine.learnt_paths.BASES` through the targets
+        (len(BASES), n_frames, m); those not in ``which`` are zeros."""
+        st = np.asarray(states, dtype=np.int64)
+        X = self.inverse_.means_[st] if x_targets is None else np.asarray(x_targets, dtype=np.float64)
+        V = self.inverse_.velocity_means_[st]
+        out = np.zeros((len(BASES), int(n_frames), X.shape[1]))
+        for i, kind in enumerate(BASES):
+            if kind in which:
+                out[i] = interpolate_targets(kind, frames, X, n_frames, V)
+        return out
+
+    def learnt_x(self, frames, states, n_frames, weights, x_targets=None) -> np.ndarray:
+        """The manifold synthesis (n_frames, m): per component a validated base interpolation plus the
+        validated share of the pooled paths.
+
+        ``weights``: ``base_index``, ``neighbor_index`` and ``beta`` per component, as
+        :func:`engine.learnt_paths.fit_blend` returns them.
+        """
+        idx = np.asarray(weights["neighbor_index"], dtype=np.int64)
+        bidx = np.asarray(weights.get("base_index") or [0] * idx.size, dtype=np.int64)
+        beta = np.asarray(weights["beta"], dtype=np.float64)
+        used = sorted(set(idx[beta > 0].tolist())) or [0]
+        P = self.pooled_x(frames, states, n_frames, x_targets, [NEIGHBOR_STEPS[i] for i in used]) \
+            if np.any(beta > 0) else None
+        full = np.zeros((len(NEIGHBOR_STEPS), int(n_frames), self.inverse_.means_.shape[1]))
+        if P is not None:
+            full[used] = P
+        bases = self.bases_x(frames, states, n_frames, x_targets, {BASES[i] for i in set(bidx.tolist())})
+        return blend(bases, full, bidx, idx, beta)
+
+    def phone_states(self, frames, labels, *, n_candidates=8, cluster_weight=1.0, warnings=None,
+                     fixed=None) -> np.ndarray:
+        """States of phone-labelled targets by the phone lattice (strict=False: undershoot rather than fail).
+
+        Phones the training frames lack take a stand-in phone's candidates (noted in
+        ``warnings``). ``fixed`` (T,) holds a state for targets that have one (None for the
+        others): the lattice keeps those and chooses the rest.
+        """
+        from engine.synthesis import phone_lattice
+        from engine.targets import resolve_phone as _resolve_phone
+
+        fixed = [None] * len(labels) if fixed is None else list(fixed)
+        if not self.phone_table_ and any(s is None for s in fixed):
+            raise ValueError("the state model was fitted without phones; phone targets need fit(..., phones=...)")
+        known = list(self.phone_table_ or ())
+        cands, prior = [], []
+        for lab, st in zip(labels, fixed):
+            if st is not None:
+                cands.append(np.array([int(st)])), prior.append(np.zeros(1))
+                continue
+            s, lp = self.phone_table_[_resolve_phone(lab, known, warnings, "instances")]
+            cands.append(s[: int(n_candidates)]), prior.append(float(cluster_weight) * lp[: int(n_candidates)])
+        return np.asarray(phone_lattice(self._graph, self.state_y_, cands, prior, frames, strict=False,
+                                        labels=list(labels), n_candidates=n_candidates), dtype=np.int64)

@@ -33,6 +33,7 @@ from sklearn.base import BaseEstimator
 
 from engine.bridges import bridge, forward_to
 from engine.targets import TargetSequence
+from engine.targets import resolve_phone as _resolve_phone
 from engine.threads import single_blas_thread
 from engine.trajectory import Synthesizer, Trajectory, smooth
 from engine.trajectory import check_fitted_manifold as _check_fitted_manifold
@@ -40,13 +41,11 @@ from engine.trajectory import target_frames as _target_frames
 
 __all__ = [
     "NoPathError", "MaxProductGraph", "log_transitions", "observed_transitions", "viterbi_path", "Trajectory", "Synthesizer",
-    "ManifoldSynthesizer", "InterpolationSynthesizer", "make_synthesizer", "METHODS",
+    "ManifoldSynthesizer", "InterpolationSynthesizer", "phone_lattice", "phone_state_table",
 ]
 
 #: log-probability cost of a gap no path of its length bridges (``strict=False`` lattices)
 _UNBRIDGED_PENALTY = 1e6
-#: method names understood by :func:`make_synthesizer`
-METHODS = ("manifold", "linear", "cubic", "unitselection")
 #: inverse maps of :class:`ManifoldSynthesizer`
 INVERSES = ("delaunay", "state-mean", "local-linear")
 
@@ -257,9 +256,16 @@ def _no_path_message(g, a, b, n) -> str:
 
 def _phone_state_table(manifold):
     """Per corpus phone label: (states, log P(state | phone)) sorted by frequency; labels most frequent first."""
-    c = manifold.corpus_
-    mids, labels, *_ = c.phone_table()
-    st = np.asarray(manifold.states_.labels_)[mids]
+    mids, labels, *_ = manifold.corpus_.phone_table()
+    return phone_state_table(np.asarray(manifold.states_.labels_)[mids], labels)
+
+
+def phone_state_table(states, labels) -> dict:
+    """Per phone label: (states, log P(state | phone)) sorted by frequency, labels most frequent first.
+
+    ``states`` (n,) int: the state of each phone instance's mid-point frame; ``labels`` (n,) str.
+    """
+    st, labels = np.asarray(states), np.asarray(labels)
     table = {}
     labs, counts = np.unique(labels, return_counts=True)
     for lab in labs[np.argsort(-counts, kind="stable")]:
@@ -269,23 +275,8 @@ def _phone_state_table(manifold):
     return table
 
 
-def _resolve_phone(label, known, warnings, what):
-    """``label`` if known, else a stand-in phone (noted in ``warnings``), else a ValueError listing the known."""
-    if label in known:
-        return label
-    from engine.targets import stand_in_phone
-
-    sub = stand_in_phone(label, known)
-    if sub is None:
-        raise ValueError(f"phone {label!r} has no {what} in the training corpus and no phone of its class stands "
-                         f"in; known phones: {', '.join(sorted(known))}")
-    if warnings is not None:
-        warnings.append(f"phone {label!r} is not in the training corpus; {sub!r} stands in for it")
-    return sub
-
-
 class ManifoldSynthesizer(BaseEstimator):
-    """The paper's synthesiser: maximum-probability paths between timed targets on the state graph.
+    """The paper's synthesiser (method ``"viterbi"``): maximum-probability paths between timed targets on the state graph.
 
     Parameters
     ----------
@@ -335,7 +326,7 @@ class ManifoldSynthesizer(BaseEstimator):
     n_states_ : int
     """
 
-    method = "manifold"
+    method = "viterbi"
 
     def __init__(self, *, n_candidates=8, cluster_weight=1.0, strict=True, inverse_dims=None, inverse="delaunay",
                  smoothing=0.0, n_neighbors=40):
@@ -502,33 +493,68 @@ class ManifoldSynthesizer(BaseEstimator):
             else:
                 c, lp = self._candidates(t.label, warnings)
                 cands.append(c), prior.append(float(self.cluster_weight) * lp)
-        delta = prior[0].copy()
-        backs = []
-        for g in range(len(f) - 1):
-            n = int(f[g + 1] - f[g] + 1)
-            S = forward_to(self._graph, cands[g], n, cands[g + 1])  # (Mg, Mg+1), as forward(...)[:, cands[g + 1]]
-            if not self.strict:
-                # an unbridgeable pair stays possible at a prohibitive cost (nearer pairs cheaper);
-                # _join then undershoots that gap
-                d = np.linalg.norm(self.centroids_[cands[g]][:, None] - self.centroids_[cands[g + 1]][None], axis=2)
-                S = np.where(np.isfinite(S), S, -_UNBRIDGED_PENALTY - d)
-            tot = delta[:, None] + S
-            bi = np.argmax(tot, axis=0)
-            delta = tot[bi, np.arange(tot.shape[1])] + prior[g + 1]
-            backs.append(bi)
-            if not np.isfinite(delta).any():
-                ta, tb = targets.targets[g], targets.targets[g + 1]
-                raise NoPathError(
-                    f"gap {g} between phones {ta.label!r} (frame {f[g]}) and {tb.label!r} (frame {f[g + 1]}), "
-                    f"{n} frames: no path of exactly that length joins any of the candidate states of the phones "
-                    f"so far; lengthen the phones, raise n_candidates (now {self.n_candidates}), or use strict=False")
-        j = int(np.argmax(delta))
-        chosen = [0] * len(f)
-        chosen[-1] = int(cands[-1][j])
-        for g in range(len(f) - 2, -1, -1):
-            j = int(backs[g][j])
-            chosen[g] = int(cands[g][j])
-        return chosen
+        return phone_lattice(self._graph, self.centroids_, cands, prior, f, strict=self.strict,
+                             labels=[t.label for t in targets.targets], n_candidates=self.n_candidates)
+
+
+def phone_lattice(graph, centroids, cands, prior, frames, *, strict=False, labels=None, n_candidates=None):
+    """States of timed targets from candidate states each: a Viterbi over the lattice of candidates.
+
+    Each gap between consecutive targets is scored by the log-probability of its best
+    exact-length path (:func:`engine.bridges.forward_to`), each candidate by its
+    ``prior``; with ``strict=False`` an unbridgeable pair of candidates stays possible at
+    a prohibitive cost (nearer pairs cheaper, by the distance of their ``centroids``).
+
+    Parameters
+    ----------
+    graph : MaxProductGraph
+    centroids : ndarray of shape (K, d)
+    cands : list of ndarray (M_i,) int
+        Candidate states per target.
+    prior : list of ndarray (M_i,)
+        Log-prior of each candidate.
+    frames : ndarray of shape (T,) int
+    strict : bool
+        Raise :class:`NoPathError` when no candidate sequence can be bridged in time.
+    labels : list of str, optional
+        Target labels for messages.
+    n_candidates : int, optional
+        For the message.
+
+    Returns
+    -------
+    list of int
+        The chosen state per target.
+    """
+    f = np.asarray(frames, dtype=np.int64)
+    delta = np.asarray(prior[0], dtype=np.float64).copy()
+    backs = []
+    for g in range(len(f) - 1):
+        n = int(f[g + 1] - f[g] + 1)
+        S = forward_to(graph, cands[g], n, cands[g + 1])  # (Mg, Mg+1), as forward(...)[:, cands[g + 1]]
+        if not strict:
+            # an unbridgeable pair stays possible at a prohibitive cost (nearer pairs cheaper);
+            # the path then undershoots that gap
+            d = np.linalg.norm(centroids[cands[g]][:, None] - centroids[cands[g + 1]][None], axis=2)
+            S = np.where(np.isfinite(S), S, -_UNBRIDGED_PENALTY - d)
+        tot = delta[:, None] + S
+        bi = np.argmax(tot, axis=0)
+        delta = tot[bi, np.arange(tot.shape[1])] + prior[g + 1]
+        backs.append(bi)
+        if not np.isfinite(delta).any():
+            la = labels[g] if labels else "?"
+            lb = labels[g + 1] if labels else "?"
+            raise NoPathError(
+                f"gap {g} between phones {la!r} (frame {f[g]}) and {lb!r} (frame {f[g + 1]}), "
+                f"{n} frames: no path of exactly that length joins any of the candidate states of the phones "
+                f"so far; lengthen the phones, raise n_candidates (now {n_candidates}), or use strict=False")
+    j = int(np.argmax(delta))
+    chosen = [0] * len(f)
+    chosen[-1] = int(cands[-1][j])
+    for g in range(len(f) - 2, -1, -1):
+        j = int(backs[g][j])
+        chosen[g] = int(cands[g][j])
+    return chosen
 
 
 # ------------------------------------------------------------------ direct interpolation
@@ -601,16 +627,3 @@ class InterpolationSynthesizer(BaseEstimator):
             out = CubicSpline(f.astype(np.float64), X, axis=0)(tc)
         return Trajectory(times=t / targets.rate, Fx=out.astype(np.float32), Fy=None, method=self.kind,
                           target_frames=f, target_labels=[x.label for x in targets.targets], warnings=warnings)
-
-
-def make_synthesizer(method: str, manifold, **params):
-    """A fitted synthesiser by name: ``"manifold"``, ``"linear"``, ``"cubic"`` or ``"unitselection"``."""
-    if method == "manifold":
-        return ManifoldSynthesizer(**params).fit(manifold)
-    if method in ("linear", "cubic"):
-        return InterpolationSynthesizer(kind=method, **params).fit(manifold)
-    if method == "unitselection":
-        from engine.unitselection import UnitSelectionSynthesizer
-
-        return UnitSelectionSynthesizer(**params).fit(manifold)
-    raise ValueError(f"unknown synthesis method {method!r}; choose one of {', '.join(METHODS)}")

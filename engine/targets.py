@@ -24,7 +24,7 @@ from engine.corpus import PhoneInterval
 
 __all__ = [
     "Target", "TargetSequence", "TargetError", "UnknownPhoneError", "PhoneMatcher", "parse_phone_string",
-    "stand_in_phone",
+    "stand_in_phone", "resolve_phone",
     "phones_from_durations", "targets_from_phones", "targets_from_textgrid", "targets_from_text",
     "targets_from_utterance", "targets_from_points",
 ]
@@ -189,6 +189,20 @@ def stand_in_phone(label: str, known) -> str | None:
             if key(i) == key(me):
                 return k
     return None
+
+
+def resolve_phone(label, known, warnings, what):
+    """``label`` if in ``known``, else a stand-in phone (:func:`stand_in_phone`, noted in ``warnings``),
+    else a ValueError listing the known; ``what`` names what the phone lacks ("instances", ...)."""
+    if label in known:
+        return label
+    sub = stand_in_phone(label, known)
+    if sub is None:
+        raise ValueError(f"phone {label!r} has no {what} in the training corpus and no phone of its class stands "
+                         f"in; known phones: {', '.join(sorted(known))}")
+    if warnings is not None:
+        warnings.append(f"phone {label!r} is not in the training corpus; {sub!r} stands in for it")
+    return sub
 
 
 # ------------------------------------------------------------------ parsing
