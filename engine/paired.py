@@ -8,10 +8,13 @@ utterance each. Their per-utterance differences ``d_u = e_baseline - e_reference
   (utterances resampled with replacement, seeded, so the interval is reproducible);
 * the sign test: the number of utterances the reference wins and loses (ties, exact
   equality, are dropped) and the two-sided binomial p-value of that split under
-  "each side wins half the time" (:func:`scipy.stats.binomtest`).
+  "each side wins half the time" (:func:`scipy.stats.binomtest`);
+* the Wilcoxon signed-rank test of the differences (two-sided, :func:`scipy.stats.wilcoxon`;
+  zero differences dropped), which also weighs how large each win or loss is.
 
 The sign test makes no assumption about the size or distribution of the differences;
-the bootstrap interval describes their size.
+the signed-rank test assumes them symmetric about their median; the bootstrap interval
+describes their size.
 """
 from __future__ import annotations
 
@@ -40,6 +43,8 @@ class PairedComparison:
     p_sign : float
         Two-sided sign-test p-value (1.0 when every utterance ties).
     confidence : float
+    p_wilcoxon : float
+        Two-sided signed-rank p-value (1.0 when every utterance ties).
     """
 
     n: int
@@ -50,6 +55,7 @@ class PairedComparison:
     losses: int
     p_sign: float
     confidence: float
+    p_wilcoxon: float = 1.0
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -71,7 +77,7 @@ def paired_comparison(reference, baseline, *, n_boot=2000, confidence=0.95, rand
     -------
     PairedComparison
     """
-    from scipy.stats import binomtest
+    from scipy.stats import binomtest, wilcoxon
 
     a = np.asarray(reference, dtype=np.float64).reshape(-1)
     b = np.asarray(baseline, dtype=np.float64).reshape(-1)
@@ -90,6 +96,7 @@ def paired_comparison(reference, baseline, *, n_boot=2000, confidence=0.95, rand
         raise ValueError("no utterances to compare")
     wins, losses = int((d > 0).sum()), int((d < 0).sum())
     p = float(binomtest(wins, wins + losses, 0.5).pvalue) if wins + losses else 1.0
+    pw = float(wilcoxon(d[d != 0]).pvalue) if wins + losses else 1.0
     if n >= 2:
         rng = np.random.default_rng(random_state)
         means = d[rng.integers(0, n, size=(int(n_boot), n))].mean(axis=1)
@@ -98,4 +105,4 @@ def paired_comparison(reference, baseline, *, n_boot=2000, confidence=0.95, rand
     else:
         lo = hi = float("nan")
     return PairedComparison(n=n, mean_diff=float(d.mean()), ci_low=float(lo), ci_high=float(hi), wins=wins,
-                            losses=losses, p_sign=p, confidence=float(confidence))
+                            losses=losses, p_sign=p, confidence=float(confidence), p_wilcoxon=pw)

@@ -17,9 +17,10 @@ from engine.paired import paired_comparison
 __all__ = ["ProtocolResult", "CSV_COLUMNS"]
 
 #: columns of :meth:`ProtocolResult.csv_rows`
-CSV_COLUMNS = ("protocol", "method", "utterance", "rmse_x", "rmse_y", "lve")
-_MEASURES = ("rmse_x", "rmse_y", "lve")
-_LABEL = {"rmse_x": "RMSE X", "rmse_y": "RMSE Y3", "lve": "LVE"}
+CSV_COLUMNS = ("protocol", "method", "utterance", "rmse_x", "rmse_y", "lve", "vel", "smooth")
+#: measures compared utterance by utterance (``smooth`` is descriptive: neither higher nor lower is better)
+_MEASURES = ("rmse_x", "rmse_y", "lve", "vel")
+_LABEL = {"rmse_x": "RMSE X", "rmse_y": "RMSE Y3", "lve": "LVE", "vel": "vel. error"}
 REFERENCE = "manifold"
 
 
@@ -30,9 +31,9 @@ class ProtocolResult:
     Attributes
     ----------
     rows : list of dict
-        ``protocol, method, utterances, frames, rmse_x, rmse_y, lve`` (pooled).
+        ``protocol, method, utterances, frames, rmse_x, rmse_y, lve, vel, smooth`` (pooled).
     per_utterance : list of dict
-        ``protocol, method, utterance, frames, rmse_x, rmse_y, lve``.
+        ``protocol, method, utterance, frames, rmse_x, rmse_y, lve, vel, smooth``.
     comparisons : list of dict
         ``protocol, method, measure`` and the fields of :class:`engine.paired.PairedComparison`
         (method against ``manifold``; positive mean difference: manifold better).
@@ -58,23 +59,25 @@ class ProtocolResult:
     notes: list = field(default_factory=list)
     #: the manifold fitted on the training utterances (for further analysis; not part of any output)
     manifold: object = field(default=None, repr=False)
+    #: each fold's settings when merged from folds (:meth:`merge`)
+    folds: list = field(default_factory=list)
+    #: the per-utterance sums the rows pool (for :meth:`merge`)
+    _sums: list = field(default_factory=list, repr=False)
 
     # ---------------------------------------------------------------- building
     @classmethod
     def build(cls, per, *, n_boot, random_state, inverse, **kw):
+        """From per-utterance sums (:func:`engine.protocol_methods.scores` plus protocol, method, utterance)."""
         rows, comps = [], []
         keys = list(dict.fromkeys((p["protocol"], p["method"]) for p in per))
+        slim = [_per_utterance(p) for p in per]
         for proto, m in keys:
             ps = [p for p in per if p["protocol"] == proto and p["method"] == m]
-            n = sum(p["frames"] for p in ps)
-            rows.append({"protocol": proto, "method": m, "utterances": len(ps), "frames": n,
-                         "rmse_x": float(np.sqrt(sum(p["sq_x"] for p in ps) / n)),
-                         "rmse_y": float(np.sqrt(sum(p["sq_y"] for p in ps) / n)),
-                         "lve": sum(p["lve_sum"] for p in ps) / n})
+            rows.append({"protocol": proto, "method": m, "utterances": len(ps), **_pooled(ps)})
         for proto in dict.fromkeys(k[0] for k in keys):
-            ref = {p["utterance"]: p for p in per if p["protocol"] == proto and p["method"] == REFERENCE}
+            ref = {p["utterance"]: p for p in slim if p["protocol"] == proto and p["method"] == REFERENCE}
             for _, m in [k for k in keys if k[0] == proto and k[1] != REFERENCE]:
-                other = {p["utterance"]: p for p in per if p["protocol"] == proto and p["method"] == m}
+                other = {p["utterance"]: p for p in slim if p["protocol"] == proto and p["method"] == m}
                 uids = [u for u in ref if u in other]
                 for meas in _MEASURES:
                     c = paired_comparison([ref[u][meas] for u in uids], [other[u][meas] for u in uids],
@@ -84,9 +87,28 @@ class ProtocolResult:
                 "lve": v["lve_sum"] / v["frames"],
                 "r2": [float(x) for x in 1.0 - np.asarray(v["sq_comp"]) / np.maximum(np.asarray(v["var_comp"]), 1e-300)]}
                for k, v in inverse.items() if not k.startswith("_")]
-        slim = [{k: p[k] for k in ("protocol", "method", "utterance", "frames", "rmse_x", "rmse_y", "lve")}
-                for p in per]
-        return cls(rows=rows, per_utterance=slim, comparisons=comps, inverse_rows=inv, **kw)
+        out = cls(rows=rows, per_utterance=slim, comparisons=comps, inverse_rows=inv, **kw)
+        out._sums = list(per)
+        return out
+
+    @classmethod
+    def merge(cls, results, *, n_boot, random_state, notes=()):
+        """One result from several folds (each held out other utterances): rows and tests over all of them.
+
+        Settings, warnings and inverse rows are those of the first fold; ``folds`` keeps each fold's settings.
+        """
+        per = [p for r in results for p in r._sums]
+        first = results[0]
+        out = cls.build(per, n_boot=n_boot, random_state=random_state, inverse={}, corpus=first.corpus,
+                        test_ids=[u for r in results for u in r.test_ids], train_ids=first.train_ids,
+                        n_train_frames=first.n_train_frames, settings=first.settings,
+                        failures=[f for r in results for f in r.failures],
+                        missed_gaps=sum(r.missed_gaps for r in results), n_states=first.n_states,
+                        state_warnings=list(dict.fromkeys(w for r in results for w in r.state_warnings)),
+                        notes=list(notes), manifold=None)
+        out.folds = [r.settings for r in results]
+        out._sums = per
+        return out
 
     # ---------------------------------------------------------------- access
     def row(self, protocol, method) -> dict:
@@ -115,7 +137,8 @@ class ProtocolResult:
         for r in sorted(better, key=lambda r: r[measure]):
             c = self.comparison(protocol, r["method"], measure)
             parts.append(f"{r['method']} ({r[measure]:.4g}, {100 * (ref - r[measure]) / ref:.0f} % lower; "
-                         f"better on {c['losses']} of {c['n']} utterances, sign test p = {c['p_sign']:.2g})")
+                         f"better on {c['losses']} of {c['n']} utterances, sign test p = {c['p_sign']:.2g}, "
+                         f"signed-rank p = {c['p_wilcoxon']:.2g})")
         return f"manifold ({ref:.4g}) LOSES on {_LABEL[measure]} to " + "; ".join(parts) + "."
 
     # ---------------------------------------------------------------- output
@@ -133,7 +156,16 @@ class ProtocolResult:
                  f"states: {self.n_states} K-means states"
                  f"{'' if s.get('frames_per_state') is None else ' (one per %s training frames)' % s['frames_per_state']}"
                  f" of the first {s['state_dims']} dims of F^y; local-linear "
-                 f"inverse k = {s['n_neighbors']}; smoothing (frames) {sig}; {s.get('note', '')}"]
+                 f"inverse k = {s['n_neighbors']}; Viterbi smoothing (frames) {sig}; {s.get('note', '')}"]
+        for p, w in (s.get("blend") or {}).items():
+            lines.append(f"manifold, {p}: {_blend_summary(w)}")
+        if s.get("sliding_window"):
+            ctx, ow, alpha = s["sliding_window"]
+            lines.append(f"sliding-window regression: input ±{ctx} frames (every 2nd), output window {ow} frames, "
+                         f"ridge alpha {alpha:g}")
+        if s.get("best"):
+            lines.append("best on validation (the explorer's and synthesize's default): "
+                         + ", ".join(f"{p} {m}" for p, m in s["best"].items()))
         if self.missed_gaps:
             lines.append(f"{self.missed_gaps} gap(s) could not reach their target state in time (ended at the "
                          f"nearest reachable state)")
@@ -145,17 +177,20 @@ class ProtocolResult:
         return lines
 
     def _table(self, protocol):
-        head = ["method", "RMSE X", "RMSE Y3", "LVE", "ΔX vs manifold [95% CI]", "manifold wins X", "p (sign)"]
+        head = ["method", "RMSE X", "RMSE Y3", "LVE", "vel. error", "smoothness", "ΔX vs manifold [95% CI]",
+                "manifold wins X / LVE", "p X (sign, signed-rank)", "p LVE (sign, signed-rank)"]
         body = []
         for r in [r for r in self.rows if r["protocol"] == protocol]:
+            cells = [r["method"], f"{r['rmse_x']:.4g}", f"{r['rmse_y']:.4g}", f"{r['lve']:.4g}", f"{r['vel']:.4g}",
+                     f"{r['smooth']:.2f}"]
             if r["method"] == REFERENCE:
-                body.append([r["method"], f"{r['rmse_x']:.4g}", f"{r['rmse_y']:.4g}", f"{r['lve']:.4g}",
-                             "(reference)", "", ""])
+                body.append(cells + ["(reference)", "", "", ""])
                 continue
             c = self.comparison(protocol, r["method"])
+            cl = self.comparison(protocol, r["method"], "lve")
             ci = "" if not np.isfinite(c["ci_low"]) else f" [{c['ci_low']:+.3g}, {c['ci_high']:+.3g}]"
-            body.append([r["method"], f"{r['rmse_x']:.4g}", f"{r['rmse_y']:.4g}", f"{r['lve']:.4g}",
-                         f"{c['mean_diff']:+.3g}{ci}", f"{c['wins']}/{c['n']}", f"{c['p_sign']:.2g}"])
+            body.append(cells + [f"{c['mean_diff']:+.3g}{ci}", f"{c['wins']}/{c['n']} / {cl['wins']}/{cl['n']}",
+                                 f"{c['p_sign']:.2g}, {c['p_wilcoxon']:.2g}", f"{cl['p_sign']:.2g}, {cl['p_wilcoxon']:.2g}"])
         return head, body
 
     def format(self) -> str:
@@ -167,7 +202,7 @@ class ProtocolResult:
             fmt = lambda row: "  ".join(s.rjust(w[i]) if i else s.ljust(w[i]) for i, s in enumerate(row))  # noqa: E731
             out += ["", f"protocol {p!r}", fmt(head), fmt(["-" * x for x in w])] + [fmt(b) for b in body]
             out += [f"verdict X: {self.verdict(p, 'rmse_x')}", f"verdict Y: {self.verdict(p, 'rmse_y')}",
-                    f"verdict LVE: {self.verdict(p, 'lve')}"]
+                    f"verdict LVE: {self.verdict(p, 'lve')}", f"verdict velocity: {self.verdict(p, 'vel')}"]
         if self.inverse_rows:
             out += ["", "inverse maps: held-out frames' X from their own F^y (R^2 per X component)",
                     "map  RMSE X  LVE  R^2"]
@@ -184,7 +219,7 @@ class ProtocolResult:
             out += [f"{h}# Protocol `{p}`", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
             out += ["| " + " | ".join(b) + " |" for b in body]
             out += ["", f"- X: {self.verdict(p, 'rmse_x')}", f"- Y: {self.verdict(p, 'rmse_y')}",
-                    f"- LVE: {self.verdict(p, 'lve')}", ""]
+                    f"- LVE: {self.verdict(p, 'lve')}", f"- velocity: {self.verdict(p, 'vel')}", ""]
         if self.inverse_rows:
             nc = min(6, len(self.inverse_rows[0]["r2"]))
             out += [f"{h}# Inverse maps (held-out frames' X from their own F^y)", "",
@@ -194,3 +229,36 @@ class ProtocolResult:
                     + " |" for r in self.inverse_rows]
             out.append("")
         return "\n".join(out)
+
+
+def _pooled(ps) -> dict:
+    """Pooled figures over per-utterance sums: RMS over all frames, LVE averaged over frames."""
+    n = sum(p["frames"] for p in ps)
+    nv = sum(p["frames_v"] for p in ps)
+    at = sum(p["acc_true"] for p in ps)
+    out = {"frames": n, "rmse_x": float(np.sqrt(sum(p["sq_x"] for p in ps) / n)),
+           "lve": sum(p["lve_sum"] for p in ps) / n,
+           "vel": float(np.sqrt(sum(p["sq_v"] for p in ps) / max(nv, 1))),
+           "smooth": float(np.sqrt(sum(p["acc"] for p in ps) / at)) if at > 0 else float("nan")}
+    out["rmse_y"] = (float(np.sqrt(sum(p["sq_y"] for p in ps) / n)) if all("sq_y" in p for p in ps)
+                     else float("nan"))
+    return out
+
+
+def _per_utterance(p) -> dict:
+    return {"protocol": p["protocol"], "method": p["method"], "utterance": p["utterance"], **_pooled([p])}
+
+
+def _blend_summary(w) -> str:
+    """The manifold method's validated weights in words: per component the base, the share and the paths pooled."""
+    from engine.learnt_paths import BASES, NEIGHBOR_STEPS
+
+    beta = np.asarray(w["beta"], dtype=np.float64)
+    bases = [BASES[i] for i in (w.get("base_index") or [0] * beta.size)]
+    if not np.any(beta > 0) and set(bases) == {"hermite"}:
+        return "no learnt share (the state-velocity Hermite spline)"
+    ks = [NEIGHBOR_STEPS[i] for i in w["neighbor_index"]]
+    parts = [f"X{j + 1} {b} + {s:.2f}×{k}" for j, (b, s, k) in enumerate(zip(bases, beta, ks))][:6]
+    counts = ", ".join(f"{bases.count(b)} {b}" for b in BASES if b in bases)
+    more = f", … ({beta.size} components: {counts}; mean share {beta.mean():.2f})" if beta.size > 6 else ""
+    return "base + learnt share × paths pooled, per component: " + ", ".join(parts) + more

@@ -8,13 +8,15 @@ three dimensions of the manifold Y, where the paper's Fig. 3 draws its trajector
 the manifold method's state path before the inverse map, every X-space method's
 trajectory projected out-of-sample, against the held-out utterance's own projection).
 
-Default: the two equal-information protocols of :mod:`engine.protocols` -- ``states``
-(every method gets the target states) and ``oracle`` (every method gets the oracle X at
-the targets and their states) -- with the mean-frame baseline, RMSE in X and in Y3
-(every trajectory through the same projection), the lip-vertex error (LVE), paired
-per-utterance statistics against the manifold, and a verdict line per measure saying
-where the manifold loses. ``--state-dims``, the smoothing and k are chosen on a
-validation split of the training utterances unless given. ``--methods`` prints the
+Default: the equal-information protocols of :mod:`engine.protocols` -- ``states``
+(every method gets the target states), ``oracle`` (every method gets the oracle X at
+the targets and their states) and, for a corpus with phone labels, ``phones`` (the
+phones and their times only) -- with the mean-frame baseline, RMSE in X and in Y3
+(every trajectory through the same projection), the lip-vertex error (LVE), the
+velocity error and a smoothness figure, paired per-utterance statistics against the
+manifold, and a verdict line per measure saying where the manifold loses.
+``--state-dims``, the Viterbi smoothing and k are chosen on a validation split of the
+training utterances unless given. ``--methods`` prints the
 older per-method table (:func:`engine.evaluation.evaluate`) instead.
 
 Input: corpus files in any importable format (several are joined, one utterance
@@ -49,7 +51,7 @@ def add_arguments(p):
                    help="dims of Y clustered into states (default: chosen on a validation split of the "
                         "training utterances; 3 for the --methods table)")
     p.add_argument("--smoothing", type=float, default=None, metavar="FRAMES",
-                   help="protocols: Gaussian smoothing of the manifold paths in frames (default: validated)")
+                   help="protocols: Gaussian smoothing of the Viterbi paths in frames (default: validated)")
     p.add_argument("--neighbors", type=int, default=None,
                    help="protocols: k of the local-linear inverse (default: validated)")
     p.add_argument("--speaker-norm", action="store_true",
@@ -176,7 +178,7 @@ def _settings(args, manifold, progress):
     s = select_settings(manifold, **kw)
     if len(s["validation"]) == 0:  # too few utterances to validate: the command line's values win
         if args.smoothing is not None:
-            s["sigma"] = {f"{p}/{m}": float(args.smoothing) for p in PROTOCOLS for m in ("manifold", "manifold-ll")}
+            s["sigma"] = {f"{p}/viterbi": float(args.smoothing) for p in PROTOCOLS}
         if args.neighbors is not None:
             s["n_neighbors"] = int(args.neighbors)
     return s

@@ -12,11 +12,12 @@ def test_evaluate_prints_both_protocols(small_corpus, tmp_path, capsys):
                  "--neighbors", "20", "-q", "--csv", str(csv_out), "--markdown", str(md_out)]) == 0
     out = capsys.readouterr().out
     assert "2 test utterance(s), 6 training" in out
-    assert "protocol 'states'" in out and "protocol 'oracle'" in out
+    assert "protocol 'states'" in out and "protocol 'oracle'" in out and "protocol 'phones'" in out
     assert "first 5 dims of F^y" in out and "k = 20" in out and "verdict X: manifold" in out
     rows = list(csv.DictReader(csv_out.read_text().splitlines()))
-    assert list(rows[0]) == ["protocol", "method", "utterance", "rmse_x", "rmse_y", "lve"]
-    assert {r["method"] for r in rows} >= {"manifold", "linear", "pchip", "hermite", "unitselection", "mean-frame"}
+    assert list(rows[0]) == ["protocol", "method", "utterance", "rmse_x", "rmse_y", "lve", "vel", "smooth"]
+    assert {r["method"] for r in rows} >= {"manifold", "viterbi", "linear", "pchip", "sv-hermite", "unitselection",
+                                           "dominance", "sliding-window", "mean-frame"}
     assert {r["utterance"] for r in rows} == {ids[3], ids[5], "ALL"}
     assert all(float(r["lve"]) > 0 for r in rows)
     assert "Protocol `states`" in md_out.read_text()
