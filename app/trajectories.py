@@ -12,10 +12,55 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["lip_frames", "trajectory_table", "export_trajectory", "synthesize_targets", "trajectory_error",
-           "METHOD_LABELS"]
+           "METHOD_LABELS", "resolve_method", "method_params"]
 
-METHOD_LABELS = {"manifold": "Manifold (max-probability path)", "linear": "Linear interpolation (X)",
-                 "cubic": "Cubic spline (X)", "unitselection": "Unit selection"}
+METHOD_LABELS = {"best": "Best on validation (per corpus)", "manifold": "Manifold (learnt paths)",
+                 "viterbi": "Manifold, max-probability path (paper)", "sv-hermite": "State-velocity Hermite",
+                 "linear": "Linear interpolation (X)", "cubic": "Cubic spline (X)", "unitselection": "Unit selection",
+                 "dominance": "Dominance (Cohen–Massaro)", "sliding-window": "Sliding-window regression"}
+#: methods that need the corpus's validated settings (engine.method_choice)
+_VALIDATED = ("manifold", "sv-hermite")
+
+
+def _choice(manifold, cache, progress=None):
+    """The corpus's validated method choice, measured once (engine.method_choice; cached on disk too)."""
+    if "_choice" not in cache:
+        from engine.method_choice import choose_methods
+
+        cache["_choice"] = choose_methods(manifold, progress=progress)
+    return cache["_choice"]
+
+
+def resolve_method(manifold, targets, method: str, cache: dict, progress=None):
+    """``(method, note)``: ``"best"`` becomes the method measured best on the corpus's validation
+    split for the protocol of ``targets``, ``note`` naming it ("method: dominance, best on
+    validation (...)"); any other method is returned as given with note None."""
+    from engine.method_choice import BEST, best_method, describe, target_protocol
+
+    if method != BEST:
+        return method, None
+    choice = _choice(manifold, cache, progress)
+    protocol = target_protocol(targets) if targets is not None else "states"
+    chosen = best_method(choice, protocol)
+    return chosen, describe(choice, protocol, chosen)
+
+
+def method_params(manifold, method: str, cache: dict, progress=None) -> dict:
+    """Constructor parameters of ``method`` for the explorer and the command line: the validated
+    settings for the manifold's own methods and the sliding-window regression, undershooting
+    (``strict=False``) for the paper's path."""
+    if method in _VALIDATED:
+        return {"choice": _choice(manifold, cache, progress)}
+    if method == "viterbi":
+        return {"strict": False}
+    if method == "sliding-window":
+        from engine.method_choice import load_choice
+
+        ch = cache.get("_choice") or load_choice(manifold)
+        if ch and ch.get("sliding_window"):
+            ctx, ow, alpha = ch["sliding_window"]
+            return {"context": int(ctx), "output_window": int(ow), "alpha": float(alpha)}
+    return {}
 
 
 
@@ -68,27 +113,30 @@ def export_trajectory(manifold, traj, path) -> list[Path]:
                      "use .csv, .npy, .obj or .ply")
 
 
-def synthesize_targets(manifold, targets, method: str, synthesizers: dict | None = None):
-    """Run synthesis method ``method`` on ``targets``; returns (TrajectoryData, engine Trajectory).
+def synthesize_targets(manifold, targets, method: str, synthesizers: dict | None = None, progress=None):
+    """Run synthesis method ``method`` (or ``"best"``) on ``targets``; returns (TrajectoryData, engine Trajectory).
 
-    The manifold method runs with ``strict=False`` so a target that cannot be reached
-    in time is undershot (and said so in the trajectory's warnings) instead of failing.
-    ``synthesizers`` caches fitted synthesisers per method.
+    ``"best"`` takes the method measured best on the corpus's validation split for these
+    targets (:func:`resolve_method`); the data's ``extra["method_note"]`` names it. The
+    paper's path (``"viterbi"``) runs with ``strict=False`` so a target that cannot be
+    reached in time is undershot (and said so in the trajectory's warnings) instead of
+    failing. ``synthesizers`` caches fitted synthesisers per method (and the validated
+    choice); ``progress`` sees the validation when it has to run.
     """
     from app.state import TrajectoryData
-    from engine.synthesis import make_synthesizer
+    from engine.methods import make_synthesizer
 
     cache = synthesizers if synthesizers is not None else {}
+    method, note = resolve_method(manifold, targets, method, cache, progress)
     if method not in cache:
-        params = {"strict": False} if method == "manifold" else {}
-        cache[method] = make_synthesizer(method, manifold, **params)
+        cache[method] = make_synthesizer(method, manifold, **method_params(manifold, method, cache, progress))
     traj = cache[method].synthesize(targets)
     Y = traj.Fy
     if Y is None:  # methods that move in X: place them in Y out of sample
         Y = manifold.project(traj.frames(manifold))
     data = TrajectoryData(Y=np.asarray(Y, np.float32), Fx=np.asarray(traj.Fx, np.float32), frames=None,
                           label=METHOD_LABELS.get(method, method).split(" (")[0], rate=float(targets.rate),
-                          extra={"method": method, "warnings": list(traj.warnings),
+                          extra={"method": method, "method_note": note, "warnings": list(traj.warnings),
                                  "target_frames": np.asarray(traj.target_frames)})
     return data, traj
 

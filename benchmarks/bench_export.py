@@ -57,11 +57,11 @@ def timed(name, fn, *, repeat=1, per=None):
 
 
 def _synthesize(m, seconds):
-    from engine.synthesis import make_synthesizer
+    from engine.methods import make_synthesizer
     from engine.targets import targets_from_phones
 
     phones, _ = first_phones(m.corpus_, seconds)
-    return make_synthesizer("manifold", m, strict=False).synthesize(targets_from_phones(m, phones))
+    return make_synthesizer("viterbi", m, strict=False).synthesize(targets_from_phones(m, phones))
 
 
 def _size(text):

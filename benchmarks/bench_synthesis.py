@@ -48,7 +48,7 @@ def main():
     args = ap.parse_args()
 
     from engine.manifold import Manifold
-    from engine.synthesis import make_synthesizer
+    from engine.methods import make_synthesizer
     from engine.synthetic import load_synthetic
     from engine.targets import targets_from_phones, targets_from_points
 
@@ -68,10 +68,10 @@ def main():
     print(f"  {inv.simplices_.shape[0]} tetrahedra over {inv.points_.shape[0]} points "
           f"({inv.n_duplicates_} duplicates, {inv.n_dropped_} left out by Qhull)")
     synths = {}
-    for meth in ("manifold", "linear", "cubic", "unitselection"):
-        kw = {"strict": False} if meth == "manifold" else {}  # undershoot unreachable targets, as the CLI does
+    for meth in ("viterbi", "linear", "cubic", "unitselection"):
+        kw = {"strict": False} if meth == "viterbi" else {}  # undershoot unreachable targets, as the CLI does
         synths[meth], _ = timed(f"prepare {meth}", lambda meth=meth, kw=kw: make_synthesizer(meth, m, **kw))
-    synths["manifold"].synthesize(targets_from_phones(m, "sil 0.1 m 0.1"))  # builds the phone table once
+    synths["viterbi"].synthesize(targets_from_phones(m, "sil 0.1 m 0.1"))  # builds the phone table once
 
     phones, u = first_phones(c, args.seconds)
     tg_phones = targets_from_phones(m, phones)
@@ -83,17 +83,17 @@ def main():
     print(f"\nsynthesis of {n / c.rate:.2f} s = {n} frames, {len(tg_phones.targets)} phone targets "
           f"(3-second utterance)")
     results = {}
-    tr, t_states = timed("manifold, state targets (Viterbi per gap)",
-                         lambda: synths["manifold"].synthesize(tg_states), repeat=args.repeat)
-    tr_p, t_phones = timed("manifold, phone targets (lattice, M=8)",
-                           lambda: synths["manifold"].synthesize(tg_phones), repeat=args.repeat)
+    tr, t_states = timed("viterbi (the paper's path), state targets",
+                         lambda: synths["viterbi"].synthesize(tg_states), repeat=args.repeat)
+    tr_p, t_phones = timed("viterbi, phone targets (lattice, M=8)",
+                           lambda: synths["viterbi"].synthesize(tg_phones), repeat=args.repeat)
     for meth in ("linear", "cubic", "unitselection"):
         _, results[meth] = timed(meth, lambda meth=meth: synths[meth].synthesize(tg_phones), repeat=args.repeat)
     _, t_inv = timed("inverse map of the frames (Y -> X)", lambda: inv.transform(tr.Fy), repeat=args.repeat)
     _, t_mesh = timed("frames F = mean + X X^T", lambda: tr.frames(m), repeat=args.repeat)
 
     def full():
-        t = synths["manifold"].synthesize(tg_phones)
+        t = synths["viterbi"].synthesize(tg_phones)
         return t.frames(m)
 
     _, t_full = timed("TOTAL: phones -> state path -> X -> frames", full, repeat=args.repeat)

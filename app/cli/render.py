@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-from app.cli.synthesize import METHODS, PRESETS, add_synthesis_options
+from app.cli.synthesize import BEST, METHODS, PRESETS, add_synthesis_options
 
 __all__ = ["add_arguments", "run"]
 
@@ -44,8 +44,9 @@ def add_arguments(p):
                                                      "synthetic talker)")
     p.add_argument("--preset", choices=PRESETS, default="default",
                    help="synthetic talker preset without --manifold (default: %(default)s)")
-    p.add_argument("--method", choices=METHODS + ("original",), default="manifold",
-                   help="synthesis method, or 'original' to render the --utterance as captured (default: %(default)s)")
+    p.add_argument("--method", choices=(BEST,) + METHODS + ("original",), default=BEST,
+                   help="synthesis method ('best': the one measured best on the corpus's validation split for "
+                        "these targets), or 'original' to render the --utterance as captured (default: %(default)s)")
     add_synthesis_options(p)
     p.add_argument("--side-by-side", action="store_true",
                    help="with --utterance: the original (left) beside the synthesis (right, red)")
@@ -88,11 +89,13 @@ def _trajectory(args, manifold):
         return c.frames[u.start:u.stop], manifold.Fy_[u.start:u.stop, :3] if args.trajectory else None, u.id
     try:
         targets = _targets(args, manifold)
-        traj = _synthesizer(args, manifold).synthesize(targets)
+        traj = _synthesizer(args, manifold, targets).synthesize(targets)
     except (ValueError, FileNotFoundError) as exc:
         raise CliError(str(exc)) from None
     for w in traj.warnings:
         print(f"warning: {w}", file=sys.stderr)
+    if getattr(args, "method_note", None):
+        print(args.method_note)
     Y = trajectory_y(manifold, traj) if args.trajectory else None
     return traj.frames(manifold), Y, f"{traj.method}: {targets.source}"
 

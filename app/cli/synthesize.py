@@ -11,6 +11,10 @@ fitted on the synthetic talker (``--preset``). Targets:
                                  indices / at its kinematic landmarks (the default when it has no phones)
 ``--states S,S,...``             manifold states (e.g. clicked in the explorer), ``--spacing`` seconds apart
 
+``--method best`` (the default) takes the method measured best on the corpus's own
+validation split for the kind of targets given (:mod:`engine.method_choice`: measured
+once per corpus and cached) and names it with its margin.
+
 Outputs: ``-o traj.csv`` / ``-o traj.npy`` (``--values`` frames, fx or fy),
 ``-o speech.glb`` / ``.gltf`` (a glTF 2.0 morph-target animation: mean shape, shape
 components as targets, F^x as weights; the utterance's or ``--audio`` sound as a WAV
@@ -22,7 +26,9 @@ import sys
 from pathlib import Path
 
 PRESETS = ("small", "default", "paper")
-METHODS = ("manifold", "linear", "cubic", "unitselection")
+#: engine.methods.METHODS (a test keeps them equal); "best" resolves to one of them
+METHODS = ("manifold", "viterbi", "sv-hermite", "linear", "cubic", "unitselection", "dominance", "sliding-window")
+BEST = "best"
 #: the manifold synthesiser's inverse maps (engine.synthesis.INVERSES; a test keeps them equal)
 INVERSES = ("delaunay", "state-mean", "local-linear")
 VALUES = ("frames", "fx", "fy")
@@ -54,7 +60,11 @@ def add_arguments(p):
                                                      "synthetic talker)")
     p.add_argument("--preset", choices=PRESETS, default="default",
                    help="synthetic talker preset without --manifold (default: %(default)s)")
-    p.add_argument("--method", choices=METHODS, default="manifold", help="synthesis method (default: %(default)s)")
+    p.add_argument("--method", choices=(BEST,) + METHODS, default=BEST,
+                   help="synthesis method: 'best' (default) takes the one measured best on the corpus's own "
+                        "validation split for these targets (docs/RESULTS.md); manifold = learnt paths between "
+                        "the states, viterbi = the paper's maximum-probability state path, sv-hermite = "
+                        "state-velocity Hermite")
     add_synthesis_options(p)
     p.add_argument("-o", "--output", metavar="TRAJ.csv|TRAJ.npy|ANIM.glb",
                    help="write the trajectory (CSV or NPY), or a glTF morph-target animation (.glb or .gltf)")
@@ -73,17 +83,17 @@ def add_arguments(p):
 def add_synthesis_options(p):
     """The manifold method's options and the target timing options, shared with ``lipspace render``."""
     p.add_argument("--strict", action="store_true",
-                   help="manifold method: fail when a target cannot be reached in time (default: undershoot and warn)")
+                   help="viterbi method: fail when a target cannot be reached in time (default: undershoot and warn)")
     p.add_argument("--candidates", type=int, default=8,
-                   help="manifold method: candidate states per phone (default: %(default)s)")
+                   help="viterbi method: candidate states per phone (default: %(default)s)")
     p.add_argument("--inverse-dims", type=int, default=None,
-                   help="manifold method: dims of F^y used by the Y -> X inverse map (default: 3, the paper's)")
+                   help="viterbi method: dims of F^y used by the Y -> X inverse map (default: 3, the paper's)")
     p.add_argument("--inverse", choices=INVERSES, default="delaunay",
-                   help="manifold method: Y -> X map of the state path: the paper's 3-D Delaunay interpolation, "
+                   help="viterbi method: Y -> X map of the state path: the paper's 3-D Delaunay interpolation, "
                         "each state's mean X, or local-linear regression on the k nearest frames in F^y "
                         "(docs/RESULTS.md compares them; default: %(default)s)")
     p.add_argument("--smoothing", type=float, default=0.0, metavar="FRAMES",
-                   help="manifold method: Gaussian smoothing (s.d. in frames) of the state path before the "
+                   help="viterbi method: Gaussian smoothing (s.d. in frames) of the state path before the "
                         "inverse map (default: %(default)s)")
     p.add_argument("--tier", default=None, help="TextGrid tier holding the phones (default: found by name)")
     p.add_argument("--tempo", type=float, default=1.0, help="--text: speaking-rate factor (default: %(default)s)")
@@ -147,13 +157,37 @@ def _key_frames(args, manifold):
         raise ValueError(f"--key-frames {spec!r}: expected comma-separated frame indices or 'kinematic'") from None
 
 
-def _synthesizer(args, manifold):
-    from engine.synthesis import make_synthesizer
+def _synthesizer(args, manifold, targets=None):
+    """The fitted synthesiser of ``args.method``; ``"best"`` is resolved for ``targets`` first
+    (``args.method`` then names the method, ``args.method_note`` says why)."""
+    from app.trajectories import method_params, resolve_method
+    from engine.methods import make_synthesizer
 
-    if args.method == "manifold":
-        return make_synthesizer("manifold", manifold, strict=args.strict, n_candidates=args.candidates,
+    cache = getattr(args, "_synth_cache", None)
+    if cache is None:
+        cache = args._synth_cache = {}
+    progress = _validation_progress(args)
+    method, note = resolve_method(manifold, targets, args.method, cache, progress=progress)
+    args.method, args.method_note = method, note
+    if method == "viterbi":
+        return make_synthesizer("viterbi", manifold, strict=args.strict, n_candidates=args.candidates,
                                 inverse_dims=args.inverse_dims, inverse=args.inverse, smoothing=args.smoothing)
-    return make_synthesizer(args.method, manifold)
+    return make_synthesizer(method, manifold, **method_params(manifold, method, cache, progress=progress))
+
+
+def _validation_progress(args):
+    """A progress callback that tells, once, that the corpus's methods are being measured (stderr)."""
+    if getattr(args, "quiet", False):
+        return None
+    said = []
+
+    def progress(stage, i, n):
+        if stage == "validation" and not said:
+            said.append(1)
+            print("lipspace synthesize: measuring the synthesis methods on this corpus's validation split "
+                  "(once per corpus; cached)...", file=sys.stderr, flush=True)
+
+    return progress
 
 
 def run(args) -> int:
@@ -165,19 +199,21 @@ def run(args) -> int:
         raise CliError(f"{out}: the trajectory file must end in .csv or .npy (or .glb/.gltf for an animation)")
     if out is not None and out.suffix.lower() in (".glb", ".gltf") and args.values != "frames":
         raise CliError(f"--values {args.values} is for .csv/.npy; a glTF animation always holds the lip frames")
-    if args.values == "fy" and args.method != "manifold":
-        raise CliError(f"--values fy needs --method manifold (the {args.method} method moves in X, not Y)")
+    if args.values == "fy" and args.method != "viterbi":
+        raise CliError(f"--values fy needs --method viterbi (the {args.method} method moves in X, not Y)")
     if args.key_frames is not None and args.utterance is None:
         raise CliError("--key-frames picks frames of an utterance: give --utterance ID too")
     manifold = _manifold(args)
     try:
         targets = _targets(args, manifold)
         check_synthesis_bounds(args, targets)
-        traj = _synthesizer(args, manifold).synthesize(targets)
+        traj = _synthesizer(args, manifold, targets).synthesize(targets)
     except (ValueError, FileNotFoundError) as exc:
         raise CliError(str(exc)) from None
     for w in traj.warnings:
         print(f"warning: {w}", file=sys.stderr)
+    if args.method_note:
+        print(args.method_note)
     frames = traj.frames(manifold)
     c = manifold.corpus_
     print(f"{traj.method}: {traj.n_frames} frames ({traj.n_frames / targets.rate:.2f} s at {targets.rate:g} Hz) "

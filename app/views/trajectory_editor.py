@@ -166,12 +166,17 @@ class TrajectoryEditor(QtWidgets.QWidget):
     # ------------------------------------------------------------------ setup
     def _fill_methods(self):
         try:
-            from engine.synthesis import METHODS
+            from engine.method_choice import BEST
+            from engine.methods import METHODS
         except ImportError as exc:  # synthesis unavailable: say so, keep the rest working
-            METHODS = ()
+            BEST, METHODS = None, ()
             self.readout.setText(f"synthesis unavailable: {exc}")
-        for m in METHODS:
+        for m in ((BEST,) if BEST else ()) + tuple(METHODS):
             self.method_box.addItem(METHOD_LABELS.get(m, m), m)
+        if BEST:
+            self.method_box.setItemData(0, "The method measured best on this corpus's own validation split for the "
+                                           "kind of targets loaded (measured once per corpus, then cached); the "
+                                           "readout names it", QtCore.Qt.ItemDataRole.ToolTipRole)
 
     @property
     def source(self) -> str:
@@ -415,7 +420,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
 
         def task(progress):
             progress("synthesising", 0, 1)
-            data, _traj = synthesize_targets(m, tg, method, self.synthesizers)
+            data, _traj = synthesize_targets(m, tg, method, self.synthesizers, progress=progress)
             err = trajectory_error(m, data, orig) if orig is not None else None
             progress("synthesising", 1, 1)
             return data, err
@@ -431,7 +436,8 @@ class TrajectoryEditor(QtWidgets.QWidget):
         data, err = result
         self.synth_btn.setEnabled(True)
         self.state.set_trajectories(synthetic=data)
-        text = f"{data.label}: {len(data)} frames"
+        note = (data.extra or {}).get("method_note")
+        text = (f"{note}; " if note else "") + f"{data.label}: {len(data)} frames"
         if err is not None:
             text += (f"; error vs original: RMSE(X) {err['rmse_x']:.4g}, per-point mean {err['mean_point_error']:.3g} "
                      f"/ max {err['max_point_error']:.3g} (corpus units)")

@@ -162,10 +162,10 @@ def test_zoom_widens_the_timeline_and_refines_the_ms_ticks(ed, qtbot, qapp):
 
 @pytest.mark.gui
 def test_every_synthesis_warning_is_listed(ed, qtbot, editor_window):
-    # the manifold method undershoots targets it cannot reach in time and warns for each:
+    # the paper's path (viterbi) undershoots targets it cannot reach in time and warns for each:
     # six phones of one frame each leave it no time between them
     assert ed.set_text("m 0.017 iy 0.017 p 0.017 aa 0.017 b 0.017 uw 0.017", source="phones")
-    ed.set_method("manifold")
+    ed.set_method("viterbi")
     runner = ed.synthesize()
     qtbot.waitUntil(lambda: runner.state != "running", timeout=60000)
     syn = editor_window.state.synthetic
@@ -221,3 +221,28 @@ def test_delete_and_plus_minus_keys_in_the_timeline(ed, qtbot, editor_window):
     assert ed.zoom == pytest.approx(1.25)
     qtbot.keyClick(ed.timeline, QtCore.Qt.Key.Key_Minus)
     assert ed.zoom == pytest.approx(1.0)
+
+
+@pytest.mark.gui
+def test_default_method_is_the_one_best_on_this_corpus_validation_and_is_named(ed, qtbot, editor_window,
+                                                                                app_manifold):
+    """The editor opens on "Best on validation": phone input gets the method the corpus's own validation split
+    measured best in the phones protocol, a corpus utterance (its states and X) the oracle protocol's best, and
+    the readout names it with its validation figure."""
+    from engine.method_choice import choose_methods
+
+    assert ed.method_box.itemData(0) == "best"  # the first entry, what a new editor shows
+    ed.set_method("best")  # (an earlier test of this window chose another)
+    choice = choose_methods(app_manifold)  # what the synthesis below reads from the cache (or measures)
+    for source, text, protocol in (("phones", PHONES, "phones"), ("utterance", None, "oracle")):
+        if source == "utterance":
+            ed.set_source("utterance")
+            assert ed.load()
+        else:
+            assert ed.set_text(text, source=source)
+        runner = ed.synthesize()
+        qtbot.waitUntil(lambda: runner.state != "running", timeout=240000)
+        best = choice["best"][protocol]
+        syn = editor_window.state.synthetic
+        assert syn.extra["method"] == best
+        assert f"method: {best}, best on validation ({protocol} protocol" in ed.readout.text()

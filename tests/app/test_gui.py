@@ -325,7 +325,7 @@ def test_clicked_states_become_targets_that_synthesis_passes_through(win, qtbot,
     last = ed.targets.targets[-1]
     assert last.state == b and last.frame > phone_frames[-1] and ed.targets.n_frames == last.frame + 1
     assert [t.state for t in ed.targets.targets] == [None, a, None, None, b]
-    ed.set_method("manifold")
+    ed.set_method("viterbi")  # the paper's path: it moves in Y through the clicked states themselves
     s.set_trajectories(synthetic=None)
     ed.synthesize()
     qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)

@@ -285,7 +285,7 @@ def test_derived_data_prepared_ahead_is_used_by_every_state(app_manifold):
 # ----------------------------------------------------------------------------- targets from clicked states
 def test_selected_state_targets_are_inserted_and_synthesis_passes_through_them(app_manifold):
     from app.state import TARGET_SPACING
-    from engine.synthesis import make_synthesizer
+    from engine.methods import make_synthesizer
     from engine.targets import TargetError
 
     m = app_manifold
@@ -310,7 +310,7 @@ def test_selected_state_targets_are_inserted_and_synthesis_passes_through_them(a
     # each target carries its state's X (the inverse map at the centroid)
     np.testing.assert_allclose(tg.targets[2].x, m.state_x_[b] if m.state_x_ is not None
                                else m.Fx_[m.states_.labels_ == b].mean(axis=0))
-    traj = make_synthesizer("manifold", m, strict=False).synthesize(tg)
+    traj = make_synthesizer("viterbi", m, strict=False).synthesize(tg)
     assert traj.warnings == []  # every gap bridged: the path is at each target's state on its frame
     assert [int(traj.states[t.frame]) for t in tg.targets] == [a, a, b]
     lin = make_synthesizer("linear", m).synthesize(tg)  # X methods pass through the states' X

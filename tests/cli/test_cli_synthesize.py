@@ -17,7 +17,12 @@ def test_phones_to_csv_and_obj_meshes(mfile, small_manifold, tmp_path, capsys):
     assert main(["synthesize", "--manifold", str(mfile), "--phones", "sil 0.15 m 0.08 aa 0.12 p 0.08 sil 0.15",
                  "-o", str(out), "--mesh-dir", str(meshes)]) == 0
     text = capsys.readouterr().out
-    assert "manifold: 35 frames" in text and "wrote 35 OBJ files" in text
+    # the default method is the one measured best on the corpus's validation split for phone input, named
+    from engine.method_choice import choose_methods
+
+    best = choose_methods(small_manifold)["best"]["phones"]  # cached by the synthesis above
+    assert f"method: {best}, best on validation (phones protocol: RMSE X" in text
+    assert f"{best}: 35 frames" in text and "wrote 35 OBJ files" in text
     rows = list(csv.reader(out.read_text().splitlines()))
     c = small_manifold.corpus_
     # rows and columns named for what they are (was "35 x 468 frames")
@@ -34,14 +39,25 @@ def test_phones_to_csv_and_obj_meshes(mfile, small_manifold, tmp_path, capsys):
 
 def test_utterance_npy_values_and_methods(mfile, small_manifold, tmp_path):
     u = small_manifold.corpus_.utterances[2]
-    for method in ("linear", "cubic", "unitselection", "manifold"):
+    from app.cli.synthesize import METHODS
+    from engine.methods import METHODS as ENGINE_METHODS
+
+    assert METHODS == ENGINE_METHODS
+    Xo = small_manifold.Fx_[u.start:u.stop]
+    from engine.targets import targets_from_utterance
+
+    f = targets_from_utterance(small_manifold, u.id, on_collision="merge").frames
+    for method in METHODS:
         out = tmp_path / f"{method}.npy"
         assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--method", method,
-                     "--values", "fx", "-o", str(out)]) == 0
+                     "--values", "fx", "-o", str(out), "-q"]) == 0
         X = np.load(out)
         assert X.shape == (u.n_frames, small_manifold.Fx_.shape[1]) and np.isfinite(X).all()
+        if method in ("manifold", "sv-hermite", "linear", "cubic"):  # the oracle X at the targets is kept
+            np.testing.assert_allclose(X[f], Xo[f], atol=1e-3 * np.abs(Xo).max())
     fy = tmp_path / "fy.npy"
-    assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--values", "fy", "-o", str(fy)]) == 0
+    assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--method", "viterbi",
+                 "--values", "fy", "-o", str(fy)]) == 0
     assert np.load(fy).shape == (u.n_frames, 3)
 
 
@@ -74,10 +90,26 @@ def test_bad_inputs_fail_cleanly(mfile, tmp_path, capsys):
     assert "must end in .csv or .npy" in capsys.readouterr().err
     assert main(["synthesize", "--manifold", str(mfile), "--phones", "p 0.1", "--method", "linear",
                  "--values", "fy", "-o", str(tmp_path / "a.npy")]) == 2
-    assert "--values fy needs --method manifold" in capsys.readouterr().err
+    assert "--values fy needs --method viterbi" in capsys.readouterr().err
     assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(tmp_path / "none.TextGrid")]) == 2
     assert "no such TextGrid" in capsys.readouterr().err
     assert main(["synthesize", "--manifold", str(tmp_path / "missing.npz"), "--phones", "p 0.1"]) == 2
+
+
+def test_best_method_follows_the_targets_and_is_named(mfile, small_manifold, capsys):
+    """Oracle targets (an utterance) and phone-only targets are different protocols: each gets the method its
+    protocol measured best on validation, and the output says which and why."""
+    from engine.method_choice import choose_methods
+
+    choice = choose_methods(small_manifold)
+    u = small_manifold.corpus_.utterances[3]
+    assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "-q"]) == 0
+    out = capsys.readouterr().out
+    best = choice["best"]["oracle"]
+    assert f"method: {best}, best on validation (oracle protocol: RMSE X" in out
+    assert out.splitlines()[-1].startswith(f"{best}: {u.n_frames} frames")
+    # validation numbers quoted are the cached ones
+    assert f"RMSE X {choice['method_validation']['oracle'][best]['rmse_x']:.4g}" in out
 
 
 def test_evaluate_prints_the_table(small_corpus, tmp_path, capsys):
@@ -115,8 +147,8 @@ def test_inverse_choice_reaches_the_synthesiser(mfile, small_manifold, tmp_path)
     outs = {}
     for inverse in INVERSES:
         out = tmp_path / f"{inverse}.npy"
-        assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--inverse", inverse,
-                     "--values", "fx", "-o", str(out), "-q"]) == 0
+        assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--method", "viterbi",
+                     "--inverse", inverse, "--values", "fx", "-o", str(out), "-q"]) == 0
         outs[inverse] = np.load(out)
         assert outs[inverse].shape == (u.n_frames, small_manifold.Fx_.shape[1])
     # every row of the state-mean trajectory is one state's mean F^x
@@ -126,6 +158,6 @@ def test_inverse_choice_reaches_the_synthesiser(mfile, small_manifold, tmp_path)
     assert d.max() < 1e-4 * np.abs(means).max()
     assert not np.allclose(outs["state-mean"], outs["delaunay"])
     smooth = tmp_path / "smooth.npy"
-    assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--inverse", "state-mean",
-                 "--smoothing", "2", "--values", "fx", "-o", str(smooth), "-q"]) == 0
+    assert main(["synthesize", "--manifold", str(mfile), "--utterance", u.id, "--method", "viterbi",
+                 "--inverse", "state-mean", "--smoothing", "2", "--values", "fx", "-o", str(smooth), "-q"]) == 0
     assert np.abs(np.diff(np.load(smooth), axis=0)).max() < np.abs(np.diff(outs["state-mean"], axis=0)).max()

@@ -93,10 +93,10 @@ def test_local_linear_inverse_on_one_thread(small_manifold, two_blas_threads, mo
     assert seen and all(s == {1} for s in seen)
 
 
-@pytest.mark.parametrize("method, inner", [("manifold", "_path_x"), ("linear", "target_x"),
+@pytest.mark.parametrize("method, inner", [("viterbi", "_path_x"), ("manifold", "_x"), ("linear", "target_x"),
                                            ("unitselection", "_sample")])
 def test_synthesis_on_one_thread(small_manifold, two_blas_threads, monkeypatch, method, inner):
-    from engine.synthesis import make_synthesizer
+    from engine.methods import make_synthesizer
     from engine.targets import targets_from_utterance
 
     m = small_manifold

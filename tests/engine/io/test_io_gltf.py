@@ -46,11 +46,11 @@ def _played_frames(gltf, accessor):
 
 @pytest.fixture(scope="module")
 def synthesized(small_manifold):
-    from engine.synthesis import make_synthesizer
+    from engine.methods import make_synthesizer
     from engine.targets import targets_from_phones
 
     targets = targets_from_phones(small_manifold, "sil 0.1 b 0.08 aa 0.12 m 0.08 sil 0.1")
-    return make_synthesizer("manifold", small_manifold, strict=False).synthesize(targets)
+    return make_synthesizer("viterbi", small_manifold, strict=False).synthesize(targets)
 
 
 def test_glb_reproduces_synthesised_frames_within_float32(small_manifold, synthesized, tmp_path):

@@ -1,0 +1,56 @@
+"""Every synthesis method by name: the registry the explorer and the command line build from.
+
+``"manifold"``        :class:`engine.state_synthesis.LearntPathSynthesizer` (the learnt paths
+                      between the states, with the corpus's validated settings);
+``"viterbi"``         :class:`engine.synthesis.ManifoldSynthesizer` (the paper's path);
+``"sv-hermite"``      :class:`engine.state_synthesis.StateHermiteSynthesizer`;
+``"linear"``, ``"cubic"``  :class:`engine.synthesis.InterpolationSynthesizer`;
+``"unitselection"``   :class:`engine.unitselection.UnitSelectionSynthesizer`;
+``"dominance"``       :class:`engine.dominance.DominanceSynthesizer`;
+``"sliding-window"``  :class:`engine.sliding_window.SlidingWindowSynthesizer`.
+
+It sits above every synthesis module (none imports it), so they never import each other
+through it.
+"""
+from __future__ import annotations
+
+__all__ = ["METHODS", "make_synthesizer"]
+
+#: method names understood by :func:`make_synthesizer`
+METHODS = ("manifold", "viterbi", "sv-hermite", "linear", "cubic", "unitselection", "dominance", "sliding-window")
+
+
+def make_synthesizer(method: str, manifold, **params):
+    """A fitted synthesiser by name (:data:`METHODS`).
+
+    ``"manifold"`` and ``"sv-hermite"`` take ``choice`` (the validated settings of
+    :func:`engine.method_choice.choose_methods`; measured and cached when not given) and
+    ``progress``; the others their class's parameters.
+    """
+    if method in ("manifold", "sv-hermite"):
+        from engine.state_synthesis import LearntPathSynthesizer, StateHermiteSynthesizer
+
+        cls = LearntPathSynthesizer if method == "manifold" else StateHermiteSynthesizer
+        progress = params.pop("progress", None)
+        return cls(**params).fit(manifold, progress=progress)
+    if method == "viterbi":
+        from engine.synthesis import ManifoldSynthesizer
+
+        return ManifoldSynthesizer(**params).fit(manifold)
+    if method in ("linear", "cubic"):
+        from engine.synthesis import InterpolationSynthesizer
+
+        return InterpolationSynthesizer(kind=method, **params).fit(manifold)
+    if method == "unitselection":
+        from engine.unitselection import UnitSelectionSynthesizer
+
+        return UnitSelectionSynthesizer(**params).fit(manifold)
+    if method == "dominance":
+        from engine.dominance import DominanceSynthesizer
+
+        return DominanceSynthesizer(**params).fit(manifold)
+    if method == "sliding-window":
+        from engine.sliding_window import SlidingWindowSynthesizer
+
+        return SlidingWindowSynthesizer(**params).fit(manifold)
+    raise ValueError(f"unknown synthesis method {method!r}; choose one of {', '.join(METHODS)}")
