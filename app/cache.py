@@ -1,8 +1,10 @@
 """Lipspace's cache folder: what is in it, how big it is, pruning old entries, clearing it (Qt-free).
 
 The cache holds the synthetic talker's generated corpora (``synthetic-<preset>-<key>.npz``,
-with their speech audio in ``synthetic-<preset>-<key>-audio/``) and the manifolds
-fitted to them (``manifolds/synthetic-<preset>-...npz``). Every entry's name carries a
+with their speech audio in ``synthetic-<preset>-<key>-audio/``), the manifolds
+fitted to them (``manifolds/synthetic-<preset>-...npz``) and each corpus's measured
+choice of synthesis method (``method-choice/<data key>-<code key>.json``,
+:mod:`engine.method_choice`). Every entry's name carries a
 key made from the code and parameters that produced it (generator, fitting
 algorithms, file format), so an entry made by other code is never used; it is only
 left behind. :func:`prune` deletes those left-behind entries of a preset once a
@@ -24,6 +26,8 @@ __all__ = ["CACHE_DIR_ENV", "CacheEntry", "cache_dir", "entries", "total_bytes",
 
 #: a cached corpus or manifold file, or a corpus's audio folder, or a temporary file left by a killed write
 _ENTRY = re.compile(r"^(?:synthetic-(?P<preset>[A-Za-z0-9_]+)-.+?(?:\.npz|-audio)|\..+\.part\.npz)$")
+#: a corpus's measured choice of synthesis method (engine.method_choice.choice_path)
+_CHOICE = re.compile(r"^[0-9a-f]{16}-[0-9a-f]{16}\.json$")
 
 #: environment variable that moves the cache folder
 CACHE_DIR_ENV = "LIPSPACE_CACHE_DIR"
@@ -60,6 +64,10 @@ def entries(folder=None) -> list[CacheEntry]:
     """Lipspace's entries in the cache ``folder`` (default :func:`cache_dir`), oldest first."""
     root = Path(folder) if folder is not None else cache_dir()
     out = []
+    sub = root / "method-choice"
+    if sub.is_dir():
+        out += [CacheEntry(p, "method choice", "", _size(p)) for p in sub.iterdir()
+                if _CHOICE.match(p.name) and p.is_file() and not p.is_symlink()]
     for sub, kind in ((root, "corpus"), (root / "manifolds", "manifold")):
         if not sub.is_dir():
             continue
@@ -143,7 +151,8 @@ def clear(folder=None) -> list[CacheEntry]:
         _remove(e.path)
         if not e.path.exists():
             gone.append(e)
-    sub = root / "manifolds"
-    if sub.is_dir() and not any(sub.iterdir()):
-        sub.rmdir()
+    for name in ("manifolds", "method-choice"):
+        sub = root / name
+        if sub.is_dir() and not any(sub.iterdir()):
+            sub.rmdir()
     return gone

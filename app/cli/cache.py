@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 _KINDS = (("corpus", "synthetic talker corpora"), ("audio", "their speech audio"),
-          ("manifold", "manifolds fitted to them"), ("partial", "unfinished writes"))
+          ("manifold", "manifolds fitted to them"), ("method choice", "synthesis methods measured"),
+          ("partial", "unfinished writes"))
 
 
 def add_arguments(p):

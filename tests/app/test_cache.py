@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from app.cache import entries, prune, total_bytes
+from app.cache import clear, entries, prune, total_bytes
 
 
 def _fill(root):
@@ -109,3 +109,18 @@ def test_cache_and_state_folders_follow_one_rule(monkeypatch, tmp_path):
     monkeypatch.setenv("LIPSPACE_STATE_DIR", str(tmp_path / "s"))
     assert cache_dir() == cache_folder() == tmp_path / "c" and state_dir() == tmp_path / "s"
     assert cache_folder(tmp_path / "o") == tmp_path / "o"
+
+
+def test_method_choices_are_entries_and_cleared(tmp_path, small_manifold):
+    """The measured choice of synthesis method per corpus (engine.method_choice) is Lipspace's to list and clear."""
+    from engine.method_choice import choice_path
+
+    mine = choice_path(small_manifold, tmp_path)
+    mine.parent.mkdir(parents=True)
+    mine.write_text("{}")
+    other = mine.parent / "notes.json"
+    other.write_text("{}")
+    found = [(e.path, e.kind) for e in entries(tmp_path)]
+    assert found == [(mine, "method choice")]
+    assert [e.path for e in clear(tmp_path)] == [mine]
+    assert other.exists() and not mine.exists()
