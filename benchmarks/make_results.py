@@ -1,27 +1,33 @@
 """Generate docs/RESULTS.md: the equal-information protocol tables from the current code.
 
 Usage: python benchmarks/make_results.py [--out docs/RESULTS.md] [--preset default|small] [--seed 0]
-                                         [--haskins-dir DIR] [--cache-dir DIR]
+                                         [--corpus default held-out haskins faces] [--haskins-dir DIR]
+                                         [--faces-dir DIR] [--cache-dir DIR] [--results-cache DIR]
 
-Sections (every number in the file is computed by this run):
+Corpora (every number in the file is computed by this script from current code):
 
-1. the default synthetic talker (``--preset``, 10 % of the utterances held out, seed 0);
-2. the held-out synthetic talker (:data:`engine.synthetic.HELD_OUT_TALKER`, same preset
-   and split rule), never used to tune anything;
-3. the Haskins IEEE pair (two speakers, one sentence each): cross-speaker in both
-   directions, with each speaker's mean frame removed, and once without that removal
-   to show what the raw cross-speaker figures measure.
+``default``   the default synthetic talker (``--preset``, 10 % of the utterances held out, seed 0);
+``held-out``  the held-out synthetic talker (:data:`engine.synthetic.HELD_OUT_TALKER`, same preset
+              and split rule), never used to tune anything;
+``haskins``   the Haskins IEEE pair (two speakers, one sentence each): cross-speaker in both
+              directions with each speaker's mean frame removed, and once without that removal;
+``faces``     the five real talking-face clips, each imported with ``lipspace import`` (60 Hz),
+              pooled as one corpus of five speakers (each clip's mean frame removed), every clip
+              held out in turn (leave one clip out) with kinematic key frames as targets.
 
-Settings (state dims, smoothing, k) are chosen per corpus on a validation split of its
-training utterances (:func:`engine.protocols.select_settings`). Prints wall time and
-peak memory of each section and the BLAS in use. Measured: 12-18 minutes for the default
-preset on two cores shared with other jobs (load average about 14; peak RSS 1.1 GB);
-the small preset about 1.5 minutes on the same machine.
+Settings are chosen per corpus (and per fold) on a validation split of its training
+utterances (:func:`engine.protocols.select_settings`). Each corpus's section is cached
+(``--results-cache``, default ``<cache folder>/make-results``) with the commit and code
+key that computed it: ``--corpus NAME ...`` recomputes only those and takes the others
+from the cache (a section computed by other code is marked so in the file; run without
+``--corpus`` to recompute everything). Prints wall time and peak memory of each corpus
+and the BLAS in use.
 """
 from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import platform
 import subprocess
 import sys
@@ -31,8 +37,19 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 from _common import peak_rss_mb  # noqa: E402
+from _results_tables import (contribution_cells, contribution_table, summary_cells,  # noqa: E402
+                             summary_table)
+
 #: where the Haskins pair is looked for (the same place as ``lipspace evaluate --haskins``)
 DEFAULT_HASKINS = REPO.parent / "shared" / "data" / "haskins-ieee"
+DEFAULT_FACES = REPO.parent / "shared" / "data" / "talking-faces"
+CORPORA = ("default", "held-out", "haskins", "faces")
+PROTOCOLS = ("states", "oracle", "phones")
+#: code whose change makes a cached section stale
+CODE = ("engine.protocols", "engine.protocol_methods", "engine.protocol_report", "engine.learnt_paths",
+        "engine.statepaths", "engine.dominance", "engine.sliding_window", "engine.unitselection", "engine.synthesis",
+        "engine.states", "engine.manifold", "engine.embedding", "engine.shape", "engine.dynamics", "engine.synthetic",
+        "engine.targets", "engine.kinematics", "engine.paired", "engine.registration", "engine.inverse_local")
 
 
 def _blas():
@@ -51,21 +68,141 @@ def _commit():
         head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
                               text=True, check=True).stdout.strip()
         dirty = subprocess.run(["git", "-C", str(REPO), "status", "--porcelain", "--untracked-files=no", "--",
-                                "engine", "app"], capture_output=True, text=True, check=True).stdout.strip()
+                                "engine", "app", "benchmarks"], capture_output=True, text=True, check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
-    return head + (" (plus uncommitted changes in engine/ or app/)" if dirty else "")
+    return head + (" (plus uncommitted changes)" if dirty else "")
 
 
-def _summary_line(name, r):
-    parts = []
-    for p in r.protocols():
-        ref = r.row(p, "manifold")
-        for meas, lab in (("rmse_x", "X"), ("rmse_y", "Y3"), ("lve", "LVE")):
-            better = [x["method"] for x in r.rows if x["protocol"] == p and x["method"] != "manifold"
-                      and x[meas] < ref[meas]]
-            parts.append("manifold best" if not better else "loses to " + ", ".join(better))
-    return f"| {name} | " + " | ".join(parts[:3]) + " | " + " | ".join(parts[3:]) + " |"
+def _code_key():
+    from engine._persist import source_fingerprint
+
+    files = [REPO / "benchmarks" / "make_results.py", REPO / "benchmarks" / "_results_tables.py"]
+    return source_fingerprint(CODE, {"scripts": [f.read_text(encoding="utf-8") for f in files]})
+
+
+class Section:
+    """One corpus's part of the file: Markdown, summary cells, validation choices, seconds."""
+
+    def __init__(self, key):
+        self.key, self.markdown, self.summary, self.lve, self.contribution, self.best = key, [], [], [], [], []
+        self.seconds = 0.0
+
+    def add(self, name, result, title, *, validation=True):
+        self.markdown.append(result.markdown(title=title))
+        if validation:
+            self.markdown.append(_validation_table(result))
+        self.summary.append((name, summary_cells(result, "rmse_x")))
+        self.lve.append((name, summary_cells(result, "lve")))
+        self.contribution.append((name, contribution_cells(result)))
+        folds = result.folds or [result.settings]
+        self.best.append((name, [f.get("best") or {} for f in folds]))
+
+    def as_dict(self, commit, code):
+        return {"key": self.key, "markdown": self.markdown, "summary": self.summary, "lve": self.lve,
+                "contribution": self.contribution, "best": self.best, "seconds": self.seconds, "commit": commit,
+                "code": code}
+
+
+def _run(name, corpus, seed, **kw):
+    from engine.protocols import evaluate_protocols
+
+    t = time.perf_counter()
+    r = evaluate_protocols(corpus, random_state=seed, **kw)
+    print(f"  {name}: {time.perf_counter() - t:.1f} s, max RSS {peak_rss_mb():.0f} MiB", flush=True)
+    return r
+
+
+def run_synthetic(key, args):
+    from engine.synthetic import HELD_OUT_TALKER, load_synthetic
+
+    title, params = {"default": ("Default synthetic talker", {}),
+                     "held-out": ("Held-out synthetic talker", dict(HELD_OUT_TALKER))}[key]
+    sec = Section(key)
+    corpus = load_synthetic(preset=args.preset, cache_dir=args.cache_dir, **params)
+    r = _run(title, corpus, args.seed)
+    desc = ", ".join(f"{k}={v}" for k, v in params.items()) or "the generator's defaults"
+    r.notes.append(f"talker: preset `{args.preset}`, {desc}; {corpus.n_frames} frames at {corpus.rate:g} Hz")
+    sec.add(title, r, f"{title} (preset `{args.preset}`)")
+    return sec
+
+
+def run_haskins(args):
+    from app.cli.evaluate import haskins_speaker, name_haskins_speakers, normalise_per_speaker
+    from engine.io import read_corpus
+
+    sec = Section("haskins")
+    mats = sorted(Path(args.haskins_dir).glob("*.mat"))
+    if len(mats) < 2:
+        sec.markdown.append(f"### Haskins pair\n\nNot run: no Haskins samples (*.mat) in {Path(args.haskins_dir).name}/.\n")
+        return sec
+    raw = name_haskins_speakers(read_corpus([str(p) for p in mats]))
+    norm = normalise_per_speaker(raw)
+    ids = [u.id for u in raw.utterances]
+    for test in ids:
+        who = haskins_speaker(raw.utterance(test))
+        r = _run(f"Haskins, test {who}", norm, args.seed, test_ids=[test])
+        r.notes.append("per-speaker mean frame removed (engine.registration.normalise_speakers, mode 'mean', "
+                       "speakers named by the file name's first field)")
+        sec.add(f"Haskins, test {who} (normalised)", r,
+                f"Haskins pair, cross-speaker: test speaker {who}, speaker means removed", validation=False)
+    test = ids[1]
+    who = haskins_speaker(raw.utterance(test))
+    r = _run("Haskins raw", raw, args.seed, test_ids=[test], inverse_table=False)
+    r.notes.append("no speaker normalisation: the figures are dominated by the offset between the speakers' "
+                   f"mean frames ({_offset(raw):.3g} mm RMS per coordinate); compare the mean-frame row")
+    sec.add(f"Haskins, test {who} (raw)", r,
+            f"Haskins pair, cross-speaker without normalisation: test speaker {who}", validation=False)
+    return sec
+
+
+def faces_corpus(faces_dir, store):
+    """The five clips, each imported with ``lipspace import`` at 60 Hz (once; kept in ``store``), pooled."""
+    from dataclasses import replace
+
+    from app.cli.evaluate import normalise_per_speaker
+    from engine.corpus import Corpus
+    from engine.io import concat
+    from engine.kinematics import kinematic_if_unlabelled
+
+    clips = sorted(Path(faces_dir).glob("*.mp4"))
+    if not clips:
+        return None, []
+    store.mkdir(parents=True, exist_ok=True)
+    parts, log = [], []
+    for clip in clips:
+        out = store / f"{clip.stem}.npz"
+        if not out.exists():
+            cmd = [sys.executable, "-m", "app.cli", "import", str(clip), "-o", str(out), "--resample", "60", "-q"]
+            res = subprocess.run(cmd, cwd=str(REPO), capture_output=True, text=True)
+            if res.returncode != 0:
+                raise SystemExit(f"lipspace import {clip.name} failed:\n{res.stderr[-2000:]}")
+        c = Corpus.load(out)
+        parts.append(replace(c, utterances=[replace(u, speaker=clip.stem) for u in c.utterances]))
+        log.append(f"{clip.name}: {c.n_frames} frames at {c.rate:g} Hz")
+    pooled = concat(parts, name="talking-faces")
+    labelled, note = kinematic_if_unlabelled(pooled)
+    return normalise_per_speaker(labelled), log + ([note] if note else [])
+
+
+def run_faces(args):
+    from engine.protocol_report import ProtocolResult
+
+    sec = Section("faces")
+    corpus, log = faces_corpus(args.faces_dir, Path(args.results_cache) / "faces")
+    if corpus is None:
+        sec.markdown.append(f"### Talking faces\n\nNot run: no clips (*.mp4) in {Path(args.faces_dir).name}/.\n")
+        return sec
+    folds = [_run(f"faces, test {u.id}", corpus, args.seed, test_ids=[u.id], inverse_table=False, phones=False)
+             for u in corpus.utterances]
+    r = ProtocolResult.merge(folds, n_boot=2000, random_state=args.seed, notes=[
+        "five real clips (one speaker each), imported with lipspace import (60 Hz) and pooled; each clip's mean "
+        "frame removed (engine.registration.normalise_speakers); targets: kinematic key frames (aperture "
+        "maxima / minima, peak opening / closing velocities); leave one clip out: five folds, each fitted and "
+        "validated on the other four clips only; the settings shown are the first fold's", *log])
+    sec.add("Talking faces, 5 clips (leave one out)", r, "Talking faces: five real clips pooled, leave one clip out",
+            validation=False)
+    return sec
 
 
 def main():
@@ -73,106 +210,147 @@ def main():
     ap.add_argument("--out", default=str(REPO / "docs" / "RESULTS.md"))
     ap.add_argument("--preset", default="default", choices=("small", "default"))
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--corpus", nargs="+", choices=CORPORA, default=None,
+                    help="recompute only these corpora (the others from the results cache)")
     ap.add_argument("--haskins-dir", default=str(DEFAULT_HASKINS))
-    ap.add_argument("--cache-dir", default=None)
+    ap.add_argument("--faces-dir", default=str(DEFAULT_FACES))
+    ap.add_argument("--cache-dir", default=None, help="synthetic talker cache")
+    ap.add_argument("--results-cache", default=None, help="per-corpus sections (default: <cache>/make-results)")
     args = ap.parse_args()
+    if args.results_cache is None:
+        from engine.userdirs import user_dir
+
+        args.results_cache = str(user_dir("cache", "LIPSPACE_CACHE_DIR") / "make-results")
 
     from engine._atomic import atomic_write
-    from engine.io import read_corpus
-    from engine.protocols import evaluate_protocols
-    from engine.synthetic import HELD_OUT_TALKER, load_synthetic
 
     t_all = time.perf_counter()
-    commit = _commit()  # the code this run imports (taken before anything is computed)
+    commit, code = _commit(), _code_key()  # the code this run imports (taken before anything is computed)
     print(f"BLAS: {_blas()}", flush=True)
-    sections, summary, timings = [], [], []
-
-    def run(name, corpus, **kw):
+    store = Path(args.results_cache)
+    store.mkdir(parents=True, exist_ok=True)
+    todo = list(args.corpus or CORPORA)
+    sections = {}
+    for key in CORPORA:
+        path = store / f"{key}-{args.preset}-seed{args.seed}.json"
+        if key not in todo and path.exists():
+            sections[key] = json.loads(path.read_text(encoding="utf-8"))
+            stale = "" if sections[key]["code"] == code else " (computed by other code)"
+            print(f"{key}: from the results cache, commit {sections[key]['commit']}{stale}", flush=True)
+            continue
+        print(f"{key}:", flush=True)
         t = time.perf_counter()
-        r = evaluate_protocols(corpus, random_state=args.seed, **kw)
-        dt = time.perf_counter() - t
-        timings.append((name, dt))
-        print(f"{name}: {dt:.1f} s, max RSS {peak_rss_mb():.0f} MiB", flush=True)
-        return r
-
-    talkers = [("Default synthetic talker", {}),
-               ("Held-out synthetic talker", dict(HELD_OUT_TALKER))]
-    for title, params in talkers:
-        corpus = load_synthetic(preset=args.preset, cache_dir=args.cache_dir, **params)
-        r = run(title, corpus)
-        desc = ", ".join(f"{k}={v}" for k, v in params.items()) or "the generator's defaults"
-        r.notes.append(f"talker: preset `{args.preset}`, {desc}; {corpus.n_frames} frames at {corpus.rate:g} Hz")
-        sections.append(r.markdown(title=f"{title} (preset `{args.preset}`)"))
-        sections.append(_validation_table(r))
-        summary.append(_summary_line(f"{title}", r))
-
-    hdir = Path(args.haskins_dir)
-    mats = sorted(hdir.glob("*.mat"))
-    if len(mats) >= 2:
-        from app.cli.evaluate import haskins_speaker, name_haskins_speakers, normalise_per_speaker
-
-        raw = name_haskins_speakers(read_corpus([str(p) for p in mats]))
-        norm = normalise_per_speaker(raw)
-        ids = [u.id for u in raw.utterances]
-        for test in ids:
-            who = haskins_speaker(raw.utterance(test))
-            r = run(f"Haskins, test {who}", norm, test_ids=[test])
-            r.notes.append("per-speaker mean frame removed (engine.registration.normalise_speakers, mode 'mean', "
-                           "speakers named by the file name's first field)")
-            sections.append(r.markdown(title=f"Haskins pair, cross-speaker: test speaker {who}, speaker means removed"))
-            summary.append(_summary_line(f"Haskins, test {who} (normalised)", r))
-        test = ids[1]
-        r = run("Haskins raw", raw, test_ids=[test], inverse_table=False)
-        r.notes.append("no speaker normalisation: the figures are dominated by the offset between the speakers' "
-                       f"mean frames ({_offset(raw):.3g} mm RMS per coordinate); compare the mean-frame row")
-        sections.append(r.markdown(title=f"Haskins pair, cross-speaker without normalisation: test speaker "
-                                         f"{haskins_speaker(raw.utterance(test))}"))
-        summary.append(_summary_line(f"Haskins, test {haskins_speaker(raw.utterance(test))} (raw)", r))
-    else:
-        sections.append(f"### Haskins pair\n\nNot run: no Haskins samples (*.mat) in {hdir.name}/.\n")
-
+        sec = (run_synthetic(key, args) if key in ("default", "held-out") else
+               run_haskins(args) if key == "haskins" else run_faces(args))
+        sec.seconds = time.perf_counter() - t
+        sections[key] = sec.as_dict(commit, code)
+        with atomic_write(path) as tmp:
+            Path(tmp).write_text(json.dumps(sections[key]), encoding="utf-8")
     total = time.perf_counter() - t_all
-    head = [
-        "# Results: held-out synthesis under equal information",
-        "",
-        f"Generated by `benchmarks/make_results.py` at commit `{commit}` on "
-        f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC ({platform.machine()}, Python "
-        f"{platform.python_version()}); total {total:.0f} s. Regenerate with "
-        "`.venv/bin/python benchmarks/make_results.py`. Do not edit by hand.",
-        "",
-        "How to read the tables (docs/METHOD.md gives the method and every decision):",
-        "",
-        "- **Protocol `states`**: every method gets only the target states (the state of each phone "
-        "mid-point frame of the held-out utterance). `manifold`: Viterbi path between them, X from each "
-        "state's mean F^x, smoothed. `manifold-ll`: the same path's centroids smoothed in Y and mapped through "
-        "the local-linear inverse. `linear`, `pchip`, `hermite`: interpolation through the states' mean X "
-        "(Hermite also gets each state's mean velocity).",
-        "- **Protocol `oracle`**: every method gets the true X at the targets and the target states. "
-        "The manifold paths are anchored to the true X at the targets; the interpolations pass through it; "
-        "`unitselection` uses the phones and their times.",
-        "- **`mean-frame`**: the training corpus's mean frame, held throughout.",
-        "- **RMSE X**: RMS over frames of the Euclidean error in the shape space X (corpus units, mm). "
-        "**RMSE Y3**: the same in the first 3 dims of Y, every trajectory (the manifold's too) projected "
-        "through the same fitted pipeline. **LVE**: lip-vertex error, per frame the largest per-point "
-        "Euclidean error (mm), averaged over frames. Scored from the first to the last target.",
-        "- **ΔX vs manifold**: mean over utterances of (method's RMSE X − manifold's), with a 95 % "
-        "bootstrap interval; positive means the manifold erred less. **manifold wins X**: utterances on "
-        "which the manifold's RMSE X is lower; **p (sign)**: two-sided sign test.",
-        "- Each table's verdict lines name every method that beats the manifold.",
-        "",
-        "## Summary",
-        "",
-        "| corpus | states X | states Y3 | states LVE | oracle X | oracle Y3 | oracle LVE |",
-        "|---|---|---|---|---|---|---|",
-        *summary,
-        "",
-        "Run times: " + "; ".join(f"{n} {t:.0f} s" for n, t in timings) + f". BLAS: {_blas()}.",
-        "",
-    ]
-    text = "\n".join(head) + "\n" + "\n".join(sections) + "\n"
+    text = _document(sections, commit, code, total)
     with atomic_write(args.out) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
     print(f"wrote {args.out} in {total:.0f} s; max RSS {peak_rss_mb():.0f} MiB")
+
+
+def _document(sections, commit, code, total):
+    secs = [sections[k] for k in CORPORA if k in sections]
+    summary = [e for s in secs for e in s["summary"]]
+    lve = [e for s in secs for e in s["lve"]]
+    contrib = [e for s in secs for e in s["contribution"]]
+    stale = [f"`{s['key']}` (commit {s['commit']})" for s in secs if s["code"] != code]
+    commits = sorted({s["commit"] for s in secs})
+    best_rows = []
+    for s in secs:
+        for name, folds in s["best"]:
+            cells = []
+            for p in PROTOCOLS:
+                picks = [f.get(p) for f in folds if f.get(p)]
+                cells.append(", ".join(f"{m} ({picks.count(m)}/{len(folds)} folds)" for m in dict.fromkeys(picks))
+                             if len(folds) > 1 and picks else (picks[0] if picks else "—"))
+            best_rows.append(f"| {name} | " + " | ".join(cells) + " |")
+    head = [
+        "# Results: held-out synthesis under equal information",
+        "",
+        f"Generated by `benchmarks/make_results.py` from commit{'s' * (len(commits) > 1)} "
+        f"{', '.join(f'`{c}`' for c in commits)} on {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC "
+        f"({platform.machine()}, Python {platform.python_version()}); sections computed in "
+        + "; ".join(f"{s['key']} {s['seconds']:.0f} s" for s in secs)
+        + f" (this run {total:.0f} s). Regenerate with `.venv/bin/python benchmarks/make_results.py` "
+          "(`--corpus NAME` recomputes one corpus). Do not edit by hand.",
+        "",
+    ]
+    if stale:
+        head += [f"**Stale sections** (computed by other code than the rest): {', '.join(stale)}.", ""]
+    head += [
+        "## Summary",
+        "",
+        "Who wins, per corpus and protocol, on RMSE X (the shape space, corpus units: mm). A cell names the "
+        "method with the lowest pooled error and the margin Δ = manifold − other (negative: `manifold` erred "
+        "less), against the runner-up when `manifold` wins and against the winner otherwise: the mean "
+        "per-utterance difference with its 95 % bootstrap interval, the relative difference of the pooled "
+        "errors, the utterances the winner wins, and the sign-test / signed-rank p-values. One-utterance "
+        "corpora (Haskins) have no interval and no test.",
+        "",
+        *summary_table(summary, PROTOCOLS, "RMSE X"),
+        "",
+        "The same on the lip-vertex error (LVE, mm):",
+        "",
+        *summary_table(lve, PROTOCOLS, "LVE"),
+        "",
+        "What the manifold contributes in the `states` and `oracle` protocols, in two steps (RMSE X; Δ = the "
+        "first method − the second, mean per utterance with its 95 % interval, negative: the first erred less; "
+        "utterances the first wins): "
+        "the states' mean velocities (the manifold's dynamic features) make the state-velocity Hermite spline "
+        "beat interpolation without dynamics, and the learnt paths between the states make `manifold` beat "
+        "the spline.",
+        "",
+        *contribution_table(contrib),
+        "",
+        "The synthesis method the explorer and `lipspace synthesize` use by default on each corpus: the one "
+        "with the lowest RMSE X on the validation split of the training utterances (per protocol; for the "
+        "folds of the talking faces, how many folds chose it).",
+        "",
+        "| corpus | `states` | `oracle` | `phones` |",
+        "|---|---|---|---|",
+        *best_rows,
+        "",
+        "## How to read the tables",
+        "",
+        "docs/METHOD.md gives the method and every decision.",
+        "",
+        "- **Protocol `states`**: every method gets only the target states (the state of each target frame's "
+        "out-of-sample F^y). `manifold`: the state-velocity Hermite spline plus, per shape component, the "
+        "validated share of the mean training path between the two states (the training sub-trajectories that "
+        "leave one state's neighbourhood and reach the other's in about the gap's duration). `viterbi`: the "
+        "paper's maximum-probability state path of exactly each gap's length, X from each state's mean F^x, "
+        "smoothed. `sv-hermite`: state-velocity Hermite, the cubic Hermite spline through the states' mean X "
+        "with the states' mean velocities. `pchip`, `linear`: through the states' mean X, no dynamics.",
+        "- **Protocol `oracle`**: every method gets the true X at the targets and the target states; every "
+        "trajectory passes through the true X.",
+        "- **Protocol `phones`**: every method gets only the phones and their times (what `lipspace synthesize "
+        "--text` has). `manifold`, `viterbi`: as above between the states the manifold's phone lattice "
+        "chooses. `unitselection`: concatenative unit selection. `dominance`: Cohen–Massaro dominance "
+        "functions (targets and dominance fitted). `sliding-window`: ridge regression from a window of phone "
+        "labels to a window of shapes, overlap-averaged. `linear`: each phone's mean X at its mid-point. Not "
+        "run on corpora without phone labels.",
+        "- **`mean-frame`**: the training corpus's mean frame, held throughout.",
+        "- **RMSE X**: RMS over frames of the Euclidean error in the shape space X. **RMSE Y3**: the same in "
+        "the first 3 dims of Y, every trajectory projected through the same fitted pipeline. **LVE**: per frame "
+        "the largest per-point error (mm), averaged. **vel. error**: RMSE of the velocity F^x' (first difference "
+        "per frame) against the real one. **smoothness**: RMS second difference of the trajectory over that of "
+        "the real lips (1: as rough as the capture, which includes its noise; lower: smoother), so a method "
+        "cannot win by oversmoothing unseen. Scored from the first to the last target.",
+        "- **ΔX vs manifold**: mean over utterances of (method's RMSE X − manifold's), 95 % bootstrap interval; "
+        "positive: the manifold erred less. **manifold wins X / LVE**: utterances on which the manifold's error "
+        "is lower. **p**: two-sided sign test and Wilcoxon signed-rank test.",
+        "- Each table's verdict lines name every method that beats the manifold.",
+        "",
+        f"BLAS: {_blas()}.",
+        "",
+    ]
+    body = [m for s in secs for m in s["markdown"] if m]
+    return "\n".join(head) + "\n" + "\n".join(body) + "\n"
 
 
 def _offset(corpus):
@@ -186,21 +364,34 @@ def _offset(corpus):
 
 
 def _validation_table(r) -> str:
-    v = r.settings.get("validation", {})
+    s = r.settings
+    v = s.get("validation", {})
     if not v:
         return ""
-    sig = sorted({float(k.rsplit("/", 1)[1]) for t in v.values() for k in t["rmse_x"]})
-    out = ["#### Validation (training utterances only): `manifold` RMSE X, states protocol", "",
-           "| state dims | frames per state | K | k (local-linear) | local-linear RMSE X | " +
-           " | ".join(f"σ = {s:g}" for s in sig) + " |", "|" + "---|" * (5 + len(sig))]
+    out = ["#### Validation (training utterances only)", "",
+           "RMSE X of the manifold method (its weights fitted on the validation utterances) and of the "
+           "state-velocity Hermite spline through the same states, per candidate state space:", "",
+           "| state dims | frames per state | K | `states` manifold | `states` sv-hermite | `oracle` manifold | "
+           "`oracle` sv-hermite |", "|---|---|---|---|---|---|---|"]
     for t in v.values():
-        cells = [f"{t['rmse_x'][f'states/manifold/{s:g}']:.3f}" for s in sig]
-        out.append(f"| {t['dims']} | {t['frames_per_state']} | {t['K']} | {t['k']} | {t['k_errors'][t['k']]:.3f} | "
-                   + " | ".join(cells) + " |")
-    s = r.settings
-    out += ["", f"Chosen: state dims {s['state_dims']}, one state per {s['frames_per_state']} frames, k "
-                f"{s['n_neighbors']}, smoothing " + ", ".join(f"{k} {x:g}" for k, x in s["sigma"].items())
-                + f" ({s['note']}).", ""]
+        x = t["rmse_x"]
+        out.append(f"| {t['dims']} | {t['frames_per_state']} | {t['K']} | {x['states/manifold']:.3f} | "
+                   f"{x['states/sv-hermite']:.3f} | {x['oracle/manifold']:.3f} | {x['oracle/sv-hermite']:.3f} |")
+    mv = s.get("method_validation") or {}
+    if mv:
+        methods = list(dict.fromkeys(m for r_ in mv.values() for m in r_))
+        out += ["", "Every method at the chosen settings (validation RMSE X / LVE; the manifold method's weights "
+                    "fitted on one half of the validation utterances and scored on the other, and vice versa):", "",
+                "| protocol | " + " | ".join(f"`{m}`" for m in methods) + " |", "|---|" + "---|" * len(methods)]
+        for p, r_ in mv.items():
+            out.append(f"| `{p}` | " + " | ".join(f"{r_[m]['rmse_x']:.3f} / {r_[m]['lve']:.3f}" if m in r_ else ""
+                                                   for m in methods) + " |")
+    sw = s.get("sliding_window_errors")
+    chosen = (f"Chosen: state dims {s['state_dims']}, one state per {s['frames_per_state']} frames, k "
+              f"{s['n_neighbors']}, Viterbi smoothing " + ", ".join(f"{k} {x:g}" for k, x in s["sigma"].items()))
+    if sw:
+        chosen += "; sliding window (context/output/alpha) " + ", ".join(f"{k}: {e:.3f}" for k, e in sw.items())
+    out += ["", chosen + f" ({s['note']}).", ""]
     return "\n".join(out)
 
 
