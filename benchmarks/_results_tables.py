@@ -22,7 +22,7 @@ _FLOOR = "mean-frame"
 def _delta(c) -> str:
     """Δ = reference − baseline of a paired comparison (negative: the reference erred less), with its interval."""
     if not np.isfinite(c["ci_low"]):
-        return f"{-c['mean_diff']:+.3g} (one utterance)"
+        return f"{0.0 - c['mean_diff']:+.3g} (one utterance)"
     return f"{-c['mean_diff']:+.3g} [{-c['ci_high']:+.3g}, {-c['ci_low']:+.3g}]"
 
 

@@ -44,6 +44,8 @@ from _results_tables import (contribution_cells, contribution_table, summary_cel
 DEFAULT_HASKINS = REPO.parent / "shared" / "data" / "haskins-ieee"
 DEFAULT_FACES = REPO.parent / "shared" / "data" / "talking-faces"
 CORPORA = ("default", "held-out", "haskins", "faces")
+#: layout of a cached section; a section of another layout is recomputed
+SECTION_FORMAT = 2
 PROTOCOLS = ("states", "oracle", "phones")
 #: code whose change makes a cached section stale
 CODE = ("engine.protocols", "engine.protocol_methods", "engine.protocol_report", "engine.learnt_paths",
@@ -101,7 +103,7 @@ class Section:
     def as_dict(self, commit, code):
         return {"key": self.key, "markdown": self.markdown, "summary": self.summary, "lve": self.lve,
                 "contribution": self.contribution, "best": self.best, "seconds": self.seconds, "commit": commit,
-                "code": code}
+                "code": code, "format": SECTION_FORMAT}
 
 
 def _run(name, corpus, seed, **kw):
@@ -233,10 +235,11 @@ def main():
     sections = {}
     for key in CORPORA:
         path = store / f"{key}-{args.preset}-seed{args.seed}.json"
-        if key not in todo and path.exists():
-            sections[key] = json.loads(path.read_text(encoding="utf-8"))
-            stale = "" if sections[key]["code"] == code else " (computed by other code)"
-            print(f"{key}: from the results cache, commit {sections[key]['commit']}{stale}", flush=True)
+        cached = json.loads(path.read_text(encoding="utf-8")) if key not in todo and path.exists() else None
+        if cached is not None and cached.get("format") == SECTION_FORMAT:
+            sections[key] = cached
+            stale = "" if cached["code"] == code else " (computed by other code)"
+            print(f"{key}: from the results cache, commit {cached['commit']}{stale}", flush=True)
             continue
         print(f"{key}:", flush=True)
         t = time.perf_counter()
