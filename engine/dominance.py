@@ -14,7 +14,8 @@ dominance parameters (log alpha, log theta before / after per phone type, one lo
 follow by L-BFGS on the squared error with the targets profiled out (their optimum makes
 the gradient the partial one). The model the synthetic talker is generated with is of
 this family (per control, not per shape component), so on that talker this is a strong
-baseline, not a straw man.
+baseline, not a straw man. :class:`engine.trajectory.PhoneModelSynthesizer` puts it behind the
+synthesiser interface (method ``"dominance"``).
 """
 from __future__ import annotations
 
@@ -24,23 +25,13 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from engine.threads import single_blas_thread
-from engine.trajectory import Trajectory
 
-__all__ = ["DominanceModel", "DominanceSynthesizer", "phone_sequences"]
+__all__ = ["DominanceModel"]
 
 #: bounds of the log parameters: alpha, theta (1/s^c), c
 _LOG_ALPHA = (-6.0, 6.0)
 _LOG_THETA = (np.log(0.1), np.log(500.0))
 _LOG_C = (np.log(0.5), np.log(3.0))
-
-
-def phone_sequences(corpus, Fx):
-    """Per utterance of ``corpus``: (X (n, m) float64, its phones); utterances without phones are left out."""
-    out = []
-    for u in corpus.utterances:
-        if u.phones:
-            out.append((np.asarray(Fx[u.start:u.stop], dtype=np.float64), tuple(u.phones)))
-    return out
 
 
 class DominanceModel(BaseEstimator):
@@ -193,39 +184,3 @@ class DominanceModel(BaseEstimator):
         types, taus, mask = self._layout([ph], [int(n_frames)], rate, index)
         w, _, _ = self._weights(self._p, types, taus, mask, K)
         return np.einsum("tw,twm->tm", w, self.targets_[types])
-
-
-class DominanceSynthesizer(BaseEstimator):
-    """:class:`DominanceModel` behind the :class:`engine.trajectory.Synthesizer` interface.
-
-    ``fit(manifold)`` fits on the manifold's corpus (its phones and F^x);
-    ``synthesize(targets)`` uses only ``targets.phones`` and the frame count.
-    Parameters as :class:`DominanceModel`.
-    """
-
-    method = "dominance"
-
-    def __init__(self, *, window=4, ridge=1e-3, max_iter=200):
-        self.window = window
-        self.ridge = ridge
-        self.max_iter = max_iter
-
-    def fit(self, manifold):
-        from engine.trajectory import check_fitted_manifold
-
-        check_fitted_manifold(manifold)
-        c = manifold.corpus_
-        self.model_ = DominanceModel(window=self.window, ridge=self.ridge, max_iter=self.max_iter).fit(
-            phone_sequences(c, manifold.Fx_), c.rate)
-        return self
-
-    def synthesize(self, targets) -> Trajectory:
-        from engine.trajectory import target_frames
-
-        check_is_fitted(self, "model_")
-        warnings = []
-        X = self.model_.predict(targets.phones, targets.n_frames, targets.rate, warnings)
-        f = target_frames(targets) if targets.targets else np.zeros(0, dtype=np.int64)
-        return Trajectory(times=np.arange(targets.n_frames) / targets.rate, Fx=X.astype(np.float32), Fy=None,
-                          method=self.method, target_frames=f, target_labels=[t.label for t in targets.targets],
-                          warnings=warnings)

@@ -6,8 +6,9 @@
 ``"sv-hermite"``      :class:`engine.state_synthesis.StateHermiteSynthesizer`;
 ``"linear"``, ``"cubic"``  :class:`engine.synthesis.InterpolationSynthesizer`;
 ``"unitselection"``   :class:`engine.unitselection.UnitSelectionSynthesizer`;
-``"dominance"``       :class:`engine.dominance.DominanceSynthesizer`;
-``"sliding-window"``  :class:`engine.sliding_window.SlidingWindowSynthesizer`.
+``"dominance"``       :class:`engine.dominance.DominanceModel`,
+``"sliding-window"``  :class:`engine.sliding_window.SlidingWindowRegressor`, each behind
+                      :class:`engine.trajectory.PhoneModelSynthesizer`.
 
 It sits above every synthesis module (none imports it), so they never import each other
 through it.
@@ -45,12 +46,11 @@ def make_synthesizer(method: str, manifold, **params):
         from engine.unitselection import UnitSelectionSynthesizer
 
         return UnitSelectionSynthesizer(**params).fit(manifold)
-    if method == "dominance":
-        from engine.dominance import DominanceSynthesizer
+    if method in ("dominance", "sliding-window"):
+        from engine.dominance import DominanceModel
+        from engine.sliding_window import SlidingWindowRegressor
+        from engine.trajectory import PhoneModelSynthesizer
 
-        return DominanceSynthesizer(**params).fit(manifold)
-    if method == "sliding-window":
-        from engine.sliding_window import SlidingWindowSynthesizer
-
-        return SlidingWindowSynthesizer(**params).fit(manifold)
+        model = (DominanceModel if method == "dominance" else SlidingWindowRegressor)(**params)
+        return PhoneModelSynthesizer(model, method=method).fit(manifold)
     raise ValueError(f"unknown synthesis method {method!r}; choose one of {', '.join(METHODS)}")

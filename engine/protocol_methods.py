@@ -88,11 +88,11 @@ class PhoneModels:
         """Fit on ``utterances`` of ``manifold.corpus_`` (unit selection: every utterance not in ``exclude``)."""
         from engine.dominance import DominanceModel
         from engine.sliding_window import SlidingWindowRegressor
+        from engine.trajectory import phone_sequences
         from engine.unitselection import UnitSelectionSynthesizer
 
         c = manifold.corpus_
-        seqs = [(np.asarray(manifold.Fx_[u.start:u.stop], dtype=np.float64), tuple(u.phones))
-                for u in utterances if u.phones]
+        seqs = phone_sequences(utterances, manifold.Fx_)
         ctx, ow, alpha = sliding
         return cls(dominance=DominanceModel().fit(seqs, c.rate),
                    sliding=SlidingWindowRegressor(context=int(ctx), output_window=int(ow), alpha=float(alpha)).fit(

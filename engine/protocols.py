@@ -267,8 +267,9 @@ def _viterbi_sigmas(sm, V, sigmas, protos, lattice):
 
 def _choose_sliding_window(manifold, fit, V, candidates):
     from engine.sliding_window import SlidingWindowRegressor
+    from engine.trajectory import phone_sequences
 
-    seqs = [(np.asarray(manifold.Fx_[u.start:u.stop], np.float64), tuple(u.phones)) for u in fit if u.phones]
+    seqs = phone_sequences(fit, manifold.Fx_)
     rate = manifold.corpus_.rate
     err = {}
     for ctx, ow, alpha in candidates:

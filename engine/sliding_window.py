@@ -8,6 +8,8 @@ mean of the windows covering it (the overlap averaging of the paper). The paper'
 network is stood in for by ridge regression (``"ridge"``, solved by its normal equations)
 or scikit-learn's multi-layer perceptron (``"mlp"``). Fitted on training utterances only;
 the window and the penalty are chosen on validation data.
+:class:`engine.trajectory.PhoneModelSynthesizer` puts it behind the synthesiser interface
+(method ``"sliding-window"``).
 """
 from __future__ import annotations
 
@@ -16,9 +18,8 @@ import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from engine.trajectory import Trajectory
 
-__all__ = ["SlidingWindowRegressor", "SlidingWindowSynthesizer", "REGRESSORS"]
+__all__ = ["SlidingWindowRegressor", "REGRESSORS"]
 
 REGRESSORS = ("ridge", "mlp")
 _BOUNDARY = "#"
@@ -159,43 +160,3 @@ class SlidingWindowRegressor(BaseEstimator):
             np.add.at(out, t[ok], Y[ok, o + h])
             np.add.at(cnt, t[ok], 1.0)
         return out / cnt[:, None]
-
-
-class SlidingWindowSynthesizer(BaseEstimator):
-    """:class:`SlidingWindowRegressor` behind the :class:`engine.trajectory.Synthesizer` interface.
-
-    ``fit(manifold)`` fits on the manifold's corpus (its phones and F^x);
-    ``synthesize(targets)`` uses only ``targets.phones`` and the frame count.
-    """
-
-    method = "sliding-window"
-
-    def __init__(self, *, context=12, step=2, output_window=5, regressor="ridge", alpha=1.0, hidden=256,
-                 random_state=0):
-        self.context = context
-        self.step = step
-        self.output_window = output_window
-        self.regressor = regressor
-        self.alpha = alpha
-        self.hidden = hidden
-        self.random_state = random_state
-
-    def fit(self, manifold):
-        from engine.dominance import phone_sequences
-        from engine.trajectory import check_fitted_manifold
-
-        check_fitted_manifold(manifold)
-        c = manifold.corpus_
-        self.model_ = SlidingWindowRegressor(**self.get_params()).fit(phone_sequences(c, manifold.Fx_), c.rate)
-        return self
-
-    def synthesize(self, targets) -> Trajectory:
-        from engine.trajectory import target_frames
-
-        check_is_fitted(self, "model_")
-        warnings = []
-        X = self.model_.predict(targets.phones, targets.n_frames, targets.rate, warnings)
-        f = target_frames(targets) if targets.targets else np.zeros(0, dtype=np.int64)
-        return Trajectory(times=np.arange(targets.n_frames) / targets.rate, Fx=X.astype(np.float32), Fy=None,
-                          method=self.method, target_frames=f, target_labels=[t.label for t in targets.targets],
-                          warnings=warnings)

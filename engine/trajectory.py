@@ -13,8 +13,10 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
+from sklearn.base import BaseEstimator, clone
 
-__all__ = ["Trajectory", "Synthesizer", "check_fitted_manifold", "target_frames", "smooth"]
+__all__ = ["Trajectory", "Synthesizer", "check_fitted_manifold", "target_frames", "smooth", "phone_sequences",
+           "PhoneModelSynthesizer"]
 
 
 @dataclass
@@ -101,3 +103,45 @@ def smooth(A, sigma) -> np.ndarray:
     if float(sigma) == 0 or A.shape[0] < 2:
         return A
     return gaussian_filter1d(A, float(sigma), axis=0, mode="nearest")
+
+
+def phone_sequences(utterances, Fx):
+    """(X (n, m) float64, phones) of each utterance with phones; ``Fx`` holds the corpus's rows."""
+    return [(np.asarray(Fx[u.start:u.stop], dtype=np.float64), tuple(u.phones)) for u in utterances if u.phones]
+
+
+class PhoneModelSynthesizer(BaseEstimator):
+    """A model of shape from phones and their times behind the :class:`Synthesizer` interface.
+
+    Parameters
+    ----------
+    model : estimator
+        With ``fit(sequences, rate)`` (sequences: (X, phones) per utterance) and
+        ``predict(phones, n_frames, rate, warnings)`` (:class:`engine.dominance.DominanceModel`,
+        :class:`engine.sliding_window.SlidingWindowRegressor`).
+    method : str
+        The method's name in the trajectories it makes.
+
+    ``fit(manifold)`` fits a copy of ``model`` on the manifold's corpus (its phones and
+    F^x); ``synthesize(targets)`` uses only ``targets.phones`` and the frame count.
+    """
+
+    def __init__(self, model, *, method):
+        self.model = model
+        self.method = method
+
+    def fit(self, manifold):
+        check_fitted_manifold(manifold)
+        c = manifold.corpus_
+        self.model_ = clone(self.model).fit(phone_sequences(c.utterances, manifold.Fx_), c.rate)
+        return self
+
+    def synthesize(self, targets) -> Trajectory:
+        if not hasattr(self, "model_"):
+            raise ValueError(f"the {self.method} synthesiser is not fitted; call fit(manifold) first")
+        warnings = []
+        X = self.model_.predict(targets.phones, targets.n_frames, targets.rate, warnings)
+        f = target_frames(targets) if targets.targets else np.zeros(0, dtype=np.int64)
+        return Trajectory(times=np.arange(targets.n_frames) / targets.rate, Fx=np.asarray(X, np.float32), Fy=None,
+                          method=self.method, target_frames=f, target_labels=[t.label for t in targets.targets],
+                          warnings=warnings)
