@@ -124,12 +124,7 @@ def target_protocol(targets) -> str:
 
 def best_method(choice, protocol) -> str:
     """The method measured best on validation in ``protocol`` (``"manifold"`` when nothing was measured)."""
-    best = (choice or {}).get("best") or {}
-    if protocol in best:
-        return best[protocol]
-    if protocol == "phones" and "states" in best:
-        return best["states"] if best["states"] != "linear" else "manifold"
-    return "manifold"
+    return ((choice or {}).get("best") or {}).get(protocol, "manifold")
 
 
 def describe(choice, protocol, method) -> str:
