@@ -33,8 +33,8 @@ def add_arguments(p):
                    help="frame rate of inputs without timing (mesh frames, .npy, CSV without a time column)")
     p.add_argument("--resample", "--analysis-rate", dest="resample", default=None, metavar="HZ",
                    help="analysis frame rate: the result is resampled to it with an anti-aliasing filter, per "
-                        f"utterance (default: {ANALYSIS_RATE:g} Hz, the paper's rate, for every input but video, "
-                        "which keeps its own rate; 'native' keeps the file's rate)")
+                        f"utterance (default: {ANALYSIS_RATE:g} Hz, the paper's rate, the rate the manifold's "
+                        "velocities and classes are read at; 'native' keeps the file's rate)")
     p.add_argument("--points", default=None, metavar="LIST",
                    help="comma-separated sensors / markers / landmarks to keep, or 'all' (EMA, MVIEW, layouts) or "
                         "'lips' (OpenFace, layouts); default: lips and jaw for EMA, lip, jaw and reference "
@@ -139,8 +139,8 @@ def run(args) -> int:
         raise CliError(f"--block-frames {args.block_frames}: must be at least 256 frames per block")
     inputs = args.inputs
     rate_out = None
-    if args.resample is None:  # video keeps its own frame rate; other inputs go to the paper's 60 Hz
-        args.resample = "native" if _is_video(args) else f"{ANALYSIS_RATE:g}"
+    if args.resample is None:  # every input, video too, goes to the paper's 60 Hz (docs/DECISIONS.md)
+        args.resample = f"{ANALYSIS_RATE:g}"
     if str(args.resample).lower() not in ("native", "none"):
         try:
             rate_out = float(args.resample)
@@ -208,17 +208,6 @@ def run(args) -> int:
               file=sys.stderr)
     print(f"wrote {out}: {summary(corpus)}", file=sys.stdout)
     return 0
-
-
-def _is_video(args) -> bool:
-    from engine.io.dispatch import FORMAT_ALIASES, detect_format
-
-    if args.format is not None or args.layout is not None:
-        return FORMAT_ALIASES.get(args.format, args.format) == "video"
-    try:
-        return detect_format(args.inputs[0]) == "video"
-    except (ValueError, OSError):
-        return False
 
 
 def _input_errors():
