@@ -4,8 +4,8 @@ Each phone interval of the corpus contributes its **mid-point frame**. Per phone
 the clusters hold the count (the paper's Table 1), the mean and covariance of the
 members in F^y (the first ``n_dims`` dimensions of Y, with dynamics) and in F^x (the
 first ``n_dims`` shape components, shape only), the 2-s.d. ellipse in any pair of axes
-and the ellipsoid in 3D (Fig. 4), and the fraction of members on the opening side of
-the zero-velocity plane.
+and the ellipsoid in 3D (Fig. 4), and the fraction of members that are opening (their
+opening velocity read on the manifold, TangentFrames.velocity_, is > 0).
 
 **Separation** between two phones is the Bhattacharyya distance between Gaussian fits
 of their clusters,
@@ -137,8 +137,8 @@ class PhoneClusters(BaseEstimator):
         Means in F^x (first ``n_dims_x_`` = min(n_dims, m) shape components).
     covariances_x_ : ndarray of shape (P, dx, dx), float64
     opening_fraction_ : ndarray of shape (P,), float64
-        Fraction of members with signed velocity > 0 (opening side of the zero-velocity
-        plane); NaN when no signed velocity was given.
+        Fraction of members whose opening velocity is > 0 (opening); NaN when no
+        velocity was given.
     members_ : ndarray of shape (M,), int64
         Mid-point frame indices, phone after phone (``members_[member_offsets_[p]:member_offsets_[p+1]]``).
     member_offsets_ : ndarray of shape (P + 1,), int64
@@ -164,7 +164,7 @@ class PhoneClusters(BaseEstimator):
     @classmethod
     def from_manifold(cls, manifold, **params) -> "PhoneClusters":
         """Fit on a fitted :class:`engine.manifold.Manifold` (its corpus's phone table,
-        ``Fy_``, ``Fx_`` and the tangent frames' zero-velocity plane)."""
+        ``Fy_``, ``Fx_`` and the tangent frames' opening velocity per frame)."""
         return cls(**params).fit(manifold)
 
     def fit(self, Fy, Fx=None, mid_frames=None, labels=None, signed_velocity=None):
@@ -178,8 +178,8 @@ class PhoneClusters(BaseEstimator):
             Mid-point frame of each phone instance, in [0, N).
         labels : sequence of str of length n_phones
         signed_velocity : None, ndarray of shape (N,), or callable
-            Signed distance to the zero-velocity plane per frame (> 0 opening), or a
-            function of F^y rows returning it (e.g. ``manifold.tangent_.signed_velocity``).
+            The opening velocity per frame (> 0 opening; ``manifold.tangent_.velocity_``),
+            or a function of F^y rows returning it.
 
         Returns
         -------
@@ -189,7 +189,7 @@ class PhoneClusters(BaseEstimator):
             m = Fy
             mids, labs = m.corpus_.phone_table()[:2]
             tangent = getattr(m, "tangent_", None)
-            sv = None if tangent is None else tangent.signed_velocity
+            sv = None if tangent is None else tangent.velocity_
             return self.fit(m.Fy_, m.Fx_, mids, labs, signed_velocity=sv)
         if Fx is None or mid_frames is None or labels is None:
             raise TypeError("fit(manifold) or fit(Fy, Fx, mid_frames, labels, signed_velocity=None): "

@@ -110,7 +110,7 @@ def run(args) -> int:
             kc, note = kinematic_if_unlabelled(replace(c, utterances=[replace(u, phones=()) for u in c.utterances]))
             mids, labs = kc.phone_table()[:2]
             print(note.replace(f"{c.name} has no phone labels: using", "labels:"), file=sys.stderr)
-            pc.fit(manifold.Fy_, manifold.Fx_, mids, labs, signed_velocity=manifold.tangent_.signed_velocity)
+            pc.fit(manifold.Fy_, manifold.Fx_, mids, labs, signed_velocity=manifold.tangent_.velocity_)
     except ValueError as exc:
         raise CliError(str(exc)) from None
     if not pc.phones_:

@@ -91,15 +91,21 @@ def sv_basis(tangent) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.asarray(tangent.plane_point_, dtype=np.float64), S, V
 
 
-def sv_coords(Y, tangent) -> np.ndarray:
-    """Coordinates of points ``Y`` (n, 3) along (S, V) about the plane point, (n, 2).
+def frame_sv(manifold) -> np.ndarray:
+    """Per frame (S, V), (N, 2): the opening and its velocity read on the manifold
+    (:meth:`engine.tangent.TangentFrames.sv_coordinates`). Opening frames lie at V > 0;
+    speech cycles are the paper's loops in this plane."""
+    return manifold.tangent_.sv_coordinates()
 
-    In these coordinates the zero-velocity plane is the line ``v = 0`` and speech
-    cycles are the paper's elliptical paths (shape along x, velocity along y).
-    """
-    o, S, V = sv_basis(tangent)
-    d = np.asarray(Y, dtype=np.float64) - o
-    return np.column_stack([d @ S, d @ V])
+
+def state_sv(manifold) -> np.ndarray:
+    """Per state (S, V), (K, 2): the mean of its frames' :func:`frame_sv`."""
+    st = manifold.states_
+    K = st.centroids_.shape[0]
+    labels = np.asarray(st.labels_)
+    P = frame_sv(manifold)
+    cnt = np.maximum(np.bincount(labels, minlength=K), 1).astype(np.float64)
+    return np.column_stack([np.bincount(labels, weights=P[:, j], minlength=K) / cnt for j in range(2)])
 
 
 def plane_trace(ax, tangent, axes, Y, **kw):

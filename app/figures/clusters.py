@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib import patheffects
 
-from app.figures._style import below, new_figure, require_fitted, sv_basis, y3
+from app.figures._style import below, frame_sv, new_figure, require_fitted, y3
 
 __all__ = ["make_fig4", "PHONE_COLOURS", "ellipse_points"]
 
@@ -37,10 +37,10 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
     colours : sequence of colours, optional
         One per phone; default :data:`PHONE_COLOURS` (the paper's), else matplotlib's cycle.
     axes : "sv" or (int, int), default="sv"
-        ``"sv"``: the plane of the global shape S (x) and velocity V (y) directions,
-        where the zero-velocity plane is the dotted line v = 0 and the opening half of
-        the cycle lies above it; ellipses are the clusters' 3-D Gaussians projected
-        onto that plane. A pair of Y dims (0-based) shows those dims, with
+        ``"sv"``: the (S, V) plane, the opening (x) and its velocity read on the
+        manifold (y), where the zero-velocity plane is the dotted line V = 0 and the
+        opening half of the cycle lies above it; ellipses are the 2-s.d. ellipses of
+        the members' (S, V). A pair of Y dims (0-based) shows those dims, with
         :meth:`PhoneClusters.ellipse` and the plane's trace.
     """
     require_fitted(manifold, "tangent_")
@@ -58,8 +58,7 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
         raise ValueError(f"axes={axes!r}: use 'sv' or a pair of Y dims such as (0, 1)")
     Y = y3(manifold)
     if sv:
-        o, S, V = sv_basis(tan)
-        B = np.vstack([S, V])                                   # (2, 3)
+        P = frame_sv(manifold)
     else:
         a, b = (int(v) for v in axes)
         if not (0 <= a < 3 and 0 <= b < 3 and a != b):
@@ -75,16 +74,16 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
             continue
         idx = pc.members(phone)
         if sv:
-            pts = (Y[idx] - o) @ B.T
-            mean = B @ (pc.means_[i] - o)
-            cov = B @ pc.covariances_[i] @ B.T
+            pts = P[idx]
+            mean = pts.mean(axis=0)
+            cov = np.atleast_2d(np.cov(pts, rowvar=False))
             ell = ellipse_points(mean, cov, n_sd)
         else:
             pts = Y[idx][:, [a, b]]
             mean = pc.means_[i][[a, b]]
             ell = pc.ellipse(phone, axes=(a, b), n_sd=n_sd)
         frac = float(pc.opening_fraction_[i])
-        label = f"/{pc.phones_[i]}/  n={len(idx)}, {100 * frac:.0f}% opening side"
+        label = f"/{pc.phones_[i]}/  n={len(idx)}, {100 * frac:.0f}% opening"
         sc = ax.scatter(pts[:, 0], pts[:, 1], s=22, color=col, edgecolors="0.15", linewidths=0.4,
                         label=label, zorder=3)
         sc.set_gid(f"fig4:points:{phone}")
@@ -97,9 +96,9 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
         found[phone] = {"label": pc.phones_[i], "count": int(len(idx)), "opening_fraction": frac,
                         "mean": np.asarray(mean), "cov": None if not sv else cov}
     if sv:
-        zl = ax.axhline(0.0, color="k", ls=":", lw=1.3, label="zero-velocity plane")
-        ax.set_xlabel("shape S")
-        ax.set_ylabel("velocity V (opening > 0)")
+        zl = ax.axhline(0.0, color="k", ls=":", lw=1.3, label="zero velocity")
+        ax.set_xlabel(tan.sv_labels()[0])
+        ax.set_ylabel(tan.sv_labels()[1])
     else:
         from app.figures._style import plane_trace
 

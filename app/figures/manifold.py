@@ -7,7 +7,7 @@ from matplotlib.lines import Line2D
 
 from app.figures._style import (CLASS_COLOURS, below, CMAP, CMAP_NEAR, ORIGINAL, S_COLOUR, UNREACHABLE, V_COLOUR,
                                  arrow, density, marker_size, new_figure, plane_trace, rasterize_for,
-                                 require_fitted, sv_basis, sv_coords, y3)
+                                 require_fitted, state_sv, sv_basis, frame_sv, y3)
 
 __all__ = ["make_fig2a", "make_fig2b", "make_classes", "choose_seed_states", "example_segment"]
 
@@ -88,12 +88,13 @@ def make_fig2a(manifold, *, utterance=None, n_local: int = 4, n_traj: int = 45, 
         plane_trace(ax, tan, (a, b), Y)
         arrow(ax, o[[a, b]], L * S[[a, b]], color=S_COLOUR, label="S", lw=2.4, gid="fig2a:S")
         arrow(ax, o[[a, b]], L * V[[a, b]], color=V_COLOUR, label="V", lw=2.4, gid="fig2a:V")
-        for j, i in enumerate(local):
-            lab = j == 0
-            arrow(ax, Y[i, [a, b]], l_loc * np.asarray(tan.s_[i])[[a, b]], color=S_COLOUR, lw=1.0, head=5,
-                  label="$s_i$" if lab else None, gid="fig2a:s_i", fontsize=8)
-            arrow(ax, Y[i, [a, b]], l_loc * np.asarray(tan.v_[i])[[a, b]], color=V_COLOUR, lw=1.0, head=5,
-                  label="$v_i$" if lab else None, gid="fig2a:v_i", fontsize=8)
+        for i in local:  # named by the legend's colours: in a panel s_i and v_i may point alike
+            s3, v3, _ = tan.drawn_local_frame(i)
+            for vec, col, name in ((s3, S_COLOUR, "s_i"), (v3, V_COLOUR, "v_i")):
+                d2 = vec[[a, b]]
+                if np.linalg.norm(d2) > 1e-6:  # its direction in this panel (the frame lives in all dims of Y)
+                    arrow(ax, Y[i, [a, b]], l_loc * d2 / np.linalg.norm(d2), color=col, lw=1.0, head=5,
+                          gid=f"fig2a:{name}")
         p = Y[traj[::2]][:, [a, b]]
         q = ax.quiver(p[:-1, 0], p[:-1, 1], np.diff(p[:, 0]), np.diff(p[:, 1]), angles="xy",
                       scale_units="xy", scale=1, color=ORIGINAL, width=0.004, headwidth=4, headlength=5,
@@ -170,13 +171,8 @@ def _mappable(cmap=CMAP, norm=None):
 
 
 def state_signed_velocity(manifold) -> np.ndarray:
-    """Mean signed distance to the zero-velocity plane of each state's frames, (K,)."""
-    st, tan = manifold.states_, manifold.tangent_
-    K = st.centroids_.shape[0]
-    sv = np.asarray(tan.signed_velocity(y3(manifold)), dtype=np.float64)
-    labels = np.asarray(st.labels_)
-    cnt = np.bincount(labels, minlength=K).astype(np.float64)
-    return np.bincount(labels, weights=sv, minlength=K) / np.maximum(cnt, 1)
+    """Mean opening velocity (the V coordinate) of each state's frames, (K,)."""
+    return state_sv(manifold)[:, 1]
 
 
 def choose_seed_states(manifold) -> dict:
@@ -184,15 +180,15 @@ def choose_seed_states(manifold) -> dict:
 
     Candidates are well-populated states (at least the median membership) in the
     largest strongly connected component. Opening: among candidates in the top decile
-    of mean signed velocity (distance of the state's frames to the zero-velocity
-    plane), the one whose centroid is nearest the median projection of all frames on
-    S (mid-opening, not an extreme); closing: the same in the bottom decile;
-    zero-velocity: the same among the fifth of candidates nearest the plane.
+    of mean opening velocity (V), the one whose mean opening (S) is nearest the median
+    of all frames (mid-opening, not an extreme); closing: the same in the bottom
+    decile; zero-velocity: the same among the fifth of candidates slowest.
     Returns ``{"opening": k, "zero velocity": k, "closing": k}``.
     """
     st = manifold.states_
     K = st.centroids_.shape[0]
-    msv = state_signed_velocity(manifold)
+    Psv = state_sv(manifold)
+    msv = Psv[:, 1]
     cnt = np.bincount(np.asarray(st.labels_), minlength=K)
     ok = cnt >= max(1, np.median(cnt[cnt > 0]))
     scc = getattr(st, "scc_labels_", None)
@@ -203,13 +199,10 @@ def choose_seed_states(manifold) -> dict:
             ok &= scc == big
     cand = np.flatnonzero(ok)
     # representative rather than extreme: among the candidates in the top / bottom decile of
-    # signed velocity (and the lowest quintile of |signed velocity|), the state nearest the
-    # median shape (projection on S) of all frames
-    o, S, _ = sv_basis(manifold.tangent_)
-    cen = np.asarray(st.centroids_, dtype=np.float64)
-    cen = np.hstack([cen, np.zeros((K, max(0, 3 - cen.shape[1])))])[:, :3]
-    s_state = (cen - o) @ S
-    s_mid = float(np.median((y3(manifold) - o) @ S))
+    # opening velocity (and the lowest quintile of |velocity|), the state nearest the median
+    # opening of all frames
+    s_state = Psv[:, 0]
+    s_mid = float(np.median(frame_sv(manifold)[:, 0]))
     v = msv[cand]
 
     def nearest_mid(sel):
@@ -224,9 +217,9 @@ def choose_seed_states(manifold) -> dict:
 def make_fig2b(manifold, *, states=None, near_hops: int = 3, width: float = 11.0):
     """Fig. 2(b): directed geodesic (hop) distances from three states.
 
-    Drawn in the (S, V) plane of the manifold (x: projection on the global shape
-    direction, y: on the global velocity direction), where the zero-velocity plane is
-    the dotted line v = 0, opening above it, closing below. Every frame takes the hop
+    Drawn in the (S, V) plane of the manifold (x: the opening, y: its velocity read on
+    the manifold, :func:`frame_sv`), where the zero-velocity plane is the dotted line
+    V = 0, opening above it, closing below. Every frame takes the hop
     distance of its state from the seed (``states_.future``): red (near) → blue (far),
     unreachable grey. Arrows point from the seed to the mean of its near future
     (states 1..``near_hops`` hops away), one per side of the zero-velocity plane that
@@ -253,12 +246,10 @@ def make_fig2b(manifold, *, states=None, near_hops: int = 3, width: float = 11.0
         if not 0 <= s < K:
             raise ValueError(f"seed state {s} ({name}) out of range: the state graph has {K} states (0..{K - 1})")
     Y = y3(manifold)
-    P = sv_coords(Y, tan)
+    P = frame_sv(manifold)
     labels = np.asarray(st.labels_)
-    cen = np.asarray(st.centroids_, dtype=np.float64)
-    cen3 = np.hstack([cen, np.zeros((K, max(0, 3 - cen.shape[1])))])[:, :3]
-    Pc = sv_coords(cen3, tan)
-    msv = sv_coords(cen3, tan)[:, 1]
+    Pc = state_sv(manifold)
+    msv = Pc[:, 1]
     dists = {name: np.asarray(st.future(s), dtype=np.float64) for name, s in seeds.items()}
     dmax = max(float(d[np.isfinite(d)].max()) for d in dists.values())
     norm = Normalize(0.0, max(dmax, 1.0))
@@ -302,9 +293,9 @@ def make_fig2b(manifold, *, states=None, near_hops: int = 3, width: float = 11.0
             ax.plot(seg[:, 0], seg[:, 1], "k--", lw=1.0, gid=f"fig2b:past-future:{name}")
         reach = int(np.isfinite(d_state).sum())
         ax.set_title(f"{name}: state {s} ({reach}/{K} reachable)", fontsize=10)
-        ax.set_xlabel("shape S")
+        ax.set_xlabel(tan.sv_labels()[0])
         info[name] = {"state": s, "reachable": reach, "n_future_directions": len(dirs)}
-    axs[0].set_ylabel("velocity V (opening > 0)")
+    axs[0].set_ylabel(tan.sv_labels()[1])
     cb = fig.colorbar(_mappable(CMAP_NEAR, norm), ax=axs, shrink=0.8)
     cb.set_label("hops from the state (grey: unreachable)")
     fig.suptitle("Directed geodesic distances on the manifold (future hemisphere)", fontsize=11)
@@ -332,37 +323,38 @@ def make_classes(manifold, *, width: float = 9.0, height: float = 3.6):
     ax.set_xticks(np.arange(len(names)), [n.replace("/", "/\n") for n in names], fontsize=8)
     ax.set_ylabel("% of frames")
     ax.set_ylim(0, max(100 * frac.max() * 1.2, 1))
-    ax.set_title("Tangent classes (frames with a forward step)", fontsize=9)
-    truth = _true_opening_agreement(manifold)
+    ax.set_title("Tangent classes (frames with a step)", fontsize=9)
+    truth = _true_agreement(manifold)
     if truth is not None:
-        below(ax, f"opening/closing agrees with the true aperture\nvelocity on {100 * truth:.1f}% of frames "
-              "(synthetic ground truth)")
-    P = sv_coords(y3(manifold), tan)
+        below(ax, f"against the true aperture (synthetic ground truth): opening {100 * truth.opening:.1f}%,\n"
+              f"accelerating {100 * truth.accelerating:.1f}% of frames (trivial rule "
+              f"{100 * truth.trivial_opening:.1f}%, {100 * truth.trivial_accelerating:.1f}%)")
+    P = frame_sv(manifold)
     sel = np.flatnonzero(valid)
     sel = sel[np.random.default_rng(0).permutation(len(sel))]   # no class hides another
     sc = ax2.scatter(P[sel, 0], P[sel, 1], s=marker_size(len(P)), c=np.asarray(CLASS_COLOURS)[cls[sel]],
                      linewidths=0, rasterized=rasterize_for(len(P)))
     sc.set_gid("classes:points")
     ax2.axhline(0, color="k", ls=":", lw=1.2)
-    ax2.set_xlabel("shape S")
-    ax2.set_ylabel("velocity V (opening > 0)")
+    ax2.set_xlabel(tan.sv_labels()[0])
+    ax2.set_ylabel(tan.sv_labels()[1])
     handles = [Line2D([], [], ls="none", marker="o", color=CLASS_COLOURS[k], label=n) for k, n in enumerate(names)]
     ax2.legend(handles=handles, fontsize=7, frameon=False, loc="best")
-    fig.lipspace.update(proportions=dict(zip(names, frac.tolist())), true_agreement=truth)
+    fig.lipspace.update(proportions=dict(zip(names, frac.tolist())),
+                        true_agreement=None if truth is None else truth.opening,
+                        opening_on_positive_v=float(np.mean(P[valid & (cls <= 1), 1] > 0))
+                        if (valid & (cls <= 1)).any() else float("nan"))
     return fig
 
 
-def _true_opening_agreement(manifold):
-    """Fraction of frames whose opening/closing class matches the synthetic truth, or None."""
+def _true_agreement(manifold):
+    """The classes against the synthetic talker's true aperture (engine.class_agreement), or None."""
     lat = getattr(manifold.corpus_, "latent", {}) or {}
     if "aperture" not in lat:
         return None
-    ap = np.asarray(lat["aperture"], dtype=np.float64)
-    fwd = np.zeros_like(ap)
-    for s, e in manifold.corpus_.bounds:
-        fwd[s:e - 1] = ap[s + 1:e] - ap[s:e - 1]
-    cls = np.asarray(manifold.tangent_.classes_)
-    sel = (cls >= 0) & (fwd != 0)
-    if not sel.any():
-        return None
-    return float(np.mean((cls[sel] <= 1) == (fwd[sel] > 0)))
+    from engine.class_agreement import class_agreement
+    from engine.kinematics import lip_aperture
+
+    tan = manifold.tangent_
+    return class_agreement(tan.opening_, tan.accelerating_, lat["aperture"], manifold.corpus_.bounds,
+                           measured=lip_aperture(manifold.corpus_))

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.colors import Normalize
 
-from app.figures._style import (CMAP, draw_shape, new_figure, require_fitted, sv_basis, shape_points, y3)
+from app.figures._style import CMAP, draw_shape, frame_sv, new_figure, require_fitted, shape_points
 
 __all__ = ["make_fig1a", "make_fig1b", "make_fig2c", "make_scree"]
 
@@ -130,9 +130,9 @@ def make_fig1b(manifold, *, max_components: int | None = 30, width: float = 5.0,
 
 
 def make_fig2c(manifold, *, n_shapes: int = 7, quantiles=(0.03, 0.97), view=None, width: float = 9.0):
-    """Fig. 2(c): lip shapes indexed by increasing S, the global shape direction.
+    """Fig. 2(c): lip shapes indexed by increasing S, the opening (the lip aperture).
 
-    Frames are ordered by their projection on S (about the plane point). For each of
+    Frames are ordered by their S coordinate (:func:`app.figures._style.frame_sv`). For each of
     ``n_shapes`` evenly spaced quantiles in ``quantiles`` the shape drawn is the mean
     F^x of the frames in that quantile bin, reconstructed to the lip points
     (``shape_.inverse_transform``): an honest average of real frames, no inverse map.
@@ -141,8 +141,8 @@ def make_fig2c(manifold, *, n_shapes: int = 7, quantiles=(0.03, 0.97), view=None
     if n_shapes < 2:
         raise ValueError(f"n_shapes must be >= 2, got {n_shapes}")
     corpus = manifold.corpus_
-    o, S, _ = sv_basis(manifold.tangent_)
-    t = (y3(manifold) - o) @ S
+    t = frame_sv(manifold)[:, 0]
+    unit = manifold.tangent_.opening_unit_
     edges = np.quantile(t, np.linspace(quantiles[0], quantiles[1], n_shapes + 1))
     centres = 0.5 * (edges[:-1] + edges[1:])
     fig = new_figure(width, 1.9)
@@ -155,7 +155,7 @@ def make_fig2c(manifold, *, n_shapes: int = 7, quantiles=(0.03, 0.97), view=None
         fx = np.asarray(manifold.Fx_, dtype=np.float64)[sel].mean(axis=0, keepdims=True)
         pts = shape_points(manifold, manifold.shape_.inverse_transform(fx)[0])
         draw_shape(ax, pts, dims=corpus.dims, faces=corpus.faces, view=view, gid=f"fig2c:shape{k}")
-        ax.set_title(f"S = {centres[k]:.2f}", fontsize=8)
+        ax.set_title(f"S = {centres[k]:.1f} {unit}" if unit else f"S = {centres[k]:.2f}", fontsize=8)
         used.append(int(sel.sum()))
     xl = np.array([ax.get_xlim() for ax in axs])
     yl = np.array([ax.get_ylim() for ax in axs])

@@ -446,7 +446,7 @@ class ManifoldView(QtWidgets.QWidget):
             t = m.tangent_
             y = m.Fy_[i, :3]
             h["marker"].move(y)
-            h["local"].update(y, t.s_[i], t.v_[i], t.normal_[i])
+            h["local"].update(y, *t.drawn_local_frame(i))
         elif s.state is not None:
             h["marker"].move(m.states_.centroids_[s.state, :3])
             h["local"].set_visible(False)

@@ -14,7 +14,7 @@ def built(tmp_path_factory):
 
 def test_build_writes_a_loadable_manifold(built, small_corpus):
     m = Manifold.load(built)
-    assert m.Fy_.shape == (small_corpus.n_frames, 10)
+    assert m.Fy_.shape == (small_corpus.n_frames, 16)
     assert m.corpus_.n_frames == small_corpus.n_frames
 
 
