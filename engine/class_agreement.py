@@ -14,12 +14,13 @@ speed grows. This module measures those statements against the aperture itself:
 Beside them it reports the **trivial rule**, the same two signs read off the measured
 aperture directly (identical to the truth when the truth *is* the measured aperture;
 on the synthetic talker the truth is its noise-free aperture and the rule reads the
-noisy captured lips, like the method), and the **ceiling** of any single-step reading
-of acceleration: how often the sign of the aperture's central second difference,
-compared with the sign of its central velocity, gives the speed change. A frame
-whose velocity flips sign between its neighbours (noise, or a frame rate too low for
-the movement) can have the opening of one span and the speed change of another; no
-class read from one step gets those frames right.
+noisy captured lips, like the method), and the **second-difference reading**: how
+often the sign of the aperture's own central second difference, compared with the sign
+of its central velocity, gives the speed change. It reads acceleration from the exact
+aperture the way a class reads it from one step; where the aperture's velocity flips
+sign between neighbouring frames (noise, or a frame rate too low for the movement) the
+opening of one span and the speed change of a wider one disagree, and it falls well
+below 100 %.
 """
 from __future__ import annotations
 
@@ -49,16 +50,16 @@ class ClassAgreement:
     accelerating: float
     trivial_opening: float
     trivial_accelerating: float
-    accelerating_ceiling: float
+    accelerating_second_difference: float
     n_opening: int
     n_accelerating: int
 
     def describe(self) -> str:
-        """One line: method, trivial rule and ceiling, in percent."""
+        """One line: method, trivial rule and second-difference reading, in percent."""
         return (f"opening {100 * self.opening:.1f}% of {self.n_opening} moving frames (trivial rule "
                 f"{100 * self.trivial_opening:.1f}%), accelerating {100 * self.accelerating:.1f}% of "
-                f"{self.n_accelerating} (trivial rule {100 * self.trivial_accelerating:.1f}%, single-step ceiling "
-                f"{100 * self.accelerating_ceiling:.1f}%)")
+                f"{self.n_accelerating} (trivial rule {100 * self.trivial_accelerating:.1f}%, the aperture's second "
+                f"difference {100 * self.accelerating_second_difference:.1f}%)")
 
 
 def _inner(bounds, n):
@@ -119,12 +120,12 @@ def class_agreement(opening, accelerating, aperture, bounds, *, measured=None) -
     m = a if measured is None else np.asarray(measured, dtype=np.float64)
     mv = central_difference(m, bounds)
     trivial_up, trivial_faster = mv > 0, central_difference(np.abs(mv), bounds) > 0
-    # the single-step ceiling: the second difference over the same five frames the speed change spans
+    # the second difference over the same five frames the speed change spans
     second = central_difference(central_difference(a, bounds), bounds)
     one_step = np.sign(second) == np.sign(v)
     return ClassAgreement(
         opening=_frac(op == up, moving), accelerating=_frac(acc == faster, accel_frames),
         trivial_opening=_frac(trivial_up == up, moving), trivial_accelerating=_frac(trivial_faster == faster,
                                                                                     accel_frames),
-        accelerating_ceiling=_frac(one_step == faster, accel_frames),
+        accelerating_second_difference=_frac(one_step == faster, accel_frames),
         n_opening=int(moving.sum()), n_accelerating=int(accel_frames.sum()))

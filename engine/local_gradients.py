@@ -30,7 +30,7 @@ nearest anchor, so the cost stops growing with k times N.
 from __future__ import annotations
 
 import numpy as np
-from sklearn.neighbors import NearestNeighbors
+from scipy.spatial import cKDTree
 
 __all__ = ["central_difference", "neighbor_candidates", "local_gradients", "gradients_block",
            "select_neighbors", "MAX_NEIGHBORS", "MAX_ANCHORS", "MARGIN_S", "N_FOLDS"]
@@ -44,7 +44,7 @@ MARGIN_S = 0.05
 #: folds of the neighbourhood validation
 N_FOLDS = 5
 #: held-out frames scored per fold at most
-_QUERIES_PER_FOLD = 1000
+_QUERIES_PER_FOLD = 500
 #: ridge of the regressions, relative to the weighted steps' mean square per dimension
 _RIDGE = 1e-3
 #: rows per block of the batched solves
@@ -98,24 +98,36 @@ def _weights(dist):
 
 
 def _solve(Zk, Fk, w):
-    """Weighted ridge gradients (B, T, d) from neighbour steps Zk (B, k, d) and changes Fk (B, k, T)."""
+    """Weighted ridge gradients (B, T, d) from neighbour steps Zk (B, k, d) and changes Fk (B, k, T).
+
+    The weighted sums run in float32 (the steps are float32); the d x d systems in float64.
+    """
     d = Zk.shape[2]
-    ZwT = (Zk * w[..., None]).transpose(0, 2, 1)  # (B, d, k)
-    C = ZwT @ Zk
+    ZwT = (Zk * w[..., None].astype(np.float32)).transpose(0, 2, 1)  # (B, d, k)
+    C = (ZwT @ Zk).astype(np.float64)
     lam = _RIDGE * np.trace(C, axis1=1, axis2=2) / d + 1e-300
     C[:, np.arange(d), np.arange(d)] += lam[:, None]
-    return np.linalg.solve(C, ZwT @ Fk).transpose(0, 2, 1)
+    R = (ZwT @ Fk.astype(np.float32)).astype(np.float64)
+    return np.linalg.solve(C, R).transpose(0, 2, 1)
 
 
-def gradients_block(start, stop, nn, Y, Z, F, k, anchors):
+def _query(tree, X, k):
+    """(distances, indices) of the ``k`` nearest points of ``tree`` to each row of X, nearest first."""
+    dist, idx = tree.query(X, k=k, workers=-1)
+    if k == 1:
+        dist, idx = dist[:, None], idx[:, None]
+    return dist, idx
+
+
+def gradients_block(start, stop, tree, Y, Z, F, k, anchors):
     """Gradients at anchors ``start:stop`` (see the module notes).
 
     Parameters
     ----------
     start, stop : int
         A block of ``anchors``.
-    nn : sklearn.neighbors.NearestNeighbors
-        Fitted on all of Y.
+    tree : scipy.spatial.cKDTree
+        Of all of Y.
     Y, Z : ndarray of shape (N, d)
         Positions and central steps of the frames.
     F : ndarray of shape (N, T)
@@ -132,8 +144,8 @@ def gradients_block(start, stop, nn, Y, Z, F, k, anchors):
     out = []
     for a in range(start, stop, _BLOCK):
         rows = anchors[a:min(stop, a + _BLOCK)]
-        dist, idx = nn.kneighbors(Y[rows], n_neighbors=k)
-        out.append(_solve(Z[idx].astype(np.float64), F[idx], _weights(dist)).astype(np.float32))
+        dist, idx = _query(tree, Y[rows], k)
+        out.append(_solve(Z[idx], F[idx], _weights(dist)).astype(np.float32))
     return np.concatenate(out) if out else np.zeros((0, F.shape[1], Y.shape[1]), np.float32)
 
 
@@ -164,19 +176,19 @@ def local_gradients(Y, Z, F, k, *, executor=None, random_state=0):
     N = Y.shape[0]
     Y = np.ascontiguousarray(Y, dtype=np.float32)
     k = int(min(k, N))
-    nn = NearestNeighbors(n_neighbors=k).fit(Y)
+    tree = cKDTree(Y)
     if N <= MAX_ANCHORS:
         anchors = np.arange(N)
     else:
         anchors = np.sort(np.random.default_rng(random_state).choice(N, MAX_ANCHORS, replace=False))
     M = len(anchors)
     if executor is None:
-        G = gradients_block(0, M, nn, Y, Z, F, k, anchors)
+        G = gradients_block(0, M, tree, Y, Z, F, k, anchors)
     else:
-        G = np.concatenate(executor.map_row_blocks(gradients_block, M, nn, Y, Z, F, k, anchors, block=4 * _BLOCK))
+        G = np.concatenate(executor.map_row_blocks(gradients_block, M, tree, Y, Z, F, k, anchors, block=4 * _BLOCK))
     if M == N:
         return G, M
-    near = NearestNeighbors(n_neighbors=1).fit(Y[anchors]).kneighbors(Y, return_distance=False)[:, 0]
+    near = _query(cKDTree(Y[anchors]), Y, 1)[1][:, 0]
     return G[near], M
 
 
@@ -264,8 +276,8 @@ def _validate(Y, Z, F, bounds, rate, candidates, random_state):
             continue
         q = held if held.size <= _QUERIES_PER_FOLD else np.sort(rng.choice(held, _QUERIES_PER_FOLD, replace=False))
         kmax = min(candidates[-1], train.size)
-        dist, idx = NearestNeighbors(n_neighbors=kmax).fit(Y[train]).kneighbors(Y[q])
-        Zt, Ft = Z[train].astype(np.float64), F[train]
+        dist, idx = _query(cKDTree(Y[train]), Y[q], kmax)
+        Zt, Ft = np.ascontiguousarray(Z[train], dtype=np.float32), F[train]
         for k in candidates:
             kk = min(k, kmax)
             for a in range(0, q.size, _BLOCK):

@@ -76,12 +76,12 @@ def _opening_lines(m):
                       "with --register utterance, or rigid with reference sensors)")
     if len([s for s in c.speakers if s]) > 1 and getattr(m, "speaker_normalisation", "auto") == "none":
         causes.append("several speakers without per-speaker normalisation (build --speaker-norm mean)")
-    ceiling = agree.accelerating_ceiling
-    if agree.accelerating < ACCELERATING_BOUND and ceiling < ACCELERATING_BOUND + 0.05:
+    second = agree.accelerating_second_difference
+    if agree.accelerating < ACCELERATING_BOUND and second < ACCELERATING_BOUND + 0.05:
         slow = c.rate < 0.9 * ANALYSIS_RATE
         causes.append(f"the aperture's velocity changes sign between neighbouring frames so often that even the "
                       f"aperture's own second difference gets the speed change right on only "
-                      f"{100 * ceiling:.1f}% of frames (the most any class read from one step can reach)"
+                      f"{100 * second:.1f}% of frames"
                       + (f"; at {c.rate:g} Hz a frame spans too much of a movement: import the recording with "
                          f"--resample {ANALYSIS_RATE:g} (the analysis rate)" if slow else
                          "; the lip measurements are noisy at this frame rate"))

@@ -1,4 +1,4 @@
-"""engine.class_agreement: the classes against the aperture, the trivial rule and the single-step ceiling."""
+"""engine.class_agreement: the classes against the aperture, the trivial rule and the second-difference reading."""
 import numpy as np
 import pytest
 
@@ -24,7 +24,7 @@ def test_exact_flags_agree_fully_and_inverted_flags_never():
     got = class_agreement(op, acc, a, b)
     assert got.opening == 1.0 and got.accelerating == 1.0
     assert got.trivial_opening == 1.0 and got.trivial_accelerating == 1.0
-    assert got.accelerating_ceiling > 0.97  # a smooth movement: one step reads the speed change
+    assert got.accelerating_second_difference > 0.97  # a smooth movement: one step reads the speed change
     bad = class_agreement(~op, ~acc, a, b)
     assert bad.opening == 0.0 and bad.accelerating == 0.0
 
@@ -44,14 +44,14 @@ def test_trivial_rule_reads_the_measured_aperture():
     got = class_agreement(op, acc, a, b, measured=noisy)
     assert got.opening == 1.0
     assert 0.5 < got.trivial_opening < 0.99 and 0.4 < got.trivial_accelerating < 0.9
-    assert "trivial rule" in got.describe() and "single-step ceiling" in got.describe()
+    assert "trivial rule" in got.describe() and "second difference" in got.describe()
 
 
-def test_noise_lowers_the_single_step_ceiling():
+def test_noise_lowers_the_second_difference_reading():
     a, b = _sine()
     rough = a + np.random.default_rng(1).normal(0, 1.0, a.shape)  # noise above a frame's movement
-    smooth = class_agreement(*_flags(a, b), a, b).accelerating_ceiling
-    noisy = class_agreement(*_flags(rough, b), rough, b).accelerating_ceiling
+    smooth = class_agreement(*_flags(a, b), a, b).accelerating_second_difference
+    noisy = class_agreement(*_flags(rough, b), rough, b).accelerating_second_difference
     assert noisy < smooth - 0.1
 
 
