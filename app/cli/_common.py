@@ -181,3 +181,18 @@ def check_synthesis_bounds(args, targets) -> None:
         raise CliError(f"the targets span {seconds:.6g} s ({targets.n_frames} frames at {targets.rate:g} Hz); "
                        f"at most {MAX_SYNTHESIS_SECONDS:g} s can be synthesised at once. Check the phone "
                        "durations (seconds, not milliseconds) and --tempo, or split the input")
+
+
+def roles_summary(names, roles, *, max_listed: int = 12) -> str:
+    """The point roles in one line: every point with a named role, the plain lip points counted.
+
+    ``UL=upper_lip, LL=lower_lip, ML=left_corner; 596 more lip points`` instead of one entry
+    per point of a dense mesh or an 80-landmark video track.
+    """
+    names = list(names) if names is not None else [str(i) for i in range(len(roles))]
+    named = [f"{n}={r}" for n, r in zip(names, roles) if r and r != "lip"]
+    plain = sum(1 for r in roles if r == "lip")
+    none = sum(1 for r in roles if not r)
+    shown = ", ".join(named[:max_listed]) + (f" and {len(named) - max_listed} more" if len(named) > max_listed else "")
+    rest = [f"{plain} lip point{'s' * (plain != 1)}" if plain else "", f"{none} without a role" if none else ""]
+    return "; ".join(x for x in [shown, *rest] if x) or "none"

@@ -201,8 +201,9 @@ def run(args) -> int:
         if not note.startswith("read "):
             print(f"lipspace import: {note}", file=sys.stderr)
     if corpus.point_roles is not None:
-        print("lipspace import: roles " + ", ".join(f"{n}={r or '-'}" for n, r in
-                                                    zip(corpus.point_names or [], corpus.point_roles)), file=sys.stderr)
+        from app.cli._common import roles_summary
+
+        print("lipspace import: roles " + roles_summary(corpus.point_names, corpus.point_roles), file=sys.stderr)
     if not corpus.registration:
         print("lipspace import: registration: none (no reference sensors and one utterance, or --register none)",
               file=sys.stderr)
