@@ -5,6 +5,7 @@ StateGraph``. The GUI and the command line are two faces over this object.
 """
 from __future__ import annotations
 
+import functools
 import json
 import time
 from pathlib import Path
@@ -21,17 +22,48 @@ from engine.embedding import Embedding
 from engine.progress import ProgressFn, report
 from engine.shape import ShapeSpace, small_query_blas
 
-__all__ = ["Manifold", "ManifoldFileError", "algorithm_fingerprint"]
+__all__ = ["Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
 
 FILE_VERSION = 2
 #: corpora whose frames exceed this are saved without F (reconstructed from F^x on load)
 MAX_SAVED_FRAME_BYTES = 512 * 2**20
 
 
-#: modules whose code determines a fitted manifold (see :func:`algorithm_fingerprint`)
-FIT_MODULES = ("engine.corpus", "engine.shape", "engine.dynamics", "engine.embedding", "engine.tangent",
-               "engine.local_gradients",
-               "engine.states", "engine.manifold", "engine._persist")
+@functools.lru_cache(maxsize=1)
+def fit_modules() -> tuple[str, ...]:
+    """The engine modules whose code determines a fitted manifold: this module and every engine
+    module it imports, directly or through others, at module level or inside functions (read
+    from their sources, so a module a new import brings in is covered without being listed)."""
+    import ast
+
+    seen, todo = {}, [__name__]
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen[name] = path = _module_file(name)
+        if path is None:
+            continue
+        with open(path, encoding="utf-8") as fh:
+            tree = ast.parse(fh.read())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                todo += [a.name for a in node.names if a.name.split(".")[0] == "engine"]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module \
+                    and node.module.split(".")[0] == "engine":
+                todo += [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+    return tuple(sorted(n for n, p in seen.items() if p is not None))
+
+
+def _module_file(name: str) -> str | None:
+    """The source file of engine module ``name``, or None when ``name`` is no module (an imported
+    function); found on disk beside this package, without importing anything."""
+    root = Path(__file__).resolve().parent
+    parts = name.split(".")[1:]
+    for cand in (root.joinpath(*parts).with_suffix(".py") if parts else None, root.joinpath(*parts, "__init__.py")):
+        if cand is not None and cand.is_file():
+            return str(cand)
+    return None
 
 
 def algorithm_fingerprint(params: dict | None = None) -> str:
@@ -41,7 +73,7 @@ def algorithm_fingerprint(params: dict | None = None) -> str:
     fingerprint was made by other code or settings and must be rebuilt.
     """
     params = Manifold().get_params() if params is None else params
-    return source_fingerprint(FIT_MODULES, {"file_version": FILE_VERSION, "params": params})
+    return source_fingerprint(fit_modules(), {"file_version": FILE_VERSION, "params": params})
 
 
 class ManifoldFileError(ValueError):
