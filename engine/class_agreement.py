@@ -30,7 +30,7 @@ import numpy as np
 
 from engine.local_gradients import central_difference
 
-__all__ = ["ClassAgreement", "class_agreement", "MOVING_PER_FRAME", "SPEED_QUANTILE", "OPENING_BOUND",
+__all__ = ["ClassAgreement", "class_agreement", "moving_frames", "MOVING_PER_FRAME", "SPEED_QUANTILE", "OPENING_BOUND",
            "ACCELERATING_BOUND"]
 
 #: a frame "moves" when the aperture changes by more than this per frame (the aperture's unit, mm)
@@ -86,6 +86,11 @@ def _truth(a, bounds):
         thr = np.quantile(np.abs(dspeed[scored]), SPEED_QUANTILE)
         accel_frames[scored] = np.abs(dspeed[scored]) > thr
     return v, dspeed, moving, accel_frames
+
+
+def moving_frames(aperture, bounds) -> np.ndarray:
+    """Frames whose aperture's central difference exceeds :data:`MOVING_PER_FRAME`, (N,) bool."""
+    return _truth(np.asarray(aperture, dtype=np.float64), bounds)[2]
 
 
 def _frac(hit, where):
