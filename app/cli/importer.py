@@ -54,8 +54,11 @@ def add_arguments(p):
                         "else utterance centring for several inputs (default: %(default)s)")
     spk = p.add_mutually_exclusive_group()
     spk.add_argument("--speaker", default=None, metavar="NAME", help="speaker of every input")
-    spk.add_argument("--speaker-from", choices=("dir", "prefix"), default=None,
-                     help="speaker of each input from its directory name or its file name up to the first '_'")
+    spk.add_argument("--speaker-from", default=None, metavar="dir|prefix|re:PATTERN",
+                     help="speaker of each input: 'dir' its folder's name (as given, symlinks not followed), "
+                          "'prefix' its file name up to the first '_', or 're:PATTERN' the one group of a regular "
+                          "expression searched in the file name, e.g. 're:^(spk[0-9]+)' or 're:^([A-Z]{3})'; "
+                          "corpus files (.npz) joined keep their own speakers")
     p.add_argument("--template", default=None, metavar="MESH", help="template OBJ/PLY giving faces for .npy input")
     p.add_argument("--audio-dir", default=None, metavar="DIR",
                    help="MVIEW .mat input: write each file's AUDIO to DIR/<stem>.wav and link it; video input: "
@@ -162,8 +165,11 @@ def run(args) -> int:
                            "<stem>.TextGrid or <stem>.lab beside it instead")
         kw = _options(args, fmt)
         groups = [inputs] if fmt == "mesh" and len(inputs) > 1 else [[p] for p in inputs]
+        _check_speakers(groups, args, fmt)
         job = {"format": fmt, "rate": args.rate, "alignment": alignment, "options": kw,
-               "audio_dir": args.audio_dir, "speaker": args.speaker, "speaker_from": args.speaker_from}
+               "audio_dir": args.audio_dir, "speaker": args.speaker, "speaker_from": args.speaker_from,
+               # corpus files joined: each one's unnamed utterances are its own speaker, named after the file
+               "name_corpora": fmt == "npz" and len(groups) > 1 and not (args.speaker or args.speaker_from)}
         if len(groups) == 1 and fmt == "video":  # tracking a face takes a while: show it
             from app.cli._common import progress_bar
 
@@ -241,6 +247,11 @@ def _read_group(g, job):
     speaker = job["speaker"] or _speaker_of(g[0], job["speaker_from"])
     if speaker:
         c = replace(c, utterances=[replace(u, speaker=speaker) for u in c.utterances])
+    elif job.get("name_corpora") and any(not u.speaker for u in c.utterances):
+        stem = Path(str(src)).stem
+        c = replace(c, utterances=[u if u.speaker else replace(u, speaker=stem) for u in c.utterances],
+                    history=list(c.history) + [f"speaker {stem!r} given to the {sum(not u.speaker for u in c.utterances)} "
+                                               f"utterance(s) of {Path(str(src)).name} that named none (its file name)"])
     return c
 
 
@@ -328,9 +339,30 @@ def _read_on_dask(groups, job, address, results, tick):
 
 
 def _speaker_of(path, how) -> str:
+    """The speaker ``--speaker-from how`` gives ``path`` (:class:`engine.speakers.SpeakerRule`), "" for None."""
     if how is None:
         return ""
-    p = Path(str(path))
-    if how == "dir":
-        return p.resolve().parent.name
-    return p.stem.split("_", 1)[0]
+    from engine.speakers import SpeakerRule
+
+    return SpeakerRule(how)(path)
+
+
+def _check_speakers(groups, args, fmt) -> None:
+    """Refuse a speaker rule that does not apply to every input, before any is read; warn when the
+    speakers it gives (or the lack of one) do not fit the file names (:func:`engine.speakers.check_assignment`)."""
+    import warnings
+
+    from app.cli import CliError
+    from engine.speakers import SpeakerRule, SpeakerRuleError, SpeakerWarning, check_assignment
+
+    if fmt == "npz" and not args.speaker_from:
+        return  # corpus files carry their own speakers
+    try:
+        rule = SpeakerRule(args.speaker_from) if args.speaker_from else None
+        speakers = [rule(g[0]) if rule else (args.speaker or "") for g in groups]
+    except SpeakerRuleError as exc:
+        raise CliError(str(exc)) from None
+    if args.speaker:
+        return
+    for msg in check_assignment([g[0] for g in groups], speakers, rule=args.speaker_from):
+        warnings.warn(SpeakerWarning(msg), stacklevel=2)
