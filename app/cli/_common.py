@@ -7,7 +7,23 @@ from pathlib import Path
 
 from engine.progress import Cancelled
 
-__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg"]
+__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg", "roles_text"]
+
+
+def roles_text(names, roles, *, limit: int = 12) -> str:
+    """The point roles in one line: ``UL=upper_lip, LL=lower_lip, ...`` for up to ``limit`` points; for more
+    (a video's 80 lip landmarks) one entry per role, naming its points when there are at most 4, else
+    counting them: ``80 points: upper_lip outer_0, inner_13; ...; lip 74 points``."""
+    names = list(names) if names is not None else [f"p{i}" for i in range(len(roles))]
+    if len(roles) <= limit:
+        return ", ".join(f"{n}={r or '-'}" for n, r in zip(names, roles))
+    from engine.layouts import ROLES
+
+    by_role: dict[str, list] = {}
+    for n, r in sorted(zip(names, roles), key=lambda t: ROLES.index(t[1]) if t[1] in ROLES else len(ROLES)):
+        by_role.setdefault(r or "-", []).append(str(n))
+    parts = [f"{r} {', '.join(ns)}" if len(ns) <= 4 else f"{r} {len(ns)} points" for r, ns in by_role.items()]
+    return f"{len(roles)} points: " + "; ".join(parts)
 
 
 @contextlib.contextmanager

@@ -142,8 +142,10 @@ def run(args) -> int:
         raise CliError(f"--block-frames {args.block_frames}: must be at least 256 frames per block")
     inputs = args.inputs
     rate_out = None
+    video = _is_video(args)
+    defaulted = args.resample is None
     if args.resample is None:  # video keeps its own frame rate; other inputs go to the paper's 60 Hz
-        args.resample = "native" if _is_video(args) else f"{ANALYSIS_RATE:g}"
+        args.resample = "native" if video else f"{ANALYSIS_RATE:g}"
     if str(args.resample).lower() not in ("native", "none"):
         try:
             rate_out = float(args.resample)
@@ -152,6 +154,16 @@ def run(args) -> int:
         if not 0 < rate_out <= MAX_RATE:  # 1e9 Hz asked for a 14 GiB index array
             raise CliError(f"--resample {args.resample}: must be above 0 and at most {MAX_RATE:g} Hz "
                            "(the fastest articulographs record at 1250 Hz)")
+    if video and rate_out is None:  # videos at different rates can be joined only at one rate
+        rates = _video_rates(inputs)
+        if len({round(r, 6) for _, r in rates}) > 1:
+            desc = ", ".join(f"{Path(p).name} {r:.4g} Hz" for p, r in rates)
+            if not defaulted:
+                raise CliError(f"the videos have different frame rates ({desc}); they can be joined only at one "
+                               f"rate: give --resample {ANALYSIS_RATE:g} (the analysis rate) or another rate")
+            rate_out = ANALYSIS_RATE
+            print(f"lipspace import: the videos have different frame rates ({desc}): each is resampled to "
+                  f"{ANALYSIS_RATE:g} Hz (the analysis rate) before they are joined", file=sys.stderr)
     try:
         fmt = args.format or ("matrix" if args.layout is not None else detect_format(inputs[0]))
         fmt = FORMAT_ALIASES.get(fmt, fmt)
@@ -164,6 +176,8 @@ def run(args) -> int:
             raise CliError(f"--alignment names one file but {len(inputs)} inputs were given; put each input's "
                            "<stem>.TextGrid or <stem>.lab beside it instead")
         kw = _options(args, fmt)
+        if fmt == "video" and rate_out is not None:  # each video (of a folder too) at that rate before joining
+            kw["resample"] = rate_out
         groups = [inputs] if fmt == "mesh" and len(inputs) > 1 else [[p] for p in inputs]
         _check_speakers(groups, args, fmt)
         job = {"format": fmt, "rate": args.rate, "alignment": alignment, "options": kw,
@@ -179,6 +193,7 @@ def run(args) -> int:
             parts = [_read_group(groups[0], job)]
         else:
             parts = _read_many(groups, job, args)
+        parts = _one_rate(parts, rate_out)
         corpus = parts[0] if len(parts) == 1 else concat(parts)
         if args.roles is not None:
             from engine.layouts import roles_from_spec
@@ -207,8 +222,9 @@ def run(args) -> int:
         if not note.startswith("read "):
             print(f"lipspace import: {note}", file=sys.stderr)
     if corpus.point_roles is not None:
-        print("lipspace import: roles " + ", ".join(f"{n}={r or '-'}" for n, r in
-                                                    zip(corpus.point_names or [], corpus.point_roles)), file=sys.stderr)
+        from app.cli._common import roles_text
+
+        print("lipspace import: roles " + roles_text(corpus.point_names, corpus.point_roles), file=sys.stderr)
     if not corpus.registration:
         print("lipspace import: registration: none (no reference sensors and one utterance, or --register none)",
               file=sys.stderr)
@@ -225,6 +241,42 @@ def _is_video(args) -> bool:
         return detect_format(args.inputs[0]) == "video"
     except (ValueError, OSError):
         return False
+
+
+def _video_rates(inputs) -> list:
+    """``(path, rate)`` of every video the inputs name (a folder's videos in order); unreadable ones left out
+    (their reader reports them)."""
+    from engine.io.dispatch import _videos_in
+    from engine.io.video import video_info
+
+    out = []
+    for p in inputs:
+        for v in (_videos_in(p) if Path(p).is_dir() else [Path(p)]):
+            try:
+                out.append((str(v), video_info(v)[0]))
+            except (ValueError, OSError, ImportError):
+                continue
+    return out
+
+
+def _one_rate(parts, rate_out):
+    """The inputs' corpora at one frame rate: each resampled to ``rate_out`` when their rates differ
+    (resampling is per utterance, so nothing crosses two inputs); different rates and no ``rate_out``
+    is an error naming them."""
+    from app.cli import CliError
+    from engine.io import resample
+
+    rates = {}
+    for c in parts:
+        rates.setdefault(round(c.rate, 6), []).append(c.name)
+    if len(rates) < 2:
+        return parts
+    desc = ", ".join(f"{r:.4g} Hz ({len(names)} input{'s' * (len(names) != 1)}, e.g. {names[0]})"
+                     for r, names in rates.items())
+    if rate_out is None:
+        raise CliError(f"the inputs have different frame rates: {desc}; they can be joined only at one rate: give "
+                       f"--resample {ANALYSIS_RATE:g} (the analysis rate) or another rate")
+    return [resample(c, rate_out) for c in parts]
 
 
 def _input_errors():

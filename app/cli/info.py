@@ -41,7 +41,9 @@ def _recording_lines(c):
     if spk:
         lines.append(f"speakers    {len(spk)}: {', '.join(spk[:12])}{' ...' if len(spk) > 12 else ''}")
     if c.point_roles is not None:
-        lines.append("roles       " + ", ".join(f"{n}={r or '-'}" for n, r in zip(c.point_names or [], c.point_roles)))
+        from app.cli._common import roles_text
+
+        lines.append("roles       " + roles_text(c.point_names, c.point_roles))
     lines.append(f"registration {c.registration or 'none'}")
     lines += [f"history     {h}" for h in c.history if not h.startswith(("read ", "registration:"))]
     return lines

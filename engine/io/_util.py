@@ -175,8 +175,8 @@ def check_rate(path, native: float, rate) -> float:
     if rate is not None and abs(float(rate) - native) > 1e-6 * native:
         raise ImportFormatError(
             path, f"the file says its frame rate is {native:g} Hz but rate={float(rate):g} was given; the rate "
-            "argument is only for files without timing. To change the rate, resample "
-            "(engine.io.resample, or 'lipspace import --resample')")
+            "argument is only for files without timing. To change the rate, resample it "
+            "('lipspace import --resample HZ')")
     return float(native)
 
 
