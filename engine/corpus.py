@@ -120,6 +120,10 @@ class Corpus:
         How head motion / position was removed, in words ("" = none was applied).
     history : list of str
         Processing steps applied on import (resampling, registration, ...), in order.
+    axes : str
+        The talker's directions of the coordinate axes when stated on import
+        (``lipspace import --axes x=forward,y=left,z=up``); "" = derived from the point
+        roles (:func:`engine.orientation.anatomical_frame`).
     """
 
     frames: np.ndarray
@@ -133,6 +137,7 @@ class Corpus:
     point_roles: list[str] | None = None
     registration: str = ""
     history: list[str] = field(default_factory=list)
+    axes: str = ""
 
     def __post_init__(self):
         if not isinstance(self.frames, BlockFrames):  # frames stored in blocks stay there (engine.frame_blocks)
@@ -147,6 +152,7 @@ class Corpus:
             self.point_roles = [str(r) for r in self.point_roles]
         self.registration = str(self.registration)
         self.history = [str(h) for h in self.history]
+        self.axes = str(self.axes)
         self.latent = {k: np.asarray(v) for k, v in self.latent.items()}
         self.validate()
 
@@ -329,6 +335,7 @@ class Corpus:
             frames=self.frames[rows], rate=self.rate, utterances=out, dims=self.dims, faces=self.faces,
             point_names=self.point_names, latent={k: v[rows] for k, v in self.latent.items()}, name=self.name,
             point_roles=self.point_roles, registration=self.registration, history=list(self.history),
+            axes=self.axes,
         )
 
     # -------------------------------------------------------------- file i/o
@@ -361,6 +368,8 @@ class Corpus:
             d["corpus_point_names"] = np.array(self.point_names, dtype=str)
         if self.point_roles is not None:
             d["corpus_point_roles"] = np.array(self.point_roles, dtype=str)
+        if self.axes:
+            d["corpus_axes"] = np.array(self.axes)
         for k, v in self.latent.items():
             d[f"corpus_latent_{k}"] = v
         return d
@@ -395,6 +404,7 @@ class Corpus:
             speaker = d["corpus_utt_speaker"] if "corpus_utt_speaker" in keys else [""] * len(ids)
             registration = str(d["corpus_registration"]) if "corpus_registration" in keys else ""
             history = [str(h) for h in d["corpus_history"]] if "corpus_history" in keys else []
+            axes = str(d["corpus_axes"]) if "corpus_axes" in keys else ""
             rate, dims, name = float(d["corpus_rate"]), int(d["corpus_dims"]), str(d["corpus_name"])
         except KeyError as exc:
             raise CorpusError(f"{source}: not a Lipspace corpus file (missing {exc.args[0]!r})") from None
@@ -406,7 +416,8 @@ class Corpus:
                                   str(speaker[k])))
         try:
             return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
-                       latent=latent, name=name, point_roles=roles, registration=registration, history=history)
+                       latent=latent, name=name, point_roles=roles, registration=registration, history=history,
+                       axes=axes)
         except CorpusError as exc:  # name the file, not only the corpus
             raise CorpusError(f"{source}: {exc}") from None
 

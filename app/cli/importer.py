@@ -52,6 +52,11 @@ def add_arguments(p):
                    help="remove head motion / recording offsets: rigid (Procrustes to the layout's reference "
                         "sensors), utterance or speaker centring, none; auto = rigid with 3+ reference sensors, "
                         "else utterance centring for several inputs (default: %(default)s)")
+    p.add_argument("--axes", default=None, metavar="x=DIR,y=DIR,z=DIR",
+                   help="the talker's direction of each coordinate axis (DIR: forward/back, left/right, up/down), "
+                        "e.g. 'x=forward,y=left,z=up' (2-D: 'x=forward,y=up'), for the lip view, the lip-shape "
+                        "figures and the MP4 / glTF exports; default: derived from the point roles (upper lip "
+                        "above lower lip, corners left and right); 'lipspace info' says which")
     spk = p.add_mutually_exclusive_group()
     spk.add_argument("--speaker", default=None, metavar="NAME", help="speaker of every input")
     spk.add_argument("--speaker-from", default=None, metavar="dir|prefix|re:PATTERN",
@@ -200,6 +205,13 @@ def run(args) -> int:
 
             corpus = replace(corpus, point_roles=roles_from_spec(args.roles, corpus.n_points, corpus.point_names,
                                                                  corpus.point_roles))
+        if args.axes is not None:
+            from engine.orientation import AxesError, parse_axes
+
+            try:
+                corpus = replace(corpus, axes=parse_axes(args.axes, corpus.dims).spec())
+            except AxesError as exc:
+                raise CliError(str(exc)) from None
         corpus = register(corpus, method=args.register)
         if rate_out is not None and abs(rate_out - corpus.rate) > 1e-9 * corpus.rate:
             corpus = resample(corpus, rate_out)
@@ -225,6 +237,9 @@ def run(args) -> int:
         from app.cli._common import roles_text
 
         print("lipspace import: roles " + roles_text(corpus.point_names, corpus.point_roles), file=sys.stderr)
+    from engine.orientation import anatomical_frame
+
+    print(f"lipspace import: orientation {anatomical_frame(corpus).describe()}", file=sys.stderr)
     if not corpus.registration:
         print("lipspace import: registration: none (no reference sensors and one utterance, or --register none)",
               file=sys.stderr)

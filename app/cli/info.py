@@ -44,6 +44,9 @@ def _recording_lines(c):
         from app.cli._common import roles_text
 
         lines.append("roles       " + roles_text(c.point_names, c.point_roles))
+    from engine.orientation import anatomical_frame
+
+    lines.append(f"orientation {anatomical_frame(c).describe()}")
     lines.append(f"registration {c.registration or 'none'}")
     lines += [f"history     {h}" for h in c.history if not h.startswith(("read ", "registration:"))]
     return lines

@@ -235,11 +235,30 @@ def draw_shape(ax, points, *, dims, faces=None, values=None, norm=None, cmap=CMA
     return coll
 
 
-def shape_points(manifold, frame_row) -> np.ndarray:
-    """One frame row (C,) as points (V, 3), z = 0 for 2-D data."""
+def talker_frame(manifold):
+    """The talker's frame of the manifold's corpus (:func:`engine.orientation.anatomical_frame`)."""
+    from engine.orientation import anatomical_frame
+
+    return anatomical_frame(manifold.corpus_, manifold.shape_.mean_)
+
+
+def shape_points(manifold, frame_row, frame=None) -> np.ndarray:
+    """One frame row (C,) as points (V, 3) in the talker's view coordinates (x the talker's left, y up, z
+    towards the viewer; 2-D: x forward, y up, z = 0), ``frame`` as :func:`talker_frame` gives it."""
     from engine.corpus import frame_points
 
-    return frame_points(np.asarray(frame_row), manifold.corpus_.dims).astype(np.float64)
+    frame = talker_frame(manifold) if frame is None else frame
+    row = frame.view_frames(np.asarray(frame_row, np.float64)[None])[0]
+    return frame_points(row, manifold.corpus_.dims).astype(np.float64)
+
+
+def shape_view(manifold, view, frame=None):
+    """``view`` if given; else (0, 1), the front view of :func:`shape_points`, when the talker's frame is
+    known, and None (the widest spread) when it is not."""
+    if view is not None:
+        return view
+    frame = talker_frame(manifold) if frame is None else frame
+    return (0, 1) if frame.source != "none" else None
 
 
 def place_labels(ax, xy, labels, *, fontsize: float = 7.0, color="0.25", marker_pt: float = 7.0,

@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.colors import Normalize
 
-from app.figures._style import (CMAP, draw_shape, new_figure, require_fitted, sv_basis, shape_points, y3)
+from app.figures._style import (CMAP, draw_shape, new_figure, require_fitted, shape_points, shape_view, sv_basis,
+                                talker_frame, y3)
 
 __all__ = ["make_fig1a", "make_fig1b", "make_fig2c", "make_scree"]
 
@@ -33,8 +34,10 @@ def make_fig1a(manifold, *, components=(0, 1), n_sd: float = 2.0, view=None, wid
         Zero-based component indices (the paper shows the first two).
     n_sd : float, default=2.0
     view : (int, int) or None
-        Coordinate axes (horizontal, vertical) of the front view; None picks them
-        from the spread of the mean shape (see :func:`app.figures._style.front_view`).
+        Axes (horizontal, vertical) of the talker's view coordinates
+        (:func:`app.figures._style.shape_points`) to draw; None: the front view when the
+        talker's frame is known (:func:`engine.orientation.anatomical_frame`), else the axes
+        of the widest spread of the mean shape (:func:`app.figures._style.front_view`).
     width : float
         Figure width in inches.
     """
@@ -44,9 +47,11 @@ def make_fig1a(manifold, *, components=(0, 1), n_sd: float = 2.0, view=None, wid
     if not comps:
         raise ValueError(f"components {list(components)} out of range: the shape space has "
                          f"{shape.n_components_} components (0..{shape.n_components_ - 1})")
-    mean_pts = shape_points(manifold, shape.mean_)
+    frame = talker_frame(manifold)
+    view = shape_view(manifold, view, frame)
+    mean_pts = shape_points(manifold, shape.mean_, frame)
     offsets = (-n_sd, 0.0, n_sd)
-    shapes = {(c, a): shape_points(manifold, shape.component_deformation(c, a) if a else shape.mean_)
+    shapes = {(c, a): shape_points(manifold, shape.component_deformation(c, a) if a else shape.mean_, frame)
               for c in comps for a in offsets}
     disp = {k: np.linalg.norm(p - mean_pts, axis=1) for k, p in shapes.items()}
     vmax = max(float(d.max()) for d in disp.values()) or 1.0
@@ -141,29 +146,33 @@ def make_fig2c(manifold, *, n_shapes: int = 7, quantiles=(0.03, 0.97), view=None
     if n_shapes < 2:
         raise ValueError(f"n_shapes must be >= 2, got {n_shapes}")
     corpus = manifold.corpus_
+    frame = talker_frame(manifold)
+    view = shape_view(manifold, view, frame)
     o, S, _ = sv_basis(manifold.tangent_)
     t = (y3(manifold) - o) @ S
     edges = np.quantile(t, np.linspace(quantiles[0], quantiles[1], n_shapes + 1))
     centres = 0.5 * (edges[:-1] + edges[1:])
     fig = new_figure(width, 1.9)
     axs = fig.subplots(1, n_shapes, squeeze=False)[0]
-    used = []
+    used, drawn = [], []
     for k, ax in enumerate(axs):
         sel = (t >= edges[k]) & (t <= edges[k + 1])
         if not sel.any():
             sel = np.abs(t - centres[k]) == np.abs(t - centres[k]).min()
         fx = np.asarray(manifold.Fx_, dtype=np.float64)[sel].mean(axis=0, keepdims=True)
-        pts = shape_points(manifold, manifold.shape_.inverse_transform(fx)[0])
+        pts = shape_points(manifold, manifold.shape_.inverse_transform(fx)[0], frame)
         draw_shape(ax, pts, dims=corpus.dims, faces=corpus.faces, view=view, gid=f"fig2c:shape{k}")
         ax.set_title(f"S = {centres[k]:.2f}", fontsize=8)
         used.append(int(sel.sum()))
+        drawn.append(pts)
     xl = np.array([ax.get_xlim() for ax in axs])
     yl = np.array([ax.get_ylim() for ax in axs])
     for ax in axs:
         ax.set_xlim(xl[:, 0].min(), xl[:, 1].max())
         ax.set_ylim(yl[:, 0].min(), yl[:, 1].max())
     fig.suptitle("Lip shapes indexed by increasing S (mean of the frames in each bin)", fontsize=10)
-    fig.lipspace.update(s_values=centres, frames_per_shape=used)
+    fig.lipspace.update(s_values=centres, frames_per_shape=used, shapes=drawn, view=view,
+                        orientation=frame.describe())
     return fig
 
 

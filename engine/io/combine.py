@@ -75,6 +75,7 @@ def concat(corpora, *, name: str | None = None) -> Corpus:
     regs = list(dict.fromkeys(c.registration for c in corpora))
     registration = regs[0] if len(regs) == 1 else "; ".join(r or "none" for r in regs)
     history = list(dict.fromkeys(h for c in corpora for h in c.history))
+    axes = a.axes if all(c.axes == a.axes for c in corpora) else ""
     return Corpus(frames=np.concatenate([c.frames for c in corpora], axis=0), rate=a.rate, utterances=utts,
                   dims=a.dims, faces=faces, point_names=names, latent=latent, name=name, point_roles=roles,
-                  registration=registration, history=history)
+                  registration=registration, history=history, axes=axes)
