@@ -69,6 +69,10 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     rmse_x = float(np.sqrt(np.mean(np.sum((fx_g - fx_o) ** 2, axis=1))))
     rmse_y = float(np.sqrt(np.mean(np.sum((gen[:, [a, b]] - orig[:, [a, b]]) ** 2, axis=1))))
     tf = np.asarray(traj.target_frames, dtype=np.int64)
+    from engine.kinematics import has_kinematic_labels
+
+    # a corpus without phone labels is regenerated through its kinematic landmarks: say so, never "phones"
+    what = "kinematic landmark" if has_kinematic_labels(corpus) else "phone"
     fig = new_figure(width, height)
     ax = fig.subplots()
     lo, = ax.plot(orig[:, a], orig[:, b], "-", color=ORIGINAL, lw=1.4, label="original")
@@ -76,13 +80,13 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     lo.set_gid("fig3:original")
     lg.set_gid("fig3:generated")
     mk, = ax.plot(orig[tf, a], orig[tf, b], "o", ms=7, mfc="none", mec=ORIGINAL, mew=1.2, ls="none",
-                  label="phone mid-points")
+                  label="phone mid-points" if what == "phone" else "kinematic landmarks")
     mk.set_gid("fig3:midpoints")
     ax.set_xlabel(f"$Y_{a + 1}$")
     ax.set_ylabel(f"$Y_{b + 1}$")
     ax.legend(frameon=False, fontsize=8, loc="best")
     text = f" \u201c{u.text}\u201d" if u.text else ""
-    ax.set_title(f"Utterance {u.id}{text}\n{len(tf)} phone targets, RMSE in X {rmse_x:.3g}", fontsize=9)
+    ax.set_title(f"Utterance {u.id}{text}\n{len(tf)} {what} targets, RMSE in X {rmse_x:.3g}", fontsize=9)
     notes = []
     if traj.warnings:
         notes.append(f"{len(traj.warnings)} gap(s) not reachable in time; ended at the nearest reachable state")
@@ -92,7 +96,7 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     if label_phones:  # placed last, against the final layout, so that no two labels collide
         left_out = place_labels(ax, orig[tf][:, [a, b]], traj.target_labels, fontsize=7)
         if left_out:
-            fig.text(0.01, 0.005, f"{left_out} phone label(s) left out where they would overlap", fontsize=6.5,
+            fig.text(0.01, 0.005, f"{left_out} {what} label(s) left out where they would overlap", fontsize=6.5,
                      color="0.35", ha="left", va="bottom").set_in_layout(False)
     fig.lipspace.update(utterance=u.id, target_frames=tf, labels=list(traj.target_labels), rmse_x=rmse_x,
                         rmse_y=rmse_y, warnings=list(traj.warnings), labels_left_out=left_out)
