@@ -68,7 +68,8 @@ class AnatomicalFrame:
         Rows: the view axes (3-D: talker's left, up, forward; 2-D: forward, up) in data
         coordinates, unit length, orthogonal. ``view = data @ matrix.T``.
     source : {"roles", "axes", "none"}
-        Derived from the point roles, given on import (``--axes``), or not known (identity).
+        Derived from the point roles, stated by the corpus (``Corpus.axes``: ``import --axes``, the
+        synthetic talker's own), or not known (identity).
     note : str
         How it was found (or why not), in words.
     """
@@ -175,7 +176,8 @@ def parse_axes(spec: str, dims: int) -> AnatomicalFrame:
     for j, ax in enumerate(_NAMES[:dims]):
         v, sign = got[ax]
         M[need.index(v), j] = sign
-    return AnatomicalFrame(M, "axes", f"given on import: --axes {AnatomicalFrame(M, 'axes', '').spec()}")
+    return AnatomicalFrame(M, "axes", f"stated by the corpus: {AnatomicalFrame(M, 'axes', '').spec()}, "
+                           "as import --axes sets it")
 
 
 def _unit(v):

@@ -76,6 +76,7 @@ def concat(corpora, *, name: str | None = None) -> Corpus:
     registration = regs[0] if len(regs) == 1 else "; ".join(r or "none" for r in regs)
     history = list(dict.fromkeys(h for c in corpora for h in c.history))
     axes = a.axes if all(c.axes == a.axes for c in corpora) else ""
+    units = a.units if all(c.units == a.units for c in corpora) else ""
     return Corpus(frames=np.concatenate([c.frames for c in corpora], axis=0), rate=a.rate, utterances=utts,
                   dims=a.dims, faces=faces, point_names=names, latent=latent, name=name, point_roles=roles,
-                  registration=registration, history=history, axes=axes)
+                  registration=registration, history=history, axes=axes, units=units)
