@@ -79,7 +79,7 @@ def test_fig3_calls_landmarks_landmarks(unlabelled):
     m = unlabelled
     corpus, _ = kinematic_if_unlabelled(m.corpus_)
     fig = make_fig3(_with_corpus(m, corpus))  # as lipspace figures labels a corpus without phones
-    texts = [t.get_text() for ax in fig.axes for t in [ax.title, *ax.get_legend().get_texts()]]
+    texts = [ax.title.get_text() for ax in fig.axes] + [t.get_text() for leg in fig.legends for t in leg.get_texts()]
     assert any("kinematic landmark targets" in t for t in texts)
     assert "kinematic landmarks" in texts
     assert not any("phone" in t for t in texts), texts
