@@ -329,10 +329,7 @@ def draw_shape(ax, points, *, dims, faces=None, values=None, norm=None, cmap=CMA
     P = np.asarray(points, dtype=np.float64)
     h, v, dep = front_view(P, dims, view)
     xy = P[:, [h, v]]
-    cols = None
-    if values is not None:
-        norm = norm or Normalize(float(np.min(values)), float(np.max(values)) or 1.0)
-        cols = cmap(norm(np.asarray(values, dtype=np.float64)))
+    cols = _colours(values, norm, cmap)
     if faces is not None and len(faces) and dep is not None:
         F = np.asarray(faces)
         tri = P[F]                                         # (T, 3, 3)
@@ -355,6 +352,19 @@ def draw_shape(ax, points, *, dims, faces=None, values=None, norm=None, cmap=CMA
         s = size if size is not None else marker_size(len(P), big=30.0, small=2.0)
         coll = ax.scatter(xy[:, 0], xy[:, 1], s=s, c=cols if cols is not None else color, linewidths=0,
                           rasterized=rasterize_for(len(P)))
+    return _shape_panel(ax, coll, gid)
+
+
+def _colours(values, norm, cmap):
+    """RGBA (V, 4) of ``values`` through ``cmap`` / ``norm`` (their own range without one), or None."""
+    if values is None:
+        return None
+    norm = norm or Normalize(float(np.min(values)), float(np.max(values)) or 1.0)
+    return cmap(norm(np.asarray(values, dtype=np.float64)))
+
+
+def _shape_panel(ax, coll, gid):
+    """A lip-shape panel: equal aspect, no ticks or spines (a scale bar gives the size); ``coll`` gets ``gid``."""
     ax.set_aspect("equal")
     ax.set_xticks([])
     ax.set_yticks([])
@@ -536,21 +546,11 @@ def draw_lips(ax, points, *, dims, faces=None, contour=None, values=None, norm=N
     if gid:
         outline.set_gid(f"{gid}:contour")
     P = np.asarray(points, np.float64)
-    cols = None
-    if values is not None:
-        norm = norm or Normalize(float(np.min(values)), float(np.max(values)) or 1.0)
-        cols = cmap(norm(np.asarray(values, dtype=np.float64)))
+    cols = _colours(values, norm, cmap)
     coll = ax.scatter(P[:, h], P[:, v], s=14, c=cols if cols is not None else color, edgecolors="0.2",
                       linewidths=0.4, zorder=3)
     ax.update_datalim(loop)
-    ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
-    for sp in ax.spines.values():
-        sp.set_visible(False)
-    if gid:
-        coll.set_gid(gid)
-    return coll
+    return _shape_panel(ax, coll, gid)
 
 
 def shared_limits(axs, shapes, *, contour=None, view=None, margin=0.15, below=0.0):

@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import contextlib
 import re
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
@@ -20,27 +18,12 @@ COUNTS = ("number of components", "component", "% of variance", "% of frames",
 
 
 @pytest.fixture(scope="module")
-def lab_manifold():
+def lab_manifold(make_articulograph_manifold):
     """A 4-sensor (UL, LL, LC, RC) build of three speakers as 'lipspace import' + 'build' make it."""
-    import warnings
-
-    from engine.corpus import CorpusWarning, Utterance
-    from engine.io import concat, resample
-    from engine.io.matrix import corpus_from_matrix
     from engine.kinematics import kinematic_if_unlabelled
-    from engine.layouts import BUILTIN
-    from engine.manifold import Manifold
-    from engine.multispeaker import generate_recordings
-    from engine.registration import register
 
-    parts = []
-    for r in generate_recordings(n_speakers=3, n_utterances=3, duration_s=(2.0, 2.5), seed=5):
-        c = corpus_from_matrix(f"{r.id}.mat", r.matrix, BUILTIN["ema7x6"], rate=r.rate)
-        parts.append(replace(c, utterances=[Utterance(r.id, 0, c.n_frames, speaker=r.speaker)], name=r.id))
-    corpus = resample(register(concat(parts, name="lab"), method="utterance"), 60)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", CorpusWarning)
-        m = Manifold(n_states=40).fit(corpus)
+    m = make_articulograph_manifold(n_speakers=3, n_utterances=3, duration_s=(2.0, 2.5), seed=5, n_states=40,
+                                    name="lab")
     m.corpus_, _ = kinematic_if_unlabelled(m.corpus_)  # as 'lipspace figures' labels it
     return m
 

@@ -2,35 +2,16 @@
 landmarks (as `lipspace clusters` does), and fig3 calls its targets landmarks, not phones."""
 from __future__ import annotations
 
-from dataclasses import replace
-
-import numpy as np
 import pytest
 
 LANDMARKS = {"open", "closed", "opening", "closing"}
 
 
 @pytest.fixture(scope="module")
-def unlabelled():
-    import warnings
-
-    from engine.corpus import CorpusWarning, Utterance
-    from engine.io import concat, resample
-    from engine.io.matrix import corpus_from_matrix
-    from engine.layouts import BUILTIN
-    from engine.manifold import Manifold
-    from engine.multispeaker import generate_recordings
-    from engine.registration import register
-
-    parts = []
-    for r in generate_recordings(n_speakers=2, n_utterances=2, duration_s=(2.0, 2.0), seed=11):
-        c = corpus_from_matrix(f"{r.id}.mat", r.matrix, BUILTIN["ema7x6"], rate=r.rate)
-        parts.append(replace(c, utterances=[Utterance(r.id, 0, c.n_frames, speaker=r.speaker)], name=r.id))
-    corpus = resample(register(concat(parts, name="ema"), method="utterance"), 60)
-    assert not any(u.phones for u in corpus.utterances)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", CorpusWarning)
-        return Manifold(n_states=16).fit(corpus)
+def unlabelled(make_articulograph_manifold):
+    m = make_articulograph_manifold(n_speakers=2, n_utterances=2, duration_s=(2.0, 2.0), seed=11, n_states=16)
+    assert not any(u.phones for u in m.corpus_.utterances)
+    return m
 
 
 def test_the_state_clusters_kinematic_landmarks_as_lipspace_clusters_does(unlabelled, tmp_path, capsys):

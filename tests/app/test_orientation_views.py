@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,28 +14,9 @@ LAB_AXES = np.array([[0.0, 0.0, -1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
 
 
 @pytest.fixture(scope="module")
-def lab_manifold():
-    import warnings
-
-    from engine.corpus import CorpusWarning, Utterance
-    from engine.io import concat, resample
-    from engine.io.matrix import corpus_from_matrix
-    from engine.layouts import BUILTIN
-    from engine.manifold import Manifold
-    from engine.multispeaker import generate_recordings
-    from engine.registration import register
-
-    parts = []
-    for r in generate_recordings(n_speakers=1, n_utterances=3, duration_s=(1.5, 1.5), seed=21):
-        M = r.matrix.reshape(r.matrix.shape[0], -1, 6).copy()
-        M[:, :, :3] = M[:, :, :3] @ LAB_AXES.T
-        c = corpus_from_matrix(f"ABCFIA{len(parts) + 1:02d}.mat", M.reshape(M.shape[0], -1), BUILTIN["ema7x6"],
-                               rate=r.rate)
-        parts.append(replace(c, utterances=[Utterance(c.name, 0, c.n_frames, speaker="ABC")]))
-    corpus = resample(register(concat(parts, name="lab"), method="utterance"), 60)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", CorpusWarning)
-        return Manifold(n_states=12).fit(corpus)
+def lab_manifold(make_articulograph_manifold):
+    return make_articulograph_manifold(n_speakers=1, n_utterances=3, duration_s=(1.5, 1.5), seed=21, n_states=12,
+                                       axes=LAB_AXES, name="lab")
 
 
 def _index(m, name):
