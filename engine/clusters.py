@@ -34,7 +34,10 @@ from sklearn.utils.validation import check_is_fitted
 
 from engine import phonesets
 
-__all__ = ["PhoneClusters", "bhattacharyya", "dprime", "MEASURES"]
+__all__ = ["PhoneClusters", "bhattacharyya", "dprime", "MEASURES", "clusters_of", "LABEL_KINDS"]
+
+#: what the clusters of :func:`clusters_of` are of
+LABEL_KINDS = ("phones", "kinematic")
 
 MEASURES = ("bhattacharyya", "dprime")
 _RIDGE = 1e-9
@@ -431,3 +434,54 @@ class PhoneClusters(BaseEstimator):
                            separation_nearest_x=np.nan)
             rows.append(row)
         return rows
+
+
+def clusters_of(manifold, *, labels: str = "auto", **params):
+    """Clusters of a fitted manifold's phone mid-points, or of its kinematic landmarks when it has no phones.
+
+    Parameters
+    ----------
+    manifold : engine.manifold.Manifold
+    labels : {"auto", "phones", "kinematic"}
+        ``auto``: phones when the corpus has any, else the kinematic landmarks of the lip
+        aperture (:func:`engine.kinematics.kinematic_if_unlabelled`: aperture maxima
+        ``open``, minima ``closed``, peak velocities ``opening`` / ``closing``); a corpus
+        already labelled with landmarks counts as landmarks.
+    **params
+        :class:`PhoneClusters` parameters.
+
+    Returns
+    -------
+    clusters : PhoneClusters
+        Fitted; its labels are the phones or the landmark names.
+    kind : {"phones", "kinematic"}
+    note : str or None
+        For landmarks, the sentence saying so (None for phones).
+
+    Raises
+    ------
+    ValueError
+        ``labels="phones"`` for a corpus without phone labels (naming the fix).
+    """
+    from dataclasses import replace
+
+    from engine.kinematics import has_kinematic_labels, kinematic_if_unlabelled
+
+    if labels not in ("auto", *LABEL_KINDS):
+        raise ValueError(f"labels={labels!r}; expected 'auto', 'phones' or 'kinematic'")
+    c = manifold.corpus_
+    has_phones = any(u.phones for u in c.utterances)
+    landmarks = has_kinematic_labels(c)
+    kind = labels if labels != "auto" else ("kinematic" if landmarks or not has_phones else "phones")
+    if kind == "phones" and (landmarks or not has_phones):
+        raise ValueError(f"{c.name} has no phone labels; cluster its kinematic landmarks (lipspace clusters "
+                         "--labels kinematic), or import it with an alignment (lipspace import --alignment)")
+    pc = PhoneClusters(**params)
+    if kind == "phones" or landmarks:
+        return pc.fit(manifold), kind, (None if kind == "phones" else
+                                        f"{c.name}: labels are kinematic landmarks (open, closed, opening, closing)")
+    kc, note = kinematic_if_unlabelled(replace(c, utterances=[replace(u, phones=()) for u in c.utterances]))
+    mids, labs = kc.phone_table()[:2]
+    tangent = getattr(manifold, "tangent_", None)
+    pc.fit(manifold.Fy_, manifold.Fx_, mids, labs, signed_velocity=None if tangent is None else tangent.velocity_)
+    return pc, kind, note

@@ -66,7 +66,7 @@ def save_blocked(corpus: Corpus, path, *, block_frames: int = 8192) -> list[Path
     for old in folder.glob("block_*.npy") if folder.is_dir() else []:
         old.unlink()  # a previous import's blocks would be mixed with these
     paths = store_frame_blocks(corpus.frames, folder, block_frames=int(block_frames))
-    d = corpus.to_arrays(include_frames=False)
+    d = corpus.to_arrays(include_frames=False, base=path.resolve().parent)
     d["blocks_files"] = np.array([p.name for p in paths], dtype=str)
     d["blocks_frames"] = np.array([np.load(p, mmap_mode="r").shape[0] for p in paths], dtype=np.int64)
     with atomic_write(path) as tmp:
@@ -103,7 +103,7 @@ def load_blocked(path) -> Corpus:
         d = read_npz(path)
     except NpzReadError as exc:
         raise CorpusError(f"{path}: not a readable .npz corpus file ({exc.reason})") from None
-    return Corpus.from_arrays(d, frames=_open_blocks(path, d), source=str(path))
+    return Corpus.from_arrays(d, frames=_open_blocks(path, d), source=str(path), base=path.resolve().parent)
 
 
 def _open_blocks(path: Path, d) -> BlockFrames:

@@ -21,7 +21,8 @@ from dataclasses import replace
 import numpy as np
 
 __all__ = ["lip_aperture", "aperture_definition", "aperture_velocity", "kinematic_landmarks",
-           "with_kinematic_labels", "kinematic_key_frames", "kinematic_if_unlabelled", "LANDMARK_LABELS"]
+           "with_kinematic_labels", "kinematic_key_frames", "kinematic_if_unlabelled", "has_kinematic_labels",
+           "LANDMARK_LABELS"]
 
 #: landmark label per kind
 LANDMARK_LABELS = ("open", "closed", "opening", "closing")
@@ -189,8 +190,17 @@ def with_kinematic_labels(corpus, **landmark_params):
             ph.append((s, e, str(li)))
         utts.append(replace(u, phones=tuple(ph)))
     out = replace(corpus, utterances=utts, history=list(corpus.history) + [
-        f"phones replaced by {len(frames)} kinematic landmarks ({', '.join(LANDMARK_LABELS)})"])
+        f"{_LANDMARK_NOTE} {len(frames)} kinematic landmarks ({', '.join(LANDMARK_LABELS)})"])
     return out
+
+
+#: how :func:`with_kinematic_labels` starts its history line
+_LANDMARK_NOTE = "phones replaced by"
+
+
+def has_kinematic_labels(corpus) -> bool:
+    """True when the corpus's labels are kinematic landmarks (:func:`with_kinematic_labels`), not phones."""
+    return any(h.startswith(_LANDMARK_NOTE) and "kinematic landmarks" in h for h in corpus.history)
 
 
 def kinematic_key_frames(corpus, utterance, **landmark_params) -> np.ndarray:

@@ -314,7 +314,7 @@ class Manifold(BaseEstimator):
              "Fx": self.Fx_, "Fxv": self.Fxv_, "G": self.G_, "Fy": self.Fy_}
         if getattr(self, "state_x_", None) is not None:
             d["state_x"] = self.state_x_
-        d.update(self.corpus_.to_arrays(include_frames=include_frames))
+        d.update(self.corpus_.to_arrays(include_frames=include_frames, base=path.resolve().parent))
         d.update(reference)
         for name, attr in self._PARTS.items():
             d.update(dump_estimator(getattr(self, attr), name))
@@ -391,7 +391,7 @@ class Manifold(BaseEstimator):
             frames = frames_from_reference(d, path, n_frames=dims["N"], n_columns=self.shape_.mean_.shape[0])
         else:
             frames = self.shape_.inverse_transform(self.Fx_)
-        self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path))
+        self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path), base=Path(path).resolve().parent)
         self.timings_ = _parse_timings(check_scalar(d, "manifold_timings", source=path, kind="str"), path)
         self._inverse = None
         self.state_x_ = None  # files written before it was stored: synthesis maps the states itself

@@ -50,6 +50,9 @@ __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker",
            "cache_token",
            "phone_gestures", "gesture_phases", "lip_roles", "speaker_anatomy"]
 
+#: the lip model's coordinates (engine.lipmodel): x the talker's left, y up, z forward, in mm
+LIP_MODEL_AXES = "x=left,y=up,z=forward"
+
 #: Bumped whenever the generated corpus changes for the same parameters (cache key).
 GENERATOR_VERSION = 6
 
@@ -572,7 +575,7 @@ class SyntheticTalker(BaseEstimator):
         self.anatomies_ = anat
         return Corpus(frames=frames, rate=rate, utterances=utts, dims=3, faces=lip.faces,
                       point_names=lip.point_names, point_roles=lip_roles(lip), latent=latent,
-                      name=f"synthetic-{self.preset}")
+                      name=f"synthetic-{self.preset}", axes=LIP_MODEL_AXES)
 
     def _registration_field(self, rng, utts, n, lip):
         """(coefficients (n, K), basis (K, 3 * n_points)) of the smooth registration error:
@@ -737,6 +740,8 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=Fal
         report(progress, "loading cache", 0, 1)
         try:
             corpus = Corpus.load(path)
+            # the lip model's unit and axes (cache files written before corpora named them)
+            corpus.units, corpus.axes = "mm", LIP_MODEL_AXES
             report(progress, "loading cache", 1, 1)
             return _with_audio(corpus, path, progress) if audio else corpus
         except (CorpusError, OSError, ValueError):

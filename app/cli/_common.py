@@ -7,7 +7,23 @@ from pathlib import Path
 
 from engine.progress import Cancelled
 
-__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg"]
+__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg", "roles_text"]
+
+
+def roles_text(names, roles, *, limit: int = 12) -> str:
+    """The point roles in one line: ``UL=upper_lip, LL=lower_lip, ...`` for up to ``limit`` points; for more
+    (a video's 80 lip landmarks) one entry per role, naming its points when there are at most 4, else
+    counting them: ``80 points: upper_lip outer_0, inner_13; ...; lip 74 points``."""
+    names = list(names) if names is not None else [f"p{i}" for i in range(len(roles))]
+    if len(roles) <= limit:
+        return ", ".join(f"{n}={r or '-'}" for n, r in zip(names, roles))
+    from engine.layouts import ROLES
+
+    by_role: dict[str, list] = {}
+    for n, r in sorted(zip(names, roles), key=lambda t: ROLES.index(t[1]) if t[1] in ROLES else len(ROLES)):
+        by_role.setdefault(r or "-", []).append(str(n))
+    parts = [f"{r} {', '.join(ns)}" if len(ns) <= 4 else f"{r} {len(ns)} points" for r, ns in by_role.items()]
+    return f"{len(roles)} points: " + "; ".join(parts)
 
 
 @contextlib.contextmanager
@@ -182,17 +198,3 @@ def check_synthesis_bounds(args, targets) -> None:
                        f"at most {MAX_SYNTHESIS_SECONDS:g} s can be synthesised at once. Check the phone "
                        "durations (seconds, not milliseconds) and --tempo, or split the input")
 
-
-def roles_summary(names, roles, *, max_listed: int = 12) -> str:
-    """The point roles in one line: every point with a named role, the plain lip points counted.
-
-    ``UL=upper_lip, LL=lower_lip, ML=left_corner; 596 more lip points`` instead of one entry
-    per point of a dense mesh or an 80-landmark video track.
-    """
-    names = list(names) if names is not None else [str(i) for i in range(len(roles))]
-    named = [f"{n}={r}" for n, r in zip(names, roles) if r and r != "lip"]
-    plain = sum(1 for r in roles if r == "lip")
-    none = sum(1 for r in roles if not r)
-    shown = ", ".join(named[:max_listed]) + (f" and {len(named) - max_listed} more" if len(named) > max_listed else "")
-    rest = [f"{plain} lip point{'s' * (plain != 1)}" if plain else "", f"{none} without a role" if none else ""]
-    return "; ".join(x for x in [shown, *rest] if x) or "none"

@@ -27,6 +27,10 @@ def add_arguments(p):
                    help="utterance id for the example trajectory (fig2a) and regenerated utterance (fig3)")
     p.add_argument("--preset", choices=BUILD_PRESETS, default="default",
                    help="synthetic talker preset when no file is given (default: %(default)s)")
+    p.add_argument("--width", default="180mm", metavar="85mm|180mm",
+                   help="figure width for a journal page: 85mm (one column) or 180mm (two columns; default), or "
+                        "another length from 40mm to 260mm (also cm or in); each figure lays itself out for it, "
+                        "fonts 7-8 pt")
     p.add_argument("--dpi", type=float, default=200, help="PNG resolution (default: %(default)s)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
@@ -85,6 +89,12 @@ def run(args) -> int:
         raise CliError(f"--dpi {args.dpi:g}: must be from 10 to at most {MAX_DPI} (print quality is 300-600)")
     if outdir.exists() and not outdir.is_dir():
         raise CliError(f"{outdir}: exists and is not a directory")
+    from app.figures._style import parse_width
+
+    try:
+        width = parse_width(args.width)
+    except ValueError as exc:
+        raise CliError(f"--width: {exc}") from None
     t0 = time.perf_counter()
     written, failed = [], []
     with progress_bar(disable=True if args.quiet else None) as progress:
@@ -103,6 +113,7 @@ def run(args) -> int:
                 progress("figures", k + 1, total)
                 continue
             opts = {"utterance": args.utterance} if name in UTTERANCE_FIGURES and args.utterance else {}
+            opts["width"] = width
             try:
                 fig = make_figure(name, manifold, **opts)
                 for fmt in formats:
@@ -113,7 +124,7 @@ def run(args) -> int:
     for name, msg in failed:
         print(f"lipspace figures: {name} failed: {msg}", file=sys.stderr)
     done = len(names) - len(failed) - len([n for n in names if n in skip])
-    print(f"wrote {len(written)} file(s) to {outdir} ({', '.join(formats)}; "
+    print(f"wrote {len(written)} file(s) to {outdir} ({', '.join(formats)}; {width * 25.4:.0f} mm wide; "
           f"{done}/{len(names)} figures) in {time.perf_counter() - t0:.1f} s")
     return 1 if failed or not done else 0
 

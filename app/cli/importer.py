@@ -52,10 +52,18 @@ def add_arguments(p):
                    help="remove head motion / recording offsets: rigid (Procrustes to the layout's reference "
                         "sensors), utterance or speaker centring, none; auto = rigid with 3+ reference sensors, "
                         "else utterance centring for several inputs (default: %(default)s)")
+    p.add_argument("--axes", default=None, metavar="x=DIR,y=DIR,z=DIR",
+                   help="the talker's direction of each coordinate axis (DIR: forward/back, left/right, up/down), "
+                        "e.g. 'x=forward,y=left,z=up' (2-D: 'x=forward,y=up'), for the lip view, the lip-shape "
+                        "figures and the MP4 / glTF exports; default: derived from the point roles (upper lip "
+                        "above lower lip, corners left and right); 'lipspace info' says which")
     spk = p.add_mutually_exclusive_group()
     spk.add_argument("--speaker", default=None, metavar="NAME", help="speaker of every input")
-    spk.add_argument("--speaker-from", choices=("dir", "prefix"), default=None,
-                     help="speaker of each input from its directory name or its file name up to the first '_'")
+    spk.add_argument("--speaker-from", default=None, metavar="dir|prefix|re:PATTERN",
+                     help="speaker of each input: 'dir' its folder's name (as given, symlinks not followed), "
+                          "'prefix' its file name up to the first '_', or 're:PATTERN' the one group of a regular "
+                          "expression searched in the file name, e.g. 're:^(spk[0-9]+)' or 're:^([A-Z]{3})'; "
+                          "corpus files (.npz) joined keep their own speakers")
     p.add_argument("--template", default=None, metavar="MESH", help="template OBJ/PLY giving faces for .npy input")
     p.add_argument("--audio-dir", default=None, metavar="DIR",
                    help="MVIEW .mat input: write each file's AUDIO to DIR/<stem>.wav and link it; video input: "
@@ -139,6 +147,7 @@ def run(args) -> int:
         raise CliError(f"--block-frames {args.block_frames}: must be at least 256 frames per block")
     inputs = args.inputs
     rate_out = None
+    video = _is_video(args)
     if args.resample is None:  # every input, video too, goes to the paper's 60 Hz (docs/DECISIONS.md)
         args.resample = f"{ANALYSIS_RATE:g}"
     if str(args.resample).lower() not in ("native", "none"):
@@ -149,6 +158,13 @@ def run(args) -> int:
         if not 0 < rate_out <= MAX_RATE:  # 1e9 Hz asked for a 14 GiB index array
             raise CliError(f"--resample {args.resample}: must be above 0 and at most {MAX_RATE:g} Hz "
                            "(the fastest articulographs record at 1250 Hz)")
+    if video and rate_out is None:  # --resample native: videos at different rates cannot be joined
+        rates = _video_rates(inputs)
+        if len({round(r, 6) for _, r in rates}) > 1:
+            desc = ", ".join(f"{Path(p).name} {r:.4g} Hz" for p, r in rates)
+            raise CliError(f"the videos have different frame rates ({desc}); they can be joined only at one "
+                           f"rate: give --resample {ANALYSIS_RATE:g} (the analysis rate, the default without "
+                           "--resample) or another rate")
     try:
         fmt = args.format or ("matrix" if args.layout is not None else detect_format(inputs[0]))
         fmt = FORMAT_ALIASES.get(fmt, fmt)
@@ -161,9 +177,14 @@ def run(args) -> int:
             raise CliError(f"--alignment names one file but {len(inputs)} inputs were given; put each input's "
                            "<stem>.TextGrid or <stem>.lab beside it instead")
         kw = _options(args, fmt)
+        if fmt == "video" and rate_out is not None:  # each video (of a folder too) at that rate before joining
+            kw["resample"] = rate_out
         groups = [inputs] if fmt == "mesh" and len(inputs) > 1 else [[p] for p in inputs]
+        _check_speakers(groups, args, fmt)
         job = {"format": fmt, "rate": args.rate, "alignment": alignment, "options": kw,
-               "audio_dir": args.audio_dir, "speaker": args.speaker, "speaker_from": args.speaker_from}
+               "audio_dir": args.audio_dir, "speaker": args.speaker, "speaker_from": args.speaker_from,
+               # corpus files joined: each one's unnamed utterances are its own speaker, named after the file
+               "name_corpora": fmt == "npz" and len(groups) > 1 and not (args.speaker or args.speaker_from)}
         if len(groups) == 1 and fmt == "video":  # tracking a face takes a while: show it
             from app.cli._common import progress_bar
 
@@ -173,12 +194,20 @@ def run(args) -> int:
             parts = [_read_group(groups[0], job)]
         else:
             parts = _read_many(groups, job, args)
+        parts = _one_rate(parts, rate_out)
         corpus = parts[0] if len(parts) == 1 else concat(parts)
         if args.roles is not None:
             from engine.layouts import roles_from_spec
 
             corpus = replace(corpus, point_roles=roles_from_spec(args.roles, corpus.n_points, corpus.point_names,
                                                                  corpus.point_roles))
+        if args.axes is not None:
+            from engine.orientation import AxesError, parse_axes
+
+            try:
+                corpus = replace(corpus, axes=parse_axes(args.axes, corpus.dims).spec())
+            except AxesError as exc:
+                raise CliError(str(exc)) from None
         corpus = register(corpus, method=args.register)
         if rate_out is not None and abs(rate_out - corpus.rate) > 1e-9 * corpus.rate:
             corpus = resample(corpus, rate_out)
@@ -201,14 +230,64 @@ def run(args) -> int:
         if not note.startswith("read "):
             print(f"lipspace import: {note}", file=sys.stderr)
     if corpus.point_roles is not None:
-        from app.cli._common import roles_summary
+        from app.cli._common import roles_text
 
-        print("lipspace import: roles " + roles_summary(corpus.point_names, corpus.point_roles), file=sys.stderr)
+        print("lipspace import: roles " + roles_text(corpus.point_names, corpus.point_roles), file=sys.stderr)
+    from engine.orientation import anatomical_frame
+
+    print(f"lipspace import: orientation {anatomical_frame(corpus).describe()}", file=sys.stderr)
     if not corpus.registration:
         print("lipspace import: registration: none (no reference sensors and one utterance, or --register none)",
               file=sys.stderr)
     print(f"wrote {out}: {summary(corpus)}", file=sys.stdout)
     return 0
+
+
+def _is_video(args) -> bool:
+    from engine.io.dispatch import FORMAT_ALIASES, detect_format
+
+    if args.format is not None or args.layout is not None:
+        return FORMAT_ALIASES.get(args.format, args.format) == "video"
+    try:
+        return detect_format(args.inputs[0]) == "video"
+    except (ValueError, OSError):
+        return False
+
+
+def _video_rates(inputs) -> list:
+    """``(path, rate)`` of every video the inputs name (a folder's videos in order); unreadable ones left out
+    (their reader reports them)."""
+    from engine.io.dispatch import _videos_in
+    from engine.io.video import video_info
+
+    out = []
+    for p in inputs:
+        for v in (_videos_in(p) if Path(p).is_dir() else [Path(p)]):
+            try:
+                out.append((str(v), video_info(v)[0]))
+            except (ValueError, OSError, ImportError):
+                continue
+    return out
+
+
+def _one_rate(parts, rate_out):
+    """The inputs' corpora at one frame rate: each resampled to ``rate_out`` when their rates differ
+    (resampling is per utterance, so nothing crosses two inputs); different rates and no ``rate_out``
+    is an error naming them."""
+    from app.cli import CliError
+    from engine.io import resample
+
+    rates = {}
+    for c in parts:
+        rates.setdefault(round(c.rate, 6), []).append(c.name)
+    if len(rates) < 2:
+        return parts
+    desc = ", ".join(f"{r:.4g} Hz ({len(names)} input{'s' * (len(names) != 1)}, e.g. {names[0]})"
+                     for r, names in rates.items())
+    if rate_out is None:
+        raise CliError(f"the inputs have different frame rates: {desc}; they can be joined only at one rate: give "
+                       f"--resample {ANALYSIS_RATE:g} (the analysis rate) or another rate")
+    return [resample(c, rate_out) for c in parts]
 
 
 def _input_errors():
@@ -231,6 +310,11 @@ def _read_group(g, job):
     speaker = job["speaker"] or _speaker_of(g[0], job["speaker_from"])
     if speaker:
         c = replace(c, utterances=[replace(u, speaker=speaker) for u in c.utterances])
+    elif job.get("name_corpora") and any(not u.speaker for u in c.utterances):
+        stem = Path(str(src)).stem
+        c = replace(c, utterances=[u if u.speaker else replace(u, speaker=stem) for u in c.utterances],
+                    history=list(c.history) + [f"speaker {stem!r} given to the {sum(not u.speaker for u in c.utterances)} "
+                                               f"utterance(s) of {Path(str(src)).name} that named none (its file name)"])
     return c
 
 
@@ -318,9 +402,30 @@ def _read_on_dask(groups, job, address, results, tick):
 
 
 def _speaker_of(path, how) -> str:
+    """The speaker ``--speaker-from how`` gives ``path`` (:class:`engine.speakers.SpeakerRule`), "" for None."""
     if how is None:
         return ""
-    p = Path(str(path))
-    if how == "dir":
-        return p.resolve().parent.name
-    return p.stem.split("_", 1)[0]
+    from engine.speakers import SpeakerRule
+
+    return SpeakerRule(how)(path)
+
+
+def _check_speakers(groups, args, fmt) -> None:
+    """Refuse a speaker rule that does not apply to every input, before any is read; warn when the
+    speakers it gives (or the lack of one) do not fit the file names (:func:`engine.speakers.check_assignment`)."""
+    import warnings
+
+    from app.cli import CliError
+    from engine.speakers import SpeakerRule, SpeakerRuleError, SpeakerWarning, check_assignment
+
+    if fmt == "npz" and not args.speaker_from:
+        return  # corpus files carry their own speakers
+    try:
+        rule = SpeakerRule(args.speaker_from) if args.speaker_from else None
+        speakers = [rule(g[0]) if rule else (args.speaker or "") for g in groups]
+    except SpeakerRuleError as exc:
+        raise CliError(str(exc)) from None
+    if args.speaker:
+        return
+    for msg in check_assignment([g[0] for g in groups], speakers, rule=args.speaker_from):
+        warnings.warn(SpeakerWarning(msg), stacklevel=2)

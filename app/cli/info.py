@@ -41,9 +41,12 @@ def _recording_lines(c):
     if spk:
         lines.append(f"speakers    {len(spk)}: {', '.join(spk[:12])}{' ...' if len(spk) > 12 else ''}")
     if c.point_roles is not None:
-        from app.cli._common import roles_summary
+        from app.cli._common import roles_text
 
-        lines.append("roles       " + roles_summary(c.point_names, c.point_roles))
+        lines.append("roles       " + roles_text(c.point_names, c.point_roles))
+    from engine.orientation import anatomical_frame
+
+    lines.append(f"orientation {anatomical_frame(c).describe()}")
     lines.append(f"registration {c.registration or 'none'}")
     lines += [f"history     {h}" for h in c.history if not h.startswith(("read ", "registration:"))]
     return lines

@@ -75,7 +75,9 @@ def export_animation(manifold, Fx, path, *, rate: float, audio=None, scale: floa
     ----------
     manifold : engine.manifold.Manifold
         Fitted; its mean shape is the base, its shape components the morph targets, its
-        corpus gives faces and point dimensions.
+        corpus gives faces and point dimensions. Points are written in the talker's frame
+        (:func:`engine.orientation.anatomical_frame`), which is glTF's: +Y up, the model
+        facing +Z, its left +X; ``scene.extras["orientation"]`` says how it was found.
     Fx : array of shape (n_frames, m') with m' <= the number of components
         The trajectory in X (the animated weights); only the first m' components become
         targets.
@@ -105,10 +107,18 @@ def export_animation(manifold, Fx, path, *, rate: float, audio=None, scale: floa
     wav = path.with_suffix(".wav") if audio is not None else None
     if wav is not None and not Path(audio).is_file():
         raise FileNotFoundError(f"{audio}: no such audio file")
-    out = [write_gltf_morph(path, shape.mean_, shape.components_[:m], Fx, rate=rate, faces=c.faces, dims=c.dims,
+    # the talker's frame (engine.orientation) is glTF's: +Y up, the asset facing +Z, its left +X
+    from engine.orientation import anatomical_frame
+
+    frame = anatomical_frame(c, shape.mean_)
+    mean = frame.view_frames(np.asarray(shape.mean_)[None])[0]
+    comps = frame.view_frames(np.asarray(shape.components_[:m]))
+    faces = c.faces[:, ::-1] if frame.mirrored and c.faces is not None else c.faces  # a mirror turns the winding
+    out = [write_gltf_morph(path, mean, comps, Fx, rate=rate, faces=faces, dims=c.dims,
                             interpolation=interpolation, scale=scale, name=name,
                             audio=wav.name if wav is not None else None,
-                            extras={"source": source} if source else None)]
+                            extras={"source": source, "orientation": frame.describe()} if source else
+                            {"orientation": frame.describe()})]
     if wav is not None:
         out.append(write_audio_beside(audio, wav))
     return out

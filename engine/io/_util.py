@@ -175,8 +175,8 @@ def check_rate(path, native: float, rate) -> float:
     if rate is not None and abs(float(rate) - native) > 1e-6 * native:
         raise ImportFormatError(
             path, f"the file says its frame rate is {native:g} Hz but rate={float(rate):g} was given; the rate "
-            "argument is only for files without timing. To change the rate, resample "
-            "(engine.io.resample, or 'lipspace import --resample')")
+            "argument is only for files without timing. To change the rate, resample it "
+            "('lipspace import --resample HZ')")
     return float(native)
 
 
@@ -190,8 +190,10 @@ def sidecar_audio(path) -> str | None:
 
 
 def one_utterance_corpus(path, frames, rate, *, dims, uid=None, phones=(), point_names=None, faces=None,
-                         audio=None, text="", name=None):
+                         audio=None, text="", name=None, units="mm"):
     """A :class:`Corpus` of one utterance read from ``path``; phones fitted to the data.
+
+    ``units``: of the coordinates ("mm", or "" when the file's units are not known).
 
     Any violated corpus invariant is reported as an :class:`ImportFormatError` naming ``path``.
     """
@@ -206,7 +208,7 @@ def one_utterance_corpus(path, frames, rate, *, dims, uid=None, phones=(), point
         utt = Utterance(uid, 0, frames.shape[0], fit_phones(phones, frames.shape[0], rate, path=path), audio,
                       text)
         return Corpus(frames=frames, rate=rate, utterances=[utt], dims=dims, faces=faces,
-                      point_names=point_names, name=name or uid)
+                      point_names=point_names, name=name or uid, units=units)
     except CorpusError as exc:
         raise ImportFormatError(path, str(exc)) from None
 

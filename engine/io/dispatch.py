@@ -105,7 +105,7 @@ def _read_native(path, rate=None, alignment=None, tier=None):
         arrays = read_npz(path)
     except NpzReadError as exc:
         raise ImportFormatError(path, f"cannot read as a Lipspace corpus (.npz): {exc.reason}") from None
-    c = Corpus.from_arrays(arrays, source=str(path))
+    c = Corpus.from_arrays(arrays, source=str(path), base=path.resolve().parent)
     check_rate(path, c.rate, rate)
     if alignment is None or alignment is False:
         return c

@@ -206,7 +206,7 @@ def read_csv_landmarks(path, *, rate: float | None = None, points=None, space: s
     frames = _fill_gaps(X, missing, path=path, names=[header[c] for c in cols], fill=fill_gaps)
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     return one_utterance_corpus(path, frames, native, dims=dims, phones=phones, point_names=names,
-                                audio=sidecar_audio(path))
+                                audio=sidecar_audio(path), units="mm" if openface and dims == 3 else "")
 
 
 def _column_rate(native, rate, column, path) -> float:
@@ -305,4 +305,4 @@ def _read_long(path, header, body, ti, fi, pi, rate, points, alignment, tier, fi
                         names=[f"{n}_{a}" for n in point_order for a in "xyz"[:dims]], fill=fill_gaps)
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     return one_utterance_corpus(path, frames, native, dims=dims, phones=phones, point_names=point_order,
-                                audio=sidecar_audio(path))
+                                audio=sidecar_audio(path), units="")

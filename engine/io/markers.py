@@ -124,4 +124,5 @@ def read_c3d(path, *, markers=None, rate: float | None = None, alignment=None, t
     frames = _fill_gaps(X, miss, path=path, names=[f"{n}_{a}" for n in names for a in "xyz"], fill=fill_gaps)
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     return one_utterance_corpus(path, frames, native, dims=3, phones=phones, point_names=names,
-                                audio=sidecar_audio(path))
+                                audio=sidecar_audio(path), units="mm" if (to_mm and units in _UNITS) or units == "mm"
+                                else "")

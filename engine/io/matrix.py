@@ -37,10 +37,10 @@ def _rate_of(path, layout: Layout, rate, found=None) -> float:
     return r
 
 
-def _from_mat(path, variable):
+def _from_mat(path, variable, notes=None):
     from engine.io.matfile import read_mat
 
-    m = read_mat(path)
+    m = read_mat(path, notes=notes)
     names = [k for k in m if not k.startswith("__")]
     numeric = {k: v for k, v in m.items() if isinstance(v, np.ndarray) and v.ndim == 2 and v.size > 1
                and np.issubdtype(v.dtype, np.number) and min(v.shape) > 1}
@@ -147,8 +147,9 @@ def read_matrix(path, *, layout, rate: float | None = None, variable: str | None
         raise ImportFormatError(path, f"a .pos file is an AG500/AG501 binary; layout {lay.name!r} describes a plain "
                                 "matrix: use layout ag500 or ag501, or a layout file with 'base: ag501'")
     found = None
+    damage = []
     if suf == ".mat":
-        M, found = _from_mat(path, variable)
+        M, found = _from_mat(path, variable, damage)
     elif suf == ".npy":
         read_bytes(path)  # FileNotFoundError / directory errors
         try:
@@ -160,5 +161,7 @@ def read_matrix(path, *, layout, rate: float | None = None, variable: str | None
     if variable is not None and suf != ".mat":
         raise ImportFormatError(path, "variable= applies to .mat files only")
     r = _rate_of(path, lay, rate, found)
-    return corpus_from_matrix(path, M, lay, rate=r, points=points, fill_gaps=fill_gaps, alignment=alignment,
-                              tier=tier)
+    c = corpus_from_matrix(path, M, lay, rate=r, points=points, fill_gaps=fill_gaps, alignment=alignment,
+                           tier=tier)
+    c.history.extend(f"{path.name}: {d}" for d in damage)  # what a damaged file still gave
+    return c

@@ -101,7 +101,7 @@ def read_mesh_sequence(source, *, rate: float | None = None, alignment=None, tie
     uid = name or where.name or "mesh"
     frames = _fill_gaps(frames, ~np.isfinite(frames), path=where, fill=fill_gaps)
     phones, _ = resolve_alignment(where, alignment, tier=tier)
-    return one_utterance_corpus(where, frames, rate, dims=3, uid=uid, phones=phones, faces=F0,
+    return one_utterance_corpus(where, frames, rate, dims=3, uid=uid, phones=phones, faces=F0, units="",
                                 audio=sidecar_audio(where))
 
 
@@ -174,4 +174,5 @@ def read_vertex_array(path, *, template=None, rate: float | None = None, alignme
         frames = np.asarray(arr, dtype=np.float32).reshape(n, 3 * V)
     frames = _fill_gaps(frames, ~np.isfinite(frames), path=path, fill=fill_gaps)
     phones, _ = resolve_alignment(path, alignment, tier=tier)
-    return one_utterance_corpus(path, frames, rate, dims=3, phones=phones, faces=faces, audio=sidecar_audio(path))
+    return one_utterance_corpus(path, frames, rate, dims=3, phones=phones, faces=faces, audio=sidecar_audio(path),
+                                units="")  # meshes carry no unit (VOCASET: metres)

@@ -30,8 +30,8 @@ __all__ = ["read_mview", "read_mview_audio", "write_audio", "MVIEW_LIP_SENSORS"]
 MVIEW_LIP_SENSORS = ("UL", "LL", "ML", "JAW", "JAWL")
 
 
-def _load_struct(path) -> MatStruct:
-    m = read_mat(path)
+def _load_struct(path, notes=None) -> MatStruct:
+    m = read_mat(path, notes=notes)
     names = [k for k in m if not k.startswith("__")]
     want = Path(path).stem
     key = want if want in names else (names[0] if len(names) == 1 else None)
@@ -66,8 +66,8 @@ def _number(v) -> float | None:
     return float(np.real(v.ravel()[0]))
 
 
-def _entries(path):
-    s = _load_struct(path)
+def _entries(path, notes=None):
+    s = _load_struct(path, notes)
     out = {}
     for i, e in enumerate(s):
         name = _text(e["NAME"]).strip()
@@ -128,7 +128,8 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
         (see :func:`write_audio`).
     """
     path = Path(path)
-    s, ent = _entries(path)
+    damage = []
+    s, ent = _entries(path, damage)
     if isinstance(sensors, str) and sensors == "all":
         want = [n for n, (i, e) in ent.items()
                 if n != "AUDIO" and isinstance(e["SIGNAL"], np.ndarray) and e["SIGNAL"].ndim == 2
@@ -164,8 +165,10 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
         phones = own
     else:
         phones, _ = resolve_alignment(path, alignment, tier=tier)
-    return one_utterance_corpus(path, frames, native, dims=3, phones=phones, point_names=want,
-                                audio=sidecar_audio(path), text=text)
+    c = one_utterance_corpus(path, frames, native, dims=3, phones=phones, point_names=want,
+                             audio=sidecar_audio(path), text=text)
+    c.history.extend(f"{path.name}: {d}" for d in damage)  # what a damaged file still gave
+    return c
 
 
 def read_mview_audio(path) -> tuple[np.ndarray, float]:

@@ -32,7 +32,11 @@ def test_glb_of_markers_is_a_point_cloud_with_the_recording_beside(mocha, tmp_pa
     r = read_gltf_morph(files[0])
     assert r["faces"] is None and r["base"].shape == (m.corpus_.n_points, 3)
     played = r["base"][None] + np.einsum("nk,kvd->nvd", r["weights"], r["targets"])
-    expect = m.shape_.inverse_transform(m.Fx_[u.start:u.stop]).reshape(u.n_frames, -1, 2)
+    from engine.orientation import anatomical_frame
+
+    frame = anatomical_frame(m.corpus_, m.shape_.mean_)  # written in the talker's frame: x forward, y up
+    assert frame.source == "roles"
+    expect = frame.view(m.shape_.inverse_transform(m.Fx_[u.start:u.stop]).reshape(u.n_frames, -1, 2))
     np.testing.assert_allclose(played[..., :2], expect, rtol=0, atol=1e-4 * float(np.abs(expect).max()))
     np.testing.assert_array_equal(played[..., 2], 0.0)
 

@@ -314,12 +314,3 @@ def test_build_the_calibrated_talker_keeps_the_classic_cache(tmp_path, monkeypat
     assert main(["build", str(p), "--kinematics", "calibrated", "-o", str(tmp_path / "x.npz")]) == 2
     assert "--kinematics chooses the synthetic talker's" in capsys.readouterr().err
 
-
-def test_roles_line_names_the_roles_and_counts_the_plain_lip_points():
-    from app.cli._common import roles_summary
-
-    names = ["UL", "LL", "ML", *(f"p{i}" for i in range(77))]
-    roles = ["upper_lip", "lower_lip", "left_corner", *["lip"] * 76, ""]
-    assert roles_summary(names, roles) == "UL=upper_lip, LL=lower_lip, ML=left_corner; 76 lip points; 1 without a role"
-    many = roles_summary([f"s{i}" for i in range(20)], ["jaw"] * 20, max_listed=3)
-    assert many == "s0=jaw, s1=jaw, s2=jaw and 17 more"
