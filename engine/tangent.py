@@ -390,6 +390,41 @@ class TangentFrames(BaseEstimator):
         Y = self._as_y3(Y)
         return (Y.astype(np.float64) - self.plane_point_) @ self.plane_normal_
 
+    def sv_basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(origin (3,), S (3,), V (3,)), float64: the plane point and the global shape and velocity directions.
+
+        S is re-orthogonalised against V (they are orthogonal by construction; this only
+        guards against rounding).
+        """
+        check_is_fitted(self, "plane_normal_")
+        V = np.asarray(self.plane_normal_, dtype=np.float64)
+        V = V / np.linalg.norm(V)
+        S = np.asarray(self.S_, dtype=np.float64)
+        S = S - (S @ V) * V
+        return np.asarray(self.plane_point_, dtype=np.float64), S / np.linalg.norm(S), V
+
+    def sv_coordinates(self, Y) -> np.ndarray:
+        """Coordinates of points along the global directions (S, V) about the plane point.
+
+        The one reading of "where a frame sits on the S and V axes": the figures (the
+        S-V panels) and the per-frame table (:mod:`engine.frame_table`) both take it
+        from here. In these coordinates the zero-velocity plane is the line ``v = 0``
+        (``v > 0``: the opening side) and speech cycles are the paper's elliptical paths.
+
+        Parameters
+        ----------
+        Y : ndarray of shape (n, k >= n_dims) or (k,)
+            Points of F^y (only the first ``n_dims`` columns are used).
+
+        Returns
+        -------
+        ndarray of shape (n, 2), float64
+            Column 0 along S, column 1 along V (in F^y units).
+        """
+        o, S, V = self.sv_basis()
+        d = self._as_y3(Y).astype(np.float64) - o
+        return np.column_stack([d @ S, d @ V])
+
     def class_proportions(self) -> dict:
         """Fraction of frames (with a forward step) in each class, ``{CLASS_NAMES[c]: fraction}``."""
         check_is_fitted(self, "classes_")

@@ -78,28 +78,15 @@ def y3(manifold) -> np.ndarray:
 
 
 def sv_basis(tangent) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(origin (3,), S (3,), V (3,)): the global shape and velocity directions.
-
-    S is re-orthogonalised against V (they are orthogonal by construction; this only
-    guards against rounding).
-    """
-    V = np.asarray(tangent.plane_normal_, dtype=np.float64)
-    V = V / np.linalg.norm(V)
-    S = np.asarray(tangent.S_, dtype=np.float64)
-    S = S - (S @ V) * V
-    S = S / np.linalg.norm(S)
-    return np.asarray(tangent.plane_point_, dtype=np.float64), S, V
+    """(origin (3,), S (3,), V (3,)): the global shape and velocity directions
+    (:meth:`engine.tangent.TangentFrames.sv_basis`)."""
+    return tangent.sv_basis()
 
 
 def sv_coords(Y, tangent) -> np.ndarray:
-    """Coordinates of points ``Y`` (n, 3) along (S, V) about the plane point, (n, 2).
-
-    In these coordinates the zero-velocity plane is the line ``v = 0`` and speech
-    cycles are the paper's elliptical paths (shape along x, velocity along y).
-    """
-    o, S, V = sv_basis(tangent)
-    d = np.asarray(Y, dtype=np.float64) - o
-    return np.column_stack([d @ S, d @ V])
+    """Coordinates of points ``Y`` (n, 3) along (S, V) about the plane point, (n, 2)
+    (:meth:`engine.tangent.TangentFrames.sv_coordinates`, which the frame table uses too)."""
+    return tangent.sv_coordinates(Y)
 
 
 def plane_trace(ax, tangent, axes, Y, **kw):
