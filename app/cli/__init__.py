@@ -59,7 +59,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 #: arguments naming files a command writes / directories it writes into
-OUTPUT_FILE_ARGS = ("output", "csv", "markdown")
+OUTPUT_FILE_ARGS = ("output", "csv", "markdown", "praat")
 OUTPUT_DIR_ARGS = ("outdir", "mesh_dir", "textgrid_dir")
 
 
