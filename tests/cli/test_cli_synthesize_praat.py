@@ -1,62 +1,19 @@
 """``lipspace synthesize --textgrid IN --praat OUT.TextGrid``: the synthesis on the input's clock, for Praat."""
 from __future__ import annotations
 
-import shutil
-import subprocess
-
 import numpy as np
 import pytest
 
 from app.cli import main
 
-PRAAT = shutil.which("praat")
 
-#: a TextGrid as Praat writes it: a word tier first, silence before the first phone (starts at 0.25 s)
-INPUT = '''File type = "ooTextFile"
-Object class = "TextGrid"
 
-xmin = 0
-xmax = 1.5
-tiers? <exists>
-size = 2
-item []:
-    item [1]:
-        class = "IntervalTier"
-        name = "words"
-        xmin = 0
-        xmax = 1.5
-        intervals: size = 1
-        intervals [1]:
-            xmin = 0
-            xmax = 1.5
-            text = "bob"
-    item [2]:
-        class = "IntervalTier"
-        name = "phones"
-        xmin = 0
-        xmax = 1.5
-        intervals: size = 5
-        intervals [1]:
-            xmin = 0
-            xmax = 0.25
-            text = ""
-        intervals [2]:
-            xmin = 0.25
-            xmax = 0.35
-            text = "B"
-        intervals [3]:
-            xmin = 0.35
-            xmax = 0.65
-            text = "AA1"
-        intervals [4]:
-            xmin = 0.65
-            xmax = 0.75
-            text = "B"
-        intervals [5]:
-            xmin = 0.75
-            xmax = 1.5
-            text = ""
-'''
+def _input(path):
+    """A TextGrid laid out as Praat writes them: a word tier first, silence before the first phone (0.25 s)."""
+    from engine.io.praat import IntervalTier, write_textgrid
+
+    return write_textgrid(path, 0, 1.5, [IntervalTier("words", [(0, 1.5, "bob")]), IntervalTier(
+        "phones", [(0.25, 0.35, "B"), (0.35, 0.65, "AA1"), (0.65, 0.75, "B")])])
 
 
 @pytest.fixture(scope="module")
@@ -69,8 +26,7 @@ def test_the_textgrid_and_csv_line_up_with_the_input(mfile, tmp_path, capsys):
     from engine.io import read_textgrid
     from engine.io.alignment import _parse_textgrid
 
-    src = tmp_path / "in.TextGrid"
-    src.write_text(INPUT, encoding="utf-8")
+    src = _input(tmp_path / "in.TextGrid")
     out = tmp_path / "out.TextGrid"
     assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(src), "--praat", str(out)]) == 0
     assert "as the input" in capsys.readouterr().out
@@ -91,20 +47,20 @@ def test_the_textgrid_and_csv_line_up_with_the_input(mfile, tmp_path, capsys):
     # the targets sit at the phones' middles of the input
     np.testing.assert_allclose(tg["time_s"], [0.3, 0.5, 0.7], atol=1 / 60)
     assert (tmp_path / "out.csv.json").exists()
-    if PRAAT:
-        script = tmp_path / "c.praat"
-        script.write_text('form C\n  sentence f x\nendform\nRead from file: f$\nn = Get number of points: 2\n'
-                          'a = Get start time\nb = Get end time\nt = Get time of point: 2, 2\n'
-                          'writeInfoLine: n, " ", a, " ", b, " ", fixed$ (t, 6)\n', encoding="utf-8")
-        r = subprocess.run([PRAAT, "--run", str(script), str(out)], capture_output=True, text=True, timeout=60)
-        assert r.returncode == 0, r.stderr
-        n, a, b, t = r.stdout.split()
-        assert (int(n), float(a), float(b)) == (3, 0.0, 1.5) and float(t) == pytest.approx(tg["time_s"].iloc[1])
+
+
+def test_praat_opens_it_with_the_input_span_and_the_targets(mfile, tmp_path, praat):
+    src = _input(tmp_path / "in.TextGrid")
+    out = tmp_path / "out.TextGrid"
+    assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(src), "--praat", str(out)]) == 0
+    got = praat('form C\n  sentence f x\nendform\nRead from file: f$\nn = Get number of points: 2\n'
+                'a = Get start time\nb = Get end time\nt = Get time of point: 2, 2\nlab$ = Get label of point: 2, 2\n'
+                'writeInfoLine: n, " ", a, " ", b, " ", fixed$ (t, 6), " ", lab$\n', out).split()
+    assert got[:3] == ["3", "0", "1.5"] and float(got[3]) == pytest.approx(0.5, abs=1 / 60) and got[4] == "aa"
 
 
 def test_praat_outputs_are_never_replaced_without_force(mfile, tmp_path, capsys):
-    src = tmp_path / "in.TextGrid"
-    src.write_text(INPUT, encoding="utf-8")
+    src = _input(tmp_path / "in.TextGrid")
     (tmp_path / "out.csv").write_text("mine")
     args = ["synthesize", "--manifold", str(mfile), "--textgrid", str(src), "--praat", str(tmp_path / "out.TextGrid")]
     assert main(args) == 2
@@ -113,24 +69,19 @@ def test_praat_outputs_are_never_replaced_without_force(mfile, tmp_path, capsys)
     assert main(args[:-1] + [str(tmp_path / "out.csv")]) == 2 and "OUT.TextGrid" in capsys.readouterr().err
 
 
-def test_a_real_recording_synthesised_from_its_own_labels_keeps_their_clock(shared_data, tmp_path):
+def test_a_real_recording_synthesised_from_its_own_labels_keeps_their_clock(mocha_manifold, shared_data, tmp_path):
     import warnings
 
     pd = pytest.importorskip("pandas")
-    from engine.io import read_alignment, read_corpus, resample
-    from engine.manifold import Manifold
+    from engine.io import read_alignment
     from engine.synthesis import make_synthesizer
     from engine.synthesis_tiers import input_timeline, synthesis_outputs
     from engine.targets import targets_from_textgrid
 
-    d = shared_data / "mocha-fsew0"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # a 2-s, 116-frame corpus: the data warnings are expected
-        corpus = resample(read_corpus(d / "fsew0_001.ema", alignment=d / "fsew0_001.lab"), 60.0)
-        m = Manifold().fit(corpus)
+    m = mocha_manifold
     mfile = m.save(tmp_path / "mocha.npz")
     out = tmp_path / "fsew0.TextGrid"
-    lab = d / "fsew0_001.lab"
+    lab = shared_data / "mocha-fsew0" / "fsew0_001.lab"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(lab), "--method", "linear",

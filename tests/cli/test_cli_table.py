@@ -18,8 +18,7 @@ import pytest
 from app.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
-PRAAT, RSCRIPT = shutil.which("praat"), shutil.which("Rscript")
-needs_praat = pytest.mark.skipif(PRAAT is None, reason="Praat is not installed (apt-get install praat; .ci/run does)")
+RSCRIPT = shutil.which("Rscript")
 needs_r = pytest.mark.skipif(RSCRIPT is None, reason="R is not installed (apt-get install r-base-core; .ci/run does)")
 
 
@@ -127,10 +126,9 @@ def _expected_counts(path):
     return {name: (0 if tier.is_point_tier else 1, len(tier)) for name, tier in g.items()}, g.xmin, g.xmax
 
 
-@needs_praat
-def test_every_textgrid_opens_in_praat_with_its_tiers_and_counts(written, tmp_path):
-    script = tmp_path / "check.praat"
-    script.write_text(
+def test_every_textgrid_opens_in_praat_with_its_tiers_and_counts(written, praat):
+    grids = written / "grids"
+    out = praat(
         "form Check\n  sentence dir x\nendform\n"
         'list = Create Strings as file list: "list", dir$ + "/*.TextGrid"\n'
         "n = Get number of strings\n"
@@ -140,14 +138,9 @@ def test_every_textgrid_opens_in_praat_with_its_tiers_and_counts(written, tmp_pa
         "    if isint\n      k = Get number of intervals: t\n    else\n      k = Get number of points: t\n    endif\n"
         '    line$ = line$ + tab$ + tname$ + ":" + string$ (isint) + ":" + string$ (k)\n  endfor\n'
         "  xmin = Get start time\n  xmax = Get end time\n"
-        '  appendInfoLine: line$, tab$, fixed$ (xmin, 9), tab$, fixed$ (xmax, 9)\n  removeObject: tg\nendfor\n',
-        encoding="utf-8")
-    grids = written / "grids"
-    r = subprocess.run([PRAAT, "--run", str(script), str(grids)], capture_output=True, text=True, timeout=300)
-    assert r.returncode == 0, r.stderr
-    lines = r.stdout.strip().splitlines()
-    files = sorted(grids.glob("*.TextGrid"))
-    assert len(lines) == len(files)
+        '  appendInfoLine: line$, tab$, fixed$ (xmin, 9), tab$, fixed$ (xmax, 9)\n  removeObject: tg\nendfor\n', grids)
+    lines = out.strip().splitlines()
+    assert len(lines) == len(list(grids.glob("*.TextGrid")))
     for line in lines:
         name, *tiers, xmin, xmax = line.split("\t")
         want, wmin, wmax = _expected_counts(grids / name)
@@ -159,19 +152,15 @@ def test_every_textgrid_opens_in_praat_with_its_tiers_and_counts(written, tmp_pa
         assert float(xmin) == pytest.approx(wmin, abs=1e-9) and float(xmax) == pytest.approx(wmax, abs=1e-8)
 
 
-@needs_praat
-def test_praat_reads_labels_with_quotes_and_non_ascii(tmp_path):
+def test_praat_reads_labels_with_quotes_and_non_ascii(tmp_path, praat):
     from engine.io.praat import IntervalTier, PointTier, write_textgrid
 
     p = write_textgrid(tmp_path / "q.TextGrid", 0, 1, [IntervalTier("w", [(0.2, 0.4, 'say "hi"'), (0.4, 0.6, "ʃøn")]),
                                                       PointTier("p", [(0.5, "é")])])
-    script = tmp_path / "q.praat"
-    script.write_text("form Q\n  sentence f x\nendform\nRead from file: f$\n"
-                      "a$ = Get label of interval: 1, 2\nb$ = Get label of interval: 1, 3\nc$ = Get label of point: 2, 1\n"
-                      'writeInfoLine: a$, "|", b$, "|", c$\n', encoding="utf-8")
-    r = subprocess.run([PRAAT, "--run", str(script), str(p)], capture_output=True, text=True, timeout=60)
-    assert r.returncode == 0, r.stderr
-    assert r.stdout.strip() == 'say "hi"|ʃøn|é'
+    out = praat("form Q\n  sentence f x\nendform\nRead from file: f$\n"
+                "a$ = Get label of interval: 1, 2\nb$ = Get label of interval: 1, 3\nc$ = Get label of point: 2, 1\n"
+                'writeInfoLine: a$, "|", b$, "|", c$\n', p)
+    assert out.strip() == 'say "hi"|ʃøn|é'
 
 
 def _csv_shape(path) -> tuple[int, int]:
@@ -221,19 +210,12 @@ def test_r_reads_the_types_and_missing_values_without_options(written, tmp_path)
         assert rd.split() == [str(n), str(ncol), "24", "TRUE", "TRUE"]
 
 
-def test_a_real_recording_gets_its_lip_aperture_and_its_own_phones(shared_data, tmp_path):
-    import warnings
-
+def test_a_real_recording_gets_its_lip_aperture_and_its_own_phones(mocha_manifold, tmp_path):
     pd = pytest.importorskip("pandas")
-    from engine.io import read_corpus, read_textgrid, resample
+    from engine.io import read_textgrid
     from engine.kinematics import lip_aperture
-    from engine.manifold import Manifold
 
-    d = shared_data / "mocha-fsew0"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # a 2-s, 116-frame corpus: the data warnings are expected
-        corpus = resample(read_corpus(d / "fsew0_001.ema", alignment=d / "fsew0_001.lab"), 60.0)
-        m = Manifold().fit(corpus)
+    m = mocha_manifold
     mfile = m.save(tmp_path / "mocha.npz")
     assert main(["table", str(mfile), "-o", str(tmp_path / "f.csv"), "--textgrid", str(tmp_path / "g")]) == 0
     f = pd.read_csv(tmp_path / "f.csv")
