@@ -10,7 +10,7 @@ are written atomically.
 """
 from __future__ import annotations
 
-import csv
+import itertools
 import json
 from pathlib import Path
 
@@ -37,15 +37,34 @@ def sidecar_path(path) -> Path:
     return p.with_name(p.name + ".json")
 
 
-def _csv_column(values, na: str) -> list[str]:
-    v = np.asarray(values)
-    if v.dtype.kind == "f":
-        out = np.char.mod("%.7g", v).astype(object)
-        out[~np.isfinite(v)] = na
-        return out.tolist()
-    if v.dtype.kind in "iub":
-        return v.astype(np.int64).astype(str).tolist()
-    return [na if x is None else str(x) for x in v]
+def _csv_text(x, na: str) -> str:
+    """One text cell as the csv module writes it (quoted only when it holds a comma, quote or line break)."""
+    if x is None:
+        return na
+    x = str(x)
+    if any(ch in x for ch in ',"\n\r'):
+        return '"' + x.replace('"', '""') + '"'
+    return x
+
+
+def _csv_rows(columns, na: str):
+    """``(row format, column lists)``: one ``%`` format per row is the fast way to write many numbers."""
+    fmts, lists = [], []
+    for v in columns:
+        v = np.asarray(v)
+        if v.dtype.kind == "f" and np.isfinite(v).all():
+            fmts.append("%.7g")
+            lists.append(v.astype(np.float64).tolist())
+        elif v.dtype.kind in "iub":
+            fmts.append("%d")
+            lists.append(v.astype(np.int64).tolist())
+        elif v.dtype.kind == "f":  # non-finite values: missing
+            fmts.append("%s")
+            lists.append([("%.7g" % x) if np.isfinite(x) else na for x in v.tolist()])
+        else:
+            fmts.append("%s")
+            lists.append([_csv_text(x, na) for x in v.tolist()])
+    return ",".join(fmts) + "\n", lists
 
 
 def write_frame_table(path, table) -> list[Path]:
@@ -60,11 +79,12 @@ def write_frame_table(path, table) -> list[Path]:
     side = sidecar_path(path)
     with atomic_write(path) as tmp, atomic_write(side) as tmp_side:
         if suffix == ".csv":
-            cols = [_csv_column(v, NA) for v in table.columns.values()]
+            fmt, cols = _csv_rows(table.columns.values(), NA)
             with open(tmp, "w", encoding="utf-8", newline="") as fh:
-                w = csv.writer(fh, lineterminator="\n")
-                w.writerow(list(table.columns))
-                w.writerows(zip(*cols))
+                fh.write(",".join(_csv_text(n, NA) for n in table.columns) + "\n")
+                rows = zip(*cols)
+                while chunk := list(itertools.islice(rows, 8192)):
+                    fh.write("".join(fmt % r for r in chunk))
         else:
             _write_parquet(tmp, table, meta)
         tmp_side.write_text(json.dumps(meta, indent=2, ensure_ascii=False) + "\n", encoding="utf-8")

@@ -126,3 +126,22 @@ def test_textgrid_writer_fills_gaps_quotes_labels_and_refuses_overlaps(tmp_path)
 def test_textgrid_names_are_file_names_and_unique():
     assert textgrid_names(["s1", "a/b", "A/B", "x:y", ".."]) == ["s1.TextGrid", "a_b.TextGrid", "A_B_2.TextGrid",
                                                                  "x_y.TextGrid", "utterance.TextGrid"]
+
+
+def test_the_csv_quotes_only_what_needs_it_and_writes_na_for_missing(tmp_path):
+    import csv
+
+    from engine.frame_table import FrameTable
+    from engine.io.tidy import sidecar_path, write_frame_table
+
+    t = FrameTable(columns={"phone": np.array(["a,b", 'say "x"', None, "two\nlines"], dtype=object),
+                            "time_s": np.array([0.0, 1 / 60, np.nan, 2.5]), "frame": np.arange(4)},
+                   units={"time_s": "s"}, descriptions={}, rate=60.0)
+    paths = write_frame_table(tmp_path / "t.csv", t)
+    assert paths == [tmp_path / "t.csv", sidecar_path(tmp_path / "t.csv")]
+    with (tmp_path / "t.csv").open(encoding="utf-8", newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows == [["phone", "time_s", "frame"], ["a,b", "0", "0"], ['say "x"', "0.01666667", "1"], ["NA", "NA", "2"],
+                    ["two\nlines", "2.5", "3"]]
+    with pytest.raises(ValueError, match="ends in .csv or .parquet"):
+        write_frame_table(tmp_path / "t.txt", t)
