@@ -48,8 +48,10 @@ def test_textgrids_from_the_menu_ask_before_replacing(window, qtbot, tmp_path, m
     _action(window, "Export TextGrids").trigger()
     assert asked and f"{n} of the TextGrids exist already" in asked[0] and first.read_text() == "edited in Praat"
     monkeypatch.setattr(QtWidgets.QMessageBox, "question", lambda *a, **k: Yes)
+    window.statusBar().clearMessage()
     _action(window, "Export TextGrids").trigger()
-    qtbot.waitUntil(lambda: first.read_text().startswith('File type = "ooTextFile"'), timeout=30000)
+    qtbot.waitUntil(lambda: f"wrote {n} TextGrids" in window.statusBar().currentMessage(), timeout=30000)
+    assert first.read_text().startswith('File type = "ooTextFile"')
 
 
 def test_the_table_filters_are_the_writers_suffixes():
