@@ -93,13 +93,15 @@ class Spectrogram:
             raise ValueError(f"dynamic_range must be > 0 dB, got {dynamic_range!r}; Praat's default is 50")
         f = np.maximum(self.frequencies, 1e-3 * max(float(self.frequencies[-1]), 1.0))  # no log of 0 Hz
         lift = (preemphasis / math.log(2.0)) * np.log(f / 1000.0)
-        db = self.power_db + lift[:, None].astype(np.float32)
+        db = self.power_db + lift[:, None].astype(np.float32)  # one working copy, changed in place below
         if maximum is not None:
             top = float(maximum)
         else:
             top = float(np.max(db)) if db.size else 0.0
-        level = np.clip((top - db) * np.float32(255.0 / dynamic_range), 0.0, 255.0)
-        return np.rint(level).astype(np.uint8)
+        np.subtract(np.float32(top), db, out=db)
+        db *= np.float32(255.0 / dynamic_range)
+        np.clip(db, 0.0, 255.0, out=db)
+        return np.rint(db, out=db).astype(np.uint8)
 
 
 @dataclass(frozen=True)
@@ -219,20 +221,24 @@ def spectrogram(samples, sample_rate, *, window_length: float = PRAAT_WIDEBAND["
     # a frame starts half a window before the sample at or left of its centre (Praat's arithmetic)
     starts = np.floor((times - x1) / dx).astype(np.int64) + 1 - half
     np.clip(starts, 0, max(len(x) - n_win, 0), out=starts)
-    offs = np.arange(n_win)
+    windows = np.lib.stride_tricks.sliding_window_view(x, n_win) if n_frames else None  # a view, no copy
     n_used = n_bands * per_band
     n_blocks = (n_frames + _BLOCK - 1) // _BLOCK
     for b in range(n_blocks):
         report(progress, "spectrogram", b, n_blocks)
         sl = slice(b * _BLOCK, min(n_frames, (b + 1) * _BLOCK))
-        frames = x[starts[sl, None] + offs] * win  # (B, n_win)
-        spec = sfft.rfft(frames, n=n_fft, axis=1)[:, :n_used]
-        p = spec.real ** 2 + spec.imag ** 2
+        frames = windows[starts[sl]]  # (B, n_win), a copy of just these frames
+        frames *= win
+        spec = sfft.rfft(frames, n=n_fft, axis=1, overwrite_x=True)[:, :n_used]
+        p = np.square(spec.real)
+        p += np.square(spec.imag)
         if per_band > 1:
             p = p.reshape(len(p), n_bands, per_band).sum(axis=2)
         p *= scale
         np.maximum(p, np.float32(1e-30), out=p)
-        out[:, sl] = (10.0 * np.log10(p)).T
+        np.log10(p, out=p)
+        p *= np.float32(10.0)
+        out[:, sl] = p.T
     report(progress, "spectrogram", n_blocks, n_blocks)
     return Spectrogram(times=times, frequencies=freqs, power_db=out, time_step=dt, window_length=float(window_length),
                        frequency_step=float(f_step), max_frequency=float(f_max))
