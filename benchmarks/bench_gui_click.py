@@ -197,10 +197,14 @@ def main():
         on = [c[0] for c, k in zip(warm, r["shown"]) if k]
         off = [c[0] for c, k in zip(warm, r["shown"]) if not k]
         pairs = np.asarray(on[:len(off)]) / np.asarray(off[:len(on)])
-        print(f"   warm, sound shown:  {gb.stats(on)}")
-        print(f"   warm, sound hidden: {gb.stats(off)}")
-        print(f"   ratio shown / hidden, click by click in turn: min {pairs.min():.2f}, median "
-              f"{np.median(pairs):.2f}, max {pairs.max():.2f} (n={pairs.size})")
+        cpu_on = [c[4] for c, k in zip(warm, r["shown"]) if k]
+        cpu_off = [c[4] for c, k in zip(warm, r["shown"]) if not k]
+        cpu_pairs = np.asarray(cpu_on[:len(cpu_off)]) / np.asarray(cpu_off[:len(cpu_on)])
+        print(f"   warm, sound shown:  {gb.stats(on)}; CPU {gb.stats(cpu_on)}")
+        print(f"   warm, sound hidden: {gb.stats(off)}; CPU {gb.stats(cpu_off)}")
+        print(f"   ratio shown / hidden, click by click in turn: wall min {pairs.min():.2f}, median "
+              f"{np.median(pairs):.2f}, max {pairs.max():.2f}; CPU median {np.median(cpu_pairs):.2f} "
+              f"(n={pairs.size})")
     for k, what in enumerate(("until the render starts (state update, picking)", "manifold view render",
                               "after it until on screen (lip render, window composition)")):
         print(f"   warm, {what}: {gb.stats([c[3][k] for c in warm])}")
