@@ -207,7 +207,7 @@ class Manifold(BaseEstimator):
 
         t = time.perf_counter()
         report(progress, "tangent frames", 0, 1)
-        opening, source, unit = lip_aperture(corpus, executor=executor), "lip aperture", "mm"  # the lips part
+        opening, source, unit = lip_aperture(corpus, executor=executor), "lip aperture", corpus.unit_label  # lips part
         if opening is None:
             opening, source, unit = np.asarray(Fx[:, 0], dtype=np.float64), "first shape component F^x_1", ""
         tangent = TangentFrames(n_neighbors=self.n_neighbors, random_state=self.random_state).fit(

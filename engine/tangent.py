@@ -311,6 +311,19 @@ class TangentFrames(BaseEstimator):
         return ((f"S: {what} ({u})" if u else f"S: {what} (arbitrary units)"),
                 (f"V: opening velocity ({u}/s)" if u else "V: opening velocity (arbitrary units/s)"))
 
+    def sv_basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(origin (3,), S (3,), V (3,)), float64: the plane point and the global shape and velocity directions.
+
+        S is re-orthogonalised against V (they are orthogonal by construction; this only
+        guards against rounding).
+        """
+        check_is_fitted(self, "plane_normal_")
+        V = np.asarray(self.plane_normal_, dtype=np.float64)
+        V = V / np.linalg.norm(V)
+        S = np.asarray(self.S_, dtype=np.float64)
+        S = S - (S @ V) * V
+        return np.asarray(self.plane_point_, dtype=np.float64), S / np.linalg.norm(S), V
+
     def class_proportions(self) -> dict:
         """Fraction of frames (with a step) in each class, ``{CLASS_NAMES[c]: fraction}``."""
         check_is_fitted(self, "classes_")

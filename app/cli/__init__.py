@@ -31,6 +31,7 @@ SUBCOMMANDS = {
     "synthesize": ("app.cli.synthesize", "synthesise a lip trajectory from phones, a TextGrid or text"),
     "evaluate": ("app.cli.evaluate", "held-out synthesis evaluation table, every method"),
     "clusters": ("app.cli.clusters", "phone cluster statistics table"),
+    "table": ("app.cli.table", "per-frame table (CSV, Parquet) and Praat TextGrids of a manifold"),
     "figures": ("app.cli.figures", "render the paper's figure set in batch"),
     "import": ("app.cli.importer", "convert a foreign corpus format to the native corpus file"),
     "render": ("app.cli.render", "render a synthesised utterance as an MP4 video with its audio"),
@@ -58,8 +59,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 #: arguments naming files a command writes / directories it writes into
-OUTPUT_FILE_ARGS = ("output", "csv", "markdown")
-OUTPUT_DIR_ARGS = ("outdir", "mesh_dir")
+OUTPUT_FILE_ARGS = ("output", "csv", "markdown", "praat")
+OUTPUT_DIR_ARGS = ("outdir", "mesh_dir", "textgrid_dir")
 
 
 def main(argv=None) -> int:

@@ -15,6 +15,10 @@ Outputs: ``-o traj.csv`` / ``-o traj.npy`` (``--values`` frames, fx or fy),
 ``-o speech.glb`` / ``.gltf`` (a glTF 2.0 morph-target animation: mean shape, shape
 components as targets, F^x as weights; the utterance's or ``--audio`` sound as a WAV
 beside it) and ``--mesh-dir DIR`` (one OBJ/PLY per frame), each written atomically.
+``--praat OUT.TextGrid`` writes, for Praat, the synthesis on the input alignment's timeline
+(:mod:`engine.synthesis_tiers`): a TextGrid with the input's span and phone tier, the
+targets and the synthesised opening's kinematic landmarks, and ``OUT.csv`` (its units in
+``OUT.csv.json``) with the synthesised aperture per frame.
 """
 from __future__ import annotations
 
@@ -67,6 +71,11 @@ def add_arguments(p):
                         "(default: %(default)s)")
     p.add_argument("--mesh-dir", metavar="DIR", help="write one mesh file per frame into DIR")
     p.add_argument("--mesh-format", choices=("obj", "ply"), default="obj", help="mesh file format (default: obj)")
+    p.add_argument("--praat", metavar="OUT.TextGrid",
+                   help="write the synthesis for Praat: OUT.TextGrid (the input's span and phones, the targets, the "
+                        "landmarks of the synthesised opening) and OUT.csv (the synthesised aperture per frame), "
+                        "on the input TextGrid's timeline")
+    p.add_argument("--force", action="store_true", help="--praat: replace files that exist already")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -169,6 +178,7 @@ def run(args) -> int:
         raise CliError(f"--values fy needs --method manifold (the {args.method} method moves in X, not Y)")
     if args.key_frames is not None and args.utterance is None:
         raise CliError("--key-frames picks frames of an utterance: give --utterance ID too")
+    praat = _praat_paths(args)
     manifold = _manifold(args)
     try:
         targets = _targets(args, manifold)
@@ -199,6 +209,8 @@ def run(args) -> int:
         else:
             write_trajectory_npy(out, values)
         print(f"wrote {out} ({values.shape[0]} frames x {values.shape[1]} values: {_values_meaning(args.values, c)})")
+    if praat is not None:
+        _write_praat(args, manifold, targets, traj, praat)
     if args.mesh_dir:
         from app.cli._common import output_directory
         from engine.io.export import write_mesh_sequence
@@ -216,6 +228,38 @@ def run(args) -> int:
         print(f"wrote {len(files)} {args.mesh_format.upper()} files to {args.mesh_dir}"
               + (f" ({note})" if note else ""))
     return 0
+
+
+def _praat_paths(args):
+    """``(OUT.TextGrid, OUT.csv, OUT.csv.json)`` of ``--praat``, refused before any work if one exists."""
+    if args.praat is None:
+        return None
+    from app.cli import CliError
+    from app.cli.table import refuse_existing
+    from engine.io.tidy import sidecar_path
+
+    grid = Path(args.praat)
+    if grid.suffix.lower() != ".textgrid":
+        raise CliError(f"--praat {grid}: give the TextGrid to write (OUT.TextGrid); OUT.csv goes beside it")
+    paths = (grid, grid.with_suffix(".csv"), sidecar_path(grid.with_suffix(".csv")))
+    refuse_existing(paths, args.force)
+    return paths
+
+
+def _write_praat(args, manifold, targets, traj, paths):
+    """``--praat``: the synthesis as a TextGrid and a CSV on the input alignment's timeline."""
+    from engine.io.praat import write_textgrid
+    from engine.io.tidy import write_frame_table
+    from engine.synthesis_tiers import input_timeline, synthesis_outputs
+
+    timeline = input_timeline(args.textgrid, tier=args.tier) if args.textgrid is not None else None
+    table, (xmin, xmax, tiers) = synthesis_outputs(manifold, targets, traj, timeline=timeline)
+    write_frame_table(paths[1], table)
+    write_textgrid(paths[0], xmin, xmax, tiers)
+    opening = [n for n in table.columns if n in ("lip_aperture", "opening_fx1")][0]
+    print(f"wrote {paths[0]} (tiers {', '.join(t.name for t in tiers)}; {xmin:g}-{xmax:g} s"
+          f"{', as the input' if timeline is not None else ''}) and {paths[1]} ({table.n_rows} frames: time_s, "
+          f"{opening}, ...; units in {paths[2].name})")
 
 
 def _write_animation(args, manifold, traj, out):

@@ -204,23 +204,15 @@ def y3(manifold) -> np.ndarray:
 
 
 def sv_basis(tangent) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(origin (3,), S (3,), V (3,)): the global shape and velocity directions.
-
-    S is re-orthogonalised against V (they are orthogonal by construction; this only
-    guards against rounding).
-    """
-    V = np.asarray(tangent.plane_normal_, dtype=np.float64)
-    V = V / np.linalg.norm(V)
-    S = np.asarray(tangent.S_, dtype=np.float64)
-    S = S - (S @ V) * V
-    S = S / np.linalg.norm(S)
-    return np.asarray(tangent.plane_point_, dtype=np.float64), S, V
+    """(origin (3,), S (3,), V (3,)): the global shape and velocity directions
+    (:meth:`engine.tangent.TangentFrames.sv_basis`)."""
+    return tangent.sv_basis()
 
 
 def frame_sv(manifold) -> np.ndarray:
     """Per frame (S, V), (N, 2): the opening and its velocity read on the manifold
-    (:meth:`engine.tangent.TangentFrames.sv_coordinates`). Opening frames lie at V > 0;
-    speech cycles are the paper's loops in this plane."""
+    (:meth:`engine.tangent.TangentFrames.sv_coordinates`, which the frame table uses too).
+    Opening frames lie at V > 0; speech cycles are the paper's loops in this plane."""
     return manifold.tangent_.sv_coordinates()
 
 

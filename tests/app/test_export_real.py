@@ -4,18 +4,8 @@ import pytest
 
 
 @pytest.fixture(scope="module")
-def mocha(shared_data):
-    import warnings
-
-    from engine.io import read_corpus, resample
-    from engine.manifold import Manifold
-
-    d = shared_data / "mocha-fsew0"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # a 2-s, 116-frame corpus: the data warnings are expected
-        corpus = resample(read_corpus(d / "fsew0_001.ema", alignment=d / "fsew0_001.lab"), 60.0)
-        m = Manifold().fit(corpus)
-    return m
+def mocha(mocha_manifold):
+    return mocha_manifold
 
 
 def test_glb_of_markers_is_a_point_cloud_with_the_recording_beside(mocha, tmp_path):
