@@ -433,7 +433,7 @@ class Corpus:
         except NpzReadError as exc:
             reason = exc.reason
         except Exception as exc:  # arrays of the wrong shape or type
-            reason = f"{type(exc).__name__}: {exc}"
+            reason = f"its arrays do not form a corpus ({exc})"
         raise CorpusError(f"{path}: cannot read as a Lipspace corpus (.npz): {reason}")
 
 

@@ -57,7 +57,7 @@ def test_native_npz_with_an_alignment(tmp_path):
         r = read_corpus(p, alignment=lab)
     assert [(x.start, x.end, x.label) for x in r.utterances[0].phones] == [(0, 0.5, "a"), (0.5, 1.0, "b")]
     np.testing.assert_array_equal(r.frames, c.frames)
-    with pytest.raises(ImportFormatError, match="100 Hz but rate=60"):
+    with pytest.raises(ImportFormatError, match="100 Hz but a rate of 60 Hz"):
         read_corpus(p, rate=60)
 
 

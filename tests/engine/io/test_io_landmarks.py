@@ -75,7 +75,7 @@ def test_long_format(tmp_path):
             rows.append(f"{f},{nm},{f},{1 if nm == 'ul' else -1},0")
     p = tmp_path / "long.csv"
     p.write_text("\n".join(rows) + "\n")
-    with pytest.raises(ImportFormatError, match="no time column; pass the frame rate"):
+    with pytest.raises(ImportFormatError, match="no time column; give the frame rate"):
         read_csv_landmarks(p)
     c = read_csv_landmarks(p, rate=50)
     assert c.point_names == ["ul", "ll"] and c.n_frames == 10 and c.dims == 3
@@ -122,26 +122,24 @@ def test_time_column_and_a_different_rate_is_refused(tmp_path):
     """A CSV's own times decide its rate: a --rate that disagrees is an error, not silently used."""
     p = tmp_path / "t.csv"
     p.write_text("time,a_x,a_y\n" + "".join(f"{k / 100:.2f},{k},{-k}\n" for k in range(20)))
-    with pytest.raises(ImportFormatError, match=r"time column 'time' gives 100 Hz but rate=60 was given"):
+    with pytest.raises(ImportFormatError, match=r"time column 'time' gives 100 Hz but a rate of 60 Hz was given \(--rate\)"):
         read_csv_landmarks(p, rate=60)
     assert read_csv_landmarks(p, rate=100).rate == 100 == read_csv_landmarks(p).rate
     q = tmp_path / "long.csv"
     q.write_text("time,point,x,y\n" + "".join(f"{k / 50:.2f},m,{k},0\n" for k in range(10)))
-    with pytest.raises(ImportFormatError, match=r"gives 50 Hz but rate=25"):
+    with pytest.raises(ImportFormatError, match=r"gives 50 Hz but a rate of 25 Hz"):
         read_csv_landmarks(q, rate=25)
 
 
 def test_long_table_frame_gaps_are_filled_and_named(tmp_path):
-    """Missing frame numbers are dropouts (interpolated, with a warning naming them), never closed up."""
-    from engine.io.errors import ImportDataWarning
-
+    """Missing frame numbers are dropouts (interpolated, the history naming them), never closed up."""
     p = tmp_path / "gaps.csv"
     p.write_text("frame,point,x,y\n" + "".join(f"{f},m,{2 * f},1\n" for f in (0, 1, 2, 5, 6, 7)))
-    with pytest.warns(ImportDataWarning, match=r"frames 3, 4 \(2 of 8\) have no rows"):
-        c = read_csv_landmarks(p, rate=10)
+    c = read_csv_landmarks(p, rate=10)
+    assert [h for h in c.history if "4 without a row in the table" in h and "2 of 8 frames (frames 3, 4)" in h]
     assert c.n_frames == 8  # not 6: the track keeps its timing
     np.testing.assert_allclose(c.frames[:, 0], 2 * np.arange(8))  # the gap interpolated linearly
-    with pytest.warns(ImportDataWarning), pytest.raises(ImportFormatError, match="missing") as e:
+    with pytest.raises(ImportFormatError, match="missing") as e:
         read_csv_landmarks(p, rate=10, fill_gaps=False)
     assert e.value.frame == 3
     p.write_text("frame,point,x,y\n0,m,0,0\n1,m,1,1\n1000000000,m,2,2\n")  # a typo: no billion-row array
