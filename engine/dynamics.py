@@ -134,9 +134,16 @@ class DynamicFeatures(BaseEstimator):
                 ax = s
             else:
                 av = s
-        if ax == 0 or av == 0:
-            raise ValueError("the lips never move in this corpus (F^x or its velocity is constant); "
+        lengths = np.diff(np.asarray(bounds, dtype=np.int64).reshape(-1, 2), axis=1).ravel()
+        if lengths.size and lengths.max() < 2:
+            raise ValueError(f"every utterance holds a single frame ({lengths.size} utterances): a velocity needs "
+                             "at least 2 consecutive frames of one utterance")
+        if ax == 0:
+            raise ValueError("the lip shape never changes in this corpus (every frame is the same shape); "
                              "nothing to embed")
+        if av == 0:
+            raise ValueError("the lips never move within an utterance of this corpus (no velocity); nothing to "
+                             "embed")
         self.alpha_ = 1.0 / ax
         self.beta_ = 1.0 / av
         return self
