@@ -188,7 +188,7 @@ def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneI
 
     An alignment whose speech (phones other than pauses) ends more than
     :data:`ALIGNMENT_OVERRUN_WARN` s after the data is
-    cut with an :class:`~engine.io.errors.ImportDataWarning` naming both durations; one
+    cut and reported (:func:`engine.io.repairs.report_repair`) naming both durations; one
     :data:`ALIGNMENT_OVERRUN_RATIO` times as long as the data (and over 1 s longer) is
     refused with an :class:`ImportFormatError` naming ``path`` (a different
     recording's alignment, or a wrong frame rate).
@@ -205,14 +205,9 @@ def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneI
             raise ImportFormatError(path if path is not None else "<alignment>",
                                     f"{what}: {end / dur:.1f} times as long. Is it this recording's alignment, "
                                     "and is the frame rate right?")
-        import warnings
+        from engine.io.repairs import report_repair
 
-        from engine.io.errors import ImportDataWarning
-
-        where = f"{path}: " if path is not None else ""
-        warnings.warn(ImportDataWarning(
-            f"{where}{what}; it was cut at the end of the data ({lost} phone{'s' * (lost != 1)} dropped)"),
-            stacklevel=2)
+        report_repair(path, f"{what}; it was cut at the end of the data ({lost} phone{'s' * (lost != 1)} dropped)")
     out = []
     for p in phones:
         s, e, lab = float(p.start), float(p.end), str(p.label).strip()

@@ -6,6 +6,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from engine.io.errors import ImportFormatError
+from engine.io.repairs import reports_repairs
 
 __all__ = ["read_corpus", "detect_format", "FORMATS", "FORMAT_ALIASES"]
 
@@ -92,6 +93,7 @@ def _reader(fmt):
     return getattr(importlib.import_module(mod), fn)
 
 
+@reports_repairs
 def _read_native(path, rate=None, alignment=None, tier=None):
     from engine._persist import NpzReadError, read_npz
     from engine.corpus import Corpus
