@@ -62,6 +62,11 @@ def as_user_error(exc: OSError) -> OSError:
 FORCE_HINT = "Pass --force to replace existing files, or choose another name"
 
 
+def _naming(exc: OSError, path) -> OSError:
+    """``exc`` naming ``path`` (the file the user asked for) instead of whatever it named."""
+    return type(exc)(exc.errno, exc.strerror or str(exc), str(path)) if exc.errno else exc
+
+
 class OutputExistsError(FileExistsError):
     """An output file already exists and replacing it was not asked for.
 
@@ -123,8 +128,11 @@ class Outputs:
             raise IsADirectoryError(errno.EISDIR, "is a directory; give a file name", str(target))
         if target.exists() and not force:
             raise OutputExistsError(target, option, hint=self.hint)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.part-", suffix=target.suffix, dir=target.parent)
+        try:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.part-", suffix=target.suffix, dir=target.parent)
+        except OSError as exc:  # a read-only or full folder: the user's name, not the temporary one
+            raise _naming(exc, target) from None
         os.close(fd)
         os.unlink(tmp)  # writers create it (some refuse to write over an existing file)
         tmp = Path(tmp)
@@ -148,8 +156,11 @@ class Outputs:
             raise NotADirectoryError(errno.ENOTDIR, "exists and is not a directory", str(target))
         if not self.force and (exclusive or names is not None):
             self._refuse_existing(target, pattern, None if exclusive else set(names), option)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.part-", dir=target.parent))
+        try:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.part-", dir=target.parent))
+        except OSError as exc:
+            raise _naming(exc, target) from None
         _STAND_IN[str(tmp)] = str(target)
         self._folders.append((target, tmp, pattern, option, bool(exclusive)))
         return tmp
