@@ -240,7 +240,7 @@ def check_synthesis_options(args) -> None:
     sm = getattr(args, "smoothing", None)
     if sm is not None and not (math.isfinite(sm) and 0 <= sm <= MAX_SMOOTHING_FRAMES):
         raise CliError(f"--smoothing {sm:g}: must be from 0 to {MAX_SMOOTHING_FRAMES:g} frames (the s.d. of the "
-                       "Gaussian smoothing the state path; 0 = none)")
+                       "Gaussian that smooths the state path; 0 = none)")
     cand = getattr(args, "candidates", None)
     if cand is not None and not 1 <= cand <= 1000:
         raise CliError(f"--candidates {cand}: must be from 1 to 1000 states per phone")

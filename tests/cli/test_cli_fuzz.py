@@ -259,8 +259,8 @@ def test_fuzz_synthesize(files, data, capsys):
                                 _inputs(files)))
     argv = ["synthesize", "--manifold", data.draw(st.sampled_from([str(files["manifold"]), str(files["junk"]),
                                                                    str(files["corpus"])])), source, value, "-q"]
-    for opt in data.draw(st.lists(st.sampled_from(["--tempo", "--inverse-dims", "--candidates"]), max_size=2,
-                                  unique=True)):
+    for opt in data.draw(st.lists(st.sampled_from(["--tempo", "--inverse-dims", "--candidates", "--smoothing"]),
+                                  max_size=2, unique=True)):
         argv += [opt, data.draw(NUMBERS)]
     with tempfile.TemporaryDirectory() as out:
         target = data.draw(st.sampled_from(["t.csv", "t.npy", "t.txt", ".", None, "mesh"]))
