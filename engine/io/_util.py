@@ -208,7 +208,7 @@ def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneI
         from engine.io.repairs import report_repair
 
         report_repair(path, f"{what}; it was cut at the end of the data ({lost} phone{'s' * (lost != 1)} dropped)")
-    out = []
+    out, empty = [], []
     for p in phones:
         s, e, lab = float(p.start), float(p.end), str(p.label).strip()
         if not lab or s >= dur:
@@ -217,6 +217,13 @@ def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneI
         s = max(s, 0.0)
         if e > s:
             out.append(PhoneInterval(s, e, lab))
+        elif lab.lower() not in _PAUSES:
+            empty.append(f"{lab} at {s:.3f} s")
+    if empty:  # a labelled phone of no duration has no frame to stand for: dropped, and said
+        from engine.io.repairs import report_repair
+
+        report_repair(path, f"{len(empty)} phone{'s' * (len(empty) != 1)} of zero duration dropped from the "
+                      f"alignment ({', '.join(empty[:5])}{', ...' if len(empty) > 5 else ''})")
     return tuple(out)
 
 

@@ -3,9 +3,7 @@ naming the file, the field and the frame: dropouts, break flags, non-finite and 
 that are zero, non-finite or absurd, duplicated or missing columns, counts that disagree with the body."""
 import math
 import re
-import warnings
 
-import c3d
 import numpy as np
 import pytest
 import scipy.io
@@ -18,6 +16,7 @@ from engine.io import (ImportFormatError, read_c3d, read_corpus, read_csv_landma
 from engine.io._util import IMPLAUSIBLE_COORDINATE, MAX_FILL_FRACTION, fill_gaps
 from engine.io.errors import ImportDataWarning
 from engine.io.repairs import collecting_repairs, frame_runs, report_repair
+from test_io_c3d import _write as _write_c3d  # the C3D writer of the reader's own tests (rate, labels, invalid)
 
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
@@ -74,14 +73,10 @@ def test_a_repair_outside_a_reader_is_a_warning():
 # ------------------------------------------------------------------ every reader repairs and says so
 def test_csv_nan_inf_and_empty_cells_are_reported(tmp_path):
     p = tmp_path / "holes.csv"
-    rows = ["time,UL_x,UL_y,LL_x,LL_y"]
-    for k in range(50):
-        v = [f"{math.sin(k / 5):.4f}", "2", "3", "4"]
-        v[0] = "" if k in (10, 11) else v[0]
-        v[1] = "nan" if k == 20 else v[1]
-        v[2] = "inf" if k == 30 else v[2]
-        rows.append(",".join([f"{k / 100:.2f}", *v]))
-    p.write_text("\n".join(rows) + "\n")
+    holes = {(10, 0): "", (11, 0): "", (20, 1): "nan", (30, 2): "inf"}  # (frame, column): what the cell holds
+    X = np.column_stack([np.sin(np.arange(50) / 5), np.full((50, 3), [2.0, 3.0, 4.0])])
+    cells = [[holes.get((k, j), f"{v:.4f}") for j, v in enumerate(row)] for k, row in enumerate(X)]
+    p.write_text("time,UL_x,UL_y,LL_x,LL_y\n" + "".join(f"{k / 100:.2f},{','.join(r)}\n" for k, r in enumerate(cells)))
     c = read_csv_landmarks(p)
     (note,) = _notes(c, "missing samples")
     assert "3 empty or NaN, 1 infinite" in note and "frames 10, 11, 20, 30" in note and str(p) in note
@@ -107,26 +102,9 @@ def test_ema_break_flags_are_reported(tmp_path):
     assert "12 break flag 0" in note and "frames 10-12" in note and "UL_x, UL_y, LL_x, LL_y" in note
 
 
-def _c3d_file(path, P, *, rate=120.0, labels=None, invalid=()):
-    w = c3d.Writer(point_rate=rate)
-    w.set_point_labels(labels or [f"M{k}" for k in range(P.shape[1])])
-    for i in range(P.shape[0]):
-        p = np.zeros((P.shape[1], 5), np.float32)
-        p[:, :3] = P[i]
-        for f, m in invalid:
-            if f == i:
-                p[m, 3] = -1
-        w.add_frames([(p, np.zeros((0, 0)))])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        with open(path, "wb") as fh:
-            w.write(fh)
-    return path
-
-
 def test_c3d_invalid_markers_and_clashing_labels_are_reported(tmp_path):
     P = np.random.default_rng(1).normal(size=(30, 3, 3)).astype(np.float32)
-    c = read_c3d(_c3d_file(tmp_path / "m.c3d", P, labels=["A", "B", "A"], invalid=[(5, 1), (6, 1)]))
+    c = read_c3d(_write_c3d(tmp_path / "m.c3d", P, labels=["A", "B", "A"], invalid=[(5, 1), (6, 1)]))
     assert "6 marked invalid (negative residual)" in _notes(c, "missing samples")[0]
     assert c.point_names == ["A#0", "B#1", "A#2"] and _notes(c, "share the label(s) 'A'")
 
@@ -202,7 +180,7 @@ def test_every_header_rate_goes_through_one_check(tmp_path):
             read_mview(_mview_file(tmp_path / "h.mat", sig, srate=srate), sensors=("UL",))
     P = np.random.default_rng(8).normal(size=(10, 2, 3)).astype(np.float32)
     with pytest.raises(ImportFormatError, match="POINT:RATE is 1e\\+06 Hz"):
-        read_c3d(_c3d_file(tmp_path / "r.c3d", P, rate=1e6))
+        read_c3d(_write_c3d(tmp_path / "r.c3d", P, rate=1e6))
     scipy.io.savemat(tmp_path / "m.mat", {"data": np.zeros((20, 42)), "fs": np.array([[0.0]])})
     with pytest.raises(ImportFormatError, match="variable 'fs' is 0"):
         read_corpus(tmp_path / "m.mat", layout="ema7x6")
@@ -379,3 +357,17 @@ def test_mview_srate_is_in_range_or_refused_by_name(tmp_path, srate):
         assert "SRATE is" in str(exc)
         return
     assert 10 <= srate <= 20000 and c.rate == srate
+
+
+def test_reversed_and_zero_length_phones_are_refused_or_reported(tmp_path):
+    p = tmp_path / "r.TextGrid"
+    p.write_text(_long_textgrid(2, 2).replace("            xmax = 0.5\n", "            xmax = 0.25\n", 1).replace(
+        "            xmin = 0.5\n", "            xmin = 0.3\n", 1).replace("            xmax = 1.0", "            xmax = 0.28"))
+    with pytest.raises(ImportFormatError, match=r"xmin > xmax"):  # a reversed interval: never dropped quietly
+        read_textgrid(p)
+    csv = tmp_path / "a.csv"
+    csv.write_text("time,a_x,a_y\n" + "".join(f"{k / 100:.2f},{k},0\n" for k in range(50)))
+    lab = tmp_path / "a.lab"
+    lab.write_text("0 0.2 p\n0.2 0.2 t\n0.2 0.4 aa\n")
+    (note,) = _notes(read_corpus(csv, alignment=lab), "zero duration")
+    assert "1 phone of zero duration dropped from the alignment (t at 0.200 s)" in note and str(csv) in note
