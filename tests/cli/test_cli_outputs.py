@@ -104,27 +104,6 @@ def test_force_replaces_a_frame_sequence_whole(mfile, tmp_path, capsys):
 
 
 # ------------------------------------------------------------------ item 4: all outputs or none
-def test_a_stop_while_meshes_are_written_leaves_no_trajectory(mfile, tmp_path, capsys, monkeypatch):
-    """The campaign's: SIGTERM during 'synthesize --mesh-dir ... -o t.csv' left t.csv."""
-    import engine.io.export as export
-
-    real, calls = export.write_obj, []
-
-    def stopped(*a, **k):
-        calls.append(1)
-        if len(calls) == 5:
-            raise KeyboardInterrupt
-        return real(*a, **k)
-
-    monkeypatch.setattr(export, "write_obj", stopped)
-    old = _mine(tmp_path / "t.csv")
-    assert main(["synthesize", "--manifold", str(mfile), "--phones", PHONES, "--mesh-dir", str(tmp_path / "mesh"),
-                 "-o", str(old), "--force"]) == 130
-    err = capsys.readouterr().err
-    assert err.strip().endswith("interrupted; nothing was written."), err
-    assert old.read_bytes() == b"a user's own file\n" and not (tmp_path / "mesh").exists() and _left(tmp_path) == []
-
-
 def test_a_signal_while_outputs_move_in_lets_them_all_land(mfile, tmp_path, capsys, monkeypatch):
     """SIGTERM arriving while the finished outputs are moved into place: all of them land, exit 0, and the
     message says the signal came too late, instead of 'nothing was written' over files that exist."""
