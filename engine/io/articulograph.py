@@ -181,7 +181,7 @@ def read_wave(path, *, layout=None, rate: float | None = None, points=None, alig
         if not raw.strip():
             continue
         tok = raw.split("\t")
-        if len(tok) < len(head):
+        if len(tok) < len(head) or any(t.strip() for t in tok[len(head):]):
             raise ImportFormatError(path, f"has {len(tok)} fields; the header has {len(head)}", line=ln + 1)
         try:
             times.append(float(tok[t_col]))

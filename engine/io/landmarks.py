@@ -198,9 +198,15 @@ def read_csv_landmarks(path, *, rate: float | None = None, points=None, space: s
         ids = _numbers(body, fid, path, "face_id")
         want = face if face is not None else np.nanmin(ids) if np.isfinite(ids).any() else None
         if want is not None:
+            others = sorted({float(i) for i in ids if i != want and np.isfinite(i)})
             body = [b for b, i in zip(body, ids) if i == want]
             if len(body) < 2:
-                raise ImportFormatError(path, f"face_id {want} has {len(body)} rows; expected at least 2")
+                raise ImportFormatError(path, f"face_id {want:g} has {len(body)} rows; expected at least 2")
+            if others:  # several faces were tracked: one is read, and the others are said to be left out
+                from engine.io.repairs import report_repair
+
+                report_repair(path, f"{len(ids) - len(body)} rows of other faces (face_id "
+                              f"{', '.join(f'{i:g}' for i in others[:5])}) left out; face_id {want:g} is read")
     pts, dims, openface = _wide_points(header, space, path)
     if points is not None:
         if isinstance(points, str) and points == "lips":

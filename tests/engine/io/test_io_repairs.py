@@ -371,3 +371,31 @@ def test_reversed_and_zero_length_phones_are_refused_or_reported(tmp_path):
     lab.write_text("0 0.2 p\n0.2 0.2 t\n0.2 0.4 aa\n")
     (note,) = _notes(read_corpus(csv, alignment=lab), "zero duration")
     assert "1 phone of zero duration dropped from the alignment (t at 0.200 s)" in note and str(csv) in note
+
+
+def test_other_faces_and_extra_fields_are_said_or_refused(tmp_path):
+    head = "frame, face_id, timestamp, success, x_0, y_0"
+    rows = [f"{k // 2 + 1}, {k % 2}, {k // 2 / 30:.3f}, 1, {k}, 1" for k in range(40)]
+    p = tmp_path / "two.csv"
+    p.write_text(head + "\n" + "\n".join(rows) + "\n")
+    (note,) = _notes(read_csv_landmarks(p), "other faces")
+    assert "20 rows of other faces (face_id 1) left out; face_id 0 is read" in note
+    w = tmp_path / "w.tsv"
+    w.write_text("Time\tSensor 1 Id\tSensor 1 Tx\tSensor 1 Ty\tSensor 1 Tz\n" + "".join(
+        f"{k / 100:.2f}\t1\t{k}\t1\t2{chr(9) + '7' if k == 3 else chr(9)}\n" for k in range(20)))
+    with pytest.raises(ImportFormatError, match="line 5: has 6 fields; the header has 5"):
+        read_wave(w)
+
+
+@SETTINGS
+@given(st.integers(-2, 60), st.integers(2, 40))
+def test_est_frame_counts_must_match_the_body(tmp_path, declared, held):
+    t = np.arange(held) / 500.0
+    p = write_est_track(tmp_path / "e.ema", t, np.zeros((held, 2)), ["ul_x", "ul_y"], binary=False)
+    p.write_text(p.read_text().replace(f"NumFrames {held}\n", f"NumFrames {declared}\n"))
+    try:
+        c = read_ema(p, sensors=("UL",))
+    except ImportFormatError as exc:
+        assert declared != held and str(p) in str(exc) and ("NumFrames" in str(exc) or "frames" in str(exc))
+        return
+    assert declared == held and c.n_frames == held
