@@ -240,7 +240,8 @@ class Case:
     env: dict = field(default_factory=dict)
     never: str | None = None  # text stderr must not hold (a misleading hint)
     after: object = None  # callable(d) -> problem or None, run after the case (e.g. info keeps the repair)
-    stop_after: float | None = None  # seconds until SIGTERM
+    stop_after: float | None = None  # seconds until SIGTERM (with stop_when: at most)
+    stop_when: str | None = None  # SIGTERM as soon as a file matching this glob (below the case folder) exists
     lines: int = 1  # most lines a refusal may print (the unreadable inputs are listed one per line)
 
 
@@ -475,11 +476,12 @@ def cases_30(d: Path):
         # 4. stopped or failed at any moment: the complete old outputs or none
         Case("SIGTERM: synthesize --mesh-dir -o t.csv", [S, "--manifold", m, "--phones", "sil 4 aa 4 sil 4",
                                                          "--mesh-dir", f"{o}/mesh", "-o", f"{o}/t.csv", "-q"], None,
-             None, [f"{o}/t.csv", f"{o}/mesh"], stop_after=6),
+             None, [f"{o}/t.csv", f"{o}/mesh"], stop_after=30, stop_when="out/**/frame_0001*"),
         Case("SIGTERM: --audio-dir import of 24 files", imp + [str(p) for p in sorted(many.iterdir())] +
              ["-o", f"{o}/h.npz", "--audio-dir", f"{o}/aud", "-q"], None, None, [f"{o}/h.npz", f"{o}/aud"],
-             stop_after=4),
-        Case("SIGTERM: figures", ["figures", m, "-o", f"{o}/figs", "-q"], None, None, [f"{o}/figs"], stop_after=5),
+             stop_after=30, stop_when="out/**/F01_R03.wav"),
+        Case("SIGTERM: figures", ["figures", m, "-o", f"{o}/figs", "-q"], None, None, [f"{o}/figs"], stop_after=30,
+             stop_when="out/**/fig2b.png"),
         Case("SIGTERM: --force import keeps the old", imp + [str(p) for p in sorted(many.iterdir())] +
              ["-o", f"{o}/h.npz", "-q", "--force"], None, None, keep=[_old(o / "h.npz")], stop_after=4),
         # 5. damaged window state files: set aside, named, no traceback
@@ -555,7 +557,13 @@ def run_case(case, cwd, cap, timeout, root):
     p = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          preexec_fn=limit, start_new_session=True)
     try:
-        if sig is not None:
+        if sig is not None and case.stop_when:  # mid-way: once the command has begun writing what it writes
+            deadline = time.monotonic() + sig
+            while p.poll() is None and time.monotonic() < deadline and not any(cwd.glob(case.stop_when)):
+                time.sleep(0.02)
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGTERM)
+        elif sig is not None:
             try:
                 p.wait(sig)
             except subprocess.TimeoutExpired:
