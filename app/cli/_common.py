@@ -7,7 +7,7 @@ from pathlib import Path
 
 from engine.progress import Cancelled
 
-__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg"]
+__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg", "command_outputs", "check_synthesis_bounds"]
 
 
 @contextlib.contextmanager
