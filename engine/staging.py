@@ -111,6 +111,7 @@ class Outputs:
         self.force = bool(force)
         self.guard = guard or contextlib.nullcontext
         self.hint = hint
+        self._made: list[Path] = []  # parent folders created for the outputs (removed again if nothing lands)
         self._files: list[tuple[Path, Path, str | None, bool]] = []  # (target, temporary, option, force)
         # (target, temporary, pattern, option, exclusive)
         self._folders: list[tuple[Path, Path, str, str | None, bool]] = []
@@ -129,7 +130,7 @@ class Outputs:
         if target.exists() and not force:
             raise OutputExistsError(target, option, hint=self.hint)
         try:
-            target.parent.mkdir(parents=True, exist_ok=True)
+            self._parents(target)
             fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.part-", suffix=target.suffix, dir=target.parent)
         except OSError as exc:  # a read-only or full folder: the user's name, not the temporary one
             raise _naming(exc, target) from None
@@ -157,13 +158,19 @@ class Outputs:
         if not self.force and (exclusive or names is not None):
             self._refuse_existing(target, pattern, None if exclusive else set(names), option)
         try:
-            target.parent.mkdir(parents=True, exist_ok=True)
+            self._parents(target)
             tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.part-", dir=target.parent))
         except OSError as exc:
             raise _naming(exc, target) from None
         _STAND_IN[str(tmp)] = str(target)
         self._folders.append((target, tmp, pattern, option, bool(exclusive)))
         return tmp
+
+    def _parents(self, target: Path) -> None:
+        """Create ``target``'s missing parent folders, remembering them."""
+        missing = [q for q in reversed(target.parents) if not q.exists()]
+        target.parent.mkdir(parents=True, exist_ok=True)
+        self._made += missing
 
     def _refuse_existing(self, target: Path, pattern: str, names, option) -> None:
         if not target.is_dir():
@@ -195,7 +202,11 @@ class Outputs:
         for _, tmp, _, _, _ in self._folders:
             shutil.rmtree(tmp, ignore_errors=True)
             _STAND_IN.pop(str(tmp), None)
-        self._files, self._folders = [], []
+        if not self.done:
+            for q in reversed(self._made):  # folders made for outputs that never landed
+                with contextlib.suppress(OSError):
+                    q.rmdir()
+        self._files, self._folders, self._made = [], [], []
 
     def commit(self) -> list[Path]:
         """Move every staged output into place; all of them or, on failure, none (old files restored).
@@ -268,7 +279,7 @@ class Outputs:
         for _, tmp, _, _, _ in self._folders:
             shutil.rmtree(tmp, ignore_errors=True)
         written = [t for _, t, _, _ in moves]
-        self.discard()
         self.done = True
+        self.discard()
         _COMMITTED.extend(str(t) for t in written)
         return written

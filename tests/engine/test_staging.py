@@ -115,3 +115,15 @@ def test_user_path_maps_temporary_names(tmp_path):
     assert user_path("/elsewhere/y") == "/elsewhere/y"
     out.discard()
     assert user_path(f) == str(f) and not _leftovers(tmp_path)
+
+
+def test_folders_made_for_outputs_that_never_land_are_removed(tmp_path):
+    with pytest.raises(RuntimeError):
+        with Outputs() as out:
+            out.file(tmp_path / "a" / "b" / "t.csv").write_text("x")
+            out.folder(tmp_path / "a" / "c" / "mesh")
+            raise RuntimeError("the work failed")
+    assert list(tmp_path.iterdir()) == []
+    with Outputs() as out:
+        out.file(tmp_path / "a" / "b" / "t.csv").write_text("x")
+    assert (tmp_path / "a" / "b" / "t.csv").read_text() == "x"
