@@ -83,13 +83,17 @@ def test_csv_nan_inf_and_empty_cells_are_reported(tmp_path):
     assert read_corpus(p).history == c.history  # the dispatcher keeps it too
 
 
-def test_openface_unsuccessful_rows_are_reported(tmp_path):
-    head = "frame, face_id, timestamp, success, x_0, x_1, y_0, y_1"
-    rows = [f"{k + 1}, 0, {k / 30:.3f}, {0 if k in (4, 5) else 1}, {k}, {k}, 1, 2" for k in range(30)]
-    p = tmp_path / "of.csv"
-    p.write_text(head + "\n" + "\n".join(rows) + "\n")
-    (note,) = _notes(read_csv_landmarks(p), "missing samples")
+def test_openface_unsuccessful_rows_and_other_faces_are_reported(tmp_path):
+    def openface(rows):  # frame, face_id, success per row; two landmarks
+        p = tmp_path / "of.csv"
+        p.write_text("frame, face_id, timestamp, success, x_0, x_1, y_0, y_1\n" + "".join(
+            f"{f}, {face}, {f / 30:.3f}, {ok}, {k}, {k}, 1, 2\n" for k, (f, face, ok) in enumerate(rows)))
+        return read_csv_landmarks(p)
+
+    (note,) = _notes(openface([(k + 1, 0, int(k not in (4, 5))) for k in range(30)]), "missing samples")
     assert "8 success 0" in note and "frames 4, 5" in note
+    (note,) = _notes(openface([(k // 2 + 1, k % 2, 1) for k in range(40)]), "other faces")
+    assert "20 rows of other faces (face_id 1) left out; face_id 0 is read" in note
 
 
 def test_ema_break_flags_are_reported(tmp_path):
@@ -373,13 +377,7 @@ def test_reversed_and_zero_length_phones_are_refused_or_reported(tmp_path):
     assert "1 phone of zero duration dropped from the alignment (t at 0.200 s)" in note and str(csv) in note
 
 
-def test_other_faces_and_extra_fields_are_said_or_refused(tmp_path):
-    head = "frame, face_id, timestamp, success, x_0, y_0"
-    rows = [f"{k // 2 + 1}, {k % 2}, {k // 2 / 30:.3f}, 1, {k}, 1" for k in range(40)]
-    p = tmp_path / "two.csv"
-    p.write_text(head + "\n" + "\n".join(rows) + "\n")
-    (note,) = _notes(read_csv_landmarks(p), "other faces")
-    assert "20 rows of other faces (face_id 1) left out; face_id 0 is read" in note
+def test_extra_wave_fields_are_refused(tmp_path):
     w = tmp_path / "w.tsv"
     w.write_text("Time\tSensor 1 Id\tSensor 1 Tx\tSensor 1 Ty\tSensor 1 Tz\n" + "".join(
         f"{k / 100:.2f}\t1\t{k}\t1\t2{chr(9) + '7' if k == 3 else chr(9)}\n" for k in range(20)))
