@@ -645,12 +645,14 @@ def ask_restore(recovery, parent=None) -> str:
 
 
 def launch(path=None, preset: str = "default", session: dict | None = None, restore: bool | None = None, *,
-           kinematics: str = "classic") -> int:
+           kinematics: str = "classic", notes=()) -> int:
     """Open the explorer on ``path`` (or the synthetic talker ``preset`` with ``kinematics``)
     and run the event loop; a session's (or a restored autosave's) source overrides them.
 
     ``restore`` answers the autosave question after an abnormal exit (None: ask in a
-    dialog); see :mod:`app.autosave`.
+    dialog); see :mod:`app.autosave`. Damaged state files (autosave markers and sessions,
+    the window settings) are moved aside and said, on stderr and in one dialog, with
+    ``notes`` (e.g. a --session file that could not be opened); the window opens anyway.
     """
     from app.autosave import Autosaver, resolve_recovery
     from app.qt_app import make_application
@@ -666,11 +668,18 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
         autosaver, recovery = None, None
     win = MainWindow(autosave=autosaver)
     win.show()
+    said = list(notes)
+    for note in (autosaver.set_aside if autosaver is not None else []) + win.settings.set_aside:
+        print(f"lipspace explore: warning: {note}", file=sys.stderr)
+        said.append(note)
+    if said:
+        win.show_error("\n\n".join(said))
     if autosaver is not None and session is None:
         try:
             restored = resolve_recovery(autosaver, recovery, restore=restore, ask=lambda r: ask_restore(r, win))
         except SessionError as exc:
-            QtWidgets.QMessageBox.warning(win, "Lipspace", user_message(exc, doing="restore the autosaved session"))
+            print(f"lipspace explore: warning: {exc}", file=sys.stderr)
+            win.show_error(user_message(exc, doing="restore the autosaved session"))  # not modal: the window runs
             restored = None
         if restored is not None:
             session, path = restored, None

@@ -16,6 +16,8 @@ from engine.frame_blocks import BlockFrames
 __all__ = ["CorpusError", "CorpusWarning", "PhoneInterval", "Utterance", "Corpus"]
 
 FORMAT_VERSION = 1
+#: largest coordinate magnitude a corpus holds (the importers treat larger samples as dropouts)
+MAX_COORDINATE = 1e6
 
 
 class CorpusError(ValueError):
@@ -185,6 +187,12 @@ class Corpus:
                 f"{self.name}: frame {i} column {j} is {F[i, j]} (NaN/inf); "
                 f"{int(bad.any(axis=1).sum())} frames are not finite. Interpolate or drop them before building."
             )
+        if not isinstance(F, BlockFrames) and F.size and float(np.abs(F).max()) > MAX_COORDINATE:
+            i, j = np.argwhere(np.abs(F) > MAX_COORDINATE)[0]
+            raise CorpusError(
+                f"{self.name}: frame {i} column {j} is {F[i, j]:g}; coordinates beyond {MAX_COORDINATE:g} (in any "
+                "unit lips are measured in) are a damaged sample or wrong units. Import the recording again "
+                "(lipspace import treats them as dropouts)")
         if not self.utterances:
             raise CorpusError(f"{self.name}: no utterances; every frame must belong to one")
         expected = 0
@@ -469,7 +477,7 @@ class Corpus:
         except NpzReadError as exc:
             reason = exc.reason
         except Exception as exc:  # arrays of the wrong shape or type
-            reason = f"{type(exc).__name__}: {exc}"
+            reason = f"its arrays do not form a corpus ({exc})"
         raise CorpusError(f"{path}: cannot read as a Lipspace corpus (.npz): {reason}")
 
 

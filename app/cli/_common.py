@@ -7,7 +7,8 @@ from pathlib import Path
 
 from engine.progress import Cancelled
 
-__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg", "roles_text"]
+__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg", "command_outputs", "check_synthesis_bounds",
+           "roles_text"]
 
 
 def roles_text(names, roles, *, limit: int = 12) -> str:
@@ -117,51 +118,14 @@ def load_manifold_arg(path):
         raise CliError(str(exc)) from None
 
 
-@contextlib.contextmanager
-def output_directory(path, *, pattern: str = "*"):
-    """Yield a fresh temporary directory beside ``path``; on success its files land in ``path``.
+def command_outputs(args):
+    """The outputs of one command as one transaction (:class:`engine.staging.Outputs`): existing
+    files refused unless ``--force``, everything moved into place at the end with stop signals
+    deferred meanwhile, nothing left behind by an error or a signal."""
+    from app.cli import signals_deferred
+    from engine.staging import Outputs
 
-    A missing or empty ``path`` is replaced by the temporary directory in one rename;
-    otherwise the files are moved in one by one (existing files matching ``pattern``
-    that the new output does not replace are refused first, nothing moved). On any
-    failure — an error, Ctrl-C, SIGTERM — the temporary directory is removed, so an
-    interrupted export leaves nothing; if moving into a non-empty directory fails
-    part-way the error says exactly which files were moved.
-    """
-    import os
-    import shutil
-    import tempfile
-
-    from app.cli import CliError
-
-    target = Path(path)
-    if target.exists() and not target.is_dir():
-        raise CliError(f"{target}: exists and is not a directory")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.part-", dir=target.parent))
-    try:
-        yield tmp
-        new = sorted(p.name for p in tmp.iterdir())
-        if target.is_dir() and any(target.iterdir()):
-            stale = sorted(q.name for q in target.glob(pattern) if q.name not in set(new))
-            if stale:
-                raise CliError(f"{target} already holds {len(stale)} other '{pattern}' file(s), e.g. {stale[0]}; "
-                               "they would be read back as extra frames. Choose an empty directory; "
-                               "nothing was written")
-            moved = []
-            try:
-                for name in new:
-                    os.replace(tmp / name, target / name)
-                    moved.append(name)
-            except OSError as exc:
-                raise CliError(f"{exc}; {len(moved)} of {len(new)} files were moved into {target}"
-                               + (f" ({moved[0]} .. {moved[-1]})" if moved else "")) from None
-        else:
-            if target.is_dir():
-                target.rmdir()
-            os.replace(tmp, target)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+    return Outputs(force=bool(getattr(args, "force", False)), guard=signals_deferred)
 
 
 #: longest synthesis the command line runs, in seconds of speech

@@ -138,8 +138,10 @@ def run(args) -> int:
             print(f"\n{args.measure} separation in {what}:")
             print(format_table(mrows, ["", *phones]))
     if args.csv:
+        from app.cli._common import command_outputs
         from engine.io.export import write_table_csv
 
-        out = write_table_csv(args.csv, rows, columns=columns)
-        print(f"wrote {out}", file=sys.stderr)
+        with command_outputs(args) as outputs:
+            write_table_csv(outputs.file(args.csv, option="--csv"), rows, columns=columns)
+        print(f"wrote {args.csv}", file=sys.stderr)
     return 0

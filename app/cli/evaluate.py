@@ -126,9 +126,11 @@ def run(args) -> int:
             raise CliError(str(exc)) from None
     print(result.format())
     if args.csv:
+        from app.cli._common import command_outputs
         from engine.io.export import write_table_csv
 
-        write_table_csv(args.csv, result.table())
+        with command_outputs(args) as outputs:
+            write_table_csv(outputs.file(args.csv, option="--csv"), result.table())
         print(f"wrote {args.csv}")
     if sum(int(r.get("utterances") or 0) for r in result.rows) == 0:
         import sys
@@ -259,15 +261,20 @@ def _settings(args, manifold, progress):
 
 
 def _run_protocols(args) -> int:
+    import math
+
     from app.cli import CliError
+    from app.cli.synthesize import MAX_SMOOTHING_FRAMES
     from app.cli._common import progress_bar
     from engine.manifold import Manifold
     from engine.protocols import evaluate_protocols
 
     for name in ("smoothing", "neighbors", "state_dims", "states"):
         v = getattr(args, name)
-        if v is not None and v < (0 if name == "smoothing" else 1):
+        if v is not None and not (v >= (0 if name == "smoothing" else 1) and math.isfinite(v)):
             raise CliError(f"--{name.replace('_', '-')} must be {'>= 0' if name == 'smoothing' else '>= 1'}, got {v}")
+    if args.smoothing is not None and args.smoothing > MAX_SMOOTHING_FRAMES:
+        raise CliError(f"--smoothing {args.smoothing:g}: at most {MAX_SMOOTHING_FRAMES:g} frames")
     test_ids = [s.strip() for s in args.test_ids.split(",") if s.strip()] if args.test_ids else None
     with progress_bar(disable=True if args.quiet else None) as progress:
         corpus = _corpus(args, progress)
@@ -323,19 +330,19 @@ def _run_protocols(args) -> int:
             warnings.warn(CorpusWarning(f"{result.missed_gaps} gap(s) could not reach their target state in time "
                                         f"(they end at the nearest reachable state); {cause}"), stacklevel=2)
     print(result.format())
-    if args.csv:
-        from engine.io.export import write_table_csv
-        from engine.protocol_report import CSV_COLUMNS
+    from app.cli._common import command_outputs
 
-        write_table_csv(args.csv, result.csv_rows(), columns=CSV_COLUMNS)
-        print(f"wrote {args.csv}")
-    if args.markdown:
-        from engine._atomic import atomic_write
+    with command_outputs(args) as outputs:  # both tables or neither
+        if args.csv:
+            from engine.io.export import write_table_csv
+            from engine.protocol_report import CSV_COLUMNS
 
-        with atomic_write(args.markdown) as tmp:
-            with open(tmp, "w", encoding="utf-8") as fh:
-                fh.write(result.markdown() + "\n")
-        print(f"wrote {args.markdown}")
+            write_table_csv(outputs.file(args.csv, option="--csv"), result.csv_rows(), columns=CSV_COLUMNS)
+        if args.markdown:
+            outputs.file(args.markdown, option="--markdown").write_text(result.markdown() + "\n", encoding="utf-8")
+    for written in (args.csv, args.markdown):
+        if written:
+            print(f"wrote {written}")
     if sum(int(r.get("utterances") or 0) for r in result.rows) == 0:
         import sys
 

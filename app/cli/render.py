@@ -140,6 +140,11 @@ def run(args) -> int:
         raise CliError("--side-by-side with --method original would show the utterance twice; choose a method")
     if args.audio is not None and args.no_audio:
         raise CliError("--audio and --no-audio contradict each other; give one")
+    from app.cli.synthesize import check_synthesis_options
+
+    check_synthesis_options(args)
+    if not 0 <= args.crf <= 51:
+        raise CliError(f"--crf {args.crf}: must be from 0 (lossless) to 51")
     manifold = _manifold(args)
     c = manifold.corpus_
     frames, Y, label = _trajectory(args, manifold)

@@ -5,14 +5,15 @@
 ``lipspace table MANIFOLD --textgrid DIR``     one TextGrid per utterance: phones, movement classes,
                                                 kinematic landmarks
 
-Existing files are never overwritten without ``--force``; every file is written atomically.
+Existing files are never overwritten without ``--force``; every output is staged and moved in
+at the end, so a failure or a stop leaves all the old files or all the new ones.
 """
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
-__all__ = ["add_arguments", "run", "refuse_existing"]
+__all__ = ["add_arguments", "run"]
 
 
 def add_arguments(p):
@@ -24,25 +25,11 @@ def add_arguments(p):
                    help="write one Praat TextGrid per utterance into DIR (tiers: phones, class, landmarks)")
     p.add_argument("--fx", type=int, default=None, metavar="K",
                    help="shape components written as fx_1..fx_K (default: all of the manifold's)")
-    p.add_argument("--force", action="store_true", help="replace files that exist already")
-
-
-def refuse_existing(paths, force: bool) -> None:
-    """Refuse (naming the file) to replace an existing file unless ``force``."""
-    from app.cli import CliError
-
-    if force:
-        return
-    there = [Path(p) for p in paths if Path(p).exists()]
-    if there:
-        more = f" (and {len(there) - 1} more)" if len(there) > 1 else ""
-        raise CliError(f"{there[0]} exists already{more}; give --force to replace it, or choose another name. "
-                       "Nothing was written")
 
 
 def run(args) -> int:
     from app.cli import CliError
-    from app.cli._common import load_manifold_arg
+    from app.cli._common import command_outputs, load_manifold_arg
     from engine.frame_table import frame_table, write_textgrids
     from engine.io.praat import textgrid_names
     from engine.io.tidy import TABLE_SUFFIXES, have_parquet, sidecar_path, write_frame_table
@@ -61,20 +48,24 @@ def run(args) -> int:
     grids = None
     if args.textgrid_dir is not None:
         grids = textgrid_names(u.id for u in c.utterances)
-    refuse_existing(([out, sidecar_path(out)] if out else [])
-                    + ([Path(args.textgrid_dir) / n for n in grids] if grids else []), args.force)
-    try:
-        table = frame_table(manifold, n_fx=args.fx, source=str(args.manifold))
-    except ValueError as exc:
-        raise CliError(f"--fx {args.fx}: {exc}" if args.fx is not None else str(exc)) from None
-    for note in table.notes:
-        if "stand" in note or "no phone" in note:
-            print(f"lipspace table: note: {note}", file=sys.stderr)
+    with command_outputs(args) as outputs:  # the table, its sidecar and the TextGrids: all or none
+        side = sidecar_path(out) if out is not None else None
+        staged = (outputs.file(out, option="-o"), outputs.file(side, option="-o")) if out is not None else None
+        folder = outputs.folder(args.textgrid_dir, names=grids, option="--textgrid") if grids is not None else None
+        try:  # existing files are refused above, before this work
+            table = frame_table(manifold, n_fx=args.fx, source=str(args.manifold))
+        except ValueError as exc:
+            raise CliError(f"--fx {args.fx}: {exc}" if args.fx is not None else str(exc)) from None
+        for note in table.notes:
+            if "stand" in note or "no phone" in note:
+                print(f"lipspace table: note: {note}", file=sys.stderr)
+        if staged is not None:
+            write_frame_table(staged[0], table, sidecar=staged[1], name=out.name)
+        if folder is not None:
+            files = write_textgrids(manifold, table, folder, names=grids)
     if out is not None:
-        written = write_frame_table(out, table)
         print(f"wrote {out} ({table.n_rows} rows x {len(table.columns)} columns: one per frame of "
-              f"{len(c.utterances)} utterances); units and column meanings in {written[1]}")
+              f"{len(c.utterances)} utterances); units and column meanings in {side}")
     if grids is not None:
-        files = write_textgrids(manifold, table, args.textgrid_dir, names=grids)
         print(f"wrote {len(files)} TextGrids to {args.textgrid_dir} (tiers: phones, class, landmarks)")
     return 0

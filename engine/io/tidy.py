@@ -67,16 +67,20 @@ def _csv_rows(columns, na: str):
     return ",".join(fmts) + "\n", lists
 
 
-def write_frame_table(path, table) -> list[Path]:
-    """Write ``table`` to ``path`` (``.csv`` or ``.parquet``) and its sidecar JSON; returns both paths."""
+def write_frame_table(path, table, *, sidecar=None, name=None) -> list[Path]:
+    """Write ``table`` to ``path`` (``.csv`` or ``.parquet``) and its sidecar JSON; returns both paths.
+
+    ``sidecar``: where the JSON goes (default :func:`sidecar_path` of ``path``); ``name``: the
+    table's file name the JSON states (default ``path``'s), for writing to staged paths.
+    """
     from engine.frame_table import NA
 
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in TABLE_SUFFIXES:
         raise ValueError(f"{path}: a frame table ends in {' or '.join(TABLE_SUFFIXES)}")
-    meta = table.metadata(path.name)
-    side = sidecar_path(path)
+    meta = table.metadata(name or path.name)
+    side = sidecar_path(path) if sidecar is None else Path(sidecar)
     with atomic_write(path) as tmp, atomic_write(side) as tmp_side:
         if suffix == ".csv":
             fmt, cols = _csv_rows(table.columns.values(), NA)

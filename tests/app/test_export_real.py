@@ -16,9 +16,19 @@ def test_glb_of_markers_is_a_point_cloud_with_the_recording_beside(mocha, tmp_pa
     u = m.corpus_.utterances[0]
     audio, why = utterance_audio(m, u.id)
     assert audio is not None, why
+    from engine.staging import OutputExistsError
+
+    (tmp_path / "fsew.wav").write_bytes(b"the user's own recording")  # beside a new animation: never replaced
+    with pytest.raises(OutputExistsError, match="fsew.wav .the audio beside it. already exists"):
+        export_animation(m, m.Fx_[u.start:u.stop], tmp_path / "fsew.glb", rate=m.corpus_.rate, audio=audio)
+    assert (tmp_path / "fsew.wav").read_bytes() == b"the user's own recording"
+    assert not (tmp_path / "fsew.glb").exists()
+    (tmp_path / "fsew.wav").unlink()
     files = export_animation(m, m.Fx_[u.start:u.stop], tmp_path / "fsew.glb", rate=m.corpus_.rate, audio=audio)
     assert files == [tmp_path / "fsew.glb", tmp_path / "fsew.wav"]
     assert (tmp_path / "fsew.wav").read_bytes() == audio.read_bytes()
+    again = export_animation(m, m.Fx_[u.start:u.stop], tmp_path / "fsew.glb", rate=m.corpus_.rate, audio=audio)
+    assert again == files  # the save dialog confirmed replacing the animation: its own WAV goes with it
     r = read_gltf_morph(files[0])
     assert r["faces"] is None and r["base"].shape == (m.corpus_.n_points, 3)
     played = r["base"][None] + np.einsum("nk,kvd->nvd", r["weights"], r["targets"])

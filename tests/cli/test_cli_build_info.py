@@ -174,7 +174,8 @@ def test_memory_error_is_one_line_with_a_hint(tmp_path, small_corpus, capsys, mo
 
 
 def test_interrupted_mesh_export_leaves_nothing(tmp_path, built, capsys, monkeypatch):
-    """Ctrl-C part-way through --mesh-dir used to leave frame files while saying nothing was written."""
+    """Ctrl-C part-way through --mesh-dir used to leave frame files while saying nothing was written, and the
+    trajectory written before them (-o t.csv); the old trajectory stays."""
     import engine.io.export as export
 
     real, calls = export.write_obj, []
@@ -186,14 +187,17 @@ def test_interrupted_mesh_export_leaves_nothing(tmp_path, built, capsys, monkeyp
         return real(*a, **kw)
 
     monkeypatch.setattr(export, "write_obj", interrupted)
-    mesh = tmp_path / "meshes"
-    argv = ["synthesize", "--manifold", str(built), "--phones", "p 0.1 aa 0.2 m 0.1", "--mesh-dir", str(mesh), "-q"]
+    mesh, old = tmp_path / "meshes", tmp_path / "t.csv"
+    old.write_text("the user's trajectory")
+    argv = ["synthesize", "--manifold", str(built), "--phones", "p 0.1 aa 0.2 m 0.1", "--mesh-dir", str(mesh), "-q",
+            "-o", str(old), "--force"]
     assert main(argv) == 130
-    assert "nothing was written" in capsys.readouterr().err
-    assert list(tmp_path.iterdir()) == []
+    assert capsys.readouterr().err.strip().endswith("interrupted; nothing was written.")
+    assert list(tmp_path.iterdir()) == [old] and old.read_text() == "the user's trajectory"
     monkeypatch.setattr(export, "write_obj", real)
     assert main(argv) == 0
-    assert len(list(mesh.iterdir())) > 4 and list(tmp_path.iterdir()) == [mesh]
+    assert len(list(mesh.iterdir())) > 4 and sorted(tmp_path.iterdir()) == [mesh, old]
+    assert old.read_text().startswith("time,")
 
 
 @pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP"])

@@ -56,7 +56,7 @@ def test_no_message_names_an_internal_api(tmp_path, capsys):
     ema = write_est_track(tmp_path / "c.ema", t, np.zeros((50, 4)), ["ul_x", "ul_y", "ll_x", "ll_y"])
     with pytest.raises(ValueError) as err:
         read_corpus(ema, rate=100.0)  # the file says 250 Hz
-    assert "250 Hz but rate=100" in str(err.value) and "engine." not in str(err.value)
+    assert "250 Hz but a rate of 100 Hz was given (--rate)" in str(err.value) and "engine." not in str(err.value)
 
 
 needs_clips = pytest.mark.skipif(not CLIPS.is_dir(), reason=f"the real clips are not at {CLIPS}")

@@ -215,7 +215,7 @@ def test_roles_mark_a_mesh_s_lip_points(tmp_path):
     assert rc == 0, err
     rc, out, err = _run(["info", str(mfile)])
     assert "opening     defined by lip aperture" in out
-    rc, out, err = _run(["import", str(tmp_path / "mesh"), "--rate", "62.5", "-o", str(corpus),
+    rc, out, err = _run(["import", str(tmp_path / "mesh"), "--rate", "62.5", "-o", str(corpus), "--force",
                          "--roles", "upper_lip=7"])
     assert rc == 2 and "no point '7'; expected an index 0..3" in err
 

@@ -41,7 +41,7 @@ def test_manifold_of_a_blocked_corpus_reads_its_frames_from_it(tmp_path, small_c
     assert got.shape[1] == corpus.frames.shape[1] and np.isfinite(got).all()
     capsys.readouterr()
     src.unlink()
-    assert main(["synthesize", "--utterance", uid, "--manifold", str(out), "-o", str(traj), "-q"]) == 2
+    assert main(["synthesize", "--utterance", uid, "--manifold", str(out), "-o", str(traj), "-q", "--force"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "c.npz" in err[0] and "which is missing" in err[0], err
 

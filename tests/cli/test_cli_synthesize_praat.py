@@ -64,9 +64,9 @@ def test_praat_outputs_are_never_replaced_without_force(mfile, tmp_path, capsys)
     (tmp_path / "out.csv").write_text("mine")
     args = ["synthesize", "--manifold", str(mfile), "--textgrid", str(src), "--praat", str(tmp_path / "out.TextGrid")]
     assert main(args) == 2
-    assert "out.csv exists already" in capsys.readouterr().err and not (tmp_path / "out.TextGrid").exists()
+    assert "out.csv (--praat) already exists" in capsys.readouterr().err and not (tmp_path / "out.TextGrid").exists()
     assert main(args + ["--force"]) == 0 and (tmp_path / "out.csv").read_text().startswith("time_s,")
-    assert main(args[:-1] + [str(tmp_path / "out.csv")]) == 2 and "OUT.TextGrid" in capsys.readouterr().err
+    assert main(args[:-1] + [str(tmp_path / "new.csv")]) == 2 and "OUT.TextGrid" in capsys.readouterr().err
 
 
 def test_a_real_recording_synthesised_from_its_own_labels_keeps_their_clock(mocha_manifold, shared_data, tmp_path):

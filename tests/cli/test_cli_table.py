@@ -86,14 +86,14 @@ def test_nothing_is_replaced_without_force(mfile, tmp_path, capsys):
     out.write_text("keep me")
     assert main(["table", str(mfile), "-o", str(out)]) == 2
     err = capsys.readouterr().err
-    assert f"{out} exists already" in err and "--force" in err and out.read_text() == "keep me"
+    assert f"{out}: already exists" in err and "--force" in err and out.read_text() == "keep me"
     assert not (tmp_path / "frames.csv.json").exists()
     grids = tmp_path / "grids"
     grids.mkdir()
     (grids / "s0003.TextGrid").write_text("mine")
     (grids / "notes.txt").write_text("other files stay")
     assert main(["table", str(mfile), "--textgrid", str(grids)]) == 2
-    assert "s0003.TextGrid exists already" in capsys.readouterr().err
+    assert "s0003.TextGrid" in (e := capsys.readouterr().err) and "already exists" in e
     assert sorted(p.name for p in grids.iterdir()) == ["notes.txt", "s0003.TextGrid"]
     assert main(["table", str(mfile), "-o", str(out), "--textgrid", str(grids), "--force"]) == 0
     assert out.read_text().startswith("utterance,speaker,time_s,") and (grids / "notes.txt").exists()
