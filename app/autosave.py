@@ -24,6 +24,7 @@ Qt-free logic; the window only calls :meth:`Autosaver.tick` from a timer.
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import sys
@@ -166,6 +167,8 @@ class Autosaver:
         self.saves = 0
         self.last_error: str | None = None
         self._inherited: Recovery | None = None
+        #: damaged files of earlier runs moved to ``damaged/`` by :meth:`begin`, one sentence each
+        self.set_aside: list[str] = []
 
     # ------------------------------------------------------------------ run markers
     def begin(self) -> Recovery | None:
@@ -179,8 +182,11 @@ class Autosaver:
         for marker in self.directory.glob(_MARKER.format(run="*")):
             if marker == self.marker:
                 continue
-            info = self._read_marker(marker)
-            pid = info.get("pid") if info else None
+            info, why = self._read_marker(marker)
+            if why is not None:  # set aside, said, and the window opens as if it were not there
+                self.set_aside.append(self.move_aside(marker, why))
+                continue
+            pid = info.get("pid")
             if isinstance(pid, int) and pid != self.pid and pid_alive(pid, info.get("start_ticks")):
                 continue  # another explorer that is still running
             session = self.directory / _SESSION.format(run=marker.stem[len("running-"):])
@@ -194,12 +200,40 @@ class Autosaver:
         return max(found, key=lambda r: r.saved, default=None)
 
     @staticmethod
-    def _read_marker(path: Path) -> dict | None:
+    def _read_marker(path: Path) -> tuple[dict | None, str | None]:
+        """(the marker's fields, None) or (None, what is wrong with it)."""
+        import math
+
         try:
             d = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
-            return None
-        return d if isinstance(d, dict) else None
+        except FileNotFoundError:  # another explorer finished meanwhile
+            return {}, None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+            return None, f"not readable JSON ({exc})"
+        if not isinstance(d, dict):
+            return None, "not a JSON object"
+        pid, started, ticks = d.get("pid"), d.get("started", 0.0), d.get("start_ticks")
+        if not isinstance(pid, int) or isinstance(pid, bool) or pid <= 0:
+            return None, f"'pid' is {json.dumps(pid)[:30]}, expected a process id"
+        if isinstance(started, bool) or not isinstance(started, (int, float)) or not math.isfinite(started):
+            return None, f"'started' is {json.dumps(started)[:30]}, expected a time in seconds"
+        if ticks is not None and (not isinstance(ticks, int) or isinstance(ticks, bool)):
+            return None, f"'start_ticks' is {json.dumps(ticks)[:30]}, expected a whole number or null"
+        return d, None
+
+    def move_aside(self, path: Path, why: str) -> str:
+        """Move a damaged file of an earlier run to ``damaged/`` (kept for a look, never read again);
+        returns the sentence that says so."""
+        dest_dir = self.directory / "damaged"
+        dest = dest_dir / f"{path.name}.{time.strftime('%Y%m%d-%H%M%S')}"
+        try:
+            dest_dir.mkdir(parents=True, exist_ok=True)
+            os.replace(path, dest)
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                path.unlink()
+            return f"{path} is damaged ({why}) and could not be moved aside ({exc.strerror or exc}); it was removed"
+        return f"{path} is damaged ({why}); it was moved to {dest}"
 
     def discard(self, recovery: Recovery) -> None:
         """Delete a dead run's marker and autosave (after it was restored or declined)."""
@@ -284,8 +318,8 @@ def resolve_recovery(autosaver: Autosaver, recovery: Recovery | None, *, restore
 
     A discarded autosave is deleted; a restored one is kept until this run has
     autosaved (:meth:`Autosaver.adopt`). An autosave that cannot be read raises
-    :class:`app.session.SessionError` after it is deleted (so it is not offered
-    again), with the reason.
+    :class:`app.session.SessionError` after it is moved to ``damaged/`` (so it is not
+    offered again, but kept for a look), with the reason and where it went.
     """
     from app.session import SessionError, load_session
 
@@ -305,7 +339,12 @@ def resolve_recovery(autosaver: Autosaver, recovery: Recovery | None, *, restore
     try:
         d = load_session(recovery.session)
     except SessionError as exc:
-        autosaver.discard(recovery)
-        raise SessionError(f"the autosaved session could not be restored: {exc}") from None
+        from app.session import arrays_path
+
+        moved = autosaver.move_aside(recovery.session, "it cannot be restored")
+        for p in (arrays_path(recovery.session), recovery.marker):
+            if p.exists():
+                autosaver.move_aside(p, "its session cannot be restored")
+        raise SessionError(f"the autosaved session could not be restored: {exc}. {moved}") from None
     autosaver.adopt(recovery)
     return d

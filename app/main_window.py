@@ -171,6 +171,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self._act(f, "Export &trajectory (CSV, NPY, OBJ, PLY)…", self.export_trajectory_dialog)
         self._act(f, "Export &animation (glTF, MP4)…", self.export_animation_dialog)
         self._act(f, "Export &cluster table (CSV)…", self.export_clusters_dialog)
+        self._act(f, "Export frame ta&ble (CSV, Parquet)…", self.export_frame_table_dialog)
+        self._act(f, "Export Te&xtGrids (one per utterance)…", self.export_textgrids_dialog)
         f.addSeparator()
         self._act(f, "&Quit", self.close, QtGui.QKeySequence.StandardKey.Quit)
         e = mb.addMenu("&Edit")
@@ -511,6 +513,50 @@ class MainWindow(QtWidgets.QMainWindow):
             path = str(path)
             self._report(lambda: self.export_clusters(path), f"wrote {path}", "export the cluster table")
 
+    def _source_name(self) -> str:
+        return str(self.state.source.get("path") or f"synthetic talker ({self.state.source.get('preset')})")
+
+    def export_frame_table_dialog(self):
+        """One row per frame, as ``lipspace table -o`` writes it (units in a .json beside it), in a worker."""
+        if self.state.manifold is None:
+            return
+        from app.export.tables import export_frame_table, table_filters
+
+        path = self._save_path("Export frame table", table_filters(), str(Path(self.last_dir) / "frames.csv"))
+        if not path:
+            return
+        from app.user_messages import plain_errors
+        from app.workers import run_task
+
+        m, src = self.state.manifold, self._source_name()
+        run_task(plain_errors(lambda progress: export_frame_table(m, path, source=src, progress=progress),
+                              doing="export the frame table"), parent=self, title=f"Writing {path.name}",
+                 on_done=lambda paths: self.statusBar().showMessage(
+                     f"wrote {paths[0]} (units in {paths[1].name})", 8000))
+
+    def export_textgrids_dialog(self):
+        """One TextGrid per utterance into a folder, as ``lipspace table --textgrid`` writes them, in a worker."""
+        m = self.state.manifold
+        if m is None:
+            return
+        from app.export.tables import existing_textgrids, export_textgrids
+
+        folder = QtWidgets.QFileDialog.getExistingDirectory(self, "Export TextGrids into folder", self.last_dir)
+        if not folder:
+            return
+        there = existing_textgrids(m, folder)
+        if there and QtWidgets.QMessageBox.question(
+                self, "Lipspace", f"{len(there)} of the TextGrids exist already in {folder} (e.g. {there[0].name}). "
+                                  "Replace them?") != QtWidgets.QMessageBox.StandardButton.Yes:
+            return
+        from app.user_messages import plain_errors
+        from app.workers import run_task
+
+        src = self._source_name()
+        run_task(plain_errors(lambda progress: export_textgrids(m, folder, source=src, progress=progress),
+                              doing="export the TextGrids"), parent=self, title="Writing TextGrids",
+                 on_done=lambda files: self.statusBar().showMessage(f"wrote {len(files)} TextGrids to {folder}", 8000))
+
     # ------------------------------------------------------------------ misc
     def reset_cameras(self):
         self.manifold_view.standard_view("default")  # both halves of the manifold, the plane slightly from above
@@ -599,12 +645,14 @@ def ask_restore(recovery, parent=None) -> str:
 
 
 def launch(path=None, preset: str = "default", session: dict | None = None, restore: bool | None = None, *,
-           kinematics: str = "classic") -> int:
+           kinematics: str = "classic", notes=()) -> int:
     """Open the explorer on ``path`` (or the synthetic talker ``preset`` with ``kinematics``)
     and run the event loop; a session's (or a restored autosave's) source overrides them.
 
     ``restore`` answers the autosave question after an abnormal exit (None: ask in a
-    dialog); see :mod:`app.autosave`.
+    dialog); see :mod:`app.autosave`. Damaged state files (autosave markers and sessions,
+    the window settings) are moved aside and said, on stderr and in one dialog, with
+    ``notes`` (e.g. a --session file that could not be opened); the window opens anyway.
     """
     from app.autosave import Autosaver, resolve_recovery
     from app.qt_app import make_application
@@ -620,11 +668,18 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
         autosaver, recovery = None, None
     win = MainWindow(autosave=autosaver)
     win.show()
+    said = list(notes)
+    for note in (autosaver.set_aside if autosaver is not None else []) + win.settings.set_aside:
+        print(f"lipspace explore: warning: {note}", file=sys.stderr)
+        said.append(note)
+    if said:
+        win.show_error("\n\n".join(said))
     if autosaver is not None and session is None:
         try:
             restored = resolve_recovery(autosaver, recovery, restore=restore, ask=lambda r: ask_restore(r, win))
         except SessionError as exc:
-            QtWidgets.QMessageBox.warning(win, "Lipspace", user_message(exc, doing="restore the autosaved session"))
+            print(f"lipspace explore: warning: {exc}", file=sys.stderr)
+            win.show_error(user_message(exc, doing="restore the autosaved session"))  # not modal: the window runs
             restored = None
         if restored is not None:
             session, path = restored, None

@@ -80,4 +80,4 @@ def hover_text(manifold, phones, i) -> str:
     u = c.utterances[int(c.utterance_index[i])]
     cls = int(manifold.tangent_.classes_[i])
     return (f"frame {i} ({u.id}, t={(i - u.start) / c.rate:.3f} s) · phone {phones[i] or '—'} · "
-            f"state {int(manifold.states_.labels_[i])} · {CLASS_LABELS[cls] if cls >= 0 else 'no forward step'}")
+            f"state {int(manifold.states_.labels_[i])} · {CLASS_LABELS[cls] if cls >= 0 else 'no step'}")

@@ -7,8 +7,9 @@ camera of each 3-D view. Qt-free: cameras are plain lists from the views.
 
 The synthesised trajectory and the trajectory editor's key targets (as edited, e.g.
 dragged) are arrays: they go to an ``.npz`` beside the JSON (``a.lipspace.json`` ->
-``a.lipspace.npz``), written atomically before the JSON, and the JSON holds that
-file's name and SHA-256, so a JSON never silently pairs with another save's arrays.
+``a.lipspace.npz``), written with the JSON as one transaction (both or neither), and
+the JSON holds that file's name and SHA-256, so a JSON never silently pairs with
+another save's arrays.
 Their labels, phones and settings stay in the JSON.
 """
 from __future__ import annotations
@@ -139,14 +140,17 @@ def save_session(state, path, *, cameras: dict | None = None, extra: dict | None
     d = session_dict(state, cameras=cameras, extra=extra, targets=targets)
     arrays = session_arrays(state, targets=targets)
     npz = arrays_path(path)
-    if arrays:
-        buf = io.BytesIO()
-        np.savez(buf, **arrays)
-        data = buf.getvalue()
-        with atomic_write(npz) as tmp:
-            tmp.write_bytes(data)
-        d["arrays"] = {"file": npz.name, "sha256": hashlib.sha256(data).hexdigest()}
-    write_text_atomic(path, json.dumps(d, indent=2) + "\n")
+    from engine.staging import Outputs
+
+    with Outputs(force=True) as outputs:  # the JSON and its arrays together, or neither
+        if arrays:
+            buf = io.BytesIO()
+            np.savez(buf, **arrays)
+            data = buf.getvalue()
+            with atomic_write(outputs.file(npz)) as tmp:
+                tmp.write_bytes(data)
+            d["arrays"] = {"file": npz.name, "sha256": hashlib.sha256(data).hexdigest()}
+        write_text_atomic(outputs.file(path), json.dumps(d, indent=2) + "\n")
     if not arrays and npz.is_file() and npz != path:
         npz.unlink(missing_ok=True)  # an earlier save's arrays no longer belong to this session
     return path
@@ -181,7 +185,7 @@ def load_session(path) -> dict:
     d.setdefault("source", {"path": None, "preset": "default"})
     src = d["source"]
     if not isinstance(src, dict):
-        raise SessionError(f"{path}: field 'source' must be an object, got {type(src).__name__}")
+        raise SessionError(f"{path}: field 'source' must be an object, got {json.dumps(src)[:40]}")
     if "kinematics" in src:  # the synthetic talker's (absent from sessions written before it had a choice)
         from app.source_loading import check_kinematics
 
@@ -199,9 +203,67 @@ def load_session(path) -> dict:
     d.setdefault("cameras", {})
     d.setdefault("extra", {})
     d.setdefault("visible_phones", [])
+    check_fields(d, path)
     d["_file"] = str(path)
     d["_synthetic"], d["_targets"] = _read_arrays(path, d)
     return d
+
+
+def _json_type(v) -> str:
+    """How JSON names the type of ``v`` (for messages about a session file)."""
+    return {dict: "an object", list: "an array", str: "a string", bool: "true/false", type(None): "null"}.get(
+        type(v), "a number")
+
+
+def check_fields(d: dict, path) -> None:
+    """Refuse a session whose view fields have the wrong type or values, naming the field.
+
+    The campaign's damaged sessions: ``extra`` a list (the window failed half-way), a NaN
+    camera (a blank view), strings where numbers belong. Checked here so that a session
+    is opened whole or refused with one message, never half-applied.
+    """
+    import math
+
+    def bad(field, what, v):
+        raise SessionError(f"{path}: field {field!r} must be {what}, got {json.dumps(v)[:60]} "
+                           f"({_json_type(v)}); the session file is damaged")
+
+    def number(v):
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+    if not isinstance(d["cameras"], dict):
+        bad("cameras", "an object of views", d["cameras"])
+    for view, cam in d["cameras"].items():
+        rows = cam if isinstance(cam, list) and len(cam) == 3 else None
+        if rows is None or not all(isinstance(r, list) and len(r) == 3 and all(number(x) for x in r) for r in rows):
+            bad(f"cameras.{view}", "3 rows of 3 finite numbers (position, focal point, view up)", cam)
+        if rows[0] == rows[1] or not any(rows[2]):
+            bad(f"cameras.{view}", "a camera whose position differs from its focal point and whose view up is "
+                "not zero", cam)
+    if not isinstance(d["extra"], dict):
+        bad("extra", "an object", d["extra"])
+    editor = d["extra"].get("editor", {})
+    if not isinstance(editor, dict):
+        bad("extra.editor", "an object", editor)
+    for key in ("text", "method", "source"):
+        if editor.get(key) is not None and not isinstance(editor[key], str):
+            bad(f"extra.editor.{key}", "a string", editor[key])
+    for key in ("visible_phones", "phone_filter"):
+        v = d.get(key, [])
+        if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+            bad(key, "an array of phone labels", v)
+    for key, what, ok in (("utterance", "an utterance id or null", lambda v: v is None or isinstance(v, str)),
+                          ("component", "a component index or null",
+                           lambda v: v is None or isinstance(v, int) and not isinstance(v, bool) and v >= 0),
+                          ("horizon_ms", "a number of milliseconds or null", lambda v: v is None or number(v) and v >= 0),
+                          ("path_mode", "true or false", lambda v: isinstance(v, bool))):
+        if key in d and not ok(d[key]):
+            bad(key, what, d[key])
+    for key in ("synthetic", "targets", "arrays"):
+        if d.get(key) is not None and not isinstance(d[key], dict):
+            bad(key, "an object or null", d[key])
+    if d["source"].get("preset") is not None and not isinstance(d["source"]["preset"], str):
+        bad("source.preset", "a preset name", d["source"]["preset"])
 
 
 def source_kinematics(d: dict) -> str:
@@ -239,8 +301,7 @@ def _read_arrays(path: Path, d: dict):
     try:
         return _trajectory_from(a, d.get("synthetic")), _targets_from(a, d.get("targets"))
     except (KeyError, ValueError, TypeError, IndexError) as exc:
-        raise SessionError(f"{npz}: session arrays are inconsistent with {path.name} ({type(exc).__name__}: "
-                           f"{exc})") from None
+        raise SessionError(f"{npz}: session arrays are inconsistent with {path.name} ({exc})") from None
 
 
 def _trajectory_from(a: dict, meta):

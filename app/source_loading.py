@@ -202,9 +202,11 @@ def read_recording(path):
 
     The defaults applied: registration ``"auto"`` (rigid with 3 or more reference sensors,
     else centring when there are several utterances; :func:`engine.registration.register`),
-    then resampling to :data:`ANALYSIS_RATE` (:func:`engine.io.resample`; a video keeps its
-    own rate, as ``import`` keeps it). Both are noted in the corpus history, which ``info``
-    and the session show.
+    then resampling to :data:`ANALYSIS_RATE` (:func:`engine.io.resample`), video included.
+    Both are noted in the corpus history, which ``info`` and the session show; so is every
+    repair of the data (dropouts interpolated, ...), which is also issued as an
+    :class:`engine.io.errors.ImportDataWarning` (the window's status bar, a warning line on the
+    command line).
 
     Parameters
     ----------
@@ -214,14 +216,20 @@ def read_recording(path):
     Returns
     -------
     engine.corpus.Corpus
-        Frames of shape (n_frames, dims * n_points) at 60 Hz (video: its own rate).
+        Frames of shape (n_frames, dims * n_points) at 60 Hz.
     """
+    import warnings
+
     from engine.io import read_corpus, resample
-    from engine.io.dispatch import detect_format
+    from engine.io.errors import ImportDataWarning
+    from engine.io.repairs import collecting_repairs
     from engine.registration import register
 
-    corpus = register(read_corpus(path), method="auto")
-    if detect_format(path) != "video" and abs(corpus.rate - ANALYSIS_RATE) > 1e-9 * ANALYSIS_RATE:
+    with collecting_repairs() as repairs:
+        corpus = register(read_corpus(path), method="auto")
+    for note in repairs:  # in the history too; said now, since no import step printed it
+        warnings.warn(ImportDataWarning(note), stacklevel=2)
+    if abs(corpus.rate - ANALYSIS_RATE) > 1e-9 * ANALYSIS_RATE:
         corpus = resample(corpus, ANALYSIS_RATE)
     return corpus
 

@@ -157,9 +157,10 @@ def prepare_derived(manifold, progress=None) -> None:
     out["phones"] = frame_phones(manifold.corpus_)
     report(progress, stage, 2, 3)
     try:
-        from engine.clusters import PhoneClusters
+        from engine.clusters import clusters_of
 
-        out["clusters"] = PhoneClusters.from_manifold(manifold)
+        # phone mid-points, or the kinematic landmarks of a corpus without phone labels
+        out["clusters"], out["cluster_kind"], out["cluster_note"] = clusters_of(manifold)
     except ValueError:
         pass  # the panel computes (and reports) it when shown
     report(progress, stage, 3, 3)
@@ -227,6 +228,7 @@ class AppState:
         self.component = None
         pre = _PREPARED.get(manifold, {}) if manifold is not None else {}
         self._density, self._phones, self._clusters = (pre.get(k) for k in ("density", "phones", "clusters"))
+        self._cluster_kind, self._cluster_note = pre.get("cluster_kind"), pre.get("cluster_note")
         self._batch_depth = 0
         self._pending: dict = {}  # field name -> None, in order of first change (a batch's events)
 
@@ -283,6 +285,7 @@ class AppState:
             self.source = dict(source)
         pre = _PREPARED.get(manifold, {}) if manifold is not None else {}
         self._density, self._phones, self._clusters = (pre.get(k) for k in ("density", "phones", "clusters"))
+        self._cluster_kind, self._cluster_note = pre.get("cluster_kind"), pre.get("cluster_note")
         self.frame = self.state = self.target = self.path = self.hover = None
         self.utterance = self.original = self.synthetic = self.playback = self.component = None
         self.playing = False
@@ -339,12 +342,26 @@ class AppState:
 
     @property
     def clusters(self):
-        """The manifold's :class:`engine.clusters.PhoneClusters`, fitted once per manifold."""
+        """The manifold's :class:`engine.clusters.PhoneClusters`, fitted once per manifold: of its phone
+        mid-points, or of its kinematic landmarks when the corpus has no phone labels
+        (:func:`engine.clusters.clusters_of`; :attr:`cluster_kind` says which)."""
         if self._clusters is None:
-            from engine.clusters import PhoneClusters
+            from engine.clusters import clusters_of
 
-            self._clusters = PhoneClusters.from_manifold(self._require())
+            self._clusters, self._cluster_kind, self._cluster_note = clusters_of(self._require())
         return self._clusters
+
+    @property
+    def cluster_kind(self) -> str:
+        """What the clusters are of: ``"phones"`` or ``"kinematic"`` (landmarks)."""
+        self.clusters
+        return self._cluster_kind
+
+    @property
+    def cluster_note(self) -> str | None:
+        """For landmark clusters, the sentence saying what the labels are (None for phones)."""
+        self.clusters
+        return self._cluster_note
 
     def cluster_rows(self) -> list[dict]:
         """The phone table of the clusters panel (see :func:`cluster_table`)."""

@@ -7,6 +7,7 @@ animation export renders :func:`lip_frames`.
 """
 from __future__ import annotations
 
+import glob
 from pathlib import Path
 
 import numpy as np
@@ -105,10 +106,16 @@ def export_trajectory(manifold, traj, path) -> list[Path]:
     if suf == ".npy":
         return [write_trajectory_npy(path, trajectory_table(traj)[0])]
     if suf in (".obj", ".ply"):
+        from engine.staging import Outputs
+
         frames = lip_frames(manifold, traj)
         c = manifold.corpus_
-        return write_mesh_sequence(path.with_suffix(""), frames, faces=c.faces, dims=c.dims, format=suf[1:],
-                                   prefix=path.stem, clear=True)
+        folder = path.with_suffix("")
+        # the save dialog asked about `path`, not about the frame files in the folder: those are never replaced
+        with Outputs(hint="Choose another name, or move the existing frame files away first") as outputs:
+            tmp = outputs.folder(folder, pattern=f"{glob.escape(path.stem)}_*{suf}", exclusive=True)
+            files = write_mesh_sequence(tmp, frames, faces=c.faces, dims=c.dims, format=suf[1:], prefix=path.stem)
+        return [folder / f.name for f in files]
     raise ValueError(f"{path}: cannot export a trajectory as {suf or 'a file without a suffix'!r}; "
                      "use .csv, .npy, .obj or .ply")
 

@@ -48,6 +48,61 @@ class WindowSettings:
 
     def __init__(self, settings: QtCore.QSettings | None = None):
         self.qsettings = settings if settings is not None else open_settings()
+        #: what was wrong with a damaged settings file set aside at start (one sentence each)
+        self.set_aside: list[str] = []
+        why = self.damage()
+        if why is not None:
+            self._move_aside(why)
+
+    # ------------------------------------------------------------------ damaged files
+    def damage(self) -> str | None:
+        """What is wrong with the settings file (None: nothing, or no file yet)."""
+        s = self.qsettings
+        path = Path(s.fileName())
+        try:
+            raw = path.read_bytes()
+        except OSError:
+            return None  # not written yet (or not a file: Qt's native formats)
+        if b"\0" in raw:
+            return "it holds binary data, not INI text"
+        try:
+            raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            return f"byte {exc.start} is not UTF-8 text"
+        if "" in s.allKeys():
+            return "it holds lines that are not 'key=value' settings"
+        for key in ("window/geometry", "window/state"):
+            v = s.value(key)
+            if v is not None and not isinstance(v, QtCore.QByteArray):
+                return f"{key} is {str(v)[:30]!r}, not saved window data"
+        v = s.value("window/layout_version")
+        if v is not None:
+            try:
+                int(v)
+            except (TypeError, ValueError):
+                return f"window/layout_version is {str(v)[:30]!r}, not a number"
+        v = s.value("recent/files")
+        if v is not None and not isinstance(v, str) and not (isinstance(v, list) and all(isinstance(x, str)
+                                                                                          for x in v)):
+            return f"recent/files is {str(v)[:30]!r}, not a list of files"
+        return None
+
+    def _move_aside(self, why: str) -> None:
+        """Move the damaged file to ``<name>.damaged-<time>`` and start from empty settings."""
+        import time
+
+        path = Path(self.qsettings.fileName())
+        dest = path.with_name(f"{path.name}.damaged-{time.strftime('%Y%m%d-%H%M%S')}")
+        try:
+            os.replace(path, dest)
+            self.set_aside.append(f"the window settings {path} were damaged ({why}); they were moved to {dest} and "
+                                  "the window starts with its default layout")
+        except OSError as exc:
+            self.set_aside.append(f"the window settings {path} are damaged ({why}) and could not be moved aside "
+                                  f"({exc.strerror or exc}); they are ignored")
+            self.qsettings.clear()  # none of its values is used
+            return
+        self.qsettings = QtCore.QSettings(str(path), QtCore.QSettings.Format.IniFormat)
 
     # ------------------------------------------------------------------ layout
     def save_layout(self, window) -> None:
@@ -79,7 +134,9 @@ class WindowSettings:
         v = self.qsettings.value("recent/files", [])
         if isinstance(v, str):  # QSettings gives one string for a one-element list in INI files
             v = [v]
-        return [str(p) for p in (v or []) if p][:MAX_RECENT]
+        if not isinstance(v, list):
+            return []
+        return [str(p) for p in v if p][:MAX_RECENT]
 
     def add_recent(self, path) -> list[str]:
         """Put ``path`` (made absolute) first in the recent files; returns the new list."""

@@ -227,6 +227,10 @@ class TaskRunner(QtCore.QObject):
         self.thread.quit()
         self.thread.wait()
         if self.dialog is not None:
+            # reset() stops the dialog's show-after-minimumDuration timer, which its first
+            # setValue started: a task done sooner would otherwise get its dialog shown
+            # after this close, modal, and never closed
+            self.dialog.reset()
             self.dialog.close()
 
     def _on_done(self, result):

@@ -36,7 +36,7 @@ def main():
     ap.add_argument("--landmarks", type=int, default=None)
     args = ap.parse_args()
 
-    from engine.dynamics import DynamicFeatures, velocities
+    from engine.dynamics import DynamicFeatures
     from engine.embedding import Embedding
     from engine.shape import ShapeSpace
     from engine.states import StateGraph
@@ -56,8 +56,9 @@ def main():
     emb = stage(f"embedding Y ({args.method})",
                 lambda: Embedding(method=args.method, n_landmarks=args.landmarks).fit(G), rows)
     Fy = emb.embedding_
-    Fxv = velocities(Fx, b)
-    stage("tangent frames", lambda: TangentFrames().fit(Fy, Fx, Fxv, b), rows)
+    from engine.kinematics import lip_aperture
+
+    stage("tangent frames", lambda: TangentFrames().fit(Fy, b, lip_aperture(corpus), rate=corpus.rate), rows)
     stage("state graph", lambda: StateGraph().fit(Fy, b), rows)
     total = time.perf_counter() - t0
     print(f"\nshape: {shape.n_components_} components hold {100 * shape.recovered_ratio_[shape.n_components_ - 1]:.2f}%"

@@ -99,7 +99,7 @@ def main(argv=None):
         print(f"  old / new transforms, pair by pair: min {ratio.min():.1f}x  median {np.median(ratio):.1f}x")
 
         cmd = lipspace + ["synthesize", "--manifold", man, "--text", "bob meets mum",
-                          "-o", str(Path(tmp) / "t.csv"), "--quiet"]
+                          "-o", str(Path(tmp) / "t.csv"), "--quiet", "--force"]  # every run replaces t.csv
         walls = []
         for _ in range(args.repeat):
             t = time.perf_counter()

@@ -302,8 +302,8 @@ def main():
     print(f"BLAS: {blas_kernel()}; {os.cpu_count()} cores")
 
     if not args.no_tangent:
-        tan, dt, peak, cpu = _timed(lambda: TangentFrames().fit(Fy, Fx, Fxv, b))
-        print(f"TangentFrames.fit (k=20)        {dt * 1e3:9.1f} ms   {cpu}   peak traced {peak:7.1f} MiB   "
+        tan, dt, peak, cpu = _timed(lambda: TangentFrames().fit(Fy, b, np.asarray(Fx[:, 0], np.float64), rate=60.0))
+        print(f"TangentFrames.fit (k={tan.n_neighbors_:3d})       {dt * 1e3:9.1f} ms   {cpu}   peak traced {peak:7.1f} MiB   "
               f"max RSS {peak_rss_mb():7.1f} MiB")
         print("  classes " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in tan.class_proportions().items()))
 

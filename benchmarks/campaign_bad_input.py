@@ -1,36 +1,52 @@
-"""The bad-input campaign of issue 16 as a checklist: every case the issue lists, run as a
-real ``lipspace`` process under a memory cap and a timeout, one line per case.
+"""The bad-input campaigns of issues 16 and 30 as a checklist: every case the issues list,
+and more of each class, run as a real ``lipspace`` process under a memory cap and a
+timeout, one line per case.
 
 Usage: python benchmarks/campaign_bad_input.py [--root TREE] [--cap-gb 3] [--timeout 60]
 
 ``--root`` runs the cases against another checkout of the project (e.g. an older commit
 extracted with ``git archive REV | tar -x -C DIR``) to compare before and after; the
-inputs are made by that tree's own code. Each line: the verdict, exit status, wall time,
-peak resident memory of the case's process, the case and the first line it printed:
+manifold and corpus inputs are made by that tree's own code, the damaged recordings by
+this script. Each line: the verdict, exit status, wall time, peak resident memory of the
+case's process, the case and the first line it printed:
 
 * ``ok``          exit 0 or 2 as expected, one clean line, nothing left behind, the
                   expected refusal or warning said
 * ``TRACEBACK``   a Python traceback reached the user
 * ``CRASH``       killed by a signal (segfault, OOM kill) or the memory cap
 * ``HANG``        still running at the timeout
-* ``SILENT``      exit 0 where the input should have been refused or warned about
-* ``LEFT``        a failed command left a file (or ``.part`` file) behind
-* ``MISREPORT``   refused, but without saying what the issue asks it to say
+* ``SILENT``      exit 0 where the input should have been refused, or repaired without
+                  the repair said (and kept in the corpus history for ``info``)
+* ``LOST``        a user file that existed before was changed or removed, or a run that
+                  lost an input exited 0 without ``--skip-bad``
+* ``LEFT``        a failed or stopped command left a file (or ``.part`` file) behind, or
+                  its message says nothing was written while something was
+* ``MISREPORT``   refused, but without saying what the issue asks it to say, or naming a
+                  temporary file, a Python identifier or an engine module
+* ``n/a``         the case needs what this machine lacks (``unshare`` for a full disk)
+
+Full and read-only disks are real: the case runs in a private mount namespace
+(``unshare -rm``, no root needed) with a tiny or read-only tmpfs where it writes.
 
 A summary counts each verdict; ``--json`` writes the rows.
 """
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
+import math
 import os
+import re
 import resource
+import shutil
 import signal
 import subprocess
 import sys
 import tempfile
 import time
 import zlib
+from dataclasses import dataclass, field
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -47,6 +63,16 @@ tiny.save(d + "/corpus.npz")
 c.save(d + "/small.npz")
 Manifold(n_states=20).fit(tiny).save(d + "/manifold.npz")
 '''
+
+def _changed_npz(src, dst, **changes) -> Path:
+    """A copy of the .npz ``src`` at ``dst`` with the arrays ``changes`` replaced (a damaged or renamed corpus)."""
+    import numpy as np
+
+    arrays = {**dict(np.load(src, allow_pickle=False)), **changes}
+    with open(dst, "wb") as fh:
+        np.savez(fh, **arrays)
+    return Path(dst)
+
 
 #: what a refusal must say, per case (substring of stderr); None: any clean refusal
 def cases(d: Path):
@@ -113,17 +139,9 @@ def cases(d: Path):
     gaps.write_text("frame,point,x,y\n" + "".join(f"{f},m,{f},0\n" for f in range(60) if f not in (7, 8)))
     lab25 = d / "long.lab"
     lab25.write_text("0 0.5 p\n0.5 25 aa\n")
-    ca = np.load(c, allow_pickle=False)
-    ca = dict(ca)
-    ca["corpus_phone_times"] = ca["corpus_phone_times"] + 1000.0
-    ph = d / "phones-out.npz"
-    with open(ph, "wb") as fh:
-        np.savez(fh, **ca)
-    ca2 = dict(np.load(c, allow_pickle=False))
-    ca2["corpus_name"] = np.array("\x1b[31mRED\x1b]0;owned\x07")
-    esc = d / "escape.npz"
-    with open(esc, "wb") as fh:
-        np.savez(fh, **ca2)
+    times = np.load(c, allow_pickle=False)["corpus_phone_times"]
+    ph = _changed_npz(c, d / "phones-out.npz", corpus_phone_times=times + 1000.0)
+    esc = _changed_npz(c, d / "escape.npz", corpus_name=np.array("\x1b[31mRED\x1b]0;owned\x07"))
     shared = ROOT.parent / "shared" / "data"
     (d / "adir").mkdir(exist_ok=True)
     (d / "afile").write_text("x")
@@ -207,6 +225,297 @@ def cases(d: Path):
     ]
 
 
+@dataclass
+class Case:
+    """One run: ``argv`` of ``lipspace`` (or ``["@py", code]``), the exit expected (0, 1 = a Python
+    snippet printing its verdict, 2, None = stopped by a signal or finished), what stderr must say."""
+
+    name: str
+    argv: list
+    expect: int | None
+    says: str | None = None
+    gone: list = field(default_factory=list)  # files that must not exist after a failure or a stop
+    keep: list = field(default_factory=list)  # user files that must be byte for byte as before
+    mount: str | None = None  # "tmpfs:SIZE" (a full disk) or "ro" at d/"tiny" for the run
+    env: dict = field(default_factory=dict)
+    never: str | None = None  # text stderr must not hold (a misleading hint)
+    after: object = None  # callable(d) -> problem or None, run after the case (e.g. info keeps the repair)
+    stop_after: float | None = None  # seconds until SIGTERM (with stop_when: at most)
+    stop_when: str | None = None  # SIGTERM as soon as a file matching this glob (below the case folder) exists
+    lines: int = 1  # most lines a refusal may print (the unreadable inputs are listed one per line)
+    loses_input: bool = False  # exit 0 would mean an input was lost (LOST, not SILENT)
+
+
+def _old(p, text=b"a user's own file\n"):
+    p = Path(p)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    p.write_bytes(text)
+    return str(p)
+
+
+def _pos(path, M, rate="250", n_ch=2):
+    import numpy as np
+
+    hdr = f"AG50xDATA_V002\n00000000\nNumberOfChannels={n_ch}\nSamplingFrequencyHz={rate}\n".encode()
+    hdr = hdr.replace(b"00000000", f"{len(hdr):08d}".encode())
+    path.write_bytes(hdr + np.asarray(M, "<f4").tobytes())
+    return str(path)
+
+
+def _mview(path, sig, *, srate=100.0, audio=None, names=("UL", "LL")):
+    import numpy as np
+    import scipy.io
+
+    dt = [("NAME", "O"), ("SRATE", "O"), ("SIGNAL", "O"), ("SENTENCE", "O"), ("PHONES", "O")]
+    s = np.zeros((1, 1 + len(names)), dtype=dt)
+    snd = np.random.default_rng(2).normal(size=(4410, 1)) * 0.1 if audio is None else audio
+    s[0, 0] = ("AUDIO", 44100.0, snd.astype(np.float32), "", np.zeros((0, 0)))
+    for k, n in enumerate(names):
+        s[0, 1 + k] = (n, srate, sig.astype(np.float32) + k, "", np.zeros((0, 0)))
+    scipy.io.savemat(path, {Path(path).stem: s})
+    return str(path)
+
+
+def _info_says(corpus, text):
+    """An ``after`` check: ``lipspace info CORPUS`` lists ``text`` in the history."""
+    def check(d, root):
+        r = subprocess.run([sys.executable, "-m", "app.cli", "info", str(corpus)], cwd=d, capture_output=True,
+                           text=True, env=dict(os.environ, PYTHONPATH=str(root)))
+        return None if text in r.stdout else f"info does not keep {text!r} in the history"
+    return check
+
+
+def cases_30(d: Path):
+    """Issue 30's classes: data defects repaired and said or refused, no overwritten file, lost inputs,
+    stops and failures at any moment, damaged window state files, messages that mislead."""
+    import warnings
+
+    import c3d
+    import numpy as np
+
+    rng = np.random.default_rng(30)
+    o, m, c = d / "out", str(d / "manifold.npz"), str(d / "corpus.npz")
+    r = d / "rec"
+    r.mkdir(exist_ok=True)
+    S = "synthesize"
+    haskins = ROOT.parent / "shared" / "data" / "haskins-ieee" / "F01_B01_S01_R01_N.mat"
+
+    # ---- recordings with the defects of item 1
+    rows = ["time,UL_x,UL_y,LL_x,LL_y"]
+    for k in range(60):
+        v = [f"{math.sin(k / 5):.4f}", "2", "3", "4"]
+        v[0] = "" if k in (10, 11) else v[0]
+        v[1] = "nan" if k == 20 else v[1]
+        v[2] = "inf" if k == 30 else v[2]
+        rows.append(",".join([f"{k / 100:.2f}", *v]))
+    holes = r / "holes.csv"
+    holes.write_text("\n".join(rows) + "\n")
+    dup = r / "dup.csv"
+    dup.write_text("time,UL_x,UL_y,UL_x,LL_y\n" + "".join(f"{k / 100},1,2,3,4\n" for k in range(30)))
+    nolx = r / "nolx.csv"
+    nolx.write_text("time,UL_x,UL_y,LL_y\n" + "".join(f"{k / 100},1,2,4\n" for k in range(30)))
+    huge_cell = r / "huge.csv"
+    huge_cell.write_text("time,a_x,a_y\n" + "".join(f"{k / 100},{1e12 if k == 7 else k},0\n" for k in range(30)))
+    from engine.io import write_est_track
+
+    valid = np.ones(100, bool)
+    valid[40:43] = False
+    ema = write_est_track(r / "breaks.ema", np.arange(100) / 500, rng.normal(size=(100, 4)) * 100,
+                          ["ul_x", "ul_y", "ll_x", "ll_y"], valid=valid)
+    w = c3d.Writer(point_rate=120.0)
+    w.set_point_labels(["UL", "LL"])
+    for i in range(40):
+        pts = np.zeros((2, 5), np.float32)
+        pts[:, :3] = rng.normal(size=(2, 3))
+        pts[1, 3] = -1 if i in (5, 6) else 0
+        w.add_frames([(pts, np.zeros((0, 0)))])
+    c3dp = r / "invalid.c3d"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with open(c3dp, "wb") as fh:
+            w.write(fh)
+    sig = rng.normal(size=(60, 6))
+    sig[[3, 4], 0] = np.nan
+    mat_nan = _mview(r / "hnan.mat", sig)
+    mat_rate = _mview(r / "hrate.mat", rng.normal(size=(60, 6)), srate=1e300)
+    mat_inf = _mview(r / "hinf.mat", rng.normal(size=(60, 6)), audio=np.full((4410, 1), np.inf))
+    M = rng.normal(size=(100, 14))
+    M[:60] = np.nan
+    pos60 = _pos(r / "nan60.pos", M)
+    pos = {v: _pos(r / f"rate-{k}.pos", rng.normal(size=(100, 14)), rate=v)
+           for k, v in enumerate(("0", "1e300", "NaN", "abc"))}
+    wave = r / "w.tsv"
+    wave.write_text("Time\tSensor 1 Id\tSensor 1 Status\tSensor 1 Tx\tSensor 1 Ty\tSensor 1 Tz\n" + "".join(
+        f"{k / 100:.2f}\t1\t{'Missing' if k == 7 else 'OK'}\t{k}\t1\t2\n" for k in range(40)))
+    tg = r / "size2.TextGrid"
+    lines = ['File type = "ooTextFile"', 'Object class = "TextGrid"', "", "xmin = 0", "xmax = 0.6",
+             "tiers? <exists>", "size = 1", "item []:", "    item [1]:", '        class = "IntervalTier"',
+             '        name = "phones"', "        xmin = 0", "        xmax = 0.6", "        intervals: size = 2"]
+    for k in range(5):
+        lines += [f"        intervals [{k + 1}]:", f"            xmin = {k * 0.12:g}",
+                  f"            xmax = {(k + 1) * 0.12:g}", f'            text = "p{k}"']
+    tg.write_text("\n".join(lines) + "\n")
+    plyd = r / "ply"
+    plyd.mkdir(exist_ok=True)
+    from engine.io import write_ply
+
+    for k in range(3):
+        p = write_ply(plyd / f"f{k}.ply", np.eye(3) + k, [[0, 1, 2]])
+        p.write_bytes(p.read_bytes() + (b"0 0 1\n" if k == 1 else b""))
+    one = d / "one-frame.npz"
+    from engine.corpus import Corpus, Utterance
+
+    Corpus(frames=rng.normal(size=(40, 6)), rate=60, utterances=[Utterance(f"u{k}", k, k + 1) for k in range(40)],
+           name="one-frame").save(one)
+    frames = np.load(c, allow_pickle=False)["corpus_frames"].copy()
+    frames[10, 3] = 1e30
+    hugec = _changed_npz(c, d / "huge-coord.npz", corpus_frames=frames)
+    accentc = _changed_npz(c, d / "accent.npz", corpus_name=np.array("café – ü"))
+    many = d / "many"
+    many.mkdir(exist_ok=True)
+    for k in range(24):
+        q = many / f"F01_R{k:02d}.mat"
+        if haskins.is_file() and not q.exists():
+            os.symlink(haskins, q)
+    three = [str(ema), str(r / "notema.ema"), str(write_est_track(r / "b2.ema", np.arange(80) / 500,
+                                                                     rng.normal(size=(80, 4)) * 100,
+                                                                     ["ul_x", "ul_y", "ll_x", "ll_y"]))]
+    (r / "notema.ema").write_text("this is not an EST track\n")
+    uid = None
+    try:
+        from engine.manifold import Manifold
+
+        uid = Manifold.load(m).corpus_.utterances[0].id
+    except Exception:  # another tree's manifold format: the key-frame case names an unknown id then
+        uid = "s0001"
+
+    # ---- window state files (item 5), through their loaders (the window opens in tests/app)
+    state = d / "state30"
+    marker = ("import json, pathlib, sys\nfrom app.autosave import Autosaver\nd = pathlib.Path({!r})\n"
+              "d.mkdir(parents=True, exist_ok=True)\n(d / 'running-4242-1.json').write_text({!r})\n"
+              "(d / 'autosave-4242-1.lipspace.json').write_text('{{}}')\na = Autosaver(d)\nrec = a.begin()\n"
+              "print('refused:', getattr(a, 'set_aside', None), rec)\na.finish()")
+    session = ("from app.session import load_session, SessionError\nimport pathlib\np = pathlib.Path({!r})\n"
+               "p.write_text({!r})\ntry:\n    d = load_session(p)\nexcept SessionError as exc:\n"
+               "    print('refused:', exc)\nelse:\n    print('loaded', d.get('extra'), d.get('cameras'))")
+    settings = ("import pathlib\nfrom PySide6 import QtCore\nfrom app.window_settings import WindowSettings\n"
+                "p = pathlib.Path({!r})\np.parent.mkdir(parents=True, exist_ok=True)\np.write_text({!r})\n"
+                "w = WindowSettings(QtCore.QSettings(str(p), QtCore.QSettings.Format.IniFormat))\n"
+                "w.recent_files(); w.restore_layout\n"
+                "print('refused:' if getattr(w, 'set_aside', None) else 'accepted', getattr(w, 'set_aside', None))")
+    s_json = '{{"lipspace_session": 2, "source": {{"path": null, "preset": "small"}}, {}}}'
+
+    imp = ["import"]
+    return [
+        # 1. data defects: repaired and said (and kept for info), or refused naming file, field, frame
+        Case("CSV NaN, Inf and empty cells", imp + [str(holes), "-o", f"{o}/c.npz"], 0, "missing samples",
+             after=_info_says(f"{o}/c.npz", "3 empty or NaN, 1 infinite")),
+        Case("CSV cell of 1e12 (implausible)", imp + [str(huge_cell), "-o", f"{o}/c.npz"], 0, "implausibly large"),
+        Case("EMA break flags", imp + [str(ema), "-o", f"{o}/c.npz", "--points", "UL,LL"], 0, "break flag 0",
+             after=_info_says(f"{o}/c.npz", "frames 40-42")),
+        Case("C3D invalid markers", imp + [str(c3dp), "-o", f"{o}/c.npz"], 0, "marked invalid"),
+        Case("NaN in a Haskins signal", imp + [mat_nan, "-o", f"{o}/c.npz", "--points", "UL,LL"], 0, "4 NaN"),
+        Case("NDI Wave status not OK", imp + [str(wave), "-o", f"{o}/c.npz", "--format", "wave"], 0,
+             "status not OK"),
+        Case(".pos 60 % NaN", imp + [pos60, "-o", f"{o}/c.npz"], 2, "60 of 100 frames", [f"{o}/c.npz"]),
+        *[Case(f".pos SamplingFrequencyHz={v}", imp + [p, "-o", f"{o}/c.npz"], 2, "SamplingFrequencyHz",
+               [f"{o}/c.npz"]) for v, p in pos.items()],
+        Case("MVIEW SRATE 1e300", imp + [mat_rate, "-o", f"{o}/c.npz", "--points", "UL,LL"], 2, "SRATE is 1e+300", [f"{o}/c.npz"]),
+        Case("CSV UL_x twice, no LL_x", imp + [str(dup), "-o", f"{o}/c.npz"], 2, "name the same coordinate",
+             [f"{o}/c.npz"]),
+        Case("CSV LL_y without LL_x", imp + [str(nolx), "-o", f"{o}/c.npz"], 2, "no LL_x column", [f"{o}/c.npz"]),
+        Case("TextGrid size = 2 before 5 intervals", imp + [str(holes), "--alignment", str(tg), "-o", f"{o}/c.npz"],
+             2, "count", [f"{o}/c.npz"]),
+        Case("PLY with more rows than its header", imp + [str(plyd), "--rate", "30", "-o", f"{o}/c.npz"], 2,
+             "follow the rows", [f"{o}/c.npz"]),
+        Case("all-Inf audio channel", imp + [mat_inf, "-o", f"{o}/c.npz", "--audio-dir", f"{o}/aud", "--points",
+                                             "UL,LL"], 2,
+             "no finite sample", [f"{o}/c.npz", f"{o}/aud/hinf.wav"]),
+        Case("--no-fill with a dropout", imp + [str(ema), "-o", f"{o}/c.npz", "--no-fill", "--points", "UL,LL"],
+             2, "--no-fill", [f"{o}/c.npz"], never="fill_gaps"),
+        Case("import --rate 0", imp + [str(plyd), "--rate", "0", "-o", f"{o}/c.npz"], 2, "--rate", [f"{o}/c.npz"]),
+        # 2. no existing user file overwritten without --force; the refusal names it
+        Case("--audio-dir over a user's WAV", imp + [str(haskins), "-o", f"{o}/h.npz", "--audio-dir", f"{o}/aud"], 2,
+             "F01_B01_S01_R01_N.wav", [f"{o}/h.npz"],
+             keep=[_old(o / "aud" / "F01_B01_S01_R01_N.wav")]),
+        Case("--mesh-dir over frame files", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "--mesh-dir",
+                                             f"{o}/mesh"], 2, "frame_00000.obj", keep=[_old(o / "mesh" /
+                                                                                          "frame_00000.obj")]),
+        Case("figures over a figure", ["figures", m, "-o", f"{o}/figs", "--only", "scree", "-q"], 2, "scree.png",
+             keep=[_old(o / "figs" / "scree.png")]),
+        Case("clusters --csv over a table", ["clusters", m, "--csv", f"{o}/t.csv", "-q"], 2, "t.csv",
+             keep=[_old(o / "t.csv")]),
+        Case("synthesize -o over a trajectory", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o", f"{o}/t.csv"],
+             2, "t.csv", keep=[_old(o / "t.csv")]),
+        Case("build -o over a manifold", ["build", c, "-o", f"{o}/m.npz", "-q"], 2, "m.npz",
+             keep=[_old(o / "m.npz")]),
+        Case("render -o over a video", ["render", "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o", f"{o}/v.mp4"],
+             2, "v.mp4", keep=[_old(o / "v.mp4")]),
+        Case("evaluate --markdown over a report", ["evaluate", c, "--markdown", f"{o}/r.md", "-q"], 2, "r.md",
+             keep=[_old(o / "r.md")]),
+        Case(".glb over the WAV beside it", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o", f"{o}/a.glb",
+                                             "--audio", str(ROOT.parent / "shared" / "data" / "mocha-fsew0" /
+                                                            "fsew0_001.wav")], 2, "a.wav", [f"{o}/a.glb"],
+             keep=[_old(o / "a.wav")]),
+        Case("--force replaces", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o", f"{o}/t.csv", "--force"], 0,
+             None, after=lambda d, root: None if (d / "out" / "t.csv").read_bytes().startswith(b"time,")
+             else "--force did not replace t.csv"),
+        # 3. a run that loses an input exits non-zero unless --skip-bad, which says how many
+        Case("one unreadable input of three", imp + three + ["-o", f"{o}/c.npz", "--points", "UL,LL", "-q"], 2,
+             "--skip-bad", [f"{o}/c.npz"], lines=2, loses_input=True),
+        Case("one unreadable input, --skip-bad", imp + three + ["-o", f"{o}/c.npz", "--points", "UL,LL", "-q",
+                                                               "--skip-bad"], 0, "skipped 1"),
+        Case("full disk: 24-file --audio-dir import", imp + [str(p) for p in sorted(many.iterdir())] +
+             ["-o", f"{d}/tiny/h.npz", "--audio-dir", f"{d}/tiny/aud", "-q"], 2, "No space left",
+             mount="tmpfs:1M", loses_input=True),
+        Case("full disk: figures", ["figures", m, "-o", f"{d}/tiny/figs", "-q"], 2, "No space left",
+             mount="tmpfs:200k"),
+        Case("full disk: build", ["build", c, "-o", f"{d}/tiny/m.npz", "-q"], 2, "No space left", mount="tmpfs:100k"),
+        Case("read-only disk: synthesize -o and --mesh-dir", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o",
+                                                               f"{d}/tiny/t.csv", "--mesh-dir", f"{d}/tiny/mesh"], 2,
+             "tiny/t.csv: Read-only", mount="ro"),
+        # 4. stopped or failed at any moment: the complete old outputs or none
+        Case("SIGTERM: synthesize --mesh-dir -o t.csv", [S, "--manifold", m, "--phones", "sil 4 aa 4 sil 4",
+                                                         "--mesh-dir", f"{o}/mesh", "-o", f"{o}/t.csv", "-q"], None,
+             None, [f"{o}/t.csv", f"{o}/mesh"], stop_after=30, stop_when="out/**/frame_0001*"),
+        Case("SIGTERM: --audio-dir import of 24 files", imp + [str(p) for p in sorted(many.iterdir())] +
+             ["-o", f"{o}/h.npz", "--audio-dir", f"{o}/aud", "-q"], None, None, [f"{o}/h.npz", f"{o}/aud"],
+             stop_after=30, stop_when="out/**/F01_R03.wav"),
+        Case("SIGTERM: figures", ["figures", m, "-o", f"{o}/figs", "-q"], None, None, [f"{o}/figs"], stop_after=30,
+             stop_when="out/**/fig2b.png"),
+        Case("SIGTERM: --force import keeps the old", imp + [str(p) for p in sorted(many.iterdir())] +
+             ["-o", f"{o}/h.npz", "-q", "--force"], None, None, keep=[_old(o / "h.npz")], stop_after=4),
+        # 5. damaged window state files: set aside, named, no traceback
+        Case("autosave marker 'started': 'abc'", ["@py", marker.format(str(state / "a"), json.dumps(
+            {"pid": 4242, "started": "abc"}))], 1, "refused:", never="Traceback"),
+        Case("autosave marker not JSON", ["@py", marker.format(str(state / "b"), "{pid")], 1, "refused:"),
+        Case("session 'extra' a list", ["@py", session.format(str(state / "s1.lipspace.json"),
+                                                              s_json.format('"extra": [1, 2]'))], 1, "refused:"),
+        Case("session NaN camera", ["@py", session.format(str(state / "s2.lipspace.json"), s_json.format(
+            '"cameras": {"manifold": [[NaN, 0, 1], [0, 0, 0], [0, 1, 0]]}'))], 1, "refused:"),
+        Case("settings file with damaged values", ["@py", settings.format(
+            str(state / "cfg" / "lipspace.ini"), "[window]\ngeometry=@ByteArray(abc\nlayout_version=zz\n")], 1,
+             "refused:"),
+        # 6. messages: the user's file, the option typed, the real cause
+        Case("--smoothing 1e9", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "--smoothing", "1e9", "-o",
+                                 f"{o}/t.csv"], 2, "--smoothing", [f"{o}/t.csv"], never="--inverse-dims"),
+        Case("--smoothing inf", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "--smoothing", "inf"], 2,
+             "--smoothing"),
+        Case("render --smoothing inf", ["render", "--manifold", m, "--phones", "p 0.1 aa 0.1", "--smoothing", "inf",
+                                        "-o", f"{o}/v.mp4"], 2, "--smoothing", [f"{o}/v.mp4"]),
+        Case("--key-frames 0,10^30", [S, "--manifold", m, "--utterance", uid, "--key-frames", "0," + "1" + "0" * 30,
+                                      "-o", f"{o}/t.csv"], 2, "key frames", [f"{o}/t.csv"]),
+        Case("ASCII terminal: info of a non-ASCII name", ["info", str(accentc)], 0, None,
+             env={"PYTHONIOENCODING": "ascii"}),
+        Case("ASCII terminal: import note", imp + [str(holes), "-o", f"{o}/café.npz", "--name", "café"], 0,
+             "missing samples", env={"PYTHONIOENCODING": "ascii"}),
+        Case("one-frame utterances", ["build", str(one), "-o", f"{o}/m.npz", "-q"], 2, "single frame",
+             [f"{o}/m.npz"], never="never move"),
+        Case("a coordinate of 1e30", ["build", str(hugec), "-o", f"{o}/m.npz", "-q"], 2, "1e+30", [f"{o}/m.npz"],
+             never="shape.py"),
+    ]
+
+
 #: runs the case as a child and reports its peak resident memory (MiB x 1024) and exit status on stderr
 _PEAK = ("import resource, signal, subprocess, sys\n"
          "signal.signal(signal.SIGTERM, lambda *a: None)  # the case gets it (a handler, not SIG_IGN: reset by exec)\n"
@@ -214,14 +523,32 @@ _PEAK = ("import resource, signal, subprocess, sys\n"
          "print('@@PEAK', resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, r.returncode, file=sys.stderr)")
 
 
-def run_case(argv, cwd, cap, timeout, root):
+#: inside a private mount namespace: a tmpfs at $1 (options $2), the case, then how many files it left there
+_MOUNTED = ('mkdir -p "$1" && mount -t tmpfs -o "$2" tmpfs "$1" || exit 97; shift 2; "$@"; rc=$?; '
+            'echo "@@TINY $(find "$0" -type f | wc -l)" >&2; exit $rc')
+
+
+def can_mount() -> bool:
+    """Whether ``unshare -rm`` can mount a private tmpfs here (a real full or read-only disk)."""
+    if shutil.which("unshare") is None:
+        return False
+    r = subprocess.run(["unshare", "-rm", "sh", "-c", "mount -t tmpfs -o size=64k tmpfs /mnt && echo ok"],
+                       capture_output=True, text=True)
+    return r.stdout.strip() == "ok"
+
+
+def run_case(case, cwd, cap, timeout, root):
     env = dict(os.environ, PYTHONPATH=str(root), LIPSPACE_CACHE_DIR=str(cwd / "cache"),
-               LIPSPACE_STATE_DIR=str(cwd / "state"))
+               LIPSPACE_STATE_DIR=str(cwd / "state"), **case.env)
     env.pop("DISPLAY", None)
-    sig = None
+    argv, sig = list(case.argv), case.stop_after
     if argv[-1].startswith("@SIGTERM"):
         sig, argv = float(argv[-1].split()[1]), argv[:-1]
     cmd = [sys.executable, "-c", argv[1]] if argv[0] == "@py" else [sys.executable, "-m", "app.cli", *argv]
+    if case.mount:
+        tiny = str(cwd / "tiny")
+        opts = "ro,size=64k" if case.mount == "ro" else f"size={case.mount.split(':')[1]}"
+        cmd = ["unshare", "-rm", "sh", "-c", _MOUNTED, tiny, tiny, opts, *cmd]
     cmd = [sys.executable, "-c", _PEAK, *cmd]  # the case's own peak memory, not this script's children's
 
     def limit():
@@ -231,7 +558,13 @@ def run_case(argv, cwd, cap, timeout, root):
     p = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          preexec_fn=limit, start_new_session=True)
     try:
-        if sig is not None:
+        if sig is not None and case.stop_when:  # mid-way: once the command has begun writing what it writes
+            deadline = time.monotonic() + sig
+            while p.poll() is None and time.monotonic() < deadline and not any(cwd.glob(case.stop_when)):
+                time.sleep(0.02)
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGTERM)
+        elif sig is not None:
             try:
                 p.wait(sig)
             except subprocess.TimeoutExpired:
@@ -249,23 +582,53 @@ def run_case(argv, cwd, cap, timeout, root):
         peak = float(tail.split()[0]) / 1024
         if code not in ("hang",) and tail.split()[1:]:
             code = int(tail.split()[1])
-    return code, wall, peak, out, err
+    tiny_files = 0
+    if "@@TINY " in err:
+        err, _, tail = err.rpartition("@@TINY ")
+        tiny_files = int(tail.split()[0])
+    return code, wall, peak, out, err, tiny_files
 
 
-def verdict(code, out, err, expect, says, must_not_exist, d):
+#: what no message may show: a temporary file, a Python identifier or exception class, an engine module
+_UNPLAIN = re.compile(r"\.part\b|\.part[-.]|\bengine\.\w|\w+\.py\b|\b[A-Z]\w+(Error|Exception)\b|"
+                      r"\b(fill_gaps|rate|format|layout|variable|points|space|alignment|key_frames|n_states|scale|"
+                      r"clear)=")
+
+
+def _digest(p) -> str | None:
+    p = Path(p)
+    return hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else None
+
+
+def verdict(case, code, out, err, d, root, before, tiny_files=0):
+    expect, says, must_not_exist = case.expect, case.says, case.gone
     parts = list(d.rglob(".*.part*"))
     if code == "hang":
         return "HANG"
     if "Traceback" in err:
         return "TRACEBACK"
+    if code == 97:
+        return "n/a"
     if isinstance(code, int) and code < 0 or code in (137, 139, 134):
         return "CRASH"
+    if any(_digest(k) != h for k, h in before.items()) and not (expect is None and code == 0):  # --force, done
+        return "LOST"
     if expect == 2 and code == 0:
-        return "SILENT"
-    if parts or code != 0 and any(Path(f).exists() for f in must_not_exist):
+        return "LOST" if case.loses_input else "SILENT"
+    if parts or code != 0 and any(Path(f).exists() for f in must_not_exist) or code != 0 and tiny_files:
         for p in parts:
-            p.unlink()
+            shutil.rmtree(p, ignore_errors=True) if p.is_dir() else p.unlink()
         return "LEFT"
+    if "nothing was written" in err and (tiny_files or any(Path(f).exists() for f in must_not_exist)):
+        return "LEFT"
+    if case.never and case.never in err + out:
+        return "MISREPORT"
+    if _UNPLAIN.search(err):
+        return "MISREPORT"
+    if case.after is not None and code == 0:
+        problem = case.after(d, root)
+        if problem:
+            return "SILENT"
     if expect == 1:  # a python snippet that must print the refusal (and never a file's content)
         return "ok" if code == 0 and says in out and "root:" not in err + out else \
             "SILENT" if code == 0 else "MISREPORT"
@@ -273,11 +636,11 @@ def verdict(code, out, err, expect, says, must_not_exist, d):
         return "ok" if code in (0, 143) else "MISREPORT"
     if says == "!ESC":
         return "ok" if "\x1b" not in out + err else "SILENT"
-    if says and says not in err:
-        return "MISREPORT" if code == expect else "SILENT"
+    if says and says not in err:  # a repair not said is silent; a refusal without its reason misreports
+        return "SILENT" if code == 0 else "MISREPORT"
     if code != expect:
         return "MISREPORT"
-    if code == 2 and not err.startswith("usage:") and err.strip().count("\n") > 0:
+    if code == 2 and not err.startswith("usage:") and err.strip().count("\n") >= case.lines:
         return "MISREPORT"
     return "ok"
 
@@ -292,8 +655,9 @@ def main() -> int:
     args = ap.parse_args()
     root = Path(args.root).resolve()
     cap = int(args.cap_gb * 2**30)
+    mountable = can_mount()
     print(f"tree {root}; load average {os.getloadavg()[0]:.2f}; cap {args.cap_gb:g} GB address space; "
-          f"timeout {args.timeout:g} s")
+          f"timeout {args.timeout:g} s; full/read-only disks: {'tmpfs in a private mount namespace' if mountable else 'n/a'}")
     rows = []
     with tempfile.TemporaryDirectory(prefix="lipspace-campaign-") as tmp:
         d = Path(tmp)
@@ -302,20 +666,28 @@ def main() -> int:
         if r.returncode:
             print(r.stderr[-2000:])
             return 1
-        for name, argv, expect, says, gone in cases(d):
-            if args.only and args.only not in name:
+        (d / "out").mkdir(exist_ok=True)
+        sys.path.insert(0, str(ROOT))  # the damaged recordings are written with this tree's writers
+        all_cases = [Case(*t) for t in cases(d)] + cases_30(d)
+        for case in all_cases:
+            if args.only and args.only not in case.name:
                 continue
-            (d / "out").mkdir(exist_ok=True)
-            code, wall, peak, out, err = run_case(argv, d, cap, args.timeout, root)
-            v = verdict(code, out, err, expect, says, gone, d)
+            if (d / "out").exists():
+                shutil.rmtree(d / "out")
+            (d / "out").mkdir()
+            for k in case.keep:  # the user's own files, present before the run
+                _old(k)
+            before = {k: _digest(k) for k in case.keep}
+            if case.mount and not mountable:
+                code, wall, peak, out, err, left = 97, 0.0, float("nan"), "", "", 0
+            else:
+                code, wall, peak, out, err, left = run_case(case, d, cap, args.timeout, root)
+            v = verdict(case, code, out, err, d, root, before, left)
             first = (err.strip().splitlines() or out.strip().splitlines() or [""])[-1 if "Traceback" in err else 0]
-            rows.append({"case": name, "exit": code, "wall_s": round(wall, 2), "peak_mb": None if peak != peak else round(peak),
-                         "verdict": v, "said": first[:160]})
+            rows.append({"case": case.name, "exit": code, "wall_s": round(wall, 2),
+                         "peak_mb": None if peak != peak else round(peak), "verdict": v, "said": first[:160]})
             mem = "     - " if peak != peak else f"{peak:6.0f} MB"  # a case killed at the timeout reports none
-            print(f"{v:10s} {str(code):>5s} {wall:6.1f} s {mem}  {name:42s} {first[:100]!r}", flush=True)
-            for p in (d / "out").rglob("*"):
-                if p.is_file():
-                    p.unlink()
+            print(f"{v:10s} {str(code):>5s} {wall:6.1f} s {mem}  {case.name:42s} {first[:100]!r}", flush=True)
     counts = {}
     for row in rows:
         counts[row["verdict"]] = counts.get(row["verdict"], 0) + 1

@@ -29,7 +29,8 @@ import numpy as np
 from engine.corpus import Corpus, CorpusWarning, Utterance
 from engine.io import concat, read_corpus, resample
 from engine.io.matrix import corpus_from_matrix
-from engine.kinematics import lip_aperture, opening_agreement
+from engine.class_agreement import class_agreement
+from engine.kinematics import lip_aperture
 from engine.layouts import BUILTIN, read_layout
 from engine.manifold import Manifold
 from engine.multispeaker import generate_recordings, layout_text
@@ -59,7 +60,7 @@ def measure(label, corpus, *, roles_for_score, use_aperture=True, speaker_norm="
     peak = tracemalloc.get_traced_memory()[1] / 2**20
     tracemalloc.stop()
     ap = lip_aperture(replace(m.corpus_, point_roles=roles_for_score))
-    agree = opening_agreement(m.tangent_.opening_, ap, m.corpus_.bounds)
+    agree = class_agreement(m.tangent_.opening_, m.tangent_.accelerating_, ap, m.corpus_.bounds).opening
     scc = np.bincount(m.states_.scc_labels_)
     split = next((str(w.message).split(" along ")[1].split(":")[0] for w in caught if " along " in str(w.message)),
                  "-")

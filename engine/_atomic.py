@@ -25,7 +25,10 @@ def atomic_write(path):
         raise IsADirectoryError(f"{path}: is a directory; give a file name to write")
     path.parent.mkdir(parents=True, exist_ok=True)
     _remove_stale_parts(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".part" + path.suffix, dir=path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".part" + path.suffix, dir=path.parent)
+    except OSError as exc:  # a read-only or full folder: name the user's file, not the temporary one
+        raise _naming(exc, path) from None
     os.close(fd)
     tmp = Path(tmp)
     try:
@@ -35,11 +38,18 @@ def atomic_write(path):
             os.chmod(tmp, 0o666 & ~_umask())
         _fsync(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
+        if isinstance(exc, OSError) and exc.filename in (None, str(tmp)):
+            raise _naming(exc, path) from None
         raise
     _fsync(path.parent, directory=True)
+
+
+def _naming(exc: OSError, path) -> OSError:
+    """``exc`` (disk full, permission denied ...) naming ``path``, the file the user asked for."""
+    return type(exc)(exc.errno, exc.strerror or str(exc), str(path)) if exc.errno else exc
 
 
 #: a temporary file of a write to the same path untouched this long was left by a killed process

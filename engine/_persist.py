@@ -78,7 +78,8 @@ def read_npz(path, *, keys_only: bool = False):
     except MemoryError:
         raise NpzReadError(path, "not enough memory to load its arrays") from None
     except Exception as exc:  # BadZipFile, EOFError, OSError, ValueError (pickled data) ...
-        raise NpzReadError(path, f"{type(exc).__name__}: {exc}") from None
+        raise NpzReadError(path, f"damaged or not an .npz archive ({exc})" if str(exc) else
+                           "damaged or not an .npz archive") from None
 
 
 def _read_member(zf, info):

@@ -260,6 +260,14 @@ def check_corpus_arrays(d, *, source, frames_given: bool = False) -> None:
         check_array(d, "corpus_faces", source=source, kind="int", shape=("_f", 3), dims=dims, low=0)
     if "corpus_point_names" in d:
         check_array(d, "corpus_point_names", source=source, kind="str", shape=("_v",), dims=dims)
+    if "corpus_utt_speaker" in d:
+        check_array(d, "corpus_utt_speaker", source=source, kind="str", shape=("U",), dims=dims)
+    if "corpus_axes" in d:
+        check_scalar(d, "corpus_axes", source=source, kind="str")
+    if "corpus_units" in d:
+        check_scalar(d, "corpus_units", source=source, kind="str")
+    if "corpus_utt_audio_abs" in d:
+        check_array(d, "corpus_utt_audio_abs", source=source, kind="str", shape=("U",), dims=dims)
     for key in d:
         if key.startswith("corpus_latent_"):
             a = check_array(d, key, source=source, kind="number")

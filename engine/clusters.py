@@ -4,8 +4,8 @@ Each phone interval of the corpus contributes its **mid-point frame**. Per phone
 the clusters hold the count (the paper's Table 1), the mean and covariance of the
 members in F^y (the first ``n_dims`` dimensions of Y, with dynamics) and in F^x (the
 first ``n_dims`` shape components, shape only), the 2-s.d. ellipse in any pair of axes
-and the ellipsoid in 3D (Fig. 4), and the fraction of members on the opening side of
-the zero-velocity plane.
+and the ellipsoid in 3D (Fig. 4), and the fraction of members that are opening (their
+opening velocity read on the manifold, TangentFrames.velocity_, is > 0).
 
 **Separation** between two phones is the Bhattacharyya distance between Gaussian fits
 of their clusters,
@@ -34,7 +34,10 @@ from sklearn.utils.validation import check_is_fitted
 
 from engine import phonesets
 
-__all__ = ["PhoneClusters", "bhattacharyya", "dprime", "MEASURES"]
+__all__ = ["PhoneClusters", "bhattacharyya", "dprime", "MEASURES", "clusters_of", "LABEL_KINDS"]
+
+#: what the clusters of :func:`clusters_of` are of
+LABEL_KINDS = ("phones", "kinematic")
 
 MEASURES = ("bhattacharyya", "dprime")
 _RIDGE = 1e-9
@@ -137,8 +140,8 @@ class PhoneClusters(BaseEstimator):
         Means in F^x (first ``n_dims_x_`` = min(n_dims, m) shape components).
     covariances_x_ : ndarray of shape (P, dx, dx), float64
     opening_fraction_ : ndarray of shape (P,), float64
-        Fraction of members with signed velocity > 0 (opening side of the zero-velocity
-        plane); NaN when no signed velocity was given.
+        Fraction of members whose opening velocity is > 0 (opening); NaN when no
+        velocity was given.
     members_ : ndarray of shape (M,), int64
         Mid-point frame indices, phone after phone (``members_[member_offsets_[p]:member_offsets_[p+1]]``).
     member_offsets_ : ndarray of shape (P + 1,), int64
@@ -164,7 +167,7 @@ class PhoneClusters(BaseEstimator):
     @classmethod
     def from_manifold(cls, manifold, **params) -> "PhoneClusters":
         """Fit on a fitted :class:`engine.manifold.Manifold` (its corpus's phone table,
-        ``Fy_``, ``Fx_`` and the tangent frames' zero-velocity plane)."""
+        ``Fy_``, ``Fx_`` and the tangent frames' opening velocity per frame)."""
         return cls(**params).fit(manifold)
 
     def fit(self, Fy, Fx=None, mid_frames=None, labels=None, signed_velocity=None):
@@ -178,8 +181,8 @@ class PhoneClusters(BaseEstimator):
             Mid-point frame of each phone instance, in [0, N).
         labels : sequence of str of length n_phones
         signed_velocity : None, ndarray of shape (N,), or callable
-            Signed distance to the zero-velocity plane per frame (> 0 opening), or a
-            function of F^y rows returning it (e.g. ``manifold.tangent_.signed_velocity``).
+            The opening velocity per frame (> 0 opening; ``manifold.tangent_.velocity_``),
+            or a function of F^y rows returning it.
 
         Returns
         -------
@@ -189,7 +192,7 @@ class PhoneClusters(BaseEstimator):
             m = Fy
             mids, labs = m.corpus_.phone_table()[:2]
             tangent = getattr(m, "tangent_", None)
-            sv = None if tangent is None else tangent.signed_velocity
+            sv = None if tangent is None else tangent.velocity_
             return self.fit(m.Fy_, m.Fx_, mids, labs, signed_velocity=sv)
         if Fx is None or mid_frames is None or labels is None:
             raise TypeError("fit(manifold) or fit(Fy, Fx, mid_frames, labels, signed_velocity=None): "
@@ -431,3 +434,54 @@ class PhoneClusters(BaseEstimator):
                            separation_nearest_x=np.nan)
             rows.append(row)
         return rows
+
+
+def clusters_of(manifold, *, labels: str = "auto", **params):
+    """Clusters of a fitted manifold's phone mid-points, or of its kinematic landmarks when it has no phones.
+
+    Parameters
+    ----------
+    manifold : engine.manifold.Manifold
+    labels : {"auto", "phones", "kinematic"}
+        ``auto``: phones when the corpus has any, else the kinematic landmarks of the lip
+        aperture (:func:`engine.kinematics.kinematic_if_unlabelled`: aperture maxima
+        ``open``, minima ``closed``, peak velocities ``opening`` / ``closing``); a corpus
+        already labelled with landmarks counts as landmarks.
+    **params
+        :class:`PhoneClusters` parameters.
+
+    Returns
+    -------
+    clusters : PhoneClusters
+        Fitted; its labels are the phones or the landmark names.
+    kind : {"phones", "kinematic"}
+    note : str or None
+        For landmarks, the sentence saying so (None for phones).
+
+    Raises
+    ------
+    ValueError
+        ``labels="phones"`` for a corpus without phone labels (naming the fix).
+    """
+    from dataclasses import replace
+
+    from engine.kinematics import has_kinematic_labels, kinematic_if_unlabelled
+
+    if labels not in ("auto", *LABEL_KINDS):
+        raise ValueError(f"labels={labels!r}; expected 'auto', 'phones' or 'kinematic'")
+    c = manifold.corpus_
+    has_phones = any(u.phones for u in c.utterances)
+    landmarks = has_kinematic_labels(c)
+    kind = labels if labels != "auto" else ("kinematic" if landmarks or not has_phones else "phones")
+    if kind == "phones" and (landmarks or not has_phones):
+        raise ValueError(f"{c.name} has no phone labels; cluster its kinematic landmarks (lipspace clusters "
+                         "--labels kinematic), or import it with an alignment (lipspace import --alignment)")
+    pc = PhoneClusters(**params)
+    if kind == "phones" or landmarks:
+        return pc.fit(manifold), kind, (None if kind == "phones" else
+                                        f"{c.name}: labels are kinematic landmarks (open, closed, opening, closing)")
+    kc, note = kinematic_if_unlabelled(replace(c, utterances=[replace(u, phones=()) for u in c.utterances]))
+    mids, labs = kc.phone_table()[:2]
+    tangent = getattr(manifold, "tangent_", None)
+    pc.fit(manifold.Fy_, manifold.Fx_, mids, labs, signed_velocity=None if tangent is None else tangent.velocity_)
+    return pc, kind, note

@@ -16,6 +16,8 @@ from engine.frame_blocks import BlockFrames
 __all__ = ["CorpusError", "CorpusWarning", "PhoneInterval", "Utterance", "Corpus"]
 
 FORMAT_VERSION = 1
+#: largest coordinate magnitude a corpus holds (the importers treat larger samples as dropouts)
+MAX_COORDINATE = 1e6
 
 
 class CorpusError(ValueError):
@@ -120,6 +122,13 @@ class Corpus:
         How head motion / position was removed, in words ("" = none was applied).
     history : list of str
         Processing steps applied on import (resampling, registration, ...), in order.
+    units : str
+        Unit of the coordinates ("mm" for articulographs, video and the synthetic talker;
+        "" = the file's own, unknown: meshes, generic CSV tracks, C3D without units).
+    axes : str
+        The talker's directions of the coordinate axes when stated on import
+        (``lipspace import --axes x=forward,y=left,z=up``); "" = derived from the point
+        roles (:func:`engine.orientation.anatomical_frame`).
     """
 
     frames: np.ndarray
@@ -133,6 +142,8 @@ class Corpus:
     point_roles: list[str] | None = None
     registration: str = ""
     history: list[str] = field(default_factory=list)
+    axes: str = ""
+    units: str = "mm"
 
     def __post_init__(self):
         if not isinstance(self.frames, BlockFrames):  # frames stored in blocks stay there (engine.frame_blocks)
@@ -147,6 +158,8 @@ class Corpus:
             self.point_roles = [str(r) for r in self.point_roles]
         self.registration = str(self.registration)
         self.history = [str(h) for h in self.history]
+        self.axes = str(self.axes)
+        self.units = str(self.units)
         self.latent = {k: np.asarray(v) for k, v in self.latent.items()}
         self.validate()
 
@@ -174,6 +187,12 @@ class Corpus:
                 f"{self.name}: frame {i} column {j} is {F[i, j]} (NaN/inf); "
                 f"{int(bad.any(axis=1).sum())} frames are not finite. Interpolate or drop them before building."
             )
+        if not isinstance(F, BlockFrames) and F.size and float(np.abs(F).max()) > MAX_COORDINATE:
+            i, j = np.argwhere(np.abs(F) > MAX_COORDINATE)[0]
+            raise CorpusError(
+                f"{self.name}: frame {i} column {j} is {F[i, j]:g}; coordinates beyond {MAX_COORDINATE:g} (in any "
+                "unit lips are measured in) are a damaged sample or wrong units. Import the recording again "
+                "(lipspace import treats them as dropouts)")
         if not self.utterances:
             raise CorpusError(f"{self.name}: no utterances; every frame must belong to one")
         expected = 0
@@ -264,6 +283,11 @@ class Corpus:
         return self.n_frames / self.rate
 
     @property
+    def unit_label(self) -> str:
+        """The coordinates' unit for messages and axis labels: :attr:`units`, or "data units" when unknown."""
+        return self.units or "data units"
+
+    @property
     def speakers(self) -> list[str]:
         """Distinct speakers in utterance order ("" = unknown)."""
         return list(dict.fromkeys(u.speaker for u in self.utterances))
@@ -329,11 +353,17 @@ class Corpus:
             frames=self.frames[rows], rate=self.rate, utterances=out, dims=self.dims, faces=self.faces,
             point_names=self.point_names, latent={k: v[rows] for k, v in self.latent.items()}, name=self.name,
             point_roles=self.point_roles, registration=self.registration, history=list(self.history),
+            axes=self.axes, units=self.units,
         )
 
     # -------------------------------------------------------------- file i/o
-    def to_arrays(self, *, include_frames: bool = True) -> dict[str, np.ndarray]:
-        """Flat dict of arrays for ``np.savez`` (no pickled objects)."""
+    def to_arrays(self, *, include_frames: bool = True, base=None) -> dict[str, np.ndarray]:
+        """Flat dict of arrays for ``np.savez`` (no pickled objects).
+
+        ``base``: the folder of the file the arrays go to. Audio paths are then stored
+        relative to it (``corpus_utt_audio``), so a folder moved with its sound keeps it, and
+        absolute as well (``corpus_utt_audio_abs``), for a corpus file moved on its own.
+        """
         phones = [(k, p.start, p.end, p.label) for k, u in enumerate(self.utterances) for p in u.phones]
         d = {
             "corpus_version": np.array(FORMAT_VERSION),
@@ -344,7 +374,7 @@ class Corpus:
             "corpus_n_columns": np.array(self.frames.shape[1]),
             "corpus_utt_ids": np.array([u.id for u in self.utterances], dtype=str),
             "corpus_utt_bounds": self.bounds,
-            "corpus_utt_audio": np.array([u.audio or "" for u in self.utterances], dtype=str),
+            "corpus_utt_audio": np.array([_relative(u.audio, base) for u in self.utterances], dtype=str),
             "corpus_utt_text": np.array([u.text for u in self.utterances], dtype=str),
             "corpus_utt_speaker": np.array([u.speaker for u in self.utterances], dtype=str),
             "corpus_registration": np.array(self.registration),
@@ -361,13 +391,23 @@ class Corpus:
             d["corpus_point_names"] = np.array(self.point_names, dtype=str)
         if self.point_roles is not None:
             d["corpus_point_roles"] = np.array(self.point_roles, dtype=str)
+        if self.axes:
+            d["corpus_axes"] = np.array(self.axes)
+        d["corpus_units"] = np.array(self.units)
+        if base is not None:
+            d["corpus_utt_audio_abs"] = np.array([_absolute(u.audio) for u in self.utterances], dtype=str)
         for k, v in self.latent.items():
             d[f"corpus_latent_{k}"] = v
         return d
 
     @classmethod
-    def from_arrays(cls, d, *, frames=None, source: str = "<arrays>") -> "Corpus":
-        """Inverse of :meth:`to_arrays`; ``frames`` overrides the stored frames."""
+    def from_arrays(cls, d, *, frames=None, source: str = "<arrays>", base=None) -> "Corpus":
+        """Inverse of :meth:`to_arrays`; ``frames`` overrides the stored frames.
+
+        ``base``: the folder of the file read. A relative audio path is taken relative to it
+        (made absolute); when that file is missing and the absolute path stored beside it
+        exists, that one. Absolute paths (files written before) are kept.
+        """
         from engine._validate import FieldError, check_corpus_arrays
 
         try:  # dtypes, shapes and index ranges checked before anything is built from them
@@ -395,6 +435,9 @@ class Corpus:
             speaker = d["corpus_utt_speaker"] if "corpus_utt_speaker" in keys else [""] * len(ids)
             registration = str(d["corpus_registration"]) if "corpus_registration" in keys else ""
             history = [str(h) for h in d["corpus_history"]] if "corpus_history" in keys else []
+            axes = str(d["corpus_axes"]) if "corpus_axes" in keys else ""
+            units = str(d["corpus_units"]) if "corpus_units" in keys else ""  # older files did not say
+            audio_abs = d["corpus_utt_audio_abs"] if "corpus_utt_audio_abs" in keys else None
             rate, dims, name = float(d["corpus_rate"]), int(d["corpus_dims"]), str(d["corpus_name"])
         except KeyError as exc:
             raise CorpusError(f"{source}: not a Lipspace corpus file (missing {exc.args[0]!r})") from None
@@ -402,11 +445,12 @@ class Corpus:
         for k, (b, uid) in enumerate(zip(bounds, ids)):
             sel = p_utt == k
             phones = tuple(PhoneInterval(float(s), float(e), str(lab)) for (s, e), lab in zip(p_t[sel], p_lab[sel]))
-            utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, str(audio[k]) or None, str(text[k]),
-                                  str(speaker[k])))
+            wav = _resolve(str(audio[k]), base, str(audio_abs[k]) if audio_abs is not None else "")
+            utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k])))
         try:
             return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
-                       latent=latent, name=name, point_roles=roles, registration=registration, history=history)
+                       latent=latent, name=name, point_roles=roles, registration=registration, history=history,
+                       axes=axes, units=units)
         except CorpusError as exc:  # name the file, not only the corpus
             raise CorpusError(f"{source}: {exc}") from None
 
@@ -415,7 +459,7 @@ class Corpus:
         path = Path(path)
         with atomic_write(path) as tmp:
             with open(tmp, "wb") as fh:
-                np.savez(fh, **self.to_arrays())
+                np.savez(fh, **self.to_arrays(base=path.resolve().parent))
         return path
 
     @classmethod
@@ -427,14 +471,47 @@ class Corpus:
         from engine._persist import NpzReadError, read_npz
 
         try:
-            return cls.from_arrays(read_npz(path), source=str(path))
+            return cls.from_arrays(read_npz(path), source=str(path), base=path.resolve().parent)
         except CorpusError:
             raise
         except NpzReadError as exc:
             reason = exc.reason
         except Exception as exc:  # arrays of the wrong shape or type
-            reason = f"{type(exc).__name__}: {exc}"
+            reason = f"its arrays do not form a corpus ({exc})"
         raise CorpusError(f"{path}: cannot read as a Lipspace corpus (.npz): {reason}")
+
+
+def _absolute(audio) -> str:
+    """An audio path made absolute ("" for none), symlinks kept."""
+    import os
+
+    return os.path.abspath(audio) if audio else ""
+
+
+def _relative(audio, base) -> str:
+    """An audio path as stored: relative to ``base`` when given (and on the same drive), else as it is."""
+    import os
+
+    if not audio or base is None:
+        return audio or ""
+    try:
+        return os.path.relpath(os.path.abspath(audio), os.path.abspath(base))
+    except ValueError:  # another drive (Windows): no relative path exists
+        return _absolute(audio)
+
+
+def _resolve(stored: str, base, absolute: str) -> str | None:
+    """The audio path a stored one means (see :meth:`Corpus.from_arrays`); None for none."""
+    import os
+
+    if not stored:
+        return None
+    if os.path.isabs(stored) or base is None:
+        return stored
+    p = os.path.normpath(os.path.join(str(base), stored))
+    if not os.path.isfile(p) and absolute and os.path.isfile(absolute):
+        return absolute  # the corpus file was moved without its sound
+    return p
 
 
 def frame_points(row: np.ndarray, dims: int) -> np.ndarray:

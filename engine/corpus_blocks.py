@@ -40,7 +40,7 @@ def blocks_folder(path) -> Path:
     return path.with_name(path.stem + ".blocks")
 
 
-def save_blocked(corpus: Corpus, path, *, block_frames: int = 8192) -> list[Path]:
+def save_blocked(corpus: Corpus, path, *, block_frames: int = 8192, folder=None) -> list[Path]:
     """Write ``corpus`` as ``path`` (.npz, no frames) and its frames as blocks in ``OUT.blocks/``.
 
     Parameters
@@ -50,6 +50,9 @@ def save_blocked(corpus: Corpus, path, *, block_frames: int = 8192) -> list[Path
         The corpus file (.npz).
     block_frames : int, default=8192
         Frames per block (a last block shorter than half of it joins the one before).
+    folder : str or Path, optional
+        Where to write the blocks instead of :func:`blocks_folder` of ``path`` (a staging
+        folder whose files are moved there afterwards: :class:`engine.staging.Outputs`).
 
     Returns
     -------
@@ -62,11 +65,11 @@ def save_blocked(corpus: Corpus, path, *, block_frames: int = 8192) -> list[Path
         raise ValueError(f"block_frames must be an integer >= 256 (each block taller than the shape range finder "
                          f"is wide), got {block_frames!r}")
     path = Path(path)
-    folder = blocks_folder(path)
+    folder = blocks_folder(path) if folder is None else Path(folder)
     for old in folder.glob("block_*.npy") if folder.is_dir() else []:
         old.unlink()  # a previous import's blocks would be mixed with these
     paths = store_frame_blocks(corpus.frames, folder, block_frames=int(block_frames))
-    d = corpus.to_arrays(include_frames=False)
+    d = corpus.to_arrays(include_frames=False, base=path.resolve().parent)
     d["blocks_files"] = np.array([p.name for p in paths], dtype=str)
     d["blocks_frames"] = np.array([np.load(p, mmap_mode="r").shape[0] for p in paths], dtype=np.int64)
     with atomic_write(path) as tmp:
@@ -103,7 +106,7 @@ def load_blocked(path) -> Corpus:
         d = read_npz(path)
     except NpzReadError as exc:
         raise CorpusError(f"{path}: not a readable .npz corpus file ({exc.reason})") from None
-    return Corpus.from_arrays(d, frames=_open_blocks(path, d), source=str(path))
+    return Corpus.from_arrays(d, frames=_open_blocks(path, d), source=str(path), base=path.resolve().parent)
 
 
 def _open_blocks(path: Path, d) -> BlockFrames:

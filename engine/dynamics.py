@@ -125,7 +125,7 @@ class DynamicFeatures(BaseEstimator):
             ratio = mx / p99 if p99 > 0 else float("inf") if mx > 0 else 1.0
             setattr(self, f"{name}_outlier_ratio_", float(ratio))
             if ratio > OUTLIER_RATIO:
-                hint = "" if q is not None else "; scale='p99' scales by the percentile instead"
+                hint = "" if q is not None else "; a percentile scale (lipspace build --dynamics-scale p99) is robust to them"
                 warnings.warn(f"the {name} block of G: its largest |entry| {mx:.4g} is {ratio:.1f} x its 99th "
                               f"percentile {p99:.4g} (more than {OUTLIER_RATIO:g} x): a few extreme frames "
                               f"(tracking glitches?) set the scale{hint}", DynamicScaleWarning, stacklevel=2)
@@ -134,9 +134,16 @@ class DynamicFeatures(BaseEstimator):
                 ax = s
             else:
                 av = s
-        if ax == 0 or av == 0:
-            raise ValueError("the lips never move in this corpus (F^x or its velocity is constant); "
+        lengths = np.diff(np.asarray(bounds, dtype=np.int64).reshape(-1, 2), axis=1).ravel()
+        if lengths.size and lengths.max() < 2:
+            raise ValueError(f"every utterance holds a single frame ({lengths.size} utterances): a velocity needs "
+                             "at least 2 consecutive frames of one utterance")
+        if ax == 0:
+            raise ValueError("the lip shape never changes in this corpus (every frame is the same shape); "
                              "nothing to embed")
+        if av == 0:
+            raise ValueError("the lips never move within an utterance of this corpus (no velocity); nothing to "
+                             "embed")
         self.alpha_ = 1.0 / ax
         self.beta_ = 1.0 / av
         return self

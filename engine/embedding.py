@@ -291,7 +291,10 @@ class Embedding(BaseEstimator):
         sign = np.sign(U[big, np.arange(k)])
         sign[sign == 0] = 1
         Vt *= sign[:, None]
-        Fy = U * (s * sign)[None, :]
+        # F^y as the rows of A projected on the axes (one more pass): the same numbers as the
+        # out-of-sample projection of the training frames, also in the weakest axes, where the
+        # range finder's U * s is least converged
+        Fy = A(Vt.T)
         total = (sumsq - N * float(c @ c)) / (N - 1)
         ev = s**2 / (N - 1)
         return Fy, Vt, c, ev, total

@@ -3,8 +3,9 @@
 When a corpus names its upper- and lower-lip points (``Corpus.point_roles``), the
 **lip aperture** is the distance between their centroids per frame. It defines
 "opening" for the tangent frames and the movement classes (instead of whatever the
-first shape component happens to be), and :func:`opening_agreement` checks a fitted
-manifold against it.
+first shape component happens to be), and :mod:`engine.class_agreement` checks a
+fitted manifold against it; :func:`aperture_definition` says in words which points
+define it.
 
 **Kinematic landmarks** are the frames where, within an utterance, the aperture
 reaches a maximum (``open``) or a minimum (``closed``), or its velocity peaks while
@@ -19,14 +20,12 @@ from dataclasses import replace
 
 import numpy as np
 
-__all__ = ["lip_aperture", "aperture_velocity", "opening_agreement", "kinematic_landmarks",
-           "with_kinematic_labels", "kinematic_key_frames", "kinematic_if_unlabelled", "LANDMARK_LABELS",
-           "AGREEMENT_WARN_BELOW"]
+__all__ = ["lip_aperture", "aperture_definition", "aperture_velocity", "kinematic_landmarks",
+           "with_kinematic_labels", "kinematic_key_frames", "kinematic_if_unlabelled", "has_kinematic_labels",
+           "LANDMARK_LABELS"]
 
 #: landmark label per kind
 LANDMARK_LABELS = ("open", "closed", "opening", "closing")
-#: ``lipspace info`` warns when the opening class agrees with the aperture velocity less often than this
-AGREEMENT_WARN_BELOW = 0.75
 
 
 def lip_aperture(corpus, *, executor=None) -> np.ndarray | None:
@@ -55,6 +54,23 @@ def lip_aperture(corpus, *, executor=None) -> np.ndarray | None:
     return np.concatenate(parts)
 
 
+def aperture_definition(corpus) -> str:
+    """What defines "opening" in ``corpus``, in words: the lip aperture and its points, or the stand-in."""
+    up, lo = corpus.role_points("upper_lip"), corpus.role_points("lower_lip")
+    if up.size == 0 or lo.size == 0:
+        return ("the first shape component F^x_1, standing in for the lip aperture (arbitrary units): the corpus "
+                "names no upper_lip / lower_lip points (import with --layout or --roles to name them)")
+    names = corpus.point_names or [str(i) for i in range(corpus.n_points)]
+
+    def which(idx):
+        shown = ", ".join(str(names[i]) for i in idx[:4])
+        return shown + (f" and {idx.size - 4} more" if idx.size > 4 else "")
+
+    what = "centroids" if up.size > 1 or lo.size > 1 else "points"
+    return (f"lip aperture: the distance between the upper_lip {what} ({which(up)}) and the lower_lip "
+            f"{what} ({which(lo)}), in mm")
+
+
 def _aperture_rows(F, a, b, *, up, lo, dims):
     """Lip aperture of the frames ``F`` (n, C) (rows ``[a, b)`` of the corpus), float64 (n,)."""
     from engine.corpus import frame_points
@@ -71,33 +87,6 @@ def aperture_velocity(aperture, bounds) -> np.ndarray:
     from engine.dynamics import velocities
 
     return velocities(np.asarray(aperture, np.float64)[:, None], bounds)[:, 0]
-
-
-def opening_agreement(opening, aperture, bounds) -> float:
-    """Fraction of moving frames whose "opening" flag agrees with the aperture increasing.
-
-    Parameters
-    ----------
-    opening : bool ndarray of shape (N,)
-        ``TangentFrames.opening_`` (opening at frame i = moving toward frame i+1).
-    aperture : ndarray of shape (N,)
-    bounds : int ndarray of shape (U, 2)
-
-    Returns
-    -------
-    float in [0, 1]; frames with no forward step or no aperture change are left out
-    (NaN when none remain).
-    """
-    a = np.asarray(aperture, np.float64)
-    op = np.asarray(opening, bool)
-    has = np.ones(len(a), bool)
-    has[np.asarray(bounds)[:, 1] - 1] = False
-    da = np.zeros_like(a)
-    da[:-1] = a[1:] - a[:-1]
-    ok = has & (da != 0)
-    if not ok.any():
-        return float("nan")
-    return float(np.mean(op[ok] == (da[ok] > 0)))
 
 
 def _smooth(x, width):
@@ -201,8 +190,17 @@ def with_kinematic_labels(corpus, **landmark_params):
             ph.append((s, e, str(li)))
         utts.append(replace(u, phones=tuple(ph)))
     out = replace(corpus, utterances=utts, history=list(corpus.history) + [
-        f"phones replaced by {len(frames)} kinematic landmarks ({', '.join(LANDMARK_LABELS)})"])
+        f"{_LANDMARK_NOTE} {len(frames)} kinematic landmarks ({', '.join(LANDMARK_LABELS)})"])
     return out
+
+
+#: how :func:`with_kinematic_labels` starts its history line
+_LANDMARK_NOTE = "phones replaced by"
+
+
+def has_kinematic_labels(corpus) -> bool:
+    """True when the corpus's labels are kinematic landmarks (:func:`with_kinematic_labels`), not phones."""
+    return any(h.startswith(_LANDMARK_NOTE) and "kinematic landmarks" in h for h in corpus.history)
 
 
 def kinematic_key_frames(corpus, utterance, **landmark_params) -> np.ndarray:

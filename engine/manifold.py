@@ -5,6 +5,7 @@ StateGraph``. The GUI and the command line are two faces over this object.
 """
 from __future__ import annotations
 
+import functools
 import json
 import time
 from pathlib import Path
@@ -21,16 +22,48 @@ from engine.embedding import Embedding
 from engine.progress import ProgressFn, report
 from engine.shape import ShapeSpace, small_query_blas
 
-__all__ = ["Manifold", "ManifoldFileError", "algorithm_fingerprint"]
+__all__ = ["Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
 
-FILE_VERSION = 1
+FILE_VERSION = 2
 #: corpora whose frames exceed this are saved without F (reconstructed from F^x on load)
 MAX_SAVED_FRAME_BYTES = 512 * 2**20
 
 
-#: modules whose code determines a fitted manifold (see :func:`algorithm_fingerprint`)
-FIT_MODULES = ("engine.corpus", "engine.shape", "engine.dynamics", "engine.embedding", "engine.tangent",
-               "engine.states", "engine.manifold", "engine._persist")
+@functools.lru_cache(maxsize=1)
+def fit_modules() -> tuple[str, ...]:
+    """The engine modules whose code determines a fitted manifold: this module and every engine
+    module it imports, directly or through others, at module level or inside functions (read
+    from their sources, so a module a new import brings in is covered without being listed)."""
+    import ast
+
+    seen, todo = {}, [__name__]
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen[name] = path = _module_file(name)
+        if path is None:
+            continue
+        with open(path, encoding="utf-8") as fh:
+            tree = ast.parse(fh.read())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                todo += [a.name for a in node.names if a.name.split(".")[0] == "engine"]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module \
+                    and node.module.split(".")[0] == "engine":
+                todo += [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+    return tuple(sorted(n for n, p in seen.items() if p is not None))
+
+
+def _module_file(name: str) -> str | None:
+    """The source file of engine module ``name``, or None when ``name`` is no module (an imported
+    function); found on disk beside this package, without importing anything."""
+    root = Path(__file__).resolve().parent
+    parts = name.split(".")[1:]
+    for cand in (root.joinpath(*parts).with_suffix(".py") if parts else None, root.joinpath(*parts, "__init__.py")):
+        if cand is not None and cand.is_file():
+            return str(cand)
+    return None
 
 
 def algorithm_fingerprint(params: dict | None = None) -> str:
@@ -40,7 +73,7 @@ def algorithm_fingerprint(params: dict | None = None) -> str:
     fingerprint was made by other code or settings and must be rebuilt.
     """
     params = Manifold().get_params() if params is None else params
-    return source_fingerprint(FIT_MODULES, {"file_version": FILE_VERSION, "params": params})
+    return source_fingerprint(fit_modules(), {"file_version": FILE_VERSION, "params": params})
 
 
 class ManifoldFileError(ValueError):
@@ -56,8 +89,9 @@ class Manifold(BaseEstimator):
         Variance kept by the shape space X.
     max_components : int, default=100
         Shape components computed.
-    n_embedding : int, default=10
-        Dimensions of Y kept.
+    n_embedding : int, default=16
+        Dimensions of Y kept (the tangent frames are read in all of them, or the first
+        10, whichever predicts the lips' held-out movement better).
     embedding_method : {"pca", "mds"}, default="pca"
     n_landmarks : int or None, default=None
         Landmark embedding with this many landmarks. None: chosen by size
@@ -69,8 +103,9 @@ class Manifold(BaseEstimator):
         K of the state graph (None: about N/30, see :class:`engine.states.StateGraph`).
     state_dims : int, default=3
         Dimensions of Y clustered into states.
-    n_neighbors : int, default=20
-        Neighbourhood size of the local tangent frames.
+    n_neighbors : int or None, default=None
+        Neighbourhood size of the local tangent frames. None: chosen for the corpus by
+        held-out validation (:class:`engine.tangent.TangentFrames`).
     random_state : int, default=0
     speaker_normalisation : {"auto", "mean", "mean+scale", "none"}, default="auto"
         Per-speaker normalisation of the frames before the shape space
@@ -105,8 +140,8 @@ class Manifold(BaseEstimator):
         Seconds per stage of the last fit.
     """
 
-    def __init__(self, *, variance=0.99, max_components=100, n_embedding=10, embedding_method="pca",
-                 n_landmarks=None, n_states=None, state_dims=3, n_neighbors=20, random_state=0,
+    def __init__(self, *, variance=0.99, max_components=100, n_embedding=16, embedding_method="pca",
+                 n_landmarks=None, n_states=None, state_dims=3, n_neighbors=None, random_state=0,
                  speaker_normalisation="auto", landmarks_above=50000, dynamics_scale="max"):
         self.variance = variance
         self.max_components = max_components
@@ -172,8 +207,11 @@ class Manifold(BaseEstimator):
 
         t = time.perf_counter()
         report(progress, "tangent frames", 0, 1)
-        tangent = TangentFrames(n_neighbors=self.n_neighbors, n_dims=min(3, self.n_embedding)).fit(
-            Fy, Fx, Fxv, bounds, opening=lip_aperture(corpus, executor=executor), executor=executor)  # "opening": the lips part
+        opening, source, unit = lip_aperture(corpus, executor=executor), "lip aperture", corpus.unit_label  # lips part
+        if opening is None:
+            opening, source, unit = np.asarray(Fx[:, 0], dtype=np.float64), "first shape component F^x_1", ""
+        tangent = TangentFrames(n_neighbors=self.n_neighbors, random_state=self.random_state).fit(
+            Fy, bounds, opening, rate=corpus.rate, source=source, unit=unit, executor=executor)
         report(progress, "tangent frames", 1, 1)
         timings["tangent"] = time.perf_counter() - t
 
@@ -276,7 +314,7 @@ class Manifold(BaseEstimator):
              "Fx": self.Fx_, "Fxv": self.Fxv_, "G": self.G_, "Fy": self.Fy_}
         if getattr(self, "state_x_", None) is not None:
             d["state_x"] = self.state_x_
-        d.update(self.corpus_.to_arrays(include_frames=include_frames))
+        d.update(self.corpus_.to_arrays(include_frames=include_frames, base=path.resolve().parent))
         d.update(reference)
         for name, attr in self._PARTS.items():
             d.update(dump_estimator(getattr(self, attr), name))
@@ -323,9 +361,13 @@ class Manifold(BaseEstimator):
         from engine.tangent import TangentFrames
 
         version = check_scalar(d, "manifold_version", source=path, kind="int")
+        if version == 1:
+            raise FieldError(path, "manifold_version", "format 1 was written by an older Lipspace whose tangent "
+                                                       "frames and classes were read in Y1-3 only; rebuild it "
+                                                       "from its corpus with 'lipspace build'")
         if version > FILE_VERSION or version < 1:
             raise FieldError(path, "manifold_version", f"format {version} is not one this Lipspace reads "
-                                                       f"(1..{FILE_VERSION}); upgrade Lipspace")
+                                                       f"({FILE_VERSION}); upgrade Lipspace")
         self = parse_params(cls, check_scalar(d, "manifold_params", source=path, kind="str"),
                             source=path, field="manifold_params")
         dims = {}
@@ -349,7 +391,7 @@ class Manifold(BaseEstimator):
             frames = frames_from_reference(d, path, n_frames=dims["N"], n_columns=self.shape_.mean_.shape[0])
         else:
             frames = self.shape_.inverse_transform(self.Fx_)
-        self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path))
+        self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path), base=Path(path).resolve().parent)
         self.timings_ = _parse_timings(check_scalar(d, "manifold_timings", source=path, kind="str"), path)
         self._inverse = None
         self.state_x_ = None  # files written before it was stored: synthesis maps the states itself
@@ -380,16 +422,23 @@ _SCHEMA = {
                   "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
                   "recovered_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
                   "landmarks_": dict(kind="array", dtype=_I, shape=("L",), low=0, high="N", none=True)},
-    "tangent": {"plane_point_": dict(kind="array", dtype=_F, shape=("t",)),
-                "plane_normal_": dict(kind="array", dtype=_F, shape=("t",)),
-                "S_": dict(kind="array", dtype=_F, shape=("t",)),
+    "tangent": {"plane_point_": dict(kind="array", dtype=_F, shape=(3,)),
+                "plane_normal_": dict(kind="array", dtype=_F, shape=(3,)),
+                "S_": dict(kind="array", dtype=_F, shape=(3,)),
+                "shape_direction_": dict(kind="array", dtype=_F, shape=("t",)),
+                "velocity_direction_": dict(kind="array", dtype=_F, shape=("t",)),
                 "s_": dict(kind="array", dtype=_F, shape=("N", "t")),
                 "v_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "normal_": dict(kind="array", dtype=_F, shape=("N", "t")),
                 "step_": dict(kind="array", dtype=_F, shape=("N", "t")),
+                "velocity_": dict(kind="array", dtype=_F, shape=("N",)),
+                "acceleration_": dict(kind="array", dtype=_F, shape=("N",)),
                 "opening_": dict(kind="array", dtype=_B, shape=("N",)),
                 "accelerating_": dict(kind="array", dtype=_B, shape=("N",)),
-                "classes_": dict(kind="array", dtype=_I, shape=("N",), low=-1, high=4)},
+                "classes_": dict(kind="array", dtype=_I, shape=("N",), low=-1, high=4),
+                "shape_coordinate_": dict(kind="array", dtype=_F, shape=("N",)),
+                "opening_source_": dict(kind="str"), "opening_unit_": dict(kind="str"),
+                "n_dims_": dict(kind="int", low=1),
+                "n_neighbors_": dict(kind="int", low=1)},
     "states": {"centroids_": dict(kind="array", dtype=_F, shape=("K", "d")),
                "labels_": dict(kind="array", dtype=_I, shape=("N",), low=0, high="K"),
                "counts_": dict(kind="csr", dtype=_I, shape=("K", "K"), low=0),
@@ -415,9 +464,9 @@ def _check_consistency(m, dims, path):
     if dims["L"] < 1 or dims["K"] < 1 or dims["N"] < 2:
         raise FieldError(path, "Fy", f"{dims['N']} frames, {dims['L']} reference points, {dims['K']} states: "
                                      "too few to be a fitted manifold")
-    if dims["t"] > dims["k"] or dims["d"] > dims["k"]:
-        raise FieldError(path, "tangent/plane_normal_", f"{dims['t']}-D tangent frames / {dims['d']}-D states "
-                                                        f"in a {dims['k']}-D embedding")
+    if dims["t"] > dims["k"] or dims["d"] > dims["k"] or m.tangent_.n_dims_ != dims["t"]:
+        raise FieldError(path, "tangent/s_", f"{dims['t']}-D tangent frames (n_dims_={m.tangent_.n_dims_}) / "
+                                             f"{dims['d']}-D states in a {dims['k']}-D embedding")
     st = m.states_
     if st.scc_labels_.size and st.scc_labels_.max() >= st.n_scc_:
         raise FieldError(path, "states/scc_labels_", f"value {st.scc_labels_.max()} is out of range "

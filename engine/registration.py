@@ -113,7 +113,7 @@ def register(corpus: Corpus, *, method: str = "auto", drop_reference: bool = Tru
         if not keep:
             raise CorpusError(f"{corpus.name}: every point is a reference sensor; nothing is left to model")
         desc = (f"rigid (Procrustes) to reference sensors {', '.join(names[i] for i in ref)}, "
-                f"residual {rms:.3g} rms{', reference sensors dropped' if drop_reference else ''}")
+                f"residual {rms:.3g} {corpus.unit_label} rms{', reference sensors dropped' if drop_reference else ''}")
         roles = [corpus.point_roles[i] for i in keep] if corpus.point_roles is not None else None
         return replace(corpus, frames=Q[:, keep].reshape(corpus.n_frames, -1).astype(np.float32),
                        point_names=[names[i] for i in keep] if corpus.point_names is not None else None,
@@ -137,8 +137,15 @@ def register(corpus: Corpus, *, method: str = "auto", drop_reference: bool = Tru
         F[g] += d
         shifts.append(float(np.linalg.norm(d)))
     what = "utterance" if method == "utterance" else "speaker"
+    unit = corpus.unit_label
+    if method == "utterance":
+        moved = (f"shifts median {np.median(shifts):.3g} {unit}, max {max(shifts):.3g} {unit} "
+                 f"({len(shifts)} utterances)")
+    else:  # name each speaker and how far its frames moved
+        names = [s or "(unnamed)" for s in dict.fromkeys(spk)]
+        moved = "frames moved " + ", ".join(f"{n} by {d:.3g} {unit}" for n, d in zip(names, shifts))
     desc = (f"{what} centring (no reference sensors): each {what}'s mean lip centroid moved to the corpus mean; "
-            f"shifts median {np.median(shifts):.3g}, max {max(shifts):.3g}")
+            f"{moved}")
     return replace(corpus, frames=F.reshape(corpus.n_frames, -1).astype(np.float32), registration=desc,
                    history=list(corpus.history) + [f"registration: {desc}"])
 
@@ -182,9 +189,24 @@ def normalise_speakers(corpus: Corpus, *, mode: str = "auto", executor=None) -> 
         frames = np.empty(F.shape, dtype=np.float32)
         for a, b in row_windows(*F.shape):
             frames[a:b] = affine.apply(F[a:b], a)
-    names = ", ".join(s or "(unnamed)" for s in speakers)
-    note = f"speaker normalisation {mode} over {len(speakers)} speakers ({names})"
+    note = f"speaker normalisation {mode} over {len(speakers)} speakers: {_moved(corpus, speakers, affine)}"
     return replace(corpus, frames=frames, history=list(corpus.history) + [note])
+
+
+def _moved(corpus, speakers, affine) -> str:
+    """What per-speaker normalisation moved, in words: each speaker's shift (RMS over the points, in the
+    corpus's unit) and, when scaled, its spread factor."""
+    d = np.asarray(affine.mean, np.float64) - np.asarray(affine.grand, np.float64)[None]
+    V = max(d.shape[1] // corpus.dims, 1)
+    rms = np.sqrt((d ** 2).sum(axis=1) / V)
+    unit = corpus.unit_label
+    parts = []
+    for k, s in enumerate(speakers):
+        part = f"{s or '(unnamed)'} by {rms[k]:.3g} {unit}"
+        if affine.factor is not None:
+            part += f", spread x{float(affine.factor[k]):.3g}"
+        parts.append(part)
+    return ("each speaker's mean frame moved to the pooled mean frame (RMS over the points): " + "; ".join(parts))
 
 
 def speaker_affine(corpus: Corpus, *, scale: bool, executor=None):

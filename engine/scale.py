@@ -20,8 +20,9 @@
   block.
 
 * the local tangent frames (:meth:`DaskExecutor.map_row_blocks` over
-  :func:`engine.tangent.local_frames_block`: the fitted KD-tree, F^y and the opening
-  signal travel once to each worker, every task returns its block's s_i, v_i, s_i x v_i);
+  :func:`engine.local_gradients.gradients_block`: the fitted KD-tree, F^y, its steps and
+  the opening's changes travel once to each worker, every task returns its block of
+  anchors' local gradients);
 * the assignment of frames to states and the transition counts
   (:func:`engine.states.assign_and_count`: labels of the block and a sparse K x K count
   matrix per task, summed on the client).
@@ -398,7 +399,7 @@ class DaskExecutor:
 
         The ``shared`` arguments (arrays, fitted objects) are scattered once to every
         worker; each task reads its own rows of them and returns only its block's
-        result. Used by the tangent frames (:func:`engine.tangent.local_frames_block`)
+        result. Used by the tangent frames (:func:`engine.local_gradients.gradients_block`)
         and the state graph (:func:`engine.states.assign_and_count`).
         """
         if int(block) < 1:

@@ -255,7 +255,7 @@ class StateGraph(BaseEstimator):
                 f"the state graph is not strongly connected: {n_scc} strongly connected components; "
                 f"{r['unreachable_from']} of {K} states are unreachable from the largest component "
                 f"({r['largest']} state{plural}) and {r['cannot_reach']} cannot reach it. Distances to and "
-                f"from them are infinite; fewer states (n_states) or more speech connect the graph.",
+                f"from them are infinite; fewer states (lipspace build --states K) or more speech connect the graph.",
                 StateGraphConnectivityWarning, stacklevel=2)
         return self
 

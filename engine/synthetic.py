@@ -48,7 +48,10 @@ from engine.threads import one_blas_thread
 
 __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker", "load_synthetic", "cache_folder",
            "cache_token",
-           "phone_gestures", "gesture_phases", "speaker_anatomy"]
+           "phone_gestures", "gesture_phases", "lip_roles", "speaker_anatomy"]
+
+#: the lip model's coordinates (engine.lipmodel): x the talker's left, y up, z forward, in mm
+LIP_MODEL_AXES = "x=left,y=up,z=forward"
 
 #: Bumped whenever the generated corpus changes for the same parameters (cache key).
 GENERATOR_VERSION = 6
@@ -571,7 +574,8 @@ class SyntheticTalker(BaseEstimator):
         self.n_utterances_ = len(utts)
         self.anatomies_ = anat
         return Corpus(frames=frames, rate=rate, utterances=utts, dims=3, faces=lip.faces,
-                      point_names=lip.point_names, latent=latent, name=f"synthetic-{self.preset}")
+                      point_names=lip.point_names, point_roles=lip_roles(lip), latent=latent,
+                      name=f"synthetic-{self.preset}", axes=LIP_MODEL_AXES)
 
     def _registration_field(self, rng, utts, n, lip):
         """(coefficients (n, K), basis (K, 3 * n_points)) of the smooth registration error:
@@ -629,6 +633,19 @@ def speaker_anatomy(seed: int, speaker: int) -> Anatomy:
     """The lip anatomy of speaker ``speaker`` of the talker with ``seed`` (drawn around the
     adult mean, :meth:`engine.lipmodel.Anatomy.draw`)."""
     return Anatomy.draw(np.random.default_rng([int(seed), 1000 + int(speaker)]))
+
+
+def lip_roles(lip) -> list[str]:
+    """Point roles of a lip surface: the inner-contour midline points are the upper and lower
+    lip (their distance is the lip aperture, as :meth:`engine.lipmodel.LipModel.aperture`
+    defines it), the inner-contour points at the commissures the corners, the rest lip."""
+    roles = ["lip"] * lip.n_points
+    up, low = lip.midline
+    roles[up], roles[low] = "upper_lip", "lower_lip"
+    left = lip.corner_column
+    roles[left] = "left_corner"
+    roles[lip.cols - 1 - left] = "right_corner"
+    return roles
 
 
 def gesture_phases(aperture, bounds) -> np.ndarray:
@@ -723,6 +740,8 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=Fal
         report(progress, "loading cache", 0, 1)
         try:
             corpus = Corpus.load(path)
+            # the lip model's unit and axes (cache files written before corpora named them)
+            corpus.units, corpus.axes = "mm", LIP_MODEL_AXES
             report(progress, "loading cache", 1, 1)
             return _with_audio(corpus, path, progress) if audio else corpus
         except (CorpusError, OSError, ValueError):

@@ -427,24 +427,29 @@ def targets_from_utterance(manifold, utterance, *, corpus=None, key_frames=None,
         one = c.subset([u.id])
         if lip_aperture(one) is None:
             raise TargetError(f"{source} has no phone alignment and {c.name} names no upper/lower lip points for "
-                              "kinematic landmarks; give key_frames= (lipspace synthesize --key-frames F,F,...)")
+                              "kinematic landmarks; give key frames (lipspace synthesize --key-frames F,F,...)")
         phones = with_kinematic_labels(one).utterances[0].phones  # aperture extrema and peak velocities
         source += " (kinematic landmarks: it has no phone alignment)"
         if not phones:
-            raise TargetError(f"{source}: no kinematic landmarks found (the lips hardly move); give key_frames=")
+            raise TargetError(f"{source}: no kinematic landmarks found (the lips hardly move); give key frames "
+                              "(--key-frames F,F,...)")
     if key_frames is None:
         ph = phones
         keep, frames = _mid_targets(ph, c.rate, n, on_collision, source)
         items = [(frames[i], ph[i].label) for i in keep]
     else:
-        kf = np.asarray(key_frames, dtype=np.int64).reshape(-1)
+        try:
+            kf = np.asarray(key_frames, dtype=np.int64).reshape(-1)
+        except (OverflowError, TypeError, ValueError):  # 10**30 does not fit a frame index
+            raise TargetError(f"{source}: key frames {list(key_frames)[:5]} are not frame indices; expected whole "
+                              f"numbers from 0 to {n - 1}") from None
         if kf.size == 0:
-            raise TargetError("key_frames is empty")
+            raise TargetError(f"{source}: no key frames given")
         bad = kf[(kf < 0) | (kf >= n)]
         if bad.size:
             raise TargetError(f"{source}: key frame {int(bad[0])} is outside the utterance's frames 0..{n - 1}")
         if np.any(np.diff(kf) <= 0):
-            raise TargetError(f"{source}: key_frames must be strictly increasing, got {kf.tolist()[:10]}")
+            raise TargetError(f"{source}: key frames must be strictly increasing, got {kf.tolist()[:10]}")
         ph = phones
         items = []
         for f in kf:

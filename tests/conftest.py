@@ -1,7 +1,10 @@
 """Shared fixtures: the small synthetic corpus and its manifold, built once per session."""
 from __future__ import annotations
 
+import itertools
 import os
+import shutil
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -42,6 +45,42 @@ def shared_data():
     if not SHARED_DATA.is_dir():
         pytest.skip(f"real sample data not found at {SHARED_DATA} (../shared/data beside the project)")
     return SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def mocha_manifold(shared_data):
+    """The manifold of the MOCHA sample (fsew0_001: lip sensors, a .lab alignment, audio) at 60 Hz."""
+    import warnings
+
+    from engine.io import read_corpus, resample
+    from engine.manifold import Manifold
+
+    d = shared_data / "mocha-fsew0"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a 2-s, 116-frame corpus: the data warnings are expected
+        corpus = resample(read_corpus(d / "fsew0_001.ema", alignment=d / "fsew0_001.lab"), 60.0)
+        return Manifold().fit(corpus)
+
+
+@pytest.fixture(scope="session")
+def praat(tmp_path_factory):
+    """``praat(script, *args) -> stdout``: run a Praat script with the real program (``praat --run``).
+
+    Skips the test where Praat is not installed (``.ci/run`` installs Debian's ``praat``).
+    """
+    exe = shutil.which("praat")
+    if exe is None:
+        pytest.skip("Praat is not installed (apt-get install praat; .ci/run does)")
+    folder, count = tmp_path_factory.mktemp("praat"), itertools.count()
+
+    def run(script: str, *args, timeout: float = 300) -> str:
+        path = folder / f"script{next(count)}.praat"
+        path.write_text(script, encoding="utf-8")
+        r = subprocess.run([exe, "--run", str(path), *map(str, args)], capture_output=True, text=True, timeout=timeout)
+        assert r.returncode == 0, f"praat --run {path.name}: {r.stderr}"
+        return r.stdout
+
+    return run
 
 
 @pytest.fixture(scope="session")

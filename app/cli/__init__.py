@@ -31,6 +31,7 @@ SUBCOMMANDS = {
     "synthesize": ("app.cli.synthesize", "synthesise a lip trajectory from phones, a TextGrid or text"),
     "evaluate": ("app.cli.evaluate", "held-out synthesis evaluation table, every method"),
     "clusters": ("app.cli.clusters", "phone cluster statistics table"),
+    "table": ("app.cli.table", "per-frame table (CSV, Parquet) and Praat TextGrids of a manifold"),
     "figures": ("app.cli.figures", "render the paper's figure set in batch"),
     "import": ("app.cli.importer", "convert a foreign corpus format to the native corpus file"),
     "render": ("app.cli.render", "render a synthesised utterance as an MP4 video with its audio"),
@@ -53,24 +54,30 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
             continue
         mod = importlib.import_module(modname)
         mod.add_arguments(p)
+        if any(a.dest in OUTPUT_FILE_ARGS + OUTPUT_DIR_ARGS for a in p._actions):
+            p.add_argument("--force", action="store_true",
+                           help="replace output files that already exist (default: refuse, naming them, and "
+                                "write nothing)")
         p.set_defaults(_run=mod.run)
     return parser
 
 
 #: arguments naming files a command writes / directories it writes into
-OUTPUT_FILE_ARGS = ("output", "csv", "markdown")
-OUTPUT_DIR_ARGS = ("outdir", "mesh_dir")
+OUTPUT_FILE_ARGS = ("output", "csv", "markdown", "praat")
+OUTPUT_DIR_ARGS = ("outdir", "mesh_dir", "audio_dir", "textgrid_dir")
 
 
 def main(argv=None) -> int:
     """Run one subcommand; the exit status (0 ok, 1 nothing succeeded, 2 error, 128 + signal)."""
     caught = _CAUGHT
     caught.clear()
+    _tolerant_streams()
     rc = _main(argv, caught)
     if caught and rc < 128:
-        # the signal's KeyboardInterrupt was swallowed where Python ignores exceptions
-        # (a weakref callback during an import): the command did not stop, say so
-        print(f"lipspace: {caught[-1]} arrived while Python could not stop the command; "
+        # the signal came while the outputs were moved into place (deferred), or its
+        # KeyboardInterrupt was swallowed where Python ignores exceptions (a weakref callback
+        # during an import): the command did not stop, say so
+        print(f"lipspace: {caught[-1]} arrived when the command could no longer stop; "
               "it ran to its end (its output is complete).", file=sys.stderr)
     return rc
 
@@ -84,21 +91,37 @@ def stop_requested() -> bool:
     return bool(_CAUGHT)
 
 
+def _tolerant_streams() -> None:
+    """A terminal that cannot show every character (PYTHONIOENCODING=ascii, a C locale) gets
+    ``\\xe9``-style escapes instead of an error after the work is done."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(AttributeError, ValueError, OSError):
+            if (stream.encoding or "").lower().replace("-", "") not in ("utf8", "utf16", "utf32"):
+                stream.reconfigure(errors="backslashreplace")
+
+
 def _main(argv, caught) -> int:
+    from engine.staging import committed
+
+    before = len(committed())
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] not in SUBCOMMANDS and argv[0] not in ("-h", "--help"):
         argv = ["explore", *argv]
     with _signals_as_interrupt(caught):
         try:
             args = argparse.Namespace(command=argv[0])
-            args = build_parser(argv[0] if argv[0] in SUBCOMMANDS else None).parse_args(argv)
-            _check_paths(args)
+            parser = build_parser(argv[0] if argv[0] in SUBCOMMANDS else None)
+            args = parser.parse_args(argv)
+            _check_paths(args, _typed_options(parser, argv))
             with _engine_warnings_to_stderr(args.command):
                 with _printable_stdout():
                     return int(args._run(args) or 0)
         except (Cancelled, KeyboardInterrupt):
             what = f"stopped by {caught[-1]}" if caught and caught[-1] != "SIGINT" else "interrupted"
-            print(f"lipspace: {what}; nothing was written.", file=sys.stderr)
+            done = committed()[before:]
+            wrote = (f"{len(done)} file(s) had been written already ({', '.join(done[:3])}"
+                     f"{', ...' if len(done) > 3 else ''})" if done else "nothing was written")
+            print(f"lipspace: {what}; {wrote}.", file=sys.stderr)
             return 128 + (caught_signum(caught) or 2)
         except CliError as exc:
             print(f"lipspace {args.command}: error: {printable(str(exc))}", file=sys.stderr)
@@ -158,7 +181,12 @@ class _PrintableWriter:
         self._pattern = pattern
 
     def write(self, text):
-        return self._stream.write(self._pattern.sub(lambda m: f"\\x{ord(m.group()):02x}", text))
+        text = self._pattern.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
+        try:
+            return self._stream.write(text)
+        except UnicodeEncodeError:  # a terminal that cannot show a character: its escape instead
+            enc = getattr(self._stream, "encoding", None) or "ascii"
+            return self._stream.write(text.encode(enc, "backslashreplace").decode(enc))
 
     def __getattr__(self, name):
         return getattr(self._stream, name)
@@ -178,12 +206,35 @@ def _printable_stdout():
 
 
 def _os_error_text(exc: OSError) -> str:
+    from engine.staging import OutputExistsError, user_path
+
+    if isinstance(exc, OutputExistsError):
+        return str(exc)
     text = exc.strerror or str(exc)
-    name = exc.filename if exc.filename is not None else ""
+    name = user_path(exc.filename) if exc.filename is not None else ""  # never a temporary file's name
     if not exc.strerror:
         return str(exc)
-    hint = " (the disk is full: free space or write elsewhere)" if exc.errno == errno.ENOSPC else ""
+    hint = {errno.ENOSPC: " (the disk is full: free space or write elsewhere); nothing was written",
+            errno.EDQUOT: " (the disk quota is used up); nothing was written",
+            errno.EROFS: " (a read-only file system: write elsewhere); nothing was written",
+            errno.EACCES: " (no permission: write elsewhere)"}.get(exc.errno, "")
     return f"{name}: {text}{hint}" if name else f"{text}{hint}"
+
+
+#: non-empty while the outputs of a command are moved into place (a stop signal waits for the end)
+_DEFERRED: list = []
+
+
+@contextlib.contextmanager
+def signals_deferred():
+    """Stop signals arriving inside the block are noted, not raised: the block (moving a command's
+    finished outputs into place) completes, so that what is on disk is all new or all old; the
+    command then ends normally and :func:`main` says the signal came too late to stop it."""
+    _DEFERRED.append(True)
+    try:
+        yield
+    finally:
+        _DEFERRED.pop()
 
 
 def caught_signum(caught) -> int | None:
@@ -200,7 +251,8 @@ def _signals_as_interrupt(caught: list):
 
     def handler(signum, frame):
         caught.append(signal.Signals(signum).name)
-        raise KeyboardInterrupt
+        if not _DEFERRED:  # outputs being moved into place: finish that, then end normally
+            raise KeyboardInterrupt
 
     old = {}
     for sig in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)):
@@ -213,10 +265,24 @@ def _signals_as_interrupt(caught: list):
             signal.signal(sig, h)
 
 
-def _check_paths(args) -> None:
+def _typed_options(parser, argv) -> dict:
+    """``{dest: the option string the user typed}`` (``-o`` or ``--output``), for messages."""
+    typed = {}
+    sub = next((a for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)
+    p = sub.choices.get(argv[0]) if sub is not None and argv else None
+    for action in p._actions if p is not None else []:
+        for opt in action.option_strings:
+            if any(a == opt or a.startswith(opt + "=") for a in argv[1:]):
+                typed[action.dest] = opt
+    return typed
+
+
+def _check_paths(args, typed=None) -> None:
     """Refuse before any work: an output that is one of the command's inputs (it would
-    be destroyed), a file output naming a directory (or the reverse), and inputs that
-    are not regular files or directories (a FIFO would block forever)."""
+    be destroyed), an output file that exists (without ``--force``), a file output naming
+    a directory (or the reverse), and inputs that are not regular files or directories (a
+    FIFO would block forever). Options are named as typed (``typed``: dest -> option)."""
+    typed = typed or {}
     outputs, inputs = [], []
     for name, value in vars(args).items():
         if name.startswith("_") or value is None or isinstance(value, bool):
@@ -235,10 +301,15 @@ def _check_paths(args) -> None:
             continue  # not a path (a phone string, a preset) or missing: the command says so
         if not (stat.S_ISREG(st.st_mode) or stat.S_ISDIR(st.st_mode)):
             raise CliError(f"{p}: not a regular file (a pipe, socket or device); give a file on disk")
+    force = bool(getattr(args, "force", False))
     for name, p in outputs:
-        opt = "--" + name.replace("_", "-")
+        opt = typed.get(name, "--" + name.replace("_", "-"))
         if name in OUTPUT_FILE_ARGS and p.is_dir():
             raise CliError(f"{opt} {p}: is a directory; give a file name")
+        if name in OUTPUT_FILE_ARGS and p.exists() and not force and not any(
+                os.path.samefile(p, q) for _, q in inputs if q.exists()):
+            raise CliError(f"{opt} {p}: already exists; nothing was written. Pass --force to replace it, or choose "
+                           "another name")
         if name in OUTPUT_DIR_ARGS and p.exists() and not p.is_dir():
             raise CliError(f"{opt} {p}: exists and is not a directory")
         for iname, q in inputs:
@@ -250,20 +321,21 @@ def _check_paths(args) -> None:
 
 @contextlib.contextmanager
 def _engine_warnings_to_stderr(command):
-    """Print the engine's own warnings (e.g. a disconnected state graph) as one clean line each.
-
-    They tell the user something about their data, so the command goes on; other
-    libraries' warnings keep Python's default handling.
-    """
+    """Print warnings as one clean line each: the engine's own (e.g. a disconnected state graph)
+    tell the user something about their data, so the command goes on; a numerical warning
+    (overflow in a product, ...) says so, without the source file and line that mean
+    nothing to the user."""
     from engine.corpus import CorpusWarning
 
     def show(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, CorpusWarning):
             print(f"lipspace {command}: warning: {printable(str(message))}", file=sys.stderr)
+        elif issubclass(category, RuntimeWarning):
+            print(f"lipspace {command}: warning: numerical trouble ({printable(str(message))}); the data may hold "
+                  "values far outside the range of the others", file=sys.stderr)
         else:
-            _default_show(message, category, filename, lineno, file, line)
+            print(f"lipspace {command}: warning: {printable(str(message))}", file=sys.stderr)
 
-    _default_show = warnings.showwarning
     with warnings.catch_warnings():
         warnings.simplefilter("always", CorpusWarning)
         warnings.showwarning = show

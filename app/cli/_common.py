@@ -7,7 +7,24 @@ from pathlib import Path
 
 from engine.progress import Cancelled
 
-__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg"]
+__all__ = ["progress_bar", "load_corpus_arg", "load_manifold_arg", "command_outputs", "check_synthesis_bounds",
+           "roles_text"]
+
+
+def roles_text(names, roles, *, limit: int = 12) -> str:
+    """The point roles in one line: ``UL=upper_lip, LL=lower_lip, ...`` for up to ``limit`` points; for more
+    (a video's 80 lip landmarks) one entry per role, naming its points when there are at most 4, else
+    counting them: ``80 points: upper_lip outer_0, inner_13; ...; lip 74 points``."""
+    names = list(names) if names is not None else [f"p{i}" for i in range(len(roles))]
+    if len(roles) <= limit:
+        return ", ".join(f"{n}={r or '-'}" for n, r in zip(names, roles))
+    from engine.layouts import ROLES
+
+    by_role: dict[str, list] = {}
+    for n, r in sorted(zip(names, roles), key=lambda t: ROLES.index(t[1]) if t[1] in ROLES else len(ROLES)):
+        by_role.setdefault(r or "-", []).append(str(n))
+    parts = [f"{r} {', '.join(ns)}" if len(ns) <= 4 else f"{r} {len(ns)} points" for r, ns in by_role.items()]
+    return f"{len(roles)} points: " + "; ".join(parts)
 
 
 @contextlib.contextmanager
@@ -101,51 +118,14 @@ def load_manifold_arg(path):
         raise CliError(str(exc)) from None
 
 
-@contextlib.contextmanager
-def output_directory(path, *, pattern: str = "*"):
-    """Yield a fresh temporary directory beside ``path``; on success its files land in ``path``.
+def command_outputs(args):
+    """The outputs of one command as one transaction (:class:`engine.staging.Outputs`): existing
+    files refused unless ``--force``, everything moved into place at the end with stop signals
+    deferred meanwhile, nothing left behind by an error or a signal."""
+    from app.cli import signals_deferred
+    from engine.staging import Outputs
 
-    A missing or empty ``path`` is replaced by the temporary directory in one rename;
-    otherwise the files are moved in one by one (existing files matching ``pattern``
-    that the new output does not replace are refused first, nothing moved). On any
-    failure — an error, Ctrl-C, SIGTERM — the temporary directory is removed, so an
-    interrupted export leaves nothing; if moving into a non-empty directory fails
-    part-way the error says exactly which files were moved.
-    """
-    import os
-    import shutil
-    import tempfile
-
-    from app.cli import CliError
-
-    target = Path(path)
-    if target.exists() and not target.is_dir():
-        raise CliError(f"{target}: exists and is not a directory")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.part-", dir=target.parent))
-    try:
-        yield tmp
-        new = sorted(p.name for p in tmp.iterdir())
-        if target.is_dir() and any(target.iterdir()):
-            stale = sorted(q.name for q in target.glob(pattern) if q.name not in set(new))
-            if stale:
-                raise CliError(f"{target} already holds {len(stale)} other '{pattern}' file(s), e.g. {stale[0]}; "
-                               "they would be read back as extra frames. Choose an empty directory; "
-                               "nothing was written")
-            moved = []
-            try:
-                for name in new:
-                    os.replace(tmp / name, target / name)
-                    moved.append(name)
-            except OSError as exc:
-                raise CliError(f"{exc}; {len(moved)} of {len(new)} files were moved into {target}"
-                               + (f" ({moved[0]} .. {moved[-1]})" if moved else "")) from None
-        else:
-            if target.is_dir():
-                target.rmdir()
-            os.replace(tmp, target)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+    return Outputs(force=bool(getattr(args, "force", False)), guard=signals_deferred)
 
 
 #: longest synthesis the command line runs, in seconds of speech
@@ -181,3 +161,4 @@ def check_synthesis_bounds(args, targets) -> None:
         raise CliError(f"the targets span {seconds:.6g} s ({targets.n_frames} frames at {targets.rate:g} Hz); "
                        f"at most {MAX_SYNTHESIS_SECONDS:g} s can be synthesised at once. Check the phone "
                        "durations (seconds, not milliseconds) and --tempo, or split the input")
+

@@ -22,7 +22,7 @@ def add_arguments(p):
                         "default: %(default)s)")
     p.add_argument("-o", "--output", required=True, help="manifold file to write (.npz)")
     p.add_argument("--variance", type=float, default=0.99, help="shape variance kept (default: %(default)s)")
-    p.add_argument("--embedding-dims", type=int, default=10, help="dimensions of Y (default: %(default)s)")
+    p.add_argument("--embedding-dims", type=int, default=16, help="dimensions of Y (default: %(default)s)")
     p.add_argument("--method", choices=("pca", "mds"), default="pca", help="embedding method (default: %(default)s)")
     p.add_argument("--landmarks", type=int, default=None,
                    help="force the landmark embedding with this many landmarks (default: exact up to "
@@ -36,7 +36,9 @@ def add_arguments(p):
                    help="folder for the frames stored in blocks, readable by every worker (default: a temporary "
                         "folder; give shared storage for workers on other machines)")
     p.add_argument("--states", type=int, default=None, help="K, the number of states (default: about N/30)")
-    p.add_argument("--neighbors", type=int, default=20, help="tangent-frame neighbourhood (default: %(default)s)")
+    p.add_argument("--neighbors", type=int, default=None,
+                   help="frames each local tangent frame is fitted to (default: chosen for the corpus by held-out "
+                        "validation, which 'lipspace info' reports)")
     p.add_argument("--speaker-norm", choices=("auto", "mean", "mean+scale", "none"), default="auto",
                    help="per-speaker normalisation before the shape space: each speaker's mean frame removed "
                         "(and spread scaled); auto = mean when utterances name 2+ speakers (default: %(default)s)")

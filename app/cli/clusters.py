@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 PRESETS = ("small", "default", "paper")
@@ -84,7 +83,7 @@ def format_table(rows, columns, headers=None) -> str:
 
 def run(args) -> int:
     from app.cli import CliError
-    from engine.clusters import PhoneClusters
+    from engine.clusters import clusters_of
 
     if args.dims < 1:
         raise CliError(f"--dims {args.dims}: must be at least 1")
@@ -94,25 +93,13 @@ def run(args) -> int:
         raise CliError(f"{args.csv}: the table file must end in .csv")
     manifold = _manifold(args)
     c = manifold.corpus_
-    has_phones = any(u.phones for u in c.utterances)
-    labels = args.labels if args.labels != "auto" else ("phones" if has_phones else "kinematic")
-    if labels == "phones" and not has_phones:
-        raise CliError(f"{c.name} has no phone labels; cluster its kinematic landmarks with --labels kinematic, "
-                       "or import it with an alignment (lipspace import --alignment)")
     try:
-        pc = PhoneClusters(n_dims=args.dims, min_count=args.min_count, exclude_pauses=not args.keep_pauses,
-                           normalize_labels=args.normalize)
-        if labels == "phones":
-            pc.fit(manifold)
-        else:
-            from engine.kinematics import kinematic_if_unlabelled
-
-            kc, note = kinematic_if_unlabelled(replace(c, utterances=[replace(u, phones=()) for u in c.utterances]))
-            mids, labs = kc.phone_table()[:2]
-            print(note.replace(f"{c.name} has no phone labels: using", "labels:"), file=sys.stderr)
-            pc.fit(manifold.Fy_, manifold.Fx_, mids, labs, signed_velocity=manifold.tangent_.signed_velocity)
+        pc, labels, note = clusters_of(manifold, labels=args.labels, n_dims=args.dims, min_count=args.min_count,
+                                       exclude_pauses=not args.keep_pauses, normalize_labels=args.normalize)
     except ValueError as exc:
         raise CliError(str(exc)) from None
+    if note:
+        print(note.replace(f"{c.name} has no phone labels: using", "labels:"), file=sys.stderr)
     if not pc.phones_:
         fix = (f"lower --min-count (at least 2; now {args.min_count})" if args.min_count > 2 else
                "use more speech, or labels with more instances")
@@ -151,8 +138,10 @@ def run(args) -> int:
             print(f"\n{args.measure} separation in {what}:")
             print(format_table(mrows, ["", *phones]))
     if args.csv:
+        from app.cli._common import command_outputs
         from engine.io.export import write_table_csv
 
-        out = write_table_csv(args.csv, rows, columns=columns)
-        print(f"wrote {out}", file=sys.stderr)
+        with command_outputs(args) as outputs:
+            write_table_csv(outputs.file(args.csv, option="--csv"), rows, columns=columns)
+        print(f"wrote {args.csv}", file=sys.stderr)
     return 0

@@ -54,9 +54,11 @@ def add_arguments(p):
                    help="protocols: Gaussian smoothing of the Viterbi paths in frames (default: validated)")
     p.add_argument("--neighbors", type=int, default=None,
                    help="protocols: k of the local-linear inverse (default: validated)")
-    p.add_argument("--speaker-norm", action="store_true",
-                   help="subtract each speaker's mean frame first (on by default with --haskins: one speaker "
-                        "per file, named by the file name's first field)")
+    p.add_argument("--speaker-norm", nargs="?", const="mean", default="auto", choices=("auto", "mean", "none"),
+                   help="per-speaker normalisation: each speaker's mean frame removed first. auto (default, as "
+                        "'lipspace build'): when the utterances name 2 or more speakers (with --haskins one speaker "
+                        "per file, named by the file name's first field); mean (a bare --speaker-norm): always, "
+                        "every utterance must name its speaker; none: never")
     p.add_argument("--inverse-dims", type=int, default=None,
                    help="--methods table: dims of the Y -> X inverse map (default: the manifold's, 3)")
     p.add_argument("--seed", type=int, default=0, help="seed of the split and the manifold (default: 0)")
@@ -126,9 +128,11 @@ def run(args) -> int:
             raise CliError(str(exc)) from None
     print(result.format())
     if args.csv:
+        from app.cli._common import command_outputs
         from engine.io.export import write_table_csv
 
-        write_table_csv(args.csv, result.table())
+        with command_outputs(args) as outputs:
+            write_table_csv(outputs.file(args.csv, option="--csv"), result.table())
         print(f"wrote {args.csv}")
     if sum(int(r.get("utterances") or 0) for r in result.rows) == 0:
         import sys
@@ -165,6 +169,80 @@ def normalise_per_speaker(corpus):
     return normalise_speakers(corpus, mode="mean")
 
 
+def _normalise_auto(corpus):
+    """Per-speaker normalisation as ``lipspace build`` applies it by default (utterances naming no speaker are
+    one group of their own)."""
+    from engine.registration import normalise_speakers
+
+    return normalise_speakers(corpus, mode="auto")
+
+
+def _unseen_speakers(corpus, test_ids, args) -> dict:
+    """Speakers of the held-out utterances that no training utterance has: ``{speaker: n test utterances}``.
+
+    The split is the one the evaluation makes (:func:`engine.evaluation.split_utterances`, same seed).
+    """
+    from engine.evaluation import split_utterances
+
+    train, test = split_utterances(corpus, test_fraction=args.test_fraction, test_ids=test_ids,
+                                   random_state=args.seed)
+    spk = {u.id: u.speaker for u in corpus.utterances}
+    seen = {spk[i] for i in train}
+    out: dict = {}
+    for i in test:
+        if spk[i] and spk[i] not in seen:
+            out[spk[i]] = out.get(spk[i], 0) + 1
+    out_all = sum(out.values()) == len(test)
+    return {"unseen": out, "trained": sorted(s for s in seen if s), "all": out_all} if out else {}
+
+
+def _unseen_text(corpus, unseen, normalised) -> str:
+    who = ", ".join(f"{s} ({n} utterance{'s' * (n != 1)})" for s, n in unseen["unseen"].items())
+    trained = ", ".join(unseen["trained"][:6]) or "unnamed speakers"
+    disjoint = "train and test speakers are disjoint: " if unseen["all"] else ""
+    tail = ("per-speaker normalisation removes each speaker's mean frame, not how each one moves" if normalised else
+            "without per-speaker normalisation the errors mostly measure the offset between the speakers' lips")
+    return (f"{disjoint}the held-out speaker(s) {who} have no training utterance; the manifold is trained on "
+            f"{trained} only and tested on lips it never saw ({tail}). For a within-speaker test hold out "
+            "utterances of every speaker (--test-ids)")
+
+
+def gap_cause(result, corpus, unseen) -> str:
+    """The likely cause of the gaps whose state path could not reach its target in time, in words.
+
+    In order: the training state graph falls apart (islands or strongly connected components, from
+    the protocol's own state graph warnings and the training manifold's graph, with
+    :func:`engine.registration.explain_split`'s reading of why), held-out speakers the training
+    never saw, else targets more transitions apart than the frames between them allow.
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    from engine.registration import explain_split
+
+    causes = []
+    m = result.manifold
+    if m is not None and getattr(m, "states_", None) is not None:
+        st = m.states_
+        n_weak, _ = connected_components(st.adjacency_, directed=True, connection="weak")
+        K = st.centroids_.shape[0]
+        if n_weak > 1 or st.n_scc_ > 1:
+            parts = (f"{n_weak} islands with no transitions between them" if n_weak > 1 else
+                     f"{st.n_scc_} strongly connected components (some states cannot be reached from others)")
+            why = explain_split(st, m.corpus_)
+            causes.append(f"the training state graph ({K} states) splits into {parts}"
+                          + (f": {why}" if why else ""))
+    if result.state_warnings and not causes:
+        causes.append(f"the evaluation's state graph ({result.n_states} states) is not strongly connected "
+                      "(see the state graph line)")
+    if unseen:
+        causes.append(f"held-out speaker(s) {', '.join(unseen['unseen'])} never appear in training, so their targets "
+                      "fall on states the training speakers' transitions do not join")
+    if not causes:
+        causes.append("every target state is reachable, but some are more transitions apart than the frames "
+                      "between the two targets (the path has exactly the gap's length)")
+    return "likely cause: " + "; ".join(causes)
+
+
 def _settings(args, manifold, progress):
     """Validated settings, overridden by whatever the command line fixes."""
     from engine.protocols import PROTOCOLS, STATE_DIM_CANDIDATES, select_settings
@@ -185,31 +263,56 @@ def _settings(args, manifold, progress):
 
 
 def _run_protocols(args) -> int:
+    import math
+
     from app.cli import CliError
+    from app.cli.synthesize import MAX_SMOOTHING_FRAMES
     from app.cli._common import progress_bar
     from engine.manifold import Manifold
     from engine.protocols import evaluate_protocols
 
     for name in ("smoothing", "neighbors", "state_dims", "states"):
         v = getattr(args, name)
-        if v is not None and v < (0 if name == "smoothing" else 1):
+        if v is not None and not (v >= (0 if name == "smoothing" else 1) and math.isfinite(v)):
             raise CliError(f"--{name.replace('_', '-')} must be {'>= 0' if name == 'smoothing' else '>= 1'}, got {v}")
+    if args.smoothing is not None and args.smoothing > MAX_SMOOTHING_FRAMES:
+        raise CliError(f"--smoothing {args.smoothing:g}: at most {MAX_SMOOTHING_FRAMES:g} frames")
     test_ids = [s.strip() for s in args.test_ids.split(",") if s.strip()] if args.test_ids else None
     with progress_bar(disable=True if args.quiet else None) as progress:
         corpus = _corpus(args, progress)
         notes = []
         if args.haskins:
             corpus = name_haskins_speakers(corpus)
-        if args.speaker_norm or args.haskins:
+        spoken = [s for s in corpus.speakers if s]
+        normalise = args.speaker_norm == "mean" or (args.speaker_norm == "auto" and len(corpus.speakers) >= 2)
+        if normalise:
             try:
-                corpus = normalise_per_speaker(corpus)
+                corpus = normalise_per_speaker(corpus) if args.speaker_norm == "mean" else \
+                    _normalise_auto(corpus)
             except ValueError as exc:
                 raise CliError(str(exc)) from None
-            notes.append(f"per-speaker mean frame removed ({', '.join(corpus.speakers)}; "
-                         f"engine.registration.normalise_speakers, mode 'mean')")
+            how = "--speaker-norm mean" if args.speaker_norm == "mean" else "as 'lipspace build' does"
+            notes.append(f"per-speaker normalisation: each speaker's mean frame removed "
+                         f"({', '.join(s or '(unnamed)' for s in corpus.speakers)}; {how})")
+        elif len(spoken) >= 2:
+            notes.append(f"no per-speaker normalisation (--speaker-norm none) over {len(spoken)} speakers")
+        try:
+            unseen = _unseen_speakers(corpus, test_ids, args)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+        if unseen:
+            import warnings
+
+            from engine.corpus import CorpusWarning
+
+            msg = _unseen_text(corpus, unseen, normalise)
+            warnings.warn(CorpusWarning(msg), stacklevel=2)
+            notes.append(f"warning: {msg}")
+        speaker_norm = "none" if args.speaker_norm == "none" else "auto"
 
         def factory(train):
-            return Manifold(n_states=args.states, random_state=args.seed).fit(train, progress=progress)
+            return Manifold(n_states=args.states, random_state=args.seed,
+                            speaker_normalisation=speaker_norm).fit(train, progress=progress)
 
         try:
             result = evaluate_protocols(
@@ -219,20 +322,29 @@ def _run_protocols(args) -> int:
         except ValueError as exc:
             raise CliError(str(exc)) from None
         result.notes.extend(notes)
+        if result.missed_gaps:
+            import warnings
+
+            from engine.corpus import CorpusWarning
+
+            cause = gap_cause(result, corpus, unseen)
+            result.notes.append(f"unreachable gaps: {cause}")
+            warnings.warn(CorpusWarning(f"{result.missed_gaps} gap(s) could not reach their target state in time "
+                                        f"(they end at the nearest reachable state); {cause}"), stacklevel=2)
     print(result.format())
-    if args.csv:
-        from engine.io.export import write_table_csv
-        from engine.protocol_report import CSV_COLUMNS
+    from app.cli._common import command_outputs
 
-        write_table_csv(args.csv, result.csv_rows(), columns=CSV_COLUMNS)
-        print(f"wrote {args.csv}")
-    if args.markdown:
-        from engine._atomic import atomic_write
+    with command_outputs(args) as outputs:  # both tables or neither
+        if args.csv:
+            from engine.io.export import write_table_csv
+            from engine.protocol_report import CSV_COLUMNS
 
-        with atomic_write(args.markdown) as tmp:
-            with open(tmp, "w", encoding="utf-8") as fh:
-                fh.write(result.markdown() + "\n")
-        print(f"wrote {args.markdown}")
+            write_table_csv(outputs.file(args.csv, option="--csv"), result.csv_rows(), columns=CSV_COLUMNS)
+        if args.markdown:
+            outputs.file(args.markdown, option="--markdown").write_text(result.markdown() + "\n", encoding="utf-8")
+    for written in (args.csv, args.markdown):
+        if written:
+            print(f"wrote {written}")
     if sum(int(r.get("utterances") or 0) for r in result.rows) == 0:
         import sys
 

@@ -85,14 +85,16 @@ def run(args) -> int:
             source_kind(args.file)
         except ValueError as exc:
             raise CliError(str(exc)) from None
-    session = None
+    session, notes = None, []
     if args.session is not None:
         from app.session import SessionError, load_session
 
         try:
             session = load_session(args.session)
-        except SessionError as exc:
-            raise CliError(str(exc)) from None
+        except SessionError as exc:  # the user's file stays where it is; the window opens without it
+            notes.append(f"--session {args.session} was not opened: {exc}")
+            print(f"lipspace explore: warning: {notes[-1]}", file=sys.stderr)
     from app.main_window import launch
 
-    return launch(args.file, preset=args.preset, session=session, restore=args.restore, kinematics=args.kinematics)
+    return launch(args.file, preset=args.preset, session=session, restore=args.restore, kinematics=args.kinematics,
+                  notes=notes)

@@ -27,7 +27,14 @@ def add_arguments(p):
                    help="utterance id for the example trajectory (fig2a) and regenerated utterance (fig3)")
     p.add_argument("--preset", choices=BUILD_PRESETS, default="default",
                    help="synthetic talker preset when no file is given (default: %(default)s)")
+    p.add_argument("--width", default="180mm", metavar="85mm|180mm",
+                   help="figure width for a journal page: 85mm (one column) or 180mm (two columns; default), or "
+                        "another length from 40mm to 260mm (also cm or in); each figure lays itself out for it, "
+                        "fonts 7-8 pt")
     p.add_argument("--dpi", type=float, default=200, help="PNG resolution (default: %(default)s)")
+    p.add_argument("--skip-bad", action="store_true",
+                   help="write the figures that could be drawn when others fail, saying how many failed "
+                        "(default: a failed figure stops the command and nothing is written)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -75,47 +82,62 @@ def _load(path, preset, progress):
 
 def run(args) -> int:
     from app.cli import CliError
-    from app.cli._common import progress_bar
+    from app.cli._common import command_outputs, progress_bar
     from app.figures import UTTERANCE_FIGURES, make_figure, save_figure
 
     names = _parse_only(args.only)
     formats = list(dict.fromkeys(args.formats or ["png"]))
     outdir = Path(args.outdir)
-    if not 10 <= args.dpi <= MAX_DPI:  # 100000 dpi asked for terabytes of pixels
+    if not (10 <= args.dpi <= MAX_DPI):  # 100000 dpi asked for terabytes of pixels (and NaN for nothing)
         raise CliError(f"--dpi {args.dpi:g}: must be from 10 to at most {MAX_DPI} (print quality is 300-600)")
     if outdir.exists() and not outdir.is_dir():
         raise CliError(f"{outdir}: exists and is not a directory")
+    from app.figures._style import parse_width
+
+    try:
+        width = parse_width(args.width)
+    except ValueError as exc:
+        raise CliError(f"--width: {exc}") from None
     t0 = time.perf_counter()
     written, failed = [], []
-    with progress_bar(disable=True if args.quiet else None) as progress:
-        manifold = _load(args.manifold, args.preset, progress)
-        if args.utterance is not None:
-            ids = [u.id for u in manifold.corpus_.utterances]
-            if args.utterance not in ids:
-                raise CliError(f"--utterance {args.utterance!r}: no such utterance in {manifold.corpus_.name} "
-                               f"(e.g. {', '.join(ids[:5])})")
-        skip = _phone_figures_to_skip(manifold)
-        total = len(names)
-        progress("figures", 0, total)
-        for k, name in enumerate(names):
-            if name in skip:
-                print(f"lipspace figures: {name} skipped: {skip[name]}", file=sys.stderr)
+    with command_outputs(args) as outputs:  # the whole set or, on any failure or stop, none of it
+        staged = outputs.folder(outdir, names=[f"{n}.{fmt}" for n in names for fmt in formats], option="-o")
+        with progress_bar(disable=True if args.quiet else None) as progress:
+            manifold = _load(args.manifold, args.preset, progress)
+            if args.utterance is not None:
+                ids = [u.id for u in manifold.corpus_.utterances]
+                if args.utterance not in ids:
+                    raise CliError(f"--utterance {args.utterance!r}: no such utterance in {manifold.corpus_.name} "
+                                   f"(e.g. {', '.join(ids[:5])})")
+            skip = _phone_figures_to_skip(manifold)
+            total = len(names)
+            progress("figures", 0, total)
+            for k, name in enumerate(names):
+                if name in skip:
+                    print(f"lipspace figures: {name} skipped: {skip[name]}", file=sys.stderr)
+                    progress("figures", k + 1, total)
+                    continue
+                opts = {"utterance": args.utterance} if name in UTTERANCE_FIGURES and args.utterance else {}
+                opts["width"] = width
+                try:
+                    fig = make_figure(name, manifold, **opts)
+                    done_here = [save_figure(fig, staged / f"{name}.{fmt}", dpi=args.dpi) for fmt in formats]
+                    written += [outdir / p.name for p in done_here]
+                except (ValueError, ImportError, RuntimeError, LookupError) as exc:
+                    failed.append((name, str(exc)))
+                    for fmt in formats:  # no half of a figure's formats
+                        (staged / f"{name}.{fmt}").unlink(missing_ok=True)
                 progress("figures", k + 1, total)
-                continue
-            opts = {"utterance": args.utterance} if name in UTTERANCE_FIGURES and args.utterance else {}
-            try:
-                fig = make_figure(name, manifold, **opts)
-                for fmt in formats:
-                    written.append(save_figure(fig, outdir / f"{name}.{fmt}", dpi=args.dpi))
-            except (ValueError, ImportError, RuntimeError, LookupError) as exc:
-                failed.append((name, f"{type(exc).__name__}: {exc}"))
-            progress("figures", k + 1, total)
-    for name, msg in failed:
-        print(f"lipspace figures: {name} failed: {msg}", file=sys.stderr)
+        for name, msg in failed:
+            print(f"lipspace figures: {name} failed: {msg}", file=sys.stderr)
+        if failed and not args.skip_bad:
+            raise CliError(f"{len(failed)} of {len(names)} figures failed (listed above); nothing was written. "
+                           "Pass --skip-bad to write the others")
     done = len(names) - len(failed) - len([n for n in names if n in skip])
-    print(f"wrote {len(written)} file(s) to {outdir} ({', '.join(formats)}; "
-          f"{done}/{len(names)} figures) in {time.perf_counter() - t0:.1f} s")
-    return 1 if failed or not done else 0
+    skipped = f"; {len(failed)} failed, skipped (--skip-bad)" if failed else ""
+    print(f"wrote {len(written)} file(s) to {outdir} ({', '.join(formats)}; {width * 25.4:.0f} mm wide; "
+          f"{done}/{len(names)} figures{skipped}) in {time.perf_counter() - t0:.1f} s")
+    return 0 if done else 1
 
 
 def _phone_figures_to_skip(manifold) -> dict:

@@ -1,6 +1,8 @@
 """``lipspace import``: foreign corpus formats -> the native corpus file (.npz)."""
 from __future__ import annotations
 
+import contextlib
+import errno
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -33,8 +35,8 @@ def add_arguments(p):
                    help="frame rate of inputs without timing (mesh frames, .npy, CSV without a time column)")
     p.add_argument("--resample", "--analysis-rate", dest="resample", default=None, metavar="HZ",
                    help="analysis frame rate: the result is resampled to it with an anti-aliasing filter, per "
-                        f"utterance (default: {ANALYSIS_RATE:g} Hz, the paper's rate, for every input but video, "
-                        "which keeps its own rate; 'native' keeps the file's rate)")
+                        f"utterance (default: {ANALYSIS_RATE:g} Hz, the paper's rate, the rate the manifold's "
+                        "velocities and classes are read at; 'native' keeps the file's rate)")
     p.add_argument("--points", default=None, metavar="LIST",
                    help="comma-separated sensors / markers / landmarks to keep, or 'all' (EMA, MVIEW, layouts) or "
                         "'lips' (OpenFace, layouts); default: lips and jaw for EMA, lip, jaw and reference "
@@ -52,10 +54,18 @@ def add_arguments(p):
                    help="remove head motion / recording offsets: rigid (Procrustes to the layout's reference "
                         "sensors), utterance or speaker centring, none; auto = rigid with 3+ reference sensors, "
                         "else utterance centring for several inputs (default: %(default)s)")
+    p.add_argument("--axes", default=None, metavar="x=DIR,y=DIR,z=DIR",
+                   help="the talker's direction of each coordinate axis (DIR: forward/back, left/right, up/down), "
+                        "e.g. 'x=forward,y=left,z=up' (2-D: 'x=forward,y=up'), for the lip view, the lip-shape "
+                        "figures and the MP4 / glTF exports; default: derived from the point roles (upper lip "
+                        "above lower lip, corners left and right); 'lipspace info' says which")
     spk = p.add_mutually_exclusive_group()
     spk.add_argument("--speaker", default=None, metavar="NAME", help="speaker of every input")
-    spk.add_argument("--speaker-from", choices=("dir", "prefix"), default=None,
-                     help="speaker of each input from its directory name or its file name up to the first '_'")
+    spk.add_argument("--speaker-from", default=None, metavar="dir|prefix|re:PATTERN",
+                     help="speaker of each input: 'dir' its folder's name (as given, symlinks not followed), "
+                          "'prefix' its file name up to the first '_', or 're:PATTERN' the one group of a regular "
+                          "expression searched in the file name, e.g. 're:^(spk[0-9]+)' or 're:^([A-Z]{3})'; "
+                          "corpus files (.npz) joined keep their own speakers")
     p.add_argument("--template", default=None, metavar="MESH", help="template OBJ/PLY giving faces for .npy input")
     p.add_argument("--audio-dir", default=None, metavar="DIR",
                    help="MVIEW .mat input: write each file's AUDIO to DIR/<stem>.wav and link it; video input: "
@@ -64,7 +74,11 @@ def add_arguments(p):
                    help="video input: assumed distance between the eye centres, which sets the mm scale "
                         "(default: 63, the mean adult interpupillary distance)")
     p.add_argument("--no-fill", action="store_true",
-                   help="fail on dropouts (invalid or missing samples) instead of interpolating them")
+                   help="fail on dropouts (invalid or missing samples) instead of interpolating them (every "
+                        "interpolation is listed in the corpus history: lipspace info)")
+    p.add_argument("--skip-bad", action="store_true",
+                   help="with several inputs: write the corpus without the inputs that cannot be read, saying how "
+                        "many (default: an unreadable input stops the import and nothing is written)")
     p.add_argument("--name", default=None, help="corpus name (default: from the input)")
     p.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
                    help="with several inputs: read them in N processes (default: one per core; 1 reads them here)")
@@ -137,10 +151,12 @@ def run(args) -> int:
         raise CliError(f"{out}: the corpus file must end in .npz")
     if args.block_frames is not None and args.block_frames < 256:
         raise CliError(f"--block-frames {args.block_frames}: must be at least 256 frames per block")
+    _check_numbers(args)
     inputs = args.inputs
     rate_out = None
-    if args.resample is None:  # video keeps its own frame rate; other inputs go to the paper's 60 Hz
-        args.resample = "native" if _is_video(args) else f"{ANALYSIS_RATE:g}"
+    video = _is_video(args)
+    if args.resample is None:  # every input, video too, goes to the paper's 60 Hz (docs/DECISIONS.md)
+        args.resample = f"{ANALYSIS_RATE:g}"
     if str(args.resample).lower() not in ("native", "none"):
         try:
             rate_out = float(args.resample)
@@ -149,6 +165,13 @@ def run(args) -> int:
         if not 0 < rate_out <= MAX_RATE:  # 1e9 Hz asked for a 14 GiB index array
             raise CliError(f"--resample {args.resample}: must be above 0 and at most {MAX_RATE:g} Hz "
                            "(the fastest articulographs record at 1250 Hz)")
+    if video and rate_out is None:  # --resample native: videos at different rates cannot be joined
+        rates = _video_rates(inputs)
+        if len({round(r, 6) for _, r in rates}) > 1:
+            desc = ", ".join(f"{Path(p).name} {r:.4g} Hz" for p, r in rates)
+            raise CliError(f"the videos have different frame rates ({desc}); they can be joined only at one "
+                           f"rate: give --resample {ANALYSIS_RATE:g} (the analysis rate, the default without "
+                           "--resample) or another rate")
     try:
         fmt = args.format or ("matrix" if args.layout is not None else detect_format(inputs[0]))
         fmt = FORMAT_ALIASES.get(fmt, fmt)
@@ -161,53 +184,138 @@ def run(args) -> int:
             raise CliError(f"--alignment names one file but {len(inputs)} inputs were given; put each input's "
                            "<stem>.TextGrid or <stem>.lab beside it instead")
         kw = _options(args, fmt)
+        if fmt == "video" and rate_out is not None:  # each video (of a folder too) at that rate before joining
+            kw["resample"] = rate_out
         groups = [inputs] if fmt == "mesh" and len(inputs) > 1 else [[p] for p in inputs]
-        job = {"format": fmt, "rate": args.rate, "alignment": alignment, "options": kw,
-               "audio_dir": args.audio_dir, "speaker": args.speaker, "speaker_from": args.speaker_from}
-        if len(groups) == 1 and fmt == "video":  # tracking a face takes a while: show it
-            from app.cli._common import progress_bar
-
-            with progress_bar(disable=True if args.quiet else None) as progress:
-                parts = [_read_group(groups[0], {**job, "options": {**kw, "progress": progress}})]
-        elif len(groups) == 1:
-            parts = [_read_group(groups[0], job)]
-        else:
-            parts = _read_many(groups, job, args)
-        corpus = parts[0] if len(parts) == 1 else concat(parts)
-        if args.roles is not None:
-            from engine.layouts import roles_from_spec
-
-            corpus = replace(corpus, point_roles=roles_from_spec(args.roles, corpus.n_points, corpus.point_names,
-                                                                 corpus.point_roles))
-        corpus = register(corpus, method=args.register)
-        if rate_out is not None and abs(rate_out - corpus.rate) > 1e-9 * corpus.rate:
-            corpus = resample(corpus, rate_out)
-        if args.name:
-            corpus = replace(corpus, name=args.name)
+        _check_speakers(groups, args, fmt)
     except (ImportFormatError, CorpusError, FileNotFoundError, ValueError, TypeError) as exc:
         raise CliError(str(exc)) from None
-    if args.block_frames is None:
-        corpus.save(out)
-    else:
-        from engine.corpus_blocks import blocks_folder, save_blocked
+    from app.cli._common import command_outputs
 
+    with command_outputs(args) as outputs:  # the corpus, its blocks and its audio: all or none
+        staged = outputs.file(out, option="-o")
+        blocks = None
+        if args.block_frames is not None:
+            from engine.corpus_blocks import blocks_folder
+
+            blocks = outputs.folder(blocks_folder(out), pattern="block_*.npy", exclusive=True, option="-o")
+        audio_dir, audio_stage = _stage_audio(args, fmt, kw, outputs)
+        job = {"format": fmt, "rate": args.rate, "alignment": alignment, "options": kw,
+               "audio_dir": None if audio_stage is None else str(audio_stage), "speaker": args.speaker,
+               "speaker_from": args.speaker_from,
+               # corpus files joined: each one's unnamed utterances are its own speaker, named after the file
+               "name_corpora": fmt == "npz" and len(groups) > 1 and not (args.speaker or args.speaker_from)}
         try:
-            blocks = save_blocked(corpus, out, block_frames=args.block_frames)
-        except ValueError as exc:
-            raise CliError(f"--block-frames {args.block_frames}: {exc}") from None
-        print(f"lipspace import: frames in {len(blocks)} blocks in {blocks_folder(out)}", file=sys.stderr)
+            if len(groups) == 1 and fmt == "video":  # tracking a face takes a while: show it
+                from app.cli._common import progress_bar
+
+                with progress_bar(disable=True if args.quiet else None) as progress:
+                    parts = [_read_group(groups[0], {**job, "options": {**kw, "progress": progress}})]
+            elif len(groups) == 1:
+                parts = [_read_group(groups[0], job)]
+            else:
+                parts = _read_many(groups, job, args)
+            parts = _one_rate(parts, rate_out)
+            corpus = parts[0] if len(parts) == 1 else concat(parts)
+            if audio_stage is not None:  # the audio goes where the corpus says it is once moved in
+                corpus = _moved_audio(corpus, audio_stage, audio_dir)
+            if args.roles is not None:
+                from engine.layouts import roles_from_spec
+
+                corpus = replace(corpus, point_roles=roles_from_spec(args.roles, corpus.n_points,
+                                                                     corpus.point_names, corpus.point_roles))
+            if args.axes is not None:
+                from engine.orientation import AxesError, parse_axes
+
+                try:
+                    corpus = replace(corpus, axes=parse_axes(args.axes, corpus.dims).spec())
+                except AxesError as exc:
+                    raise CliError(str(exc)) from None
+            corpus = register(corpus, method=args.register)
+            if rate_out is not None and abs(rate_out - corpus.rate) > 1e-9 * corpus.rate:
+                corpus = resample(corpus, rate_out)
+            if args.name:
+                corpus = replace(corpus, name=args.name)
+        except (ImportFormatError, CorpusError, FileNotFoundError, ValueError, TypeError) as exc:
+            raise CliError(str(exc)) from None
+        if blocks is None:
+            corpus.save(staged)
+        else:
+            from engine.corpus_blocks import save_blocked
+
+            try:
+                block_files = save_blocked(corpus, staged, block_frames=args.block_frames, folder=blocks)
+            except ValueError as exc:
+                raise CliError(f"--block-frames {args.block_frames}: {exc}") from None
+    if blocks is not None:
+        from engine.corpus_blocks import blocks_folder
+
+        print(f"lipspace import: frames in {len(block_files)} blocks in {blocks_folder(out)}", file=sys.stderr)
     # what was done to the data, on stderr (stdout keeps the one summary line)
     for note in corpus.history:
         if not note.startswith("read "):
             print(f"lipspace import: {note}", file=sys.stderr)
     if corpus.point_roles is not None:
-        print("lipspace import: roles " + ", ".join(f"{n}={r or '-'}" for n, r in
-                                                    zip(corpus.point_names or [], corpus.point_roles)), file=sys.stderr)
+        from app.cli._common import roles_text
+
+        print("lipspace import: roles " + roles_text(corpus.point_names, corpus.point_roles), file=sys.stderr)
+    from engine.orientation import anatomical_frame
+
+    print(f"lipspace import: orientation {anatomical_frame(corpus).describe()}", file=sys.stderr)
     if not corpus.registration:
         print("lipspace import: registration: none (no reference sensors and one utterance, or --register none)",
               file=sys.stderr)
     print(f"wrote {out}: {summary(corpus)}", file=sys.stdout)
     return 0
+
+
+def _check_numbers(args) -> None:
+    """Refuse --rate and --interocular-mm values no recording can have, naming the option."""
+    import math
+
+    from app.cli import CliError
+    from engine.io._util import MOTION_RATE_RANGE
+
+    lo, hi = MOTION_RATE_RANGE
+    if args.rate is not None and not (math.isfinite(args.rate) and lo <= args.rate <= hi):
+        raise CliError(f"--rate {args.rate:g}: a frame rate of lip motion is from {lo:g} to {hi:g} Hz")
+    mm = args.interocular_mm
+    if mm is not None and not (math.isfinite(mm) and 20 <= mm <= 150):
+        raise CliError(f"--interocular-mm {mm:g}: an adult's distance between the eye centres is 50-75 mm; give "
+                       "one from 20 to 150")
+
+
+def _stage_audio(args, fmt, kw, outputs):
+    """(the audio folder the corpus will name, the staging folder the readers write to) or (None, None).
+
+    MVIEW .mat input writes each file's AUDIO with ``--audio-dir``; video input writes each
+    utterance's audio track (default ``<output stem>_audio/``). A WAV already there is
+    refused unless ``--force`` (before anything is read when the names are known)."""
+    if fmt == "mview" and args.audio_dir:
+        final = Path(args.audio_dir)
+        names = [Path(p).stem + ".wav" for p in args.inputs]
+    elif fmt == "video":
+        final, names = Path(kw["audio_dir"]), None
+    else:
+        return None, None
+    stage = outputs.folder(final, pattern="*.wav", names=names, option="--audio-dir")
+    if fmt == "video":
+        kw["audio_dir"] = str(stage)
+    return final, stage
+
+
+def _moved_audio(corpus, stage: Path, final: Path):
+    """``corpus`` with audio paths in the staging folder pointing where the files will be."""
+    def moved(a):
+        if not a:
+            return a
+        p = Path(a)
+        for q in (stage, stage.resolve()):
+            with contextlib.suppress(ValueError):
+                return str((final.resolve() if p.is_absolute() else final) / p.relative_to(q))
+        return a
+
+    return replace(corpus, utterances=[replace(u, audio=moved(u.audio)) for u in corpus.utterances])
 
 
 def _is_video(args) -> bool:
@@ -221,6 +329,42 @@ def _is_video(args) -> bool:
         return False
 
 
+def _video_rates(inputs) -> list:
+    """``(path, rate)`` of every video the inputs name (a folder's videos in order); unreadable ones left out
+    (their reader reports them)."""
+    from engine.io.dispatch import _videos_in
+    from engine.io.video import video_info
+
+    out = []
+    for p in inputs:
+        for v in (_videos_in(p) if Path(p).is_dir() else [Path(p)]):
+            try:
+                out.append((str(v), video_info(v)[0]))
+            except (ValueError, OSError, ImportError):
+                continue
+    return out
+
+
+def _one_rate(parts, rate_out):
+    """The inputs' corpora at one frame rate: each resampled to ``rate_out`` when their rates differ
+    (resampling is per utterance, so nothing crosses two inputs); different rates and no ``rate_out``
+    is an error naming them."""
+    from app.cli import CliError
+    from engine.io import resample
+
+    rates = {}
+    for c in parts:
+        rates.setdefault(round(c.rate, 6), []).append(c.name)
+    if len(rates) < 2:
+        return parts
+    desc = ", ".join(f"{r:.4g} Hz ({len(names)} input{'s' * (len(names) != 1)}, e.g. {names[0]})"
+                     for r, names in rates.items())
+    if rate_out is None:
+        raise CliError(f"the inputs have different frame rates: {desc}; they can be joined only at one rate: give "
+                       f"--resample {ANALYSIS_RATE:g} (the analysis rate) or another rate")
+    return [resample(c, rate_out) for c in parts]
+
+
 def _input_errors():
     """Errors that make one input unreadable (reported and skipped when there are several inputs)."""
     from engine.corpus import CorpusError
@@ -232,24 +376,52 @@ def _input_errors():
 def _read_group(g, job):
     """The corpus of one input (a file, or the frame files of one mesh sequence)."""
     from engine.io import read_corpus, write_audio
+    from engine.io.repairs import collecting_repairs
 
     src = g if len(g) > 1 else g[0]
     c = read_corpus(src, format=job["format"], rate=job["rate"], alignment=job["alignment"], **job["options"])
     if job["audio_dir"] and job["format"] == "mview":
-        wav = write_audio(src, Path(job["audio_dir"]) / (Path(src).stem + ".wav"))
-        c = replace(c, utterances=[replace(u, audio=str(wav)) for u in c.utterances])
+        with collecting_repairs() as notes:  # e.g. non-finite samples written as silence
+            wav = write_audio(src, Path(job["audio_dir"]) / (Path(src).stem + ".wav"))
+        c = replace(c, utterances=[replace(u, audio=str(wav)) for u in c.utterances],
+                    history=c.history + [n for n in notes if n not in c.history])
     speaker = job["speaker"] or _speaker_of(g[0], job["speaker_from"])
     if speaker:
         c = replace(c, utterances=[replace(u, speaker=speaker) for u in c.utterances])
+    elif job.get("name_corpora") and any(not u.speaker for u in c.utterances):
+        stem = Path(str(src)).stem
+        c = replace(c, utterances=[u if u.speaker else replace(u, speaker=stem) for u in c.utterances],
+                    history=list(c.history) + [f"speaker {stem!r} given to the {sum(not u.speaker for u in c.utterances)} "
+                                               f"utterance(s) of {Path(str(src)).name} that named none (its file name)"])
     return c
 
 
+#: errors writing an output (not the input's fault): they stop the whole import
+_OUTPUT_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG)
+
+
 def read_one(g, job):
-    """``(corpus, None)`` or ``(None, reason)`` for one input; runs in a worker process or on a Dask worker."""
+    """``(corpus, None)`` or ``(None, reason)`` for one input; runs in a worker process or on a Dask worker.
+
+    An error writing an output (a full or read-only disk while its audio is written) is
+    not the input's: it is raised, naming the user's file, and stops the import."""
+    from engine.staging import as_user_error, user_path
+
     try:
         return _read_group(g, job), None
+    except OSError as exc:
+        if exc.errno in _OUTPUT_ERRNOS or user_path(exc.filename) != exc.filename:
+            raise as_user_error(exc) from None
+        return None, _plain(exc)
     except _input_errors() as exc:
-        return None, str(exc) or type(exc).__name__
+        return None, _plain(exc)
+
+
+def _plain(exc) -> str:
+    """The reason an input could not be read, in words."""
+    if isinstance(exc, OSError) and exc.strerror:
+        return f"{exc.filename}: {exc.strerror}" if exc.filename else exc.strerror
+    return str(exc) or "it could not be read"
 
 
 def _read_many(groups, job, args):
@@ -288,20 +460,28 @@ def _read_many(groups, job, args):
         # fork: the readers are imported already; the pool starts before the progress bar's thread
         with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
             futs = {pool.submit(read_one, g, job): i for i, g in enumerate(groups)}
-            with progress_bar(disable=True if args.quiet else None) as progress:
-                progress(stage, 0, n)
-                for done, f in enumerate(as_completed(futs), 1):
-                    results[futs[f]] = f.result()
-                    progress(stage, done, n)
+            try:
+                with progress_bar(disable=True if args.quiet else None) as progress:
+                    progress(stage, 0, n)
+                    for done, f in enumerate(as_completed(futs), 1):
+                        results[futs[f]] = f.result()
+                        progress(stage, done, n)
+            except BaseException:  # a full disk, Ctrl-C: start no more inputs
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
     skipped = [(g[0], reason) for g, (c, reason) in zip(groups, results) if c is None]
     for src, reason in skipped:
-        print(f"lipspace import: skipped {src}: {reason}", file=sys.stderr)
+        print(f"lipspace import: {'skipped' if args.skip_bad else 'cannot read'} {src}: {reason}", file=sys.stderr)
     parts = [c for c, _ in results if c is not None]
     if not parts:
-        raise CliError(f"none of the {n} inputs could be read (first: {skipped[0][0]}: {skipped[0][1]})")
+        raise CliError(f"none of the {n} inputs could be read (first: {skipped[0][0]}: {skipped[0][1]}); "
+                       "nothing was written")
+    if skipped and not args.skip_bad:
+        raise CliError(f"{len(skipped)} of {n} inputs could not be read (listed above); nothing was written. "
+                       "Pass --skip-bad to write the corpus of the other inputs")
     if skipped:
-        print(f"lipspace import: read {len(parts)} of {n} inputs, skipped {len(skipped)} (listed above)",
-              file=sys.stderr)
+        print(f"lipspace import: read {len(parts)} of {n} inputs, skipped {len(skipped)} (--skip-bad; listed "
+              "above)", file=sys.stderr)
     return parts
 
 
@@ -328,9 +508,30 @@ def _read_on_dask(groups, job, address, results, tick):
 
 
 def _speaker_of(path, how) -> str:
+    """The speaker ``--speaker-from how`` gives ``path`` (:class:`engine.speakers.SpeakerRule`), "" for None."""
     if how is None:
         return ""
-    p = Path(str(path))
-    if how == "dir":
-        return p.resolve().parent.name
-    return p.stem.split("_", 1)[0]
+    from engine.speakers import SpeakerRule
+
+    return SpeakerRule(how)(path)
+
+
+def _check_speakers(groups, args, fmt) -> None:
+    """Refuse a speaker rule that does not apply to every input, before any is read; warn when the
+    speakers it gives (or the lack of one) do not fit the file names (:func:`engine.speakers.check_assignment`)."""
+    import warnings
+
+    from app.cli import CliError
+    from engine.speakers import SpeakerRule, SpeakerRuleError, SpeakerWarning, check_assignment
+
+    if fmt == "npz" and not args.speaker_from:
+        return  # corpus files carry their own speakers
+    try:
+        rule = SpeakerRule(args.speaker_from) if args.speaker_from else None
+        speakers = [rule(g[0]) if rule else (args.speaker or "") for g in groups]
+    except SpeakerRuleError as exc:
+        raise CliError(str(exc)) from None
+    if args.speaker:
+        return
+    for msg in check_assignment([g[0] for g in groups], speakers, rule=args.speaker_from):
+        warnings.warn(SpeakerWarning(msg), stacklevel=2)

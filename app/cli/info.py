@@ -41,72 +41,64 @@ def _recording_lines(c):
     if spk:
         lines.append(f"speakers    {len(spk)}: {', '.join(spk[:12])}{' ...' if len(spk) > 12 else ''}")
     if c.point_roles is not None:
-        lines.append("roles       " + ", ".join(f"{n}={r or '-'}" for n, r in zip(c.point_names or [], c.point_roles)))
+        from app.cli._common import roles_text
+
+        lines.append("roles       " + roles_text(c.point_names, c.point_roles))
+    from engine.orientation import anatomical_frame
+
+    lines.append(f"orientation {anatomical_frame(c).describe()}")
     lines.append(f"registration {c.registration or 'none'}")
     lines += [f"history     {h}" for h in c.history if not h.startswith(("read ", "registration:"))]
     return lines
 
 
-def _wider_neighbourhood(m, aperture):
-    """(k, agreement) when tangent frames over k = max(2 x, 0.3% of the frames) neighbours agree with the
-    aperture at least 5 points better than the manifold's own, else None (refits only the tangent frames)."""
-    from engine.kinematics import opening_agreement
-    from engine.tangent import TangentFrames
-
-    t = m.tangent_
-    N = m.Fy_.shape[0]
-    k2 = int(max(2 * t.n_neighbors, round(0.003 * N)))
-    if k2 >= N:
-        return None
-    tf = TangentFrames(n_neighbors=k2, n_dims=t.n_dims, zero_velocity_quantile=t.zero_velocity_quantile,
-                       local_plane=t.local_plane).fit(m.Fy_, m.Fx_, m.Fxv_, m.corpus_.bounds, opening=aperture)
-    base = opening_agreement(t.opening_, aperture, m.corpus_.bounds)
-    agree2 = opening_agreement(tf.opening_, aperture, m.corpus_.bounds)
-    return (k2, agree2) if agree2 >= base + 0.05 else None
-
-
 def _opening_lines(m):
-    """How "opening" is defined and how well the opening class follows the lip aperture."""
+    """How "opening" is defined and how well the tangent classes follow the lip aperture."""
     import warnings
 
-    from engine.kinematics import AGREEMENT_WARN_BELOW, lip_aperture, opening_agreement
+    from engine.class_agreement import ACCELERATING_BOUND, OPENING_BOUND, class_agreement
+    from engine.kinematics import aperture_definition, lip_aperture
 
-    c = m.corpus_
-    source = getattr(m.tangent_, "opening_source_", "F^x_1")
+    c, t = m.corpus_, m.tangent_
+    scores = t.neighbor_scores_
+    how = (f"tangent frames in {t.n_dims_} dims of Y over {t.n_neighbors_} neighbours"
+           + (" (chosen by held-out validation)" if len(scores) else " (as given)"))
+    lines = [f"opening     defined by {aperture_definition(c)}", f"            {how}"]
     ap = lip_aperture(c)
     if ap is None:
-        return [f"opening     defined by {source} (the corpus names no upper_lip / lower_lip points, so the "
-                "aperture cannot be checked; import with --layout to name them)"]
-    agree = opening_agreement(m.tangent_.opening_, ap, c.bounds)
-    lines = [f"opening     defined by {source}; agreement of the opening class with the lip aperture "
-             f"increasing: {100 * agree:.1f}% of moving frames"]
-    if not agree >= AGREEMENT_WARN_BELOW:
-        causes = []
-        if source != "lip aperture":
-            causes.append("opening follows the first shape component, not the aperture (rebuild: the layout's "
-                          "upper/lower lip roles make the aperture the reference)")
-        if (c.point_roles or []) and "tongue" in c.point_roles:
-            n_t = c.point_roles.count("tongue")
-            causes.append(f"{n_t} tongue sensor{'s' * (n_t != 1)} in the shape space (import with --points to "
-                          "keep the lip sensors only)")
-        if not c.registration:
-            causes.append("no registration (import with --register utterance, or rigid with reference sensors)")
-        if len([s for s in c.speakers if s]) > 1 and getattr(m, "speaker_normalisation", "auto") == "none":
-            causes.append("several speakers without per-speaker normalisation (build --speaker-norm mean)")
-        if source == "lip aperture" and m.Fy_.shape[1] >= 3:
-            wider = _wider_neighbourhood(m, ap)
-            if wider is not None:
-                k2, agree2 = wider
-                causes.append(f"tangent neighbourhoods of {m.tangent_.n_neighbors} frames are small for "
-                              f"{c.n_frames} frames ('lipspace build --neighbors {k2}' gives {100 * agree2:.1f}%)")
-        if not causes:
-            causes.append("opening shares the first three dimensions of Y with other lip movements (rounding, "
-                          "protrusion) or is small against sensor noise; check the lip sensors' roles")
-        from engine.corpus import CorpusWarning
+        return lines + ["classes vs  the lip aperture: not measurable (no lip aperture)"]
+    agree = class_agreement(t.opening_, t.accelerating_, ap, c.bounds)
+    lines.append(f"classes vs  the lip aperture: {agree.describe()}")
+    if agree.opening >= OPENING_BOUND and agree.accelerating >= ACCELERATING_BOUND:
+        return lines
+    causes = []
+    if (c.point_roles or []) and "tongue" in c.point_roles:
+        n_t = c.point_roles.count("tongue")
+        causes.append(f"{n_t} tongue sensor{'s' * (n_t != 1)} in the shape space move the manifold without "
+                      "the lips (import with --points naming the lip sensors only)")
+    if not c.registration and len(c.utterances) > 1:
+        causes.append("no registration: offsets between recordings move the manifold without the lips (import "
+                      "with --register utterance, or rigid with reference sensors)")
+    if len([s for s in c.speakers if s]) > 1 and getattr(m, "speaker_normalisation", "auto") == "none":
+        causes.append("several speakers without per-speaker normalisation (build --speaker-norm mean)")
+    second = agree.accelerating_second_difference
+    if agree.accelerating < ACCELERATING_BOUND and second < ACCELERATING_BOUND + 0.05:
+        slow = c.rate < 0.9 * ANALYSIS_RATE
+        causes.append(f"the aperture's velocity changes sign between neighbouring frames so often that even the "
+                      f"aperture's own second difference gets the speed change right on only "
+                      f"{100 * second:.1f}% of frames"
+                      + (f"; at {c.rate:g} Hz a frame spans too much of a movement: import the recording with "
+                         f"--resample {ANALYSIS_RATE:g} (the analysis rate)" if slow else
+                         "; the lip measurements are noisy at this frame rate"))
+    if not causes:
+        causes.append(f"the lips' movement is a small part of what varies in Y ({t.n_dims_} dims): other "
+                      "movements or measurement noise dominate the neighbourhoods; no build option changes that")
+    from engine.corpus import CorpusWarning
 
-        warnings.warn(CorpusWarning(f"the opening class agrees with the lip aperture velocity on only "
-                                    f"{100 * agree:.1f}% of moving frames (expected >= "
-                                    f"{100 * AGREEMENT_WARN_BELOW:.0f}%); likely cause: {'; '.join(causes)}"))
+    warnings.warn(CorpusWarning(f"the tangent classes agree with the lip aperture less than expected (opening "
+                                f"{100 * agree.opening:.1f}%, expected >= {100 * OPENING_BOUND:.0f}%; accelerating "
+                                f"{100 * agree.accelerating:.1f}%, expected >= {100 * ACCELERATING_BOUND:.0f}%); "
+                                f"cause: {'; '.join(causes)}"))
     return lines
 
 

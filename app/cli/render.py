@@ -143,6 +143,11 @@ def run(args) -> int:
         raise CliError("--side-by-side with --method original would show the utterance twice; choose a method")
     if args.audio is not None and args.no_audio:
         raise CliError("--audio and --no-audio contradict each other; give one")
+    from app.cli.synthesize import check_synthesis_options
+
+    check_synthesis_options(args)
+    if not 0 <= args.crf <= 51:
+        raise CliError(f"--crf {args.crf}: must be from 0 (lossless) to 51")
     manifold = _manifold(args)
     c = manifold.corpus_
     frames, Y, label = _trajectory(args, manifold)
@@ -157,9 +162,12 @@ def run(args) -> int:
     if original is not None:
         title = f"{args.utterance}: original (left), {title} (right)"
     t0 = time.perf_counter()
+    from engine.orientation import anatomical_frame
+
     with progress_bar(disable=True if args.quiet else None) as progress:
         try:
             render_video(out, frames, rate=c.rate, faces=c.faces, dims=c.dims, roles=c.point_roles or None,
+                         orientation=anatomical_frame(c, manifold.shape_.mean_),
                          names=c.point_names or None, original=original, Y=Y,
                          Y_original=Y_original, cloud=manifold.Fy_[:, :3] if Y is not None else None, audio=audio,
                          size=args.size, crf=args.crf, title=title, progress=progress)

@@ -19,6 +19,10 @@ Outputs: ``-o traj.csv`` / ``-o traj.npy`` (``--values`` frames, fx or fy),
 ``-o speech.glb`` / ``.gltf`` (a glTF 2.0 morph-target animation: mean shape, shape
 components as targets, F^x as weights; the utterance's or ``--audio`` sound as a WAV
 beside it) and ``--mesh-dir DIR`` (one OBJ/PLY per frame), each written atomically.
+``--praat OUT.TextGrid`` writes, for Praat, the synthesis on the input alignment's timeline
+(:mod:`engine.synthesis_tiers`): a TextGrid with the input's span and phone tier, the
+targets and the synthesised opening's kinematic landmarks, and ``OUT.csv`` (its units in
+``OUT.csv.json``) with the synthesised aperture per frame.
 """
 from __future__ import annotations
 
@@ -77,6 +81,10 @@ def add_arguments(p):
                         "(default: %(default)s)")
     p.add_argument("--mesh-dir", metavar="DIR", help="write one mesh file per frame into DIR")
     p.add_argument("--mesh-format", choices=("obj", "ply"), default="obj", help="mesh file format (default: obj)")
+    p.add_argument("--praat", metavar="OUT.TextGrid",
+                   help="write the synthesis for Praat: OUT.TextGrid (the input's span and phones, the targets, the "
+                        "landmarks of the synthesised opening) and OUT.csv (the synthesised aperture per frame), "
+                        "on the input TextGrid's timeline")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -192,7 +200,7 @@ def _validation_progress(args):
 
 def run(args) -> int:
     from app.cli import CliError
-    from app.cli._common import check_synthesis_bounds
+    from app.cli._common import check_synthesis_bounds, command_outputs
 
     out = Path(args.output) if args.output else None
     if out is not None and out.suffix.lower() not in (".csv", ".npy", ".glb", ".gltf"):
@@ -203,59 +211,128 @@ def run(args) -> int:
         raise CliError(f"--values fy needs --method viterbi (the {args.method} method moves in X, not Y)")
     if args.key_frames is not None and args.utterance is None:
         raise CliError("--key-frames picks frames of an utterance: give --utterance ID too")
-    manifold = _manifold(args)
-    try:
-        targets = _targets(args, manifold)
-        check_synthesis_bounds(args, targets)
-        traj = _synthesizer(args, manifold, targets).synthesize(targets)
-    except (ValueError, FileNotFoundError) as exc:
-        raise CliError(str(exc)) from None
-    for w in traj.warnings:
-        print(f"warning: {w}", file=sys.stderr)
-    if args.method_note:
-        print(args.method_note)
-    frames = traj.frames(manifold)
-    c = manifold.corpus_
-    print(f"{traj.method}: {traj.n_frames} frames ({traj.n_frames / targets.rate:.2f} s at {targets.rate:g} Hz) "
-          f"through {len(targets.targets)} targets from {targets.source}: "
-          f"{' '.join(t.label or '?' for t in targets.targets[:30])}{' ...' if len(targets.targets) > 30 else ''}")
-    if out is not None and out.suffix.lower() in (".glb", ".gltf"):
-        _write_animation(args, manifold, traj, out)
-    elif out is not None:
-        from engine.io.export import corpus_columns, write_trajectory_csv, write_trajectory_npy
+    check_synthesis_options(args)
+    praat = _praat_paths(args)
+    said = []  # what to print once every output is in place
+    with command_outputs(args) as outputs:  # all outputs or none, also on Ctrl-C / SIGTERM
+        animation = out is not None and out.suffix.lower() in (".glb", ".gltf")
+        staged = outputs.file(out, option="-o") if out is not None and not animation else None
+        staged_praat = None if praat is None else [outputs.file(p, option="--praat") for p in praat]
+        mesh_dir = None
+        if args.mesh_dir:  # a frame sequence: any older frame file would be read back with it
+            mesh_dir = outputs.folder(args.mesh_dir, pattern=f"frame_*.{args.mesh_format}", exclusive=True,
+                                      option="--mesh-dir")
+        manifold = _manifold(args)
+        try:
+            targets = _targets(args, manifold)
+            check_synthesis_bounds(args, targets)
+            traj = _synthesizer(args, manifold, targets).synthesize(targets)
+        except (ValueError, FileNotFoundError) as exc:
+            raise CliError(str(exc)) from None
+        for w in traj.warnings:
+            print(f"warning: {w}", file=sys.stderr)
+        if args.method_note:
+            print(args.method_note)
+        frames = traj.frames(manifold)
+        c = manifold.corpus_
+        print(f"{traj.method}: {traj.n_frames} frames ({traj.n_frames / targets.rate:.2f} s at {targets.rate:g} Hz) "
+              f"through {len(targets.targets)} targets from {targets.source}: "
+              f"{' '.join(t.label or '?' for t in targets.targets[:30])}{' ...' if len(targets.targets) > 30 else ''}")
+        if animation:
+            said.append(_write_animation(args, manifold, traj, out, outputs))
+        elif out is not None:
+            from engine.io.export import corpus_columns, write_trajectory_csv, write_trajectory_npy
 
-        if args.values == "frames":
-            values, cols = frames, corpus_columns(c)
-        elif args.values == "fx":
-            values, cols = traj.Fx, [f"x{k + 1}" for k in range(traj.Fx.shape[1])]
-        else:
-            values, cols = traj.Fy, [f"y{k + 1}" for k in range(traj.Fy.shape[1])]
-        if out.suffix.lower() == ".csv":
-            write_trajectory_csv(out, values, times=traj.times, columns=cols)
-        else:
-            write_trajectory_npy(out, values)
-        print(f"wrote {out} ({values.shape[0]} frames x {values.shape[1]} values: {_values_meaning(args.values, c)})")
-    if args.mesh_dir:
-        from app.cli._common import output_directory
-        from engine.io.export import write_mesh_sequence
+            if args.values == "frames":
+                values, cols = frames, corpus_columns(c)
+            elif args.values == "fx":
+                values, cols = traj.Fx, [f"x{k + 1}" for k in range(traj.Fx.shape[1])]
+            else:
+                values, cols = traj.Fy, [f"y{k + 1}" for k in range(traj.Fy.shape[1])]
+            if out.suffix.lower() == ".csv":
+                write_trajectory_csv(staged, values, times=traj.times, columns=cols)
+            else:
+                write_trajectory_npy(staged, values)
+            said.append(f"wrote {out} ({values.shape[0]} frames x {values.shape[1]} values: "
+                        f"{_values_meaning(args.values, c)})")
+        if praat is not None:
+            said.append(_write_praat(args, manifold, targets, traj, praat, staged_praat))
+        if mesh_dir is not None:
+            from engine.io.export import write_mesh_sequence
+            from engine.lipcontour import mesh_geometry
 
-        with output_directory(args.mesh_dir, pattern=f"frame_*.{args.mesh_format}") as tmp:  # all or nothing
             try:
-                from engine.lipcontour import mesh_geometry
-
                 # sparse lip markers: a contour tube, plus one labelled vertex per sensor
                 pts, faces, note, labels = mesh_geometry(frames, c, sensors=True)
-                files = write_mesh_sequence(tmp, pts, faces=faces, dims=c.dims, format=args.mesh_format,
+                files = write_mesh_sequence(mesh_dir, pts, faces=faces, dims=c.dims, format=args.mesh_format,
                                             labels=labels)
             except ValueError as exc:
                 raise CliError(str(exc)) from None
-        print(f"wrote {len(files)} {args.mesh_format.upper()} files to {args.mesh_dir}"
-              + (f" ({note})" if note else ""))
+            said.append(f"wrote {len(files)} {args.mesh_format.upper()} files to {args.mesh_dir}"
+                        + (f" ({note})" if note else ""))
+    for line in said:
+        print(line)
     return 0
 
 
-def _write_animation(args, manifold, traj, out):
-    """``-o speech.glb``: the trajectory as glTF morph weights, its audio as a WAV beside it."""
+def _praat_paths(args):
+    """``(OUT.TextGrid, OUT.csv, OUT.csv.json)`` of ``--praat`` (None without it)."""
+    if args.praat is None:
+        return None
+    from app.cli import CliError
+    from engine.io.tidy import sidecar_path
+
+    grid = Path(args.praat)
+    if grid.suffix.lower() != ".textgrid":
+        raise CliError(f"--praat {grid}: give the TextGrid to write (OUT.TextGrid); OUT.csv goes beside it")
+    return grid, grid.with_suffix(".csv"), sidecar_path(grid.with_suffix(".csv"))
+
+
+def _write_praat(args, manifold, targets, traj, paths, staged) -> str:
+    """``--praat``: the synthesis as a TextGrid and a CSV on the input alignment's timeline, written to
+    the ``staged`` paths of ``paths``; returns the line to print once they are in place."""
+    from engine.io.praat import write_textgrid
+    from engine.io.tidy import write_frame_table
+    from engine.synthesis_tiers import input_timeline, synthesis_outputs
+
+    timeline = input_timeline(args.textgrid, tier=args.tier) if args.textgrid is not None else None
+    table, (xmin, xmax, tiers) = synthesis_outputs(manifold, targets, traj, timeline=timeline)
+    write_frame_table(staged[1], table, sidecar=staged[2], name=paths[1].name)
+    write_textgrid(staged[0], xmin, xmax, tiers)
+    opening = [n for n in table.columns if n in ("lip_aperture", "opening_fx1")][0]
+    return (f"wrote {paths[0]} (tiers {', '.join(t.name for t in tiers)}; {xmin:g}-{xmax:g} s"
+            f"{', as the input' if timeline is not None else ''}) and {paths[1]} ({table.n_rows} frames: time_s, "
+            f"{opening}, ...; units in {paths[2].name})")
+
+
+#: largest --smoothing (s.d. in frames): a minute at 60 Hz; more flattens any utterance to its mean
+MAX_SMOOTHING_FRAMES = 3600.0
+
+
+def check_synthesis_options(args) -> None:
+    """Refuse numeric options no synthesis can use (non-finite, negative, absurdly large), naming them."""
+    import math
+
+    from app.cli import CliError
+
+    sm = getattr(args, "smoothing", None)
+    if sm is not None and not (math.isfinite(sm) and 0 <= sm <= MAX_SMOOTHING_FRAMES):
+        raise CliError(f"--smoothing {sm:g}: must be from 0 to {MAX_SMOOTHING_FRAMES:g} frames (the s.d. of the "
+                       "Gaussian that smooths the state path; 0 = none)")
+    cand = getattr(args, "candidates", None)
+    if cand is not None and not 1 <= cand <= 1000:
+        raise CliError(f"--candidates {cand}: must be from 1 to 1000 states per phone")
+    sp = getattr(args, "spacing", None)
+    if getattr(args, "states", None) is not None and sp is not None and not (math.isfinite(sp) and 0 < sp <= 60):
+        raise CliError(f"--spacing {sp:g}: must be above 0 and at most 60 seconds between targets")
+    gs = getattr(args, "gltf_scale", None)
+    if gs is not None and not (math.isfinite(gs) and 0 < gs <= 1e6):
+        raise CliError(f"--gltf-scale {gs:g}: must be a positive number (0.001 turns millimetres into metres)")
+
+
+def _write_animation(args, manifold, traj, out, outputs) -> str:
+    """``-o speech.glb``: the trajectory as glTF morph weights, its audio as a WAV beside it, staged
+    in ``outputs``; returns the line to print once they are in place."""
     from app.cli import CliError
     from app.export.animation import export_animation, utterance_audio
 
@@ -270,9 +347,10 @@ def _write_animation(args, manifold, traj, out):
             print(f"lipspace synthesize: note: {why}; no WAV beside {out.name}", file=sys.stderr)
     try:
         files = export_animation(manifold, traj.Fx, out, rate=manifold.corpus_.rate, audio=audio,
-                                 scale=args.gltf_scale, source=f"{traj.method}: {args.utterance or 'synthesis'}")
+                                 scale=args.gltf_scale, source=f"{traj.method}: {args.utterance or 'synthesis'}",
+                                 outputs=outputs)
     except ValueError as exc:
         raise CliError(str(exc)) from None
     m = traj.Fx.shape[1]
-    print(f"wrote {', '.join(str(f) for f in files)} ({traj.n_frames} frames; {m} shape components as {2 * m} "
-          "morph targets X1+, X1-, ...)")
+    return (f"wrote {', '.join(str(f) for f in files)} ({traj.n_frames} frames; {m} shape components as {2 * m} "
+            "morph targets X1+, X1-, ...)")

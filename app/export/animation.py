@@ -4,6 +4,7 @@ Used by ``lipspace synthesize -o speech.glb`` and the window's File › Export a
 """
 from __future__ import annotations
 
+import contextlib
 import shutil
 from pathlib import Path
 
@@ -68,14 +69,17 @@ def write_audio_beside(audio, path) -> Path:
 
 
 def export_animation(manifold, Fx, path, *, rate: float, audio=None, scale: float = DEFAULT_SCALE,
-                     interpolation: str = "LINEAR", name: str = "lips", source: str = "") -> list[Path]:
+                     interpolation: str = "LINEAR", name: str = "lips", source: str = "",
+                     outputs=None) -> list[Path]:
     """Write F^x frames as a glTF 2.0 morph animation over the manifold's shape space.
 
     Parameters
     ----------
     manifold : engine.manifold.Manifold
         Fitted; its mean shape is the base, its shape components the morph targets, its
-        corpus gives faces and point dimensions.
+        corpus gives faces and point dimensions. Points are written in the talker's frame
+        (:func:`engine.orientation.anatomical_frame`), which is glTF's: +Y up, the model
+        facing +Z, its left +X; ``scene.extras["orientation"]`` says how it was found.
     Fx : array of shape (n_frames, m') with m' <= the number of components
         The trajectory in X (the animated weights); only the first m' components become
         targets.
@@ -90,11 +94,16 @@ def export_animation(manifold, Fx, path, *, rate: float, audio=None, scale: floa
         See :func:`engine.io.gltf.write_gltf_morph`.
     source : str
         What the trajectory is (recorded in ``scene.extras["source"]``).
+    outputs : engine.staging.Outputs, optional
+        Stage both files there (the command's transaction). Without it the two are written
+        as one transaction here: ``path`` replaced (its save dialog asked), an existing WAV
+        beside it replaced only along with an existing ``path`` (an earlier export), else
+        refused (nobody asked about it).
 
     Returns
     -------
     list of Path
-        The files written (the glTF, then the WAV if any), each atomically.
+        The files written (the glTF, then the WAV if any), both or neither.
     """
     shape, c = manifold.shape_, manifold.corpus_
     Fx = np.atleast_2d(np.asarray(Fx, np.float32))
@@ -105,10 +114,28 @@ def export_animation(manifold, Fx, path, *, rate: float, audio=None, scale: floa
     wav = path.with_suffix(".wav") if audio is not None else None
     if wav is not None and not Path(audio).is_file():
         raise FileNotFoundError(f"{audio}: no such audio file")
-    out = [write_gltf_morph(path, shape.mean_, shape.components_[:m], Fx, rate=rate, faces=c.faces, dims=c.dims,
-                            interpolation=interpolation, scale=scale, name=name,
-                            audio=wav.name if wav is not None else None,
-                            extras={"source": source} if source else None)]
-    if wav is not None:
-        out.append(write_audio_beside(audio, wav))
-    return out
+    from engine.staging import Outputs
+
+    # the talker's frame (engine.orientation) is glTF's: +Y up, the asset facing +Z, its left +X
+    from engine.orientation import anatomical_frame
+
+    frame = anatomical_frame(c, shape.mean_)
+    mean = frame.view_frames(np.asarray(shape.mean_)[None])[0]
+    comps = frame.view_frames(np.asarray(shape.components_[:m]))
+    faces = c.faces[:, ::-1] if frame.mirrored and c.faces is not None else c.faces  # a mirror turns the winding
+    extras = {"source": source, "orientation": frame.describe()} if source else {"orientation": frame.describe()}
+    own = outputs is None
+    if own:
+        outputs = Outputs(hint="Choose another name, or move the existing WAV away first")
+    with outputs if own else contextlib.nullcontext():
+        staged = outputs.file(path, option="-o", force=True if own else None)
+        same = wav is not None and Path(audio).resolve() == wav.resolve()  # the audio is already beside it
+        # the window: a WAV beside replaced only with the animation it belongs to (the dialog asked about that)
+        staged_wav = outputs.file(wav, option="the audio beside it", force=True if own and path.exists() else None) \
+            if wav is not None and not same else None
+        write_gltf_morph(staged, mean, comps, Fx, rate=rate, faces=faces, dims=c.dims,
+                         interpolation=interpolation, scale=scale, name=name,
+                         audio=wav.name if wav is not None else None, extras=extras)
+        if staged_wav is not None:
+            write_audio_beside(audio, staged_wav)
+    return [path] + ([wav] if wav is not None else [])

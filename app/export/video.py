@@ -280,7 +280,7 @@ class _Encoder:
 
 def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=None, names=None, original=None,
                  Y=None, Y_original=None, cloud=None, audio=None, size=(640, 480), title: str = "", crf: int = 20,
-                 progress=None) -> Path:
+                 progress=None, orientation=None) -> Path:
     """Render a lip trajectory to an MP4 (H.264 + AAC), one video frame per trajectory frame.
 
     Parameters
@@ -319,6 +319,10 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=
     progress : callable, optional
         ``progress("render", done, total)``; raising from it (e.g. Ctrl-C) aborts and
         writes nothing.
+    orientation : engine.orientation.AnatomicalFrame, optional
+        The talker's frame (:func:`engine.orientation.anatomical_frame`): the lips are drawn
+        in it, seen from the front (upper lip up, the talker's left on the right). None
+        draws the data's x right, y up.
 
     Returns
     -------
@@ -334,6 +338,9 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=
         raise ValueError(f"crf={crf!r}; expected 0..51 (20 is visually lossless for this content)")
     if len(size) != 2 or min(size) < 16 or max(size) > 4096:
         raise ValueError(f"size={size!r}; expected (width, height) in pixels, each 16..4096")
+    if orientation is not None:  # the talker's frame: front view along -z, up +y
+        frames = orientation.view_frames(np.asarray(frames))
+        original = None if original is None else orientation.view_frames(np.asarray(original))
     F = _frames3(frames, dims, "frames")
     O = None if original is None else _frames3(original, dims, "original frames")
     if O is not None and O.shape[1] != F.shape[1]:

@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 from matplotlib import patheffects
 
-from app.figures._style import below, new_figure, require_fitted, sv_basis, y3
+from app.figures._style import (ARBITRARY, below, frame_sv, journal, legend_below, new_figure, one_column,
+                                require_fitted, y3)
 
 __all__ = ["make_fig4", "PHONE_COLOURS", "ellipse_points"]
 
@@ -21,8 +22,9 @@ def ellipse_points(mean, cov, n_sd: float = 2.0, n_points: int = 100) -> np.ndar
     return np.asarray(mean, dtype=np.float64) + float(n_sd) * np.column_stack([np.cos(t), np.sin(t)]) @ L.T
 
 
+@journal
 def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd: float = 2.0,
-              min_count: int = 3, width: float = 6.5, height: float = 5.2):
+              min_count: int = 3, width=None, height: float | None = None):
     """Fig. 4: mid-points of /b/ (red), /p/ (green), /m/ (yellow) with 2-s.d. ellipses.
 
     Each phone's mid-point frames (:class:`engine.clusters.PhoneClusters`; labels are
@@ -37,10 +39,10 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
     colours : sequence of colours, optional
         One per phone; default :data:`PHONE_COLOURS` (the paper's), else matplotlib's cycle.
     axes : "sv" or (int, int), default="sv"
-        ``"sv"``: the plane of the global shape S (x) and velocity V (y) directions,
-        where the zero-velocity plane is the dotted line v = 0 and the opening half of
-        the cycle lies above it; ellipses are the clusters' 3-D Gaussians projected
-        onto that plane. A pair of Y dims (0-based) shows those dims, with
+        ``"sv"``: the (S, V) plane, the opening (x) and its velocity read on the
+        manifold (y), where the zero-velocity plane is the dotted line V = 0 and the
+        opening half of the cycle lies above it; ellipses are the 2-s.d. ellipses of
+        the members' (S, V). A pair of Y dims (0-based) shows those dims, with
         :meth:`PhoneClusters.ellipse` and the plane's trace.
     """
     require_fitted(manifold, "tangent_")
@@ -58,13 +60,12 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
         raise ValueError(f"axes={axes!r}: use 'sv' or a pair of Y dims such as (0, 1)")
     Y = y3(manifold)
     if sv:
-        o, S, V = sv_basis(tan)
-        B = np.vstack([S, V])                                   # (2, 3)
+        P = frame_sv(manifold)
     else:
         a, b = (int(v) for v in axes)
         if not (0 <= a < 3 and 0 <= b < 3 and a != b):
             raise ValueError(f"axes={tuple(axes)}: need two different Y dims in 0..2")
-    fig = new_figure(width, height)
+    fig = new_figure(width, height or (1.0 if one_column(width) else 0.72) * width)
     ax = fig.subplots()
     found, missing = {}, []
     for phone, col in zip(phones, colours):
@@ -75,17 +76,17 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
             continue
         idx = pc.members(phone)
         if sv:
-            pts = (Y[idx] - o) @ B.T
-            mean = B @ (pc.means_[i] - o)
-            cov = B @ pc.covariances_[i] @ B.T
+            pts = P[idx]
+            mean = pts.mean(axis=0)
+            cov = np.atleast_2d(np.cov(pts, rowvar=False))
             ell = ellipse_points(mean, cov, n_sd)
         else:
             pts = Y[idx][:, [a, b]]
             mean = pc.means_[i][[a, b]]
             ell = pc.ellipse(phone, axes=(a, b), n_sd=n_sd)
         frac = float(pc.opening_fraction_[i])
-        label = f"/{pc.phones_[i]}/  n={len(idx)}, {100 * frac:.0f}% opening side"
-        sc = ax.scatter(pts[:, 0], pts[:, 1], s=22, color=col, edgecolors="0.15", linewidths=0.4,
+        label = f"/{pc.phones_[i]}/  n={len(idx)}, {100 * frac:.0f}% opening"
+        sc = ax.scatter(pts[:, 0], pts[:, 1], s=14, color=col, edgecolors="0.15", linewidths=0.4,
                         label=label, zorder=3)
         sc.set_gid(f"fig4:points:{phone}")
         closed = np.vstack([ell, ell[:1]])
@@ -97,23 +98,24 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
         found[phone] = {"label": pc.phones_[i], "count": int(len(idx)), "opening_fraction": frac,
                         "mean": np.asarray(mean), "cov": None if not sv else cov}
     if sv:
-        zl = ax.axhline(0.0, color="k", ls=":", lw=1.3, label="zero-velocity plane")
-        ax.set_xlabel("shape S")
-        ax.set_ylabel("velocity V (opening > 0)")
+        zl = ax.axhline(0.0, color="k", ls=":", lw=1.0, label="zero velocity")
+        ax.set_xlabel(tan.sv_labels()[0])
+        ax.set_ylabel(tan.sv_labels()[1])
     else:
         from app.figures._style import plane_trace
 
         zl = plane_trace(ax, tan, (a, b), Y[np.concatenate([pc.members(p) for p in found])] if found else Y)
-        ax.set_xlabel(f"$Y_{a + 1}$")
-        ax.set_ylabel(f"$Y_{b + 1}$")
+        ax.set_xlabel(f"$Y_{a + 1}$ {ARBITRARY}")
+        ax.set_ylabel(f"$Y_{b + 1}$ {ARBITRARY}")
         ax.autoscale(True)
         ax.relim()
         ax.autoscale_view()
     if zl is not None:
         zl.set_gid("fig4:zero-velocity")
-    ax.legend(frameon=False, fontsize=8, loc="best")
+    handles, _ = ax.get_legend_handles_labels()
+    legend_below(fig, handles, ncol=2, gid="fig4:legend")
     names = ", ".join(f"/{p}/" for p in phones)
-    ax.set_title(f"Clusters of {names} mid-points ({n_sd:g} s.d. ellipses, squares: means)", fontsize=10)
+    ax.set_title(f"Clusters of {names} mid-points ({n_sd:g} s.d. ellipses, squares: means)")
     notes = []
     if missing:
         notes.append("not in this corpus (or fewer than "

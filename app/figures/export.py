@@ -16,6 +16,10 @@ __all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "sa
 FIGURE_FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
 #: suffixes 3-D views are saved to as vector graphics
 VECTOR_3D_FORMATS = (".svg", ".pdf", ".eps")
+#: text in vector files: PDF/PS embed the TrueType font (Type 42: text stays text, selectable and editable, the
+#: font travels with the file); SVG draws glyph outlines ("path": an SVG cannot carry a font file, and outlines
+#: look the same on every machine and in every journal's pipeline)
+EMBEDDED_FONTS = {"pdf.fonttype": 42, "ps.fonttype": 42, "svg.fonttype": "path"}
 #: metadata that would make output differ run to run (dates) is left out
 _METADATA = {".png": {"Software": "Lipspace"}, ".svg": {"Date": None, "Creator": "Lipspace"},
              ".pdf": {"CreationDate": None, "ModDate": None, "Creator": "Lipspace"}}
@@ -56,8 +60,8 @@ def save_figure(fig, path, *, dpi: float = 200, transparent: bool = False) -> Pa
         FigureCanvasAgg(fig)
     from matplotlib import rc_context
 
-    # a fixed salt makes SVG element ids (and so the bytes) reproducible
-    with rc_context({"svg.hashsalt": "lipspace"}), atomic_write(path) as tmp:
+    # a fixed salt makes SVG element ids (and so the bytes) reproducible; fonts go with the file (EMBEDDED_FONTS)
+    with rc_context({"svg.hashsalt": "lipspace", **EMBEDDED_FONTS}), atomic_write(path) as tmp:
         fig.savefig(tmp, format=FIGURE_FORMATS[suf], dpi=dpi, transparent=transparent,
                     metadata=_METADATA[suf])
     return Path(path)
@@ -180,7 +184,7 @@ def save_vector_figure(fig, path) -> Path:
     suf = _suffix(path, VECTOR_3D_FORMATS, "a 3-D view as vector graphics")
     from matplotlib import rc_context
 
-    with rc_context({"svg.hashsalt": "lipspace", "svg.fonttype": "path"}), atomic_write(path) as tmp:
+    with rc_context({"svg.hashsalt": "lipspace", **EMBEDDED_FONTS}), atomic_write(path) as tmp:
         fig.savefig(tmp, format=suf.lstrip("."), metadata=_METADATA.get(suf, {}), facecolor=fig.get_facecolor())
     return Path(path)
 

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.figures._style import GENERATED, ORIGINAL, below, new_figure, place_labels, require_fitted
+from app.figures._style import (ARBITRARY, GENERATED, ORIGINAL, below, font_pt, journal, legend_below, new_figure,
+                                one_column, place_labels, require_fitted)
 
 __all__ = ["make_fig3", "default_utterance"]
 
@@ -20,8 +21,9 @@ def default_utterance(corpus, *, min_phones: int = 8) -> str:
     return utts[order[len(order) // 2]].id
 
 
-def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = True, width: float = 6.0,
-              height: float = 5.0):
+@journal
+def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = True, width=None,
+              height: float | None = None):
     """Fig. 3: a generated trajectory in the first two components of Y.
 
     The utterance's own phone mid-points are the targets (oracle states,
@@ -69,31 +71,45 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     rmse_x = float(np.sqrt(np.mean(np.sum((fx_g - fx_o) ** 2, axis=1))))
     rmse_y = float(np.sqrt(np.mean(np.sum((gen[:, [a, b]] - orig[:, [a, b]]) ** 2, axis=1))))
     tf = np.asarray(traj.target_frames, dtype=np.int64)
-    fig = new_figure(width, height)
+    from engine.kinematics import has_kinematic_labels
+
+    # a corpus without phone labels is regenerated through its kinematic landmarks: say so, never "phones"
+    what = "kinematic landmark" if has_kinematic_labels(corpus) else "phone"
+    fig = new_figure(width, height or (1.0 if one_column(width) else 0.72) * width)
     ax = fig.subplots()
     lo, = ax.plot(orig[:, a], orig[:, b], "-", color=ORIGINAL, lw=1.4, label="original")
     lg, = ax.plot(gen[:, a], gen[:, b], "-", color=GENERATED, lw=1.4, label="generated (manifold path)")
     lo.set_gid("fig3:original")
     lg.set_gid("fig3:generated")
     mk, = ax.plot(orig[tf, a], orig[tf, b], "o", ms=7, mfc="none", mec=ORIGINAL, mew=1.2, ls="none",
-                  label="phone mid-points")
+                  label="phone mid-points" if what == "phone" else "kinematic landmarks")
     mk.set_gid("fig3:midpoints")
-    ax.set_xlabel(f"$Y_{a + 1}$")
-    ax.set_ylabel(f"$Y_{b + 1}$")
-    ax.legend(frameon=False, fontsize=8, loc="best")
+    ax.set_xlabel(f"$Y_{a + 1}$ {ARBITRARY}")
+    ax.set_ylabel(f"$Y_{b + 1}$ {ARBITRARY}")
+    legend_below(fig, [lo, lg, mk], gid="fig3:legend")
     text = f" \u201c{u.text}\u201d" if u.text else ""
-    ax.set_title(f"Utterance {u.id}{text}\n{len(tf)} phone targets, RMSE in X {rmse_x:.3g}", fontsize=9)
+    ax.set_title(f"Utterance {u.id}{text}\n{len(tf)} {what} targets, RMSE in X {rmse_x:.3g} "
+                 f"({corpus.unit_label})")
     notes = []
     if traj.warnings:
         notes.append(f"{len(traj.warnings)} gap(s) not reachable in time; ended at the nearest reachable state")
-    if notes:
-        below(ax, "; ".join(notes))
+    note = below(ax, "; ".join(notes)) if notes else None
     left_out = 0
     if label_phones:  # placed last, against the final layout, so that no two labels collide
-        left_out = place_labels(ax, orig[tf][:, [a, b]], traj.target_labels, fontsize=7)
-        if left_out:
-            fig.text(0.01, 0.005, f"{left_out} phone label(s) left out where they would overlap", fontsize=6.5,
-                     color="0.35", ha="left", va="bottom").set_in_layout(False)
+        args = (ax, orig[tf][:, [a, b]], traj.target_labels)
+        trial: list = []
+        left_out = place_labels(*args, fontsize=font_pt(-1.5), placed_texts=trial)
+        if left_out:  # say so under the axes (which changes the layout): place them again against it
+            for t in trial:
+                t.remove()
+            notes.append(f"{left_out} {what} label(s) left out where they would overlap")
+            if note is not None:
+                note.remove()
+            note = below(ax, "; ".join(notes))
+            left_out = place_labels(*args, fontsize=font_pt(-1.5))
+            notes = notes[:-1] + ([f"{left_out} {what} label(s) left out where they would overlap"] if left_out
+                                  else [])
+            note.set_text("; ".join(notes))
     fig.lipspace.update(utterance=u.id, target_frames=tf, labels=list(traj.target_labels), rmse_x=rmse_x,
                         rmse_y=rmse_y, warnings=list(traj.warnings), labels_left_out=left_out)
     return fig

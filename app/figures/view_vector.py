@@ -223,7 +223,8 @@ def _scalar_bar(fig, bar, size):
     if ticks is not None:
         cb.set_ticklabels([f"{t:.0f}" for t in ticks])
     cb.ax.tick_params(labelsize=8)
-    cax.set_title(bar.GetTitle() or "", fontsize=9, pad=8, loc="left")
+    # right-aligned over the bar: the bar sits at the view's right edge, a title running right would be cut
+    cax.set_title(bar.GetTitle() or "", fontsize=9, pad=8, loc="right")
     return cax
 
 

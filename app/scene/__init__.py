@@ -7,7 +7,7 @@ positions, visibility) instead of re-adding actors on every click. Tests pass
 from app.scene.handles import Handle
 from app.scene.lips import ContourHandle, LipsHandle, add_lip_contour, add_lips, lip_mesh
 from app.scene.manifold import (ORIGINAL_COLOUR, PATH_COLOUR, S_COLOUR, SYNTHETIC_COLOUR, V_COLOUR,
-                                PointsHandle, add_cluster_ellipsoids, add_global_axes, add_local_frame,
+                                PointsHandle, add_cluster_ellipsoids, add_global_axes, add_local_frame, label_zoom,
                                 add_manifold_points, add_marker, add_point_markers, add_state_path, add_trajectory,
                                 add_zero_velocity_plane, move_to_overlay, overlay_renderer, scene_scale,
                                 to_rgb8)
@@ -15,7 +15,7 @@ from app.scene.pick import ClickPicker, enable_click_picking, pick_display_point
 
 __all__ = ["Handle", "PointsHandle", "LipsHandle", "ContourHandle", "add_lip_contour", "ClickPicker",
            "add_manifold_points", "add_zero_velocity_plane",
-           "add_global_axes", "add_local_frame", "add_trajectory", "add_cluster_ellipsoids", "add_state_path",
+           "add_global_axes", "label_zoom", "add_local_frame", "add_trajectory", "add_cluster_ellipsoids", "add_state_path",
            "add_marker", "add_point_markers", "add_lips", "lip_mesh", "enable_click_picking", "pick_display_point",
            "scene_scale", "overlay_renderer", "move_to_overlay",
            "to_rgb8", "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR", "S_COLOUR", "V_COLOUR"]

@@ -11,7 +11,7 @@ import pyvista as pv
 from app.scene.handles import Handle
 
 __all__ = ["PointsHandle", "LocalFrameHandle", "PolylineHandle", "add_manifold_points", "add_zero_velocity_plane",
-           "add_global_axes", "add_local_frame", "add_point_markers", "add_trajectory", "add_state_path",
+           "add_global_axes", "label_zoom", "add_local_frame", "add_point_markers", "add_trajectory", "add_state_path",
            "add_cluster_ellipsoids",
            "add_marker", "MarkerHandle", "scene_scale", "overlay_renderer", "move_to_overlay", "to_rgb8", "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR",
            "S_COLOUR", "V_COLOUR", "NORMAL_COLOUR", "PLANE_COLOUR"]
@@ -178,10 +178,32 @@ def add_global_axes(plotter, origin, S, V, length: float, *, labels: bool = True
         o = _vec(origin, "origin")
         tips = np.array([o + 1.08 * length * _vec(S, "S") / max(np.linalg.norm(S), 1e-12),
                          o + 1.08 * length * _vec(V, "V") / max(np.linalg.norm(V), 1e-12)])
-        out["labels"] = plotter.add_point_labels(tips, ["S", "V"], font_size=14, text_color="black",
+        out["labels"] = plotter.add_point_labels(tips, ["S", "V"], font_size=AXES_LABEL_PX, text_color="black",
                                                  shape=None, show_points=False, name="global_axes_labels",
                                                  always_visible=True, pickable=False, reset_camera=False, render=False)
+        out["tips"] = tips  # where the labels stand (views keep them on screen: label_zoom)
     return out
+
+
+#: font size (pixels) of the S and V labels
+AXES_LABEL_PX = 14
+
+
+def label_zoom(xy, size, *, pad: float = 1.5 * AXES_LABEL_PX) -> float:
+    """The camera zoom (<= 1) that keeps labels at display positions ``xy`` (n, 2) at least ``pad`` pixels
+    inside a viewport of ``size`` (width, height); 1 when they already are.
+
+    Zooming scales display offsets from the viewport's centre by the factor (exactly in a parallel
+    projection, nearly so in perspective), so the factor is the smallest ratio of the room left to
+    each label's offset, per axis.
+    """
+    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    half = 0.5 * np.asarray(size, dtype=np.float64)
+    off = np.abs(xy - half)
+    room = np.maximum(half - pad, 1.0)
+    with np.errstate(divide="ignore"):
+        ratio = np.where(off > 0, room / off, np.inf)
+    return float(min(1.0, ratio.min())) if ratio.size else 1.0
 
 
 def _placement(point, direction, length):

@@ -1,6 +1,7 @@
 """Small Qt helpers shared by the views."""
 from __future__ import annotations
 
+import math
 from contextlib import contextmanager
 
 __all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all",
@@ -76,7 +77,7 @@ def set_camera(plotter, cam) -> None:
         rows = [[float(x) for x in row] for row in cam]
     except (TypeError, ValueError):
         return
-    if len(rows) == 3 and all(len(r) == 3 for r in rows):
+    if len(rows) == 3 and all(len(r) == 3 and all(math.isfinite(x) for x in r) for r in rows) and rows[0] != rows[1]:
         plotter.camera_position = rows
         plotter.render()
 

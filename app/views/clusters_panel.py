@@ -2,7 +2,9 @@
 
 Numbers come from :class:`engine.clusters.PhoneClusters` (built once per manifold
 and cached on the state); ticking a phone shows its 2-s.d. ellipsoid in the
-manifold view, in the phone's colour.
+manifold view, in the phone's colour. A corpus without phone labels shows the
+clusters of its four kinematic landmarks (aperture maxima, minima, peak opening and
+closing velocities), named as landmarks: the first column is "Landmark".
 """
 from __future__ import annotations
 
@@ -38,6 +40,7 @@ class ClustersPanel(QtWidgets.QWidget):
         super().__init__(parent)
         self.state = state
         self.rows: list[dict] = []
+        self.kind = "phones"  # or "kinematic": what the rows are clusters of
         self.table = QtWidgets.QTableWidget(0, len(COLUMNS))
         self.table.setHorizontalHeaderLabels([h for _k, h, _t in COLUMNS])
         for j, (_k, _h, tip) in enumerate(COLUMNS):
@@ -65,20 +68,36 @@ class ClustersPanel(QtWidgets.QWidget):
         self.rebuild()
 
     def table_rows(self) -> list[dict]:
-        """The table as rows of dicts (what File > Export cluster table writes)."""
-        return [dict(r) for r in self.rows]
+        """The table as rows of dicts (what File > Export cluster table writes); landmark clusters name their
+        first column ``landmark``."""
+        if self.kind != "kinematic":
+            return [dict(r) for r in self.rows]
+        return [{("landmark" if k == "phone" else k): v for k, v in r.items()} for r in self.rows]
+
+    #: (header of the first column, singular noun) per kind of clusters
+    NAMES = {"phones": ("Phone", "phone"), "kinematic": ("Landmark", "landmark")}
 
     def rebuild(self) -> None:
         m = self.state.manifold
         self.rows = []
+        self.kind = "phones"
         if m is not None:
             try:
                 self.rows = self.state.cluster_rows()
-                self.note.setText("Tick a phone to show its 2-s.d. ellipsoid in the manifold view. Separations are "
-                                  "Bhattacharyya distances (0 = identical clusters) in Y (with dynamics) and X "
-                                  "(shape only), from the phone's nearest neighbour in Y.")
+                self.kind = self.state.cluster_kind
+                noun = self.NAMES[self.kind][1]
+                what = ("No phone labels: clusters of the kinematic landmarks of the lip aperture (open = maxima, "
+                        "closed = minima, opening / closing = peak velocities). " if self.kind == "kinematic" else "")
+                self.note.setText(f"{what}Tick a {noun} to show its 2-s.d. ellipsoid in the manifold view. "
+                                  "Separations are Bhattacharyya distances (0 = identical clusters) in Y (with "
+                                  f"dynamics) and X (shape only), from the {noun}'s nearest neighbour in Y.")
             except (ImportError, ValueError) as exc:
                 self.note.setText(f"phone clusters unavailable: {exc}")
+        header = self.NAMES[self.kind][0]
+        item = self.table.horizontalHeaderItem(0)
+        item.setText(header)
+        item.setToolTip(COLUMNS[0][2] if self.kind == "phones" else
+                        "kinematic landmark of the lip aperture: open, closed, opening, closing")
         from app.colouring import phone_palette
 
         palette = phone_palette(self.state) if m is not None else {}

@@ -116,6 +116,9 @@ class LipView(QtWidgets.QWidget):
             self.renderer.request()
             return
         c = m.corpus_
+        from engine.orientation import anatomical_frame
+
+        self.orientation = anatomical_frame(c, m.shape_.mean_)  # points drawn in the talker's frame, seen from the front
         mean = self._points(m.shape_.mean_)
         ext = mean.max(0) - mean.min(0)
         self.offset = np.array([1.25 * max(float(ext[0]), 1e-6), 0.0, 0.0])
@@ -125,16 +128,18 @@ class LipView(QtWidgets.QWidget):
                                      **sensors)
         self.second.set_visible(False)
         self._on_trajectories(render=False)
-        # the lips face the viewer: look along -z (the capture's depth axis), y up
+        # the lips face the viewer: the talker's frame puts forward on +z, up on +y, the talker's left on +x
         p.view_xy(render=False)
         p.reset_camera(render=False)
         p.camera_set = True
         self.refresh()
 
     def _points(self, row) -> np.ndarray:
+        """One frame row (C,) as points (V, 3) in the talker's view coordinates (engine.orientation)."""
         from engine.corpus import frame_points
 
-        return frame_points(np.asarray(row, np.float32), self.state.manifold.corpus_.dims)
+        row = self.orientation.view_frames(np.asarray(row, np.float32)[None])[0]
+        return frame_points(row, self.state.manifold.corpus_.dims)
 
     # ---------------------------------------------------------------- refresh
     def _on_changed(self, names) -> None:

@@ -252,8 +252,20 @@ class ManifoldView(QtWidgets.QWidget):
         cam.SetPosition(*pos)
         cam.SetFocalPoint(*focal)
         cam.SetViewUp(*up)
-        self.plotter.renderer.ResetCamera(*self.handles["points"].mesh.bounds)  # fit the cloud, same direction
-        self.plotter.renderer.ResetCameraClippingRange()
+        ren = self.plotter.renderer
+        lo, hi = np.reshape(self.handles["points"].mesh.bounds, (3, 2)).T
+        tips = self.handles["axes"].get("tips") if isinstance(self.handles.get("axes"), dict) else None
+        if tips is not None:  # the S and V labels stand beyond the cloud: frame them too
+            lo, hi = np.minimum(lo, tips.min(axis=0)), np.maximum(hi, tips.max(axis=0))
+        ren.ResetCamera(*np.column_stack([lo, hi]).ravel())  # fit the cloud and the labels, same direction
+        if tips is not None:  # and keep the labels' text inside the view, not cut at its edge
+            for _ in range(2):
+                M, size = view_transform(self.plotter)
+                z = scene.label_zoom(project(tips, M, size)[0], size)
+                if z >= 0.999:
+                    break
+                cam.Zoom(z)
+        ren.ResetCameraClippingRange()
         if render:
             self.renderer.request()
 
@@ -446,7 +458,7 @@ class ManifoldView(QtWidgets.QWidget):
             t = m.tangent_
             y = m.Fy_[i, :3]
             h["marker"].move(y)
-            h["local"].update(y, t.s_[i], t.v_[i], t.normal_[i])
+            h["local"].update(y, *t.drawn_local_frame(i))
         elif s.state is not None:
             h["marker"].move(m.states_.centroids_[s.state, :3])
             h["local"].set_visible(False)

@@ -10,6 +10,9 @@ and "Reset targets" (back to the targets as loaded) complete the edits, each one
 command on :attr:`TrajectoryEditor.undo_stack` (the window's Edit > Undo / Redo).
 The timeline zooms (wheel, + / -, Fit), shows time in ms, and with the keyboard focus
 plays (Space) and steps (Left / Right) through :class:`app.state.AppState`'s playback.
+Under it, where the utterance has audio, its waveform and wide-band spectrogram
+(:mod:`app.views.sound_panel`, computed in a worker by :mod:`app.views.sound_track`)
+scroll and zoom with it and carry the same playback cursor; "Sound" hides them.
 The synthetic trajectory is drawn red in the manifold view and played beside the
 original in the lip view; for an utterance the error against the captured original
 is shown, and every synthesis warning is listed under the timeline.
@@ -22,6 +25,8 @@ from app.target_editing import remove_target
 from app.trajectories import METHOD_LABELS, synthesize_targets, trajectory_error
 from app.views._common import connect_all, disconnect_all, READOUT_INTERVAL_S, Throttle
 from app.views.phone_timeline import PhoneTimeline
+from app.views.sound_panel import SoundPanel
+from app.views.sound_track import SoundTrack
 
 __all__ = ["TrajectoryEditor", "TargetsEdit", "ZOOM_RANGE", "ADD_STATE_SHORTCUT", "REMOVE_SHORTCUT"]
 
@@ -99,13 +104,24 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.readout = QtWidgets.QLabel("")
         self.readout.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
         self.readout.setWordWrap(True)
-        self.timeline = PhoneTimeline()
+        # the phone tiers and the sound under them share one scrolled strip: one width, one scroll bar
+        self.tracks = QtWidgets.QWidget()
+        self.timeline = PhoneTimeline(self.tracks)
+        self.sound = SoundPanel(self.tracks)
+        self.sound.move(0, PhoneTimeline.HEIGHT)
+        self.sound.hide()
+        self.sound_track = SoundTrack(self.sound, state, parent=self)
+        self.sound_box = QtWidgets.QCheckBox("Sound")
+        self.sound_box.setChecked(True)
+        self.sound_box.setToolTip("Show the utterance's waveform and wide-band spectrogram under the phones "
+                                  "(where it has audio)")
+        self._min_height_without_sound = None
         self.scroll = QtWidgets.QScrollArea()
-        self.scroll.setWidget(self.timeline)
+        self.scroll.setWidget(self.tracks)
         self.scroll.setWidgetResizable(False)
         self.scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)
         self.scroll.setVerticalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
-        self.scroll.setFixedHeight(PhoneTimeline.HEIGHT + self.scroll.horizontalScrollBar().sizeHint().height() + 4)
+        self._layout_tracks()
         self.scroll.setMinimumWidth(200)
         self.scroll.viewport().installEventFilter(self)
         self.warnings_list = QtWidgets.QListWidget()
@@ -121,7 +137,8 @@ class TrajectoryEditor(QtWidgets.QWidget):
         row1.addStretch(0)
         row2 = QtWidgets.QHBoxLayout()
         for w in (QtWidgets.QLabel("Method:"), self.method_box, self.synth_btn, self.play_btn, self.remove_btn,
-                  self.reset_btn, QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn, self.fit_btn):
+                  self.reset_btn, QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn, self.fit_btn,
+                  self.sound_box):
             row2.addWidget(w)
         row2.addWidget(self.readout, 1)
         lay = QtWidgets.QVBoxLayout(self)
@@ -153,9 +170,11 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.timeline.playToggled.connect(self.toggle_playing)
         self.timeline.stepRequested.connect(self.step)
         self.timeline.zoomRequested.connect(lambda f, x: self.zoom_by(f, x))
+        self.sound_box.toggled.connect(lambda _on: self._layout_tracks())
+        self.sound_track.changed.connect(lambda _has: self._layout_tracks())
         ev = state.events
         # the cursor follows playback a few times a second (each repaint composes the whole window)
-        self._cursor_readout = Throttle(self.timeline.set_cursor, READOUT_INTERVAL_S, parent=self)
+        self._cursor_readout = Throttle(self._set_cursor, READOUT_INTERVAL_S, parent=self)
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.playback, self._cursor_readout),
                              (ev.utterance, self._on_utterance),
                              (ev.trajectory, lambda _o, syn: self._show_warnings(syn)),
@@ -219,6 +238,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.loaded_targets = None
         self.undo_stack.clear()
         self.timeline.set_targets(None)
+        self.sound_track.clear_cache()
         self._sync_buttons()
         self.utt_box.blockSignals(True)
         self.utt_box.clear()
@@ -323,6 +343,10 @@ class TrajectoryEditor(QtWidgets.QWidget):
     def _apply_targets(self, targets, message: str) -> None:
         self.targets = targets
         self.timeline.set_targets(targets)
+        if targets is not None:
+            self.sound.set_span(targets.n_frames, targets.rate, targets.phones)
+        self.sound_track.show(None if targets is None else targets.utterance)
+        self._layout_tracks()
         self.readout.setText(message)
         self._sync_buttons()
 
@@ -374,10 +398,37 @@ class TrajectoryEditor(QtWidgets.QWidget):
             anchor = (tl.frame_at(anchor_x), anchor_x - bar.value())  # (time, pixel on screen)
         self.zoom = float(min(max(zoom, lo), hi))
         view_w = self.scroll.viewport().width()
-        tl.resize(max(int(round(view_w * self.zoom)), 1), PhoneTimeline.HEIGHT)
+        width = max(int(round(view_w * self.zoom)), 1)
+        tl.resize(width, PhoneTimeline.HEIGHT)
+        self.sound.resize(width, SoundPanel.HEIGHT)
+        self.tracks.resize(width, self._tracks_height())
         if anchor is not None and tl.targets is not None:
             bar.setValue(int(round(tl._x(anchor[0]) - anchor[1])))
         return self.zoom
+
+    def _tracks_height(self) -> int:
+        return PhoneTimeline.HEIGHT + (SoundPanel.HEIGHT if self.sound.isVisibleTo(self.tracks) else 0)
+
+    def _layout_tracks(self) -> None:
+        """Show the sound under the phones when asked for and the utterance has audio; size the strip."""
+        show = self.sound_box.isChecked() and self.sound_track.wanted is not None
+        self.sound.setVisible(show)
+        h = self._tracks_height()
+        self.tracks.resize(self.timeline.width(), h)
+        self.scroll.setFixedHeight(h + self.scroll.horizontalScrollBar().sizeHint().height() + 4)
+        # the dock grows by the sound's height while it shows (an explicit minimum height, as the
+        # window sets one, would otherwise clip it), and gives it back after
+        if show and self._min_height_without_sound is None:
+            self._min_height_without_sound = self.minimumHeight()
+        if self._min_height_without_sound is not None:
+            need = self.layout().totalMinimumSize().height() if show else 0
+            self.setMinimumHeight(max(self._min_height_without_sound, need))
+            if not show:
+                self._min_height_without_sound = None
+
+    def _set_cursor(self, frame) -> None:
+        self.timeline.set_cursor(frame)
+        self.sound.set_cursor(frame)
 
     def zoom_by(self, factor: float, anchor_x: float | None = None) -> float:
         if anchor_x is None:
@@ -464,7 +515,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
     def settings(self) -> dict:
         """Editor settings for session files."""
         return {"source": self.source, "text": self.text_edit.text(), "method": self.method,
-                "oracle": self.oracle_box.isChecked()}
+                "oracle": self.oracle_box.isChecked(), "sound": self.sound_box.isChecked()}
 
     def apply_settings(self, d: dict) -> None:
         if d.get("source"):
@@ -473,6 +524,8 @@ class TrajectoryEditor(QtWidgets.QWidget):
         if d.get("method") and self.method_box.findData(d["method"]) >= 0:
             self.set_method(d["method"])
         self.oracle_box.setChecked(bool(d.get("oracle", True)))
+        self.sound_box.setChecked(bool(d.get("sound", True)))
 
     def close_view(self) -> None:
         disconnect_all(self._connections)
+        self.sound_track.stop()

@@ -12,7 +12,7 @@ from engine.io.errors import ImportFormatError
 
 __all__ = [
     "read_bytes", "decode_text", "parse_floats", "fill_gaps", "fit_phones",
-    "natural_key", "check_rate", "sidecar_audio", "one_utterance_corpus", "uniform_rate",
+    "natural_key", "check_rate", "plausible_rate", "sidecar_audio", "one_utterance_corpus", "uniform_rate",
 ]
 
 def read_bytes(path) -> bytes:
@@ -64,47 +64,110 @@ def parse_floats(tokens, path, line: int, what: str = "a number") -> list[float]
     return out
 
 
-def fill_gaps(X: np.ndarray, missing: np.ndarray, *, path, names=None, fill: bool = True) -> np.ndarray:
-    """Linearly interpolate missing samples per column; hold the edge values.
+#: a kept column may be missing in at most this share of its frames to be interpolated; more is refused
+MAX_FILL_FRACTION = 0.5
+#: coordinates larger than this in magnitude are implausible in any unit lips are recorded in (mm,
+#: cm, m, pixels): a sentinel, an overflowed or a damaged sample. They are dropouts.
+IMPLAUSIBLE_COORDINATE = 1e6
+
+
+def fill_gaps(X: np.ndarray, missing: np.ndarray, *, path, names=None, fill: bool = True,
+              flagged: str = "flagged invalid", nan: str = "NaN", first_frame: int = 0) -> np.ndarray:
+    """Linearly interpolate missing samples per column, hold the edge values, and report it.
+
+    A sample is missing when ``missing`` flags it (a break flag, an invalid marker, a
+    status that is not OK), when it is not finite, or when its magnitude exceeds
+    :data:`IMPLAUSIBLE_COORDINATE`. The repair is reported per file
+    (:func:`engine.io.repairs.report_repair`): how many samples of which columns, why,
+    in which frames, and how they were filled.
 
     Parameters
     ----------
     X : ndarray of shape (n_frames, n_columns)
     missing : bool ndarray of shape (n_frames, n_columns) or (n_frames,)
-        True where a sample is absent (dropout, invalid flag, NaN).
+        True where the file marks a sample absent.
     path : str
-        File named in errors.
-    names : sequence of str, optional
-        Column names for errors.
+        File named in errors and in the report.
+    names : sequence of str or callable(int) -> str, optional
+        Column names (default ``column <j>``).
     fill : bool
-        If False, any missing sample is an error naming its frame.
+        If False, any missing sample is an error naming its column and frame.
+    flagged, nan : str
+        How the report names samples ``missing`` flags and NaN samples (e.g. ``"break
+        flag 0"``, ``"empty or NaN"``).
+    first_frame : int
+        The number of the first row, for the frames the report and errors name (a table
+        that numbers its frames gives its own numbers; default: 0-based rows).
 
     Returns
     -------
     ndarray of shape (n_frames, n_columns), float32, with no missing samples.
+
+    Raises
+    ------
+    ImportFormatError
+        A column missing in every frame, or in more than :data:`MAX_FILL_FRACTION` of its
+        frames; any missing sample when ``fill`` is False.
     """
+    from engine.io.repairs import frame_runs, report_repair
+
     with np.errstate(over="ignore", invalid="ignore"):  # out-of-range values become inf: missing
         X = np.asarray(X).astype(np.float32, copy=False)
-    missing = np.asarray(missing, dtype=bool)
-    if missing.ndim == 1:
-        missing = np.broadcast_to(missing[:, None], X.shape)
-    missing = missing | ~np.isfinite(X)
-    if not missing.any():
+    flag = np.asarray(missing, dtype=bool)
+    if flag.ndim == 1:
+        flag = np.broadcast_to(flag[:, None], X.shape)
+    finite = np.isfinite(X)
+    with np.errstate(invalid="ignore"):
+        huge = finite & (np.abs(X) > IMPLAUSIBLE_COORDINATE)
+    miss = flag | ~finite | huge
+    if not miss.any():
         return X
-    X = X.copy()
-    cols = np.flatnonzero(missing.any(axis=0))
+
+    def name(j):
+        if names is None:
+            return f"column {j}"
+        return names(j) if callable(names) else names[j]
+
+    nan_mask, inf_mask = np.isnan(X), np.isinf(X)
+
+    def why(j=slice(None)):
+        """What the missing samples of column(s) ``j`` are, counted by cause."""
+        m, f = miss[:, j], flag[:, j]
+        kinds = [(int((m & f).sum()), flagged), (int((m & ~f & nan_mask[:, j]).sum()), nan),
+                 (int((m & ~f & inf_mask[:, j]).sum()), "infinite"),
+                 (int((m & ~f & huge[:, j]).sum()), f"implausibly large (beyond {IMPLAUSIBLE_COORDINATE:g})")]
+        return ", ".join(f"{k} {w}" for k, w in kinds if k)
+
+    n = X.shape[0]
+    cols = np.flatnonzero(miss.any(axis=0))
     for j in cols:
-        col_name = names[j] if names is not None else f"column {j}"
+        rows = np.flatnonzero(miss[:, j])
+        i = int(rows[0])
         if not fill:
-            i = int(np.flatnonzero(missing[:, j])[0])
-            raise ImportFormatError(path, f"{col_name} is missing (invalid or not finite); pass fill_gaps=True "
-                                    "to interpolate over dropouts", frame=i)
-        ok = ~missing[:, j]
-        if not ok.any():
-            raise ImportFormatError(path, f"{col_name} is missing in every frame; expected at least one valid "
-                                    "sample (choose other points/sensors)")
-        idx = np.arange(X.shape[0])
+            raise ImportFormatError(path, f"{name(j)} is missing ({why(j)} in {rows.size} of {n} "
+                                    "frames); refused because gap filling is off (import without --no-fill to "
+                                    "interpolate dropouts)", frame=i + first_frame)
+        if rows.size == n:
+            raise ImportFormatError(path, f"{name(j)} is missing in every frame ({why(j)}); expected "
+                                    "at least one valid sample (choose other points or sensors with --points)")
+        if rows.size > MAX_FILL_FRACTION * n:
+            raise ImportFormatError(path, f"{name(j)} is missing in {rows.size} of {n} frames "
+                                    f"({100 * rows.size / n:.0f}%: {why(j)}); at most "
+                                    f"{100 * MAX_FILL_FRACTION:.0f}% of a channel can be interpolated. Leave it out "
+                                    "(--points) or check the recording", frame=i + first_frame)
+    X = X.copy()
+    idx = np.arange(n)
+    for j in cols:
+        ok = ~miss[:, j]
         X[:, j] = np.interp(idx, idx[ok], X[ok, j].astype(np.float64))
+    rows = np.flatnonzero(miss.any(axis=1))
+    shown = [name(j) for j in cols[:6]]
+    more = f" and {cols.size - 6} more" if cols.size > 6 else ""
+    edge = " (a column missing at the start or the end holds its first or last valid value)" if \
+        miss[0].any() or miss[-1].any() else ""
+    report_repair(path, f"{int(miss.sum())} missing samples ({why()}) in {', '.join(shown)}{more}, in "
+                  f"{rows.size} of {n} frames ({frame_runs(rows + first_frame)}); interpolated linearly between the nearest "
+                  f"valid frames{edge}")
     return X
 
 
@@ -125,7 +188,7 @@ def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneI
 
     An alignment whose speech (phones other than pauses) ends more than
     :data:`ALIGNMENT_OVERRUN_WARN` s after the data is
-    cut with an :class:`~engine.io.errors.ImportDataWarning` naming both durations; one
+    cut and reported (:func:`engine.io.repairs.report_repair`) naming both durations; one
     :data:`ALIGNMENT_OVERRUN_RATIO` times as long as the data (and over 1 s longer) is
     refused with an :class:`ImportFormatError` naming ``path`` (a different
     recording's alignment, or a wrong frame rate).
@@ -142,15 +205,10 @@ def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneI
             raise ImportFormatError(path if path is not None else "<alignment>",
                                     f"{what}: {end / dur:.1f} times as long. Is it this recording's alignment, "
                                     "and is the frame rate right?")
-        import warnings
+        from engine.io.repairs import report_repair
 
-        from engine.io.errors import ImportDataWarning
-
-        where = f"{path}: " if path is not None else ""
-        warnings.warn(ImportDataWarning(
-            f"{where}{what}; it was cut at the end of the data ({lost} phone{'s' * (lost != 1)} dropped)"),
-            stacklevel=2)
-    out = []
+        report_repair(path, f"{what}; it was cut at the end of the data ({lost} phone{'s' * (lost != 1)} dropped)")
+    out, empty = [], []
     for p in phones:
         s, e, lab = float(p.start), float(p.end), str(p.label).strip()
         if not lab or s >= dur:
@@ -159,6 +217,13 @@ def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneI
         s = max(s, 0.0)
         if e > s:
             out.append(PhoneInterval(s, e, lab))
+        elif lab.lower() not in _PAUSES:
+            empty.append(f"{lab} at {s:.3f} s")
+    if empty:  # a labelled phone of no duration has no frame to stand for: dropped, and said
+        from engine.io.repairs import report_repair
+
+        report_repair(path, f"{len(empty)} phone{'s' * (len(empty) != 1)} of zero duration dropped from the "
+                      f"alignment ({', '.join(empty[:5])}{', ...' if len(empty) > 5 else ''})")
     return tuple(out)
 
 
@@ -170,13 +235,39 @@ def natural_key(name: str):
     return [int(t) if t.isdigit() else t.lower() for t in _NUM.split(name)]
 
 
+#: frame rates (Hz) lip motion is recorded at: webcams from 10 fps, articulographs and motion capture up
+#: to a few kHz, high-speed video below 20 kHz. A rate outside is a damaged or misread header.
+MOTION_RATE_RANGE = (10.0, 20000.0)
+#: sample rates (Hz) of speech audio
+AUDIO_RATE_RANGE = (1000.0, 768000.0)
+
+
+def plausible_rate(path, value, field: str, *, line: int | None = None, audio: bool = False) -> float:
+    """``value`` as a rate in Hz, or an :class:`ImportFormatError` naming ``field`` (a header field,
+    a variable, an option) when it is not a number, not finite, not positive or outside
+    :data:`MOTION_RATE_RANGE` (:data:`AUDIO_RATE_RANGE` for ``audio``)."""
+    lo, hi = AUDIO_RATE_RANGE if audio else MOTION_RATE_RANGE
+    what = "a sample rate" if audio else "a frame rate"
+    try:
+        r = float(value)
+    except (TypeError, ValueError):
+        raise ImportFormatError(path, f"{field} is {str(value)[:30]!r}; expected {what} in Hz", line=line) from None
+    if not (np.isfinite(r) and r > 0):
+        raise ImportFormatError(path, f"{field} is {r:g}; expected {what} in Hz, a positive number", line=line)
+    if not lo <= r <= hi:
+        raise ImportFormatError(path, f"{field} is {r:g} Hz; {what} of {'speech audio' if audio else 'lip motion'} "
+                                f"is from {lo:g} to {hi:g} Hz (a damaged header, or times in other units?)",
+                                line=line)
+    return r
+
+
 def check_rate(path, native: float, rate) -> float:
     """Return the file's ``native`` rate; a different explicit ``rate`` is an error."""
     if rate is not None and abs(float(rate) - native) > 1e-6 * native:
         raise ImportFormatError(
-            path, f"the file says its frame rate is {native:g} Hz but rate={float(rate):g} was given; the rate "
-            "argument is only for files without timing. To change the rate, resample "
-            "(engine.io.resample, or 'lipspace import --resample')")
+            path, f"the file says its frame rate is {native:g} Hz but a rate of {float(rate):g} Hz was given "
+            "(--rate); a rate is only given for files without timing. To change the rate, resample "
+            "('lipspace import --resample HZ')")
     return float(native)
 
 
@@ -190,8 +281,10 @@ def sidecar_audio(path) -> str | None:
 
 
 def one_utterance_corpus(path, frames, rate, *, dims, uid=None, phones=(), point_names=None, faces=None,
-                         audio=None, text="", name=None):
+                         audio=None, text="", name=None, units="mm"):
     """A :class:`Corpus` of one utterance read from ``path``; phones fitted to the data.
+
+    ``units``: of the coordinates ("mm", or "" when the file's units are not known).
 
     Any violated corpus invariant is reported as an :class:`ImportFormatError` naming ``path``.
     """
@@ -206,7 +299,7 @@ def one_utterance_corpus(path, frames, rate, *, dims, uid=None, phones=(), point
         utt = Utterance(uid, 0, frames.shape[0], fit_phones(phones, frames.shape[0], rate, path=path), audio,
                       text)
         return Corpus(frames=frames, rate=rate, utterances=[utt], dims=dims, faces=faces,
-                      point_names=point_names, name=name or uid)
+                      point_names=point_names, name=name or uid, units=units)
     except CorpusError as exc:
         raise ImportFormatError(path, str(exc)) from None
 
@@ -237,4 +330,5 @@ def uniform_rate(times, path, *, tolerance: float = 0.05) -> float:
                                 "(dropped or repeated frames?)", frame=i)
     rate = (t.size - 1) / float(t[-1] - t[0])  # mean step: robust to times rounded to the millisecond
     r = round(rate)
-    return float(r) if r > 0 and abs(rate - r) <= 1e-3 * r else rate
+    rate = float(r) if r > 0 and abs(rate - r) <= 1e-3 * r else rate
+    return plausible_rate(path, rate, f"the frame times (a step of {step:g} s) give a rate that")

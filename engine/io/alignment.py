@@ -117,7 +117,7 @@ def _locate_textgrid_fault(lines: list[str]) -> tuple[int, str] | None:
                     if (f := need(p + j, kv(chk), f"tier {t + 1} {'point' if point else 'interval'} {k + 1}: {what}")):
                         return f
                 p += 3 if point else 4
-        return None
+        return _trailing(body, p - 1 if n_tiers else 4, off)
     for i, what in ((0, "the TextGrid's xmin (seconds)"), (1, "its xmax (seconds)")):
         if (f := need(i, is_num, what)):
             return f
@@ -141,7 +141,16 @@ def _locate_textgrid_fault(lines: list[str]) -> tuple[int, str] | None:
                 if (f := need(p + j, chk, f"tier {t + 1} item {k + 1}: {what}")):
                     return f
             p += len(fields)
-    return None
+    return _trailing(body, p, off)
+
+
+def _trailing(body: list[str], p: int, off: int) -> tuple[int, str] | None:
+    """A fault when text follows the last item the counts declare (a count smaller than the items)."""
+    rest = [i for i in range(max(p, 0), len(body)) if body[i]]
+    if not rest:
+        return None
+    return (rest[0] + off, f"found {body[rest[0]][:60]!r} after the last item the counts declare; expected the end "
+            "of the file (a tier or interval count, 'size = N', smaller than what the file holds?)")
 
 
 def _parse_textgrid(path):
@@ -156,8 +165,12 @@ def _parse_textgrid(path):
         if fault is not None:
             raise ImportFormatError(path, f"not a valid TextGrid: {fault[1]}", line=fault[0]) from None
         kind = "binary" if lines is None else "text"
-        raise ImportFormatError(path, f"not a valid {kind} TextGrid ({type(exc).__name__}: {exc}); "
+        raise ImportFormatError(path, f"not a valid {kind} TextGrid ({exc or 'damaged'}); "
                                 "expected Praat's long, short or binary TextGrid format") from None
+    # the library reads as many items as the counts say and ignores the rest: check the counts
+    fault = _locate_textgrid_fault(lines) if lines is not None else None
+    if fault is not None:
+        raise ImportFormatError(path, f"not a valid TextGrid: {fault[1]}", line=fault[0])
     return grid
 
 

@@ -26,8 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.io._util import decode_text, read_bytes, uniform_rate
+from engine.io._util import decode_text, plausible_rate, read_bytes, uniform_rate
 from engine.io.errors import ImportFormatError
+from engine.io.repairs import reports_repairs
 from engine.io.sensor_matrix import corpus_from_matrix
 from engine.layouts import LayoutError, get_layout
 
@@ -43,6 +44,7 @@ def _layout(path, layout, default):
         raise ImportFormatError(path, str(exc)) from None
 
 
+@reports_repairs
 def read_pos(path, *, layout=None, rate: float | None = None, points=None, alignment=None, tier=None,
              fill_gaps: bool = True):
     """A Carstens AG500 / AG501 ``.pos`` file as a 3-D corpus.
@@ -75,13 +77,17 @@ def read_pos(path, *, layout=None, rate: float | None = None, points=None, align
                                     "bytes") from None
         if not 0 < start <= len(data):
             raise ImportFormatError(path, f"AG50x header claims {start} bytes but the file has {len(data)}")
-        header = data[:start].decode("latin-1")
-        m = re.search(r"NumberOfChannels\s*=\s*(\d+)", header)
-        if m:
-            n_ch = int(m.group(1))
-        m = re.search(r"SamplingFrequencyHz\s*=\s*([0-9.]+)", header)
-        if m:
-            hdr_rate = float(m.group(1))
+        fields = _pos_header(data[:start].decode("latin-1"))
+        if "NumberOfChannels" in fields:
+            value, line = fields["NumberOfChannels"]
+            try:
+                n_ch = int(value)
+            except ValueError:
+                raise ImportFormatError(path, f"NumberOfChannels is {value[:30]!r}; expected a whole number of "
+                                        "channels", line=line) from None
+        if "SamplingFrequencyHz" in fields:
+            value, line = fields["SamplingFrequencyHz"]
+            hdr_rate = plausible_rate(path, value, "SamplingFrequencyHz", line=line)
     if n_ch < 1:
         raise ImportFormatError(path, f"header gives {n_ch} channels; expected at least 1")
     try:
@@ -98,18 +104,30 @@ def read_pos(path, *, layout=None, rate: float | None = None, points=None, align
                                 "(give a layout with one sensor per channel)", frame=body // per_frame)
     M = np.frombuffer(data, "<f4", body // 4, start).reshape(-1, n_ch * 7)
     if hdr_rate is not None and rate is not None and abs(hdr_rate - float(rate)) > 1e-6 * hdr_rate:
-        raise ImportFormatError(path, f"the header says {hdr_rate:g} Hz but rate={float(rate):g} was given; to "
-                                "change the rate, resample (lipspace import --analysis-rate)")
+        raise ImportFormatError(path, f"the header says {hdr_rate:g} Hz but a rate of {float(rate):g} Hz was given "
+                                "(--rate); to change the rate, resample (lipspace import --resample)")
     r = hdr_rate if hdr_rate is not None else (rate if rate is not None else lay.rate)
     if r is None:
-        raise ImportFormatError(path, "no rate in the file or the layout; pass rate= (lipspace import --rate HZ)")
+        raise ImportFormatError(path, "no rate in the file or the layout; give one (lipspace import --rate HZ)")
+    r = plausible_rate(path, r, "the frame rate" if hdr_rate is None else "SamplingFrequencyHz")
     return corpus_from_matrix(path, M, lay, rate=float(r), points=points, fill_gaps=fill_gaps,
                               alignment=alignment, tier=tier)
+
+
+def _pos_header(text: str) -> dict:
+    """``{key: (value, line)}`` of the ``key=value`` lines of an AG50x header."""
+    out = {}
+    for i, raw in enumerate(text.split("\n"), start=1):
+        key, eq, value = raw.partition("=")
+        if eq and key.strip():
+            out[key.strip()] = (value.strip().strip("\x00"), i)
+    return out
 
 
 _SENSOR = re.compile(r"sensor\s*(\d+)\s*id", re.I)
 
 
+@reports_repairs
 def read_wave(path, *, layout=None, rate: float | None = None, points=None, alignment=None, tier=None,
               fill_gaps: bool = True):
     """An NDI Wave TSV export as a 3-D corpus.
@@ -163,7 +181,7 @@ def read_wave(path, *, layout=None, rate: float | None = None, points=None, alig
         if not raw.strip():
             continue
         tok = raw.split("\t")
-        if len(tok) < len(head):
+        if len(tok) < len(head) or any(t.strip() for t in tok[len(head):]):
             raise ImportFormatError(path, f"has {len(tok)} fields; the header has {len(head)}", line=ln + 1)
         try:
             times.append(float(tok[t_col]))
@@ -189,10 +207,11 @@ def read_wave(path, *, layout=None, rate: float | None = None, points=None, alig
         t = t / 1000.0
     native = uniform_rate(t, path)
     if rate is not None and abs(float(rate) - native) > 1e-3 * native:
-        raise ImportFormatError(path, f"the Time column says {native:g} Hz but rate={float(rate):g} was given")
+        raise ImportFormatError(path, f"the Time column says {native:g} Hz but a rate of {float(rate):g} Hz was "
+                                "given (--rate); leave the rate out, or resample (lipspace import --resample)")
     from dataclasses import replace
 
     lay3 = replace(lay, values=3, xyz=(0, 1, 2))
     return corpus_from_matrix(path, np.array(rows), lay3, rate=native, points=points, fill_gaps=fill_gaps,
-                              alignment=alignment, tier=tier, missing=np.array(bad, bool))
+                              alignment=alignment, tier=tier, missing=np.array(bad, bool), flagged="status not OK")
 

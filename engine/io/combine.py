@@ -42,8 +42,9 @@ def concat(corpora, *, name: str | None = None) -> Corpus:
             raise CorpusError(f"concat: item {k} is a {type(c).__name__}, not a Corpus")
         what = f"concat: corpus {k} ({c.name!r})"
         if abs(c.rate - a.rate) > 1e-9 * a.rate:
-            raise CorpusError(f"{what} is at {c.rate:g} Hz but corpus 0 ({a.name!r}) at {a.rate:g} Hz; resample "
-                              "one of them first (engine.io.resample)")
+            raise CorpusError(f"{what} is at {c.rate:g} Hz but corpus 0 ({a.name!r}) at {a.rate:g} Hz; "
+                              "corpora can be joined only at one frame rate: resample them to one first "
+                              "('lipspace import --resample HZ' resamples each input before joining)")
         if c.dims != a.dims or c.n_points != a.n_points:
             raise CorpusError(f"{what} has {c.n_points} points in {c.dims}-D but corpus 0 ({a.name!r}) has "
                               f"{a.n_points} in {a.dims}-D; expected the same points (same sensors / markers / mesh)")
@@ -74,6 +75,8 @@ def concat(corpora, *, name: str | None = None) -> Corpus:
     regs = list(dict.fromkeys(c.registration for c in corpora))
     registration = regs[0] if len(regs) == 1 else "; ".join(r or "none" for r in regs)
     history = list(dict.fromkeys(h for c in corpora for h in c.history))
+    axes = a.axes if all(c.axes == a.axes for c in corpora) else ""
+    units = a.units if all(c.units == a.units for c in corpora) else ""
     return Corpus(frames=np.concatenate([c.frames for c in corpora], axis=0), rate=a.rate, utterances=utts,
                   dims=a.dims, faces=faces, point_names=names, latent=latent, name=name, point_roles=roles,
-                  registration=registration, history=history)
+                  registration=registration, history=history, axes=axes, units=units)

@@ -6,6 +6,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from engine.io.errors import ImportFormatError
+from engine.io.repairs import reports_repairs
 
 __all__ = ["read_corpus", "detect_format", "FORMATS", "FORMAT_ALIASES"]
 
@@ -47,8 +48,8 @@ def detect_format(path) -> str:
         return "video" if _videos_in(p) else "mesh"
     suf = p.suffix.lower()
     if suf in _ALIGN_EXT:
-        raise ImportFormatError(p, "is a phone alignment, not lip data; read it with read_alignment or pass it as "
-                                "alignment= (--alignment) with the data file")
+        raise ImportFormatError(p, "is a phone alignment, not lip data; give it with the data file "
+                                "(lipspace import DATA --alignment FILE)")
     if suf in _EXT:
         return _EXT[suf]
     if not p.exists():
@@ -71,8 +72,8 @@ def detect_format(path) -> str:
         return "video"
     if len(head) >= 2 and head[1] == 0x50:
         return "c3d"
-    raise ImportFormatError(p, f"cannot tell the format from the name or the first bytes {head[:16]!r}; pass "
-                            f"format= one of {sorted(FORMATS)}")
+    raise ImportFormatError(p, f"cannot tell the format from the name or the first bytes {head[:16]!r}; give "
+                            f"it (lipspace import --format one of {', '.join(sorted(FORMATS))})")
 
 
 def _videos_in(folder) -> list:
@@ -92,6 +93,7 @@ def _reader(fmt):
     return getattr(importlib.import_module(mod), fn)
 
 
+@reports_repairs
 def _read_native(path, rate=None, alignment=None, tier=None):
     from engine._persist import NpzReadError, read_npz
     from engine.corpus import Corpus
@@ -105,7 +107,7 @@ def _read_native(path, rate=None, alignment=None, tier=None):
         arrays = read_npz(path)
     except NpzReadError as exc:
         raise ImportFormatError(path, f"cannot read as a Lipspace corpus (.npz): {exc.reason}") from None
-    c = Corpus.from_arrays(arrays, source=str(path))
+    c = Corpus.from_arrays(arrays, source=str(path), base=path.resolve().parent)
     check_rate(path, c.rate, rate)
     if alignment is None or alignment is False:
         return c

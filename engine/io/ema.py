@@ -28,6 +28,7 @@ from engine.io._util import (check_rate, decode_text, one_utterance_corpus, pars
                              sidecar_audio, uniform_rate)
 from engine.io.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
+from engine.io.repairs import reports_repairs
 
 __all__ = ["read_ema", "read_est_track", "write_est_track", "MOCHA_CHANNELS", "MOCHA_SENSORS", "LIP_SENSORS"]
 
@@ -239,16 +240,23 @@ def _sensor_columns(names, path):
         if not m:
             continue
         s = m.group("s").strip("_- .").upper()
-        found.setdefault(s, {})[m.group("a").lower()] = k
+        axes = found.setdefault(s, {})
+        if m.group("a").lower() in axes:
+            j = axes[m.group("a").lower()]
+            raise ImportFormatError(path, f"channels {j} ({names[j]!r}) and {k} ({nm!r}) are both sensor {s}'s "
+                                    f"{m.group('a').lower()}; expected each channel name once")
+        axes[m.group("a").lower()] = k
     pairs = {s: (d["x"], d["y"]) for s, d in found.items() if "x" in d and "y" in d}
+    half = {s: d for s, d in found.items() if s not in pairs}
     if pairs:
-        return pairs
-    if len(names) == len(MOCHA_CHANNELS):  # unnamed channels in MOCHA order
+        return pairs, half
+    if len(names) == len(MOCHA_CHANNELS) and not found:  # unnamed channels in MOCHA order
         return _sensor_columns(list(MOCHA_CHANNELS), path)
     raise ImportFormatError(path, f"cannot pair the channels into sensors: names {names[:6]}...; expected names "
                             "ending in x / y (e.g. 'ul_x', 'ul_y') or MOCHA's 20 channels")
 
 
+@reports_repairs
 def read_ema(path, *, sensors=LIP_SENSORS, scale: float = 0.01, rate: float | None = None, alignment=None,
              tier: str | None = None, fill_gaps: bool = True):
     """A MOCHA-TIMIT ``.ema`` file (EST Track binary/ASCII, or ASCII table) as a 2-D corpus.
@@ -283,14 +291,19 @@ def read_ema(path, *, sensors=LIP_SENSORS, scale: float = 0.01, rate: float | No
     else:
         times, values, valid, names = _read_mocha_ascii(path)
     native = check_rate(path, uniform_rate(times, path), rate)
-    cols = _sensor_columns(names, path)
+    cols, half = _sensor_columns(names, path)
     want = list(cols) if isinstance(sensors, str) and sensors == "all" else [str(s).upper() for s in sensors]
+    for s in (list(half) if isinstance(sensors, str) and sensors == "all" else [s for s in want if s in half]):
+        (axis, k), = half[s].items()
+        raise ImportFormatError(path, f"sensor {s} has an {axis} channel ({names[k]!r}, channel {k}) but no "
+                                f"{'y' if axis == 'x' else 'x'} channel; expected both (a damaged header?)")
     missing = [s for s in want if s not in cols]
     if missing or not want:
         raise ImportFormatError(path, f"no sensor(s) {missing} in the file; it has {sorted(cols)}")
     idx = [c for s in want for c in cols[s]]
     col_names = [f"{s}_{a}" for s in want for a in "xy"]
-    frames = _fill_gaps(values[:, idx] * scale, ~valid, path=path, names=col_names, fill=fill_gaps)
+    frames = _fill_gaps(values[:, idx] * scale, ~valid, path=path, names=col_names, fill=fill_gaps,
+                        flagged="break flag 0")
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     return one_utterance_corpus(path, frames, native, dims=2, phones=phones, point_names=want,
                                 audio=sidecar_audio(path))

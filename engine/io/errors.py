@@ -22,7 +22,8 @@ class ImportFormatError(ValueError):
     line : int, optional
         1-based line number in a text file.
     frame : int, optional
-        0-based frame index in a track or sequence.
+        0-based frame index in a track or sequence (a table that numbers its frames: its
+        own number).
 
     Attributes
     ----------

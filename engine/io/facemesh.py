@@ -17,9 +17,15 @@ Head pose is fitted to them (:mod:`engine.headpose`).
 
 Only :class:`FaceTracker` needs ``mediapipe`` (the ``[video]`` extra), imported when
 one is made; :func:`require_mediapipe` raises the one-line install hint when it is missing.
+MediaPipe's C++ start-up messages (TensorFlow Lite's delegate line, absl's log lines),
+written straight to file descriptor 2 while a tracker starts, are not for the user: that
+descriptor goes to the null device from the tracker's creation to the end of its first
+frame (``LIPSPACE_NATIVE_LOGS=1`` keeps them, for debugging).
 """
 from __future__ import annotations
 
+import os
+import sys
 import warnings
 
 import numpy as np
@@ -131,6 +137,39 @@ def to_metric(lm, width: int, height: int) -> np.ndarray:
     return out
 
 
+class _QuietNativeStderr:
+    """File descriptor 2 sent to the null device until :meth:`stop` (C++ libraries' logs written to it)."""
+
+    def __init__(self):
+        self._saved = None
+        if os.environ.get("LIPSPACE_NATIVE_LOGS"):
+            return
+        try:
+            sys.stderr.flush()
+            saved = os.dup(2)
+        except (OSError, ValueError, AttributeError):
+            return  # no descriptor 2 to silence
+        try:
+            null = os.open(os.devnull, os.O_WRONLY)
+            try:
+                os.dup2(null, 2)
+            finally:
+                os.close(null)
+        except OSError:
+            os.close(saved)
+            return
+        self._saved = saved
+
+    def stop(self) -> None:
+        if self._saved is None:
+            return
+        saved, self._saved = self._saved, None
+        try:
+            os.dup2(saved, 2)
+        finally:
+            os.close(saved)
+
+
 class FaceTracker:
     """FaceMesh in video mode (``static_image_mode=False``, refined landmarks, one face).
 
@@ -154,15 +193,24 @@ class FaceTracker:
         warnings.filterwarnings("ignore", message=r"SymbolDatabase\.GetPrototype\(\) is deprecated",
                                 category=UserWarning)
         self.points = np.asarray(points, dtype=np.int64)
-        self._mesh = face_mesh.FaceMesh(static_image_mode=False, max_num_faces=1, refine_landmarks=True,
-                                        min_detection_confidence=min_detection_confidence,
-                                        min_tracking_confidence=min_tracking_confidence)
+        self._mesh = None
+        self._quiet = _QuietNativeStderr()  # until the graph has started: its first frame
+        try:
+            self._mesh = face_mesh.FaceMesh(static_image_mode=False, max_num_faces=1, refine_landmarks=True,
+                                            min_detection_confidence=min_detection_confidence,
+                                            min_tracking_confidence=min_tracking_confidence)
+        except BaseException:
+            self._quiet.stop()
+            raise
 
     def track(self, rgb) -> np.ndarray | None:
         rgb = np.ascontiguousarray(rgb, dtype=np.uint8)
         if rgb.ndim != 3 or rgb.shape[2] != 3:
             raise ValueError(f"frame of shape {rgb.shape}; expected (height, width, 3) RGB")
-        res = self._mesh.process(rgb)
+        try:
+            res = self._mesh.process(rgb)
+        finally:
+            self._quiet.stop()
         if not res.multi_face_landmarks:
             return None
         lms = res.multi_face_landmarks[0].landmark
@@ -170,6 +218,7 @@ class FaceTracker:
         return to_metric(lm, rgb.shape[1], rgb.shape[0]).astype(np.float32)
 
     def close(self) -> None:
+        self._quiet.stop()
         if self._mesh is not None:
             self._mesh.close()
             self._mesh = None

@@ -20,15 +20,16 @@ from __future__ import annotations
 
 import csv
 import re
-import warnings
 from pathlib import Path
 
 import numpy as np
 
-from engine.io._util import decode_text, one_utterance_corpus, read_bytes, sidecar_audio, uniform_rate
+from engine.io._util import (decode_text, one_utterance_corpus, plausible_rate, read_bytes, sidecar_audio,
+                             uniform_rate)
 from engine.io._util import fill_gaps as _fill_gaps
 from engine.io.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
+from engine.io.repairs import reports_repairs
 
 __all__ = ["read_csv_landmarks", "IBUG68_LIPS"]
 
@@ -91,11 +92,15 @@ def _wide_points(header, space, path):
     for j, h in enumerate(header):
         m = _OPENFACE.match(h)
         if m:
-            of.setdefault(m.group(1), {})[int(m.group(2))] = j
+            axis = of.setdefault(m.group(1), {})
+            if int(m.group(2)) in axis:
+                raise _twice(path, header, axis[int(m.group(2))], j)
+            axis[int(m.group(2))] = j
     if "x" in of and "y" in of or {"X", "Y", "Z"} <= set(of):
         three = {"X", "Y", "Z"} <= set(of) and set(of["X"]) == set(of["Y"]) == set(of["Z"])
         if space == "3d" and not three:
-            raise ImportFormatError(path, "space='3d' but the header has no complete X_i, Y_i, Z_i columns")
+            raise ImportFormatError(path, "3-D landmarks were asked for but the header has no complete X_i, Y_i, "
+                                    "Z_i columns")
         use3 = three and space != "2d"
         if not use3 and not ("x" in of and "y" in of and set(of["x"]) == set(of["y"])):
             raise ImportFormatError(path, "the x_i and y_i columns do not match; expected x_0..x_N and y_0..y_N")
@@ -110,7 +115,17 @@ def _wide_points(header, space, path):
             nm = m.group(1)
             if nm not in named:
                 order.append(nm)
-            named.setdefault(nm, {})[m.group(2).lower()] = j
+            axes = named.setdefault(nm, {})
+            if m.group(2).lower() in axes:
+                raise _twice(path, header, axes[m.group(2).lower()], j)
+            axes[m.group(2).lower()] = j
+    for n in order:  # a point with one axis but not the other would be dropped without a word
+        have = named[n]
+        lack = [a for a in "xy" if a not in have]
+        if lack and (len(lack) == 1 or "z" in have):
+            got = ", ".join(repr(header[k]) for k in have.values())
+            raise ImportFormatError(path, f"point {n!r} has column(s) {got} but no {n}_{lack[0]} column; expected "
+                                    f"{n}_x and {n}_y (and {n}_z for 3-D) for every point")
     pts = [n for n in order if "x" in named[n] and "y" in named[n]]
     if not pts:
         raise ImportFormatError(path, f"header {header[:8]}...: no landmark columns; expected OpenFace x_0/y_0 "
@@ -125,6 +140,13 @@ def _wide_points(header, space, path):
     return [(n, [named[n][a] for a in "xyz"[:dims]]) for n in pts], dims, False
 
 
+def _twice(path, header, first: int, second: int) -> ImportFormatError:
+    """The error for two header columns naming the same coordinate."""
+    return ImportFormatError(path, f"columns {first + 1} ({header[first]!r}) and {second + 1} ({header[second]!r}) "
+                             "name the same coordinate; expected each coordinate once")
+
+
+@reports_repairs
 def read_csv_landmarks(path, *, rate: float | None = None, points=None, space: str = "auto", face=None,
                        delimiter: str | None = None, alignment=None, tier: str | None = None,
                        fill_gaps: bool = True):
@@ -156,6 +178,11 @@ def read_csv_landmarks(path, *, rate: float | None = None, points=None, space: s
     if space not in ("auto", "2d", "3d"):
         raise ValueError(f"space={space!r}; expected 'auto', '2d' or '3d'")
     hline, header, body = _rows(path, delimiter)
+    seen = {}
+    for j, h in enumerate(header):
+        if h and h in seen:
+            raise _twice(path, header, seen[h], j)
+        seen.setdefault(h, j)
     ncol = len(header)
     for line, row in body:
         if len(row) != ncol:
@@ -171,14 +198,20 @@ def read_csv_landmarks(path, *, rate: float | None = None, points=None, space: s
         ids = _numbers(body, fid, path, "face_id")
         want = face if face is not None else np.nanmin(ids) if np.isfinite(ids).any() else None
         if want is not None:
+            others = sorted({float(i) for i in ids if i != want and np.isfinite(i)})
             body = [b for b, i in zip(body, ids) if i == want]
             if len(body) < 2:
-                raise ImportFormatError(path, f"face_id {want} has {len(body)} rows; expected at least 2")
+                raise ImportFormatError(path, f"face_id {want:g} has {len(body)} rows; expected at least 2")
+            if others:  # several faces were tracked: one is read, and the others are said to be left out
+                from engine.io.repairs import report_repair
+
+                report_repair(path, f"{len(ids) - len(body)} rows of other faces (face_id "
+                              f"{', '.join(f'{i:g}' for i in others[:5])}) left out; face_id {want:g} is read")
     pts, dims, openface = _wide_points(header, space, path)
     if points is not None:
         if isinstance(points, str) and points == "lips":
             if not openface:
-                raise ImportFormatError(path, "points='lips' needs OpenFace's 68 numbered landmarks")
+                raise ImportFormatError(path, "--points lips needs OpenFace's 68 numbered landmarks")
             points = IBUG68_LIPS
         names = [p for p, _ in pts]
         sel = []
@@ -190,30 +223,31 @@ def read_csv_landmarks(path, *, rate: float | None = None, points=None, space: s
         pts = [pts[k] for k in sel]
     cols = [c for _, cc in pts for c in cc]
     X = np.column_stack([_numbers(body, c, path, f"column {header[c]!r}") for c in cols])
-    missing = ~np.isfinite(X)
+    flags = np.zeros(X.shape, bool)
     si = _find(header, ("success",))
     if si is not None:
-        missing |= (_numbers(body, si, path, "success") == 0)[:, None]
+        flags |= (_numbers(body, si, path, "success") == 0)[:, None]
     if ti is not None:
         native = _column_rate(uniform_rate(_numbers(body, ti, path, f"time column {header[ti]!r}"), path),
                               rate, header[ti], path)
     elif rate is None:
-        raise ImportFormatError(path, f"has no time column ({', '.join(_TIME)}); pass the frame rate "
-                                "(rate=<Hz>)")
+        raise ImportFormatError(path, f"has no time column ({', '.join(_TIME)}); give the frame rate "
+                                "(lipspace import --rate HZ)")
     else:
-        native = float(rate)
+        native = plausible_rate(path, rate, "the frame rate given (--rate)")
     names = [("L" + n if openface else n) for n, _ in pts]
-    frames = _fill_gaps(X, missing, path=path, names=[header[c] for c in cols], fill=fill_gaps)
+    frames = _fill_gaps(X, flags, path=path, names=[header[c] for c in cols], fill=fill_gaps, flagged="success 0",
+                        nan="empty or NaN")
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     return one_utterance_corpus(path, frames, native, dims=dims, phones=phones, point_names=names,
-                                audio=sidecar_audio(path))
+                                audio=sidecar_audio(path), units="mm" if openface and dims == 3 else "")
 
 
 def _column_rate(native, rate, column, path) -> float:
     """The rate the time column gives; an explicit ``rate`` that disagrees is refused."""
     if rate is not None and abs(float(rate) - native) > 1e-3 * native:
-        raise ImportFormatError(path, f"the time column {column!r} gives {native:g} Hz but rate={float(rate):g} "
-                                "was given; leave the rate out to use the column's times, or resample "
+        raise ImportFormatError(path, f"the time column {column!r} gives {native:g} Hz but a rate of "
+                                f"{float(rate):g} Hz was given (--rate); leave the rate out to use the column's times, or resample "
                                 "('lipspace import --resample') to change it")
     return float(native)
 
@@ -225,11 +259,10 @@ MAX_MISSING_FRAMES = 0.5
 def _frame_numbers(frame_keys, frame_of, keys, body, column, path):
     """Frame numbers as consecutive rows: integers, every missing number a gap to fill.
 
-    A warning names the missing numbers; more than :data:`MAX_MISSING_FRAMES` of the
-    span missing (e.g. a typo making frame 1000000) is refused before allocating.
+    Their samples are filled and reported as any dropout (:func:`engine.io._util.fill_gaps`);
+    more than :data:`MAX_MISSING_FRAMES` of the span missing (e.g. a typo making frame
+    1000000) is refused before allocating.
     """
-    from engine.io.errors import ImportDataWarning
-
     frac = np.flatnonzero(frame_keys != np.round(frame_keys))
     if frac.size:
         r = int(np.flatnonzero(keys == frame_keys[frac[0]])[0])
@@ -250,9 +283,6 @@ def _frame_numbers(frame_keys, frame_of, keys, body, column, path):
         raise ImportFormatError(path, f"column {column!r} numbers frames {frame_keys[0]:g} to {frame_keys[-1]:g} "
                                 f"but {n_missing} of those {span} frames have no rows ({shown}); expected "
                                 "consecutive frame numbers")
-    warnings.warn(ImportDataWarning(
-        f"{path}: frames {shown} ({n_missing} of {span}) have no rows in column {column!r}; they are "
-        "treated as dropouts and interpolated (--no-fill, fill_gaps=False, refuses them)"), stacklevel=3)
     return np.arange(frame_keys[0], frame_keys[-1] + 1, dtype=np.float64), \
         (frame_keys[frame_of] - frame_keys[0]).astype(np.intp)
 
@@ -298,11 +328,13 @@ def _read_long(path, header, body, ti, fi, pi, rate, points, alignment, tier, fi
         first[frame_of[::-1]] = t[::-1]  # each frame's time from its first row
         native = _column_rate(uniform_rate(first, path), rate, header[ti], path)
     elif rate is None:
-        raise ImportFormatError(path, "has frame numbers but no time column; pass the frame rate (rate=<Hz>)")
+        raise ImportFormatError(path, "has frame numbers but no time column; give the frame rate (lipspace import "
+                                "--rate HZ)")
     else:
-        native = float(rate)
-    frames = _fill_gaps(X, ~np.isfinite(X), path=path,
-                        names=[f"{n}_{a}" for n in point_order for a in "xyz"[:dims]], fill=fill_gaps)
+        native = plausible_rate(path, rate, "the frame rate given (--rate)")
+    frames = _fill_gaps(X, np.repeat(~seen, dims, axis=1), path=path,
+                        names=[f"{n}_{a}" for n in point_order for a in "xyz"[:dims]], fill=fill_gaps,
+                        flagged="without a row in the table", nan="empty or NaN", first_frame=int(frame_keys[0]))
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     return one_utterance_corpus(path, frames, native, dims=dims, phones=phones, point_names=point_order,
-                                audio=sidecar_audio(path))
+                                audio=sidecar_audio(path), units="")

@@ -7,10 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.io._util import check_rate, one_utterance_corpus, read_bytes, sidecar_audio
+from engine.io._util import check_rate, one_utterance_corpus, plausible_rate, read_bytes, sidecar_audio
 from engine.io._util import fill_gaps as _fill_gaps
 from engine.io.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
+from engine.io.repairs import report_repair, reports_repairs
 
 __all__ = ["read_c3d"]
 
@@ -35,6 +36,7 @@ def _select(labels, markers, path):
     return idx
 
 
+@reports_repairs
 def read_c3d(path, *, markers=None, rate: float | None = None, alignment=None, tier: str | None = None,
              fill_gaps: bool = True, to_mm: bool = True):
     """A C3D marker file as a 3-D corpus.
@@ -81,8 +83,7 @@ def read_c3d(path, *, markers=None, rate: float | None = None, alignment=None, t
         except ImportFormatError:
             raise
         except Exception as exc:
-            raise ImportFormatError(path, f"cannot read the C3D header or parameters ({type(exc).__name__}: "
-                                    f"{exc})") from None
+            raise ImportFormatError(path, f"cannot read the C3D header or parameters ({exc or 'damaged'})") from None
         if n_points < 1:
             raise ImportFormatError(path, "has no 3-D points (POINT:USED is 0); expected marker trajectories")
         n_frames = last - first + 1
@@ -93,8 +94,7 @@ def read_c3d(path, *, markers=None, rate: float | None = None, alignment=None, t
         if whole < n_frames:
             raise ImportFormatError(path, f"the data holds {whole} whole frames of {frame_bytes} bytes; the header "
                                     f"promises frames {first}..{last} ({n_frames}). Truncated file?", frame=whole)
-        if not np.isfinite(point_rate) or point_rate <= 0:
-            raise ImportFormatError(path, f"POINT:RATE is {point_rate}; expected a positive rate in Hz")
+        point_rate = plausible_rate(path, point_rate, "POINT:RATE")
         labels = (labels + [f"M{k}" for k in range(len(labels), n_points)])[:n_points]
         xyz = np.empty((n_frames, n_points, 3), np.float64)
         bad = np.zeros((n_frames, n_points), bool)
@@ -107,7 +107,7 @@ def read_c3d(path, *, markers=None, rate: float | None = None, alignment=None, t
                 bad[k] = pts[:, 3] < 0
                 got = k + 1
         except Exception as exc:
-            raise ImportFormatError(path, f"cannot decode the frame data ({type(exc).__name__}: {exc})",
+            raise ImportFormatError(path, f"cannot decode the frame data ({exc or 'damaged'})",
                                     frame=got) from None
     eof = [w for w in caught if "end of file" in str(w.message).lower()]
     if got < n_frames or eof:
@@ -116,12 +116,17 @@ def read_c3d(path, *, markers=None, rate: float | None = None, alignment=None, t
     idx = _select(labels, markers, path)
     if len({labels[i] for i in idx}) < len(idx):
         names = [f"{labels[i]}#{i}" for i in idx]
+        clash = sorted({labels[i] for i in idx if [labels[j] for j in idx].count(labels[i]) > 1})
+        report_repair(path, f"markers share the label(s) {', '.join(repr(c) for c in clash)} (POINT:LABELS); "
+                      "renamed <label>#<marker index> to tell them apart")
     else:
         names = [labels[i] for i in idx]
     factor = _UNITS.get(units, 1.0) if to_mm else 1.0
     X = xyz[:, idx].reshape(n_frames, -1) * factor
     miss = np.repeat(bad[:, idx], 3, axis=1)
-    frames = _fill_gaps(X, miss, path=path, names=[f"{n}_{a}" for n in names for a in "xyz"], fill=fill_gaps)
+    frames = _fill_gaps(X, miss, path=path, names=[f"{n}_{a}" for n in names for a in "xyz"], fill=fill_gaps,
+                        flagged="marked invalid (negative residual)")
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     return one_utterance_corpus(path, frames, native, dims=3, phones=phones, point_names=names,
-                                audio=sidecar_audio(path))
+                                audio=sidecar_audio(path), units="mm" if (to_mm and units in _UNITS) or units == "mm"
+                                else "")

@@ -8,6 +8,12 @@ and cells, compressed or not. Sparse arrays and objects are rejected.
 
 Values: numeric / logical arrays as ndarrays of the stored shape; char arrays as str
 (one row) or a list of str; structs as :class:`MatStruct`; cells as object ndarrays.
+
+A compressed variable whose zlib stream lacks its end (the end-of-stream marker and the
+Adler-32 checksum; a writer that stopped before closing the stream, or a file cut short
+inside them) is read when every byte of the variable's data is still there: the reader
+says so in ``notes`` (what was recovered, what could not be checked). When data bytes are
+missing it is an error saying how many of the variable's bytes were recovered.
 """
 from __future__ import annotations
 
@@ -54,12 +60,17 @@ class _Reader:
     def __init__(self, path, endian, budget=MAX_INFLATE):
         self.path, self.e = path, endian
         self.budget = budget  # bytes all compressed variables may still expand to (zip bombs)
+        self.notes = []  # damage found and what was recovered despite it
 
     def fail(self, offset, what):
         raise ImportFormatError(self.path, f"damaged MAT-file at byte {offset}: {what}")
 
-    def tag(self, buf, pos, base):
-        """(type, nbytes, data start, next element position)."""
+    def tag(self, buf, pos, base, *, cut_ok=False):
+        """(type, nbytes, data start, next element position).
+
+        ``cut_ok``: a compressed element claiming more bytes than remain is returned with the
+        bytes present (the caller says what was lost), instead of an error.
+        """
         if pos + 8 > len(buf):
             self.fail(base + pos, f"a data element tag needs 8 bytes, {len(buf) - pos} remain")
         first = int(np.frombuffer(buf, self.e + "u4", 1, pos)[0])
@@ -70,6 +81,8 @@ class _Reader:
             return mtype, n, pos + 4, pos + 8
         n = int(np.frombuffer(buf, self.e + "u4", 1, pos + 4)[0])
         start = pos + 8
+        if start + n > len(buf) and cut_ok and first == MI_COMPRESSED:
+            return first, len(buf) - start, start, len(buf)
         if start + n > len(buf):
             self.fail(base + pos, f"element of type {first} claims {n} bytes, {len(buf) - start} remain")
         nxt = start + n if first == MI_COMPRESSED else start + ((n + 7) // 8) * 8
@@ -84,12 +97,54 @@ class _Reader:
             self.fail(base + pos, f"{what}: {n} bytes is not a whole number of {dt.itemsize}-byte values")
         return np.frombuffer(buf, dt, n // dt.itemsize, start), mtype, nxt
 
+    def _unfinished(self, inner, offset, depth, cut):
+        """(name, value) of a compressed variable whose zlib stream has no end; a note says what was recovered.
+
+        ``cut``: bytes of the element the file lacks (it ends inside it), 0 when the element is whole.
+        """
+        where = (f"the file ends {cut:,} bytes before the end of the compressed element at byte {offset}" if cut
+                 else f"the compressed element at byte {offset} stops before its end")
+        need = self._inner_size(inner)
+        name = self._inner_name(inner)
+        what = f"variable {name!r}" if name else "a variable"
+        try:
+            name, value, _ = self.element(inner, 0, 0, depth + 1)
+        except ImportFormatError:
+            lost = f"{need - len(inner):,} of its {need:,} bytes are missing" if need else "its data is incomplete"
+            self.fail(offset, f"{where}: its zlib stream lacks its end and {what} cannot be read: "
+                      f"{len(inner):,} bytes were recovered, {lost}")
+        extra = f", {len(inner) - need:,} bytes after it ignored" if need and len(inner) > need else ""
+        self.notes.append(f"damaged MAT-file: {where}: its zlib stream lacks its end-of-stream marker and Adler-32 "
+                          f"checksum; all {min(len(inner), need or len(inner)):,} bytes of {what} were recovered and "
+                          f"read{extra}, but cannot be verified against the checksum")
+        return name, value
+
+    def _inner_size(self, inner) -> int:
+        """Bytes the decompressed element's own tag says it takes (0 when not even its tag survived)."""
+        if len(inner) < 8:
+            return 0
+        return 8 + int(np.frombuffer(inner, self.e + "u4", 1, 4)[0])
+
+    def _inner_name(self, inner) -> str:
+        """The array name of a decompressed miMATRIX element, or "" when it cannot be read."""
+        if len(inner) < 8 or int(np.frombuffer(inner, self.e + "u4", 1, 0)[0]) != MI_MATRIX:
+            return ""
+        body = inner[8:8 + int(np.frombuffer(inner, self.e + "u4", 1, 4)[0])]  # what survived of it
+        try:
+            _, _, p = self.numbers(body, 0, 0, "array flags")
+            _, _, p = self.numbers(body, p, 0, "dimensions")
+            raw, _, _ = self.numbers(body, p, 0, "array name")
+            return raw.astype(np.uint8).tobytes().decode("latin-1")
+        except ImportFormatError:
+            return ""
+
     def element(self, buf, pos, base, depth):
         """(name, value, next position) of the miMATRIX (or miCOMPRESSED) element at ``pos``."""
         if depth > MAX_DEPTH:
             self.fail(base + pos, f"arrays nested deeper than {MAX_DEPTH}")
-        mtype, n, start, nxt = self.tag(buf, pos, base)
+        mtype, n, start, nxt = self.tag(buf, pos, base, cut_ok=depth == 0)
         if mtype == MI_COMPRESSED:
+            claimed = int(np.frombuffer(buf, self.e + "u4", 1, pos + 4)[0])
             d = zlib.decompressobj()
             limit = max(1, min(MAX_INFLATE, self.budget))
             try:
@@ -100,8 +155,10 @@ class _Reader:
                 self.fail(base + pos, f"compressed data expands beyond {limit} bytes (at most {MAX_EXPANSION}x "
                           "the file size in all, 2 GiB per variable); refused as a decompression bomb")
             self.budget -= len(inner)
-            name, value, _ = self.element(inner, 0, 0, depth + 1)
-            return name, value, nxt
+            if d.eof:
+                name, value, _ = self.element(inner, 0, 0, depth + 1)
+                return name, value, nxt
+            return self._unfinished(inner, base + pos, depth, claimed - n) + (nxt,)
         if mtype != MI_MATRIX:
             self.fail(base + pos, f"expected a matrix (type 14), found data type {mtype}")
         if n == 0:
@@ -178,11 +235,20 @@ class _Reader:
         self.fail(here, f"{name!r} has MATLAB class {cls} (sparse, function handle, ...); not supported")
 
 
-def read_mat(path) -> dict:
+def read_mat(path, *, notes: list | None = None) -> dict:
     """The variables of a level-5 MAT-file, ``{name: value}``.
 
+    Parameters
+    ----------
+    path : str or Path
+    notes : list, optional
+        Receives one sentence per damage the file survived (a compressed variable whose
+        zlib stream lacks its end, every data byte present): what was recovered and what
+        could not be checked. Callers put them in the corpus history.
+
     Raises :class:`ImportFormatError` (naming the byte offset) for anything damaged,
-    truncated or of an unsupported kind (v4, v7.3/HDF5, sparse, objects).
+    truncated or of an unsupported kind (v4, v7.3/HDF5, sparse, objects); a compressed
+    variable missing data bytes says how many were recovered.
     """
     path = Path(path)
     data = read_bytes(path)
@@ -199,4 +265,6 @@ def read_mat(path) -> dict:
             break  # padding
         name, value, pos = r.element(data, pos, 0, 0)
         out[name] = value
+    if notes is not None:
+        notes.extend(r.notes)
     return out

@@ -15,8 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.io._util import decode_text, read_bytes
+from engine.io._util import decode_text, plausible_rate, read_bytes
 from engine.io.errors import ImportFormatError
+from engine.io.repairs import reports_repairs
 from engine.io.sensor_matrix import corpus_from_matrix
 from engine.layouts import Layout, LayoutError, get_layout
 
@@ -27,20 +28,19 @@ _RATE_NAMES = ("fs", "srate", "samplerate", "sampling_rate", "rate", "sr")
 
 
 def _rate_of(path, layout: Layout, rate, found=None) -> float:
-    r = rate if rate is not None else (found if found is not None else layout.rate)
+    r = rate if rate is not None else (found[1] if found is not None else layout.rate)
     if r is None:
         raise ImportFormatError(path, f"a plain matrix carries no timing and layout {layout.name!r} gives no rate; "
-                                "pass rate= (lipspace import --rate HZ)")
-    r = float(r)
-    if not (np.isfinite(r) and r > 0):
-        raise ImportFormatError(path, f"rate {r!r}; expected a positive number of Hz")
-    return r
+                                "give one (lipspace import --rate HZ)")
+    field = ("the frame rate given (--rate)" if rate is not None else
+             f"variable {found[0]!r}" if found is not None else f"the rate of layout {layout.name!r}")
+    return plausible_rate(path, r, field)
 
 
-def _from_mat(path, variable):
+def _from_mat(path, variable, notes=None):
     from engine.io.matfile import read_mat
 
-    m = read_mat(path)
+    m = read_mat(path, notes=notes)
     names = [k for k in m if not k.startswith("__")]
     numeric = {k: v for k, v in m.items() if isinstance(v, np.ndarray) and v.ndim == 2 and v.size > 1
                and np.issubdtype(v.dtype, np.number) and min(v.shape) > 1}
@@ -48,7 +48,7 @@ def _from_mat(path, variable):
     for k, v in m.items():
         if k.lower() in _RATE_NAMES and isinstance(v, np.ndarray) and v.size == 1 and \
                 np.issubdtype(v.dtype, np.number):
-            found = float(np.real(v.ravel()[0]))
+            found = (k, float(np.real(v.ravel()[0])))
     if variable is not None:
         if variable not in m:
             raise ImportFormatError(path, f"has no variable {variable!r}; it has {names[:12]}")
@@ -58,7 +58,7 @@ def _from_mat(path, variable):
     if len(numeric) != 1:
         desc = ", ".join(f"{k} {v.shape}" for k, v in numeric.items()) or "none"
         raise ImportFormatError(path, f"holds {len(numeric)} 2-D numeric matrices ({desc}); expected one, or name "
-                                "it with variable= (lipspace import --variable NAME)")
+                                "it (lipspace import --variable NAME)")
     return next(iter(numeric.values())), found
 
 
@@ -106,6 +106,7 @@ def _from_text(path):
     return np.array(rows, dtype=np.float64)
 
 
+@reports_repairs
 def read_matrix(path, *, layout, rate: float | None = None, variable: str | None = None, points=None,
                 alignment=None, tier: str | None = None, fill_gaps: bool = True):
     """A plain numeric matrix file (``.mat`` variable, ``.npy``, CSV/TSV without names) through a layout.
@@ -147,8 +148,9 @@ def read_matrix(path, *, layout, rate: float | None = None, variable: str | None
         raise ImportFormatError(path, f"a .pos file is an AG500/AG501 binary; layout {lay.name!r} describes a plain "
                                 "matrix: use layout ag500 or ag501, or a layout file with 'base: ag501'")
     found = None
+    damage = []
     if suf == ".mat":
-        M, found = _from_mat(path, variable)
+        M, found = _from_mat(path, variable, damage)
     elif suf == ".npy":
         read_bytes(path)  # FileNotFoundError / directory errors
         try:
@@ -158,7 +160,9 @@ def read_matrix(path, *, layout, rate: float | None = None, variable: str | None
     else:
         M = _from_text(path)
     if variable is not None and suf != ".mat":
-        raise ImportFormatError(path, "variable= applies to .mat files only")
+        raise ImportFormatError(path, "--variable applies to .mat files only")
     r = _rate_of(path, lay, rate, found)
-    return corpus_from_matrix(path, M, lay, rate=r, points=points, fill_gaps=fill_gaps, alignment=alignment,
-                              tier=tier)
+    c = corpus_from_matrix(path, M, lay, rate=r, points=points, fill_gaps=fill_gaps, alignment=alignment,
+                           tier=tier)
+    c.history.extend(f"{path.name}: {d}" for d in damage)  # what a damaged file still gave
+    return c

@@ -8,9 +8,10 @@ from pathlib import Path
 import numpy as np
 
 from engine.io._util import fill_gaps as _fill_gaps
-from engine.io._util import natural_key, one_utterance_corpus, sidecar_audio
+from engine.io._util import natural_key, one_utterance_corpus, plausible_rate, sidecar_audio
 from engine.io.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
+from engine.io.repairs import reports_repairs
 from engine.io.meshfile import read_mesh
 
 __all__ = ["read_mesh_sequence", "read_vertex_array", "mesh_sequence_files"]
@@ -18,14 +19,15 @@ __all__ = ["read_mesh_sequence", "read_vertex_array", "mesh_sequence_files"]
 MESH_SUFFIXES = (".obj", ".ply")
 
 
+def _vertex_column(j: int) -> str:
+    return f"vertex {j // 3} {'xyz'[j % 3]}"
+
+
 def _need_rate(where, rate):
     if rate is None:
-        raise ImportFormatError(where, "mesh frames carry no timing; pass the frame rate (rate=<Hz>, "
-                                "or --rate on the command line)")
-    rate = float(rate)
-    if not np.isfinite(rate) or rate <= 0:
-        raise ImportFormatError(where, f"rate={rate}; expected a positive frame rate in Hz")
-    return rate
+        raise ImportFormatError(where, "mesh frames carry no timing; give the frame rate (lipspace import "
+                                "--rate HZ)")
+    return plausible_rate(where, rate, "the frame rate given (--rate)")
 
 
 def mesh_sequence_files(source) -> tuple[list[Path], Path]:
@@ -60,6 +62,7 @@ def mesh_sequence_files(source) -> tuple[list[Path], Path]:
     return files, where
 
 
+@reports_repairs
 def read_mesh_sequence(source, *, rate: float | None = None, alignment=None, tier: str | None = None,
                        fill_gaps: bool = True, name: str | None = None):
     """One utterance from one mesh file per frame.
@@ -99,9 +102,9 @@ def read_mesh_sequence(source, *, rate: float | None = None, alignment=None, tie
                                     "topology for the whole sequence", frame=k)
         frames[k] = V.ravel()
     uid = name or where.name or "mesh"
-    frames = _fill_gaps(frames, ~np.isfinite(frames), path=where, fill=fill_gaps)
+    frames = _fill_gaps(frames, np.zeros(len(frames), bool), path=where, fill=fill_gaps, names=_vertex_column)
     phones, _ = resolve_alignment(where, alignment, tier=tier)
-    return one_utterance_corpus(where, frames, rate, dims=3, uid=uid, phones=phones, faces=F0,
+    return one_utterance_corpus(where, frames, rate, dims=3, uid=uid, phones=phones, faces=F0, units="",
                                 audio=sidecar_audio(where))
 
 
@@ -127,9 +130,10 @@ def _load_npy(path) -> np.ndarray:
             fh.seek(0)
             return np.load(fh, allow_pickle=False)
     except Exception as exc:  # ValueError (not .npy / pickled), OSError, EOFError, ...
-        raise ImportFormatError(path, f"is not a readable .npy array ({type(exc).__name__}: {exc})") from None
+        raise ImportFormatError(path, f"is not a readable .npy array ({exc})") from None
 
 
+@reports_repairs
 def read_vertex_array(path, *, template=None, rate: float | None = None, alignment=None, tier: str | None = None,
                       fill_gaps: bool = True):
     """A NumPy vertex array (VOCASET-style) as one utterance.
@@ -172,6 +176,7 @@ def read_vertex_array(path, *, template=None, rate: float | None = None, alignme
                                     "expected the same mesh")
     with np.errstate(over="ignore", invalid="ignore"):  # out-of-range values become inf: gaps
         frames = np.asarray(arr, dtype=np.float32).reshape(n, 3 * V)
-    frames = _fill_gaps(frames, ~np.isfinite(frames), path=path, fill=fill_gaps)
+    frames = _fill_gaps(frames, np.zeros(len(frames), bool), path=path, fill=fill_gaps, names=_vertex_column)
     phones, _ = resolve_alignment(path, alignment, tier=tier)
-    return one_utterance_corpus(path, frames, rate, dims=3, phones=phones, faces=faces, audio=sidecar_audio(path))
+    return one_utterance_corpus(path, frames, rate, dims=3, phones=phones, faces=faces, audio=sidecar_audio(path),
+                                units="")  # meshes carry no unit (VOCASET: metres)

@@ -399,6 +399,10 @@ def _triangles(lists, path) -> np.ndarray:
     return np.column_stack([flat[base], flat[base + j], flat[base + j + 1]])
 
 
+def _counts(elements) -> str:
+    return ", ".join(f"{e['name']} {e['count']}" for e in elements)
+
+
 def read_ply(path):
     """Vertices and triangles of a PLY file (ASCII, binary little- or big-endian).
 
@@ -415,11 +419,19 @@ def read_ply(path):
         li = 0
         for el in elements:
             got[el["name"]], li = _read_ascii_element(el, data, lines, li, path)
+        if li < len(lines[0]):  # the header's counts are smaller than the body
+            raise ImportFormatError(path, f"{len(lines[0]) - li} more line(s) follow the rows the header's element "
+                                    f"counts declare ({_counts(elements)}); "
+                                    "expected the file to end (a damaged count?)", line=int(lines[3][li]))
     else:
         endian = "<" if fmt == "binary_little_endian" else ">"
         pos = body
         for el in elements:
             got[el["name"]], pos = _read_binary_element(el, data, pos, endian, path)
+        if data[pos:].strip(b"\0\r\n\t "):  # padding aside, the header's counts are smaller than the body
+            raise ImportFormatError(path, f"{len(data) - pos} bytes follow the rows the header's element counts "
+                                    f"declare ({_counts(elements)}); "
+                                    "expected the file to end (a damaged count?)")
     v = got.get("vertex")
     if v is None or not {"x", "y", "z"} <= set(v):
         raise ImportFormatError(path, "has no 'vertex' element with x, y, z properties; expected a PLY mesh "

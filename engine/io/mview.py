@@ -17,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.io._util import check_rate, one_utterance_corpus, sidecar_audio
+from engine.io._util import check_rate, one_utterance_corpus, plausible_rate, sidecar_audio
 from engine.io._util import fill_gaps as _fill_gaps
 from engine.io.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
+from engine.io.repairs import reports_repairs
 from engine.io.matfile import MatStruct, read_mat
 from engine.corpus import PhoneInterval
 
@@ -30,8 +31,8 @@ __all__ = ["read_mview", "read_mview_audio", "write_audio", "MVIEW_LIP_SENSORS"]
 MVIEW_LIP_SENSORS = ("UL", "LL", "ML", "JAW", "JAWL")
 
 
-def _load_struct(path) -> MatStruct:
-    m = read_mat(path)
+def _load_struct(path, notes=None) -> MatStruct:
+    m = read_mat(path, notes=notes)
     names = [k for k in m if not k.startswith("__")]
     want = Path(path).stem
     key = want if want in names else (names[0] if len(names) == 1 else None)
@@ -66,14 +67,31 @@ def _number(v) -> float | None:
     return float(np.real(v.ravel()[0]))
 
 
-def _entries(path):
-    s = _load_struct(path)
-    out = {}
+def _entries(path, notes=None):
+    s = _load_struct(path, notes)
+    out, twice = {}, {}
     for i, e in enumerate(s):
         name = _text(e["NAME"]).strip()
         if name:
-            out[name.upper()] = (i, e)
-    return s, out
+            if name.upper() in out:
+                twice[name.upper()] = (out[name.upper()][0], i)
+            out.setdefault(name.upper(), (i, e))
+    return s, _Entries(path, out, twice)
+
+
+class _Entries(dict):
+    """Sensor entries by NAME; using a NAME that two entries carry is refused."""
+
+    def __init__(self, path, entries, twice):
+        super().__init__(entries)
+        self.path, self.twice = path, twice
+
+    def __getitem__(self, name):
+        if name in self.twice:
+            a, b = self.twice[name]
+            raise ImportFormatError(self.path, f"entries {a + 1} and {b + 1} are both named {name!r}; expected one "
+                                    "entry per sensor")
+        return super().__getitem__(name)
 
 
 def _phones(entry0, path) -> tuple[list[PhoneInterval], str]:
@@ -101,6 +119,7 @@ def _phones(entry0, path) -> tuple[list[PhoneInterval], str]:
     return out, text
 
 
+@reports_repairs
 def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, alignment=None,
                tier: str | None = None, fill_gaps: bool = True):
     """A Haskins / MVIEW ``.mat`` file as a 3-D corpus of lip and jaw sensors.
@@ -128,7 +147,8 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
         (see :func:`write_audio`).
     """
     path = Path(path)
-    s, ent = _entries(path)
+    damage = []
+    s, ent = _entries(path, damage)
     if isinstance(sensors, str) and sensors == "all":
         want = [n for n, (i, e) in ent.items()
                 if n != "AUDIO" and isinstance(e["SIGNAL"], np.ndarray) and e["SIGNAL"].ndim == 2
@@ -148,8 +168,10 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
             raise ImportFormatError(path, f"entry {i + 1} ({n}) SIGNAL is {getattr(sig, 'shape', type(sig))} "
                                     f"{getattr(sig, 'dtype', '')}; "
                                     "expected numbers of shape (n_frames, >=3) holding x, y, z")
-        if r is None or not np.isfinite(r) or r <= 0:
-            raise ImportFormatError(path, f"entry {i + 1} ({n}) SRATE is {r!r}; expected a rate in Hz")
+        if r is None:
+            raise ImportFormatError(path, f"entry {i + 1} ({n}) SRATE is {e['SRATE']!r}"[:200] + "; expected a "
+                                    "rate in Hz")
+        r = plausible_rate(path, r, f"entry {i + 1} ({n}) SRATE")
         sigs.append(sig[:, :3].astype(np.float64))
         rates.append(r)
     if len(set(rates)) > 1 or len({g.shape[0] for g in sigs}) > 1:
@@ -158,14 +180,16 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
     native = check_rate(path, rates[0], rate)
     X = np.concatenate(sigs, axis=1)
     cols = [f"{n}_{a}" for n in want for a in "xyz"]
-    frames = _fill_gaps(X, ~np.isfinite(X), path=path, names=cols, fill=fill_gaps)
+    frames = _fill_gaps(X, np.zeros(len(X), bool), path=path, names=cols, fill=fill_gaps)
     own, text = _phones(s[0], path)
     if alignment is None and own:
         phones = own
     else:
         phones, _ = resolve_alignment(path, alignment, tier=tier)
-    return one_utterance_corpus(path, frames, native, dims=3, phones=phones, point_names=want,
-                                audio=sidecar_audio(path), text=text)
+    c = one_utterance_corpus(path, frames, native, dims=3, phones=phones, point_names=want,
+                             audio=sidecar_audio(path), text=text)
+    c.history.extend(f"{path.name}: {d}" for d in damage)  # what a damaged file still gave
+    return c
 
 
 def read_mview_audio(path) -> tuple[np.ndarray, float]:
@@ -177,10 +201,12 @@ def read_mview_audio(path) -> tuple[np.ndarray, float]:
     x = e["SIGNAL"]
     r = _number(e["SRATE"])
     if not isinstance(x, np.ndarray) or x.ndim not in (1, 2) or x.size == 0 or np.iscomplexobj(x) or \
-            not np.issubdtype(x.dtype, np.number) or not r or not np.isfinite(r) or r <= 0:
-        raise ImportFormatError(path, f"entry {i + 1} (AUDIO) holds {getattr(x, 'shape', type(x))} at {r!r} Hz; "
+            not np.issubdtype(x.dtype, np.number) or r is None:
+        raise ImportFormatError(path, f"entry {i + 1} (AUDIO) holds {getattr(x, 'shape', 'no array')} at {r!r} Hz; "
                                 "expected a mono signal and a positive SRATE")
-    return x.reshape(x.shape[0], -1)[:, 0].astype(np.float32), float(r)
+    r = plausible_rate(path, r, f"entry {i + 1} (AUDIO) SRATE", audio=True)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return x.reshape(x.shape[0], -1)[:, 0].astype(np.float32), float(r)
 
 
 def write_audio(path, wav_path=None) -> Path:
@@ -196,12 +222,25 @@ def write_audio(path, wav_path=None) -> Path:
     Returns
     -------
     Path of the WAV written. Samples are scaled by the peak only if it exceeds 1.
+    Non-finite samples (NaN, infinite) are written as silence and reported
+    (:func:`engine.io.repairs.report_repair`); a signal without a finite sample is refused.
     """
     from engine._atomic import write_wav_atomic
 
     x, r = read_mview_audio(path)
     wav_path = Path(wav_path) if wav_path is not None else Path(path).with_suffix(".wav")
-    x = np.nan_to_num(x.astype(np.float64))
+    x = x.astype(np.float64)
+    bad = ~np.isfinite(x)
+    if bad.all():
+        raise ImportFormatError(path, f"the AUDIO signal has no finite sample ({x.size} samples, all NaN or "
+                                "infinite); expected sound")
+    if bad.any():
+        x[bad] = 0.0
+        from engine.io.repairs import report_repair
+
+        where = np.flatnonzero(bad)
+        report_repair(path, f"AUDIO: {where.size} of {x.size} samples are not finite (NaN or infinite), from "
+                      f"{where[0] / r:.3f} s to {where[-1] / r:.3f} s; written as silence")
     peak = float(np.max(np.abs(x))) if x.size else 0.0
     if peak > 1.0:
         x = x / peak

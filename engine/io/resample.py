@@ -90,7 +90,7 @@ def resample(corpus: Corpus, rate: float, *, progress=None) -> Corpus:
                       faces=corpus.faces, point_names=corpus.point_names,
                       latent={k: v.copy() for k, v in corpus.latent.items()}, name=corpus.name,
                       point_roles=corpus.point_roles, registration=corpus.registration,
-                      history=list(corpus.history))
+                      history=list(corpus.history), axes=corpus.axes, units=corpus.units)
     blocks, utts, lat = [], [], {k: [] for k in corpus.latent}
     pos = 0
     total = len(corpus.utterances)
@@ -126,7 +126,8 @@ def resample(corpus: Corpus, rate: float, *, progress=None) -> Corpus:
     return Corpus(frames=frames, rate=rate, utterances=utts, dims=corpus.dims, faces=corpus.faces,
                   point_names=corpus.point_names, latent={k: np.concatenate(v) for k, v in lat.items()},
                   name=corpus.name, point_roles=corpus.point_roles, registration=corpus.registration,
-                  history=list(corpus.history) + [f"resampled {old:g} -> {rate:g} Hz ({how(old, rate)})"])
+                  history=list(corpus.history) + [f"resampled {old:g} -> {rate:g} Hz ({how(old, rate)})"],
+                  axes=corpus.axes, units=corpus.units)
 
 
 def how(old: float, new: float) -> str:

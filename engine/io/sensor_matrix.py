@@ -17,7 +17,7 @@ __all__ = ["corpus_from_matrix"]
 
 
 def corpus_from_matrix(path, M, layout, *, rate: float, points=None, fill_gaps: bool = True, alignment=None,
-                       tier=None, missing=None):
+                       tier=None, missing=None, flagged: str = "flagged invalid"):
     """A one-utterance 3-D corpus from a matrix (n_frames, n_sensors * values) read through ``layout``.
 
     Parameters
@@ -32,6 +32,8 @@ def corpus_from_matrix(path, M, layout, *, rate: float, points=None, fill_gaps: 
     fill_gaps : bool
     missing : bool ndarray of shape (n_frames, n_sensors), optional
         Samples flagged invalid by the file (besides NaN).
+    flagged : str
+        How the repair report names the samples ``missing`` flags (e.g. "status not OK").
 
     Returns
     -------
@@ -61,12 +63,12 @@ def corpus_from_matrix(path, M, layout, *, rate: float, points=None, fill_gaps: 
     n = M.shape[0]
     block = M.reshape(n, len(layout.sensors), layout.values)
     X = block[:, keep][:, :, list(layout.xyz)].reshape(n, -1)
-    miss = ~np.isfinite(X.astype(np.float64))
+    miss = np.zeros(X.shape, bool)  # NaN and implausible samples are found by fill_gaps
     if missing is not None:
         miss |= np.repeat(np.asarray(missing, bool)[:, keep], 3, axis=1)
     names = [layout.sensors[i] for i in keep]
     cols = [f"{s}_{a}" for s in names for a in "xyz"]
-    frames = _fill_gaps(X, miss, path=path, names=cols, fill=fill_gaps)
+    frames = _fill_gaps(X, miss, path=path, names=cols, fill=fill_gaps, flagged=flagged)
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     c = one_utterance_corpus(path, frames, rate, dims=3, phones=phones, point_names=names,
                              audio=sidecar_audio(path))

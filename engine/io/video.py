@@ -291,14 +291,17 @@ def head_pose_model(interocular_mm: float = 63.0):
 
 
 def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: float = 63.0,
-                bridge_s: float = DEFAULT_BRIDGE_S, audio_dir=None, audio_rate: int = AUDIO_RATE, progress=None):
+                bridge_s: float = DEFAULT_BRIDGE_S, audio_dir=None, audio_rate: int = AUDIO_RATE, progress=None,
+                resample: float | None = None):
     """Several videos of one speaker (e.g. a folder), one utterance each, with one pooled template.
 
     Every video is tracked first (only its landmarks are kept); the speaker template is then
     fitted to the reference landmarks of all of them together, and each video is read
     through it (:func:`read_video` with ``landmarks=`` and ``pose=``). ``alignment`` is None
     (each video's own ``<stem>.TextGrid`` / ``.lab``), False, or one path / phone list per
-    video. Other parameters as :func:`read_video`.
+    video. ``resample``: the frame rate (Hz) each video is resampled to before they are
+    joined (videos at different rates can be joined only so); None keeps their rate, which
+    must then be the same for all. Other parameters as :func:`read_video`.
 
     Returns
     -------
@@ -321,6 +324,13 @@ def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: 
                          "<stem>.TextGrid / .lab beside it")
     else:
         aligns = [alignment] * len(paths)
+    if resample is None:  # refuse before minutes of tracking
+        rates = [video_info(p)[0] for p in paths]
+        if len({round(r, 6) for r in rates}) > 1:
+            desc = ", ".join(f"{p.name} {r:.4g} Hz" for p, r in zip(paths, rates))
+            raise ImportFormatError(paths[0].parent, f"its videos have different frame rates ({desc}); they can be "
+                                    "joined only at one rate: resample them to one while reading (lipspace import "
+                                    "--resample 60, the analysis rate, or another rate)")
     # a fresh tracker per video (video mode tracks from the previous frame: never across two files)
     tracked = [track_video(p, progress=progress) for p in paths]
     n_lip = len(LIP_POINTS)
@@ -330,14 +340,14 @@ def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: 
                                 "videos of one face seen from the front")
     pose = head_pose_model(interocular_mm).fit(np.concatenate(refs))
     parts = [read_video(p, rate=rate, alignment=a, tier=tier, interocular_mm=interocular_mm, bridge_s=bridge_s,
-                        audio_dir=audio_dir, audio_rate=audio_rate, landmarks=t, pose=pose)
+                        audio_dir=audio_dir, audio_rate=audio_rate, landmarks=t, pose=pose, resample=resample)
              for p, a, t in zip(paths, aligns, tracked)]
     return concat(parts)
 
 
 def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: float = 63.0,
                bridge_s: float = DEFAULT_BRIDGE_S, audio_dir=None, audio_rate: int = AUDIO_RATE,
-               tracker=None, progress=None, landmarks=None, pose=None):
+               tracker=None, progress=None, landmarks=None, pose=None, resample: float | None = None):
     """Read a video of one talking face as a corpus of lip landmarks (mm, head pose removed).
 
     Parameters
@@ -369,6 +379,9 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
     pose : HeadPose, optional
         A fitted speaker template (:func:`head_pose_model`) to use instead of fitting one
         to this video's frames (:func:`read_videos` pools one over a speaker's videos).
+    resample : float, optional
+        Frame rate (Hz) the result is resampled to (:func:`engine.io.resample`, per
+        utterance); None keeps the video's rate.
 
     Returns
     -------
@@ -468,4 +481,11 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
                    registration=desc, history=history)
     except CorpusError as exc:
         raise ImportFormatError(path, str(exc)) from None
+    if resample is not None and abs(float(resample) - native) > 1e-9 * native:
+        from engine.io.resample import resample as resample_corpus
+
+        try:
+            c = resample_corpus(c, float(resample))
+        except CorpusError as exc:
+            raise ImportFormatError(path, str(exc)) from None
     return c

@@ -169,9 +169,11 @@ def test_restore_choices(tmp_path, dead_pid):
     rec2.begin()
     rec2.save(lambda p: p.write_text("{damaged"))
     r = Autosaver(tmp_path).begin()
-    with pytest.raises(SessionError, match="could not be restored.*not a readable"):
+    with pytest.raises(SessionError, match="could not be restored.*not a readable.*it was moved to .*damaged"):
         resolve_recovery(me, r, restore=None, ask=lambda _r: "restore")
-    assert not r.session.exists()  # not offered again
+    assert not r.session.exists()  # not offered again, but kept for a look
+    assert [p.name.split(".lipspace.json")[0] for p in (tmp_path / "damaged").glob("autosave-*")] == [
+        r.session.name.split(".lipspace.json")[0]]
     with pytest.raises(ValueError, match="must answer"):
         resolve_recovery(me, Recovery(r.session, r.marker, 1, 0.0, 0.0), restore=None, ask=lambda _r: "yes")
 

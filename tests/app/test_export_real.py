@@ -4,18 +4,8 @@ import pytest
 
 
 @pytest.fixture(scope="module")
-def mocha(shared_data):
-    import warnings
-
-    from engine.io import read_corpus, resample
-    from engine.manifold import Manifold
-
-    d = shared_data / "mocha-fsew0"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # a 2-s, 116-frame corpus: the data warnings are expected
-        corpus = resample(read_corpus(d / "fsew0_001.ema", alignment=d / "fsew0_001.lab"), 60.0)
-        m = Manifold().fit(corpus)
-    return m
+def mocha(mocha_manifold):
+    return mocha_manifold
 
 
 def test_glb_of_markers_is_a_point_cloud_with_the_recording_beside(mocha, tmp_path):
@@ -26,13 +16,27 @@ def test_glb_of_markers_is_a_point_cloud_with_the_recording_beside(mocha, tmp_pa
     u = m.corpus_.utterances[0]
     audio, why = utterance_audio(m, u.id)
     assert audio is not None, why
+    from engine.staging import OutputExistsError
+
+    (tmp_path / "fsew.wav").write_bytes(b"the user's own recording")  # beside a new animation: never replaced
+    with pytest.raises(OutputExistsError, match="fsew.wav .the audio beside it. already exists"):
+        export_animation(m, m.Fx_[u.start:u.stop], tmp_path / "fsew.glb", rate=m.corpus_.rate, audio=audio)
+    assert (tmp_path / "fsew.wav").read_bytes() == b"the user's own recording"
+    assert not (tmp_path / "fsew.glb").exists()
+    (tmp_path / "fsew.wav").unlink()
     files = export_animation(m, m.Fx_[u.start:u.stop], tmp_path / "fsew.glb", rate=m.corpus_.rate, audio=audio)
     assert files == [tmp_path / "fsew.glb", tmp_path / "fsew.wav"]
     assert (tmp_path / "fsew.wav").read_bytes() == audio.read_bytes()
+    again = export_animation(m, m.Fx_[u.start:u.stop], tmp_path / "fsew.glb", rate=m.corpus_.rate, audio=audio)
+    assert again == files  # the save dialog confirmed replacing the animation: its own WAV goes with it
     r = read_gltf_morph(files[0])
     assert r["faces"] is None and r["base"].shape == (m.corpus_.n_points, 3)
     played = r["base"][None] + np.einsum("nk,kvd->nvd", r["weights"], r["targets"])
-    expect = m.shape_.inverse_transform(m.Fx_[u.start:u.stop]).reshape(u.n_frames, -1, 2)
+    from engine.orientation import anatomical_frame
+
+    frame = anatomical_frame(m.corpus_, m.shape_.mean_)  # written in the talker's frame: x forward, y up
+    assert frame.source == "roles"
+    expect = frame.view(m.shape_.inverse_transform(m.Fx_[u.start:u.stop]).reshape(u.n_frames, -1, 2))
     np.testing.assert_allclose(played[..., :2], expect, rtol=0, atol=1e-4 * float(np.abs(expect).max()))
     np.testing.assert_array_equal(played[..., 2], 0.0)
 

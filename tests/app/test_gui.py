@@ -404,6 +404,13 @@ def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
     assert len(files) == len(traj)
     V, F = read_obj(files[3])
     np.testing.assert_allclose(V, _points(m, lip_frames(m, traj)[3]), atol=1e-5)
+    from engine.staging import OutputExistsError
+
+    before = files[0].read_bytes()  # the dialog asked about seq.obj, never about the frame files in seq/
+    with pytest.raises(OutputExistsError, match=r"seq_00000.obj and \d+ other files already exist; nothing was "
+                                                r"written. Choose another name") as e:
+        export_trajectory(m, traj, tmp_path / "seq.obj")
+    assert "--force" not in str(e.value) and files[0].read_bytes() == before
     with pytest.raises(ValueError, match="cannot export"):
         export_trajectory(m, traj, tmp_path / "t.txt")
     # the 3-D views as figures

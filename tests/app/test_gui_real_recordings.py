@@ -2,8 +2,6 @@
 kinematic landmarks (needs a display: Xvfb is started if absent)."""
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
@@ -11,27 +9,8 @@ pytestmark = pytest.mark.gui
 
 
 @pytest.fixture(scope="module")
-def ema_manifold():
-    from engine.corpus import Utterance
-    from engine.io import concat, resample
-    from engine.io.matrix import corpus_from_matrix
-    from engine.layouts import BUILTIN
-    from engine.manifold import Manifold
-    from engine.multispeaker import generate_recordings
-    from engine.registration import register
-
-    parts = []
-    for r in generate_recordings(n_speakers=2, n_utterances=2, duration_s=(2.0, 2.0), seed=11):
-        c = corpus_from_matrix(f"{r.id}.csv", r.matrix, BUILTIN["ema7x6"], rate=r.rate)
-        parts.append(replace(c, utterances=[Utterance(r.id, 0, c.n_frames, speaker=r.speaker)], name=r.id))
-    corpus = resample(register(concat(parts, name="ema"), method="utterance"), 60)
-    import warnings
-
-    from engine.corpus import CorpusWarning
-
-    with warnings.catch_warnings():  # a state or two cut off by 8 s of speech is not what this test is about
-        warnings.simplefilter("ignore", CorpusWarning)
-        return Manifold(n_states=16).fit(corpus)
+def ema_manifold(make_articulograph_manifold):
+    return make_articulograph_manifold(n_speakers=2, n_utterances=2, duration_s=(2.0, 2.0), seed=11, n_states=16)
 
 
 def test_unlabelled_sparse_markers_in_the_explorer(qapp, qtbot, ema_manifold, main_window_factory):
@@ -52,4 +31,8 @@ def test_unlabelled_sparse_markers_in_the_explorer(qapp, qtbot, ema_manifold, ma
         s.set_playback(10)
         from engine.corpus import frame_points
 
-        np.testing.assert_allclose(lv.main.points, frame_points(m.corpus_.frames[u.start + 10], 3), atol=1e-4)
+        from engine.orientation import anatomical_frame
+
+        talker = anatomical_frame(m.corpus_, m.shape_.mean_)  # the lips drawn seen from the front
+        np.testing.assert_allclose(lv.main.points, talker.view(frame_points(m.corpus_.frames[u.start + 10], 3)),
+                                   atol=1e-4)

@@ -180,11 +180,11 @@ def test_exported_view_is_vector_with_the_hop_bar_title_clear_of_its_ticks(fresh
     assert fig.lipspace["n_points"] >= n_shown                    # every frame a vector marker
     fig.canvas.draw()
     r = fig.canvas.get_renderer()
-    bar = [ax for ax in fig.axes if ax.get_title(loc="left") == "future hops"]
+    bar = [ax for ax in fig.axes if ax.get_title(loc="right") == "future hops"]
     assert len(bar) == 1
     ticks = [t for t in bar[0].yaxis.get_ticklabels() if t.get_text()]
     assert [t.get_text() for t in ticks] == [str(k) for k in range(len(ticks))]   # whole hops 0, 1, 2, ...
-    title = bar[0].title if bar[0].title.get_text() else bar[0]._left_title
+    title = bar[0]._right_title  # right-aligned over the bar: it never runs off the view's right edge
     tb = title.get_window_extent(r)
     assert not any(tb.overlaps(t.get_window_extent(r)) for t in ticks)
     root = ET.fromstring(save_plotter_vector(v.plotter, tmp_path / "view.SVG").read_bytes())

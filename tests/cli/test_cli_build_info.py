@@ -14,7 +14,7 @@ def built(tmp_path_factory):
 
 def test_build_writes_a_loadable_manifold(built, small_corpus):
     m = Manifold.load(built)
-    assert m.Fy_.shape == (small_corpus.n_frames, 10)
+    assert m.Fy_.shape == (small_corpus.n_frames, 16)
     assert m.corpus_.n_frames == small_corpus.n_frames
 
 
@@ -174,7 +174,8 @@ def test_memory_error_is_one_line_with_a_hint(tmp_path, small_corpus, capsys, mo
 
 
 def test_interrupted_mesh_export_leaves_nothing(tmp_path, built, capsys, monkeypatch):
-    """Ctrl-C part-way through --mesh-dir used to leave frame files while saying nothing was written."""
+    """Ctrl-C part-way through --mesh-dir used to leave frame files while saying nothing was written, and the
+    trajectory written before them (-o t.csv); the old trajectory stays."""
     import engine.io.export as export
 
     real, calls = export.write_obj, []
@@ -186,14 +187,17 @@ def test_interrupted_mesh_export_leaves_nothing(tmp_path, built, capsys, monkeyp
         return real(*a, **kw)
 
     monkeypatch.setattr(export, "write_obj", interrupted)
-    mesh = tmp_path / "meshes"
-    argv = ["synthesize", "--manifold", str(built), "--phones", "p 0.1 aa 0.2 m 0.1", "--mesh-dir", str(mesh), "-q"]
+    mesh, old = tmp_path / "meshes", tmp_path / "t.csv"
+    old.write_text("the user's trajectory")
+    argv = ["synthesize", "--manifold", str(built), "--phones", "p 0.1 aa 0.2 m 0.1", "--mesh-dir", str(mesh), "-q",
+            "-o", str(old), "--force"]
     assert main(argv) == 130
-    assert "nothing was written" in capsys.readouterr().err
-    assert list(tmp_path.iterdir()) == []
+    assert capsys.readouterr().err.strip().endswith("interrupted; nothing was written.")
+    assert list(tmp_path.iterdir()) == [old] and old.read_text() == "the user's trajectory"
     monkeypatch.setattr(export, "write_obj", real)
     assert main(argv) == 0
-    assert len(list(mesh.iterdir())) > 4 and list(tmp_path.iterdir()) == [mesh]
+    assert len(list(mesh.iterdir())) > 4 and sorted(tmp_path.iterdir()) == [mesh, old]
+    assert old.read_text().startswith("time,")
 
 
 @pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP"])
@@ -313,3 +317,4 @@ def test_build_the_calibrated_talker_keeps_the_classic_cache(tmp_path, monkeypat
     p = classic.save(tmp_path / "corpus.npz")
     assert main(["build", str(p), "--kinematics", "calibrated", "-o", str(tmp_path / "x.npz")]) == 2
     assert "--kinematics chooses the synthetic talker's" in capsys.readouterr().err
+

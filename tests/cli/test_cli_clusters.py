@@ -75,6 +75,6 @@ def test_errors(manifold_file, tmp_path, capsys):
     assert "must end in .csv" in capsys.readouterr().err
     assert main(["clusters", str(tmp_path / "missing.npz")]) == 2
     assert "no such" in capsys.readouterr().err
-    assert main(["clusters", str(manifold_file), "--dims", "11"]) == 2
-    assert "n_dims=11" in capsys.readouterr().err
+    assert main(["clusters", str(manifold_file), "--dims", "17"]) == 2
+    assert "n_dims=17" in capsys.readouterr().err
     assert not (tmp_path / "t.txt").exists()

@@ -53,8 +53,15 @@ def test_bad_file_is_a_user_error(monkeypatch, tmp_path):
         run_explore([str(junk)])
     bad_session = tmp_path / "s.json"
     bad_session.write_text("{}")
-    with pytest.raises(CliError, match="not a Lipspace session"):
-        run_explore(["--session", str(bad_session)])
+    import app.main_window
+
+    opened = []  # a session that cannot be opened is said, and the window opens without it
+    monkeypatch.setattr(app.main_window, "launch", lambda *a, **k: opened.append((a, k)) or 0)
+    assert run_explore(["--session", str(bad_session)]) == 0
+    (args, kw), = opened
+    assert kw["session"] is None and len(kw["notes"]) == 1
+    assert kw["notes"][0].startswith(f"--session {bad_session} was not opened: ") and \
+        "not a Lipspace session" in kw["notes"][0]
 
 
 def test_cache_path_follows_env(monkeypatch, tmp_path):
@@ -118,7 +125,8 @@ def test_kinematics_argument_reaches_the_window_and_is_refused_with_a_file(monke
     opened = []
     monkeypatch.setattr(app.main_window, "launch", lambda *a, **k: opened.append((a, k)) or 0)
     assert run_explore(["--preset", "small", "--kinematics", "calibrated"]) == 0
-    assert opened == [((None,), {"preset": "small", "session": None, "restore": None, "kinematics": "calibrated"})]
+    assert opened == [((None,), {"preset": "small", "session": None, "restore": None, "kinematics": "calibrated",
+                                 "notes": []})]
     mfile = small_manifold.save(tmp_path / "m.npz")
     with pytest.raises(CliError, match=r"--kinematics chooses the synthetic talker's; .*m\.npz.*leave it out"):
         run_explore([str(mfile), "--kinematics", "calibrated"])

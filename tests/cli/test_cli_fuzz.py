@@ -198,7 +198,7 @@ def test_import_refuses_a_rate_that_contradicts_the_time_column(tmp_path, capsys
     out = tmp_path / "c.npz"
     assert main(["import", str(csv), "-o", str(out), "--rate", "60"]) == 2
     err = capsys.readouterr().err
-    assert "gives 100 Hz but rate=60 was given" in err and not out.exists(), err
+    assert "gives 100 Hz but a rate of 60 Hz was given (--rate)" in err and not out.exists(), err
 
 
 def test_import_warns_about_frame_gaps_and_a_long_alignment(tmp_path, capsys):
@@ -207,8 +207,10 @@ def test_import_warns_about_frame_gaps_and_a_long_alignment(tmp_path, capsys):
     (tmp_path / "g.lab").write_text("0 0.5 p\n0.5 1.5 aa\n")  # 1.5 s of speech for 1 s of data
     assert main(["import", str(long), "-o", str(tmp_path / "c.npz"), "--rate", "60"]) == 0
     err = capsys.readouterr().err
-    assert "lipspace import: warning:" in err and "frames 7, 8 (2 of 60) have no rows" in err, err
+    assert "4 without a row in the table" in err and "2 of 60 frames (frames 7, 8); interpolated" in err, err
     assert "runs to 1.500 s but the data last 1.000 s" in err, err
+    history = main(["info", str(tmp_path / "c.npz")]) == 0 and capsys.readouterr().out
+    assert "frames 7, 8" in history and "runs to 1.500 s" in history, history  # info keeps both repairs
     (tmp_path / "g.lab").write_text("0 0.5 p\n0.5 25 aa\n")  # 25x the data: refused
     assert main(["import", str(long), "-o", str(tmp_path / "d.npz"), "--rate", "60"]) == 2
     err = capsys.readouterr().err
@@ -257,8 +259,8 @@ def test_fuzz_synthesize(files, data, capsys):
                                 _inputs(files)))
     argv = ["synthesize", "--manifold", data.draw(st.sampled_from([str(files["manifold"]), str(files["junk"]),
                                                                    str(files["corpus"])])), source, value, "-q"]
-    for opt in data.draw(st.lists(st.sampled_from(["--tempo", "--inverse-dims", "--candidates"]), max_size=2,
-                                  unique=True)):
+    for opt in data.draw(st.lists(st.sampled_from(["--tempo", "--inverse-dims", "--candidates", "--smoothing"]),
+                                  max_size=2, unique=True)):
         argv += [opt, data.draw(NUMBERS)]
     with tempfile.TemporaryDirectory() as out:
         target = data.draw(st.sampled_from(["t.csv", "t.npy", "t.txt", ".", None, "mesh"]))

@@ -24,15 +24,19 @@ needs_data = pytest.mark.skipif(not (DATA / "mocha-fsew0").is_dir() or not (DATA
 
 
 def run(argv):
-    """What ``lipspace import ARGV`` does (app.cli.main's handling of CliError included)."""
+    """What ``lipspace import ARGV`` does (app.cli.main's handling of CliError and OSError included),
+    its error on stdout."""
+    from app.cli import _os_error_text, build_parser
+
     assert SUBCOMMANDS["import"][0] == "app.cli.importer"
-    p = argparse.ArgumentParser(prog="lipspace import")
-    importer.add_arguments(p)
-    args = p.parse_args(argv)
+    args = build_parser("import").parse_args(["import", *argv])
     try:
         return importer.run(args)
     except CliError as exc:
         print(f"lipspace import: error: {exc}")
+        return 2
+    except OSError as exc:
+        print(f"lipspace import: error: {_os_error_text(exc)}")
         return 2
 
 
@@ -51,7 +55,10 @@ def test_import_mocha_with_resampling(tmp_path, capsys):
 def test_import_both_haskins_files_with_audio(tmp_path, capsys):
     files = sorted(str(p) for p in (DATA / "haskins-ieee").glob("*.mat"))
     out = tmp_path / "h.npz"
-    assert run([*files, "-o", str(out), "--audio-dir", str(tmp_path / "wav")]) == 0
+    from engine.speakers import SpeakerWarning
+
+    with pytest.warns(SpeakerWarning, match="all 2 inputs are one unnamed speaker"):  # F01_..., M01_...
+        assert run([*files, "-o", str(out), "--audio-dir", str(tmp_path / "wav")]) == 0
     c = Corpus.load(out)
     assert len(c.utterances) == 2 and c.rate == 60 and c.dims == 3  # the default analysis rate and c.point_names[:2] == ["UL", "LL"]
     for u in c.utterances:
@@ -63,7 +70,7 @@ def test_import_both_haskins_files_with_audio(tmp_path, capsys):
 def test_import_errors_are_clean(tmp_path, capsys):
     ema = str(DATA / "mocha-fsew0" / "fsew0_001.ema")
     assert run([ema, "-o", str(tmp_path / "x.npz"), "--rate", "60"]) == 2
-    assert "500 Hz but rate=60" in capsys.readouterr().out
+    assert "500 Hz but a rate of 60 Hz was given (--rate)" in capsys.readouterr().out
     assert run([ema, "-o", str(tmp_path / "x.npz"), "--points", "UL,NOSE"]) == 2
     assert "no sensor(s) ['NOSE']" in capsys.readouterr().out
     assert run([str(DATA / "mocha-fsew0" / "fsew0_001.lab"), "-o", str(tmp_path / "x.npz")]) == 2
@@ -86,8 +93,8 @@ def test_import_mesh_directory_with_alignment_and_rate(tmp_path, capsys):
     c = Corpus.load(out)
     assert c.n_frames == 20 and c.rate == 50 and c.faces.shape == (2, 3)
     assert [p.label for p in c.utterances[0].phones] == ["m", "a"]
-    assert run([str(tmp_path / "frames"), "-o", str(out)]) == 2
-    assert "pass the frame rate" in capsys.readouterr().out
+    assert run([str(tmp_path / "frames"), "-o", str(out), "--force"]) == 2
+    assert "give the frame rate (lipspace import --rate HZ)" in capsys.readouterr().out
 
 
 def test_import_est_with_points_and_no_fill(tmp_path, capsys):
@@ -100,5 +107,5 @@ def test_import_est_with_points_and_no_fill(tmp_path, capsys):
     assert run([str(src), "--points", "ll", "-o", str(out), "--name", "demo", "--resample", "native"]) == 0
     c = Corpus.load(out)
     assert c.point_names == ["LL"] and c.name == "demo" and c.rate == 250
-    assert run([str(src), "--no-fill", "--points", "UL,LL", "-o", str(out)]) == 2
+    assert run([str(src), "--no-fill", "--points", "UL,LL", "-o", str(out), "--force"]) == 2
     assert "frame 5" in capsys.readouterr().out

@@ -1,5 +1,5 @@
-"""``lipspace import`` over many files: one backend maps the readers over them, unreadable ones are skipped
-with the reason (issue 13 item 3)."""
+"""``lipspace import`` over many files: one backend maps the readers over them; an unreadable one stops the
+import, or with --skip-bad is skipped with the reason (issue 13 item 3, issue 30 item 3)."""
 import numpy as np
 import pytest
 
@@ -30,11 +30,21 @@ def _import(paths, out, *extra):
                  "--speaker-from", "prefix", "--points", "UL,LL", *extra])
 
 
+def test_an_unreadable_input_stops_the_import_without_skip_bad(inputs, tmp_path, capsys):
+    for jobs in ("1", "2"):
+        out = tmp_path / f"x{jobs}.npz"
+        assert _import(inputs, out, "--jobs", jobs) == 2
+        err = capsys.readouterr().err
+        assert f"cannot read {inputs[3]}: " in err and "1 of 7 inputs could not be read" in err, err
+        assert "--skip-bad" in err and "nothing was written" in err
+        assert not out.exists() and not list(tmp_path.glob(".*part*"))
+
+
 def test_import_many_in_processes_skips_the_unreadable_file_with_its_reason(inputs, tmp_path, capsys):
     serial, pooled = tmp_path / "serial.npz", tmp_path / "pooled.npz"
-    assert _import(inputs, serial, "--jobs", "1") == 0
+    assert _import(inputs, serial, "--jobs", "1", "--skip-bad") == 0
     capsys.readouterr()
-    assert _import(inputs, pooled, "--jobs", "2") == 0
+    assert _import(inputs, pooled, "--jobs", "2", "--skip-bad") == 0
     err = capsys.readouterr().err
     assert f"skipped {inputs[3]}: " in err and "read 6 of 7 inputs, skipped 1" in err
     reason = err.split(f"skipped {inputs[3]}: ", 1)[1].splitlines()[0]
@@ -49,8 +59,8 @@ def test_import_many_in_processes_skips_the_unreadable_file_with_its_reason(inpu
 
 def test_import_many_on_dask_equals_in_process(inputs, tmp_path, capsys, dask_cluster):
     ref, out = tmp_path / "ref.npz", tmp_path / "dask.npz"
-    assert _import(inputs, ref, "--jobs", "1") == 0
-    assert _import(inputs, out, "--dask", dask_cluster.scheduler_address) == 0
+    assert _import(inputs, ref, "--jobs", "1", "--skip-bad") == 0
+    assert _import(inputs, out, "--dask", dask_cluster.scheduler_address, "--skip-bad") == 0
     err = capsys.readouterr().err
     assert "Dask 2 workers" in err and f"skipped {inputs[3]}: " in err
     np.testing.assert_array_equal(Corpus.load(out).frames, Corpus.load(ref).frames)

@@ -101,7 +101,8 @@ def test_render_errors_and_interrupt_leave_no_file(mfile, tmp_path, capsys, monk
 
     monkeypatch.setattr(video._Scene, "draw", interrupted)
     out.write_bytes(b"old video")
-    assert main(["render", "--manifold", str(mfile), "--phones", PHONES, "--size", SIZE, "-q", "-o", str(out)]) == 130
+    assert main(["render", "--manifold", str(mfile), "--phones", PHONES, "--size", SIZE, "-q", "-o", str(out),
+                 "--force"]) == 130
     assert "nothing was written" in capsys.readouterr().err
     assert out.read_bytes() == b"old video" and sorted(q.name for q in tmp_path.iterdir()) == ["x.mp4"]
 
@@ -117,7 +118,7 @@ def test_real_sigint_mid_render_leaves_no_half_video(mfile, tmp_path):
     out = tmp_path / "talk.mp4"
     out.write_bytes(b"old video")
     proc = subprocess.Popen([sys.executable, "-m", "app.cli", "render", "--manifold", str(mfile), "--phones",
-                             "sil 10 aa 10 sil 10", "--size", SIZE, "-o", str(out)],  # 30 s: still rendering
+                             "sil 10 aa 10 sil 10", "--size", SIZE, "-o", str(out), "--force"],  # 30 s: still rendering
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
     deadline = time.monotonic() + 60
     while not list(tmp_path.glob(".talk.*.part.mp4")) and proc.poll() is None and time.monotonic() < deadline:

@@ -19,7 +19,7 @@ def test_build_on_a_running_scheduler(tmp_path, small_corpus, capsys, dask_clust
     assert "Dask 2 workers, 2 threads at " + dask_cluster.scheduler_address in text
     assert sorted(p.name for p in (tmp_path / "blocks" / "frames").iterdir())[0] == "block_00000.npy"
     m = Manifold.load(out)
-    assert m.Fy_.shape == (corpus.n_frames, 10) and np.isfinite(m.Fy_).all()
+    assert m.Fy_.shape == (corpus.n_frames, 16) and np.isfinite(m.Fy_).all()
 
 
 def test_manifold_of_a_blocked_corpus_reads_its_frames_from_it(tmp_path, small_corpus, capsys):
@@ -41,7 +41,7 @@ def test_manifold_of_a_blocked_corpus_reads_its_frames_from_it(tmp_path, small_c
     assert got.shape[1] == corpus.frames.shape[1] and np.isfinite(got).all()
     capsys.readouterr()
     src.unlink()
-    assert main(["synthesize", "--utterance", uid, "--manifold", str(out), "-o", str(traj), "-q"]) == 2
+    assert main(["synthesize", "--utterance", uid, "--manifold", str(out), "-o", str(traj), "-q", "--force"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "c.npz" in err[0] and "which is missing" in err[0], err
 

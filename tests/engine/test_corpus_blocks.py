@@ -43,9 +43,8 @@ def two_speakers(corpus):
     F = corpus.frames.astype(np.float64)
     for u in utts[1::2]:
         F[u.start:u.stop] = 1.3 * F[u.start:u.stop] + 0.7
-    roles = [""] * corpus.n_points  # upper and lower lip points named: "opening" is the aperture growing
-    roles[:6], roles[6:12] = ["upper_lip"] * 6, ["lower_lip"] * 6
-    return replace(corpus, frames=F.astype(np.float32), utterances=utts, point_roles=roles)
+    assert corpus.role_points("upper_lip").size and corpus.role_points("lower_lip").size  # the talker names them
+    return replace(corpus, frames=F.astype(np.float32), utterances=utts)
 
 
 @pytest.fixture(scope="module")

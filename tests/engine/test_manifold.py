@@ -240,7 +240,7 @@ def test_session_source_accepts_a_data_file(tmp_path, small_corpus):
 
 def test_cache_keys_follow_code_and_parameters(tmp_path, monkeypatch):
     import engine._persist as persist
-    from engine.manifold import FIT_MODULES, algorithm_fingerprint
+    from engine.manifold import algorithm_fingerprint, fit_modules
     from engine.synthetic import generator_fingerprint
 
     base = algorithm_fingerprint()
@@ -261,10 +261,39 @@ def test_cache_keys_follow_code_and_parameters(tmp_path, monkeypatch):
         return fh
 
     monkeypatch.setattr("builtins.open", edited)
-    assert "engine.embedding" in FIT_MODULES
+    assert "engine.embedding" in fit_modules()
     assert algorithm_fingerprint() != base
     assert generator_fingerprint() == gen
     assert persist.source_fingerprint(("engine.embedding",)) != ""
+
+
+def test_cache_key_covers_every_engine_module_a_fit_imports(tmp_path):
+    """The key's modules are read from the imports; a fit that imports an engine module they do not
+    list (a new module, or one imported by name at run time) fails here."""
+    import subprocess
+    import sys
+
+    from engine.manifold import fit_modules
+
+    code = ("import sys, warnings\n"
+            "from engine.synthetic import load_synthetic\n"
+            "from engine.manifold import Manifold\n"
+            "c = load_synthetic(preset='small')\n"
+            "c = c.subset([u.id for u in c.utterances[:8]])\n"
+            "before = set(sys.modules)\n"
+            "with warnings.catch_warnings():\n"
+            "    warnings.simplefilter('ignore')\n"
+            f"    Manifold(n_states=20).fit(c).save({str(tmp_path / 'm.npz')!r})\n"
+            "print(' '.join(sorted(m for m in sys.modules if m.startswith('engine') and m not in before)))\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    used = set(r.stdout.split())
+    covered = set(fit_modules())
+    assert used, "the fit imported no engine module after the corpus was made: the check sees nothing"
+    missing = used - covered - {"engine"}
+    assert not missing, f"modules the fit imports but the cache key leaves out: {sorted(missing)}"
+    assert {"engine.registration", "engine.kinematics", "engine.buildplan", "engine.inverse",
+            "engine.tangent", "engine.local_gradients"} <= covered
 
 
 def test_deeply_nested_session_is_a_session_error(tmp_path):

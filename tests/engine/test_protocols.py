@@ -118,7 +118,7 @@ def test_state_paths_follow_observed_transitions(small_manifold):
     np.testing.assert_allclose(X, sm.inverse_.means_[path])
     assert sm.path_x(path, how="local-linear", sigma=2.0).shape == (u.n_frames, m.Fx_.shape[1])
     with pytest.raises(ValueError, match="state_dims must be in"):
-        StateModel(state_dims=11).fit(m.Fy_, m.Fx_, m.Fxv_, m.corpus_.bounds)
+        StateModel(state_dims=m.Fy_.shape[1] + 1).fit(m.Fy_, m.Fx_, m.Fxv_, m.corpus_.bounds)
 
 
 # ------------------------------------------------------------------ the evaluation

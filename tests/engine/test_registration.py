@@ -5,7 +5,7 @@ import pytest
 from engine.corpus import Corpus, CorpusError, Utterance
 from engine.io import concat
 from engine.io.matrix import corpus_from_matrix
-from engine.kinematics import kinematic_landmarks, lip_aperture, opening_agreement, with_kinematic_labels
+from engine.kinematics import kinematic_landmarks, lip_aperture, with_kinematic_labels
 from engine.layouts import read_layout
 from engine.multispeaker import generate_recordings, layout_text
 from engine.registration import normalise_speakers, register
@@ -120,10 +120,6 @@ def test_kinematic_landmarks_and_labels():
     mids, labels = kl.phone_table()[:2]
     np.testing.assert_array_equal(mids, f)
     np.testing.assert_array_equal(labels, lab)
-    # agreement of an "opening" flag with the aperture increasing
-    opening = np.r_[ap[1:] > ap[:-1], False]
-    assert opening_agreement(opening, ap, c.bounds) == 1.0
-    assert opening_agreement(~opening, ap, c.bounds) == 0.0
 
 
 class _Graph:

@@ -96,10 +96,10 @@ def test_dask_tangent_frames_and_states_equal_in_process_on_the_same_fy(executor
 
     m = in_process
     b = m.corpus_.bounds
-    args = (m.Fy_, m.Fx_, m.Fxv_, b)
-    ref = TangentFrames().fit(*args, opening=lip_aperture(m.corpus_))
-    got = TangentFrames().fit(*args, opening=lip_aperture(m.corpus_), executor=executor)
-    for attr in ("s_", "v_", "normal_", "classes_"):
+    args = (m.Fy_, b, lip_aperture(m.corpus_))
+    ref = TangentFrames().fit(*args, rate=m.corpus_.rate)
+    got = TangentFrames().fit(*args, rate=m.corpus_.rate, executor=executor)
+    for attr in ("s_", "v_", "velocity_", "classes_", "neighbor_scores_"):
         np.testing.assert_array_equal(getattr(got, attr), getattr(ref, attr))
     assert got.n_degenerate_ == ref.n_degenerate_
 

@@ -75,5 +75,8 @@ def test_g_blocks_in_unit_range(small_manifold):
 
 
 def test_dynamics_rejects_still_lips():
-    with pytest.raises(ValueError, match="never move"):
+    with pytest.raises(ValueError, match="the lip shape never changes"):
         DynamicFeatures().fit(np.ones((5, 2)), np.array([[0, 5]]))
+    Fx = np.arange(10.0).reshape(5, 2)  # shapes that change, but one frame per utterance: no velocity at all
+    with pytest.raises(ValueError, match="every utterance holds a single frame .5 utterances.: a velocity needs"):
+        DynamicFeatures().fit(Fx, np.array([[k, k + 1] for k in range(5)]))

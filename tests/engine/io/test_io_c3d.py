@@ -58,7 +58,7 @@ def test_marker_selection_units_and_gaps(tmp_path):
     assert e.value.frame == 10
     with pytest.raises(ImportFormatError, match="has no marker 'nose'"):
         read_c3d(p, markers=["nose"])
-    with pytest.raises(ImportFormatError, match="120 Hz but rate=60"):
+    with pytest.raises(ImportFormatError, match="120 Hz but a rate of 60 Hz"):
         read_c3d(p, rate=60)
 
 

@@ -233,7 +233,7 @@ def test_truncated_binary_files_are_errors(tmp_path, case):
     ("mocha_ascii", b"0 1 " + b"1 " * 19 + b"\n", "line 1: 21 columns"),
     ("lab", b"0 0.1 a\n0.1 b\n", "line 2"),
     ("textgrid", b'File type = "ooTextFile"\nObject class = "TextGrid"\n\nxmin = 0\nxmax = nan\n', "holds no tiers"),
-    ("csv_long", b"frame,point,x,y\n0,a,NaN,NaN\n1,a,nan,\n", "missing in every frame"),
+    ("csv_long", b"frame,point,x,y\n0.00,a,NaN,NaN\n0.01,a,nan,\n", "missing in every frame"),
     ("npy", b"\x93NUMPY\x01\x00", "not a readable .npy"),
 ])
 def test_specific_malformations_are_named(tmp_path, case, text, match):

@@ -1,4 +1,6 @@
 """CSV landmark tracks: OpenFace, named wide (Lipspace's own export), long format."""
+import re
+
 import numpy as np
 import pytest
 
@@ -75,7 +77,7 @@ def test_long_format(tmp_path):
             rows.append(f"{f},{nm},{f},{1 if nm == 'ul' else -1},0")
     p = tmp_path / "long.csv"
     p.write_text("\n".join(rows) + "\n")
-    with pytest.raises(ImportFormatError, match="no time column; pass the frame rate"):
+    with pytest.raises(ImportFormatError, match="no time column; give the frame rate"):
         read_csv_landmarks(p)
     c = read_csv_landmarks(p, rate=50)
     assert c.point_names == ["ul", "ll"] and c.n_frames == 10 and c.dims == 3
@@ -122,26 +124,24 @@ def test_time_column_and_a_different_rate_is_refused(tmp_path):
     """A CSV's own times decide its rate: a --rate that disagrees is an error, not silently used."""
     p = tmp_path / "t.csv"
     p.write_text("time,a_x,a_y\n" + "".join(f"{k / 100:.2f},{k},{-k}\n" for k in range(20)))
-    with pytest.raises(ImportFormatError, match=r"time column 'time' gives 100 Hz but rate=60 was given"):
+    with pytest.raises(ImportFormatError, match=r"time column 'time' gives 100 Hz but a rate of 60 Hz was given \(--rate\)"):
         read_csv_landmarks(p, rate=60)
     assert read_csv_landmarks(p, rate=100).rate == 100 == read_csv_landmarks(p).rate
     q = tmp_path / "long.csv"
     q.write_text("time,point,x,y\n" + "".join(f"{k / 50:.2f},m,{k},0\n" for k in range(10)))
-    with pytest.raises(ImportFormatError, match=r"gives 50 Hz but rate=25"):
+    with pytest.raises(ImportFormatError, match=r"gives 50 Hz but a rate of 25 Hz"):
         read_csv_landmarks(q, rate=25)
 
 
 def test_long_table_frame_gaps_are_filled_and_named(tmp_path):
-    """Missing frame numbers are dropouts (interpolated, with a warning naming them), never closed up."""
-    from engine.io.errors import ImportDataWarning
-
+    """Missing frame numbers are dropouts (interpolated, the history naming them), never closed up."""
     p = tmp_path / "gaps.csv"
     p.write_text("frame,point,x,y\n" + "".join(f"{f},m,{2 * f},1\n" for f in (0, 1, 2, 5, 6, 7)))
-    with pytest.warns(ImportDataWarning, match=r"frames 3, 4 \(2 of 8\) have no rows"):
-        c = read_csv_landmarks(p, rate=10)
+    c = read_csv_landmarks(p, rate=10)
+    assert [h for h in c.history if "4 without a row in the table" in h and "2 of 8 frames (frames 3, 4)" in h]
     assert c.n_frames == 8  # not 6: the track keeps its timing
     np.testing.assert_allclose(c.frames[:, 0], 2 * np.arange(8))  # the gap interpolated linearly
-    with pytest.warns(ImportDataWarning), pytest.raises(ImportFormatError, match="missing") as e:
+    with pytest.raises(ImportFormatError, match="missing") as e:
         read_csv_landmarks(p, rate=10, fill_gaps=False)
     assert e.value.frame == 3
     p.write_text("frame,point,x,y\n0,m,0,0\n1,m,1,1\n1000000000,m,2,2\n")  # a typo: no billion-row array
@@ -154,9 +154,7 @@ def test_long_table_frame_gaps_are_filled_and_named(tmp_path):
 
 
 def test_alignment_longer_than_the_data(tmp_path):
-    """Cut with a warning naming both durations; refused when it is many times as long (wrong file or rate)."""
-    from engine.io.errors import ImportDataWarning
-
+    """Cut and reported naming both durations; refused when it is many times as long (wrong file or rate)."""
     p = tmp_path / "a.csv"
     p.write_text("time,a_x,a_y\n" + "".join(f"{k / 100:.2f},{k},0\n" for k in range(100)))  # 1.00 s
     lab = tmp_path / "a.lab"
@@ -164,9 +162,10 @@ def test_alignment_longer_than_the_data(tmp_path):
     with pytest.raises(ImportFormatError, match=r"runs to 25\.000 s but the data last 1\.000 s .*25\.0 times"):
         read_corpus(p, alignment=lab)
     lab.write_text("0 0.5 p\n0.5 1.3 aa\n1.3 1.4 m\n")
-    with pytest.warns(ImportDataWarning, match=r"runs to 1\.400 s but the data last 1\.000 s.*1 phone dropped"):
-        c = read_corpus(p, alignment=lab)
-    assert [ph.label for ph in c.utterances[0].phones] == ["p", "aa"] and c.utterances[0].phones[-1].end == 1.0
-    lab.write_text("0 0.5 p\n0.5 1.0 aa\n1.0 3.5 sil\n")  # a trailing pause past the data: no warning
     c = read_corpus(p, alignment=lab)
+    assert [h for h in c.history if re.search(r"runs to 1\.400 s but the data last 1\.000 s.*1 phone dropped", h)]
+    assert [ph.label for ph in c.utterances[0].phones] == ["p", "aa"] and c.utterances[0].phones[-1].end == 1.0
+    lab.write_text("0 0.5 p\n0.5 1.0 aa\n1.0 3.5 sil\n")  # a trailing pause past the data: nothing to say
+    c = read_corpus(p, alignment=lab)
+    assert not [h for h in c.history if "alignment" in h]
     assert [ph.label for ph in c.utterances[0].phones] == ["p", "aa"]

@@ -123,7 +123,7 @@ def test_sequence_consistency_errors(tmp_path):
     P, F = _frames(n=5)
     d = tmp_path / "s"
     write_mesh_sequence(d, P, faces=F)
-    with pytest.raises(ImportFormatError, match="carry no timing; pass the frame rate"):
+    with pytest.raises(ImportFormatError, match="carry no timing; give the frame rate"):
         read_mesh_sequence(d)
     write_obj(d / "frame_00003.obj", P[3][:-1], None)
     with pytest.raises(ImportFormatError, match="frame_00003.obj, frame 3: has 11 vertices.*has 12") as e:
@@ -164,7 +164,7 @@ def test_vertex_array_with_template(tmp_path):
     np.save(tmp_path / "bad.npy", np.zeros((4, 5)))
     with pytest.raises(ImportFormatError, match=r"shape \(4, 5\); expected \(n_frames, V, 3\)"):
         read_vertex_array(tmp_path / "bad.npy", rate=60)
-    with pytest.raises(ImportFormatError, match="pass the frame rate"):
+    with pytest.raises(ImportFormatError, match="give the frame rate"):
         read_vertex_array(npy)
 
 

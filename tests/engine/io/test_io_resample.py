@@ -81,7 +81,8 @@ def test_concat_checks():
     b.utterances[0] = Utterance("v0", 0, 12)
     ab = concat([a, b])
     assert ab.n_frames == 22 and [u.id for u in ab.utterances] == ["u0", "v0"]
-    with pytest.raises(CorpusError, match="at 50 Hz but corpus 0 .* at 100 Hz; resample"):
+    with pytest.raises(CorpusError, match="at 50 Hz but corpus 0 .* at 100 Hz; corpora can be joined only at one "
+                                          "frame rate: resample"):
         concat([a, _corpus([np.zeros(5)], 50.0)])
     with pytest.raises(CorpusError, match="no corpora"):
         concat([])

@@ -231,12 +231,18 @@ def test_dispatch_and_folder_of_videos(videos, tmp_path):
         assert np.sqrt((d ** 2).mean()) < 0.5
 
 
-def test_cli_import_keeps_video_rate_and_audio(videos, tmp_path):
+def test_cli_import_resamples_video_to_the_analysis_rate_and_keeps_audio(videos, tmp_path):
     from app.cli import main
     from engine.corpus import Corpus
 
+    out60 = tmp_path / "talk60.npz"
+    assert main(["import", str(videos["dir"] / "moving.mp4"), "-o", str(out60), "--interocular-mm", "60"]) == 0
+    c60 = Corpus.load(out60)
+    assert c60.rate == 60.0 and c60.n_frames == 2 * N  # as every other input (the classes are read at 60 Hz)
+    assert any(h.startswith(f"resampled {RATE:g} -> 60 Hz") for h in c60.history)
     out = tmp_path / "talk.npz"
-    assert main(["import", str(videos["dir"] / "moving.mp4"), "-o", str(out), "--interocular-mm", "60"]) == 0
+    assert main(["import", str(videos["dir"] / "moving.mp4"), "-o", str(out), "--interocular-mm", "60",
+                 "--resample", "native"]) == 0
     c = Corpus.load(out)
     assert c.rate == RATE and c.n_frames == N and c.faces.shape == (120, 3)
     assert c.registration.startswith("head pose removed") and "60 mm" in c.registration
