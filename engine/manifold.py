@@ -292,8 +292,14 @@ class Manifold(BaseEstimator):
         return path
 
     @classmethod
-    def load(cls, path) -> "Manifold":
+    def load(cls, path, *, memory_map: bool | None = None) -> "Manifold":
         """Read a manifold written by :meth:`save`, without refitting.
+
+        ``memory_map``: None (default) leaves the large per-frame arrays (of at least
+        ``engine._persist.MMAP_MIN_BYTES``) memory-mapped from the file, read-only, paged in
+        as they are used; True maps every array the file stores uncompressed; False reads
+        everything into memory. The checks below read mapped arrays a block at a time and
+        give the pages back, so a check does not make the file resident.
 
         Every array is checked before use (see ``engine._validate``): dtypes, shapes
         that fit together (N frames, m shape components, k embedding dims, L reference
@@ -306,7 +312,7 @@ class Manifold(BaseEstimator):
 
         path = Path(path)
         try:
-            d = read_npz(path)
+            d = read_npz(path, memory_map=memory_map)
         except FileNotFoundError:
             raise ManifoldFileError(f"{path}: no such manifold file") from None
         except NpzReadError as exc:

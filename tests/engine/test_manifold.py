@@ -35,6 +35,25 @@ def test_save_load_round_trips_exactly(small_manifold, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.npz"]
 
 
+def test_memory_mapped_load_reads_the_same_arrays_from_the_file(small_manifold, tmp_path):
+    """memory_map=True leaves every stored array on disk (read-only maps), equal to the fitted ones."""
+    from engine._persist import release_pages
+
+    path = small_manifold.save(tmp_path / "m.npz")
+    m = Manifold.load(path, memory_map=True)
+    for attr in ("Fx_", "Fxv_", "G_", "Fy_"):
+        a = getattr(m, attr)
+        assert isinstance(a, np.memmap) and not a.flags.writeable
+        np.testing.assert_array_equal(a, getattr(small_manifold, attr))
+    assert isinstance(m.tangent_.s_, np.memmap) and isinstance(m.states_.labels_, np.memmap)
+    np.testing.assert_array_equal(m.states_.labels_, small_manifold.states_.labels_)
+    np.testing.assert_array_equal(m.corpus_.frames, small_manifold.corpus_.frames)
+    release_pages(m.Fy_[10:500])  # the pages go back to the file cache; the values stay readable
+    release_pages(np.ones(3))  # an array in memory: nothing to do
+    np.testing.assert_array_equal(m.Fy_[10:500], small_manifold.Fy_[10:500])
+    assert not isinstance(Manifold.load(path, memory_map=False).Fy_, np.memmap)
+
+
 def test_save_without_frames_reconstructs(small_manifold, tmp_path):
     path = small_manifold.save(tmp_path / "m.npz", include_frames=False)
     m = Manifold.load(path)
@@ -142,8 +161,9 @@ DAMAGE = {
 }
 
 
+@pytest.mark.parametrize("memory_map", [None, True])
 @pytest.mark.parametrize("case", sorted(DAMAGE))
-def test_damaged_manifold_is_refused_naming_the_field(saved_arrays, tmp_path, case):
+def test_damaged_manifold_is_refused_naming_the_field(saved_arrays, tmp_path, case, memory_map):
     damage, field = DAMAGE[case]
     d = {k: v.copy() for k, v in saved_arrays.items()}
     damage(d)
@@ -151,7 +171,7 @@ def test_damaged_manifold_is_refused_naming_the_field(saved_arrays, tmp_path, ca
     with open(path, "wb") as fh:
         np.savez(fh, **d)
     with pytest.raises(ManifoldFileError) as err:
-        Manifold.load(path)
+        Manifold.load(path, memory_map=memory_map)  # True: every array checked as a map of the file
     msg = str(err.value)
     assert msg.startswith(str(path)) and field in msg and "\n" not in msg, msg
 
