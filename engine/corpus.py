@@ -5,6 +5,7 @@ across utterance boundaries: no velocity, transition or path crosses one.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -195,7 +196,7 @@ class Corpus:
             tol = 0.5 / self.rate + 1e-9
             for k, p in enumerate(u.phones):
                 # (the message is made only for a fault: a million-frame corpus has a million phones)
-                if not (np.isfinite(p.start) and np.isfinite(p.end)):
+                if not (math.isfinite(p.start) and math.isfinite(p.end)):
                     raise CorpusError(f"{self._where(u, k, p)}: times must be finite")
                 if not p.label:
                     raise CorpusError(f"{self._where(u, k, p)}: empty label")
