@@ -349,14 +349,27 @@ def test_dynamics_scale_reaches_the_dynamic_features_and_round_trips(small_corpu
     np.testing.assert_array_equal(m2.Fy_, m.Fy_)
 
 
-def test_state_inverse_table_only_on_the_exact_path(small_corpus, small_manifold):
-    """The landmark (large-corpus) build does not tetrahedralise all frames at build time."""
+def test_state_inverse_table_of_the_landmark_path_comes_from_local_triangulations(small_corpus, small_manifold):
+    """The landmark (large-corpus) build does not tetrahedralise all frames: the map at the state points
+    comes from triangulations of their neighbourhoods, the same values as the whole map's; a file
+    without the table gets it on first synthesis, the same way."""
+    from engine.inverse import InverseMap, delaunay_at
     from engine.synthesis import ManifoldSynthesizer
     from engine.targets import targets_from_utterance
 
     assert small_manifold.state_x_ is not None
     m = Manifold(n_landmarks=300).fit(small_corpus)
-    assert m.state_x_ is None and m._inverse is None
+    assert m.state_x_ is not None and m._inverse is None  # no tetrahedralisation of every frame
+    C = np.asarray(m.states_.centroids_, np.float64)
+    whole = InverseMap(n_dims=3).fit(m.Fy_, m.Fx_)
+    np.testing.assert_allclose(m.state_x_, whole.transform(C), rtol=0, atol=1e-5 * np.abs(m.Fx_).max())
+    rng = np.random.default_rng(0)  # any point inside the frames' hull, not only centroids
+    q = m.Fy_[rng.choice(len(m.Fy_), 40), :3] * 0.6 + m.Fy_[rng.choice(len(m.Fy_), 40), :3] * 0.4
+    got = delaunay_at(m.Fy_, m.Fx_, q)
+    ok = ~np.isnan(got).any(axis=1)
+    assert ok.mean() > 0.9
+    np.testing.assert_allclose(got[ok], whole.transform(q)[ok], rtol=0, atol=1e-5 * np.abs(m.Fx_).max())
+    m.state_x_ = None  # as a file of an older build
     u = m.corpus_.utterances[0]
     traj = ManifoldSynthesizer(strict=False).fit(m).synthesize(targets_from_utterance(m, u.id, on_collision="merge"))
-    assert np.isfinite(traj.Fx).all() and m._inverse is not None  # mapped lazily instead
+    assert np.isfinite(traj.Fx).all() and m.state_x_ is not None and m._inverse is None
