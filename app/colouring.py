@@ -258,6 +258,23 @@ def _phone_counts(state):
     return sp.csr_matrix((n, (keys // (P + 1), keys % (P + 1))), shape=(cd.n_points, P + 1))
 
 
+def _row_argmax(m) -> np.ndarray:
+    """Column of each row's largest entry of a csr matrix with sorted indices (the first on a tie; 0 for
+    an empty row), without a Python loop over rows."""
+    m.sort_indices()
+    n = np.diff(m.indptr)
+    out = np.zeros(m.shape[0], np.int64)
+    rows = np.flatnonzero(n > 0)
+    if rows.size == 0:
+        return out
+    top = np.maximum.reduceat(m.data, m.indptr[rows])
+    row_of = np.repeat(np.arange(m.shape[0]), n)
+    at = np.flatnonzero(m.data == top[np.searchsorted(rows, row_of)])
+    first = at[np.r_[True, row_of[at][1:] != row_of[at][:-1]]]
+    out[row_of[first]] = m.indices[first]
+    return out
+
+
 def _mode_colors(mode, manifold, state, modes) -> Coloring:
     cd = state.cloud
     G = cd.n_points
@@ -298,10 +315,10 @@ def _mode_colors(mode, manifold, state, modes) -> Coloring:
             # a point with any frame of a chosen phone shows the most frequent of them: the filter never hides one
             has = np.diff(sub.indptr) > 0
             rgb = np.broadcast_to(np.asarray(OUTSIDE_RGB, np.float32), (G, 3)).copy()
-            rgb[has] = pal[cols[np.asarray(sub[has].argmax(axis=1)).reshape(-1)]]
+            rgb[has] = pal[cols[_row_argmax(sub)[has]]]
         else:
             chosen, cols = names, np.arange(P)
-            rgb = pal[state.derived("phone_points", lambda: np.asarray(counts.argmax(axis=1)).reshape(-1))]
+            rgb = pal[state.derived("phone_points", lambda: _row_argmax(counts))]
         legend = [(n, tuple(lut[n])) for n in chosen[:LEGEND_MAX]]
         if len(chosen) > LEGEND_MAX:
             legend.append((f"… {len(chosen) - LEGEND_MAX} more (filter phones)", UNREACHABLE_RGB))

@@ -725,7 +725,7 @@ def insert_state_target(manifold, targets, state: int, *, frame=None, spacing: f
     frame = int(frame)
     if frame < 0:
         raise TargetError(f"target frame {frame} is negative")
-    table = getattr(manifold, "state_x_", None)
+    table = getattr(manifold, "state_x_", None)  # (not computed here: a click must not wait for it)
     if table is not None and table.shape[0] == K:
         x = np.asarray(table[s], dtype=np.float64)
     else:
