@@ -146,10 +146,13 @@ def _whole(Y, labels) -> CloudDetail:
 
 
 def _cells(Y, lo, hi, h):
-    """Grid cell of every frame: (N,) int64 cell number, and the cells per axis."""
-    ijk = np.floor((Y - lo) / h).astype(np.int64)
+    """Grid cell of every frame: (N,) int64 cell number, and the cells per axis (float64 arithmetic)."""
     n = np.floor((hi - lo) / h).astype(np.int64) + 1  # the largest index is the top corner's (same arithmetic)
-    return (ijk[:, 0] * n[1] + ijk[:, 1]) * n[2] + ijk[:, 2], n
+    cell = np.zeros(Y.shape[0], np.int64)
+    for c in range(3):  # a column at a time: no (N, 3) temporaries
+        cell *= n[c]
+        cell += np.floor((Y[:, c].astype(np.float64) - lo[c]) / h).astype(np.int64)
+    return cell, n
 
 
 def _keys(Y, labels, lo, hi, h, n_states) -> np.ndarray:
@@ -198,12 +201,13 @@ def cloud_detail(Y, labels, *, max_points: int | None = None) -> CloudDetail:
         raise ValueError(f"Y must have shape (N, >=3) with N = {labels.shape[0]} (one row per label), got {Y.shape}")
     labels = labels.astype(np.int64)
     N = Y.shape[0]
-    Y = np.ascontiguousarray(Y[:, :3], dtype=np.float64)
+    # Y1-3 in their own precision (F^y is float32: 12 bytes a frame); cells are found in float64
+    Y = np.ascontiguousarray(Y[:, :3], dtype=np.float64 if Y.dtype.itemsize > 4 else np.float32)
     if not np.isfinite(Y).all():
         raise ValueError("Y holds NaN or infinite values; a fitted manifold never does")
     if N <= max_points:
-        return _whole(Y, labels)
-    lo, hi = Y.min(axis=0), Y.max(axis=0)
+        return _whole(Y.astype(np.float64), labels)
+    lo, hi = Y.min(axis=0).astype(np.float64), Y.max(axis=0).astype(np.float64)
     extent = np.maximum(hi - lo, 0.0)
     big = float(extent.max()) * 2.0 + 1.0  # one cell holds everything
     K = int(labels.max()) + 1
@@ -242,25 +246,35 @@ def cloud_detail(Y, labels, *, max_points: int | None = None) -> CloudDetail:
     ok = [hh for hh, gg in tried.items() if gg <= max_points]
     h = min(ok) if ok else big  # the finest grid within the cap; else whole states (K groups)
     key = _keys(Y, labels, lo, hi, h, K)
-    order = np.argsort(key, kind="stable")
-    ks = key[order]
-    starts = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
+    if int(key.max()) >= 2**62 // N:  # renumber the (state, cell) pairs so that key * N fits in int64
+        key = np.unique(key, return_inverse=True)[1].reshape(-1)
+    both = np.sort(key * N + np.arange(N, dtype=np.int64))  # by group, then frame: one sort of N numbers
+    del key
+    order = both % N
+    ks = both // N
+    del both
+    first = np.r_[True, ks[1:] != ks[:-1]]
+    del ks
+    starts = np.flatnonzero(first)
     G = starts.size
     offsets = np.r_[starts, N].astype(np.int64)
     sizes = np.diff(offsets)
-    gs = np.repeat(np.arange(G, dtype=np.int64), sizes)
     group_of = np.empty(N, np.int64)
-    group_of[order] = gs
+    group_of[order] = np.cumsum(first) - 1
+    gs = group_of[order]
     Yo = Y[order]
-    mean = np.add.reduceat(Yo, starts, axis=0) / sizes[:, None]
+    mean = (np.add.reduceat(Yo, starts, axis=0, dtype=np.float64) / sizes[:, None]).astype(Yo.dtype)
     d2 = ((Yo - mean[gs]) ** 2).sum(axis=1)
     near = np.flatnonzero(d2 == np.minimum.reduceat(d2, starts)[gs])
     near = near[np.r_[True, gs[near][1:] != gs[near][:-1]]]  # the first nearest member per group
     frames = order[near]
-    radius = np.sqrt(np.maximum.reduceat(((Yo - Y[frames][gs]) ** 2).sum(axis=1), starts))
+    r2 = np.maximum.reduceat(((Yo - Y[frames][gs]) ** 2).sum(axis=1), starts).astype(np.float64)
+    # the farthest member, computed in Y's precision: a hair larger, so that it bounds the float64 distance
+    radius = np.sqrt(r2) * (1 + 1e-5) + 1e-7 * float((hi - lo).max())
+    del Yo, d2, gs
     cell, _n = _cells(Y[frames], lo, hi, h)
     uc, inv = np.unique(cell, return_inverse=True)
     in_cell = np.bincount(inv.reshape(-1), weights=sizes, minlength=uc.size)[inv.reshape(-1)]
     density = (np.log(in_cell) - np.log(N) - 3.0 * np.log(h)).astype(np.float32)
-    return CloudDetail(frames.astype(np.int64), order.astype(np.int64), offsets, group_of, labels[frames],
-                       radius, float(h), density, np.array([lo, hi]))
+    return CloudDetail(frames.astype(np.int64), order.astype(np.int64), offsets, group_of.astype(np.int64),
+                       labels[frames], radius, float(h), density, np.array([lo, hi]))

@@ -44,6 +44,19 @@ class PhoneInterval:
     def mid(self) -> float:
         return 0.5 * (self.start + self.end)
 
+    @classmethod
+    def _many(cls, times, labels) -> tuple:
+        """Phones from lists of ``(start, end)`` floats and ``str`` labels (already of those types, as
+        ``tolist()`` of a file's float and str arrays gives them), without the dataclass's per-field
+        ``__init__`` (a million-frame corpus has ~10^5 phones). :meth:`Corpus.validate` checks them."""
+        new = object.__new__
+        out = []
+        for (t0, t1), lab in zip(times, labels):
+            p = new(cls)
+            p.__dict__.update(start=t0, end=t1, label=lab)
+            out.append(p)
+        return tuple(out)
+
 
 @dataclass(frozen=True)
 class Utterance:
@@ -412,7 +425,7 @@ class Corpus:
         times, labels = np.asarray(p_t)[by_utt].tolist(), np.asarray(p_lab)[by_utt].tolist()
         for k, (b, uid) in enumerate(zip(bounds.tolist(), ids.tolist())):
             a, e = int(cuts[k]), int(cuts[k + 1])
-            phones = tuple(PhoneInterval(float(t0), float(t1), str(lab)) for (t0, t1), lab in zip(times[a:e], labels[a:e]))
+            phones = PhoneInterval._many(times[a:e], labels[a:e])
             utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, str(audio[k]) or None, str(text[k]),
                                   str(speaker[k])))
         try:

@@ -40,7 +40,7 @@ def test_groups_hold_one_state_and_one_cell_and_every_frame_once():
         mem = cd.members(g)
         assert cd.frames[g] in mem and len(np.unique(cell[mem], axis=0)) == 1  # one grid cell
         far = np.linalg.norm(Y[mem, :3] - Y[cd.frames[g], :3], axis=1).max()
-        np.testing.assert_allclose(cd.radius[g], far, rtol=1e-12)
+        assert far <= cd.radius[g] <= far * (1 + 1e-4) + 1e-5  # bounds the farthest member, tightly
         centre = Y[mem, :3].mean(axis=0)  # the drawn frame is the member nearest the members' mean
         d = np.linalg.norm(Y[mem, :3] - centre, axis=1)
         assert np.isclose(np.linalg.norm(Y[cd.frames[g], :3] - centre), d.min())
