@@ -64,8 +64,9 @@ class Coloring:
 
     Attributes
     ----------
-    rgb : ndarray of shape (N, 3) float32 in [0, 1]
-    values : ndarray of shape (N,) float32 or None
+    rgb : ndarray of shape (G, 3) float32 in [0, 1]
+        One colour per drawn point (G = N while every frame is drawn).
+    values : ndarray of shape (G,) float32 or None
         The scalar shown (density, signed hop distance), NaN = no value; None for categories.
     cmap : str, or ndarray of shape (n, 3) of RGB rows for a discrete scale, or None
     clim : (float, float) or None
@@ -142,7 +143,7 @@ def categorical_palette(n: int) -> np.ndarray:
 
 def phone_palette(state) -> dict:
     """Colour of each phone label (sorted labels, :func:`categorical_palette`), shared by all views."""
-    names = sorted(set(state.phones.tolist()) - {""})
+    names = list(state.phone_names)
     return {n: tuple(float(c) for c in col) for n, col in zip(names, categorical_palette(len(names)))}
 
 
@@ -185,18 +186,23 @@ def hop_table(max_hops: int, direction: str) -> tuple[np.ndarray, float, float]:
     return table.astype(np.float32), float(lo), float(lo + len(table))
 
 
-def hemisphere_coloring(manifold, state: int, direction: str, horizon_ms=None) -> Coloring:
+def hemisphere_coloring(manifold, state: int, direction: str, horizon_ms=None, *, cloud=None) -> Coloring:
     """Colours of the frames by signed hop distance from ``state`` within ``horizon_ms``.
 
     ``horizon_ms=None`` means no horizon (every reachable state). Frames outside the
     horizon get :data:`OUTSIDE_RGB` (value NaN), unreachable ones :data:`UNREACHABLE_RGB`.
+    With ``cloud`` (an :class:`app.lod.CloudDetail`) one colour per drawn point: its
+    group's state's, exactly its frames' colour; the readout still counts frames.
     """
     from engine.horizon import hemisphere, horizon_hops
 
     g = manifold.states_
     rate = float(manifold.corpus_.rate)
     H = None if horizon_ms is None else horizon_hops(float(horizon_ms) / 1000.0, rate)
-    hem = hemisphere(g, state, g.labels_, direction=direction, max_hops=H)
+    if cloud is None or cloud.whole:
+        hem = hemisphere(g, state, g.labels_ if cloud is None else cloud.state, direction=direction, max_hops=H)
+    else:
+        hem = hemisphere(g, state, cloud.state, direction=direction, max_hops=H, weights=cloud.sizes)
     scale = hem.reach if H is None else H
     table, lo, hi = hop_table(scale, direction)
     v = hem.hops
@@ -214,8 +220,9 @@ def hemisphere_coloring(manifold, state: int, direction: str, horizon_ms=None) -
         within = "reachable"
     else:
         within = f"within {float(horizon_ms):.0f} ms ({H} hop{'s' if H != 1 else ''} at {rate:g} frames/s)"
+    total = len(v) if hem.weights is None else int(np.sum(hem.weights))
     readout = (f"{sides[direction]} {within}: {100 * hem.fraction_inside:.1f}% of frames "
-               f"({hem.n_inside:,}/{len(v):,})")
+               f"({hem.n_inside:,}/{total:,})")
     return Coloring(rgb.astype(np.float32), v, table, (lo, hi), names[direction], [], ticks,
                     [str(abs(int(t))) if direction != "both" else f"{int(t):+d}".replace("+0", "0")
                      for t in ticks], readout)
@@ -223,12 +230,14 @@ def hemisphere_coloring(manifold, state: int, direction: str, horizon_ms=None) -
 
 # --------------------------------------------------------------------------- every mode
 def point_colors(mode: str, manifold, state=None) -> Coloring:
-    """Colours of every frame of ``manifold`` for colour mode ``mode``.
+    """Colours of the points the manifold view draws for colour mode ``mode``: one per frame
+    while every frame is drawn, else one per group of frames (``state.cloud``, an
+    :class:`app.lod.CloudDetail`), computed from all the frames it stands for.
 
     ``state`` (an :class:`app.state.AppState`) supplies the selection and hemisphere
     (distance mode), the horizon, the current utterance (utterance mode highlights it),
-    the phone filter (phone mode), the shown ellipsoids (points dimmed) and the cached
-    density / phones.
+    the phone filter (phone mode), the shown ellipsoids (points dimmed), the cloud and
+    the cached density / phones.
     """
     from app.state import COLOR_MODES, AppState
 
@@ -240,52 +249,91 @@ def point_colors(mode: str, manifold, state=None) -> Coloring:
     return c
 
 
+def _phone_counts(state):
+    """(G, P + 1) csr: frames of each phone code in each drawn point's group (code P: no phone)."""
+    import scipy.sparse as sp
+
+    cd, P = state.cloud, len(state.phone_names)
+    keys, n = np.unique(cd.group_of * (P + 1) + state.phone_codes, return_counts=True)
+    return sp.csr_matrix((n, (keys // (P + 1), keys % (P + 1))), shape=(cd.n_points, P + 1))
+
+
+def _row_argmax(m) -> np.ndarray:
+    """Column of each row's largest entry of a csr matrix with sorted indices (the first on a tie; 0 for
+    an empty row), without a Python loop over rows."""
+    m.sort_indices()
+    n = np.diff(m.indptr)
+    out = np.zeros(m.shape[0], np.int64)
+    rows = np.flatnonzero(n > 0)
+    if rows.size == 0:
+        return out
+    top = np.maximum.reduceat(m.data, m.indptr[rows])
+    row_of = np.repeat(np.arange(m.shape[0]), n)
+    at = np.flatnonzero(m.data == top[np.searchsorted(rows, row_of)])
+    first = at[np.r_[True, row_of[at][1:] != row_of[at][:-1]]]
+    out[row_of[first]] = m.indices[first]
+    return out
+
+
 def _mode_colors(mode, manifold, state, modes) -> Coloring:
-    N = manifold.Fy_.shape[0]
+    cd = state.cloud
+    G = cd.n_points
     if mode == "density":
-        v = state.density
+        v = state.density if cd.whole else cd.density  # a group: the histogram density of its cell
         clim = (float(np.percentile(v, 2)), float(np.percentile(v, 98)))
         return Coloring(_map(v, DENSITY_CMAP, clim), v, DENSITY_CMAP, clim, "log density")
     if mode == "distance":
         if state.state is None:
-            v = np.full(N, np.nan, dtype=np.float32)
-            return Coloring(np.broadcast_to(np.asarray(UNREACHABLE_RGB, np.float32), (N, 3)).copy(), v, None,
+            v = np.full(G, np.nan, dtype=np.float32)
+            return Coloring(np.broadcast_to(np.asarray(UNREACHABLE_RGB, np.float32), (G, 3)).copy(), v, None,
                             None, "hop distance", readout="click a point to colour its hemisphere")
         if state.hemisphere == "off":
-            v = np.where(manifold.states_.labels_ == state.state, 0.0, np.nan).astype(np.float32)
+            v = np.where(cd.state == state.state, 0.0, np.nan).astype(np.float32)
             rgb = np.where(np.isfinite(v)[:, None], np.asarray(RESERVED_COLOURS["selected"], np.float32),
                            np.asarray(UNREACHABLE_RGB, np.float32)).astype(np.float32)
             return Coloring(rgb, v, None, None, "selected state")
-        return hemisphere_coloring(manifold, state.state, state.hemisphere, state.horizon_ms)
+        return hemisphere_coloring(manifold, state.state, state.hemisphere, state.horizon_ms, cloud=cd)
     if mode == "class":
-        cls = np.asarray(manifold.tangent_.classes_)
+        cls = state.derived("class_points", lambda: cd.plurality(
+            np.where(np.asarray(manifold.tangent_.classes_) < 0, 4, manifold.tangent_.classes_), 5))
         pal = np.vstack([np.asarray(CLASS_COLOURS, np.float32), np.asarray(UNREACHABLE_RGB, np.float32)])
-        rgb = pal[np.where(cls < 0, 4, cls)]
+        rgb = pal[cls]
         return Coloring(rgb, None, None, None, "tangent class",
                         [(n, CLASS_COLOURS[i]) for i, n in enumerate(CLASS_LABELS)])
     if mode == "phone":
         lut = phone_palette(state)
         names = list(lut)
-        chosen = [n for n in names if n in state.phone_filter] if state.phone_filter else names
-        codes = np.searchsorted(np.array(names + ["\uffff"]), state.phones)  # "" sorts before every label
+        P = len(names)
         pal = np.vstack([np.asarray(list(lut.values()), np.float32).reshape(-1, 3),
                          np.asarray(UNREACHABLE_RGB, np.float32)])
-        known = np.isin(state.phones, chosen)
-        rgb = pal[np.where(known, codes, len(names))]
+        frames_per_code = state.derived("phone_frames", lambda: np.bincount(state.phone_codes, minlength=P + 1))
+        counts = state.derived("phone_counts", lambda: _phone_counts(state))
         if state.phone_filter:
-            rgb[~known] = OUTSIDE_RGB
+            chosen = [n for n in names if n in state.phone_filter]
+            cols = np.array([names.index(n) for n in chosen], dtype=np.int64)
+            sub = counts[:, cols]
+            # a point with any frame of a chosen phone shows the most frequent of them: the filter never hides one
+            has = np.diff(sub.indptr) > 0
+            rgb = np.broadcast_to(np.asarray(OUTSIDE_RGB, np.float32), (G, 3)).copy()
+            rgb[has] = pal[cols[_row_argmax(sub)[has]]]
+        else:
+            chosen, cols = names, np.arange(P)
+            rgb = pal[state.derived("phone_points", lambda: _row_argmax(counts))]
         legend = [(n, tuple(lut[n])) for n in chosen[:LEGEND_MAX]]
         if len(chosen) > LEGEND_MAX:
             legend.append((f"… {len(chosen) - LEGEND_MAX} more (filter phones)", UNREACHABLE_RGB))
         shown = f"{len(chosen)} of {len(names)} phones" if state.phone_filter else f"all {len(names)} phones"
-        return Coloring(rgb, None, None, None, "phone", legend,
-                        readout=f"{shown}: {100 * float(known.mean()) if N else 0.0:.1f}% of frames")
+        N = int(frames_per_code.sum())
+        share = 100 * float(frames_per_code[cols].sum()) / N if N else 0.0
+        return Coloring(rgb, None, None, None, "phone", legend, readout=f"{shown}: {share:.1f}% of frames")
     if mode == "utterance":
-        uidx = manifold.corpus_.utterance_index
-        rgb = categorical_palette(int(uidx.max()) + 1)[uidx] if N else np.zeros((0, 3), np.float32)
+        c = manifold.corpus_
+        U = len(c.utterances)
+        utt = state.derived("utterance_points", lambda: cd.plurality(c.utterance_index, U))
+        rgb = categorical_palette(U)[utt] if G else np.zeros((0, 3), np.float32)
         if state.utterance is not None:
-            k = [u.id for u in manifold.corpus_.utterances].index(state.utterance)
+            u = c.utterance(state.utterance)
             rgb = rgb * 0.25 + 0.75 * np.asarray(UNREACHABLE_RGB, np.float32)
-            rgb[uidx == k] = (0.0, 0.0, 0.0)
+            rgb[cd.groups_of(np.arange(u.start, u.stop))] = (0.0, 0.0, 0.0)  # every point holding one of its frames
         return Coloring(rgb.astype(np.float32), None, None, None, "utterance")
     raise ValueError(f"colour mode must be one of {modes}, got {mode!r}")

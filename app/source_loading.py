@@ -19,8 +19,8 @@ from pathlib import Path
 from app.cache import CACHE_DIR_ENV, cache_dir
 
 __all__ = ["PRESETS", "KINEMATICS_CHOICES", "KINEMATICS_LABELS", "CACHE_DIR_ENV", "cache_dir", "cached_manifold_path",
-           "check_kinematics", "talker_name", "prune_talker_cache", "source_kind", "load_source", "read_recording",
-           "ANALYSIS_RATE"]
+           "check_kinematics", "talker_name", "prune_talker_cache", "source_kind", "load_source", "read_corpus_file",
+           "read_recording", "ANALYSIS_RATE"]
 
 #: synthetic talker presets (engine.synthetic)
 PRESETS = ("small", "default", "paper")
@@ -158,13 +158,7 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
             m = Manifold.load(path)
             report(progress, "loading manifold", 1, 1)
             return m, src
-        if kind == "foreign":
-            corpus = read_recording(path)
-        else:
-            from engine.corpus import Corpus
-
-            corpus = Corpus.load(path)
-        return Manifold().fit(corpus, progress=progress), src
+        return Manifold().fit(read_corpus_file(path), progress=progress), src
     src = {"path": None, "preset": preset, "kind": "synthetic", "kinematics": kinematics}
     cached = cached_manifold_path(preset, kinematics)
     if use_cache and cached.exists():
@@ -193,6 +187,33 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
 #: the method's analysis rate in Hz (the paper's 60 Hz), to which 'lipspace import' and :func:`read_recording`
 #: resample by default (see docs/DECISIONS.md, "Real recordings")
 ANALYSIS_RATE = 60.0
+
+
+def read_corpus_file(path):
+    """The corpus a file holds, read as every part of Lipspace reads it: the one reader of the
+    window (File › Open, a corpus named to ``lipspace explore``) and of the command line
+    (``build``, ``info``, ``figures``, ``clusters``: :func:`app.cli._common.load_corpus_arg`).
+
+    * a Lipspace corpus ``.npz`` with its frames stored whole: :meth:`engine.corpus.Corpus.load`;
+    * a corpus stored in blocks (``lipspace import --block-frames``):
+      :func:`engine.corpus_blocks.load_blocked`, its frames left in the block files (an
+      :class:`engine.frame_blocks.BlockFrames`, never gathered);
+    * any foreign recording the importers read: :func:`read_recording` (import's defaults).
+
+    Raises
+    ------
+    engine.corpus.CorpusError
+        A damaged corpus or block file (the message names it).
+    engine.io.ImportFormatError
+        A file no importer reads.
+    """
+    p = Path(path)
+    if p.suffix.lower() == ".npz":
+        from engine.corpus import Corpus
+        from engine.corpus_blocks import is_blocked, load_blocked
+
+        return load_blocked(p) if is_blocked(p) else Corpus.load(p)
+    return read_recording(p)
 
 
 def read_recording(path):

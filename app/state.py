@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 __all__ = ["Event", "AppState", "TrajectoryData", "HEMISPHERES", "COLOR_MODES", "DEFAULT_HORIZON_MS",
-           "HORIZON_MAX_MS", "knn_density", "frame_phones", "state_path", "cluster_table",
+           "HORIZON_MAX_MS", "knn_density", "frame_phones", "frame_phone_codes", "state_path", "cluster_table",
            "original_trajectory", "prepare_derived", "insert_state_target", "TARGET_SPACING"]
 
 HEMISPHERES = ("future", "past", "both", "off")
@@ -139,23 +139,28 @@ _PREPARED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 def prepare_derived(manifold, progress=None) -> None:
     """Compute what the views derive from ``manifold`` ahead of showing it (Qt-free, any thread).
 
-    The k-NN density of every frame, the phone of every frame and the phone clusters
-    (together about a second of work at 28,800 frames) and the state graph's cached forms
-    for hemisphere and path queries are computed here, e.g. in the
-    loading worker, and picked up by :meth:`AppState.set_manifold`, so that showing a
-    manifold does not freeze the window. Reports stage ``"preparing the views"``.
+    The level of detail of the drawn cloud (:func:`app.lod.cloud_detail`: every frame up to
+    150,000, groups of frames above), the k-NN density of every frame (only while every frame
+    is drawn: a grouped cloud carries its own density), the phone of every frame, the phone
+    clusters and the state graph's cached forms for hemisphere and path queries are
+    computed here, e.g. in the loading worker, and picked up by :meth:`AppState.set_manifold`,
+    so that showing a manifold does not freeze the window. Reports stage ``"preparing the views"``.
     A corpus whose phone clusters cannot be fitted is left for the clusters panel to
     report, as without this step.
     """
+    from app.lod import cloud_detail
     from engine.progress import report
 
     stage = "preparing the views"
-    report(progress, stage, 0, 3)
-    out = {"density": knn_density(manifold.Fy_)}
+    report(progress, stage, 0, 4)
+    out = {"cloud": cloud_detail(manifold.Fy_, manifold.states_.labels_)}
+    report(progress, stage, 1, 4)
+    if out["cloud"].whole:
+        out["density"] = knn_density(manifold.Fy_)
     manifold.states_.prepare_queries()  # the state graph's csr forms, so the first click's hemisphere does not build them
-    report(progress, stage, 1, 3)
-    out["phones"] = frame_phones(manifold.corpus_)
-    report(progress, stage, 2, 3)
+    report(progress, stage, 2, 4)
+    out["phone_codes"] = frame_phone_codes(manifold.corpus_)
+    report(progress, stage, 3, 4)
     try:
         from engine.clusters import clusters_of
 
@@ -163,7 +168,7 @@ def prepare_derived(manifold, progress=None) -> None:
         out["clusters"], out["cluster_kind"], out["cluster_note"] = clusters_of(manifold)
     except ValueError:
         pass  # the panel computes (and reports) it when shown
-    report(progress, stage, 3, 3)
+    report(progress, stage, 4, 4)
     _PREPARED[manifold] = out
 
 
@@ -226,9 +231,7 @@ class AppState:
         self.playback = None
         self.playing = False
         self.component = None
-        pre = _PREPARED.get(manifold, {}) if manifold is not None else {}
-        self._density, self._phones, self._clusters = (pre.get(k) for k in ("density", "phones", "clusters"))
-        self._cluster_kind, self._cluster_note = pre.get("cluster_kind"), pre.get("cluster_note")
+        self._take_prepared(manifold)
         self._batch_depth = 0
         self._pending: dict = {}  # field name -> None, in order of first change (a batch's events)
 
@@ -283,9 +286,7 @@ class AppState:
         self.manifold = manifold
         if source is not None:
             self.source = dict(source)
-        pre = _PREPARED.get(manifold, {}) if manifold is not None else {}
-        self._density, self._phones, self._clusters = (pre.get(k) for k in ("density", "phones", "clusters"))
-        self._cluster_kind, self._cluster_note = pre.get("cluster_kind"), pre.get("cluster_note")
+        self._take_prepared(manifold)
         self.frame = self.state = self.target = self.path = self.hover = None
         self.utterance = self.original = self.synthetic = self.playback = self.component = None
         self.playing = False
@@ -313,6 +314,16 @@ class AppState:
         self._set("phone_filter", frozenset())
         self._set("visible_phones", frozenset())
 
+    def _take_prepared(self, manifold) -> None:
+        """Pick up what :func:`prepare_derived` computed for ``manifold`` (the rest is computed on demand)."""
+        pre = _PREPARED.get(manifold, {}) if manifold is not None else {}
+        self._density, self._phone_codes, self._clusters, self._cloud = (
+            pre.get(k) for k in ("density", "phone_codes", "clusters", "cloud"))
+        self._cluster_kind, self._cluster_note = pre.get("cluster_kind"), pre.get("cluster_note")
+        self._phones = None
+        self._derived: dict = {}  # per-manifold values of the views, computed once (see derived)
+        self._utt_starts = None
+
     def _require(self):
         if self.manifold is None:
             raise RuntimeError("no manifold is loaded; open a corpus or manifold first")
@@ -334,11 +345,54 @@ class AppState:
         return self._density
 
     @property
+    def cloud(self):
+        """The level of detail the manifold view draws (:class:`app.lod.CloudDetail`), once per manifold."""
+        if self._cloud is None:
+            from app.lod import cloud_detail
+
+            m = self._require()
+            self._cloud = cloud_detail(m.Fy_, m.states_.labels_)
+        return self._cloud
+
+    @property
+    def phone_codes(self) -> np.ndarray:
+        """(N,) int32: every frame's phone as an index into :attr:`phone_names` (``len(phone_names)``:
+        no phone), computed once per manifold."""
+        if self._phone_codes is None:
+            self._phone_codes = frame_phone_codes(self._require().corpus_)
+        return self._phone_codes[0]
+
+    @property
+    def phone_names(self) -> list[str]:
+        """The phone labels covering at least one frame, sorted."""
+        self.phone_codes
+        return self._phone_codes[1]
+
+    @property
     def phones(self) -> np.ndarray:
         """Phone label of every frame ('' outside phones), computed once per manifold."""
         if self._phones is None:
-            self._phones = frame_phones(self._require().corpus_)
+            self._phones = np.array(list(self.phone_names) + [""])[self.phone_codes]
         return self._phones
+
+    def phone_of(self, i: int) -> str:
+        """Frame ``i``'s phone ('' outside phones)."""
+        c = int(self.phone_codes[int(i)])
+        names = self.phone_names
+        return names[c] if c < len(names) else ""
+
+    def utterance_of(self, i: int):
+        """The utterance (:class:`engine.corpus.Utterance`) frame ``i`` belongs to."""
+        c = self._require().corpus_
+        if self._utt_starts is None:
+            self._utt_starts = np.array([u.start for u in c.utterances], dtype=np.int64)
+        return c.utterances[int(np.searchsorted(self._utt_starts, int(i), side="right")) - 1]
+
+    def derived(self, key, compute):
+        """``compute()`` once per manifold under ``key`` (the views' per-manifold tables, e.g. a colouring's)."""
+        if key not in self._derived:
+            self._derived[key] = compute()
+        return self._derived[key]
 
     @property
     def clusters(self):
@@ -478,7 +532,7 @@ class AppState:
         """Phones the phone colouring shows (empty: all); unknown labels are refused with the known ones."""
         labels = frozenset(str(x) for x in labels)
         if labels and self.manifold is not None:
-            known = set(self.phones.tolist()) - {""}
+            known = set(self.phone_names)
             bad = sorted(labels - known)
             if bad:
                 raise ValueError(f"unknown phone(s) {', '.join(bad)}; this corpus has {', '.join(sorted(known))}")
@@ -604,13 +658,45 @@ def frame_phones(corpus) -> np.ndarray:
 
     Returns ndarray of shape (N,) of str.
     """
-    out = np.full(corpus.n_frames, "", dtype=object)
-    for u in corpus.utterances:
-        for p in u.phones:
-            a = corpus.time_to_frame(u, p.start)
-            b = corpus.time_to_frame(u, p.end)
-            out[a:max(b, a + 1)] = p.label
-    return out.astype(str)
+    codes, names = frame_phone_codes(corpus)
+    return np.array(list(names) + [""])[codes]
+
+
+def frame_phone_codes(corpus) -> tuple[np.ndarray, list[str]]:
+    """Every corpus frame's phone as a code: ``(codes (N,) int32, names)``.
+
+    A phone covers its frames from the one nearest its start up to (not including) the
+    one nearest its end, and at least its first frame; where two cover a frame the later
+    phone wins. ``names`` are the labels that cover a frame, sorted; ``codes[i]`` indexes
+    them, ``len(names)`` where no phone covers frame i. Vectorised over the phones (no
+    loop over frames or phones in Python).
+    """
+    N = corpus.n_frames
+    _mid, labs, _utt, a, b = corpus.phone_table()
+    labels, inv = np.unique(labs, return_inverse=True)
+    inv = inv.reshape(-1)
+    e = np.maximum(b, a + 1)
+    codes = np.full(N, len(labels), np.int64)
+    if len(a) and np.all(a[1:] >= a[:-1]):  # phones in corpus order (as Corpus.validate keeps them)
+        f = np.arange(N)
+        j = np.searchsorted(a, f, side="right") - 1  # the last phone starting at or before each frame
+        reach = np.maximum.accumulate(e)  # the furthest end of any phone so far
+        pending = np.flatnonzero(j >= 0)
+        while pending.size:  # the latest phone covering each frame: walk back while one could
+            jj = j[pending]
+            hit = e[jj] > pending
+            codes[pending[hit]] = inv[jj[hit]]
+            more = ~hit & (jj > 0)
+            more[more] = reach[jj[more] - 1] > pending[more]
+            pending = pending[more]
+            j[pending] -= 1
+    else:
+        for k in range(len(a)):
+            codes[a[k]:e[k]] = inv[k]
+    used = np.bincount(codes, minlength=len(labels) + 1)[:len(labels)] > 0
+    remap = np.full(len(labels) + 1, int(used.sum()), np.int64)
+    remap[np.flatnonzero(used)] = np.arange(int(used.sum()))
+    return remap[codes].astype(np.int32), [str(x) for x in labels[used]]
 
 
 def cluster_table(clusters) -> list[dict]:
@@ -655,7 +741,7 @@ def insert_state_target(manifold, targets, state: int, *, frame=None, spacing: f
     frame = int(frame)
     if frame < 0:
         raise TargetError(f"target frame {frame} is negative")
-    table = getattr(manifold, "state_x_", None)
+    table = getattr(manifold, "state_x_", None)  # (not computed here: a click must not wait for it)
     if table is not None and table.shape[0] == K:
         x = np.asarray(table[s], dtype=np.float64)
     else:

@@ -4,6 +4,11 @@ They drive the real explorer window (``app.main_window.MainWindow``) under an X 
 Without a DISPLAY a script re-runs itself under ``xvfb-run -a -s "-screen 0 1600x1200x24"``
 (software OpenGL: Mesa llvmpipe). The default synthetic talker's manifold (28,800 frames)
 is built once into the cache (``$LIPSPACE_CACHE_DIR`` or the user cache dir) if missing.
+
+``--manifold FILE`` (several may be given) runs a script on any built manifold instead,
+blocked corpora's included (``benchmarks/make_standins.py`` builds the 100k-1M stand-ins);
+``talker`` names the default talker, so that both can be measured side by side in one run
+(:func:`manifold_specs`, :func:`load_manifold`, :func:`compare`).
 """
 from __future__ import annotations
 
@@ -79,6 +84,86 @@ def default_manifold(preset: str = "default"):
     print(f"   manifold: synthetic talker '{preset}', {m.Fy_.shape[0]} frames, {how} {path} "
           f"({time.perf_counter() - t:.1f} s)")
     return m, src
+
+
+#: what ``--manifold`` calls the default synthetic talker
+TALKER = "talker"
+
+
+def add_manifold_argument(ap) -> None:
+    """``--manifold FILE [FILE ...]`` (``talker``: the default synthetic talker)."""
+    ap.add_argument("--manifold", nargs="+", default=None, metavar="FILE",
+                    help="manifold file(s) from 'lipspace build' (any size, blocked corpora included); "
+                         f"'{TALKER}' is the default synthetic talker; several are measured side by side, "
+                         "each in fresh processes, in alternating order")
+    ap.add_argument("--max-points", type=int, default=None,
+                    help="points the manifold view draws at most (app.lod.DEFAULT_MAX_POINTS; default its value)")
+
+
+def apply_max_points(args) -> list[str]:
+    """Set the level of detail's cap from ``--max-points`` (in this process); returns the option for children."""
+    if args.max_points is None:
+        return []
+    import app.lod
+
+    app.lod.DEFAULT_MAX_POINTS = int(args.max_points)
+    return ["--max-points", str(args.max_points)]
+
+
+def manifold_specs(args) -> list[str]:
+    """The manifolds a run measures: ``--manifold``'s, else the talker of ``--preset``."""
+    if not args.manifold:
+        return [TALKER]
+    out = []
+    for spec in args.manifold:
+        if spec != TALKER and not os.path.isfile(spec):
+            sys.exit(f"--manifold {spec}: no such file (build one with 'lipspace build' or make_standins.py)")
+        out.append(spec if spec == TALKER else os.path.abspath(spec))
+    return out
+
+
+def spec_label(spec: str) -> str:
+    return TALKER if spec == TALKER else os.path.basename(spec)
+
+
+def load_manifold(spec: str, preset: str = "default"):
+    """``(manifold, source)`` for a ``--manifold`` entry, loaded as the window loads it (views prepared)."""
+    if spec == TALKER:
+        return default_manifold(preset)
+    from app.source_loading import load_source
+
+    t = time.perf_counter()
+    m, src = load_source(spec)
+    print(f"   manifold: {spec}, {m.Fy_.shape[0]} frames, K={m.states_.centroids_.shape[0]}, loaded and prepared in "
+          f"{time.perf_counter() - t:.1f} s", flush=True)
+    return m, src
+
+
+def order_of_runs(specs, repeats: int) -> list[str]:
+    """Each manifold ``repeats`` times, the order reversed every other round (side by side, alternating)."""
+    out = []
+    for r in range(repeats):
+        out += specs if r % 2 == 0 else specs[::-1]
+    return out
+
+
+def compare(label: str, per_spec: dict, unit: str = "ms", scale: float = 1e3) -> None:
+    """Print min / median per manifold of the values ``per_spec[spec]`` (one per run or click) and, against
+    the first manifold, the ratio of their medians and of their minima."""
+    import numpy as np
+
+    specs = list(per_spec)
+    base = specs[0]
+    for spec in specs:
+        v = np.asarray(per_spec[spec], float) * scale
+        if v.size == 0:
+            continue
+        line = f"   {label} [{spec_label(spec)}]: min {v.min():.1f} {unit}, median {np.median(v):.1f} {unit} (n={v.size})"
+        b = np.asarray(per_spec[base], float) * scale
+        if spec != base and b.size:
+            ratio = (lambda x, y: f"{x / y:.2f}" if y else "n/a")
+            line += f"; / {spec_label(base)}: median {ratio(np.median(v), np.median(b))}, min {ratio(v.min(), b.min())}"
+        print(line)
 
 
 def open_window(manifold, source):

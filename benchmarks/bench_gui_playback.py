@@ -1,11 +1,14 @@
 """Benchmark: playback in the real explorer window — frames per second and lag behind the clock.
 
 Usage: python benchmarks/bench_gui_playback.py [--repeats 4] [--max-seconds 15] [--preset default]
-       [--tree DIR] [--probe]
+       [--tree DIR] [--probe] [--manifold FILE|talker ...] [--rounds 1]
 
 Drives ``app.main_window.MainWindow`` on the default synthetic talker (28,800 frames,
-60 Hz) under an X server (re-runs itself under ``xvfb-run`` without one; software
-OpenGL). Loads the longest utterance, synthesises it with the linear method (so the
+60 Hz), or on the manifold given with ``--manifold`` (any size, blocked corpora
+included), under an X server (re-runs itself under ``xvfb-run`` without one; software
+OpenGL). With several ``--manifold`` files (``talker`` names the default talker) each
+is played in fresh processes, alternating, ``--rounds`` times, and the frame rates and
+lags are printed side by side. Loads the longest utterance, synthesises it with the linear method (so the
 lip view shows the original and the synthetic lips side by side, as a user would
 compare them) and presses Play, then runs the Qt event loop as the explorer does. There
 is no sound device here, so the reference is the clock a sound track would set:
@@ -56,6 +59,7 @@ Goals (issue 9 item 4): >= 30 frames/s in the lip view; lag never above one fram
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 import time
@@ -231,18 +235,27 @@ def main():
     ap.add_argument("--tree", default=None, help="run the explorer code of this checkout instead of this one")
     ap.add_argument("--probe", action="store_true",
                     help="run steal_probe.py beside the repeats and give its pieces during each long frame")
+    gb.add_manifold_argument(ap)
+    ap.add_argument("--rounds", type=int, default=1, help="with several --manifold: fresh processes per manifold")
     args = ap.parse_args()
     gb.ensure_display()
     if args.tree:
         sys.path.insert(0, os.path.abspath(args.tree))
     import numpy as np
 
+    cap = gb.apply_max_points(args)
+    specs = gb.manifold_specs(args)
+    if len(specs) > 1:
+        side_by_side(args, specs, cap)
+        return
+
     gb.header("playback in the lip view (real window, Play button)")
     import app
 
     print(f"   explorer code: {os.path.dirname(os.path.dirname(os.path.abspath(app.__file__)))}")
     t_all = time.perf_counter()
-    m, src = gb.default_manifold(args.preset)  # through whichever loader the tree under test has
+    # through whichever loader the tree under test has
+    m, src = gb.default_manifold(args.preset) if specs[0] == gb.TALKER else gb.load_manifold(specs[0])
     app_, win = gb.open_window(m, src)
     c = m.corpus_
     u = max(c.utterances, key=lambda u: u.stop - u.start)
@@ -320,7 +333,37 @@ def main():
           f"load average {os.getloadavg()[0]:.1f} at end")
     if probe is not None:
         _probe_report(probe, res)
+    print("SUMMARY " + json.dumps({"n_frames": int(m.Fy_.shape[0]), "rss_mb": gb.peak_rss_mb(),
+                                   "repeats": [{k: float(x[k]) for k in ("fps", "lag_max", "late", "cpu_ms", "load")}
+                                               for x in res]}))
     win.close()
+
+
+def side_by_side(args, specs, cap) -> None:
+    """Each manifold in fresh processes, alternating; the frame rates and lags side by side."""
+    import subprocess
+
+    gb.header(f"playback in the lip view, side by side: {', '.join(gb.spec_label(s) for s in specs)}")
+    runs = {spec: [] for spec in specs}
+    for spec in gb.order_of_runs(specs, args.rounds):
+        cmd = [sys.executable, os.path.abspath(__file__), "--manifold", spec, "--repeats", str(args.repeats),
+               "--max-seconds", str(args.max_seconds), "--preset", args.preset, *cap]
+        p = subprocess.run(cmd, capture_output=True, text=True, env=os.environ)
+        line = [ln for ln in p.stdout.splitlines() if ln.startswith("SUMMARY ")]
+        if p.returncode != 0 or not line:
+            sys.exit(f"playback on {spec} failed ({p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}")
+        r = json.loads(line[0][8:])
+        runs[spec].append(r)
+        fps = ", ".join(f"{x['fps']:.1f}" for x in r["repeats"])
+        lags = ", ".join(f"{x['lag_max']:.2f}" for x in r["repeats"])
+        print(f"   [{gb.spec_label(spec)}] {r['n_frames']:,} frames: frames/s per repeat {fps} (repeat 1 cold); "
+              f"worst lag {lags} periods; peak RSS {r['rss_mb']:.0f} MiB", flush=True)
+    for key, label, unit, scale in (("fps", "frames/s shown", "/s", 1.0), ("lag_max", "worst lag", "periods", 1.0),
+                                    ("late", "frames > 1 period late", "%", 100.0),
+                                    ("cpu_ms", "CPU per frame shown", "ms", 1.0)):
+        gb.compare(label, {s: [x[key] for r in rs for x in r["repeats"]] for s, rs in runs.items()}, unit, scale)
+    loads = [x["load"] for rs in runs.values() for r in rs for x in r["repeats"]]
+    print(f"   load average during repeats {min(loads):.1f}-{max(loads):.1f}")
 
 
 if __name__ == "__main__":

@@ -1,14 +1,19 @@
 """Benchmark: start-up of the explorer — time to an interactive window, and to the manifold shown.
 
 Usage: python benchmarks/bench_gui_startup.py [--cold 1] [--warm 3] [--preset default]
+       [--manifold FILE|talker ...]
 
 Each run is a fresh process executing what ``lipspace explore`` / ``make run`` executes
-(``app.main_window.launch`` on the synthetic talker), under an X server (re-runs itself
+(``app.main_window.launch`` on the synthetic talker, or on a manifold file given with
+``--manifold``: any size, blocked corpora included; ``talker`` names the default talker,
+so several can be measured side by side, alternating), under an X server (re-runs itself
 under ``xvfb-run`` without one; software OpenGL), with its own autosave state dir.
 
-* cold: an empty ``LIPSPACE_CACHE_DIR`` (the synthetic corpus and its manifold are built:
-  the first ``make run`` on a new machine);
-* warm: the same cache again (the cached manifold is loaded).
+* cold: for the talker an empty ``LIPSPACE_CACHE_DIR`` (the synthetic corpus and its
+  manifold are built: the first ``make run`` on a new machine); for a manifold file the
+  file, and the blocked corpus it references, dropped from the system's file cache first
+  (``posix_fadvise(DONTNEED)``: read from disk);
+* warm: the same cache again (the cached manifold is loaded), the files in the file cache.
 
 Measured from just before the process is started:
 
@@ -16,14 +21,17 @@ Measured from just before the process is started:
   probe timer in the GUI thread runs), with the process's CPU time until then (less
   sensitive than wall time to other work on a shared machine);
 * manifold shown: the manifold has reached the window and the manifold view has put its
-  first frame with it on screen;
+  first frame with it on screen — from then on a click selects (**usable** for a large
+  manifold);
 * event-loop stalls: the longest gap between probe ticks while the manifold is loading
   in the worker (what a user clicking around would feel) and around showing it;
 * how long a modal dialog blocked the window while the manifold loaded; the summary's
-  "window usable" is the later of "interactive" and the moment such a dialog went away.
+  "window usable" is the later of "interactive" and the moment such a dialog went away;
+* the process's peak resident memory (VmHWM) once the manifold is shown.
 
-Also printed: each loading stage and when it began (cold run). Goals (issue 9 item 6):
-window interactive in under 20 s cold and under 5 s warm.
+Also printed: each loading stage and when it began (cold run). Goals: window interactive
+in under 20 s cold and under 5 s warm (issue 9 item 6); the manifold of 1M frames shown
+in under 10 s warm with a peak under 4 GiB, 10M frames in under 30 s and 8 GiB (issue 29).
 """
 from __future__ import annotations
 
@@ -39,7 +47,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _gui_bench as gb  # noqa: E402
 
 
-def child(t0: float, preset: str) -> None:
+def child(t0: float, preset: str, path=None) -> None:
     """One start-up, timed against ``t0`` (time.time() in the parent before the process started)."""
     from PySide6 import QtCore, QtWidgets
 
@@ -92,6 +100,7 @@ def child(t0: float, preset: str) -> None:
             if prog is not None:
                 out["stages"] = [(name, t - prog.stages[0][1]) for name, t in prog.stages]
             out["rss_mb"] = gb.peak_rss_mb()
+            out["load"] = os.getloadavg()[0]
             out["gl"] = gb.gl_renderer(win.manifold_view.plotter)
             win.close()
             app.quit()
@@ -102,15 +111,16 @@ def child(t0: float, preset: str) -> None:
     timer.start()
     from app.main_window import launch
 
-    launch(None, preset=preset, restore=False)
+    launch(path, preset=preset, restore=False)
     print("RESULT " + json.dumps(out))
 
 
-def run_one(preset: str, cache: str, state: str) -> dict:
+def run_one(preset: str, cache: str, state: str, path=None, cap=()) -> dict:
     env = dict(os.environ, LIPSPACE_CACHE_DIR=cache, LIPSPACE_STATE_DIR=state)
     t0 = time.time()
-    p = subprocess.run([sys.executable, __file__, "--child", repr(t0), "--preset", preset], capture_output=True,
-                       text=True, env=env, timeout=1800)
+    extra = ["--child-path", path] if path else []
+    p = subprocess.run([sys.executable, __file__, "--child", repr(t0), "--preset", preset, *extra, *cap],
+                       capture_output=True, text=True, env=env, timeout=1800)
     line = [ln for ln in p.stdout.splitlines() if ln.startswith("RESULT ")]
     if p.returncode != 0 or not line:
         sys.exit(f"start-up run failed ({p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}")
@@ -119,59 +129,114 @@ def run_one(preset: str, cache: str, state: str) -> dict:
     return r
 
 
-def show(kind: str, k: int, r: dict) -> None:
-    print(f"   {kind} {k}: window on screen {r['window']:.2f} s, interactive {r['interactive']:.2f} s "
+def manifold_files(path) -> list[str]:
+    """The manifold file and, when it references a blocked corpus, that corpus and its block files."""
+    import glob
+
+    import numpy as np
+
+    files = [path]
+    with np.load(path) as z:
+        if "corpus_blocks_source" in z.files:
+            src = str(z["corpus_blocks_source"])
+            rel = str(z["corpus_blocks_relative"]) if "corpus_blocks_relative" in z.files else ""
+            cand = os.path.join(os.path.dirname(path), rel) if rel else src
+            src = cand if os.path.isfile(cand) else src
+            files += [src] + sorted(glob.glob(os.path.join(src[:-len(".npz")] + ".blocks", "*.npy")))
+    return files
+
+
+def drop_from_file_cache(files) -> None:
+    """Ask the system to drop ``files`` from its page cache (the next read comes from disk)."""
+    for f in files:
+        fd = os.open(f, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+            os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_DONTNEED)
+        finally:
+            os.close(fd)
+
+
+def read_into_file_cache(files) -> None:
+    for f in files:
+        with open(f, "rb") as fh:
+            while fh.read(1 << 24):
+                pass
+
+
+def show(kind: str, k: int, r: dict, label: str = "") -> None:
+    print(f"   {kind} {k}{f' [{label}]' if label else ''}: window on screen {r['window']:.2f} s, interactive {r['interactive']:.2f} s "
           f"(process CPU {r.get('cpu_interactive', float('nan')):.2f} s until then), "
           f"manifold in the window {r['manifold']:.2f} s, drawn {r['shown']:.2f} s; longest event-loop stall "
           f"while loading {1e3 * r['stall_loading']:.0f} ms (ending at {r.get('stall_loading_at', 0):.2f} s), around showing it {1e3 * r['stall_showing']:.0f} ms; "
           f"window blocked by a modal dialog for {r.get('modal_s', 0.0):.1f} s of the load; "
-          f"peak RSS {r.get('rss_mb', 0):.0f} MiB", flush=True)
+          f"peak RSS {r.get('rss_mb', 0):.0f} MiB; load average {r.get('load', float('nan')):.1f}", flush=True)
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cold", type=int, default=1, help="runs with an empty cache (each builds the talker)")
-    ap.add_argument("--warm", type=int, default=3, help="runs with the cache filled")
+    ap.add_argument("--cold", type=int, default=1, help="runs with an empty cache (each builds the talker) / with "
+                                                        "the manifold's files dropped from the file cache")
+    ap.add_argument("--warm", type=int, default=3, help="runs with the cache filled / the files in the file cache")
     ap.add_argument("--preset", default="default")
+    gb.add_manifold_argument(ap)
     ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--child-path", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     gb.ensure_display()
+    cap = gb.apply_max_points(args)
     if args.child is not None:
-        child(float(args.child), args.preset)
+        child(float(args.child), args.preset, args.child_path)
         return
     import numpy as np
 
-    gb.header(f"start-up of the explorer on the synthetic talker '{args.preset}' (fresh process per run)")
+    specs = gb.manifold_specs(args)
+    gb.header(f"start-up of the explorer on {', '.join(gb.spec_label(s) for s in specs)} (fresh process per run)")
     t_all = time.perf_counter()
-    runs = {"cold": [], "warm": []}
+    runs = {spec: {"cold": [], "warm": []} for spec in specs}
     with tempfile.TemporaryDirectory(prefix="lipspace-bench-") as tmp:
         state = os.path.join(tmp, "state")
-        for k in range(args.cold):
-            cache = os.path.join(tmp, f"cache{k}")  # empty
-            r = run_one(args.preset, cache, state)
-            runs["cold"].append(r)
-            show("cold", k + 1, r)
-            if k == 0:
+        talker_cache = os.path.join(tmp, "cache0")
+
+        def one(spec, kind, k):
+            if spec == gb.TALKER:
+                cache = os.path.join(tmp, f"cache{k}") if kind == "cold" else talker_cache
+                if kind == "warm" and not os.path.isdir(cache):
+                    os.makedirs(cache, exist_ok=True)
+                    run_one(args.preset, cache, state, cap=cap)  # fill the cache
+                r = run_one(args.preset, cache, state, cap=cap)
+            else:
+                files = manifold_files(spec)
+                (drop_from_file_cache if kind == "cold" else read_into_file_cache)(files)
+                r = run_one(args.preset, talker_cache, state, path=spec, cap=cap)
+            runs[spec][kind].append(r)
+            show(kind, len(runs[spec][kind]), r, gb.spec_label(spec) if len(specs) > 1 else "")
+            if kind == "cold" and len(runs[spec]["cold"]) == 1:
                 print("      stages (s after the load started): " + ", ".join(
                     f"{name} {t:.1f}" for name, t in r["stages"]))
-        cache = os.path.join(tmp, "cache0")
-        if not runs["cold"]:
-            os.makedirs(cache, exist_ok=True)
-            run_one(args.preset, cache, state)  # fill the cache
-        for k in range(args.warm):
-            r = run_one(args.preset, cache, state)
-            runs["warm"].append(r)
-            show("warm", k + 1, r)
-    for kind, goal in (("cold", 20.0), ("warm", 5.0)):
-        rs = runs[kind]
-        if not rs:
-            continue
-        # usable: interactive, or, when a modal dialog blocked the window, the moment it went away
-        inter = [max(r["interactive"], r.get("modal_closed", 0.0)) for r in rs]
-        shown = [r["shown"] for r in rs]
-        print(f"{kind}: window usable (interactive, no modal dialog) min {min(inter):.2f} s, median {np.median(inter):.2f} s (goal < {goal:g} s); "
-              f"manifold drawn min {min(shown):.2f} s, median {np.median(shown):.2f} s (n={len(rs)})")
-    print(f"   OpenGL renderer: {(runs['warm'] or runs['cold'])[0].get('gl')}; wall {time.perf_counter() - t_all:.0f} s; "
+
+        for k, spec in enumerate(gb.order_of_runs(specs, args.cold)):
+            one(spec, "cold", k)
+        for k, spec in enumerate(gb.order_of_runs(specs, args.warm)):
+            one(spec, "warm", k)
+    for spec in specs:
+        for kind, goal in (("cold", 20.0), ("warm", 5.0)):
+            rs = runs[spec][kind]
+            if not rs:
+                continue
+            # usable: interactive, or, when a modal dialog blocked the window, the moment it went away
+            inter = [max(r["interactive"], r.get("modal_closed", 0.0)) for r in rs]
+            shown = [r["shown"] for r in rs]
+            rss = [r.get("rss_mb", 0.0) for r in rs]
+            print(f"{kind} [{gb.spec_label(spec)}]: window interactive (no modal dialog) min {min(inter):.2f} s, "
+                  f"median {np.median(inter):.2f} s (goal < {goal:g} s); manifold drawn (usable) min {min(shown):.2f} s, "
+                  f"median {np.median(shown):.2f} s; peak RSS max {max(rss):.0f} MiB (n={len(rs)})")
+    if len(specs) > 1:
+        print("side by side (ratios against the first):")
+        for kind in ("cold", "warm"):
+            gb.compare(f"{kind}: manifold drawn", {s: [r["shown"] for r in runs[s][kind]] for s in specs}, "s", 1.0)
+    first = next(r for s in specs for k in ("warm", "cold") for r in runs[s][k])
+    print(f"   OpenGL renderer: {first.get('gl')}; wall {time.perf_counter() - t_all:.0f} s; "
           f"load average {os.getloadavg()[0]:.1f} at end")
 
 

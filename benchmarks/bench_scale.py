@@ -51,10 +51,14 @@ class _StagePeaks(threading.Thread):
         super().__init__(daemon=True)
         self.interval, self.peak, self._halt = interval, current_rss_mb(), threading.Event()
         self.stage, self.stages = "setup", {}
+        self.cpu, self._cpu0 = {}, time.process_time()  # the client's CPU seconds per reported stage
 
     def progress(self, stage, done, total):
         if stage and stage != self.stage:
             self.stages[self.stage] = max(self.stages.get(self.stage, 0.0), current_rss_mb())
+            now = time.process_time()
+            self.cpu[self.stage] = self.cpu.get(self.stage, 0.0) + now - self._cpu0
+            self._cpu0 = now
             self.stage = stage
 
     def run(self):
@@ -98,13 +102,14 @@ def measured_build(corpus, dask: str | None, *, save_to=None) -> dict:
         t = time.perf_counter()
         m.save(save_to)
         saved = {"s": time.perf_counter() - t, "mb": os.path.getsize(save_to) / 2**20}
+    sampler.progress("end", 0, 1)
     peak = sampler.stop()
     workers = None
     if executor is not None:
         workers = sorted(peak_rss_mb(pid) for pid in executor.client.run(os.getpid).values())
         executor.close()
     return {"manifold": m, "wall": wall, "cpu": cpu, "start": start, "peak": peak, "workers": workers,
-            "stage_peaks": sampler.stages, "saved": saved}
+            "stage_peaks": sampler.stages, "stage_cpu": sampler.cpu, "saved": saved}
 
 
 def generate(n_frames: int, resolution: str, path: str) -> dict:
@@ -135,7 +140,8 @@ def one(path: str, dask: str | None) -> dict:
             "speakers": len(corpus.speakers), "open_s": t_open, "rss_before_open_mb": rss0,
             "plan": plan_build(corpus.n_frames).describe(), "wall_s": b["wall"], "cpu_s": b["cpu"],
             "stages": m.timings_, "rss_start_mb": b["start"], "rss_peak_mb": b["peak"],
-            "build_mb": b["peak"] - b["start"], "stage_peaks_mb": b["stage_peaks"], "saved": b["saved"],
+            "build_mb": b["peak"] - b["start"], "stage_peaks_mb": b["stage_peaks"], "stage_cpu": b["stage_cpu"],
+            "saved": b["saved"],
             "worker_peak_mb": b["workers"], "frames_mb": corpus.frames.nbytes / 2**20, "blas": blas_kernel(),
             "dask": dask, "load_before": load0, "load_after": os.getloadavg()}
 
@@ -174,13 +180,14 @@ def main(argv=None) -> int:
         r = run_child_json(me + ["--one", path] + (["--dask", args.dask] if args.dask else []))
         runs.append(r)
         st = ", ".join(f"{k} {v:.1f}" for k, v in r["stages"].items())
-        peaks = ", ".join(f"{k} {v:.0f}" for k, v in r["stage_peaks_mb"].items())
+        peaks = ", ".join(f"{k} {v:.0f}" for k, v in r["stage_peaks_mb"].items() if k != "end")
+        cpu = ", ".join(f"{k} {v:.1f}" for k, v in r["stage_cpu"].items())
         wk = f"\n  workers' peak RSS {', '.join(f'{w:.0f}' for w in r['worker_peak_mb'])} MB" if r["worker_peak_mb"] else ""
         sv = r["saved"]
         print(f"{r['plan']}\n  {r['coords']} coordinates, {r['speakers']} speaker(s), {r['blocks']} blocks "
               f"({r['frames_mb']:.0f} MB of frames, {gen}); opened in {r['open_s']:.2f} s\n"
               f"  build {r['wall_s']:.1f} s wall, client CPU {r['cpu_s']:.1f} s ({st}); saved in {sv['s']:.1f} s "
-              f"({sv['mb']:.0f} MB file)\n"
+              f"({sv['mb']:.0f} MB file)\n  client CPU per reported stage (s): {cpu}\n"
               f"  client RSS after opening the corpus {r['rss_start_mb']:.0f} MB, peak {r['rss_peak_mb']:.0f} MB "
               f"(N x C frames would be {r['frames_mb']:.0f} MB); peak per stage (MB): {peaks}{wk}\n"
               f"  load average {r['load_before'][0]:.1f} before, {r['load_after'][0]:.1f} after "

@@ -3,16 +3,25 @@
 An estimator is saved as its constructor parameters (JSON) and its fitted
 attributes (names ending in ``_``). Fitted attributes may be ndarrays, Python or
 numpy scalars, strings, lists of str, ``scipy.sparse`` matrices or None.
+
+:func:`read_npz` reads a file's arrays, large ones memory-mapped where the archive
+stores them uncompressed (as ``np.savez`` does): a manifold of ten million frames is
+then paged in from disk as it is used, not copied into memory whole.
+:func:`release_pages` gives back the resident pages of such a map after a pass over it.
 """
 from __future__ import annotations
 
 import json
+import mmap
 import os
 
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["dump_estimator", "load_estimator", "read_npz", "NpzReadError"]
+__all__ = ["dump_estimator", "load_estimator", "read_npz", "NpzReadError", "release_pages", "MMAP_MIN_BYTES"]
+
+#: arrays of at least this many bytes are memory-mapped by ``read_npz(..., memory_map=None)``
+MMAP_MIN_BYTES = 16 * 2**20
 
 
 class NpzReadError(ValueError):
@@ -32,7 +41,7 @@ MAX_EXPANSION = 64
 EXPANSION_SLACK = 64 * 2**20
 
 
-def read_npz(path, *, keys_only: bool = False):
+def read_npz(path, *, keys_only: bool = False, memory_map: bool | None = False):
     """Every array of the ``.npz`` file ``path`` as a dict (or only the set of its names).
 
     The file is opened here and always closed, also when it is empty, truncated or not
@@ -41,6 +50,10 @@ def read_npz(path, *, keys_only: bool = False):
     uncompressed sizes may total at most ``MAX_EXPANSION`` times the file size plus
     ``EXPANSION_SLACK`` (a zip bomb is refused before it is inflated); every array's
     header must declare no more bytes than its member holds; object arrays are refused.
+
+    ``memory_map``: False reads every array into memory; None memory-maps (read-only
+    ``np.memmap``) the arrays of at least :data:`MMAP_MIN_BYTES` that the archive stores
+    uncompressed; True every such array. A compressed member is always read.
 
     Raises
     ------
@@ -72,7 +85,9 @@ def read_npz(path, *, keys_only: bool = False):
                 raise NpzReadError(path, f"its arrays would inflate to {total / 2**20:.0f} MiB from a "
                                          f"{size / 2**20:.1f} MiB file (limit {cap / 2**20:.0f} MiB); "
                                          "refused as a decompression bomb")
-            return {i.filename[:-4]: _read_member(zf, i) for i in infos}
+            least = None if memory_map is False else (0 if memory_map is True else MMAP_MIN_BYTES)
+            return {i.filename[:-4]: _read_member(zf, i, path=path, fh=fh, size=size, mmap_least=least)
+                    for i in infos}
     except (FileNotFoundError, NpzReadError):
         raise
     except MemoryError:
@@ -82,8 +97,11 @@ def read_npz(path, *, keys_only: bool = False):
                            "damaged or not an .npz archive") from None
 
 
-def _read_member(zf, info):
-    """One ``.npy`` member, its header checked against the member's size first."""
+def _read_member(zf, info, *, path=None, fh=None, size=0, mmap_least=None):
+    """One ``.npy`` member, its header checked against the member's size first; memory-mapped when
+    it is stored uncompressed and holds at least ``mmap_least`` bytes (None: never)."""
+    import zipfile
+
     fmt = np.lib.format
     with zf.open(info) as f:
         version = fmt.read_magic(f)
@@ -95,8 +113,53 @@ def _read_member(zf, info):
         if need > info.file_size:
             raise ValueError(f"array {info.filename[:-4]!r} declares shape {shape} ({need} bytes) but its "
                              f"member holds {info.file_size} bytes")
+        header = f.tell()  # bytes of the .npy header inside the member
+    if (mmap_least is not None and len(shape) and need >= max(mmap_least, 1)
+            and info.compress_type == zipfile.ZIP_STORED and fh is not None):
+        start = _member_data(fh, info) + header
+        if start + need <= size:
+            return np.memmap(path, dtype=dtype, mode="r", offset=start, shape=tuple(shape),
+                             order="F" if fortran else "C")
     with zf.open(info) as f:
         return fmt.read_array(f, allow_pickle=False)
+
+
+def _member_data(fh, info) -> int:
+    """Offset in the archive of member ``info``'s first byte (past its local file header)."""
+    import struct
+
+    fh.seek(info.header_offset)
+    local = fh.read(30)
+    if len(local) != 30 or local[:4] != b"PK\x03\x04":
+        raise ValueError(f"member {info.filename!r}: bad local file header")
+    name_len, extra_len = struct.unpack("<HH", local[26:30])
+    return info.header_offset + 30 + name_len + extra_len
+
+
+def release_pages(a) -> None:
+    """Give back the resident pages of the memory map under ``a`` (an ``np.memmap`` or a view of one).
+
+    The pages stay in the system's file cache; reading ``a`` again pages them back in. A pass
+    over a large mapped array (a finiteness check) then leaves the process's resident memory
+    as it was. Does nothing for an array in memory.
+    """
+    base = a
+    while base is not None and not isinstance(getattr(base, "_mmap", None), mmap.mmap):
+        base = getattr(base, "base", None)
+    mm = None if base is None else base._mmap
+    if mm is None or not hasattr(mm, "madvise") or not hasattr(mmap, "MADV_DONTNEED"):
+        return
+    try:
+        start = np.frombuffer(mm, dtype=np.uint8).ctypes.data
+        lo = a.ctypes.data - start
+        hi = lo + a.nbytes
+        page = mmap.PAGESIZE
+        lo = (lo // page) * page
+        hi = min(len(mm), -(-hi // page) * page)
+        if hi > lo:
+            mm.madvise(mmap.MADV_DONTNEED, lo, hi - lo)
+    except (ValueError, OSError, BufferError):
+        pass  # an advice only
 
 
 def _fitted_names(obj):

@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from engine._persist import release_pages
+
 __all__ = ["FieldError", "check_array", "check_scalar", "check_csr", "parse_params",
            "check_regular_file", "check_source_path", "DATA_SUFFIXES"]
 
@@ -94,16 +96,26 @@ def check_array(d, key, *, source, kind="float", shape=None, dims=None, low=None
             elif n != want:
                 raise FieldError(source, field, f"axis {axis} ({sym}) has length {n}, expected {want} "
                                                 "(the file's arrays do not fit together)")
+    mapped = isinstance(a, np.memmap)  # a pass over a memory-mapped array gives its pages back as it goes
+    step = max(1, 2**22 // max(1, a[0].size if a.ndim and a.shape[0] else 1))  # rows per check
     if a.size and a.dtype.kind in "fc" and finite:
-        step = max(1, 2**22 // max(1, a[0].size if a.ndim else 1))  # rows per check: no full-size bool copy
-        for s in range(0, a.shape[0] if a.ndim else 1, step):
+        for s in range(0, a.shape[0] if a.ndim else 1, step):  # no full-size bool copy
             part = a[s:s + step] if a.ndim else a
-            if not np.isfinite(part).all():
+            ok = bool(np.isfinite(part).all())
+            if not ok:
                 where = np.argwhere(~np.isfinite(part))[0]
                 where = (where[0] + s, *where[1:]) if a.ndim else ()
                 raise FieldError(source, field, f"holds NaN/inf (first at index {tuple(int(i) for i in where)})")
+            if mapped:
+                release_pages(part)
     if a.size and (low is not None or high is not None) and a.dtype.kind in "fiub":
-        lo, hi = a.min(), a.max()
+        if mapped and a.ndim:
+            parts = [a[s:s + step] for s in range(0, a.shape[0], step)]
+            lo, hi = min(p.min() for p in parts), max(p.max() for p in parts)
+            for p in parts:
+                release_pages(p)
+        else:
+            lo, hi = a.min(), a.max()
         if low is not None and lo < low:
             raise FieldError(source, field, f"value {lo} is below the allowed minimum {low}")
         if high is not None and hi >= high:

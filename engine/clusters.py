@@ -203,11 +203,15 @@ class PhoneClusters(BaseEstimator):
 
         phoneset = phonesets.detect_phoneset(labels)
         keep = np.ones(len(labels), bool)
+        # each distinct label is looked up once (a million-frame corpus has ~10^5 phones of ~50 labels)
+        distinct, which = np.unique(np.asarray(labels, dtype=str), return_inverse=True)
+        which = which.reshape(-1)
         if self.exclude_pauses:
-            keep = np.array([not phonesets.is_pause(x, phoneset=phoneset) for x in labels], bool)
+            keep = ~np.array([phonesets.is_pause(x, phoneset=phoneset) for x in distinct], bool)[which]
         if self.normalize_labels:
-            norm = [phonesets.normalize(x, strict=False, phoneset=phoneset) for x in labels]
-            labels = [x if n == phonesets.UNKNOWN else n for x, n in zip(labels, norm)]
+            norm = [phonesets.normalize(x, strict=False, phoneset=phoneset) for x in distinct]
+            mapped = np.array([x if n == phonesets.UNKNOWN else n for x, n in zip(distinct, norm)], dtype=object)
+            labels = list(mapped[which])
         labels = np.asarray(labels, dtype=object)[keep]
         mids = mids[keep]
 

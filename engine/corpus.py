@@ -5,6 +5,7 @@ across utterance boundaries: no velocity, transition or path crosses one.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -44,6 +45,19 @@ class PhoneInterval:
     @property
     def mid(self) -> float:
         return 0.5 * (self.start + self.end)
+
+    @classmethod
+    def _many(cls, times, labels) -> tuple:
+        """Phones from lists of ``(start, end)`` floats and ``str`` labels (already of those types, as
+        ``tolist()`` of a file's float and str arrays gives them), without the dataclass's per-field
+        ``__init__`` (a million-frame corpus has ~10^5 phones). :meth:`Corpus.validate` checks them."""
+        new = object.__new__
+        out = []
+        for (t0, t1), lab in zip(times, labels):
+            p = new(cls)
+            p.__dict__.update(start=t0, end=t1, label=lab)
+            out.append(p)
+        return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -211,23 +225,24 @@ class Corpus:
             expected = u.stop
             dur = u.n_frames / self.rate
             prev_end = -np.inf
+            tol = 0.5 / self.rate + 1e-9
             for k, p in enumerate(u.phones):
-                where = f"{self.name}: utterance {u.id!r} phone {k} ({p.label!r} {p.start:.4f}-{p.end:.4f} s)"
-                if not (np.isfinite(p.start) and np.isfinite(p.end)):
-                    raise CorpusError(f"{where}: times must be finite")
+                # (the message is made only for a fault: a million-frame corpus has a million phones)
+                if not (math.isfinite(p.start) and math.isfinite(p.end)):
+                    raise CorpusError(f"{self._where(u, k, p)}: times must be finite")
                 if not p.label:
-                    raise CorpusError(f"{where}: empty label")
+                    raise CorpusError(f"{self._where(u, k, p)}: empty label")
                 if p.end <= p.start:
-                    raise CorpusError(f"{where}: end is not after start")
+                    raise CorpusError(f"{self._where(u, k, p)}: end is not after start")
                 if p.start < prev_end - 1e-9:
                     raise CorpusError(
-                        f"{where}: starts before the previous phone ends at {prev_end:.4f} s "
+                        f"{self._where(u, k, p)}: starts before the previous phone ends at {prev_end:.4f} s "
                         "(intervals must be sorted and not overlap)"
                     )
-                tol = 0.5 / self.rate + 1e-9
                 if p.start < -1e-9 or p.end > dur + tol:
                     raise CorpusError(
-                        f"{where}: lies outside the utterance (0-{dur:.4f} s, {u.n_frames} frames at {self.rate:g} Hz)"
+                        f"{self._where(u, k, p)}: lies outside the utterance (0-{dur:.4f} s, {u.n_frames} frames "
+                        f"at {self.rate:g} Hz)"
                     )
                 prev_end = p.end
         if expected != F.shape[0]:
@@ -257,6 +272,9 @@ class Corpus:
         for k, v in self.latent.items():
             if v.shape[0] != F.shape[0]:
                 raise CorpusError(f"{self.name}: latent {k!r} has {v.shape[0]} rows, frames have {F.shape[0]}")
+
+    def _where(self, u, k, p) -> str:
+        return f"{self.name}: utterance {u.id!r} phone {k} ({p.label!r} {p.start:.4f}-{p.end:.4f} s)"
 
     # -------------------------------------------------------------- properties
     @property
@@ -322,21 +340,23 @@ class Corpus:
         utterance : ndarray of shape (n_phones,) int, utterance number
         start_frames, end_frames : ndarray of shape (n_phones,) int
         """
-        mids, labs, utt, st, en = [], [], [], [], []
-        for k, u in enumerate(self.utterances):
-            for p in u.phones:
-                mids.append(self.time_to_frame(u, p.mid))
-                st.append(self.time_to_frame(u, p.start))
-                en.append(self.time_to_frame(u, p.end))
-                labs.append(p.label)
-                utt.append(k)
-        return (
-            np.array(mids, dtype=np.int64),
-            np.array(labs, dtype=str),
-            np.array(utt, dtype=np.int64),
-            np.array(st, dtype=np.int64),
-            np.array(en, dtype=np.int64),
-        )
+        from itertools import chain
+        from operator import attrgetter
+
+        per_utt = [u.phones for u in self.utterances]
+        flat = list(chain.from_iterable(per_utt))
+        utt = np.repeat(np.arange(len(per_utt), dtype=np.int64),
+                        np.fromiter(map(len, per_utt), np.int64, count=len(per_utt)))
+        times = np.column_stack([np.fromiter(map(attrgetter(k), flat), np.float64, count=len(flat))
+                                 for k in ("start", "end")])
+        labs = np.array(list(map(attrgetter("label"), flat)), dtype=str)
+        b = self.bounds
+        lo, hi = b[utt, 0], b[utt, 1] - 1
+
+        def frame(t):  # time_to_frame, for every phone at once (np.rint rounds half to even, as round)
+            return np.clip(lo + np.rint(t * self.rate).astype(np.int64), lo, hi)
+
+        return frame(times.sum(axis=1) * 0.5), labs, utt, frame(times[:, 0]), frame(times[:, 1])
 
     def subset(self, ids) -> "Corpus":
         """A new corpus holding only the utterances named in ``ids`` (in corpus order)."""
@@ -442,9 +462,13 @@ class Corpus:
         except KeyError as exc:
             raise CorpusError(f"{source}: not a Lipspace corpus file (missing {exc.args[0]!r})") from None
         utts = []
-        for k, (b, uid) in enumerate(zip(bounds, ids)):
-            sel = p_utt == k
-            phones = tuple(PhoneInterval(float(s), float(e), str(lab)) for (s, e), lab in zip(p_t[sel], p_lab[sel]))
+        # each utterance's phones in file order, found by one sort (not a scan of every phone per utterance)
+        by_utt = np.argsort(np.asarray(p_utt), kind="stable")
+        cuts = np.searchsorted(np.asarray(p_utt)[by_utt], np.arange(len(ids) + 1))
+        times, labels = np.asarray(p_t)[by_utt].tolist(), np.asarray(p_lab)[by_utt].tolist()
+        for k, (b, uid) in enumerate(zip(bounds.tolist(), ids.tolist())):
+            a, e = int(cuts[k]), int(cuts[k + 1])
+            phones = PhoneInterval._many(times[a:e], labels[a:e])
             wav = _resolve(str(audio[k]), base, str(audio_abs[k]) if audio_abs is not None else "")
             utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k])))
         try:

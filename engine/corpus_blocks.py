@@ -103,7 +103,7 @@ def load_blocked(path) -> Corpus:
 
     path = Path(path)
     try:
-        d = read_npz(path)
+        d = read_npz(path, memory_map=None)  # per-frame metadata (e.g. a talker's latents) stays on disk
     except NpzReadError as exc:
         raise CorpusError(f"{path}: not a readable .npz corpus file ({exc.reason})") from None
     return Corpus.from_arrays(d, frames=_open_blocks(path, d), source=str(path), base=path.resolve().parent)
@@ -189,7 +189,7 @@ def frames_from_reference(d, manifold_path, *, n_frames: int, n_columns: int) ->
                           f"{blocks_folder(src).name}/ beside it), which is missing; put the corpus back there "
                           "(or beside the manifold as when it was built) or rebuild the manifold")
     try:
-        cd = read_npz(found)
+        cd = read_npz(found, memory_map=None)
     except NpzReadError as exc:
         raise CorpusError(f"{found}: not a readable .npz corpus file ({exc.reason}); this manifold's frames "
                           "are stored there") from None

@@ -98,23 +98,28 @@ class Hemisphere:
         ``inside.mean()`` (0 for no frames).
     reach : int
         The largest hop distance of a reachable state (the hemisphere's depth without horizon).
+    weights : ndarray of shape (N,) or None
+        Frames each entry stands for (None: one each); ``fraction_inside`` and
+        ``n_inside`` count frames.
     """
 
-    def __init__(self, hops, inside, reachable, max_hops, direction, reach):
+    def __init__(self, hops, inside, reachable, max_hops, direction, reach, weights=None):
         self.hops = hops
         self.inside = inside
         self.reachable = reachable
         self.max_hops = max_hops
         self.direction = direction
         self.reach = int(reach)
-        self.fraction_inside = float(inside.mean()) if inside.size else 0.0
+        self.weights = weights
+        total = inside.size if weights is None else float(np.sum(weights))
+        self.fraction_inside = self.n_inside / total if total else 0.0
 
     @property
     def n_inside(self) -> int:
-        return int(self.inside.sum())
+        return int(self.inside.sum() if self.weights is None else np.sum(self.weights[self.inside]))
 
 
-def hemisphere(graph, state, labels, *, direction: str = "future", max_hops=None) -> Hemisphere:
+def hemisphere(graph, state, labels, *, direction: str = "future", max_hops=None, weights=None) -> Hemisphere:
     """Frames whose state lies within ``max_hops`` hops after (and/or before) ``state``.
 
     Parameters
@@ -123,10 +128,14 @@ def hemisphere(graph, state, labels, *, direction: str = "future", max_hops=None
     state : int
         The selected state.
     labels : ndarray of shape (N,) int
-        The state of each frame (``graph.labels_`` for the corpus frames).
+        The state of each frame (``graph.labels_`` for the corpus frames), or of each
+        group of frames of one state (a drawn point standing for several frames).
     direction : {"future", "past", "both"}, default="future"
     max_hops : int or None, default=None
         Horizon in hops (see :func:`horizon_hops`); None = unlimited.
+    weights : ndarray of shape (N,), optional
+        Frames each entry of ``labels`` stands for (default one each), so that the
+        fraction inside counts frames.
 
     Returns
     -------
@@ -153,4 +162,8 @@ def hemisphere(graph, state, labels, *, direction: str = "future", max_hops=None
     keep = finite if max_hops is None else finite & (dist <= max_hops)
     per_state = np.where(keep, signed, np.nan)
     hops = per_state[labels].astype(np.float32)
-    return Hemisphere(hops, keep[labels], finite[labels], max_hops, direction, reach)
+    if weights is not None:
+        weights = np.asarray(weights)
+        if weights.shape != labels.shape:
+            raise ValueError(f"weights must give one count per label, shape {labels.shape}, got {weights.shape}")
+    return Hemisphere(hops, keep[labels], finite[labels], max_hops, direction, reach, weights)

@@ -41,7 +41,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from engine.threads import single_blas_thread
 
-__all__ = ["InverseMap", "barycentric_transforms"]
+__all__ = ["InverseMap", "barycentric_transforms", "delaunay_at"]
 
 #: Qhull options: scipy's defaults for <= 4-D ("Qt" is always added by scipy)
 QHULL_OPTIONS = "Qbb Qc Qz Q12"
@@ -377,3 +377,90 @@ class InverseMap(BaseEstimator):
             W[i] = w / w.sum()
             V[i] = tri.simplices[cand[best]]
         return W, V
+
+
+def _circumspheres(V):
+    """Centres (n, 3) and squared radii (n,) of the circumspheres of tetrahedra V (n, 4, 3)."""
+    A = 2.0 * (V[:, 1:] - V[:, :1])  # (n, 3, 3)
+    b = (V[:, 1:] ** 2).sum(axis=2) - (V[:, :1] ** 2).sum(axis=2)
+    c = np.linalg.solve(A, b[..., None])[..., 0]
+    return c, ((V[:, 0] - c) ** 2).sum(axis=1)
+
+
+@single_blas_thread
+def delaunay_at(Fy, Fx, queries, *, tree=None, n_neighbors: int = 32, max_neighbors: int = 4096):
+    """The Delaunay inverse map of ``(Fy, Fx)`` at a few query points, from local triangulations.
+
+    :class:`InverseMap` tetrahedralises every frame; to map a few points (a manifold's
+    state centroids) that costs minutes and gigabytes at a million frames. The
+    tetrahedron of the Delaunay triangulation that holds a query is determined by the
+    frames near it: the query's nearest frames are triangulated, the tetrahedron holding
+    the query is taken when its circumsphere holds no other frame of the whole set (then
+    it is a tetrahedron of the whole set's triangulation too), otherwise the
+    neighbourhood grows by the frames found inside. The value is the barycentric
+    combination of its vertices' values (a vertex shared by duplicate frames takes their
+    mean, as :class:`InverseMap` does), so it equals ``InverseMap(n_dims=3).fit(Fy,
+    Fx).transform(queries)`` up to round-off wherever a query lies inside the frames'
+    hull and the points are in general position.
+
+    Parameters
+    ----------
+    Fy : ndarray of shape (N, >=3)
+        The frames in the embedding (Y1-3 are used).
+    Fx : ndarray of shape (N, m)
+        Their values.
+    queries : ndarray of shape (n, >=3)
+    tree : scipy.spatial.cKDTree, optional
+        Of ``Fy[:, :3]`` in float64 (built when not given).
+    n_neighbors, max_neighbors : int
+        First and largest neighbourhood triangulated.
+
+    Returns
+    -------
+    ndarray of shape (n, m), float64
+        NaN rows where no tetrahedron could be found (a query outside the hull, or a
+        degenerate neighbourhood): map those with :class:`InverseMap`.
+    """
+    Y = np.ascontiguousarray(np.asarray(Fy)[:, :3], dtype=np.float64)
+    Q = np.asarray(queries, dtype=np.float64)[:, :3]
+    tree = cKDTree(Y) if tree is None else tree
+    N, out = Y.shape[0], np.full((Q.shape[0], np.asarray(Fx).shape[1]), np.nan)
+    extent = float(np.abs(Y - Y.mean(axis=0)).max()) if N else 0.0
+    tol = _REL_TOL * max(extent, 1e-300)
+    for i, q in enumerate(Q):
+        dist, idx = tree.query(q, k=min(n_neighbors, N))
+        idx = np.atleast_1d(idx)
+        if np.atleast_1d(dist)[0] <= tol:  # a query at a frame: that frame's value (duplicates: their mean)
+            out[i] = np.asarray(Fx)[tree.query_ball_point(Y[idx[0]], 0.0)].astype(np.float64).mean(axis=0)
+            continue
+        while True:
+            try:
+                tri = Delaunay(Y[idx], qhull_options=QHULL_OPTIONS)
+                s = int(tri.find_simplex(q))
+            except Exception:  # noqa: BLE001 - Qhull refuses a flat neighbourhood: grow it
+                s = -1
+            if s >= 0:
+                verts = idx[tri.simplices[s]]
+                V = Y[verts][None]
+                with np.errstate(all="ignore"):
+                    c, r2 = _circumspheres(V)
+                if np.isfinite(r2).all():
+                    inside = np.asarray(tree.query_ball_point(c[0], np.sqrt(r2[0]) * (1 - 1e-9)), dtype=np.int64)
+                    extra = np.setdiff1d(inside, idx)
+                    same = np.isin(inside, verts) | (((Y[inside] - c[0]) ** 2).sum(axis=1) >= r2[0] * (1 - 1e-9))
+                    if same.all():
+                        T = barycentric_transforms(Y[verts], np.arange(4)[None])[0]
+                        b = T[:3] @ (q - T[3])
+                        w = np.r_[b, 1.0 - b.sum()]
+                        vals = np.stack([np.asarray(Fx)[tree.query_ball_point(Y[v], 0.0)].astype(np.float64).mean(axis=0)
+                                         for v in verts])
+                        out[i] = w @ vals
+                        break
+                    if extra.size and idx.size < max_neighbors:  # frames inside the sphere: triangulate with them
+                        idx = np.concatenate([idx, extra])
+                        continue
+            if idx.size >= min(max_neighbors, N):
+                break  # outside the hull or degenerate: left to InverseMap
+            _d, idx = tree.query(q, k=min(2 * idx.size, max_neighbors, N))
+            idx = np.atleast_1d(idx)
+    return out

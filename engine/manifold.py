@@ -228,20 +228,43 @@ class Manifold(BaseEstimator):
         self._inverse = None
         t = time.perf_counter()
         report(progress, "inverse map", 0, 1)
-        # the tetrahedralisation is built here only while the build is exact-sized: above
-        # that (a million frames) it would cost the build more than it saves synthesis
-        self.state_x_ = self._state_x() if plan.n_landmarks is None else None
+        # exact-sized builds tetrahedralise every frame (the inverse map synthesis uses anyway); above
+        # (a million frames) that costs minutes and gigabytes, so the map at the state points is read
+        # from local triangulations (engine.inverse.delaunay_at: the same tetrahedra)
+        self.state_x_ = self._state_x(local=plan.n_landmarks is not None)
         report(progress, "inverse map", 1, 1)
         timings["inverse map"] = time.perf_counter() - t
         self.timings_ = timings
         return self
 
-    def _state_x(self):
-        """(K, m) the Delaunay inverse map at every state centroid (first 3 dims), or None."""
+    def _state_x(self, *, local: bool = False):
+        """(K, m) the Delaunay inverse map at every state centroid (first 3 dims), or None.
+
+        ``local``: from local triangulations around each centroid (:func:`engine.inverse.delaunay_at`)
+        instead of the tetrahedralisation of every frame; a centroid it cannot place (outside
+        the hull, a degenerate neighbourhood) is mapped by the whole map.
+        """
         C = np.asarray(self.states_.centroids_, dtype=np.float64)
         if C.shape[1] != min(3, self.Fy_.shape[1]):
             return None  # states in other dims than the map: synthesis maps its points itself
-        return np.asarray(self.inverse_map.transform(C))
+        if not local or C.shape[1] != 3:
+            return np.asarray(self.inverse_map.transform(C))
+        from engine.inverse import delaunay_at
+
+        X = delaunay_at(self.Fy_, self.Fx_, C)
+        lost = np.isnan(X).any(axis=1)
+        if lost.any():
+            X[lost] = self.inverse_map.transform(C[lost])
+        return X.astype(np.asarray(self.Fx_).dtype)
+
+    def state_inverse(self):
+        """(K, m) the Delaunay inverse map at every state centroid (``state_x_``), or None when the
+        states live in other dims than the map's. A file without it (a large build of an older
+        Lipspace) gets it here, once, from local triangulations."""
+        check_is_fitted(self, "Fy_")
+        if getattr(self, "state_x_", None) is None:
+            self.state_x_ = self._state_x(local=True)
+        return self.state_x_
 
     # -------------------------------------------------------------- projections
     def project(self, frames, bounds=None) -> np.ndarray:
@@ -324,8 +347,14 @@ class Manifold(BaseEstimator):
         return path
 
     @classmethod
-    def load(cls, path) -> "Manifold":
+    def load(cls, path, *, memory_map: bool | None = None) -> "Manifold":
         """Read a manifold written by :meth:`save`, without refitting.
+
+        ``memory_map``: None (default) leaves the large per-frame arrays (of at least
+        ``engine._persist.MMAP_MIN_BYTES``) memory-mapped from the file, read-only, paged in
+        as they are used; True maps every array the file stores uncompressed; False reads
+        everything into memory. The checks below read mapped arrays a block at a time and
+        give the pages back, so a check does not make the file resident.
 
         Every array is checked before use (see ``engine._validate``): dtypes, shapes
         that fit together (N frames, m shape components, k embedding dims, L reference
@@ -338,7 +367,7 @@ class Manifold(BaseEstimator):
 
         path = Path(path)
         try:
-            d = read_npz(path)
+            d = read_npz(path, memory_map=memory_map)
         except FileNotFoundError:
             raise ManifoldFileError(f"{path}: no such manifold file") from None
         except NpzReadError as exc:

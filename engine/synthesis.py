@@ -384,7 +384,7 @@ class ManifoldSynthesizer(BaseEstimator):
                 self._own_inverse = LocalLinearInverse(n_neighbors=int(self.n_neighbors),
                                                        n_dims=self.points_.shape[1]).fit(m.Fy_, m.Fx_)
             return self._own_inverse.transform(P)
-        table = getattr(m, "state_x_", None)
+        table = m.state_inverse() if hasattr(m, "state_inverse") else getattr(m, "state_x_", None)
         if (table is not None and self.inverse_dims is None and float(self.smoothing) == 0
                 and table.shape[0] == self.n_states_):
             # the manifold file holds the Delaunay map of every state point: the same rows, no

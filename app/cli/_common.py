@@ -64,16 +64,17 @@ def progress_bar(*, disable: bool | None = None):
 
 def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, kinematics: str = "classic",
                     audio: bool = False):
-    """A corpus from a native file, a foreign recording (as ``lipspace import`` makes it by default:
-    :func:`app.source_loading.read_recording`), or the synthetic talker (with ``kinematics``) when
-    ``path`` is None.
+    """A corpus from a native file (frames whole or in blocks), a foreign recording (as ``lipspace
+    import`` makes it by default), both read by the window's reader
+    :func:`app.source_loading.read_corpus_file`, or the synthetic talker (with ``kinematics``)
+    when ``path`` is None.
 
     ``audio``: give the synthetic talker its speech audio (espeak-ng; without it the corpus
     history says why), as the explorer's talker has it; ``lipspace build`` asks for it so that
     a manifold file of the talker plays and exports with sound. Ignored for a file.
     """
     from app.cli import CliError
-    from engine.corpus import Corpus, CorpusError
+    from engine.corpus import CorpusError
 
     if path is None:
         from app.source_loading import prune_talker_cache
@@ -85,21 +86,15 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, k
     p = Path(path)
     if not p.exists():
         raise CliError(f"{p}: no such file")
+    from app.source_loading import read_corpus_file
+    from engine.io import ImportFormatError
+
     try:
-        if p.suffix.lower() == ".npz":
-            from engine.corpus_blocks import is_blocked, load_blocked
-
-            # frames in blocks beside it ('lipspace import --block-frames'): read from there when needed
-            return load_blocked(p) if is_blocked(p) else Corpus.load(p)
-        # Any foreign format the importers know (Haskins .mat, MOCHA .ema, C3D, ...), with
-        # import's defaults (registration, 60 Hz), as the window opens it
-        from app.source_loading import read_recording
-        from engine.io import ImportFormatError
-
-        try:
-            return read_recording(p)
-        except ImportFormatError as exc:
-            raise CliError(f"{exc} (convert it first with 'lipspace import')") from None
+        # a corpus .npz (frames whole, or in blocks read from there when needed) or any foreign
+        # format the importers know, with import's defaults: the window's reader
+        return read_corpus_file(p)
+    except ImportFormatError as exc:
+        raise CliError(f"{exc} (convert it first with 'lipspace import')") from None
     except CorpusError as exc:
         raise CliError(str(exc)) from None
 

@@ -64,7 +64,7 @@ class PointsHandle(Handle):
     unreachable state), so tests and tools can read what is drawn.
     """
 
-    #: frame index of each drawn point (None: point i is frame i); see :func:`app.lod.cloud_subsample`
+    #: frame index of each drawn point (None: point i is frame i); see :func:`app.lod.cloud_detail`
     frames = None
 
     def frame_of(self, point_id) -> int:
@@ -112,14 +112,15 @@ def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: floa
         Shade each point as a small sphere; False draws flat dots, several times cheaper
         per frame in software OpenGL (the explorer's choice for large clouds).
     frames : ndarray of int, optional
-        Draw only these frames (level of detail, :func:`app.lod.cloud_subsample`); the
+        Draw only these frames (level of detail, :func:`app.lod.cloud_detail`); the
         handle's ``frame_of`` maps a drawn point back to its frame and ``set_colors``
         accepts one colour per frame.
     """
-    Y = _xyz(Fy3, "Fy3", 1)
     if frames is not None:
         frames = np.asarray(frames, dtype=np.int64)
-        Y = Y[frames]  # colours per frame are cut to the drawn frames by set_colors below
+        Y = _xyz(np.asarray(Fy3)[frames], "Fy3", 1)  # only the drawn rows are read (F^y may be on disk)
+    else:
+        Y = _xyz(Fy3, "Fy3", 1)
     mesh = pv.PolyData(Y.astype(np.float32))
     n = len(Y)
     mesh.point_data["rgb"] = np.full((n, 3), 160, np.uint8) if rgb is None else np.zeros((n, 3), np.uint8)

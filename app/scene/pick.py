@@ -33,18 +33,24 @@ class ClickPicker:
     ----------
     plotter : pyvista plotter (observers are added only when it has an interactor)
     actor : the actor whose points are pickable
-    callback : callable(int, ndarray (3,), bool)
+    callback : callable(int, ndarray (3,) or None, bool)
     tolerance : float, default=0.01
         Pick tolerance as a fraction of the window diagonal.
     max_move : int, default=4
         Pixels the mouse may move between press and release for a click.
+    locate : callable((x, y)) -> int or None, optional
+        Finds what a click at a display position picks (e.g.
+        :meth:`app.picking.CloudLocator.locate`, which searches frames the view does not
+        draw); the callback then gets its result and ``xyz=None``. Default: VTK's point
+        picker on ``actor``.
     """
 
-    def __init__(self, plotter, actor, callback, *, tolerance: float = 0.01, max_move: int = 4):
+    def __init__(self, plotter, actor, callback, *, tolerance: float = 0.01, max_move: int = 4, locate=None):
         from vtkmodules.vtkRenderingCore import vtkPointPicker
 
         self.plotter = plotter
         self.callback = callback
+        self.locate = locate
         self.max_move = int(max_move)
         self.picker = vtkPointPicker()
         self.picker.SetTolerance(float(tolerance))
@@ -99,6 +105,11 @@ class ClickPicker:
 
     def pick(self, x: float, y: float, *, shift: bool = False):
         """Pick at display position (x, y); returns the point id or None if nothing is there."""
+        if self.locate is not None:
+            pid = self.locate((float(x), float(y)))
+            if pid is not None:
+                self.callback(int(pid), None, bool(shift))
+            return pid
         self.picker.Pick(float(x), float(y), 0.0, self.plotter.renderer)
         pid = int(self.picker.GetPointId())
         if pid < 0:

@@ -18,10 +18,9 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app import scene
 from app.colouring import CLASS_LABELS, ellipsoid_colors, point_colors
-from app.lod import cloud_frames
 from app.scene.colour_bar import add_scalar_bar, configure_scalar_bar
-from app.picking import PointLocator, handle_pick, hover_text
-from app.scene.projection import nearest_on_screen, project, standard_camera, view_transform
+from app.picking import CloudLocator, handle_pick, hover_text
+from app.scene.projection import standard_camera, view_transform
 from app.state import COLOR_MODES, HEMISPHERES
 from app.views.flow_layout import FlowLayout
 from app.views._common import (blocked, camera_of, close_plotter, connect_all,
@@ -189,22 +188,23 @@ class ManifoldView(QtWidgets.QWidget):
         p.clear_actors()
         scene.overlay_renderer(p).RemoveAllViewProps()
         self.handles, self.ellipsoids, self.members = {}, {}, {}
-        self._hover_cache = None
         self._legend_mode = None
         m = self.state.manifold
         if m is None:
             self.renderer.request()
             return
-        Y = np.asarray(m.Fy_[:, :3], dtype=np.float64)
-        L = scene.scene_scale(Y)
+        cloud = self.state.cloud  # level of detail: every frame, or one point per group of frames (app.lod)
+        Y = np.asarray(m.Fy_[cloud.frames, :3], dtype=np.float64)  # the drawn points
+        L = scene.scene_scale(cloud.bounds)
         self.scale = L
         t = m.tangent_
         h = self.handles
         # shaded spheres cost ~4x flat dots per frame in software GL; at 3.5 px they are hardly
         # distinguishable, so large clouds (the default talker's 28,800 frames) use dots
         small = len(Y) <= self.SPHERE_POINTS_MAX
-        h["points"] = scene.add_manifold_points(p, Y, point_size=5.0 if small else 3.5, spheres=small,
-                                                frames=cloud_frames(m.states_.labels_))  # level of detail
+        size = 5.0 if small else 3.5
+        h["points"] = scene.add_manifold_points(p, m.Fy_, point_size=size, spheres=small,
+                                                frames=None if cloud.whole else cloud.frames)
         h["plane"] = scene.add_zero_velocity_plane(p, t.plane_point_, t.plane_normal_, 1.1 * L)
         h["axes"] = scene.add_global_axes(p, axes_origin(Y, t.plane_point_, t.S_, t.plane_normal_, L), t.S_,
                                           t.plane_normal_, 0.45 * L)
@@ -219,8 +219,9 @@ class ManifoldView(QtWidgets.QWidget):
         for key in self.OVERLAY:  # drawn over the cloud: never buried inside it
             scene.move_to_overlay(p, h[key])
         self._bar = add_scalar_bar(p)
-        self.locator = PointLocator(Y)
-        self.picker = scene.enable_click_picking(p, h["points"].actor, self._on_pick)
+        # a click or the pointer finds its frame among every frame, drawn or not
+        self.locator = CloudLocator(m.Fy_, cloud, dot_radius=0.5 * size)
+        self.picker = scene.enable_click_picking(p, h["points"].actor, self._on_pick, locate=self.frame_at)
         self._set_visible("plane", self.plane_box.isChecked())
         self._show_points(self.points_box.isChecked())
         self._show_axes(self.axes_box.isChecked())
@@ -247,7 +248,8 @@ class ManifoldView(QtWidgets.QWidget):
         if m is None or "points" not in self.handles:
             return
         t = m.tangent_
-        pos, focal, up = standard_camera(name, m.Fy_[:, :3], t.plane_point_, t.S_, t.plane_normal_)
+        # the cloud's bounds stand for every frame (the camera only reads their extent)
+        pos, focal, up = standard_camera(name, self.state.cloud.bounds, t.plane_point_, t.S_, t.plane_normal_)
         cam = self.plotter.renderer.GetActiveCamera()
         cam.SetPosition(*pos)
         cam.SetFocalPoint(*focal)
@@ -287,22 +289,21 @@ class ManifoldView(QtWidgets.QWidget):
         self.state.set_hover(self.hover_frame(self._hover_pos))
 
     def hover_frame(self, display_xy, radius: float = 6.0):
-        """The frame drawn under display position ``display_xy`` (pixels, origin bottom left), or None."""
-        M, size = view_transform(self.plotter)
-        key = (M.tobytes(), size)
-        if self._hover_cache is None or self._hover_cache[0] != key:  # re-project only when the camera moved
-            xy, depth = project(self.handles["points"].mesh.points, M, size)
-            self._hover_cache = (key, xy, depth)
-        _, xy, depth = self._hover_cache
+        """The frame under display position ``display_xy`` (pixels, origin bottom left), or None."""
         if not self.handles["points"].visible:
             return None
-        i = nearest_on_screen(xy, depth, display_xy, radius)
-        return None if i is None else self.handles["points"].frame_of(i)
+        return self.frame_at(display_xy, radius=radius)
+
+    def frame_at(self, display_xy, radius: float | None = None):
+        """The frame a click at ``display_xy`` selects, among every frame (:class:`app.picking.CloudLocator`)."""
+        if self.locator is None:
+            return None
+        M, size = view_transform(self.plotter)
+        return self.locator.locate(display_xy, M, size, radius=radius)
 
     # --------------------------------------------------------------- events
-    def _on_pick(self, point_id, xyz, shift):
-        handle_pick(self.state, self.handles["points"].frame_of(point_id), self.locator,
-                    as_target=True if shift else None)
+    def _on_pick(self, frame, _xyz, shift):
+        handle_pick(self.state, frame, as_target=True if shift else None)
 
     def _sync_box(self, box, on):
         with blocked(box):
@@ -479,8 +480,8 @@ class ManifoldView(QtWidgets.QWidget):
         s, m = self.state, self.state.manifold
         parts = []
         if s.frame is not None:
-            u = m.corpus_.utterances[int(m.corpus_.utterance_index[s.frame])]
-            ph = s.phones[s.frame] or "—"
+            u = s.utterance_of(s.frame)
+            ph = s.phone_of(s.frame) or "—"
             cls = int(m.tangent_.classes_[s.frame])
             parts.append(f"frame {s.frame} ({u.id}, t={(s.frame - u.start) / m.corpus_.rate:.2f} s, phone {ph}, "
                          f"{CLASS_LABELS[cls] if cls >= 0 else 'no step'})")
@@ -497,7 +498,7 @@ class ManifoldView(QtWidgets.QWidget):
     def _update_hover(self):
         s = self.state
         self.hover_label.setText("" if s.hover is None or s.manifold is None else
-                                 "under the pointer: " + hover_text(s.manifold, s.phones, s.hover))
+                                 "under the pointer: " + hover_text(s.manifold, s, s.hover))
 
     def _on_path(self, render=True):
         if "path" not in self.handles:

@@ -52,3 +52,28 @@ def test_window_on_a_blocked_manifold_clicks_synthesises_and_plays(qapp, qtbot, 
         s.set_playing(True)
         qtbot.waitUntil(lambda: not s.playing, timeout=5000)
         assert s.playback == len(s.original) - 1
+
+
+def test_file_open_fits_a_blocked_corpus_from_its_blocks_as_the_command_line_reads_it(qapp, qtbot, tmp_path,
+                                                                                       small_corpus,
+                                                                                       main_window_factory):
+    """File › Open on a corpus stored in blocks reads it with the command line's reader: the frames stay
+    in the block files (never gathered) and the window shows the manifold fitted on them."""
+    from app.cli._common import load_corpus_arg
+    from engine.corpus_blocks import save_blocked
+    from engine.frame_blocks import BlockFrames
+
+    corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1200])
+    src = tmp_path / "blocked.npz"
+    save_blocked(corpus, src, block_frames=400)
+    cli = load_corpus_arg(src)
+    assert isinstance(cli.frames, BlockFrames)
+    with main_window_factory(qapp, None) as win:
+        runner = win.open_source(str(src))  # what File › Open does with the chosen file
+        qtbot.waitUntil(lambda: runner.state != "running", timeout=120000)
+        assert runner.state == "done", getattr(win, "last_error_message", None)
+        m = win.state.manifold
+        assert m is not None and isinstance(m.corpus_.frames, BlockFrames)
+        assert m.corpus_.frames.paths == cli.frames.paths and m.corpus_.n_frames == corpus.n_frames
+        np.testing.assert_array_equal(m.corpus_.frames[:50], corpus.frames[:50])
+        assert win.state.source["kind"] == "corpus"

@@ -247,3 +247,50 @@ def test_window_reset_camera_and_export_dialog(qapp, qtbot, app_manifold, tmp_pa
         assert -0.6 < d @ V < -0.2     # from slightly above the plane, not looking down on it
     finally:
         w.close()
+
+
+def test_a_level_of_detail_cloud_is_coloured_from_every_frame_and_clicks_find_undrawn_frames(qapp, app_manifold,
+                                                                                            monkeypatch):
+    """Above the cap the view draws one point per group of frames: its hemisphere colour is its frames' (one
+    state), its density that of its grid cell over every frame; a click finds the frame under the cursor among
+    all frames, also one the view does not draw; the readout counts frames."""
+    import app.lod
+    from app.picking import frame_under_cursor
+    from app.scene import pick_display_point
+    from app.scene.projection import project, view_transform
+    from app.state import AppState
+    from app.views.manifold_view import ManifoldView
+
+    m = app_manifold
+    monkeypatch.setattr(app.lod, "DEFAULT_MAX_POINTS", 800)
+    s = AppState(m)
+    v = ManifoldView(s)
+    try:
+        v.resize(900, 650)
+        v.show()
+        for _ in range(5):
+            qapp.processEvents()
+        cd = s.cloud
+        h = v.handles["points"]
+        assert not cd.whole and h.mesh.n_points == cd.n_points <= 800
+        np.testing.assert_array_equal(h.values, cd.density)  # density mode: every frame of the cell counted
+        M, size = view_transform(v.plotter)
+        xy, depth = project(np.asarray(m.Fy_[:, :3], np.float64), M, size)
+        undrawn = np.setdiff1d(np.arange(len(xy)), cd.frames)
+        front = undrawn[np.argsort(depth[undrawn])[:40]]
+        hits = 0
+        for f in front:  # clicks at frames that are not drawn
+            x, y = pick_display_point(v.plotter, m.Fy_[f, :3])
+            want = frame_under_cursor(xy, depth, (x, y), dot_radius=v.locator.dot_radius, radius=v.locator.radius)
+            assert v.picker.pick(x, y) == want
+            hits += want not in set(cd.frames.tolist())
+        assert hits > 0 and s.frame is not None  # undrawn frames were selected
+        s.select_frame(int(front[0]))
+        future = m.states_.future(s.state)
+        hops = np.where(future <= 6, future, np.nan)[cd.state]  # the default 100 ms = 6 hops at 60 Hz
+        np.testing.assert_array_equal(h.values, hops.astype(np.float32))  # each point: its frames' state's hops
+        inside = (future <= 6)[m.states_.labels_]
+        assert f"{100 * inside.mean():.1f}% of frames ({int(inside.sum()):,}/{len(inside):,})" in v.info.text()
+    finally:
+        v.close_view()
+        v.close()

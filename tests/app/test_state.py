@@ -274,10 +274,11 @@ def test_derived_data_prepared_ahead_is_used_by_every_state(app_manifold):
 
     m, stages = app_manifold, []
     prepare_derived(m, lambda st, d, t: stages.append((st, d, t)))  # as the loading worker does
-    assert stages[0] == ("preparing the views", 0, 3) and stages[-1] == ("preparing the views", 3, 3)
+    assert stages[0] == ("preparing the views", 0, 4) and stages[-1] == ("preparing the views", 4, 4)
     a, b = AppState(), AppState(m)
     a.set_manifold(m)
-    assert a.density is b.density and a.phones is b.phones and a.clusters is b.clusters  # computed once, ahead
+    assert a.density is b.density and a.clusters is b.clusters and a.cloud is b.cloud  # computed once, ahead
+    assert a.phone_codes is b.phone_codes and a.cloud.whole  # every frame of the small talker is drawn
     np.testing.assert_array_equal(a.density, knn_density(m.Fy_))
     np.testing.assert_array_equal(a.phones, frame_phones(m.corpus_))
 

@@ -35,6 +35,25 @@ def test_save_load_round_trips_exactly(small_manifold, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.npz"]
 
 
+def test_memory_mapped_load_reads_the_same_arrays_from_the_file(small_manifold, tmp_path):
+    """memory_map=True leaves every stored array on disk (read-only maps), equal to the fitted ones."""
+    from engine._persist import release_pages
+
+    path = small_manifold.save(tmp_path / "m.npz")
+    m = Manifold.load(path, memory_map=True)
+    for attr in ("Fx_", "Fxv_", "G_", "Fy_"):
+        a = getattr(m, attr)
+        assert isinstance(a, np.memmap) and not a.flags.writeable
+        np.testing.assert_array_equal(a, getattr(small_manifold, attr))
+    assert isinstance(m.tangent_.s_, np.memmap) and isinstance(m.states_.labels_, np.memmap)
+    np.testing.assert_array_equal(m.states_.labels_, small_manifold.states_.labels_)
+    np.testing.assert_array_equal(m.corpus_.frames, small_manifold.corpus_.frames)
+    release_pages(m.Fy_[10:500])  # the pages go back to the file cache; the values stay readable
+    release_pages(np.ones(3))  # an array in memory: nothing to do
+    np.testing.assert_array_equal(m.Fy_[10:500], small_manifold.Fy_[10:500])
+    assert not isinstance(Manifold.load(path, memory_map=False).Fy_, np.memmap)
+
+
 def test_save_without_frames_reconstructs(small_manifold, tmp_path):
     path = small_manifold.save(tmp_path / "m.npz", include_frames=False)
     m = Manifold.load(path)
@@ -142,8 +161,9 @@ DAMAGE = {
 }
 
 
+@pytest.mark.parametrize("memory_map", [None, True])
 @pytest.mark.parametrize("case", sorted(DAMAGE))
-def test_damaged_manifold_is_refused_naming_the_field(saved_arrays, tmp_path, case):
+def test_damaged_manifold_is_refused_naming_the_field(saved_arrays, tmp_path, case, memory_map):
     damage, field = DAMAGE[case]
     d = {k: v.copy() for k, v in saved_arrays.items()}
     damage(d)
@@ -151,7 +171,7 @@ def test_damaged_manifold_is_refused_naming_the_field(saved_arrays, tmp_path, ca
     with open(path, "wb") as fh:
         np.savez(fh, **d)
     with pytest.raises(ManifoldFileError) as err:
-        Manifold.load(path)
+        Manifold.load(path, memory_map=memory_map)  # True: every array checked as a map of the file
     msg = str(err.value)
     assert msg.startswith(str(path)) and field in msg and "\n" not in msg, msg
 
@@ -358,14 +378,27 @@ def test_dynamics_scale_reaches_the_dynamic_features_and_round_trips(small_corpu
     np.testing.assert_array_equal(m2.Fy_, m.Fy_)
 
 
-def test_state_inverse_table_only_on_the_exact_path(small_corpus, small_manifold):
-    """The landmark (large-corpus) build does not tetrahedralise all frames at build time."""
+def test_state_inverse_table_of_the_landmark_path_comes_from_local_triangulations(small_corpus, small_manifold):
+    """The landmark (large-corpus) build does not tetrahedralise all frames: the map at the state points
+    comes from triangulations of their neighbourhoods, the same values as the whole map's; a file
+    without the table gets it on first synthesis, the same way."""
+    from engine.inverse import InverseMap, delaunay_at
     from engine.synthesis import ManifoldSynthesizer
     from engine.targets import targets_from_utterance
 
     assert small_manifold.state_x_ is not None
     m = Manifold(n_landmarks=300).fit(small_corpus)
-    assert m.state_x_ is None and m._inverse is None
+    assert m.state_x_ is not None and m._inverse is None  # no tetrahedralisation of every frame
+    C = np.asarray(m.states_.centroids_, np.float64)
+    whole = InverseMap(n_dims=3).fit(m.Fy_, m.Fx_)
+    np.testing.assert_allclose(m.state_x_, whole.transform(C), rtol=0, atol=1e-5 * np.abs(m.Fx_).max())
+    rng = np.random.default_rng(0)  # any point inside the frames' hull, not only centroids
+    q = m.Fy_[rng.choice(len(m.Fy_), 40), :3] * 0.6 + m.Fy_[rng.choice(len(m.Fy_), 40), :3] * 0.4
+    got = delaunay_at(m.Fy_, m.Fx_, q)
+    ok = ~np.isnan(got).any(axis=1)
+    assert ok.mean() > 0.9
+    np.testing.assert_allclose(got[ok], whole.transform(q)[ok], rtol=0, atol=1e-5 * np.abs(m.Fx_).max())
+    m.state_x_ = None  # as a file of an older build
     u = m.corpus_.utterances[0]
     traj = ManifoldSynthesizer(strict=False).fit(m).synthesize(targets_from_utterance(m, u.id, on_collision="merge"))
-    assert np.isfinite(traj.Fx).all() and m._inverse is not None  # mapped lazily instead
+    assert np.isfinite(traj.Fx).all() and m.state_x_ is not None and m._inverse is None
