@@ -216,6 +216,8 @@ def run(args) -> int:
     said = []  # what to print once every output is in place
     with command_outputs(args) as outputs:  # all outputs or none, also on Ctrl-C / SIGTERM
         animation = out is not None and out.suffix.lower() in (".glb", ".gltf")
+        if animation:
+            _refuse_existing_animation(args, out)
         staged = outputs.file(out, option="-o") if out is not None and not animation else None
         staged_praat = None if praat is None else [outputs.file(p, option="--praat") for p in praat]
         mesh_dir = None
@@ -328,6 +330,21 @@ def check_synthesis_options(args) -> None:
     gs = getattr(args, "gltf_scale", None)
     if gs is not None and not (math.isfinite(gs) and 0 < gs <= 1e6):
         raise CliError(f"--gltf-scale {gs:g}: must be a positive number (0.001 turns millimetres into metres)")
+
+
+def _refuse_existing_animation(args, out) -> None:
+    """Refuse an existing ``-o`` animation, or WAV beside it, before any synthesis (the choice of
+    method can take minutes); :func:`_write_animation` stages them later."""
+    from engine.staging import OutputExistsError
+
+    if args.force:
+        return
+    wav = out.with_suffix(".wav")
+    with_audio = args.audio is not None or args.utterance is not None
+    if out.exists():
+        raise OutputExistsError(out, "-o")
+    if with_audio and wav.exists() and not (args.audio is not None and Path(args.audio).resolve() == wav.resolve()):
+        raise OutputExistsError(wav, "the audio beside it")
 
 
 def _write_animation(args, manifold, traj, out, outputs) -> str:
