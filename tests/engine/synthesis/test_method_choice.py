@@ -42,7 +42,7 @@ def test_best_method_and_its_description():
 
 
 def test_the_choice_is_measured_once_and_keyed_by_the_data(small_manifold, tmp_path, monkeypatch):
-    import engine.evaluation.protocols
+    import engine.synthesis.validation
 
     calls = []
 
@@ -50,7 +50,7 @@ def test_the_choice_is_measured_once_and_keyed_by_the_data(small_manifold, tmp_p
         calls.append(1)
         return {**CHOICE, "state_dims": 5, "validation": {"big": "diagnostics, not cached"}}
 
-    monkeypatch.setattr(engine.evaluation.protocols, "select_settings", fake)
+    monkeypatch.setattr(engine.synthesis.validation, "select_settings", fake)
     first = mc.choose_methods(small_manifold, cache_dir=tmp_path)
     again = mc.choose_methods(small_manifold, cache_dir=tmp_path)
     assert calls == [1] and first == again and "validation" not in again and again["state_dims"] == 5
@@ -70,7 +70,7 @@ def test_the_choice_is_measured_once_and_keyed_by_the_data(small_manifold, tmp_p
 def test_state_model_synthesisers_resolve_every_kind_of_target(small_manifold):
     """A clicked state of the manifold's own graph, an F^y point and a phone label each become a state of the
     validated state model; the state-velocity Hermite spline passes through the states' mean X there."""
-    from engine.evaluation.protocols import hermite_only_blend
+    from engine.synthesis.learnt_paths import hermite_only_blend
     from engine.synthesis.state_synthesis import LearntPathSynthesizer, StateHermiteSynthesizer
 
     m = small_manifold
