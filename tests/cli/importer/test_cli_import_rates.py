@@ -11,7 +11,7 @@ import pytest
 from app.cli import main
 from engine.recordings.corpus import Corpus
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 CLIPS = REPO.parent / "shared" / "data" / "talking-faces"
 
 
