@@ -79,7 +79,7 @@ class AudioPlayer:
         """Where the sound is, in seconds of the file, while it plays; None otherwise.
 
         This is the position QtMultimedia reports (``QMediaPlayer.position``, whole
-        milliseconds, updated in steps); :class:`app.playback.PlaybackClock` follows it.
+        milliseconds, updated in steps); :class:`app.models.playback.PlaybackClock` follows it.
         """
         if not self.available or self._player.playbackState() != self._playing_state:
             return None

@@ -1,6 +1,6 @@
 """The explorer's main window: the manifold view in the centre, the other views docked around it.
 
-Every view observes one :class:`app.state.AppState`; the window only wires menus,
+Every view observes one :class:`app.models.state.AppState`; the window only wires menus,
 loading (in a worker thread with a progress dialog), sessions and exports.
 """
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.state import AppState
+from app.models.state import AppState
 
 __all__ = ["MainWindow", "launch", "stop_on_signals"]
 
@@ -34,14 +34,14 @@ class MainWindow(QtWidgets.QMainWindow):
 
     Parameters
     ----------
-    manifold : engine.manifold.Manifold or None
+    manifold : engine.manifold.model.Manifold or None
         Shown at once when given; otherwise use :meth:`open_source`.
     state : AppState, optional
     source : dict, optional
         Where ``manifold`` came from (``path``, ``preset``, the synthetic talker's ``kinematics``),
         for the title and session files.
-    autosave : app.autosave.Autosaver, optional
-        Saves the session a few seconds after it changes (:mod:`app.autosave`).
+    autosave : app.files.autosave.Autosaver, optional
+        Saves the session a few seconds after it changes (:mod:`app.files.autosave`).
     settings : app.window_settings.WindowSettings, optional
         Where geometry, dock layout and recent files are remembered (default: the user's
         settings, :func:`app.window_settings.open_settings`).
@@ -120,7 +120,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     @staticmethod
     def _talker_menu_text(preset: str, kinematics: str) -> str:
-        from app.source_loading import KINEMATICS_LABELS
+        from app.files.source_loading import KINEMATICS_LABELS
 
         return preset if kinematics == "classic" else f"{preset}, {KINEMATICS_LABELS[kinematics]}"
 
@@ -244,7 +244,7 @@ class MainWindow(QtWidgets.QMainWindow):
             f"{s['corpus']}: {s['frames']} frames, {s['utterances']} utterances, {s['points']} points · "
             f"X {s['shape_components']} comp. ({100 * s['shape_variance_kept']:.1f}%) · Y {s['embedding_dims']}-D, "
             f"first 3 hold {100 * s['Y_first3_recovered']:.0f}% · K={s['n_states']} states")
-        from app.source_loading import talker_name
+        from app.files.source_loading import talker_name
 
         src = self.state.source
         name = (Path(src["path"]).name if src.get("path")
@@ -255,7 +255,7 @@ class MainWindow(QtWidgets.QMainWindow):
                     session: dict | None = None):
         """Load a manifold / corpus file (or the synthetic talker ``preset`` with ``kinematics``,
         ``"classic"`` or ``"calibrated"``) in a worker; returns the runner."""
-        from app.source_loading import check_kinematics, load_source, talker_name
+        from app.files.source_loading import check_kinematics, load_source, talker_name
         from app.user_messages import plain_errors
         from app.views.task_progress import attach_status_progress
         from app.workers import run_task
@@ -318,14 +318,14 @@ class MainWindow(QtWidgets.QMainWindow):
         return {"manifold": self.manifold_view.camera(), "lips": self.lip_view.camera()}
 
     def save_session(self, path) -> Path:
-        from app.session import save_session
+        from app.files.session import save_session
 
         return save_session(self.state, path, cameras=self.cameras(), extra={"editor": self.editor.settings()},
                             targets=self.editor.targets)
 
     def _autosave_tick(self):
         """Timer slot: save the session once it has been unchanged for the autosave delay."""
-        from app.autosave import session_fingerprint
+        from app.files.autosave import session_fingerprint
 
         a = self.autosaver
         if a is None or self._pending_session is not None or self.state.manifold is None:
@@ -337,7 +337,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def apply_session(self, d: dict) -> None:
         """Restore selection, modes, phones, editor settings and cameras from a loaded session."""
-        from app.session import apply_session
+        from app.files.session import apply_session
 
         targets = apply_session(self.state, d)
         self.editor.apply_settings(d.get("extra", {}).get("editor", {}))
@@ -351,7 +351,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def open_session(self, path):
         """Open a session file: reload its source if it differs from what is shown, then restore it."""
-        from app.session import load_session, source_kinematics
+        from app.files.session import load_session, source_kinematics
 
         d = load_session(path)
         src, cur = d.get("source", {}), self.state.source
@@ -464,7 +464,7 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         path = self._save_path(f"Export trajectory ({traj.label})", TRAJECTORY_FILTERS)
         if path:
-            from app.trajectories import export_trajectory
+            from app.models.trajectories import export_trajectory
 
             path = str(path)
             self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}",
@@ -501,7 +501,7 @@ class MainWindow(QtWidgets.QMainWindow):
             dlg.close()
 
     def export_clusters(self, path) -> Path:
-        from engine.io.export import write_table_csv
+        from engine.io.writers.export import write_table_csv
 
         return write_table_csv(path, self.clusters.table_rows())
 
@@ -650,13 +650,13 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
     and run the event loop; a session's (or a restored autosave's) source overrides them.
 
     ``restore`` answers the autosave question after an abnormal exit (None: ask in a
-    dialog); see :mod:`app.autosave`. Damaged state files (autosave markers and sessions,
+    dialog); see :mod:`app.files.autosave`. Damaged state files (autosave markers and sessions,
     the window settings) are moved aside and said, on stderr and in one dialog, with
     ``notes`` (e.g. a --session file that could not be opened); the window opens anyway.
     """
-    from app.autosave import Autosaver, resolve_recovery
+    from app.files.autosave import Autosaver, resolve_recovery
     from app.qt_app import make_application
-    from app.session import SessionError, source_kinematics
+    from app.files.session import SessionError, source_kinematics
     from app.user_messages import user_message
 
     app = make_application(sys.argv[:1])

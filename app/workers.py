@@ -5,7 +5,7 @@ engine's progress callback: it forwards to the GUI through a queued signal and
 raises :class:`engine.progress.Cancelled` once the user has pressed Cancel, which
 unwinds the engine cleanly. Results and errors come back on the GUI thread.
 
-Engine warnings about the user's data (:class:`engine.corpus.CorpusWarning`) raised in
+Engine warnings about the user's data (:class:`engine.recordings.corpus.CorpusWarning`) raised in
 a worker thread go to that worker's ``warned`` signal through :data:`WARNINGS`, one
 process-wide ``warnings.showwarning`` that dispatches by thread id. Nothing enters or
 leaves ``warnings.catch_warnings`` in a worker thread: that context manager swaps
@@ -21,7 +21,7 @@ import warnings
 from PySide6 import QtCore, QtWidgets
 
 from app.user_messages import UserError
-from engine.corpus import CorpusWarning
+from engine.recordings.corpus import CorpusWarning
 from engine.progress import Cancelled
 
 __all__ = ["Worker", "TaskRunner", "run_task", "run_blocking", "cancel_all", "WarningRouter", "WARNINGS"]

@@ -73,8 +73,8 @@ def header(title: str) -> None:
 def default_manifold(preset: str = "default"):
     """The synthetic talker's manifold from the explorer's cache (built and cached when missing)."""
     try:
-        from app.source_loading import cached_manifold_path, load_source
-    except ImportError:  # trees before app.source_loading (bench_gui_playback.py --tree)
+        from app.files.source_loading import cached_manifold_path, load_source
+    except ImportError:  # trees before app.files.source_loading (bench_gui_playback.py --tree)
         from app.cli.explore import cached_manifold_path, load_source
 
     path = cached_manifold_path(preset)
@@ -97,16 +97,16 @@ def add_manifold_argument(ap) -> None:
                          f"'{TALKER}' is the default synthetic talker; several are measured side by side, "
                          "each in fresh processes, in alternating order")
     ap.add_argument("--max-points", type=int, default=None,
-                    help="points the manifold view draws at most (app.lod.DEFAULT_MAX_POINTS; default its value)")
+                    help="points the manifold view draws at most (app.models.lod.DEFAULT_MAX_POINTS; default its value)")
 
 
 def apply_max_points(args) -> list[str]:
     """Set the level of detail's cap from ``--max-points`` (in this process); returns the option for children."""
     if args.max_points is None:
         return []
-    import app.lod
+    import app.models.lod
 
-    app.lod.DEFAULT_MAX_POINTS = int(args.max_points)
+    app.models.lod.DEFAULT_MAX_POINTS = int(args.max_points)
     return ["--max-points", str(args.max_points)]
 
 
@@ -130,7 +130,7 @@ def load_manifold(spec: str, preset: str = "default"):
     """``(manifold, source)`` for a ``--manifold`` entry, loaded as the window loads it (views prepared)."""
     if spec == TALKER:
         return default_manifold(preset)
-    from app.source_loading import load_source
+    from app.files.source_loading import load_source
 
     t = time.perf_counter()
     m, src = load_source(spec)

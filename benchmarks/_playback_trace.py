@@ -196,7 +196,7 @@ class PlaybackTrace:
         lv = win.lip_view
         self.helpers = HelperWaits()
         try:
-            from app.playback import PlaybackClock
+            from app.models.playback import PlaybackClock
         except ImportError:  # trees without a playback clock: no per-tick records
             PlaybackClock = None
         if PlaybackClock is not None:

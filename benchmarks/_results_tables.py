@@ -73,7 +73,7 @@ def contribution_cells(result) -> dict:
     """protocol -> the two gains that are the manifold's: the states' velocities (state-velocity Hermite
     against the better of linear and PCHIP) and the learnt paths (manifold against state-velocity Hermite),
     each as a mean per-utterance difference in RMSE X with interval and wins."""
-    from engine.paired import paired_comparison
+    from engine.evaluation.paired import paired_comparison
 
     out = {}
     for p in result.protocols():

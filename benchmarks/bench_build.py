@@ -36,12 +36,12 @@ def main():
     ap.add_argument("--landmarks", type=int, default=None)
     args = ap.parse_args()
 
-    from engine.dynamics import DynamicFeatures
-    from engine.embedding import Embedding
-    from engine.shape import ShapeSpace
-    from engine.states import StateGraph
-    from engine.synthetic import load_synthetic
-    from engine.tangent import TangentFrames
+    from engine.manifold.dynamics import DynamicFeatures
+    from engine.manifold.embedding import Embedding
+    from engine.manifold.shape import ShapeSpace
+    from engine.graph.states import StateGraph
+    from engine.talker.synthetic import load_synthetic
+    from engine.manifold.tangent import TangentFrames
 
     rows = []
     corpus = stage("corpus (cache/generate)", lambda: load_synthetic(preset=args.preset), rows)
@@ -56,7 +56,7 @@ def main():
     emb = stage(f"embedding Y ({args.method})",
                 lambda: Embedding(method=args.method, n_landmarks=args.landmarks).fit(G), rows)
     Fy = emb.embedding_
-    from engine.kinematics import lip_aperture
+    from engine.recordings.kinematics import lip_aperture
 
     stage("tangent frames", lambda: TangentFrames().fit(Fy, b, lip_aperture(corpus), rate=corpus.rate), rows)
     stage("state graph", lambda: StateGraph().fit(Fy, b), rows)

@@ -46,8 +46,8 @@ def run_build(preset) -> dict:
     """Load the corpus, then time ``Manifold().fit`` in this process; report the widths it used."""
     import warnings
 
-    from engine.manifold import Manifold
-    from engine.synthetic import load_synthetic
+    from engine.manifold.model import Manifold
+    from engine.talker.synthetic import load_synthetic
 
     corpus = load_synthetic(preset=preset)
     load0 = os.getloadavg()[0]
@@ -100,7 +100,7 @@ def main(argv=None) -> int:
                 del sys.modules[name]
         print(json.dumps(run_build(args.preset)))
         return 0
-    subprocess.run([sys.executable, "-c", f"from engine.synthetic import load_synthetic; "
+    subprocess.run([sys.executable, "-c", f"from engine.talker.synthetic import load_synthetic; "
                     f"load_synthetic(preset={args.preset!r})"], check=True, cwd=ROOT)  # fill the cache
     load_before = os.getloadavg()
     widths = None  # read from pair 0's build, which runs first

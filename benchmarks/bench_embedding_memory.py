@@ -3,7 +3,7 @@
 The embedding promises O(N·k + block·N) memory: D is never formed, each block of its
 rows is made, used and dropped. Until issue 16 the first pass kept one length-N
 column-sum vector per block, and with blocks of 96 MiB / (4N) rows that grew as N^3
-(230k frames took 9.3 GB). This script fits ``engine.embedding.Embedding`` on dynamic
+(230k frames took 9.3 GB). This script fits ``engine.manifold.embedding.Embedding`` on dynamic
 features of a small point set at N = 50k, 100k, 200k (by default) frames, each fit in
 a fresh process, and prints wall time, the process's peak resident memory, the memory
 held when the fit starts (the input G and the libraries), their difference (an upper
@@ -41,8 +41,8 @@ def features(n_frames: int, n_points: int, seed: int = 0):
     """Dynamic features G (N, 2m) of a smooth random trajectory of ``n_points`` 3-D points."""
     import numpy as np
 
-    from engine.dynamics import DynamicFeatures, velocities
-    from engine.shape import ShapeSpace
+    from engine.manifold.dynamics import DynamicFeatures, velocities
+    from engine.manifold.shape import ShapeSpace
 
     rng = np.random.default_rng(seed)
     n_ctrl = 6  # a few articulatory controls drive the points, like the synthetic talker
@@ -63,7 +63,7 @@ def one(n_frames: int, n_points: int, n_iter: int) -> dict:
     """Fit once in this process; return the measurements."""
     import numpy as np
 
-    from engine.embedding import Embedding
+    from engine.manifold.embedding import Embedding
 
     G = np.ascontiguousarray(features(n_frames, n_points), dtype=np.float32)
     before = peak_rss_mb()

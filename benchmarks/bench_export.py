@@ -57,8 +57,8 @@ def timed(name, fn, *, repeat=1, per=None):
 
 
 def _synthesize(m, seconds):
-    from engine.methods import make_synthesizer
-    from engine.targets import targets_from_phones
+    from engine.synthesis.methods import make_synthesizer
+    from engine.phonetics.targets import targets_from_phones
 
     phones, _ = first_phones(m.corpus_, seconds)
     return make_synthesizer("viterbi", m, strict=False).synthesize(targets_from_phones(m, phones))
@@ -72,7 +72,7 @@ def _size(text):
 def _child(kind, manifold_path, seconds, size, out):
     """One cold run in this fresh process; prints a JSON line of its timings."""
     t0 = time.perf_counter()
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     m = Manifold.load(manifold_path)
     traj = _synthesize(m, seconds)
@@ -122,8 +122,8 @@ def main():
 
     from threadpoolctl import threadpool_info
 
-    from engine.manifold import Manifold
-    from engine.synthetic import load_synthetic
+    from engine.manifold.model import Manifold
+    from engine.talker.synthetic import load_synthetic
 
     blas = [f"{i['internal_api']} {i.get('version')} {i.get('architecture')} x{i['num_threads']}"
             for i in threadpool_info() if i["user_api"] == "blas"]
@@ -161,7 +161,7 @@ def main():
         timed("lips only (warm)", lambda: render_video(mp4, frames, rate=c.rate, faces=c.faces, dims=c.dims,
                                                        size=args.size), repeat=w, per=dur)
         print(f"  file size {mp4.stat().st_size / 2**20:.2f} MiB")
-        from engine.evaluation import trajectory_y
+        from engine.evaluation.per_method import trajectory_y
 
         u = max(c.utterances, key=lambda x: x.n_frames)
         orig = c.frames[u.start:u.start + n]

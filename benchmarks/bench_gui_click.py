@@ -17,7 +17,7 @@ the software rasteriser's included: less sensitive to other processes on a share
 machine than wall time), and how many VTK renders the click caused in the manifold
 view and in the lip view. Each click's selection is checked against a search over
 every frame of the manifold (drawn or not: the level of detail draws at most 150,000
-points): the selected frame must be the one under the cursor (``app.picking.
+points): the selected frame must be the one under the cursor (``app.models.picking.
 frame_under_cursor`` over all N frames projected by the view's camera).
 
 * cold: the first click in a fresh process (window just opened);
@@ -139,7 +139,7 @@ def frame_under_cursor_everywhere(win, mouse, camera):
     """The frame under ``mouse`` by a search over every frame of the manifold (the check of a click)."""
     import numpy as np
 
-    from app.picking import frame_under_cursor
+    from app.models.picking import frame_under_cursor
     from app.scene.projection import project
 
     view = win.manifold_view

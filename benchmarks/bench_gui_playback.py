@@ -12,7 +12,7 @@ lags are printed side by side. Loads the longest utterance, synthesises it with 
 lip view shows the original and the synthetic lips side by side, as a user would
 compare them) and presses Play, then runs the Qt event loop as the explorer does. There
 is no sound device here, so the reference is the clock a sound track would set:
-the playback clock's media time (``app.playback.PlaybackClock``, started in Play's
+the playback clock's media time (``app.models.playback.PlaybackClock``, started in Play's
 handler; the delay from the press to that start is printed separately), frame ``k``
 due at ``k / rate``.
 
@@ -259,8 +259,8 @@ def main():
     app_, win = gb.open_window(m, src)
     c = m.corpus_
     u = max(c.utterances, key=lambda u: u.stop - u.start)
-    from engine import targets as T
-    from app.trajectories import synthesize_targets
+    from engine.phonetics import targets as T
+    from app.models.trajectories import synthesize_targets
 
     win.state.set_utterance(u.id)
     data, _ = synthesize_targets(m, T.targets_from_utterance(m, u.id, on_collision="merge"), "linear")

@@ -11,7 +11,7 @@ cold figure: a new process pays the Delaunay set-up and the transforms once):
 
 * ``stage`` rows: load the manifold, Delaunay tetrahedralisation, the transforms by the
   old path (scipy's own, ``tri.transform``) and by the new one
-  (``engine.inverse.barycentric_transforms``), measured side by side in the same
+  (``engine.manifold.inverse.barycentric_transforms``), measured side by side in the same
   process; the first and a second (warm) query of 79 state points;
 * ``command`` rows: ``lipspace synthesize --manifold FILE --text "bob meets mum"`` as a
   whole process (imports, load, synthesis, inverse map, writing the CSV), wall time and
@@ -42,8 +42,8 @@ _STAGES = r"""
 import json, sys, time
 import numpy as np
 t0 = time.perf_counter()
-from engine.manifold import Manifold
-from engine.inverse import InverseMap, barycentric_transforms, QHULL_OPTIONS
+from engine.manifold.model import Manifold
+from engine.manifold.inverse import InverseMap, barycentric_transforms, QHULL_OPTIONS
 from scipy.spatial import Delaunay
 out = {"import": time.perf_counter() - t0}
 t = time.perf_counter(); m = Manifold.load(sys.argv[1]); out["load manifold"] = time.perf_counter() - t

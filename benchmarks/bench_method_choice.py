@@ -2,8 +2,8 @@
 
 Usage: python benchmarks/bench_method_choice.py [--preset small|default] [--cache-dir DIR]
 
-``best`` resolves through :func:`engine.method_choice.choose_methods`: the whole validation
-of :func:`engine.protocols.select_settings` on the loaded manifold, once per corpus, then
+``best`` resolves through :func:`engine.synthesis.method_choice.choose_methods`: the whole validation
+of :func:`engine.evaluation.protocols.select_settings` on the loaded manifold, once per corpus, then
 a JSON file in the cache. Printed: the manifold fit (for scale), the validation cold (no
 cached choice; wall time, peak RSS) and warm (the cached JSON read back), the fitting of
 the manifold method's state model for synthesis, and one synthesis of a 3-second phone
@@ -35,11 +35,11 @@ def main():
     ap.add_argument("--cache-dir", default=None, help="synthetic talker cache")
     args = ap.parse_args()
 
-    from engine.manifold import Manifold
-    from engine.method_choice import best_method, choose_methods, describe, target_protocol
-    from engine.methods import make_synthesizer
-    from engine.synthetic import load_synthetic
-    from engine.targets import targets_from_phones
+    from engine.manifold.model import Manifold
+    from engine.synthesis.method_choice import best_method, choose_methods, describe, target_protocol
+    from engine.synthesis.methods import make_synthesizer
+    from engine.talker.synthetic import load_synthetic
+    from engine.phonetics.targets import targets_from_phones
 
     print(f"BLAS: {blas_kernel()}")
     corpus = timed(f"corpus '{args.preset}'", lambda: load_synthetic(preset=args.preset, cache_dir=args.cache_dir))

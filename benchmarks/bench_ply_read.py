@@ -13,7 +13,7 @@ Cases (each about ``--mb`` MB, written to a temporary folder):
 Each case runs in a fresh process: the first read is cold (imports and page cache
 warm, code paths not), then ``--repeats`` warm reads; min and median of the warm
 reads, and the process's peak resident memory, are printed. ``--impl`` reads with
-another copy of ``engine/io/meshfile.py`` (e.g. the previous commit's, for a before /
+another copy of ``engine/io/readers/meshfile.py`` (e.g. the previous commit's, for a before /
 after comparison). A reader error (these files' empty faces are refused) counts as
 a completed read: what is timed is how long it takes to decide.
 """
@@ -79,7 +79,7 @@ def one(path: str, impl: str | None, repeats: int) -> dict:
         mod = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(mod)
     else:
-        from engine.io import meshfile as mod
+        from engine.io.readers import meshfile as mod
     times, outcome = [], ""
     for _ in range(1 + repeats):
         t = time.perf_counter()
@@ -113,7 +113,7 @@ def main() -> int:
 
     from _common import run_child_json
 
-    print(f"load average {os.getloadavg()[0]:.2f}; reader {args.impl or 'engine/io/meshfile.py'}")
+    print(f"load average {os.getloadavg()[0]:.2f}; reader {args.impl or 'engine/io/readers/meshfile.py'}")
     with tempfile.TemporaryDirectory() as d:
         for case in args.cases.split(","):
             p = make(case, Path(d), args.mb)

@@ -41,12 +41,12 @@ DATA = os.path.join(os.path.dirname(ROOT), "shared", "data", "haskins-ieee")
 
 
 def pooled_corpus(n_frames: int = N_FRAMES, seed: int = 0):
-    """The pooled corpus described above (engine.corpus.Corpus, n_frames frames)."""
+    """The pooled corpus described above (engine.recordings.corpus.Corpus, n_frames frames)."""
     from dataclasses import replace
 
     import numpy as np
 
-    from engine.corpus import Corpus
+    from engine.recordings.corpus import Corpus
     from engine.io import read_corpus, resample
 
     files = sorted(os.path.join(DATA, f) for f in os.listdir(DATA) if f.endswith(".mat"))

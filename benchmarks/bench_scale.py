@@ -1,11 +1,11 @@
 """Wall time and memory per stage of the whole build at growing N, the client's apart from the workers' (issue 13).
 
 For each N the synthetic talker speaks N frames (60 Hz) in a fresh process that writes
-them as a corpus stored in blocks (``engine.corpus_blocks.save_blocked``, 8,192 frames
+them as a corpus stored in blocks (``engine.recordings.corpus_blocks.save_blocked``, 8,192 frames
 per block, kept in ``--work`` and reused by later runs); then a second fresh process
 (cold) opens that corpus lazily (``load_blocked``: block paths and per-utterance
 metadata, no frames), builds its manifold with ``Manifold().fit`` and saves it (the file
-references the blocked corpus). The build follows the size rule of ``engine.buildplan``:
+references the blocked corpus). The build follows the size rule of ``engine.manifold.buildplan``:
 the exact embedding up to 50,000 frames, 2,000 landmarks above.
 
 Printed per size: the path taken; wall time per stage; the client process's resident
@@ -81,11 +81,11 @@ def measured_build(corpus, dask: str | None, *, save_to=None) -> dict:
     stage, the workers' peaks; with ``save_to`` the manifold is saved there too (stage "save")."""
     import warnings
 
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     executor = None
     if dask:
-        from engine.scale import DaskExecutor
+        from engine.scale.executor import DaskExecutor
 
         executor = DaskExecutor.connect(dask)
     start = current_rss_mb()
@@ -114,8 +114,8 @@ def measured_build(corpus, dask: str | None, *, save_to=None) -> dict:
 
 def generate(n_frames: int, resolution: str, path: str) -> dict:
     """The talker's N frames written as a blocked corpus at ``path`` (run in a fresh process)."""
-    from engine.corpus_blocks import save_blocked
-    from engine.synthetic import SyntheticTalker
+    from engine.recordings.corpus_blocks import save_blocked
+    from engine.talker.synthetic import SyntheticTalker
 
     t = time.perf_counter()
     corpus = SyntheticTalker(duration=n_frames / 60.0, resolution=resolution).generate()
@@ -125,8 +125,8 @@ def generate(n_frames: int, resolution: str, path: str) -> dict:
 
 def one(path: str, dask: str | None) -> dict:
     """Open the blocked corpus at ``path`` lazily, build, save, and measure (run in a fresh process)."""
-    from engine.buildplan import plan_build
-    from engine.corpus_blocks import load_blocked
+    from engine.manifold.buildplan import plan_build
+    from engine.recordings.corpus_blocks import load_blocked
 
     load0 = os.getloadavg()
     rss0 = current_rss_mb()

@@ -8,7 +8,7 @@ talker's sentences one after another (without espeak-ng: the sample MOCHA record
 utterances joined into one utterance of ``--seconds`` (whose audio is that sound) and
 a manifold fitted on it (not timed).
 
-1. engine (:func:`engine.spectrogram.sound_display` + ``grey()``: read the WAV, the
+1. engine (:func:`engine.phonetics.spectrogram.sound_display` + ``grey()``: read the WAV, the
    Praat-style wide-band spectrogram 0-8 kHz, grey levels):
    - cold: a fresh process each time (imports included), ``--cold`` processes;
    - warm: ``--repeats`` calls in one process.
@@ -50,9 +50,9 @@ MOCHA_WAV = HERE.parents[1] / "shared" / "data" / "mocha-fsew0" / "fsew0_001.wav
 
 def make_speech(path: Path, seconds: float) -> str:
     """Write ``seconds`` of speech to ``path`` (16-bit mono WAV); returns what it is."""
-    from engine._atomic import write_wav_atomic
-    from engine.speech_audio import read_wav
-    from engine.synthetic import load_synthetic
+    from engine.files.atomic import write_wav_atomic
+    from engine.phonetics.speech_audio import read_wav
+    from engine.talker.synthetic import load_synthetic
 
     exe = shutil.which("espeak-ng")
     if exe is not None:
@@ -72,7 +72,7 @@ def make_speech(path: Path, seconds: float) -> str:
 
 
 def engine_once(path) -> float:
-    from engine.spectrogram import sound_display
+    from engine.phonetics.spectrogram import sound_display
 
     t = time.perf_counter()
     d = sound_display(path)
@@ -84,9 +84,9 @@ def long_utterance_manifold(wav: Path, seconds: float):
     """The small talker with its first utterances joined into one of ``seconds`` whose audio is ``wav``."""
     from dataclasses import replace
 
-    from engine.corpus import PhoneInterval, Utterance
-    from engine.manifold import Manifold
-    from engine.synthetic import load_synthetic
+    from engine.recordings.corpus import PhoneInterval, Utterance
+    from engine.manifold.model import Manifold
+    from engine.talker.synthetic import load_synthetic
 
     c = load_synthetic(preset="small")
     n = int(round(seconds * c.rate))

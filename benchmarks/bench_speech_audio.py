@@ -42,7 +42,7 @@ FRICATIVES = ("s", "sh", "z", "zh", "f", "th", "ch", "jh")
 
 
 def _corpus(preset):
-    from engine.synthetic import load_synthetic
+    from engine.talker.synthetic import load_synthetic
 
     return load_synthetic(preset=preset)
 
@@ -51,8 +51,8 @@ def time_one(preset: str, method: str) -> dict:
     """In this (fresh) process: make the preset's audio with ``method`` into an empty folder."""
     from _common import peak_rss_mb
 
-    from engine import espeak_phones
-    from engine import speech_audio as sa
+    from engine.phonetics import espeak_phones
+    from engine.phonetics import speech_audio as sa
 
     corpus = _corpus(preset)
     if method == "words":
@@ -106,9 +106,9 @@ def hiss_onset(y, t, sr, search=0.04):
 def analyse(preset: str, words: bool) -> dict:
     from _common import peak_rss_mb
 
-    from engine import espeak_phones
-    from engine import speech_audio as sa
-    from engine.phonetics import PAUSE
+    from engine.phonetics import espeak_phones
+    from engine.phonetics import speech_audio as sa
+    from engine.phonetics.phones import PAUSE
 
     sr = sa.SAMPLE_RATE
     corpus = _corpus(preset)

@@ -4,10 +4,10 @@ Usage: python benchmarks/bench_states.py [--source synthetic|standin] [--preset 
        python benchmarks/bench_states.py --source standin --frames 600000 --states 5000 20000 \
            --no-tangent --reuse /tmp/graphs   # issue 13 item 8: queries at K = 5,000 and 20,000
 
-Data: the paper-scale synthetic talker (``engine.synthetic``, preset "paper") put through
+Data: the paper-scale synthetic talker (``engine.talker.synthetic``, preset "paper") put through
 the manifold pipeline (shape space, dynamic features, embedding) when ``--source
-synthetic`` (the default, if ``engine.synthetic`` is importable). ``--source standin``
-(or no ``engine.synthetic``) uses a stand-in with the paper's N = 28,833 frames: speech-like
+synthetic`` (the default, if ``engine.talker.synthetic`` is importable). ``--source standin``
+(or no ``engine.talker.synthetic``) uses a stand-in with the paper's N = 28,833 frames: speech-like
 opening trajectories (critically damped articulator driven by random phone targets, 60 Hz,
 utterances of 1.5-3.5 s) embedded as a paraboloid-shaped sheet in 3-D, F^y = (x, v, x^2 - v^2/2)
 plus noise, with F^x = (x, ...) and F^x' its first differences; ``--frames N`` sets its size
@@ -30,11 +30,11 @@ processes, each loading the saved graph and timing its first query: right after 
 so building A and A^T as csr is included, and after ``StateGraph.prepare_queries``, which
 the explorer's loading worker calls; loading is timed apart). Also the state path ``lipspace synthesize`` and ``StateModel.path`` find:
 10 targets (the states of every 6th frame of a training utterance, 0.1 s apart at
-60 Hz), each gap the most probable path of exactly its length (``engine.bridges.bridge``),
+60 Hz), each gap the most probable path of exactly its length (``engine.graph.bridges.bridge``),
 beside the full recursion over every edge it replaced (``MaxProductGraph.viterbi`` +
 ``backtrack``) on the same targets, min / median of ``--synthesis-repeats``; and the
 phone lattice of ``synthesize --text`` (scores from up to 8 candidate states per target
-to the next target's, ``engine.bridges.forward_to`` beside ``MaxProductGraph.forward``). Every line carries the load average; the BLAS kernel is printed
+to the next target's, ``engine.graph.bridges.forward_to`` beside ``MaxProductGraph.forward``). Every line carries the load average; the BLAS kernel is printed
 once (no query calls BLAS). Target (issue 13 item 8): hemisphere and path <= 20 ms at
 K = 20,000.
 """
@@ -101,10 +101,10 @@ def standin(n_frames=PAPER_FRAMES, seed=0, rate=60.0):
 
 
 def synthetic(preset):
-    from engine.dynamics import DynamicFeatures, velocities
-    from engine.embedding import Embedding
-    from engine.shape import ShapeSpace
-    from engine.synthetic import load_synthetic
+    from engine.manifold.dynamics import DynamicFeatures, velocities
+    from engine.manifold.embedding import Embedding
+    from engine.manifold.shape import ShapeSpace
+    from engine.talker.synthetic import load_synthetic
 
     corpus = load_synthetic(preset=preset)
     b = corpus.bounds
@@ -121,8 +121,8 @@ def _child(path, query, seed, prepared):
     import json
 
     t = time.perf_counter()
-    from engine._persist import load_estimator, read_npz
-    from engine.states import StateGraph
+    from engine.files.persist import load_estimator, read_npz
+    from engine.graph.states import StateGraph
 
     g = load_estimator(StateGraph, read_npz(path), "states")
     if prepared:
@@ -189,7 +189,7 @@ def _cold(path, query, runs):
 def _max_product_graph(g):
     """The state graph ``g``'s observed transitions as the ``MaxProductGraph`` synthesis runs
     on, and the seconds it took to set up."""
-    from engine.synthesis import MaxProductGraph, log_transitions, observed_transitions
+    from engine.synthesis.viterbi import MaxProductGraph, log_transitions, observed_transitions
 
     t = time.perf_counter()
     mg = MaxProductGraph(log_transitions(observed_transitions(g)))
@@ -198,10 +198,10 @@ def _max_product_graph(g):
 
 def _synthesis_path(mg, g, bounds, rng, repeats, gap=6, n_targets=10):
     """Per repeat: the 9 gaps' state paths on ``mg`` (:func:`_max_product_graph` of ``g``) by
-    ``engine.bridges.bridge`` (what ``lipspace synthesize`` and ``StateModel.path`` run) and by
+    ``engine.graph.bridges.bridge`` (what ``lipspace synthesize`` and ``StateModel.path`` run) and by
     the full recursion over every edge (``viterbi`` + ``backtrack``, before), same targets,
     alternating; the paths must agree."""
-    from engine.bridges import bridge
+    from engine.graph.bridges import bridge
 
     span = gap * (n_targets - 1)
     long = bounds[(bounds[:, 1] - bounds[:, 0]) > span]
@@ -229,9 +229,9 @@ def _lattice_scores(mg, g, bounds, rng, repeats, gap=6, n_targets=10, n_candidat
     """The phone lattice of ``synthesize --text``: for each gap, the best ``gap + 1``-frame
     path scores from every candidate state of one target to every candidate of the next
     (candidates: the distinct states of the 8 frames around each target frame), by
-    ``engine.bridges.forward_to`` and by the full ``MaxProductGraph.forward`` on ``mg``
+    ``engine.graph.bridges.forward_to`` and by the full ``MaxProductGraph.forward`` on ``mg``
     (:func:`_max_product_graph` of ``g``), alternating."""
-    from engine.bridges import forward_to
+    from engine.graph.bridges import forward_to
 
     span = gap * (n_targets - 1)
     h = n_candidates // 2
@@ -275,29 +275,29 @@ def main():
 
     from _common import blas_kernel
 
-    from engine._atomic import atomic_write
-    from engine._persist import dump_estimator, load_estimator, read_npz
-    from engine.states import StateGraph, StateGraphConnectivityWarning
-    from engine.tangent import TangentFrames
+    from engine.files.atomic import atomic_write
+    from engine.files.persist import dump_estimator, load_estimator, read_npz
+    from engine.graph.states import StateGraph, StateGraphConnectivityWarning
+    from engine.manifold.tangent import TangentFrames
 
     source = args.source
     if source is None:
         try:
-            import engine.synthetic  # noqa: F401
+            import engine.talker.synthetic  # noqa: F401
             source = "synthetic"
         except ImportError:
             source = "standin"
     t = time.perf_counter()
     if source == "synthetic":
         Fy, Fx, Fxv, b, corpus = synthetic(args.preset)
-        print(f"data: engine.synthetic preset {args.preset!r} through shape/dynamics/embedding: "
+        print(f"data: engine.talker.synthetic preset {args.preset!r} through shape/dynamics/embedding: "
               f"{len(Fy)} frames x {corpus.frames.shape[1]} coordinates, {len(b)} utterances "
               f"({time.perf_counter() - t:.1f} s to build)")
         tag = f"synthetic_{args.preset}"
     else:
         Fy, Fx, Fxv, b, _ = standin(args.frames)
         print(f"data: STAND-IN (paraboloid sheet of speech-like opening trajectories), {len(Fy)} frames, "
-              f"{len(b)} utterances (engine.synthetic not used)")
+              f"{len(b)} utterances (engine.talker.synthetic not used)")
         tag = f"standin_{args.frames}"
     print(f"BLAS: {blas_kernel()}; {os.cpu_count()} cores")
 

@@ -47,10 +47,10 @@ def main():
     ap.add_argument("--cache-dir", default=None)
     args = ap.parse_args()
 
-    from engine.manifold import Manifold
-    from engine.methods import make_synthesizer
-    from engine.synthetic import load_synthetic
-    from engine.targets import targets_from_phones, targets_from_points
+    from engine.manifold.model import Manifold
+    from engine.synthesis.methods import make_synthesizer
+    from engine.talker.synthetic import load_synthetic
+    from engine.phonetics.targets import targets_from_phones, targets_from_points
 
     print("one-time set-up")
     if args.manifold:

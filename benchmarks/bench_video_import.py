@@ -3,9 +3,9 @@
 Usage: python benchmarks/bench_video_import.py [--seconds 20 60] [--repeats 3] [--size 512] [--keep DIR] [--live]
 
 Makes a 30 fps video of scikit-image's astronaut photo (``--size`` pixels square, the
-whole photo) under known head motion (rotation, scale, shift; engine.io.video_synth) for
+whole photo) under known head motion (rotation, scale, shift; engine.io.video.synth) for
 each length, with a 16 kHz tone as its audio track, then imports each in a fresh process
-(``engine.io.video.read_video`` with the audio stored, what ``lipspace import`` runs):
+(``engine.io.video.clips.read_video`` with the audio stored, what ``lipspace import`` runs):
 the first import in the process is *cold* (mediapipe loaded, graph built), a second one
 right after is *warm*. Prints per length: frames, min and median wall time of the
 repeats, import fps, and the process's peak resident memory, which stays flat with the
@@ -13,7 +13,7 @@ video's length because frames are decoded and tracked one at a time (only ~1 KiB
 landmarks per frame is kept). Target: a 1-minute 30 fps video in under 2 minutes.
 
 ``--live`` also plays the shortest video as a live stream (paced at 30 fps, as a camera
-delivers it) into a manifold built from its own import (app.live.LiveSession, the live
+delivers it) into a manifold built from its own import (app.models.live.LiveSession, the live
 mirror's engine without the window) and prints the frames processed per second and the
 frames dropped because tracking could not keep up. ``--live-window`` does the same
 through the live mirror's window (drawing included; run under ``xvfb-run -a``).
@@ -38,7 +38,7 @@ def make_video(path: Path, seconds: float, size: int) -> None:
     from skimage.data import astronaut
     from skimage.transform import resize
 
-    from engine.io.video_synth import default_motion, moving_image_frames, write_video
+    from engine.io.video.synth import default_motion, moving_image_frames, write_video
 
     img = astronaut()
     if size != img.shape[0]:
@@ -56,7 +56,7 @@ def child(path: str, audio_dir: str) -> dict:
 
     rss0 = current_rss_mb()
     t = time.perf_counter()
-    from engine.io.video import read_video
+    from engine.io.video.clips import read_video
 
     c = read_video(path, audio_dir=audio_dir)
     cold = time.perf_counter() - t
@@ -72,9 +72,9 @@ def child(path: str, audio_dir: str) -> dict:
 
 
 def live(path: Path) -> None:
-    from app.live import LiveSession
-    from engine.io.video import read_video
-    from engine.manifold import Manifold
+    from app.models.live import LiveSession
+    from engine.io.video.clips import read_video
+    from engine.manifold.model import Manifold
 
     m = Manifold(n_states=50).fit(read_video(path))
     s = LiveSession(m, str(path)).start()
@@ -95,10 +95,10 @@ def live_window(path: Path) -> None:
     """The same stream through the live mirror window (needs a display: run under xvfb-run)."""
     from PySide6 import QtCore, QtWidgets
 
-    from app.live import LiveSession
+    from app.models.live import LiveSession
     from app.views.live_view import LiveWindow
-    from engine.io.video import read_video
-    from engine.manifold import Manifold
+    from engine.io.video.clips import read_video
+    from engine.manifold.model import Manifold
 
     m = Manifold(n_states=50).fit(read_video(path))
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])

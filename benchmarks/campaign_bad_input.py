@@ -54,8 +54,8 @@ ROOT = Path(__file__).resolve().parents[1]
 SETUP = r'''
 import json, sys
 import numpy as np
-from engine.synthetic import load_synthetic
-from engine.manifold import Manifold
+from engine.talker.synthetic import load_synthetic
+from engine.manifold.model import Manifold
 d = sys.argv[1]
 c = load_synthetic(preset="small")
 tiny = c.subset([u.id for u in c.utterances[:3]])
@@ -157,10 +157,10 @@ def cases(d: Path):
     s_deep = session("deep", '{"lipspace_session": 1, "x": ' + "[" * 100000 + "]" * 100000 + "}")
     s_range = session("range", {"lipspace_session": 1, "source": {"path": m}, "selection": {"frame": 10**9}})
     s_fifo = session("fifo", {"lipspace_session": 1, "source": {"path": str(fifo)}})
-    load = ("from app.session import load_session, SessionError\ntry:\n    d = load_session({!r})\n"
+    load = ("from app.files.session import load_session, SessionError\ntry:\n    d = load_session({!r})\n"
             "except SessionError as exc:\n    print('refused:', exc)\nelse:\n    print('loaded', d['source'])")
-    apply = ("from app.session import load_session, apply_session, SessionError\nfrom app.state import AppState\n"
-             "from engine.manifold import Manifold\nd = load_session({!r})\n"
+    apply = ("from app.files.session import load_session, apply_session, SessionError\nfrom app.models.state import AppState\n"
+             "from engine.manifold.model import Manifold\nd = load_session({!r})\n"
              "st = AppState(Manifold.load(d['source']['path']))\ntry:\n    apply_session(st, d)\n"
              "except SessionError as exc:\n    print('refused:', exc)\nelse:\n    print('applied')")
     o = str(out)
@@ -219,8 +219,8 @@ def cases(d: Path):
          "lipspace import", []),
         ("info on a MOCHA .ema", ["info", str(shared / "mocha-fsew0" / "fsew0_001.ema")], 2, "lipspace import", []),
         ("corpus name with escape codes", ["info", str(esc)], 0, "!ESC", []),
-        ("cache keyed on the fitting code", ["@py", "from app.source_loading import cached_manifold_path as p; "
-                                             "from engine.manifold import algorithm_fingerprint as a; "
+        ("cache keyed on the fitting code", ["@py", "from app.files.source_loading import cached_manifold_path as p; "
+                                             "from engine.manifold.model import algorithm_fingerprint as a; "
                                              "assert a() in p('small').name; print('keyed')"], 0, None, []),
     ]
 
@@ -363,7 +363,7 @@ def cases_30(d: Path):
         p = write_ply(plyd / f"f{k}.ply", np.eye(3) + k, [[0, 1, 2]])
         p.write_bytes(p.read_bytes() + (b"0 0 1\n" if k == 1 else b""))
     one = d / "one-frame.npz"
-    from engine.corpus import Corpus, Utterance
+    from engine.recordings.corpus import Corpus, Utterance
 
     Corpus(frames=rng.normal(size=(40, 6)), rate=60, utterances=[Utterance(f"u{k}", k, k + 1) for k in range(40)],
            name="one-frame").save(one)
@@ -383,7 +383,7 @@ def cases_30(d: Path):
     (r / "notema.ema").write_text("this is not an EST track\n")
     uid = None
     try:
-        from engine.manifold import Manifold
+        from engine.manifold.model import Manifold
 
         uid = Manifold.load(m).corpus_.utterances[0].id
     except Exception:  # another tree's manifold format: the key-frame case names an unknown id then
@@ -391,11 +391,11 @@ def cases_30(d: Path):
 
     # ---- window state files (item 5), through their loaders (the window opens in tests/app)
     state = d / "state30"
-    marker = ("import json, pathlib, sys\nfrom app.autosave import Autosaver\nd = pathlib.Path({!r})\n"
+    marker = ("import json, pathlib, sys\nfrom app.files.autosave import Autosaver\nd = pathlib.Path({!r})\n"
               "d.mkdir(parents=True, exist_ok=True)\n(d / 'running-4242-1.json').write_text({!r})\n"
               "(d / 'autosave-4242-1.lipspace.json').write_text('{{}}')\na = Autosaver(d)\nrec = a.begin()\n"
               "print('refused:', getattr(a, 'set_aside', None), rec)\na.finish()")
-    session = ("from app.session import load_session, SessionError\nimport pathlib\np = pathlib.Path({!r})\n"
+    session = ("from app.files.session import load_session, SessionError\nimport pathlib\np = pathlib.Path({!r})\n"
                "p.write_text({!r})\ntry:\n    d = load_session(p)\nexcept SessionError as exc:\n"
                "    print('refused:', exc)\nelse:\n    print('loaded', d.get('extra'), d.get('cameras'))")
     settings = ("import pathlib\nfrom PySide6 import QtCore\nfrom app.window_settings import WindowSettings\n"

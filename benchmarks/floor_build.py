@@ -122,7 +122,7 @@ def work(N, C, *, r_shape, n_iter, m, r_emb, n_passes, L=None, **_) -> dict:
 
 
 def _corpus(preset):
-    from engine.synthetic import load_synthetic
+    from engine.talker.synthetic import load_synthetic
 
     return load_synthetic(preset=preset)
 

@@ -7,7 +7,7 @@ Usage: python benchmarks/make_results.py [--out docs/RESULTS.md] [--preset defau
 Corpora (every number in the file is computed by this script from current code):
 
 ``default``   the default synthetic talker (``--preset``, 10 % of the utterances held out, seed 0);
-``held-out``  the held-out synthetic talker (:data:`engine.synthetic.HELD_OUT_TALKER`, same preset
+``held-out``  the held-out synthetic talker (:data:`engine.talker.synthetic.HELD_OUT_TALKER`, same preset
               and split rule), never used to tune anything;
 ``haskins``   the Haskins IEEE pair (two speakers, one sentence each): cross-speaker in both
               directions with each speaker's mean frame removed, and once without that removal;
@@ -16,7 +16,7 @@ Corpora (every number in the file is computed by this script from current code):
               held out in turn (leave one clip out) with kinematic key frames as targets.
 
 Settings are chosen per corpus (and per fold) on a validation split of its training
-utterances (:func:`engine.protocols.select_settings`). Each corpus's section is cached
+utterances (:func:`engine.evaluation.protocols.select_settings`). Each corpus's section is cached
 (``--results-cache``, default ``<cache folder>/make-results``) with the commit and code
 key that computed it: ``--corpus NAME ...`` recomputes only those and takes the others
 from the cache (a section computed by other code is marked so in the file; run without
@@ -48,10 +48,10 @@ CORPORA = ("default", "held-out", "haskins", "faces")
 SECTION_FORMAT = 2
 PROTOCOLS = ("states", "oracle", "phones")
 #: code whose change makes a cached section stale
-CODE = ("engine.protocols", "engine.protocol_methods", "engine.protocol_report", "engine.learnt_paths",
-        "engine.statepaths", "engine.dominance", "engine.sliding_window", "engine.unitselection", "engine.synthesis",
-        "engine.states", "engine.manifold", "engine.embedding", "engine.shape", "engine.dynamics", "engine.synthetic",
-        "engine.targets", "engine.kinematics", "engine.paired", "engine.registration", "engine.inverse_local")
+CODE = ("engine.evaluation.protocols", "engine.evaluation.protocol_methods", "engine.evaluation.protocol_report", "engine.synthesis.learnt_paths",
+        "engine.synthesis.statepaths", "engine.synthesis.dominance", "engine.synthesis.sliding_window", "engine.synthesis.unitselection", "engine.synthesis.viterbi",
+        "engine.graph.states", "engine.manifold.model", "engine.manifold.embedding", "engine.manifold.shape", "engine.manifold.dynamics", "engine.talker.synthetic",
+        "engine.phonetics.targets", "engine.recordings.kinematics", "engine.evaluation.paired", "engine.recordings.registration", "engine.manifold.inverse_local")
 
 
 def _blas():
@@ -77,7 +77,7 @@ def _commit():
 
 
 def _code_key():
-    from engine._persist import source_fingerprint
+    from engine.files.persist import source_fingerprint
 
     files = [REPO / "benchmarks" / "make_results.py", REPO / "benchmarks" / "_results_tables.py"]
     return source_fingerprint(CODE, {"scripts": [f.read_text(encoding="utf-8") for f in files]})
@@ -107,7 +107,7 @@ class Section:
 
 
 def _run(name, corpus, seed, **kw):
-    from engine.protocols import evaluate_protocols
+    from engine.evaluation.protocols import evaluate_protocols
 
     t = time.perf_counter()
     r = evaluate_protocols(corpus, random_state=seed, **kw)
@@ -116,7 +116,7 @@ def _run(name, corpus, seed, **kw):
 
 
 def run_synthetic(key, args):
-    from engine.synthetic import HELD_OUT_TALKER, load_synthetic
+    from engine.talker.synthetic import HELD_OUT_TALKER, load_synthetic
 
     title, params = {"default": ("Default synthetic talker", {}),
                      "held-out": ("Held-out synthetic talker", dict(HELD_OUT_TALKER))}[key]
@@ -144,7 +144,7 @@ def run_haskins(args):
     for test in ids:
         who = haskins_speaker(raw.utterance(test))
         r = _run(f"Haskins, test {who}", norm, args.seed, test_ids=[test])
-        r.notes.append("per-speaker mean frame removed (engine.registration.normalise_speakers, mode 'mean', "
+        r.notes.append("per-speaker mean frame removed (engine.recordings.registration.normalise_speakers, mode 'mean', "
                        "speakers named by the file name's first field)")
         sec.add(f"Haskins, test {who} (normalised)", r,
                 f"Haskins pair, cross-speaker: test speaker {who}, speaker means removed", validation=False)
@@ -163,9 +163,9 @@ def faces_corpus(faces_dir, store):
     from dataclasses import replace
 
     from app.cli.evaluate import normalise_per_speaker
-    from engine.corpus import Corpus
+    from engine.recordings.corpus import Corpus
     from engine.io import concat
-    from engine.kinematics import kinematic_if_unlabelled
+    from engine.recordings.kinematics import kinematic_if_unlabelled
 
     clips = sorted(Path(faces_dir).glob("*.mp4"))
     if not clips:
@@ -188,7 +188,7 @@ def faces_corpus(faces_dir, store):
 
 
 def run_faces(args):
-    from engine.protocol_report import ProtocolResult
+    from engine.evaluation.protocol_report import ProtocolResult
 
     sec = Section("faces")
     corpus, log = faces_corpus(args.faces_dir, Path(args.results_cache) / "faces")
@@ -199,7 +199,7 @@ def run_faces(args):
              for u in corpus.utterances]
     r = ProtocolResult.merge(folds, n_boot=2000, random_state=args.seed, notes=[
         "five real clips (one speaker each), imported with lipspace import (60 Hz) and pooled; each clip's mean "
-        "frame removed (engine.registration.normalise_speakers); targets: kinematic key frames (aperture "
+        "frame removed (engine.recordings.registration.normalise_speakers); targets: kinematic key frames (aperture "
         "maxima / minima, peak opening / closing velocities); leave one clip out: five folds, each fitted and "
         "validated on the other four clips only; the settings shown are the first fold's", *log])
     sec.add("Talking faces, 5 clips (leave one out)", r, "Talking faces: five real clips pooled, leave one clip out",
@@ -220,11 +220,11 @@ def main():
     ap.add_argument("--results-cache", default=None, help="per-corpus sections (default: <cache>/make-results)")
     args = ap.parse_args()
     if args.results_cache is None:
-        from engine.userdirs import user_dir
+        from engine.files.userdirs import user_dir
 
         args.results_cache = str(user_dir("cache", "LIPSPACE_CACHE_DIR") / "make-results")
 
-    from engine._atomic import atomic_write
+    from engine.files.atomic import atomic_write
 
     t_all = time.perf_counter()
     commit, code = _commit(), _code_key()  # the code this run imports (taken before anything is computed)

@@ -52,8 +52,8 @@ def generate_part(n_frames: int, resolution: str, seed: int, speaker: str, path:
     """One part of a chunked stand-in: ``n_frames`` of the talker with ``seed``, spoken by ``speaker``."""
     from dataclasses import replace
 
-    from engine.corpus_blocks import save_blocked
-    from engine.synthetic import SyntheticTalker
+    from engine.recordings.corpus_blocks import save_blocked
+    from engine.talker.synthetic import SyntheticTalker
 
     t = time.perf_counter()
     c = SyntheticTalker(duration=n_frames / 60.0, resolution=resolution, seed=seed).generate()
@@ -68,8 +68,8 @@ def join_parts(parts: list[str], out: str) -> None:
     """Join blocked corpora (same points, rate and roles) into one, moving their block files (no frame is read)."""
     import numpy as np
 
-    from engine._atomic import atomic_write
-    from engine.corpus_blocks import blocks_folder, load_blocked
+    from engine.files.atomic import atomic_write
+    from engine.recordings.corpus_blocks import blocks_folder, load_blocked
 
     folder = blocks_folder(out)
     folder.mkdir(parents=True, exist_ok=True)

@@ -4,7 +4,7 @@ Two inputs:
 
 * the Haskins IEEE pair (``--haskins DIR``, default ``../shared/data/haskins-ieee`` beside
   the project when present): two speakers, one sentence each, 100 Hz;
-* a generated 3-speaker articulograph corpus (:mod:`engine.multispeaker`): 7 sensors x 6
+* a generated 3-speaker articulograph corpus (:mod:`engine.talker.multispeaker`): 7 sensors x 6
   values at 250 Hz, speaker origins 100 mm apart, offsets between utterances, head
   motion, tongue sensors; with and without head reference sensors.
 
@@ -26,15 +26,15 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.corpus import Corpus, CorpusWarning, Utterance
+from engine.recordings.corpus import Corpus, CorpusWarning, Utterance
 from engine.io import concat, read_corpus, resample
-from engine.io.matrix import corpus_from_matrix
-from engine.class_agreement import class_agreement
-from engine.kinematics import lip_aperture
-from engine.layouts import BUILTIN, read_layout
-from engine.manifold import Manifold
-from engine.multispeaker import generate_recordings, layout_text
-from engine.registration import register
+from engine.io.readers.matrix import corpus_from_matrix
+from engine.manifold.class_agreement import class_agreement
+from engine.recordings.kinematics import lip_aperture
+from engine.recordings.layouts import BUILTIN, read_layout
+from engine.manifold.model import Manifold
+from engine.talker.multispeaker import generate_recordings, layout_text
+from engine.recordings.registration import register
 
 HASKINS = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "haskins-ieee"
 

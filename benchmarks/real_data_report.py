@@ -1,10 +1,10 @@
 """Build every real sample recording and the synthetic talkers; write docs/REAL_DATA.md.
 
 For each corpus, read as ``lipspace import`` reads it by default (registered, resampled
-to 60 Hz; :func:`app.source_loading.read_recording`) and built with ``lipspace build``'s
+to 60 Hz; :func:`app.files.source_loading.read_recording`) and built with ``lipspace build``'s
 defaults (``Manifold()``): frames, rate, speakers, shape components for 95 % of the
 variance, the share of Y's recovered variance in its first 3 dims, the tangent classes'
-agreement with the lip aperture (:mod:`engine.class_agreement`) beside the trivial rule
+agreement with the lip aperture (:mod:`engine.manifold.class_agreement`) beside the trivial rule
 and the aperture's second-difference reading, the tangent frames chosen (dims of Y, neighbours), the
 state graph's strongly connected components and the build time.
 
@@ -45,12 +45,12 @@ def with_speaker(corpus, speaker):
 
 def read(path, *, native=False):
     """A recording as ``lipspace import`` makes it (``native``: at its own rate)."""
-    from app.source_loading import read_recording
+    from app.files.source_loading import read_recording
 
     if not native:
         return read_recording(path)
     from engine.io import read_corpus
-    from engine.registration import register
+    from engine.recordings.registration import register
 
     return register(read_corpus(path), method="auto")
 
@@ -85,7 +85,7 @@ def real_corpora(data=DATA, *, clips=CLIPS):
 
 
 def synthetic_corpora(*, quick=False):
-    from engine.synthetic import HELD_OUT_TALKER, load_synthetic
+    from engine.talker.synthetic import HELD_OUT_TALKER, load_synthetic
 
     out = {"synthetic small": load_synthetic(preset="small"),
            "synthetic small, held-out talker": load_synthetic(preset="small", **HELD_OUT_TALKER)}
@@ -97,10 +97,10 @@ def synthetic_corpora(*, quick=False):
 # ----------------------------------------------------------------- one build
 def measure(name, corpus):
     """A row of the table: the build of ``corpus`` with the defaults, and what it says."""
-    from engine.class_agreement import class_agreement
-    from engine.kinematics import lip_aperture
-    from engine.manifold import Manifold
-    from engine.talker_report import components_of_total
+    from engine.manifold.class_agreement import class_agreement
+    from engine.recordings.kinematics import lip_aperture
+    from engine.manifold.model import Manifold
+    from engine.evaluation.talker_report import components_of_total
 
     tracemalloc.start()
     t = time.perf_counter()
@@ -129,8 +129,8 @@ def measure(name, corpus):
 def _slow_share(tf, truth, bounds):
     """(n, share): moving frames whose opening class disagrees with the aperture, and the share of
     them changing by less than 3 times the moving threshold (0.15 mm per frame): near a turn."""
-    from engine.class_agreement import MOVING_PER_FRAME, moving_frames
-    from engine.local_gradients import central_difference
+    from engine.manifold.class_agreement import MOVING_PER_FRAME, moving_frames
+    from engine.manifold.local_gradients import central_difference
 
     v = central_difference(truth, bounds)
     moving = moving_frames(truth, bounds)
@@ -144,8 +144,8 @@ def _best_smoothed_rule(tf, truth, measured, bounds):
     Savitzky-Golay window (cubic) that gives the best accelerating agreement with the truth."""
     from scipy.signal import savgol_filter
 
-    from engine.class_agreement import class_agreement
-    from engine.local_gradients import central_difference
+    from engine.manifold.class_agreement import class_agreement
+    from engine.manifold.local_gradients import central_difference
 
     best = None
     for w in (5, 7, 9, 11, 13, 15, 21, 31):
@@ -210,7 +210,7 @@ def main(argv=None):
                                   with_speaker(read(args.data / "talking-faces" / f"{clip}.mp4", native=True), clip)))
             inner.append(measure(f"{clip}, inner contour", inner_contour(c)))
             print(_row(native[-1]), "\n", _row(inner[-1]), flush=True)
-    from engine._atomic import write_text_atomic
+    from engine.files.atomic import write_text_atomic
 
     lines = [
         "# The tangent classes on real recordings",

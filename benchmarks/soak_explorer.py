@@ -22,7 +22,7 @@ The child does what a user does, on Qt timers inside the real event loop:
 * every 5 s switches panels (clusters/scree tabs), colour mode and hemisphere,
 * every ``--resynth-every`` s (30; 0 = never) loads another input (an utterance or the
   typed text) and synthesises it again, alternating methods, in the worker thread,
-* autosaves as ``lipspace explore`` does (:mod:`app.autosave`, into a temporary
+* autosaves as ``lipspace explore`` does (:mod:`app.files.autosave`, into a temporary
   directory; ``--no-autosave`` to leave it out).
 
 Printed at the end: whether the child was alive when the soak time ran out and how it
@@ -123,7 +123,7 @@ def child(args) -> int:
     if args.autosave:
         import tempfile
 
-        from app.autosave import Autosaver
+        from app.files.autosave import Autosaver
 
         autosaver = Autosaver(Path(tempfile.mkdtemp(prefix="lipspace-soak-state-")))
         autosaver.begin()

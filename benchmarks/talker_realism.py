@@ -1,8 +1,8 @@
 """How real the synthetic talker is to the method: generation time, X scree, Y1-3 variance,
 and the tangent classes' agreement with the exact ground truth next to the trivial
-Delta F^x_1 rule (engine.talker_report), for the default and the held-out talker; and the
+Delta F^x_1 rule (engine.evaluation.talker_report), for the default and the held-out talker; and the
 scree of four articulograph sensors (upper and lower lip, left corner, jaw) on the talker
-(engine.virtual_sensors) beside the same sensors of real speakers (the Haskins IEEE pair,
+(engine.talker.virtual_sensors) beside the same sensors of real speakers (the Haskins IEEE pair,
 when --haskins-dir holds it).
 
 Run: .venv/bin/python benchmarks/talker_realism.py [--preset default] [--repeats 3] [--skip-heldout]
@@ -25,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the engine, f
 
 from _common import blas_kernel  # noqa: E402
 
-_COLD = ("import time, json, resource; t=time.perf_counter(); from engine.synthetic import SyntheticTalker; "
+_COLD = ("import time, json, resource; t=time.perf_counter(); from engine.talker.synthetic import SyntheticTalker; "
          "SyntheticTalker(preset={preset!r}, **{extra!r}).generate(); "
          "print(json.dumps([time.perf_counter()-t, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss/1024]))")
 
@@ -47,11 +47,11 @@ def main(argv=None):
     args = ap.parse_args(argv)
     import os
 
-    from engine.manifold import Manifold
-    from engine.lipmodel import CONTROL_NAMES, LipModel
-    from engine.synthetic import HELD_OUT_TALKER, PRESETS, SyntheticTalker, speaker_anatomy
-    from engine.talker_report import articulation_report, format_articulation, format_realism, talker_realism
-    from engine.virtual_sensors import SENSOR_ROLES, sensor_motion, sensor_scree, virtual_sensors
+    from engine.manifold.model import Manifold
+    from engine.talker.lipmodel import CONTROL_NAMES, LipModel
+    from engine.talker.synthetic import HELD_OUT_TALKER, PRESETS, SyntheticTalker, speaker_anatomy
+    from engine.evaluation.talker_report import articulation_report, format_articulation, format_realism, talker_realism
+    from engine.talker.virtual_sensors import SENSOR_ROLES, sensor_motion, sensor_scree, virtual_sensors
 
     print(f"BLAS: {blas_kernel()}")
     print(f"load average {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
@@ -123,7 +123,7 @@ def _real_sensors(haskins, mocha, roles):
     """The same four sensors of each real 3-D recording (Haskins), and UL, LL and the lower
     incisor of the midsagittal MOCHA recording, which the calibrated kinematics were not set on."""
     from engine.io.dispatch import read_corpus
-    from engine.virtual_sensors import sensor_motion, sensor_scree
+    from engine.talker.virtual_sensors import sensor_motion, sensor_scree
 
     files = sorted(haskins.glob("*.mat")) if haskins.is_dir() else []
     print("\n== real speakers' sensors (the same roles)" if files else f"\nreal sensors: nothing in {haskins}")

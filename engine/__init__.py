@@ -10,7 +10,7 @@ __version__ = "0.1.0"
 
 def __getattr__(name):
     if name in __all__:
-        from engine import corpus
+        from engine.recordings import corpus
 
         return getattr(corpus, name)
     raise AttributeError(f"module 'engine' has no attribute {name!r}")

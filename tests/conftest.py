@@ -19,7 +19,7 @@ def pytest_configure(config):
         import tempfile
 
         os.environ["LIPSPACE_CACHE_DIR"] = tempfile.mkdtemp(prefix="lipspace-test-cache-")
-    # nor autosave into the user's real state dir (app.autosave)
+    # nor autosave into the user's real state dir (app.files.autosave)
     if "LIPSPACE_STATE_DIR" not in os.environ:
         import tempfile
 
@@ -28,14 +28,14 @@ def pytest_configure(config):
 
 @pytest.fixture(scope="session")
 def small_corpus():
-    from engine.synthetic import load_synthetic
+    from engine.talker.synthetic import load_synthetic
 
     return load_synthetic(preset="small")
 
 
 @pytest.fixture(scope="session")
 def small_manifold(small_corpus):
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     return Manifold().fit(small_corpus)
 
@@ -53,7 +53,7 @@ def mocha_manifold(shared_data):
     import warnings
 
     from engine.io import read_corpus, resample
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     d = shared_data / "mocha-fsew0"
     with warnings.catch_warnings():

@@ -100,8 +100,8 @@ def test_the_cycle_finder_finds_a_cycle():
 
 def test_the_scan_sees_function_level_and_relative_imports():
     g = import_graph()
-    assert "app.source_loading" in g["app.main_window"]  # imported inside MainWindow.open_source
-    assert "engine.trajectory" in g["engine.unitselection"]
+    assert "app.files.source_loading" in g["app.main_window"]  # imported inside MainWindow.open_source
+    assert "engine.synthesis.trajectory" in g["engine.synthesis.unitselection"]
     assert "app.views.lip_view" in g["app.views"]
 
 

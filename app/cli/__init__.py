@@ -101,7 +101,7 @@ def _tolerant_streams() -> None:
 
 
 def _main(argv, caught) -> int:
-    from engine.staging import committed
+    from engine.files.staging import committed
 
     before = len(committed())
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -206,7 +206,7 @@ def _printable_stdout():
 
 
 def _os_error_text(exc: OSError) -> str:
-    from engine.staging import OutputExistsError, user_path
+    from engine.files.staging import OutputExistsError, user_path
 
     if isinstance(exc, OutputExistsError):
         return str(exc)
@@ -325,7 +325,7 @@ def _engine_warnings_to_stderr(command):
     tell the user something about their data, so the command goes on; a numerical warning
     (overflow in a product, ...) says so, without the source file and line that mean
     nothing to the user."""
-    from engine.corpus import CorpusWarning
+    from engine.recordings.corpus import CorpusWarning
 
     def show(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, CorpusWarning):

@@ -18,7 +18,7 @@ def roles_text(names, roles, *, limit: int = 12) -> str:
     names = list(names) if names is not None else [f"p{i}" for i in range(len(roles))]
     if len(roles) <= limit:
         return ", ".join(f"{n}={r or '-'}" for n, r in zip(names, roles))
-    from engine.layouts import ROLES
+    from engine.recordings.layouts import ROLES
 
     by_role: dict[str, list] = {}
     for n, r in sorted(zip(names, roles), key=lambda t: ROLES.index(t[1]) if t[1] in ROLES else len(ROLES)):
@@ -66,7 +66,7 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, k
                     audio: bool = False):
     """A corpus from a native file (frames whole or in blocks), a foreign recording (as ``lipspace
     import`` makes it by default), both read by the window's reader
-    :func:`app.source_loading.read_corpus_file`, or the synthetic talker (with ``kinematics``)
+    :func:`app.files.source_loading.read_corpus_file`, or the synthetic talker (with ``kinematics``)
     when ``path`` is None.
 
     ``audio``: give the synthetic talker its speech audio (espeak-ng; without it the corpus
@@ -74,11 +74,11 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, k
     a manifold file of the talker plays and exports with sound. Ignored for a file.
     """
     from app.cli import CliError
-    from engine.corpus import CorpusError
+    from engine.recordings.corpus import CorpusError
 
     if path is None:
-        from app.source_loading import prune_talker_cache
-        from engine.synthetic import load_synthetic
+        from app.files.source_loading import prune_talker_cache
+        from engine.talker.synthetic import load_synthetic
 
         corpus = load_synthetic(preset=synthetic_preset, progress=progress, kinematics=kinematics, audio=audio)
         prune_talker_cache(synthetic_preset, kinematics)  # the corpora older code left behind
@@ -86,7 +86,7 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, k
     p = Path(path)
     if not p.exists():
         raise CliError(f"{p}: no such file")
-    from app.source_loading import read_corpus_file
+    from app.files.source_loading import read_corpus_file
     from engine.io import ImportFormatError
 
     try:
@@ -102,7 +102,7 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, k
 def load_manifold_arg(path):
     """A fitted manifold from a file written by ``lipspace build``."""
     from app.cli import CliError
-    from engine.manifold import Manifold, ManifoldFileError
+    from engine.manifold.model import Manifold, ManifoldFileError
 
     p = Path(path)
     if not p.exists():
@@ -114,11 +114,11 @@ def load_manifold_arg(path):
 
 
 def command_outputs(args):
-    """The outputs of one command as one transaction (:class:`engine.staging.Outputs`): existing
+    """The outputs of one command as one transaction (:class:`engine.files.staging.Outputs`): existing
     files refused unless ``--force``, everything moved into place at the end with stop signals
     deferred meanwhile, nothing left behind by an error or a signal."""
     from app.cli import signals_deferred
-    from engine.staging import Outputs
+    from engine.files.staging import Outputs
 
     return Outputs(force=bool(getattr(args, "force", False)), guard=signals_deferred)
 
@@ -139,7 +139,7 @@ def check_synthesis_bounds(args, targets) -> None:
     """
     from app.cli import CliError
 
-    # empty or word-less --text is refused where the targets are built (engine.phonetics)
+    # empty or word-less --text is refused where the targets are built (engine.phonetics.phones)
     phones = getattr(args, "phones", None)
     if phones is not None and not phones.strip():
         raise CliError('--phones is empty; give labels with durations, e.g. "p 0.08 aa 0.12"')

@@ -6,7 +6,7 @@ import time
 from pathlib import Path
 
 from app.cli._common import load_corpus_arg, progress_bar
-from app.source_loading import ANALYSIS_RATE, KINEMATICS_CHOICES, PRESETS
+from app.files.source_loading import ANALYSIS_RATE, KINEMATICS_CHOICES, PRESETS
 
 
 def add_arguments(p):
@@ -51,7 +51,7 @@ def add_arguments(p):
 
 def run(args) -> int:
     from app.cli import CliError
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     out = Path(args.output)
     if out.suffix != ".npz":
@@ -69,7 +69,7 @@ def run(args) -> int:
                   "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "
                   "'lipspace import CORPUS --resample 60 -o OUT.npz'", file=sys.stderr)
         try:
-            from engine.buildplan import plan_build
+            from engine.manifold.buildplan import plan_build
 
             plan = plan_build(corpus.n_frames, n_landmarks=args.landmarks, landmarks_above=args.landmarks_above)
             print(f"lipspace build: {plan.describe()}", file=sys.stdout)
@@ -99,7 +99,7 @@ def _dask_executor(args):
     if not args.dask:
         return None
     try:
-        from engine.scale import DaskExecutor
+        from engine.scale.executor import DaskExecutor
     except ImportError as exc:
         from app.cli import CliError
 

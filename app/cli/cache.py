@@ -16,7 +16,7 @@ def _mb(n: int) -> str:
 
 
 def run(args) -> int:
-    from app.cache import cache_dir, clear, entries
+    from app.files.cache import cache_dir, clear, entries
 
     root = cache_dir()
     if args.clear:

@@ -44,7 +44,7 @@ def add_arguments(p):
 def _manifold(args):
     from app.cli import CliError
     from app.cli._common import load_corpus_arg, load_manifold_arg, progress_bar
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     if args.input is not None:
         try:
@@ -83,7 +83,7 @@ def format_table(rows, columns, headers=None) -> str:
 
 def run(args) -> int:
     from app.cli import CliError
-    from engine.clusters import clusters_of
+    from engine.manifold.clusters import clusters_of
 
     if args.dims < 1:
         raise CliError(f"--dims {args.dims}: must be at least 1")
@@ -139,7 +139,7 @@ def run(args) -> int:
             print(format_table(mrows, ["", *phones]))
     if args.csv:
         from app.cli._common import command_outputs
-        from engine.io.export import write_table_csv
+        from engine.io.writers.export import write_table_csv
 
         with command_outputs(args) as outputs:
             write_table_csv(outputs.file(args.csv, option="--csv"), rows, columns=columns)

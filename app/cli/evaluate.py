@@ -8,7 +8,7 @@ three dimensions of the manifold Y, where the paper's Fig. 3 draws its trajector
 the manifold method's state path before the inverse map, every X-space method's
 trajectory projected out-of-sample, against the held-out utterance's own projection).
 
-Default: the equal-information protocols of :mod:`engine.protocols` -- ``states``
+Default: the equal-information protocols of :mod:`engine.evaluation.protocols` -- ``states``
 (every method gets the target states), ``oracle`` (every method gets the oracle X at
 the targets and their states) and, for a corpus with phone labels, ``phones`` (the
 phones and their times only) -- with the mean-frame baseline, RMSE in X and in Y3
@@ -17,7 +17,7 @@ velocity error and a smoothness figure, paired per-utterance statistics against 
 manifold, and a verdict line per measure saying where the manifold loses.
 ``--state-dims``, the Viterbi smoothing and k are chosen on a validation split of the
 training utterances unless given. ``--methods`` prints the
-older per-method table (:func:`engine.evaluation.evaluate`) instead.
+older per-method table (:func:`engine.evaluation.per_method.evaluate`) instead.
 
 Input: corpus files in any importable format (several are joined, one utterance
 each), ``--haskins`` (the two Haskins IEEE samples beside the project), or nothing
@@ -32,7 +32,7 @@ HASKINS_DIR = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "
 
 
 def add_arguments(p):
-    from engine.evaluation import DEFAULT_METHODS, EVALUATION_METHODS
+    from engine.evaluation.per_method import DEFAULT_METHODS, EVALUATION_METHODS
 
     p.add_argument("corpus", nargs="*", metavar="CORPUS",
                    help="corpus file(s): native .npz or any importable format; omit for the synthetic talker")
@@ -81,7 +81,7 @@ def _corpus(args, progress):
     if not paths:
         return load_corpus_arg(None, synthetic_preset=args.preset, progress=progress)
     from engine.io import ImportFormatError, read_corpus
-    from engine.kinematics import kinematic_if_unlabelled
+    from engine.recordings.kinematics import kinematic_if_unlabelled
 
     for p in paths:
         if not p.exists():
@@ -104,8 +104,8 @@ def run(args) -> int:
 
     if args.methods is None:
         return _run_protocols(args)
-    from engine.evaluation import EVALUATION_METHODS, evaluate
-    from engine.manifold import Manifold
+    from engine.evaluation.per_method import EVALUATION_METHODS, evaluate
+    from engine.manifold.model import Manifold
 
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     bad = [m for m in methods if m not in EVALUATION_METHODS]
@@ -129,7 +129,7 @@ def run(args) -> int:
     print(result.format())
     if args.csv:
         from app.cli._common import command_outputs
-        from engine.io.export import write_table_csv
+        from engine.io.writers.export import write_table_csv
 
         with command_outputs(args) as outputs:
             write_table_csv(outputs.file(args.csv, option="--csv"), result.table())
@@ -156,11 +156,11 @@ def name_haskins_speakers(corpus):
 
 
 def normalise_per_speaker(corpus):
-    """Each speaker's mean frame removed (:func:`engine.registration.normalise_speakers`, mode "mean").
+    """Each speaker's mean frame removed (:func:`engine.recordings.registration.normalise_speakers`, mode "mean").
 
     Raises ValueError when an utterance names no speaker.
     """
-    from engine.registration import normalise_speakers
+    from engine.recordings.registration import normalise_speakers
 
     blank = [u.id for u in corpus.utterances if not u.speaker]
     if blank:
@@ -172,7 +172,7 @@ def normalise_per_speaker(corpus):
 def _normalise_auto(corpus):
     """Per-speaker normalisation as ``lipspace build`` applies it by default (utterances naming no speaker are
     one group of their own)."""
-    from engine.registration import normalise_speakers
+    from engine.recordings.registration import normalise_speakers
 
     return normalise_speakers(corpus, mode="auto")
 
@@ -180,9 +180,9 @@ def _normalise_auto(corpus):
 def _unseen_speakers(corpus, test_ids, args) -> dict:
     """Speakers of the held-out utterances that no training utterance has: ``{speaker: n test utterances}``.
 
-    The split is the one the evaluation makes (:func:`engine.evaluation.split_utterances`, same seed).
+    The split is the one the evaluation makes (:func:`engine.evaluation.per_method.split_utterances`, same seed).
     """
-    from engine.evaluation import split_utterances
+    from engine.evaluation.per_method import split_utterances
 
     train, test = split_utterances(corpus, test_fraction=args.test_fraction, test_ids=test_ids,
                                    random_state=args.seed)
@@ -212,12 +212,12 @@ def gap_cause(result, corpus, unseen) -> str:
 
     In order: the training state graph falls apart (islands or strongly connected components, from
     the protocol's own state graph warnings and the training manifold's graph, with
-    :func:`engine.registration.explain_split`'s reading of why), held-out speakers the training
+    :func:`engine.recordings.registration.explain_split`'s reading of why), held-out speakers the training
     never saw, else targets more transitions apart than the frames between them allow.
     """
     from scipy.sparse.csgraph import connected_components
 
-    from engine.registration import explain_split
+    from engine.recordings.registration import explain_split
 
     causes = []
     m = result.manifold
@@ -245,7 +245,7 @@ def gap_cause(result, corpus, unseen) -> str:
 
 def _settings(args, manifold, progress):
     """Validated settings, overridden by whatever the command line fixes."""
-    from engine.protocols import PROTOCOLS, STATE_DIM_CANDIDATES, select_settings
+    from engine.evaluation.protocols import PROTOCOLS, STATE_DIM_CANDIDATES, select_settings
 
     dims = (args.state_dims,) if args.state_dims is not None else STATE_DIM_CANDIDATES
     kw = {"state_dims": dims, "random_state": args.seed, "progress": progress, "n_states": args.states}
@@ -268,8 +268,8 @@ def _run_protocols(args) -> int:
     from app.cli import CliError
     from app.cli.synthesize import MAX_SMOOTHING_FRAMES
     from app.cli._common import progress_bar
-    from engine.manifold import Manifold
-    from engine.protocols import evaluate_protocols
+    from engine.manifold.model import Manifold
+    from engine.evaluation.protocols import evaluate_protocols
 
     for name in ("smoothing", "neighbors", "state_dims", "states"):
         v = getattr(args, name)
@@ -303,7 +303,7 @@ def _run_protocols(args) -> int:
         if unseen:
             import warnings
 
-            from engine.corpus import CorpusWarning
+            from engine.recordings.corpus import CorpusWarning
 
             msg = _unseen_text(corpus, unseen, normalise)
             warnings.warn(CorpusWarning(msg), stacklevel=2)
@@ -325,7 +325,7 @@ def _run_protocols(args) -> int:
         if result.missed_gaps:
             import warnings
 
-            from engine.corpus import CorpusWarning
+            from engine.recordings.corpus import CorpusWarning
 
             cause = gap_cause(result, corpus, unseen)
             result.notes.append(f"unreachable gaps: {cause}")
@@ -336,8 +336,8 @@ def _run_protocols(args) -> int:
 
     with command_outputs(args) as outputs:  # both tables or neither
         if args.csv:
-            from engine.io.export import write_table_csv
-            from engine.protocol_report import CSV_COLUMNS
+            from engine.io.writers.export import write_table_csv
+            from engine.evaluation.protocol_report import CSV_COLUMNS
 
             write_table_csv(outputs.file(args.csv, option="--csv"), result.csv_rows(), columns=CSV_COLUMNS)
         if args.markdown:

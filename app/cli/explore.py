@@ -3,7 +3,7 @@
 Without a display (no DISPLAY / WAYLAND_DISPLAY on Linux) it explains how to run
 under a virtual X server and which batch commands work without one, and exits 3.
 Qt is imported only when the window is really opened. What is shown is loaded by
-:mod:`app.source_loading` (Qt-free, shared with the window).
+:mod:`app.files.source_loading` (Qt-free, shared with the window).
 """
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import argparse
 import os
 import sys
 
-from app.source_loading import KINEMATICS_CHOICES, PRESETS, source_kind
+from app.files.source_loading import KINEMATICS_CHOICES, PRESETS, source_kind
 
 __all__ = ["add_arguments", "run", "has_display", "NO_DISPLAY_MESSAGE", "EXIT_NO_DISPLAY"]
 
@@ -73,7 +73,7 @@ def run(args) -> int:
         return EXIT_NO_DISPLAY
     from app.cli import CliError
 
-    if args.camera is not None:  # the live mirror (app.live)
+    if args.camera is not None:  # the live mirror (app.models.live)
         from app.views.live_view import run_live
 
         return run_live(args.manifold or args.file, args.camera, interocular_mm=args.interocular_mm)
@@ -87,7 +87,7 @@ def run(args) -> int:
             raise CliError(str(exc)) from None
     session, notes = None, []
     if args.session is not None:
-        from app.session import SessionError, load_session
+        from app.files.session import SessionError, load_session
 
         try:
             session = load_session(args.session)

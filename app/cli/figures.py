@@ -13,7 +13,7 @@ MAX_DPI = 1200
 
 
 def add_arguments(p):
-    from app.source_loading import PRESETS as BUILD_PRESETS
+    from app.files.source_loading import PRESETS as BUILD_PRESETS
 
     p.add_argument("manifold", nargs="?",
                    help="manifold file from 'lipspace build' (a corpus file is fitted first); "
@@ -62,10 +62,10 @@ def _load(path, preset, progress):
     """A fitted manifold from a manifold file, a corpus file (fitted here) or the synthetic talker."""
     from app.cli import CliError
     from app.cli._common import load_corpus_arg, load_manifold_arg
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     if path is not None:
-        from app.source_loading import source_kind
+        from app.files.source_loading import source_kind
 
         try:
             kind = source_kind(path)
@@ -146,7 +146,7 @@ def _phone_figures_to_skip(manifold) -> dict:
     c = manifold.corpus_
     if any(u.phones for u in c.utterances):
         return {}
-    from engine.kinematics import kinematic_if_unlabelled, lip_aperture
+    from engine.recordings.kinematics import kinematic_if_unlabelled, lip_aperture
 
     skip = {"fig4": f"it needs the phone labels /b/ /p/ /m/ and {c.name} has no phone labels"}
     if lip_aperture(c) is not None:

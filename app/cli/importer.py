@@ -7,7 +7,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from app.source_loading import ANALYSIS_RATE
+from app.files.source_loading import ANALYSIS_RATE
 
 #: which reader option ``--points`` sets, per format
 _POINT_OPTION = {"ema": "sensors", "mview": "sensors", "c3d": "markers", "csv": "points", "matrix": "points",
@@ -107,7 +107,7 @@ def _options(args, fmt):
 
             raise CliError("--variable needs --layout (it names the .mat variable holding a plain matrix)")
         kw["variable"] = args.variable
-    if fmt == "video":  # FaceMesh tracking (engine.io.video); audio beside the output
+    if fmt == "video":  # FaceMesh tracking (engine.io.video.clips); audio beside the output
         if args.interocular_mm is not None:
             kw["interocular_mm"] = args.interocular_mm
         out = Path(args.output)
@@ -141,10 +141,10 @@ def summary(corpus) -> str:
 
 def run(args) -> int:
     from app.cli import CliError
-    from engine.corpus import CorpusError
+    from engine.recordings.corpus import CorpusError
     from engine.io import ImportFormatError, concat, resample
     from engine.io.dispatch import FORMAT_ALIASES, detect_format
-    from engine.registration import register
+    from engine.recordings.registration import register
 
     out = Path(args.output)
     if out.suffix != ".npz":
@@ -196,7 +196,7 @@ def run(args) -> int:
         staged = outputs.file(out, option="-o")
         blocks = None
         if args.block_frames is not None:
-            from engine.corpus_blocks import blocks_folder
+            from engine.recordings.corpus_blocks import blocks_folder
 
             blocks = outputs.folder(blocks_folder(out), pattern="block_*.npy", exclusive=True, option="-o")
         audio_dir, audio_stage = _stage_audio(args, fmt, kw, outputs)
@@ -220,12 +220,12 @@ def run(args) -> int:
             if audio_stage is not None:  # the audio goes where the corpus says it is once moved in
                 corpus = _moved_audio(corpus, audio_stage, audio_dir)
             if args.roles is not None:
-                from engine.layouts import roles_from_spec
+                from engine.recordings.layouts import roles_from_spec
 
                 corpus = replace(corpus, point_roles=roles_from_spec(args.roles, corpus.n_points,
                                                                      corpus.point_names, corpus.point_roles))
             if args.axes is not None:
-                from engine.orientation import AxesError, parse_axes
+                from engine.recordings.orientation import AxesError, parse_axes
 
                 try:
                     corpus = replace(corpus, axes=parse_axes(args.axes, corpus.dims).spec())
@@ -241,14 +241,14 @@ def run(args) -> int:
         if blocks is None:
             corpus.save(staged)
         else:
-            from engine.corpus_blocks import save_blocked
+            from engine.recordings.corpus_blocks import save_blocked
 
             try:
                 block_files = save_blocked(corpus, staged, block_frames=args.block_frames, folder=blocks)
             except ValueError as exc:
                 raise CliError(f"--block-frames {args.block_frames}: {exc}") from None
     if blocks is not None:
-        from engine.corpus_blocks import blocks_folder
+        from engine.recordings.corpus_blocks import blocks_folder
 
         print(f"lipspace import: frames in {len(block_files)} blocks in {blocks_folder(out)}", file=sys.stderr)
     # what was done to the data, on stderr (stdout keeps the one summary line)
@@ -259,7 +259,7 @@ def run(args) -> int:
         from app.cli._common import roles_text
 
         print("lipspace import: roles " + roles_text(corpus.point_names, corpus.point_roles), file=sys.stderr)
-    from engine.orientation import anatomical_frame
+    from engine.recordings.orientation import anatomical_frame
 
     print(f"lipspace import: orientation {anatomical_frame(corpus).describe()}", file=sys.stderr)
     if not corpus.registration:
@@ -333,7 +333,7 @@ def _video_rates(inputs) -> list:
     """``(path, rate)`` of every video the inputs name (a folder's videos in order); unreadable ones left out
     (their reader reports them)."""
     from engine.io.dispatch import _videos_in
-    from engine.io.video import video_info
+    from engine.io.video.clips import video_info
 
     out = []
     for p in inputs:
@@ -367,7 +367,7 @@ def _one_rate(parts, rate_out):
 
 def _input_errors():
     """Errors that make one input unreadable (reported and skipped when there are several inputs)."""
-    from engine.corpus import CorpusError
+    from engine.recordings.corpus import CorpusError
     from engine.io import ImportFormatError
 
     return (ImportFormatError, CorpusError, OSError, ValueError, TypeError)
@@ -405,7 +405,7 @@ def read_one(g, job):
 
     An error writing an output (a full or read-only disk while its audio is written) is
     not the input's: it is raised, naming the user's file, and stops the import."""
-    from engine.staging import as_user_error, user_path
+    from engine.files.staging import as_user_error, user_path
 
     try:
         return _read_group(g, job), None
@@ -491,7 +491,7 @@ def _read_on_dask(groups, job, address, results, tick):
     try:
         from distributed import as_completed
 
-        from engine.scale import DaskExecutor
+        from engine.scale.executor import DaskExecutor
     except ImportError as exc:
         raise CliError(f"--dask needs the 'scale' extra ({exc}); install it with pip install 'lipspace[scale]'") from None
     try:
@@ -508,21 +508,21 @@ def _read_on_dask(groups, job, address, results, tick):
 
 
 def _speaker_of(path, how) -> str:
-    """The speaker ``--speaker-from how`` gives ``path`` (:class:`engine.speakers.SpeakerRule`), "" for None."""
+    """The speaker ``--speaker-from how`` gives ``path`` (:class:`engine.recordings.speakers.SpeakerRule`), "" for None."""
     if how is None:
         return ""
-    from engine.speakers import SpeakerRule
+    from engine.recordings.speakers import SpeakerRule
 
     return SpeakerRule(how)(path)
 
 
 def _check_speakers(groups, args, fmt) -> None:
     """Refuse a speaker rule that does not apply to every input, before any is read; warn when the
-    speakers it gives (or the lack of one) do not fit the file names (:func:`engine.speakers.check_assignment`)."""
+    speakers it gives (or the lack of one) do not fit the file names (:func:`engine.recordings.speakers.check_assignment`)."""
     import warnings
 
     from app.cli import CliError
-    from engine.speakers import SpeakerRule, SpeakerRuleError, SpeakerWarning, check_assignment
+    from engine.recordings.speakers import SpeakerRule, SpeakerRuleError, SpeakerWarning, check_assignment
 
     if fmt == "npz" and not args.speaker_from:
         return  # corpus files carry their own speakers

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from app.source_loading import ANALYSIS_RATE  # the paper's 60 Hz, which velocities and the state graph are tuned to
+from app.files.source_loading import ANALYSIS_RATE  # the paper's 60 Hz, which velocities and the state graph are tuned to
 
 
 def add_arguments(p):
@@ -44,7 +44,7 @@ def _recording_lines(c):
         from app.cli._common import roles_text
 
         lines.append("roles       " + roles_text(c.point_names, c.point_roles))
-    from engine.orientation import anatomical_frame
+    from engine.recordings.orientation import anatomical_frame
 
     lines.append(f"orientation {anatomical_frame(c).describe()}")
     lines.append(f"registration {c.registration or 'none'}")
@@ -56,8 +56,8 @@ def _opening_lines(m):
     """How "opening" is defined and how well the tangent classes follow the lip aperture."""
     import warnings
 
-    from engine.class_agreement import ACCELERATING_BOUND, OPENING_BOUND, class_agreement
-    from engine.kinematics import aperture_definition, lip_aperture
+    from engine.manifold.class_agreement import ACCELERATING_BOUND, OPENING_BOUND, class_agreement
+    from engine.recordings.kinematics import aperture_definition, lip_aperture
 
     c, t = m.corpus_, m.tangent_
     scores = t.neighbor_scores_
@@ -93,7 +93,7 @@ def _opening_lines(m):
     if not causes:
         causes.append(f"the lips' movement is a small part of what varies in Y ({t.n_dims_} dims): other "
                       "movements or measurement noise dominate the neighbourhoods; no build option changes that")
-    from engine.corpus import CorpusWarning
+    from engine.recordings.corpus import CorpusWarning
 
     warnings.warn(CorpusWarning(f"the tangent classes agree with the lip aperture less than expected (opening "
                                 f"{100 * agree.opening:.1f}%, expected >= {100 * OPENING_BOUND:.0f}%; accelerating "
@@ -128,7 +128,7 @@ def _refuse_foreign(path: Path) -> None:
 
 def run(args) -> int:
     from app.cli import CliError
-    from engine.manifold import Manifold, ManifoldFileError
+    from engine.manifold.model import Manifold, ManifoldFileError
 
     path = Path(args.file)
     if not path.exists():
@@ -152,7 +152,7 @@ def run(args) -> int:
     print(f"shape X     {k} components hold {100 * sh.recovered_ratio_[k - 1]:.2f}% of the variance of the "
           f"{len(sh.scree_)} computed ({100 * sh.explained_variance_ratio_.sum():.2f}% of the total); "
           f"scree {', '.join(f'{100 * v:.1f}' for v in sh.scree_[:5])}%")
-    from engine.talker_report import components_of_total
+    from engine.evaluation.talker_report import components_of_total
 
     n_comp = len(sh.scree_)
     (n_total,) = components_of_total(sh.scree_, (0.95,))

@@ -79,7 +79,7 @@ def _trajectory(args, manifold):
     """(frames, F^y path or None, label) of what is rendered."""
     from app.cli import CliError
     from app.cli.synthesize import _synthesizer, _targets
-    from engine.evaluation import trajectory_y
+    from engine.evaluation.per_method import trajectory_y
 
     c = manifold.corpus_
     if args.method == "original":
@@ -162,7 +162,7 @@ def run(args) -> int:
     if original is not None:
         title = f"{args.utterance}: original (left), {title} (right)"
     t0 = time.perf_counter()
-    from engine.orientation import anatomical_frame
+    from engine.recordings.orientation import anatomical_frame
 
     with progress_bar(disable=True if args.quiet else None) as progress:
         try:

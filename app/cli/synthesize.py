@@ -12,7 +12,7 @@ fitted on the synthetic talker (``--preset``). Targets:
 ``--states S,S,...``             manifold states (e.g. clicked in the explorer), ``--spacing`` seconds apart
 
 ``--method best`` (the default) takes the method measured best on the corpus's own
-validation split for the kind of targets given (:mod:`engine.method_choice`: measured
+validation split for the kind of targets given (:mod:`engine.synthesis.method_choice`: measured
 once per corpus and cached) and names it with its margin.
 
 Outputs: ``-o traj.csv`` / ``-o traj.npy`` (``--values`` frames, fx or fy),
@@ -20,7 +20,7 @@ Outputs: ``-o traj.csv`` / ``-o traj.npy`` (``--values`` frames, fx or fy),
 components as targets, F^x as weights; the utterance's or ``--audio`` sound as a WAV
 beside it) and ``--mesh-dir DIR`` (one OBJ/PLY per frame), each written atomically.
 ``--praat OUT.TextGrid`` writes, for Praat, the synthesis on the input alignment's timeline
-(:mod:`engine.synthesis_tiers`): a TextGrid with the input's span and phone tier, the
+(:mod:`engine.synthesis.tiers`): a TextGrid with the input's span and phone tier, the
 targets and the synthesised opening's kinematic landmarks, and ``OUT.csv`` (its units in
 ``OUT.csv.json``) with the synthesised aperture per frame.
 """
@@ -30,10 +30,10 @@ import sys
 from pathlib import Path
 
 PRESETS = ("small", "default", "paper")
-#: engine.methods.METHODS (a test keeps them equal); "best" resolves to one of them
+#: engine.synthesis.methods.METHODS (a test keeps them equal); "best" resolves to one of them
 METHODS = ("manifold", "viterbi", "sv-hermite", "linear", "cubic", "unitselection", "dominance", "sliding-window")
 BEST = "best"
-#: the manifold synthesiser's inverse maps (engine.synthesis.INVERSES; a test keeps them equal)
+#: the manifold synthesiser's inverse maps (engine.synthesis.viterbi.INVERSES; a test keeps them equal)
 INVERSES = ("delaunay", "state-mean", "local-linear")
 VALUES = ("frames", "fx", "fy")
 
@@ -109,7 +109,7 @@ def add_synthesis_options(p):
 def _manifold(args):
     from app.cli import CliError
     from app.cli._common import load_corpus_arg, load_manifold_arg, progress_bar
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     if args.manifold:
         return load_manifold_arg(args.manifold)
@@ -122,7 +122,7 @@ def _manifold(args):
 
 
 def _targets(args, manifold):
-    from engine import targets as T
+    from engine.phonetics import targets as T
 
     if args.phones is not None:
         return T.targets_from_phones(manifold, args.phones)
@@ -131,7 +131,7 @@ def _targets(args, manifold):
             raise FileNotFoundError(f"{args.textgrid}: no such TextGrid file")
         return T.targets_from_textgrid(manifold, args.textgrid, tier=args.tier)
     if args.text is not None:
-        from engine.phonetics import DurationModel
+        from engine.phonetics.phones import DurationModel
 
         return T.targets_from_text(manifold, args.text, duration_model=DurationModel(tempo=args.tempo))
     if args.states is not None:
@@ -151,7 +151,7 @@ def _targets(args, manifold):
 def _key_frames(args, manifold):
     spec = args.key_frames.strip()
     if spec == "kinematic":
-        from engine.kinematics import kinematic_key_frames, lip_aperture
+        from engine.recordings.kinematics import kinematic_key_frames, lip_aperture
 
         c = manifold.corpus_
         if lip_aperture(c) is None:
@@ -168,8 +168,8 @@ def _key_frames(args, manifold):
 def _synthesizer(args, manifold, targets=None):
     """The fitted synthesiser of ``args.method``; ``"best"`` is resolved for ``targets`` first
     (``args.method`` then names the method, ``args.method_note`` says why)."""
-    from app.trajectories import method_params, resolve_method
-    from engine.methods import make_synthesizer
+    from app.models.trajectories import method_params, resolve_method
+    from engine.synthesis.methods import make_synthesizer
 
     cache = getattr(args, "_synth_cache", None)
     if cache is None:
@@ -243,7 +243,7 @@ def run(args) -> int:
         if animation:
             said.append(_write_animation(args, manifold, traj, out, outputs))
         elif out is not None:
-            from engine.io.export import corpus_columns, write_trajectory_csv, write_trajectory_npy
+            from engine.io.writers.export import corpus_columns, write_trajectory_csv, write_trajectory_npy
 
             if args.values == "frames":
                 values, cols = frames, corpus_columns(c)
@@ -260,8 +260,8 @@ def run(args) -> int:
         if praat is not None:
             said.append(_write_praat(args, manifold, targets, traj, praat, staged_praat))
         if mesh_dir is not None:
-            from engine.io.export import write_mesh_sequence
-            from engine.lipcontour import mesh_geometry
+            from engine.io.writers.export import write_mesh_sequence
+            from engine.recordings.lipcontour import mesh_geometry
 
             try:
                 # sparse lip markers: a contour tube, plus one labelled vertex per sensor
@@ -282,7 +282,7 @@ def _praat_paths(args):
     if args.praat is None:
         return None
     from app.cli import CliError
-    from engine.io.tidy import sidecar_path
+    from engine.io.writers.tidy import sidecar_path
 
     grid = Path(args.praat)
     if grid.suffix.lower() != ".textgrid":
@@ -293,9 +293,9 @@ def _praat_paths(args):
 def _write_praat(args, manifold, targets, traj, paths, staged) -> str:
     """``--praat``: the synthesis as a TextGrid and a CSV on the input alignment's timeline, written to
     the ``staged`` paths of ``paths``; returns the line to print once they are in place."""
-    from engine.io.praat import write_textgrid
-    from engine.io.tidy import write_frame_table
-    from engine.synthesis_tiers import input_timeline, synthesis_outputs
+    from engine.io.writers.praat import write_textgrid
+    from engine.io.writers.tidy import write_frame_table
+    from engine.synthesis.tiers import input_timeline, synthesis_outputs
 
     timeline = input_timeline(args.textgrid, tier=args.tier) if args.textgrid is not None else None
     table, (xmin, xmax, tiers) = synthesis_outputs(manifold, targets, traj, timeline=timeline)
@@ -335,7 +335,7 @@ def check_synthesis_options(args) -> None:
 def _refuse_existing_animation(args, out) -> None:
     """Refuse an existing ``-o`` animation, or WAV beside it, before any synthesis (the choice of
     method can take minutes); :func:`_write_animation` stages them later."""
-    from engine.staging import OutputExistsError
+    from engine.files.staging import OutputExistsError
 
     if args.force:
         return

@@ -1,6 +1,6 @@
 """``lipspace table``: a manifold's per-frame results as a tidy table and as Praat TextGrids.
 
-``lipspace table MANIFOLD -o frames.csv``      one row per frame (:mod:`engine.frame_table`), units in
+``lipspace table MANIFOLD -o frames.csv``      one row per frame (:mod:`engine.manifold.frame_table`), units in
                                                 ``frames.csv.json``; ``-o frames.parquet`` with pyarrow
 ``lipspace table MANIFOLD --textgrid DIR``     one TextGrid per utterance: phones, movement classes,
                                                 kinematic landmarks
@@ -30,9 +30,9 @@ def add_arguments(p):
 def run(args) -> int:
     from app.cli import CliError
     from app.cli._common import command_outputs, load_manifold_arg
-    from engine.frame_table import frame_table, write_textgrids
-    from engine.io.praat import textgrid_names
-    from engine.io.tidy import TABLE_SUFFIXES, have_parquet, sidecar_path, write_frame_table
+    from engine.manifold.frame_table import frame_table, write_textgrids
+    from engine.io.writers.praat import textgrid_names
+    from engine.io.writers.tidy import TABLE_SUFFIXES, have_parquet, sidecar_path, write_frame_table
 
     if args.output is None and args.textgrid_dir is None:
         raise CliError("nothing to write: give -o FRAMES.csv (or .parquet) and/or --textgrid DIR")

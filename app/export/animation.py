@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from engine._atomic import atomic_write
-from engine.io.gltf import write_gltf_morph
+from engine.files.atomic import atomic_write
+from engine.io.writers.gltf import write_gltf_morph
 
 __all__ = ["export_animation", "write_audio_beside", "utterance_audio", "DEFAULT_SCALE"]
 
@@ -62,7 +62,7 @@ def write_audio_beside(audio, path) -> Path:
             shutil.copyfile(src, tmp)
         return dst
     from app.export.video import decode_audio
-    from engine._atomic import write_wav_atomic
+    from engine.files.atomic import write_wav_atomic
 
     samples, rate = decode_audio(src)  # (channels, n) floats
     return write_wav_atomic(dst, samples.T if samples.shape[0] > 1 else samples[0], rate)
@@ -75,10 +75,10 @@ def export_animation(manifold, Fx, path, *, rate: float, audio=None, scale: floa
 
     Parameters
     ----------
-    manifold : engine.manifold.Manifold
+    manifold : engine.manifold.model.Manifold
         Fitted; its mean shape is the base, its shape components the morph targets, its
         corpus gives faces and point dimensions. Points are written in the talker's frame
-        (:func:`engine.orientation.anatomical_frame`), which is glTF's: +Y up, the model
+        (:func:`engine.recordings.orientation.anatomical_frame`), which is glTF's: +Y up, the model
         facing +Z, its left +X; ``scene.extras["orientation"]`` says how it was found.
     Fx : array of shape (n_frames, m') with m' <= the number of components
         The trajectory in X (the animated weights); only the first m' components become
@@ -91,10 +91,10 @@ def export_animation(manifold, Fx, path, *, rate: float, audio=None, scale: floa
         The utterance's audio; written as ``<stem>.wav`` beside ``path`` and named in
         the file's ``scene.extras["audio"]``.
     scale, interpolation, name
-        See :func:`engine.io.gltf.write_gltf_morph`.
+        See :func:`engine.io.writers.gltf.write_gltf_morph`.
     source : str
         What the trajectory is (recorded in ``scene.extras["source"]``).
-    outputs : engine.staging.Outputs, optional
+    outputs : engine.files.staging.Outputs, optional
         Stage both files there (the command's transaction). Without it the two are written
         as one transaction here: ``path`` replaced (its save dialog asked), an existing WAV
         beside it replaced only along with an existing ``path`` (an earlier export), else
@@ -114,10 +114,10 @@ def export_animation(manifold, Fx, path, *, rate: float, audio=None, scale: floa
     wav = path.with_suffix(".wav") if audio is not None else None
     if wav is not None and not Path(audio).is_file():
         raise FileNotFoundError(f"{audio}: no such audio file")
-    from engine.staging import Outputs
+    from engine.files.staging import Outputs
 
-    # the talker's frame (engine.orientation) is glTF's: +Y up, the asset facing +Z, its left +X
-    from engine.orientation import anatomical_frame
+    # the talker's frame (engine.recordings.orientation) is glTF's: +Y up, the asset facing +Z, its left +X
+    from engine.recordings.orientation import anatomical_frame
 
     frame = anatomical_frame(c, shape.mean_)
     mean = frame.view_frames(np.asarray(shape.mean_)[None])[0]

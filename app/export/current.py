@@ -25,11 +25,11 @@ def _fx(manifold, traj):
 
 
 def export_current_animation(state, path, *, size=(640, 480), progress=None) -> list[Path]:
-    """Write the current trajectory of an :class:`app.state.AppState` by suffix.
+    """Write the current trajectory of an :class:`app.models.state.AppState` by suffix.
 
     Parameters
     ----------
-    state : app.state.AppState
+    state : app.models.state.AppState
         With a manifold and an original or synthetic trajectory.
     path : str or Path
         ``.glb`` / ``.gltf`` (morph animation, WAV beside it) or ``.mp4`` (video).
@@ -44,7 +44,7 @@ def export_current_animation(state, path, *, size=(640, 480), progress=None) -> 
         The files written.
     """
     from app.export.animation import export_animation, utterance_audio
-    from app.trajectories import lip_frames
+    from app.models.trajectories import lip_frames
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -64,7 +64,7 @@ def export_current_animation(state, path, *, size=(640, 480), progress=None) -> 
     two = state.synthetic is not None and state.original is not None
     original = lip_frames(m, state.original) if two else None
     c = m.corpus_
-    from engine.orientation import anatomical_frame
+    from engine.recordings.orientation import anatomical_frame
 
     return [render_video(path, lip_frames(m, traj), rate=traj.rate, faces=c.faces, dims=c.dims,
                          orientation=anatomical_frame(c, m.shape_.mean_),

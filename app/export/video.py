@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from engine._atomic import atomic_write
+from engine.files.atomic import atomic_write
 
 __all__ = ["render_video", "decode_audio", "AAC_RATES", "MAIN_COLOUR", "SYNTH_COLOUR", "MAX_CLOUD_POINTS"]
 
@@ -70,7 +70,7 @@ def _even(n):
 
 
 def _frames3(frames, dims, what):
-    from engine.corpus import frame_points
+    from engine.recordings.corpus import frame_points
 
     A = np.asarray(frames, np.float32)
     if A.ndim != 2 or A.shape[0] < 1:
@@ -319,8 +319,8 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=
     progress : callable, optional
         ``progress("render", done, total)``; raising from it (e.g. Ctrl-C) aborts and
         writes nothing.
-    orientation : engine.orientation.AnatomicalFrame, optional
-        The talker's frame (:func:`engine.orientation.anatomical_frame`): the lips are drawn
+    orientation : engine.recordings.orientation.AnatomicalFrame, optional
+        The talker's frame (:func:`engine.recordings.orientation.anatomical_frame`): the lips are drawn
         in it, seen from the front (upper lip up, the talker's left on the right). None
         draws the data's x right, y up.
 

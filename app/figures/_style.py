@@ -36,7 +36,7 @@ GENERATED = "red"
 #: global / local shape and velocity directions
 S_COLOUR = "#006400"   # dark green
 V_COLOUR = "#8b008b"   # dark magenta
-#: the four tangent classes (engine.tangent.TangentFrames.classes_ 0..3)
+#: the four tangent classes (engine.manifold.tangent.TangentFrames.classes_ 0..3)
 CLASS_COLOURS = ("#d62728", "#ff9896", "#1f4fb4", "#8fb8ff")
 
 #: above this many points, large scatters are rasterised inside SVG/PDF
@@ -168,7 +168,7 @@ def require_fitted(manifold, *attrs):
     """Raise a clear error unless ``manifold`` is a fitted Manifold with ``attrs``."""
     missing = [a for a in ("Fy_", *attrs) if getattr(manifold, a, None) is None]
     if missing:
-        raise ValueError(f"figures need a fitted engine.manifold.Manifold (missing {', '.join(missing)}); "
+        raise ValueError(f"figures need a fitted engine.manifold.model.Manifold (missing {', '.join(missing)}); "
                          "fit one with Manifold().fit(corpus) or load one with Manifold.load(path)")
 
 
@@ -205,13 +205,13 @@ def y3(manifold) -> np.ndarray:
 
 def sv_basis(tangent) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(origin (3,), S (3,), V (3,)): the global shape and velocity directions
-    (:meth:`engine.tangent.TangentFrames.sv_basis`)."""
+    (:meth:`engine.manifold.tangent.TangentFrames.sv_basis`)."""
     return tangent.sv_basis()
 
 
 def frame_sv(manifold) -> np.ndarray:
     """Per frame (S, V), (N, 2): the opening and its velocity read on the manifold
-    (:meth:`engine.tangent.TangentFrames.sv_coordinates`, which the frame table uses too).
+    (:meth:`engine.manifold.tangent.TangentFrames.sv_coordinates`, which the frame table uses too).
     Opening frames lie at V > 0; speech cycles are the paper's loops in this plane."""
     return manifold.tangent_.sv_coordinates()
 
@@ -371,8 +371,8 @@ def _shape_panel(ax, coll, gid):
 
 
 def talker_frame(manifold):
-    """The talker's frame of the manifold's corpus (:func:`engine.orientation.anatomical_frame`)."""
-    from engine.orientation import anatomical_frame
+    """The talker's frame of the manifold's corpus (:func:`engine.recordings.orientation.anatomical_frame`)."""
+    from engine.recordings.orientation import anatomical_frame
 
     return anatomical_frame(manifold.corpus_, manifold.shape_.mean_)
 
@@ -380,7 +380,7 @@ def talker_frame(manifold):
 def shape_points(manifold, frame_row, frame=None) -> np.ndarray:
     """One frame row (C,) as points (V, 3) in the talker's view coordinates (x the talker's left, y up, z
     towards the viewer; 2-D: x forward, y up, z = 0), ``frame`` as :func:`talker_frame` gives it."""
-    from engine.corpus import frame_points
+    from engine.recordings.corpus import frame_points
 
     frame = talker_frame(manifold) if frame is None else frame
     row = frame.view_frames(np.asarray(frame_row, np.float64)[None])[0]
@@ -510,12 +510,12 @@ def scale_bar(ax, unit: str, *, length=None, gid=None):
 
 
 def fit_contour(manifold, frame=None):
-    """A :class:`engine.lipcontour.LipContour` fitted on the mean shape in view coordinates, for sparse lip
+    """A :class:`engine.recordings.lipcontour.LipContour` fitted on the mean shape in view coordinates, for sparse lip
     markers with roles (3-D, no faces); None otherwise (meshes are drawn as meshes)."""
     c = manifold.corpus_
     if c.faces is not None or c.point_roles is None or c.dims != 3:
         return None
-    from engine.lipcontour import LipContour
+    from engine.recordings.lipcontour import LipContour
 
     try:
         return LipContour(n_samples=64).fit(shape_points(manifold, manifold.shape_.mean_, frame), c.point_roles)

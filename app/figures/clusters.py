@@ -27,8 +27,8 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
               min_count: int = 3, width=None, height: float | None = None):
     """Fig. 4: mid-points of /b/ (red), /p/ (green), /m/ (yellow) with 2-s.d. ellipses.
 
-    Each phone's mid-point frames (:class:`engine.clusters.PhoneClusters`; labels are
-    matched through :func:`engine.phonesets.normalize`, so ``B``/``P``/``M`` of an
+    Each phone's mid-point frames (:class:`engine.manifold.clusters.PhoneClusters`; labels are
+    matched through :func:`engine.phonetics.phonesets.normalize`, so ``B``/``P``/``M`` of an
     ARPAbet corpus are found), their ``n_sd`` ellipse and their mean (square).
     Phones the corpus lacks (or has fewer than ``min_count`` mid-points of) are
     skipped with a note on the figure.
@@ -46,7 +46,7 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
         :meth:`PhoneClusters.ellipse` and the plane's trace.
     """
     require_fitted(manifold, "tangent_")
-    from engine.clusters import PhoneClusters
+    from engine.manifold.clusters import PhoneClusters
 
     tan = manifold.tangent_
     pc = PhoneClusters.from_manifold(manifold, n_dims=min(3, manifold.Fy_.shape[1]), min_count=min_count)

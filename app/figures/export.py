@@ -1,13 +1,13 @@
 """Saving figures: matplotlib figures (PNG/SVG/PDF) and pyvista 3-D views (PNG, SVG/PDF/EPS).
 
-Every writer goes through :func:`engine._atomic.atomic_write`: a failed save removes
+Every writer goes through :func:`engine.files.atomic.atomic_write`: a failed save removes
 its temporary file and leaves any existing file at ``path`` untouched.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from engine._atomic import atomic_write
+from engine.files.atomic import atomic_write
 
 __all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure", "suffix_from_filter", "filter_suffixes", "save_vector_figure",
            "save_plotter_image", "save_plotter_vector", "vector_export_available"]

@@ -401,12 +401,12 @@ def make_classes(manifold, *, width=None, height: float | None = None):
 
 
 def _true_agreement(manifold):
-    """The classes against the synthetic talker's true aperture (engine.class_agreement), or None."""
+    """The classes against the synthetic talker's true aperture (engine.manifold.class_agreement), or None."""
     lat = getattr(manifold.corpus_, "latent", {}) or {}
     if "aperture" not in lat:
         return None
-    from engine.class_agreement import class_agreement
-    from engine.kinematics import lip_aperture
+    from engine.manifold.class_agreement import class_agreement
+    from engine.recordings.kinematics import lip_aperture
 
     tan = manifold.tangent_
     return class_agreement(tan.opening_, tan.accelerating_, lat["aperture"], manifold.corpus_.bounds,

@@ -34,7 +34,7 @@ def make_fig1a(manifold, *, components=(0, 1), n_sd: float = 2.0, view=None, wid
 
     Parameters
     ----------
-    manifold : engine.manifold.Manifold
+    manifold : engine.manifold.model.Manifold
         Fitted.
     components : sequence of int, default=(0, 1)
         Zero-based component indices (the paper shows the first two).
@@ -42,7 +42,7 @@ def make_fig1a(manifold, *, components=(0, 1), n_sd: float = 2.0, view=None, wid
     view : (int, int) or None
         Axes (horizontal, vertical) of the talker's view coordinates
         (:func:`app.figures._style.shape_points`) to draw; None: the front view when the
-        talker's frame is known (:func:`engine.orientation.anatomical_frame`), else the axes
+        talker's frame is known (:func:`engine.recordings.orientation.anatomical_frame`), else the axes
         of the widest spread of the mean shape (:func:`app.figures._style.front_view`).
     width : float, optional
         Figure width in inches (default 180 mm, two journal columns; see :func:`app.figures._style.journal`).

@@ -27,7 +27,7 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     """Fig. 3: a generated trajectory in the first two components of Y.
 
     The utterance's own phone mid-points are the targets (oracle states,
-    :func:`engine.targets.targets_from_utterance`); :class:`engine.synthesis.ManifoldSynthesizer`
+    :func:`engine.phonetics.targets.targets_from_utterance`); :class:`engine.synthesis.viterbi.ManifoldSynthesizer`
     fills every gap with the most probable state path of exactly the gap's length
     (``strict=False``: a gap that cannot be bridged in time ends at the nearest
     reachable state and the figure notes it). Original black, generated red,
@@ -43,8 +43,8 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
         Write each mid-point's phone label beside its circle.
     """
     require_fitted(manifold, "states_")
-    from engine.synthesis import ManifoldSynthesizer
-    from engine.targets import targets_from_utterance
+    from engine.synthesis.viterbi import ManifoldSynthesizer
+    from engine.phonetics.targets import targets_from_utterance
 
     corpus = manifold.corpus_
     a, b = (int(v) for v in axes)
@@ -71,7 +71,7 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     rmse_x = float(np.sqrt(np.mean(np.sum((fx_g - fx_o) ** 2, axis=1))))
     rmse_y = float(np.sqrt(np.mean(np.sum((gen[:, [a, b]] - orig[:, [a, b]]) ** 2, axis=1))))
     tf = np.asarray(traj.target_frames, dtype=np.int64)
-    from engine.kinematics import has_kinematic_labels
+    from engine.recordings.kinematics import has_kinematic_labels
 
     # a corpus without phone labels is regenerated through its kinematic landmarks: say so, never "phones"
     what = "kinematic landmark" if has_kinematic_labels(corpus) else "phone"

@@ -1,7 +1,7 @@
 """The lip view's geometry: a mesh over the corpus faces, or sparse markers as a lip contour.
 
 With no faces and 3 to 20 lip points (by their roles), the markers are drawn as lips:
-a tube along the interpolated outer lip contour (:class:`engine.lipcontour.LipContour`),
+a tube along the interpolated outer lip contour (:class:`engine.recordings.lipcontour.LipContour`),
 the markers as spheres and a label per sensor; otherwise as bare spheres.
 """
 from __future__ import annotations
@@ -123,7 +123,7 @@ class ContourHandle(LipsHandle):
     """Sparse lip markers drawn as a contour tube, sphere markers and sensor labels, moved frame by frame.
 
     ``mesh`` is the tube; ``markers`` the markers' PolyData; ``contour`` the fitted
-    :class:`engine.lipcontour.LipContour`; ``labels`` the label actor (or None).
+    :class:`engine.recordings.lipcontour.LipContour`; ``labels`` the label actor (or None).
     """
 
     def __init__(self, plotter, mesh, actor, offset, contour, markers, marker_actor, labels, label_points):
@@ -185,7 +185,7 @@ def add_lip_contour(plotter, points, roles=None, names=None, *, color=(0.85, 0.4
     ValueError
         When the points cannot form a contour (fewer than 3 or more than 20 lip points).
     """
-    from engine.lipcontour import LipContour
+    from engine.recordings.lipcontour import LipContour
 
     P = _points(points)
     off = np.asarray(offset, np.float32)
@@ -289,10 +289,10 @@ SKIN = (0.93, 0.80, 0.70)
 def lip_colours(n_points: int, color, names=None) -> np.ndarray | None:
     """Per-point RGB (uint8, (V, 3)) for a lip mesh: ``color`` on the vermilion, blended
     towards :data:`SKIN` on the surrounding skin, when the point names are the synthetic
-    lip model's (``engine.lipmodel.vermilion_weight``); None otherwise (one colour)."""
+    lip model's (``engine.talker.lipmodel.vermilion_weight``); None otherwise (one colour)."""
     if names is None or len(names) != n_points:
         return None
-    from engine.lipmodel import vermilion_weight
+    from engine.talker.lipmodel import vermilion_weight
 
     w = vermilion_weight(list(names))
     if w is None:

@@ -1,7 +1,7 @@
 """Scene elements of the manifold view: points, plane, directions, trajectories, paths, ellipsoids.
 
 Colours follow the paper's figures: original trajectories black, generated ones
-red; density and similarity run blue -> red (see :mod:`app.state`).
+red; density and similarity run blue -> red (see :mod:`app.models.state`).
 """
 from __future__ import annotations
 
@@ -64,7 +64,7 @@ class PointsHandle(Handle):
     unreachable state), so tests and tools can read what is drawn.
     """
 
-    #: frame index of each drawn point (None: point i is frame i); see :func:`app.lod.cloud_detail`
+    #: frame index of each drawn point (None: point i is frame i); see :func:`app.models.lod.cloud_detail`
     frames = None
 
     def frame_of(self, point_id) -> int:
@@ -112,7 +112,7 @@ def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: floa
         Shade each point as a small sphere; False draws flat dots, several times cheaper
         per frame in software OpenGL (the explorer's choice for large clouds).
     frames : ndarray of int, optional
-        Draw only these frames (level of detail, :func:`app.lod.cloud_detail`); the
+        Draw only these frames (level of detail, :func:`app.models.lod.cloud_detail`); the
         handle's ``frame_of`` maps a drawn point back to its frame and ``set_colors``
         accepts one colour per frame.
     """

@@ -40,7 +40,7 @@ class ClickPicker:
         Pixels the mouse may move between press and release for a click.
     locate : callable((x, y)) -> int or None, optional
         Finds what a click at a display position picks (e.g.
-        :meth:`app.picking.CloudLocator.locate`, which searches frames the view does not
+        :meth:`app.models.picking.CloudLocator.locate`, which searches frames the view does not
         draw); the callback then gets its result and ``xyz=None``. Default: VTK's point
         picker on ``actor``.
     """

@@ -1,4 +1,4 @@
-"""Qt views of the explorer; each observes one :class:`app.state.AppState` and never calls another view."""
+"""Qt views of the explorer; each observes one :class:`app.models.state.AppState` and never calls another view."""
 from app.views.clusters_panel import ClustersPanel
 from app.views.lip_view import LipView
 from app.views.manifold_view import ManifoldView

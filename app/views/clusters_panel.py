@@ -1,6 +1,6 @@
 """Clusters panel: the phone table (counts, opening-side fraction, separation) with ellipsoid toggles.
 
-Numbers come from :class:`engine.clusters.PhoneClusters` (built once per manifold
+Numbers come from :class:`engine.manifold.clusters.PhoneClusters` (built once per manifold
 and cached on the state); ticking a phone shows its 2-s.d. ellipsoid in the
 manifold view, in the phone's colour. A corpus without phone labels shows the
 clusters of its four kinematic landmarks (aperture maxima, minima, peak opening and
@@ -34,7 +34,7 @@ def _swatch(rgb) -> "QtGui.QIcon":
 
 
 class ClustersPanel(QtWidgets.QWidget):
-    """Phone table bound to an :class:`app.state.AppState`."""
+    """Phone table bound to an :class:`app.models.state.AppState`."""
 
     def __init__(self, state, parent=None):
         super().__init__(parent)
@@ -98,7 +98,7 @@ class ClustersPanel(QtWidgets.QWidget):
         item.setText(header)
         item.setToolTip(COLUMNS[0][2] if self.kind == "phones" else
                         "kinematic landmark of the lip aperture: open, closed, opening, closing")
-        from app.colouring import phone_palette
+        from app.models.colouring import phone_palette
 
         palette = phone_palette(self.state) if m is not None else {}
         self._palette = palette
@@ -133,7 +133,7 @@ class ClustersPanel(QtWidgets.QWidget):
 
     def _sync_checks(self, visible):
         """Tick the visible phones; their swatch shows the ellipsoid colour, the others the phone colour."""
-        from app.colouring import ellipsoid_colors
+        from app.models.colouring import ellipsoid_colors
 
         ell = ellipsoid_colors(visible)
         with blocked(self.table):

@@ -7,7 +7,7 @@
 * Playback shows the original trajectory (left, grey-pink) and the synthetic one
   (right, red) side by side, at the corpus rate, with the utterance's audio when it
   has any and a sound device exists. The frame shown comes from elapsed time
-  (:class:`app.playback.PlaybackClock`: the audio device's position while the sound
+  (:class:`app.models.playback.PlaybackClock`: the audio device's position while the sound
   plays, the monotonic clock otherwise), not from counting timer ticks: when a frame
   takes longer to draw than the frame period, the frames in between are dropped and
   playback stays in step with the clock. A single-shot timer fires at the moment the
@@ -29,8 +29,8 @@ from PySide6 import QtCore, QtWidgets
 
 from app import scene
 from app.audio import AudioPlayer, resolve_audio_path
-from app.playback import PlaybackClock
-from app.trajectories import lip_frames
+from app.models.playback import PlaybackClock
+from app.models.trajectories import lip_frames
 from app.views._common import (camera_of, close_plotter, connect_all, disconnect_all, drawing_frame,
                                make_plotter, READOUT_INTERVAL_S, RenderScheduler, set_camera, Throttle)
 
@@ -42,7 +42,7 @@ SPEEDS = (("1×", 1.0), ("½×", 0.5), ("¼×", 0.25))
 
 
 class LipView(QtWidgets.QWidget):
-    """Lip mesh (or markers) bound to an :class:`app.state.AppState`."""
+    """Lip mesh (or markers) bound to an :class:`app.models.state.AppState`."""
 
     def __init__(self, state, parent=None):
         super().__init__(parent)
@@ -116,7 +116,7 @@ class LipView(QtWidgets.QWidget):
             self.renderer.request()
             return
         c = m.corpus_
-        from engine.orientation import anatomical_frame
+        from engine.recordings.orientation import anatomical_frame
 
         self.orientation = anatomical_frame(c, m.shape_.mean_)  # points drawn in the talker's frame, seen from the front
         mean = self._points(m.shape_.mean_)
@@ -135,8 +135,8 @@ class LipView(QtWidgets.QWidget):
         self.refresh()
 
     def _points(self, row) -> np.ndarray:
-        """One frame row (C,) as points (V, 3) in the talker's view coordinates (engine.orientation)."""
-        from engine.corpus import frame_points
+        """One frame row (C,) as points (V, 3) in the talker's view coordinates (engine.recordings.orientation)."""
+        from engine.recordings.corpus import frame_points
 
         row = self.orientation.view_frames(np.asarray(row, np.float32)[None])[0]
         return frame_points(row, self.state.manifold.corpus_.dims)

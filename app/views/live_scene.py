@@ -70,7 +70,7 @@ class LiveScene:
         plotter.reset_camera()
 
     def update(self, samples, future=None) -> bool:
-        """Append samples (:class:`app.live.LiveSample`); recolour the states when the current
+        """Append samples (:class:`app.models.live.LiveSample`); recolour the states when the current
         state changed (``future(state) -> hops (K,)``). Returns whether anything changed."""
         if not samples:
             return False

@@ -1,7 +1,7 @@
 """The live mirror window (``lipspace explore --manifold M --camera 0|video.mp4``).
 
 A camera (or a video file played as a stream) is read, tracked and projected into a
-built manifold in background threads (:class:`app.live.LiveSession`); a 30 Hz timer
+built manifold in background threads (:class:`app.models.live.LiveSession`); a 30 Hz timer
 takes what was projected, extends the live trajectory, moves the marker, recolours the
 states by the current state's future hemisphere (:class:`app.views.live_scene.LiveScene`)
 and shows the counters: frames processed, received, dropped (when tracking cannot keep
@@ -13,7 +13,7 @@ import sys
 
 from PySide6 import QtCore, QtWidgets
 
-from app.live import LiveSession, camera_source, check_video_manifold
+from app.models.live import LiveSession, camera_source, check_video_manifold
 from app.views._common import RenderScheduler, close_plotter, make_plotter
 from app.views.live_scene import LiveScene
 
@@ -75,7 +75,7 @@ def launch_live(manifold, source, *, interocular_mm: float = 63.0) -> int:
 def run_live(manifold_path, source, *, interocular_mm: float = 63.0) -> int:
     """``lipspace explore --manifold M --camera SOURCE``: check the inputs, then open the window."""
     from app.cli import CliError
-    from engine.manifold import Manifold, ManifoldFileError
+    from engine.manifold.model import Manifold, ManifoldFileError
 
     if manifold_path is None:
         raise CliError("--camera needs --manifold M: a manifold built from a video import "
@@ -84,7 +84,7 @@ def run_live(manifold_path, source, *, interocular_mm: float = 63.0) -> int:
         camera_source(source)
         manifold = Manifold.load(manifold_path)
         check_video_manifold(manifold)
-        from engine.io.facemesh import require_mediapipe
+        from engine.io.video.facemesh import require_mediapipe
 
         require_mediapipe()
     except (ValueError, ManifoldFileError, FileNotFoundError, ImportError) as exc:

@@ -17,11 +17,11 @@ import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from app import scene
-from app.colouring import CLASS_LABELS, ellipsoid_colors, point_colors
+from app.models.colouring import CLASS_LABELS, ellipsoid_colors, point_colors
 from app.scene.colour_bar import add_scalar_bar, configure_scalar_bar
-from app.picking import CloudLocator, handle_pick, hover_text
+from app.models.picking import CloudLocator, handle_pick, hover_text
 from app.scene.projection import standard_camera, view_transform
-from app.state import COLOR_MODES, HEMISPHERES
+from app.models.state import COLOR_MODES, HEMISPHERES
 from app.views.flow_layout import FlowLayout
 from app.views._common import (blocked, camera_of, close_plotter, connect_all,
                                disconnect_all, make_plotter, RenderScheduler, set_camera)
@@ -51,7 +51,7 @@ def axes_origin(Y, plane_point, S, V, length_scale) -> np.ndarray:
 
 
 class ManifoldView(QtWidgets.QWidget):
-    """3-D view of the manifold bound to an :class:`app.state.AppState`."""
+    """3-D view of the manifold bound to an :class:`app.models.state.AppState`."""
 
     #: clouds up to this many frames are drawn as shaded spheres, larger ones as flat dots
     SPHERE_POINTS_MAX = 10000
@@ -193,7 +193,7 @@ class ManifoldView(QtWidgets.QWidget):
         if m is None:
             self.renderer.request()
             return
-        cloud = self.state.cloud  # level of detail: every frame, or one point per group of frames (app.lod)
+        cloud = self.state.cloud  # level of detail: every frame, or one point per group of frames (app.models.lod)
         Y = np.asarray(m.Fy_[cloud.frames, :3], dtype=np.float64)  # the drawn points
         L = scene.scene_scale(cloud.bounds)
         self.scale = L
@@ -295,7 +295,7 @@ class ManifoldView(QtWidgets.QWidget):
         return self.frame_at(display_xy, radius=radius)
 
     def frame_at(self, display_xy, radius: float | None = None):
-        """The frame a click at ``display_xy`` selects, among every frame (:class:`app.picking.CloudLocator`)."""
+        """The frame a click at ``display_xy`` selects, among every frame (:class:`app.models.picking.CloudLocator`)."""
         if self.locator is None:
             return None
         M, size = view_transform(self.plotter)
@@ -390,7 +390,7 @@ class ManifoldView(QtWidgets.QWidget):
 
     def _sync_horizon(self):
         """Slider, box and label from the state's horizon (ms, and hops at the corpus rate)."""
-        from engine.horizon import horizon_hops
+        from engine.graph.hemispheres import horizon_hops
 
         ms = self.state.horizon_ms
         m = self.state.manifold

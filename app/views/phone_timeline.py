@@ -2,14 +2,14 @@
 
 Drawing and input only; what an edit means (undo, synthesis) is the editor's
 (:mod:`app.views.trajectory_editor`), the arithmetic of moving a target is
-:mod:`app.target_editing`'s.
+:mod:`app.models.target_editing`'s.
 """
 from __future__ import annotations
 
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.target_editing import move_target, time_ticks
+from app.models.target_editing import move_target, time_ticks
 
 __all__ = ["PhoneTimeline"]
 

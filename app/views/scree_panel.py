@@ -6,7 +6,7 @@ from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
 from PySide6 import QtWidgets
 
-from app.scree import scree_series
+from app.models.scree import scree_series
 from app.views._common import blocked, connect_all, disconnect_all
 
 __all__ = ["ScreePanel"]

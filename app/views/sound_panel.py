@@ -1,6 +1,6 @@
 """The sound under the trajectory editor's timeline: waveform and a Praat-style wide-band spectrogram.
 
-Drawing only. The arrays come from :mod:`engine.spectrogram` (computed in a worker
+Drawing only. The arrays come from :mod:`engine.phonetics.spectrogram` (computed in a worker
 thread by the editor, :mod:`app.views.trajectory_editor`); this widget maps time to
 pixels exactly as :class:`app.views.phone_timeline.PhoneTimeline` maps frames (same
 margin, same width: the editor sizes both), so phone boundaries, targets and the
@@ -26,7 +26,7 @@ class SoundPanel(QtWidgets.QWidget):
 
     Attributes
     ----------
-    display : engine.spectrogram.SoundDisplay or None
+    display : engine.phonetics.spectrogram.SoundDisplay or None
     shown_at : float or None
         ``time.perf_counter()`` when the spectrogram of the current sound was first
         painted (None until then): what "the spectrogram appears" means in tests and
@@ -60,7 +60,7 @@ class SoundPanel(QtWidgets.QWidget):
         self.update()
 
     def set_sound(self, display, grey=None, message: str = "") -> None:
-        """Show ``display`` (a :class:`engine.spectrogram.SoundDisplay`) with its grey levels
+        """Show ``display`` (a :class:`engine.phonetics.spectrogram.SoundDisplay`) with its grey levels
         ``grey`` ((F, T) uint8, row 0 the lowest band); None: show ``message`` instead."""
         self.display, self.message, self.shown_at = display, message, None
         self._image = self._grey = None
@@ -142,7 +142,7 @@ class SoundPanel(QtWidgets.QWidget):
         qp.end()
 
     def _paint_wave(self, qp, x0, x1):
-        from engine.spectrogram import waveform_envelope
+        from engine.phonetics.spectrogram import waveform_envelope
 
         d = self.display
         h = self.WAVE_HEIGHT

@@ -1,7 +1,7 @@
 """Which sound the trajectory editor's :class:`app.views.sound_panel.SoundPanel` shows, computed off the GUI thread.
 
 :class:`SoundTrack` resolves an utterance's audio file, computes its waveform and
-spectrogram (:func:`engine.spectrogram.sound_display`) in a worker thread
+spectrogram (:func:`engine.phonetics.spectrogram.sound_display`) in a worker thread
 (:func:`app.workers.run_task`, no dialog), keeps the results of the last few
 utterances (:data:`CACHE_SIZE`), and hands the panel the one asked for last; a
 request for another utterance cancels the computation still running for the
@@ -84,7 +84,7 @@ class SoundTrack(QtCore.QObject):
     def _start(self, key, path):
         from app.user_messages import plain_errors
         from app.workers import run_task
-        from engine.spectrogram import sound_display
+        from engine.phonetics.spectrogram import sound_display
 
         def task(progress):
             disp = sound_display(path, progress=progress)

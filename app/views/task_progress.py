@@ -13,7 +13,7 @@ import time
 
 from PySide6 import QtCore, QtWidgets
 
-from app.task_status import stage_text
+from app.models.task_status import stage_text
 
 __all__ = ["TaskProgress", "attach_status_progress"]
 

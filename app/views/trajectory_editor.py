@@ -5,11 +5,11 @@ states: the paper's Fig. 3 experiment), typed English text, a phone string with
 durations (``p 0.08 ax 0.05 ...``) or a TextGrid / .lab file, and from clicked
 states: "Add clicked state" (Ctrl+T) inserts a target holding the selected state at
 the playback cursor, or after the last target. Dragging a target marker moves its
-frame, inside its phone interval (:mod:`app.target_editing`); "Remove target" (Delete)
+frame, inside its phone interval (:mod:`app.models.target_editing`); "Remove target" (Delete)
 and "Reset targets" (back to the targets as loaded) complete the edits, each one a
 command on :attr:`TrajectoryEditor.undo_stack` (the window's Edit > Undo / Redo).
 The timeline zooms (wheel, + / -, Fit), shows time in ms, and with the keyboard focus
-plays (Space) and steps (Left / Right) through :class:`app.state.AppState`'s playback.
+plays (Space) and steps (Left / Right) through :class:`app.models.state.AppState`'s playback.
 Under it, where the utterance has audio, its waveform and wide-band spectrogram
 (:mod:`app.views.sound_panel`, computed in a worker by :mod:`app.views.sound_track`)
 scroll and zoom with it and carry the same playback cursor; "Sound" hides them.
@@ -21,8 +21,8 @@ from __future__ import annotations
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.target_editing import remove_target
-from app.trajectories import METHOD_LABELS, synthesize_targets, trajectory_error
+from app.models.target_editing import remove_target
+from app.models.trajectories import METHOD_LABELS, synthesize_targets, trajectory_error
 from app.views._common import connect_all, disconnect_all, READOUT_INTERVAL_S, Throttle
 from app.views.phone_timeline import PhoneTimeline
 from app.views.sound_panel import SoundPanel
@@ -53,7 +53,7 @@ class TargetsEdit(QtGui.QUndoCommand):
 
 # ============================================================================ the editor
 class TrajectoryEditor(QtWidgets.QWidget):
-    """Build targets, synthesise, play and compare; bound to an :class:`app.state.AppState`."""
+    """Build targets, synthesise, play and compare; bound to an :class:`app.models.state.AppState`."""
 
     def __init__(self, state, parent=None):
         super().__init__(parent)
@@ -185,8 +185,8 @@ class TrajectoryEditor(QtWidgets.QWidget):
     # ------------------------------------------------------------------ setup
     def _fill_methods(self):
         try:
-            from engine.method_choice import BEST
-            from engine.methods import METHODS
+            from engine.synthesis.method_choice import BEST
+            from engine.synthesis.methods import METHODS
         except ImportError as exc:  # synthesis unavailable: say so, keep the rest working
             BEST, METHODS = None, ()
             self.readout.setText(f"synthesis unavailable: {exc}")
@@ -230,7 +230,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
     def rebuild(self) -> None:
         m = self.state.manifold
         if m is not None and self.method_box.count() == 0:
-            # engine.synthesis pulls in scikit-learn (seconds at start-up); by the time a manifold
+            # engine.synthesis.viterbi pulls in scikit-learn (seconds at start-up); by the time a manifold
             # is loaded it is imported already, so the empty window opens without it
             self._fill_methods()
         self.synthesizers = {}
@@ -268,7 +268,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
     # ------------------------------------------------------------------ targets
     def load(self) -> bool:
         """Build targets from the chosen input; returns False (and says why) on bad input."""
-        from engine import targets as T
+        from engine.phonetics import targets as T
 
         m = self.state.manifold
         if m is None:

@@ -2,7 +2,7 @@
 
 Usage: .venv/bin/python docs/gltf_web_check/expected_weights.py speech.glb expected.json
 
-Reads the file back with engine.io.gltf.read_gltf_morph (pygltflib) and writes, as JSON,
+Reads the file back with engine.io.writers.gltf.read_gltf_morph (pygltflib) and writes, as JSON,
 the number of morph targets, the animation's duration, and at 12 times (6 keyframes and
 the midpoints after them, where LINEAR interpolation gives the mean of the two keys) the
 expected morph weights and the first 10 deformed vertices (base + weights @ targets, in
@@ -13,7 +13,7 @@ import sys
 
 import numpy as np
 
-from engine.io.gltf import read_gltf_morph
+from engine.io.writers.gltf import read_gltf_morph
 
 
 def main(src, dst):

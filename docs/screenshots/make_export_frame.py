@@ -12,7 +12,7 @@ from pathlib import Path
 import av
 
 from app.cli import main
-from engine._atomic import atomic_write
+from engine.files.atomic import atomic_write
 
 manifold, utt, at, outdir = sys.argv[1], sys.argv[2], float(sys.argv[3]), Path(sys.argv[4])
 with tempfile.TemporaryDirectory() as tmp:

@@ -18,11 +18,11 @@ import pyvista as pv
 from skimage import data as skdata
 
 from app.scene.lips import add_lips
-from engine.io.facemesh import LIP_NAMES, LIP_RINGS
-from engine.io.video import read_video
-from engine.io.video_synth import moving_image_frames, write_video
-from engine.lipmodel import vermilion_weight
-from engine.synthetic import load_synthetic
+from engine.io.video.facemesh import LIP_NAMES, LIP_RINGS
+from engine.io.video.clips import read_video
+from engine.io.video.synth import moving_image_frames, write_video
+from engine.talker.lipmodel import vermilion_weight
+from engine.talker.synthetic import load_synthetic
 
 
 def lip_heights(P, upper, lower):

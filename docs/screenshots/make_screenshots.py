@@ -13,7 +13,7 @@ import numpy as np
 from pathlib import Path
 from PySide6 import QtWidgets
 app = QtWidgets.QApplication([])
-from engine.manifold import Manifold
+from engine.manifold.model import Manifold
 from app.main_window import MainWindow
 path, preset, out = sys.argv[1], sys.argv[2], Path(sys.argv[3])
 out.mkdir(parents=True, exist_ok=True)

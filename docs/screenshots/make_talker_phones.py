@@ -1,6 +1,6 @@
 import sys, numpy as np, pyvista as pv
 sys.path.insert(0, '/work/main')
-from engine.synthetic import SyntheticTalker
+from engine.talker.synthetic import SyntheticTalker
 from app.scene.lips import add_lips
 c = SyntheticTalker(preset="small", resolution="default", duration=120).generate()
 mids, labels, *_ = c.phone_table()

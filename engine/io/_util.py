@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.corpus import PhoneInterval
+from engine.recordings.corpus import PhoneInterval
 from engine.io.errors import ImportFormatError
 
 __all__ = [
@@ -288,7 +288,7 @@ def one_utterance_corpus(path, frames, rate, *, dims, uid=None, phones=(), point
 
     Any violated corpus invariant is reported as an :class:`ImportFormatError` naming ``path``.
     """
-    from engine.corpus import Corpus, CorpusError, Utterance
+    from engine.recordings.corpus import Corpus, CorpusError, Utterance
 
     frames = np.asarray(frames, dtype=np.float32)
     if frames.ndim != 2 or frames.shape[0] < 2:

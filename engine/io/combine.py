@@ -5,7 +5,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from engine.corpus import Corpus, CorpusError
+from engine.recordings.corpus import Corpus, CorpusError
 
 __all__ = ["concat"]
 

@@ -12,18 +12,18 @@ __all__ = ["read_corpus", "detect_format", "FORMATS", "FORMAT_ALIASES"]
 
 #: format name -> (module, reader function, one-line description)
 FORMATS = {
-    "ema": ("engine.io.ema", "read_ema", "MOCHA-TIMIT EMA: EST Track (binary/ASCII) or ASCII table, 2-D"),
-    "mview": ("engine.io.mview", "read_mview", "Haskins / MVIEW .mat EMA structs, 3-D"),
-    "c3d": ("engine.io.markers", "read_c3d", "C3D motion-capture markers, 3-D"),
-    "mesh": ("engine.io.mesh", "read_mesh_sequence", "OBJ/PLY mesh sequence, one file per frame (needs rate)"),
-    "csv": ("engine.io.landmarks", "read_csv_landmarks", "CSV landmark tracks (OpenFace, named or long)"),
-    "npy": ("engine.io.mesh", "read_vertex_array", "NumPy vertex array (n, V, 3) + template mesh (needs rate)"),
-    "npz": ("engine.corpus", "Corpus.load", "Lipspace native corpus file"),
-    "matrix": ("engine.io.matrix", "read_matrix", "plain numeric matrix (.mat variable, .npy, CSV/TSV without "
+    "ema": ("engine.io.readers.ema", "read_ema", "MOCHA-TIMIT EMA: EST Track (binary/ASCII) or ASCII table, 2-D"),
+    "mview": ("engine.io.readers.mview", "read_mview", "Haskins / MVIEW .mat EMA structs, 3-D"),
+    "c3d": ("engine.io.readers.markers", "read_c3d", "C3D motion-capture markers, 3-D"),
+    "mesh": ("engine.io.readers.mesh", "read_mesh_sequence", "OBJ/PLY mesh sequence, one file per frame (needs rate)"),
+    "csv": ("engine.io.readers.landmarks", "read_csv_landmarks", "CSV landmark tracks (OpenFace, named or long)"),
+    "npy": ("engine.io.readers.mesh", "read_vertex_array", "NumPy vertex array (n, V, 3) + template mesh (needs rate)"),
+    "npz": ("engine.recordings.corpus", "Corpus.load", "Lipspace native corpus file"),
+    "matrix": ("engine.io.readers.matrix", "read_matrix", "plain numeric matrix (.mat variable, .npy, CSV/TSV without "
                "names, AG500/AG501 .pos, NDI Wave TSV) read through a sensor layout (layout=)"),
-    "pos": ("engine.io.articulograph", "read_pos", "Carstens AG500 / AG501 .pos binary"),
-    "wave": ("engine.io.articulograph", "read_wave", "NDI Wave TSV export"),
-    "video": ("engine.io.video", "read_video", "video of a talking face (.mp4 .mov .avi .mkv ...; a folder of them): "
+    "pos": ("engine.io.readers.articulograph", "read_pos", "Carstens AG500 / AG501 .pos binary"),
+    "wave": ("engine.io.readers.articulograph", "read_wave", "NDI Wave TSV export"),
+    "video": ("engine.io.video.clips", "read_video", "video of a talking face (.mp4 .mov .avi .mkv ...; a folder of them): "
               "FaceMesh lip landmarks, head pose removed, mm (needs the [video] extra)"),
 }
 FORMAT_ALIASES = {"mocha": "ema", "est": "ema", "haskins": "mview", "mat": "mview", "obj": "mesh", "ply": "mesh",
@@ -95,10 +95,10 @@ def _reader(fmt):
 
 @reports_repairs
 def _read_native(path, rate=None, alignment=None, tier=None):
-    from engine._persist import NpzReadError, read_npz
-    from engine.corpus import Corpus
+    from engine.files.persist import NpzReadError, read_npz
+    from engine.recordings.corpus import Corpus
     from engine.io._util import check_rate, fit_phones
-    from engine.io.alignment import resolve_alignment
+    from engine.io.readers.alignment import resolve_alignment
 
     path = Path(path)
     if not path.exists():
@@ -165,7 +165,7 @@ def read_corpus(path, *, format: str | None = None, rate: float | None = None, a
         videos = _videos_in(path)  # a folder of one speaker's videos, one utterance each (TextGrid / .lab beside)
         if not videos:
             raise ImportFormatError(path, "holds no video files; expected .mp4, .mov, .avi, .mkv ... files")
-        from engine.io.video import read_videos
+        from engine.io.video.clips import read_videos
 
         return read_videos(videos, rate=rate, alignment=alignment, **kw)
     if isinstance(path, (list, tuple)) and fmt != "mesh":  # several files: one utterance each
@@ -190,7 +190,7 @@ def read_corpus(path, *, format: str | None = None, rate: float | None = None, a
         raise TypeError(f"format {fmt!r} takes no option(s) {unknown}; it takes {takes}")
     c = fn(path, rate=rate, alignment=alignment, **kw)
     if c.point_roles is None and c.point_names:  # conventional sensor names (UL, LL, ML, JAW, REF, TT ...)
-        from engine.layouts import guess_roles
+        from engine.recordings.layouts import guess_roles
 
         roles = guess_roles(c.point_names)
         if any(roles):

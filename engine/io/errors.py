@@ -2,7 +2,7 @@
 one warning for input read with a repair (:class:`ImportDataWarning`)."""
 from __future__ import annotations
 
-from engine.corpus import CorpusWarning
+from engine.recordings.corpus import CorpusWarning
 
 __all__ = ["ImportFormatError", "ImportDataWarning"]
 

@@ -58,7 +58,7 @@ def collecting_repairs():
 
 
 def reports_repairs(reader):
-    """Decorate a reader returning a :class:`engine.corpus.Corpus`: the repairs it reported
+    """Decorate a reader returning a :class:`engine.recordings.corpus.Corpus`: the repairs it reported
     are appended to the corpus's ``history`` (once each)."""
 
     @functools.wraps(reader)

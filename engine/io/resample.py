@@ -6,7 +6,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from engine.corpus import Corpus, CorpusError
+from engine.recordings.corpus import Corpus, CorpusError
 
 __all__ = ["resample", "resampled_length", "how"]
 

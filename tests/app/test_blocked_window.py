@@ -9,16 +9,16 @@ pytestmark = pytest.mark.gui
 
 @pytest.fixture(scope="module")
 def blocked_manifold(tmp_path_factory, small_corpus):
-    from app.source_loading import load_source
-    from engine.corpus_blocks import save_blocked
-    from engine.frame_blocks import BlockFrames
-    from engine.manifold import Manifold
+    from app.files.source_loading import load_source
+    from engine.recordings.corpus_blocks import save_blocked
+    from engine.recordings.frame_blocks import BlockFrames
+    from engine.manifold.model import Manifold
 
     corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1500])
     folder = tmp_path_factory.mktemp("blocked_window")
     src = folder / "c.npz"
     save_blocked(corpus, src, block_frames=512)
-    from engine.corpus_blocks import load_blocked
+    from engine.recordings.corpus_blocks import load_blocked
 
     lazy = load_blocked(src)
     Manifold(n_states=30, random_state=0).fit(lazy).save(folder / "m.npz")
@@ -60,8 +60,8 @@ def test_file_open_fits_a_blocked_corpus_from_its_blocks_as_the_command_line_rea
     """File › Open on a corpus stored in blocks reads it with the command line's reader: the frames stay
     in the block files (never gathered) and the window shows the manifold fitted on them."""
     from app.cli._common import load_corpus_arg
-    from engine.corpus_blocks import save_blocked
-    from engine.frame_blocks import BlockFrames
+    from engine.recordings.corpus_blocks import save_blocked
+    from engine.recordings.frame_blocks import BlockFrames
 
     corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1200])
     src = tmp_path / "blocked.npz"

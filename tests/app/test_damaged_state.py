@@ -4,8 +4,8 @@ import json
 
 import pytest
 
-from app.autosave import Autosaver
-from app.session import SessionError, load_session
+from app.files.autosave import Autosaver
+from app.files.session import SessionError, load_session
 
 DAMAGED_MARKERS = {
     "started text": {"pid": 4242, "started": "abc"},

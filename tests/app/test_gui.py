@@ -30,7 +30,7 @@ def win(window, qapp):
 
 
 def _points(manifold, row):
-    from engine.corpus import frame_points
+    from engine.recordings.corpus import frame_points
 
     return frame_points(np.asarray(row, np.float32), manifold.corpus_.dims)
 
@@ -378,11 +378,11 @@ def test_textgrid_input_and_bad_input(win, tmp_path):
 
 
 def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
-    from app.trajectories import export_trajectory, trajectory_table
-    from engine import targets as T
-    from engine.io.meshfile import read_obj
-    from app.trajectories import lip_frames
-    from app.trajectories import synthesize_targets
+    from app.models.trajectories import export_trajectory, trajectory_table
+    from engine.phonetics import targets as T
+    from engine.io.readers.meshfile import read_obj
+    from app.models.trajectories import lip_frames
+    from app.models.trajectories import synthesize_targets
 
     m, s = app_manifold, win.state
     u = m.corpus_.utterances[0]
@@ -404,7 +404,7 @@ def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
     assert len(files) == len(traj)
     V, F = read_obj(files[3])
     np.testing.assert_allclose(V, _points(m, lip_frames(m, traj)[3]), atol=1e-5)
-    from engine.staging import OutputExistsError
+    from engine.files.staging import OutputExistsError
 
     before = files[0].read_bytes()  # the dialog asked about seq.obj, never about the frame files in seq/
     with pytest.raises(OutputExistsError, match=r"seq_00000.obj and \d+ other files already exist; nothing was "
@@ -436,7 +436,7 @@ def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
 
 
 def test_scree_panel_and_component_deformation(win, app_manifold):
-    from app.scree import scree_series
+    from app.models.scree import scree_series
 
     m, s, sc = app_manifold, win.state, win.scree
     lines = sc.figure.axes[0].get_lines()
@@ -525,7 +525,7 @@ def test_worker_shows_engine_warnings_in_the_status_bar(win, qtbot):
     import warnings
 
     from app.workers import run_task
-    from engine.states import StateGraphConnectivityWarning
+    from engine.graph.states import StateGraphConnectivityWarning
 
     def task(progress):
         progress("fitting", 1, 1)
@@ -542,7 +542,7 @@ def test_worker_shows_engine_warnings_in_the_status_bar(win, qtbot):
 def test_open_runs_in_a_worker_with_status_bar_progress_and_cancel(win, qtbot, tmp_path, app_manifold):
     from PySide6 import QtWidgets
 
-    from app.task_status import stage_text
+    from app.models.task_status import stage_text
     from app.views.task_progress import TaskProgress
 
     corpus = tmp_path / "c.npz"

@@ -9,17 +9,17 @@ import os
 import numpy as np
 import pytest
 
-from app.cache import entries
-from app.session import SessionError, load_session, save_session, source_kinematics
-from app.source_loading import (KINEMATICS_CHOICES, cached_manifold_path, check_kinematics, load_source,
+from app.files.cache import entries
+from app.files.session import SessionError, load_session, save_session, source_kinematics
+from app.files.source_loading import (KINEMATICS_CHOICES, cached_manifold_path, check_kinematics, load_source,
                                 talker_name)
-from app.state import AppState
+from app.models.state import AppState
 
 
 def test_cache_names_keep_the_talkers_apart_and_the_classic_name_unchanged(monkeypatch, tmp_path):
     from engine import __version__
-    from engine.manifold import FILE_VERSION, algorithm_fingerprint
-    from engine.synthetic import GENERATOR_VERSION, generator_fingerprint
+    from engine.manifold.model import FILE_VERSION, algorithm_fingerprint
+    from engine.talker.synthetic import GENERATOR_VERSION, generator_fingerprint
 
     monkeypatch.setenv("LIPSPACE_CACHE_DIR", str(tmp_path))
     classic = cached_manifold_path("default")
@@ -39,7 +39,7 @@ def test_cache_names_keep_the_talkers_apart_and_the_classic_name_unchanged(monke
 
 
 def test_a_wrong_kinematics_is_refused_naming_it_and_the_choices(small_manifold, tmp_path):
-    from engine.lipmodel import KINEMATICS
+    from engine.talker.lipmodel import KINEMATICS
 
     assert KINEMATICS_CHOICES == tuple(KINEMATICS)  # the command line's choices are the engine's
     for call in (lambda: check_kinematics("calibrate"), lambda: cached_manifold_path("small", "calibrate"),
@@ -133,7 +133,7 @@ def test_a_session_keeps_the_talkers_kinematics(small_manifold, tmp_path):
 
 
 def test_the_autosave_notices_another_talker(small_manifold):
-    from app.autosave import session_fingerprint
+    from app.files.autosave import session_fingerprint
 
     s = _state(small_manifold, {"path": None, "preset": "small", "kind": "synthetic", "kinematics": "classic"})
     before = session_fingerprint(s)

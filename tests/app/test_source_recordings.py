@@ -23,7 +23,7 @@ def _csv_recording(path, rate=200.0, seconds=4.0):
 
 
 def test_a_recording_opened_directly_is_fitted_at_the_analysis_rate_as_import_makes_it(tmp_path, capsys):
-    from app.source_loading import load_source, source_kind
+    from app.files.source_loading import load_source, source_kind
 
     rec = _csv_recording(tmp_path / "take1.csv")
     assert source_kind(rec) == "foreign"
@@ -36,7 +36,7 @@ def test_a_recording_opened_directly_is_fitted_at_the_analysis_rate_as_import_ma
     # the same frames as 'lipspace import' with its defaults
     assert main(["import", str(rec), "-o", str(tmp_path / "take1.npz")]) == 0
     capsys.readouterr()
-    from engine.corpus import Corpus
+    from engine.recordings.corpus import Corpus
 
     imported = Corpus.load(tmp_path / "take1.npz")
     np.testing.assert_allclose(c.frames, imported.frames, rtol=1e-6, atol=1e-9)
@@ -47,8 +47,8 @@ def test_build_of_a_recording_fits_what_import_makes(tmp_path, capsys):
     """`lipspace build rec.csv` (and figures, clusters: app.cli._common.load_corpus_arg) read a foreign
     file as the window does: at 60 Hz with import's defaults, so no rate warning (before: fitted at
     200 Hz with a warning to run import first)."""
-    from engine.corpus import Corpus
-    from engine.manifold import Manifold
+    from engine.recordings.corpus import Corpus
+    from engine.manifold.model import Manifold
 
     rec = _csv_recording(tmp_path / "take2.csv")
     assert main(["build", str(rec), "-o", str(tmp_path / "m.npz"), "-q"]) == 0

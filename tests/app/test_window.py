@@ -277,7 +277,7 @@ def test_a_stop_signal_closes_the_explorer_and_keeps_its_session(manifold_file, 
     import signal
     import time
 
-    from app.autosave import Autosaver
+    from app.files.autosave import Autosaver
 
     script = _explore_script("self.state.select_frame(7)\nprint('ready', flush=True)")
     state = tmp_path / "state"
@@ -301,7 +301,7 @@ def test_a_stop_signal_closes_the_explorer_and_keeps_its_session(manifold_file, 
                            "autosaved and is offered back at the next start).")
     recovery = Autosaver(state / "autosave").begin()
     assert recovery is not None  # the next start offers it back
-    from app.session import load_session
+    from app.files.session import load_session
 
     assert load_session(recovery.session)["selection"]["frame"] == 7
 

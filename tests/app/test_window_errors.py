@@ -27,7 +27,7 @@ def broken_files(app_manifold, tmp_path_factory):
 
 
 def _load_error(path):
-    from app.source_loading import load_source
+    from app.files.source_loading import load_source
 
     with pytest.raises(Exception) as info:
         load_source(path)

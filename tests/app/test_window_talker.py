@@ -18,7 +18,7 @@ CALIBRATED = "calibrated on articulograph lips"
 def talker_cache(tmp_path_factory, small_manifold):
     """A cache folder of this module's own, holding the classic small talker's manifold (so
     the classic talker opens from it); the calibrated one is built by the first test that opens it."""
-    from app.source_loading import cached_manifold_path
+    from app.files.source_loading import cached_manifold_path
 
     folder = tmp_path_factory.mktemp("talker-cache")
     old = os.environ.get("LIPSPACE_CACHE_DIR")
@@ -117,7 +117,7 @@ def test_sessions_reopen_the_talker_they_were_saved_with(win, qtbot, tmp_path):
 def test_explore_opens_the_calibrated_talker(talker_cache, tmp_path, monkeypatch, how, dead_pid, run_cli_window):
     """``lipspace explore --preset small --kinematics calibrated`` opens it; so does
     ``lipspace explore --restore`` of a crashed run that showed it."""
-    from app.autosave import Autosaver
+    from app.files.autosave import Autosaver
 
     monkeypatch.setenv("LIPSPACE_STATE_DIR", str(tmp_path / "state"))
     if how == "autosave":

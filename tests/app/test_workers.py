@@ -13,7 +13,7 @@ import warnings
 
 import pytest
 
-from engine.corpus import CorpusWarning
+from engine.recordings.corpus import CorpusWarning
 
 N_WARNINGS = 150
 

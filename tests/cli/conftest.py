@@ -13,7 +13,7 @@ def write_lab_folder(folder, *, n_utterances=3, duration_s=(1.0, 1.2), seed=5, c
     speakers, no phone labels, no '_' in the names; x anterior, y lateral (left), z up. Returns the paths."""
     import scipy.io
 
-    from engine.multispeaker import generate_recordings
+    from engine.talker.multispeaker import generate_recordings
 
     folder.mkdir(parents=True, exist_ok=True)
     count, paths = {}, []

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from engine.manifold import Manifold
+from engine.manifold.model import Manifold
 
 
 @pytest.fixture(scope="module")
@@ -159,7 +159,7 @@ def test_disk_full_is_one_line_and_leaves_no_file(tmp_path, built, capsys, monke
 
 
 def test_memory_error_is_one_line_with_a_hint(tmp_path, small_corpus, capsys, monkeypatch):
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     def oom(self, corpus, progress=None, **kwargs):
         raise MemoryError("Unable to allocate 15.6 GiB for an array with shape (461000, 4540) and data type float64")
@@ -176,7 +176,7 @@ def test_memory_error_is_one_line_with_a_hint(tmp_path, small_corpus, capsys, mo
 def test_interrupted_mesh_export_leaves_nothing(tmp_path, built, capsys, monkeypatch):
     """Ctrl-C part-way through --mesh-dir used to leave frame files while saying nothing was written, and the
     trajectory written before them (-o t.csv); the old trajectory stays."""
-    import engine.io.export as export
+    import engine.io.writers.export as export
 
     real, calls = export.write_obj, []
 
@@ -300,8 +300,8 @@ def test_build_the_calibrated_talker_keeps_the_classic_cache(tmp_path, monkeypat
     """``lipspace build --kinematics calibrated`` builds the opt-in talker; the cache keeps the
     classic talker's corpus beside it (each variant has its own file name), and a corpus file
     with --kinematics is refused with the reason."""
-    from app.cache import entries
-    from engine.synthetic import load_synthetic
+    from app.files.cache import entries
+    from engine.talker.synthetic import load_synthetic
 
     monkeypatch.setenv("LIPSPACE_CACHE_DIR", str(tmp_path / "cache"))
     classic = load_synthetic(preset="small")

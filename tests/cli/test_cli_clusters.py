@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from engine.clusters import PhoneClusters
+from engine.manifold.clusters import PhoneClusters
 
 
 @pytest.fixture(scope="module")

@@ -18,12 +18,12 @@ def _run(argv):
 
 
 def _two_speakers(register_as="utterance"):
-    from engine.corpus import Utterance
+    from engine.recordings.corpus import Utterance
     from engine.io import concat, resample
-    from engine.io.matrix import corpus_from_matrix
-    from engine.layouts import BUILTIN
-    from engine.multispeaker import generate_recordings
-    from engine.registration import register
+    from engine.io.readers.matrix import corpus_from_matrix
+    from engine.recordings.layouts import BUILTIN
+    from engine.talker.multispeaker import generate_recordings
+    from engine.recordings.registration import register
 
     parts = []
     for r in generate_recordings(n_speakers=2, n_utterances=4, duration_s=(2.0, 2.5), seed=3):
@@ -69,7 +69,7 @@ def test_islands_of_the_training_graph_are_named_as_the_cause():
     import warnings
 
     from app.cli.evaluate import gap_cause
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     corpus = _two_speakers(register_as="none")  # speakers 100 mm apart, nothing removed
     with warnings.catch_warnings():

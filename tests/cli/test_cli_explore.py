@@ -9,7 +9,7 @@ import argparse
 from app.cli import CliError
 from app.cli import explore
 from app.cli.explore import EXIT_NO_DISPLAY, has_display
-from app.source_loading import cached_manifold_path, load_source, source_kind
+from app.files.source_loading import cached_manifold_path, load_source, source_kind
 from engine.progress import Cancelled
 
 

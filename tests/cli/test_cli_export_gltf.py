@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from engine.io.gltf import read_gltf_morph
+from engine.io.writers.gltf import read_gltf_morph
 
 PHONES = "sil 0.1 b 0.08 iy 0.12 m 0.08 sil 0.1"
 

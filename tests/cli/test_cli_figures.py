@@ -43,7 +43,7 @@ def test_without_a_file_builds_on_the_synthetic_talker(tmp_path, capsys):
 def test_corpus_file_is_fitted_first(tmp_path, capsys):
     import numpy as np
 
-    from engine.corpus import Corpus, Utterance
+    from engine.recordings.corpus import Corpus, Utterance
 
     # a corpus too short to fit: the command must try to fit it (not read it as a manifold)
     c = Corpus(np.zeros((8, 6), np.float32), 60.0, [Utterance("u", 0, 8)], name="tiny")

@@ -106,7 +106,7 @@ def test_hostile_file_is_one_line_error_within_bounds(tmp_path, make, command):
 @pytest.fixture(scope="module")
 def files(small_corpus, tmp_path_factory):
     """A tiny corpus and its manifold (fast to load and synthesise from), a directory, a FIFO, junk."""
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     d = tmp_path_factory.mktemp("fuzz-inputs")
     tiny = small_corpus.subset([u.id for u in small_corpus.utterances[:3]])
@@ -176,7 +176,7 @@ def test_info_on_a_recording_says_what_it_is_and_how_to_import_it(shared_data, t
 
 def test_terminal_escape_codes_in_names_are_not_printed_raw(files, tmp_path, capsys):
     """A corpus named with escape sequences (colour, window title, clear screen) is shown escaped."""
-    from engine._persist import read_npz
+    from engine.files.persist import read_npz
 
     d = read_npz(files["corpus"])
     d["corpus_name"] = np.array("\x1b[31mRED\x1b]0;owned\x07")
@@ -319,7 +319,7 @@ def _random_array(data):
 
 
 def _mutated(path, data, n_keys=3):
-    from engine._persist import read_npz
+    from engine.files.persist import read_npz
 
     d = read_npz(path)
     keys = sorted(d)
@@ -341,7 +341,7 @@ def _mutated(path, data, n_keys=3):
 @given(data=st.data())
 def test_fuzz_manifold_loader(files, data):
     """A damaged manifold either is refused with ManifoldFileError or loads into something that works."""
-    from engine.manifold import Manifold, ManifoldFileError
+    from engine.manifold.model import Manifold, ManifoldFileError
 
     d = _mutated(files["manifold"], data)
     with tempfile.TemporaryDirectory() as tmp:
@@ -365,7 +365,7 @@ def test_fuzz_manifold_loader(files, data):
 @FUZZ
 @given(data=st.data())
 def test_fuzz_corpus_loader(files, data):
-    from engine.corpus import Corpus, CorpusError
+    from engine.recordings.corpus import Corpus, CorpusError
 
     d = _mutated(files["corpus"], data)
     with tempfile.TemporaryDirectory() as tmp:
@@ -387,7 +387,7 @@ def test_fuzz_corpus_loader(files, data):
        source=st.one_of(st.none(), TEXT, st.integers(), st.sampled_from(["/etc/passwd", "../../../etc/passwd",
                                                                           "fifo.npz", "adir", "corpus.npz"])))
 def test_fuzz_session_loader(files, doc, source):
-    from app.session import SessionError, load_session
+    from app.files.session import SessionError, load_session
 
     with tempfile.TemporaryDirectory() as tmp:
         p = Path(files["corpus"]).parent / f"s-{os.getpid()}.json"  # beside the fuzz inputs: relative names

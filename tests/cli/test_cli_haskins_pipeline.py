@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from engine.corpus import Corpus
-from engine.manifold import Manifold
+from engine.recordings.corpus import Corpus
+from engine.manifold.model import Manifold
 
 
 @pytest.fixture(scope="module")
@@ -93,7 +93,7 @@ def test_synthesize_a_real_utterance_and_a_phone_string(built, tmp_path, capsys)
 
 
 def test_explorer_and_figures_open_a_foreign_file_directly(haskins_files, tmp_path):
-    from app.source_loading import load_source, source_kind
+    from app.files.source_loading import load_source, source_kind
 
     mat = haskins_files[0]
     assert source_kind(mat) == "foreign"

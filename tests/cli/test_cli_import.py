@@ -7,7 +7,7 @@ import pytest
 
 from app.cli import SUBCOMMANDS, CliError
 from app.cli import importer
-from engine.corpus import Corpus
+from engine.recordings.corpus import Corpus
 from engine.io import write_est_track, write_mesh_sequence
 
 
@@ -55,7 +55,7 @@ def test_import_mocha_with_resampling(tmp_path, capsys):
 def test_import_both_haskins_files_with_audio(tmp_path, capsys):
     files = sorted(str(p) for p in (DATA / "haskins-ieee").glob("*.mat"))
     out = tmp_path / "h.npz"
-    from engine.speakers import SpeakerWarning
+    from engine.recordings.speakers import SpeakerWarning
 
     with pytest.warns(SpeakerWarning, match="all 2 inputs are one unnamed speaker"):  # F01_..., M01_...
         assert run([*files, "-o", str(out), "--audio-dir", str(tmp_path / "wav")]) == 0

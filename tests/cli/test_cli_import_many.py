@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from engine.corpus import Corpus
+from engine.recordings.corpus import Corpus
 from engine.io import write_est_track
 
 

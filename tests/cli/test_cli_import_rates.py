@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from engine.corpus import Corpus
+from engine.recordings.corpus import Corpus
 
 REPO = Path(__file__).resolve().parents[2]
 CLIPS = REPO.parent / "shared" / "data" / "talking-faces"
@@ -18,7 +18,7 @@ CLIPS = REPO.parent / "shared" / "data" / "talking-faces"
 def _mat(path, rate, seed):
     import scipy.io
 
-    from engine.multispeaker import generate_recordings
+    from engine.talker.multispeaker import generate_recordings
 
     r = generate_recordings(n_speakers=1, n_utterances=1, duration_s=(1.0, 1.0), rate=rate, seed=seed)[0]
     scipy.io.savemat(path, {"data": r.matrix, "fs": np.array([[rate]])})
@@ -80,7 +80,7 @@ def _lipspace(*argv):
 @needs_clips
 def test_five_clips_at_22_25_and_30_fps_import_at_60_hz_with_a_clean_terminal(tmp_path):
     pytest.importorskip("mediapipe", reason="the [video] extra is not installed (pip install -e '.[video]')")
-    from engine.io.video import video_info
+    from engine.io.video.clips import video_info
 
     names = [f"face{k}.mp4" for k in range(1, 6)]
     folder = _clip_folder(tmp_path, names)

@@ -7,7 +7,7 @@ import os
 import pytest
 
 from app.cli import main
-from engine.corpus import Corpus
+from engine.recordings.corpus import Corpus
 
 
 def _run(argv):

@@ -21,7 +21,7 @@ PHONES = "p 0.1 aa 0.1"
 
 @pytest.fixture(scope="module")
 def mfile(small_corpus, tmp_path_factory):
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     tiny = small_corpus.subset([u.id for u in small_corpus.utterances[:3]])
     d = tmp_path_factory.mktemp("outputs")
@@ -196,7 +196,7 @@ def test_numeric_options_are_refused_by_name(mfile, capsys, argv, says):
 
 
 def test_key_frames_beyond_any_index_and_render_options(mfile, tmp_path, capsys):
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     uid = Manifold.load(mfile).corpus_.utterances[0].id
     assert main(["synthesize", "--manifold", str(mfile), "--utterance", uid, "--key-frames", "0," + "1" * 31]) == 2
@@ -214,7 +214,7 @@ def test_key_frames_beyond_any_index_and_render_options(mfile, tmp_path, capsys)
 
 def test_an_ascii_terminal_gets_escapes_not_a_traceback(mfile, tmp_path):
     """The campaign's PYTHONIOENCODING=ascii run failed after the output file was written."""
-    from engine._persist import read_npz
+    from engine.files.persist import read_npz
 
     d = read_npz(Path(mfile).with_name("corpus.npz"))
     d["corpus_name"] = np.array("café – ü")

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from engine.corpus import Corpus
-from engine.multispeaker import generate_recordings
+from engine.recordings.corpus import Corpus
+from engine.talker.multispeaker import generate_recordings
 
 
 def _run(argv):
@@ -126,7 +126,7 @@ def test_evaluate_unlabelled_and_exit_status(good, tmp_path):
     # named, without kinematic landmarks either
     from dataclasses import replace
 
-    from engine.kinematics import with_kinematic_labels
+    from engine.recordings.kinematics import with_kinematic_labels
 
     c = with_kinematic_labels(Corpus.load(corpus))
     c = c.subset([u.id for u in c.utterances[:3]])  # small: 2 training utterances, no validation split
@@ -140,7 +140,7 @@ def test_evaluate_unlabelled_and_exit_status(good, tmp_path):
 
 
 def test_head_sensors_give_rigid_registration(tmp_path):
-    from engine.multispeaker import layout_text
+    from engine.talker.multispeaker import layout_text
 
     (tmp_path / "ref.layout").write_text(layout_text(reference=True))
     files = []
@@ -186,7 +186,7 @@ def test_evaluate_protocols_exit_status_when_every_item_fails(good, tmp_path):
     corpus, _, _, _ = good
     from dataclasses import replace
 
-    from engine.kinematics import with_kinematic_labels
+    from engine.recordings.kinematics import with_kinematic_labels
 
     c = with_kinematic_labels(Corpus.load(corpus))
     c = c.subset([u.id for u in c.utterances[:3]])  # small: 2 training utterances, no validation split

@@ -8,7 +8,7 @@ pytest.importorskip("distributed")
 
 
 def test_build_on_a_running_scheduler(tmp_path, small_corpus, capsys, dask_cluster):
-    from engine.manifold import Manifold
+    from engine.manifold.model import Manifold
 
     corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1500])
     src = corpus.save(tmp_path / "c.npz")
@@ -25,8 +25,8 @@ def test_build_on_a_running_scheduler(tmp_path, small_corpus, capsys, dask_clust
 def test_manifold_of_a_blocked_corpus_reads_its_frames_from_it(tmp_path, small_corpus, capsys):
     """build writes no copy of a blocked corpus's frames; synthesize reads them from the corpus's blocks, and
     says which file is missing when the corpus is gone (exit 2)."""
-    from engine._persist import read_npz
-    from engine.corpus_blocks import save_blocked
+    from engine.files.persist import read_npz
+    from engine.recordings.corpus_blocks import save_blocked
 
     corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1500])
     src = tmp_path / "c.npz"
@@ -47,7 +47,7 @@ def test_manifold_of_a_blocked_corpus_reads_its_frames_from_it(tmp_path, small_c
 
 
 def test_info_reads_a_corpus_stored_in_blocks(tmp_path, small_corpus, capsys):
-    from engine.corpus_blocks import save_blocked
+    from engine.recordings.corpus_blocks import save_blocked
 
     corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1500])
     save_blocked(corpus, tmp_path / "c.npz", block_frames=512)

@@ -18,7 +18,7 @@ def test_phones_to_csv_and_obj_meshes(mfile, small_manifold, tmp_path, capsys):
                  "-o", str(out), "--mesh-dir", str(meshes)]) == 0
     text = capsys.readouterr().out
     # the default method is the one measured best on the corpus's validation split for phone input, named
-    from engine.method_choice import choose_methods
+    from engine.synthesis.method_choice import choose_methods
 
     best = choose_methods(small_manifold)["best"]["phones"]  # cached by the synthesis above
     assert f"method: {best}, best on validation (phones protocol: RMSE X" in text
@@ -40,11 +40,11 @@ def test_phones_to_csv_and_obj_meshes(mfile, small_manifold, tmp_path, capsys):
 def test_utterance_npy_values_and_methods(mfile, small_manifold, tmp_path):
     u = small_manifold.corpus_.utterances[2]
     from app.cli.synthesize import METHODS
-    from engine.methods import METHODS as ENGINE_METHODS
+    from engine.synthesis.methods import METHODS as ENGINE_METHODS
 
     assert METHODS == ENGINE_METHODS
     Xo = small_manifold.Fx_[u.start:u.stop]
-    from engine.targets import targets_from_utterance
+    from engine.phonetics.targets import targets_from_utterance
 
     f = targets_from_utterance(small_manifold, u.id, on_collision="merge").frames
     for method in METHODS:
@@ -99,7 +99,7 @@ def test_bad_inputs_fail_cleanly(mfile, tmp_path, capsys):
 def test_best_method_follows_the_targets_and_is_named(mfile, small_manifold, capsys):
     """Oracle targets (an utterance) and phone-only targets are different protocols: each gets the method its
     protocol measured best on validation, and the output says which and why."""
-    from engine.method_choice import choose_methods
+    from engine.synthesis.method_choice import choose_methods
 
     choice = choose_methods(small_manifold)
     u = small_manifold.corpus_.utterances[3]
@@ -140,7 +140,7 @@ def test_evaluate_on_the_haskins_pair(shared_data, capsys):
 def test_inverse_choice_reaches_the_synthesiser(mfile, small_manifold, tmp_path):
     """--inverse / --smoothing pick the Y -> X map: the state-mean path's X is exactly the states' mean X."""
     from app.cli.synthesize import INVERSES as CLI_INVERSES
-    from engine.synthesis import INVERSES
+    from engine.synthesis.viterbi import INVERSES
 
     assert CLI_INVERSES == INVERSES
     u = small_manifold.corpus_.utterances[1]

@@ -10,7 +10,7 @@ from app.cli import main
 
 def _input(path):
     """A TextGrid laid out as Praat writes them: a word tier first, silence before the first phone (0.25 s)."""
-    from engine.io.praat import IntervalTier, write_textgrid
+    from engine.io.writers.praat import IntervalTier, write_textgrid
 
     return write_textgrid(path, 0, 1.5, [IntervalTier("words", [(0, 1.5, "bob")]), IntervalTier(
         "phones", [(0.25, 0.35, "B"), (0.35, 0.65, "AA1"), (0.65, 0.75, "B")])])
@@ -24,7 +24,7 @@ def mfile(small_manifold, tmp_path_factory):
 def test_the_textgrid_and_csv_line_up_with_the_input(mfile, tmp_path, capsys):
     pd = pytest.importorskip("pandas")
     from engine.io import read_textgrid
-    from engine.io.alignment import _parse_textgrid
+    from engine.io.readers.alignment import _parse_textgrid
 
     src = _input(tmp_path / "in.TextGrid")
     out = tmp_path / "out.TextGrid"
@@ -74,9 +74,9 @@ def test_a_real_recording_synthesised_from_its_own_labels_keeps_their_clock(moch
 
     pd = pytest.importorskip("pandas")
     from engine.io import read_alignment
-    from engine.synthesis import make_synthesizer
-    from engine.synthesis_tiers import input_timeline, synthesis_outputs
-    from engine.targets import targets_from_textgrid
+    from engine.synthesis.viterbi import make_synthesizer
+    from engine.synthesis.tiers import input_timeline, synthesis_outputs
+    from engine.phonetics.targets import targets_from_textgrid
 
     m = mocha_manifold
     mfile = m.save(tmp_path / "mocha.npz")

@@ -36,7 +36,7 @@ def written(mfile, tmp_path_factory):
 
 def test_the_csv_reads_in_pandas_without_options(written, small_manifold):
     pd = pytest.importorskip("pandas")
-    from engine.frame_table import CLASS_LABELS, frame_table
+    from engine.manifold.frame_table import CLASS_LABELS, frame_table
 
     d = pd.read_csv(written / "frames.csv")
     c = small_manifold.corpus_
@@ -47,7 +47,7 @@ def test_the_csv_reads_in_pandas_without_options(written, small_manifold):
     assert d["class"].isna().sum() == 0  # every frame of an utterance longer than one frame has a step
     assert set(d["class"].dropna()) <= set(CLASS_LABELS)
     assert d["speaker"].isna().all()  # the talker names no speakers: NA, not an empty string
-    from engine.kinematics import lip_aperture
+    from engine.recordings.kinematics import lip_aperture
 
     np.testing.assert_allclose(d["lip_aperture"], lip_aperture(c), rtol=1e-6, atol=1e-5)
     np.testing.assert_allclose(d["v"], t.columns["v"], rtol=1e-6, atol=1e-6)
@@ -74,7 +74,7 @@ def test_parquet_holds_the_same_columns_with_their_units(mfile, written, tmp_pat
 
 
 def test_without_pyarrow_parquet_is_refused_with_the_fix(mfile, tmp_path, monkeypatch, capsys):
-    import engine.io.tidy as tidy
+    import engine.io.writers.tidy as tidy
 
     monkeypatch.setattr(tidy, "have_parquet", lambda: False)
     assert main(["table", str(mfile), "-o", str(tmp_path / "f.parquet")]) == 2
@@ -102,9 +102,9 @@ def test_nothing_is_replaced_without_force(mfile, tmp_path, capsys):
 
 
 def test_textgrids_read_back_with_praat_textgrids(written, small_manifold):
-    from engine.frame_table import class_intervals, frame_table
+    from engine.manifold.frame_table import class_intervals, frame_table
     from engine.io import read_textgrid
-    from engine.io.alignment import _parse_textgrid
+    from engine.io.readers.alignment import _parse_textgrid
 
     c = small_manifold.corpus_
     t = frame_table(small_manifold)
@@ -122,7 +122,7 @@ def test_textgrids_read_back_with_praat_textgrids(written, small_manifold):
 
 
 def _expected_counts(path):
-    from engine.io.alignment import _parse_textgrid
+    from engine.io.readers.alignment import _parse_textgrid
 
     g = _parse_textgrid(path)
     return {name: (0 if tier.is_point_tier else 1, len(tier)) for name, tier in g.items()}, g.xmin, g.xmax
@@ -155,7 +155,7 @@ def test_every_textgrid_opens_in_praat_with_its_tiers_and_counts(written, praat)
 
 
 def test_praat_reads_labels_with_quotes_and_non_ascii(tmp_path, praat):
-    from engine.io.praat import IntervalTier, PointTier, write_textgrid
+    from engine.io.writers.praat import IntervalTier, PointTier, write_textgrid
 
     p = write_textgrid(tmp_path / "q.TextGrid", 0, 1, [IntervalTier("w", [(0.2, 0.4, 'say "hi"'), (0.4, 0.6, "ʃøn")]),
                                                       PointTier("p", [(0.5, "é")])])
@@ -215,7 +215,7 @@ def test_r_reads_the_types_and_missing_values_without_options(written, tmp_path)
 def test_a_real_recording_gets_its_lip_aperture_and_its_own_phones(mocha_manifold, tmp_path):
     pd = pytest.importorskip("pandas")
     from engine.io import read_textgrid
-    from engine.kinematics import lip_aperture
+    from engine.recordings.kinematics import lip_aperture
 
     m = mocha_manifold
     mfile = m.save(tmp_path / "mocha.npz")

@@ -8,7 +8,7 @@ import shutil
 import numpy as np
 
 from app.cli import main
-from engine.corpus import Corpus
+from engine.recordings.corpus import Corpus
 
 
 def _run(argv):
@@ -19,7 +19,7 @@ def _run(argv):
 
 
 def _with_sound(paths):
-    from engine._atomic import write_wav_atomic
+    from engine.files.atomic import write_wav_atomic
 
     for p in paths:
         write_wav_atomic(p.with_suffix(".wav"), np.zeros(1600, np.float32), 16000)
@@ -70,7 +70,7 @@ def test_a_moved_folder_keeps_its_sound(lab_folder, tmp_path):
     moved = tmp_path / "elsewhere" / "lab2"
     shutil.move(str(lab), str(moved))
     for name in ("corpus.npz", "m.npz"):
-        from engine.manifold import Manifold
+        from engine.manifold.model import Manifold
 
         c = Corpus.load(moved / name) if name == "corpus.npz" else Manifold.load(moved / name).corpus_
         assert [os.path.dirname(u.audio) for u in c.utterances] == [str(moved)] * len(files)
@@ -80,8 +80,8 @@ def test_a_moved_folder_keeps_its_sound(lab_folder, tmp_path):
 def test_old_files_with_absolute_audio_paths_still_load(tmp_path):
     wav = tmp_path / "sound" / "u1.wav"
     wav.parent.mkdir()
-    from engine._atomic import write_wav_atomic
-    from engine.corpus import Utterance
+    from engine.files.atomic import write_wav_atomic
+    from engine.recordings.corpus import Utterance
 
     write_wav_atomic(wav, np.zeros(800, np.float32), 16000)
     c = Corpus(frames=np.zeros((10, 6), np.float32), rate=60.0, utterances=[Utterance("u1", 0, 10, audio=str(wav))])

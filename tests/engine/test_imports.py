@@ -11,7 +11,7 @@ FORBIDDEN = ("PySide6", "PyQt5", "PyQt6", "qtpy", "vtk", "vtkmodules", "pyvista"
 
 def test_engine_imports_no_gui_toolkits():
     modules = sorted(m.name for m in pkgutil.walk_packages([str(Path(engine.__file__).parent)], "engine."))
-    assert "engine.manifold" in modules and "engine.corpus" in modules
+    assert "engine.manifold.model" in modules and "engine.recordings.corpus" in modules
     code = (
         "import importlib, sys\n"
         f"for m in {modules!r}: importlib.import_module(m)\n"

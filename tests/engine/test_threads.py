@@ -72,7 +72,7 @@ def test_overlapping_callers_on_two_threads_restore_the_original(two_blas_thread
 
 
 def test_inverse_map_query_on_one_thread(small_manifold, two_blas_threads, monkeypatch):
-    from engine.inverse import InverseMap
+    from engine.manifold.inverse import InverseMap
 
     seen = []
     monkeypatch.setattr(InverseMap, "_transform_nd", recording(InverseMap._transform_nd, seen))
@@ -83,7 +83,7 @@ def test_inverse_map_query_on_one_thread(small_manifold, two_blas_threads, monke
 
 
 def test_local_linear_inverse_on_one_thread(small_manifold, two_blas_threads, monkeypatch):
-    from engine.inverse_local import LocalLinearInverse
+    from engine.manifold.inverse_local import LocalLinearInverse
 
     m = small_manifold
     inv = LocalLinearInverse(n_dims=3).fit(m.Fy_, m.Fx_)
@@ -96,8 +96,8 @@ def test_local_linear_inverse_on_one_thread(small_manifold, two_blas_threads, mo
 @pytest.mark.parametrize("method, inner", [("viterbi", "_path_x"), ("manifold", "_x"), ("linear", "target_x"),
                                            ("unitselection", "_sample")])
 def test_synthesis_on_one_thread(small_manifold, two_blas_threads, monkeypatch, method, inner):
-    from engine.methods import make_synthesizer
-    from engine.targets import targets_from_utterance
+    from engine.synthesis.methods import make_synthesizer
+    from engine.phonetics.targets import targets_from_utterance
 
     m = small_manifold
     syn = make_synthesizer(method, m)
@@ -121,7 +121,7 @@ class _RecordingArray(np.ndarray):
 def test_reconstructing_a_few_frames_on_one_thread_and_many_on_all(small_manifold, two_blas_threads):
     import copy
 
-    from engine.shape import SMALL_QUERY_ROWS
+    from engine.manifold.shape import SMALL_QUERY_ROWS
 
     sh = copy.copy(small_manifold.shape_)
     sh.components_ = small_manifold.shape_.components_.view(_RecordingArray)
@@ -134,7 +134,7 @@ def test_reconstructing_a_few_frames_on_one_thread_and_many_on_all(small_manifol
 
 
 def test_projecting_a_live_frame_on_one_thread(small_manifold, two_blas_threads, monkeypatch):
-    from engine.embedding import Embedding
+    from engine.manifold.embedding import Embedding
 
     seen = []
     monkeypatch.setattr(Embedding, "transform", recording(Embedding.transform, seen))

@@ -5,7 +5,7 @@ import shutil
 import numpy as np
 import pytest
 
-from engine.corpus import Corpus, CorpusError, PhoneInterval, Utterance
+from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
 from engine.io import (ImportFormatError, detect_format, read_corpus, write_est_track, write_obj,
                        write_trajectory_csv)
 
@@ -80,7 +80,7 @@ def test_several_files_become_utterances(tmp_path):
 
 def test_native_npz_with_phones_out_of_range_is_refused_not_dropped(tmp_path):
     """A phone outside its utterance, or of an utterance that does not exist: the file, the phone and the range."""
-    from engine._persist import read_npz
+    from engine.files.persist import read_npz
 
     c = Corpus(frames=np.zeros((100, 6)), rate=100, utterances=[Utterance("u", 0, 100, (PhoneInterval(0, 0.5, "a"),))])
     d = read_npz(c.save(tmp_path / "c.npz"))

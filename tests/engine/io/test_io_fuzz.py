@@ -1,5 +1,5 @@
 """Malformed input to every importer: it raises ImportFormatError (CorpusError for the native
-.npz file, whose reader belongs to engine.corpus) or returns a valid corpus -- never another
+.npz file, whose reader belongs to engine.recordings.corpus) or returns a valid corpus -- never another
 exception, never a hang."""
 import io
 import re
@@ -12,7 +12,7 @@ import scipy.io
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from engine.corpus import Corpus, CorpusError, Utterance
+from engine.recordings.corpus import Corpus, CorpusError, Utterance
 from engine.io import (ImportFormatError, read_alignment, read_corpus, write_est_track, write_obj, write_ply,
                        write_trajectory_csv)
 

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from engine.corpus import Corpus, CorpusError, PhoneInterval, Utterance
+from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
 from engine.io import concat, resample
 
 

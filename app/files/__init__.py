@@ -1,0 +1,1 @@
+"""Qt-free session files, autosave, reading sources and the manifold cache."""

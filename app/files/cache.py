@@ -1,0 +1,158 @@
+"""Lipspace's cache folder: what is in it, how big it is, pruning old entries, clearing it (Qt-free).
+
+The cache holds the synthetic talker's generated corpora (``synthetic-<preset>-<key>.npz``,
+with their speech audio in ``synthetic-<preset>-<key>-audio/``), the manifolds
+fitted to them (``manifolds/synthetic-<preset>-...npz``) and each corpus's measured
+choice of synthesis method (``method-choice/<data key>-<code key>.json``,
+:mod:`engine.synthesis.method_choice`). Every entry's name carries a
+key made from the code and parameters that produced it (generator, fitting
+algorithms, file format), so an entry made by other code is never used; it is only
+left behind. :func:`prune` deletes those left-behind entries of a preset once a
+current one has been written, so the folder holds one corpus and one manifold per
+preset instead of one per code version (they are 50-200 MB each).
+
+Only Lipspace's own entries are ever deleted (the patterns above and the atomic
+writer's ``.*.part*`` leftovers), never anything else in the folder: the folder may
+be one the user named with ``$LIPSPACE_CACHE_DIR``.
+"""
+from __future__ import annotations
+
+import re
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["CACHE_DIR_ENV", "CacheEntry", "cache_dir", "entries", "total_bytes", "newest", "prune", "clear"]
+
+#: a cached corpus or manifold file, or a corpus's audio folder, or a temporary file left by a killed write
+_ENTRY = re.compile(r"^(?:synthetic-(?P<preset>[A-Za-z0-9_]+)-.+?(?:\.npz|-audio)|\..+\.part\.npz)$")
+#: a corpus's measured choice of synthesis method (engine.synthesis.method_choice.choice_path)
+_CHOICE = re.compile(r"^[0-9a-f]{16}-[0-9a-f]{16}\.json$")
+
+#: environment variable that moves the cache folder
+CACHE_DIR_ENV = "LIPSPACE_CACHE_DIR"
+
+
+def cache_dir() -> Path:
+    """The cache folder: ``$LIPSPACE_CACHE_DIR``, else the platform's user cache folder."""
+    from engine.files.userdirs import user_dir
+
+    return user_dir("cache", CACHE_DIR_ENV)
+
+
+@dataclass(frozen=True)
+class CacheEntry:
+    """One cached item: its path, kind (``"corpus"``, ``"audio"``, ``"manifold"``,
+    ``"partial"``), synthetic talker preset ("" if unknown) and size in bytes."""
+
+    path: Path
+    kind: str
+    preset: str
+    size: int
+
+
+def _size(p: Path) -> int:
+    if p.is_dir() and not p.is_symlink():
+        return sum(f.stat().st_size for f in p.rglob("*") if f.is_file() and not f.is_symlink())
+    try:
+        return p.lstat().st_size
+    except OSError:
+        return 0
+
+
+def entries(folder=None) -> list[CacheEntry]:
+    """Lipspace's entries in the cache ``folder`` (default :func:`cache_dir`), oldest first."""
+    root = Path(folder) if folder is not None else cache_dir()
+    out = []
+    sub = root / "method-choice"
+    if sub.is_dir():
+        out += [CacheEntry(p, "method choice", "", _size(p)) for p in sub.iterdir()
+                if _CHOICE.match(p.name) and p.is_file() and not p.is_symlink()]
+    for sub, kind in ((root, "corpus"), (root / "manifolds", "manifold")):
+        if not sub.is_dir():
+            continue
+        for p in sub.iterdir():
+            m = _ENTRY.match(p.name)
+            if not m or p.is_symlink():
+                continue
+            k = "partial" if p.name.startswith(".") else "audio" if p.name.endswith("-audio") else kind
+            if (k == "audio") != p.is_dir():
+                continue
+            out.append(CacheEntry(p, k, m.group("preset") or "", _size(p)))
+    return sorted(out, key=lambda e: (_mtime(e.path), e.path.name))
+
+
+def _mtime(p: Path) -> float:
+    try:
+        return p.lstat().st_mtime
+    except OSError:
+        return 0.0
+
+
+def total_bytes(folder=None) -> int:
+    """Bytes taken by Lipspace's entries in the cache folder."""
+    return sum(e.size for e in entries(folder))
+
+
+def newest(kind: str, preset: str, folder=None) -> list[Path]:
+    """The most recently written entry of ``kind`` for ``preset`` ([] if none): the one the
+    current code wrote or uses, where its key is not known here (the synthetic corpus)."""
+    found = [e.path for e in entries(folder) if e.kind == kind and e.preset == preset]
+    return found[-1:]
+
+
+def _remove(p: Path) -> None:
+    if p.is_dir() and not p.is_symlink():
+        shutil.rmtree(p, ignore_errors=True)
+    else:
+        p.unlink(missing_ok=True)
+
+
+def prune(keep, folder=None) -> list[CacheEntry]:
+    """Delete the entries left behind by ``keep``: the same kind and preset, other keys.
+
+    Parameters
+    ----------
+    keep : path or sequence of paths
+        The current entries (just written or just used); each keeps its audio folder.
+    folder : path, optional
+        The cache folder (default :func:`cache_dir`).
+
+    Returns
+    -------
+    list of CacheEntry
+        What was deleted. Errors (a file in use, a read-only folder) leave an entry in
+        place; it is tried again next time.
+    """
+    keeps = [Path(k) for k in ([keep] if isinstance(keep, (str, Path)) else keep)]
+    keep_names = {k.name for k in keeps} | {k.stem + "-audio" for k in keeps}
+    found = entries(folder)
+    current = [e for e in found if e.path.name in keep_names]
+    gone = []
+    for e in found:
+        if e.path.name in keep_names or e.kind == "partial":
+            continue
+        if any(c.preset == e.preset and (c.kind == e.kind or {c.kind, e.kind} == {"corpus", "audio"})
+               and c.path.parent == e.path.parent for c in current):
+            _remove(e.path)
+            if not e.path.exists():
+                gone.append(e)
+    return gone
+
+
+def clear(folder=None) -> list[CacheEntry]:
+    """Delete every Lipspace entry in the cache folder (and ``manifolds/`` once empty).
+
+    Returns what was deleted; anything else in the folder is left alone.
+    """
+    root = Path(folder) if folder is not None else cache_dir()
+    gone = []
+    for e in entries(root):
+        _remove(e.path)
+        if not e.path.exists():
+            gone.append(e)
+    for name in ("manifolds", "method-choice"):
+        sub = root / name
+        if sub.is_dir() and not any(sub.iterdir()):
+            sub.rmdir()
+    return gone

@@ -1,0 +1,1 @@
+"""Qt-free models of the explorer: the application state and what views compute from it."""

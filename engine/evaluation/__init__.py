@@ -1,0 +1,1 @@
+"""Evaluation under equal information: protocols, their methods, paired tests and reports."""

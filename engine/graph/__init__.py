@@ -1,0 +1,1 @@
+"""The state graph over the manifold: states, directed geodesics (hop paths), hemispheres, bridges."""

@@ -1,0 +1,1 @@
+"""Readers of corpus files: articulograph, EMA, MAT, markers, landmarks, meshes, alignments."""

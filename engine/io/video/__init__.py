@@ -1,0 +1,1 @@
+"""Video import: face-mesh landmarks tracked in clips."""

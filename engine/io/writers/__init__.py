@@ -1,0 +1,1 @@
+"""Writers: trajectories, meshes, glTF animations, tidy tables, Praat TextGrids."""

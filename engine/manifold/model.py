@@ -1,0 +1,517 @@
+"""The fitted visual speech manifold: the whole pipeline in one object and one file.
+
+``Corpus -> ShapeSpace (X) -> DynamicFeatures (G) -> Embedding (Y) -> TangentFrames,
+StateGraph``. The GUI and the command line are two faces over this object.
+"""
+from __future__ import annotations
+
+import functools
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
+
+from engine.files.atomic import atomic_write
+from engine.files.persist import NpzReadError, dump_estimator, load_estimator, read_npz, source_fingerprint
+from engine.recordings.corpus import Corpus, CorpusError
+from engine.manifold.dynamics import DynamicFeatures, velocities
+from engine.manifold.embedding import Embedding
+from engine.progress import ProgressFn, report
+from engine.manifold.shape import ShapeSpace, small_query_blas
+
+__all__ = ["Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
+
+FILE_VERSION = 2
+#: corpora whose frames exceed this are saved without F (reconstructed from F^x on load)
+MAX_SAVED_FRAME_BYTES = 512 * 2**20
+
+
+@functools.lru_cache(maxsize=1)
+def fit_modules() -> tuple[str, ...]:
+    """The engine modules whose code determines a fitted manifold: this module and every engine
+    module it imports, directly or through others, at module level or inside functions (read
+    from their sources, so a module a new import brings in is covered without being listed)."""
+    import ast
+
+    seen, todo = {}, [__name__]
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen[name] = path = _module_file(name)
+        if path is None:
+            continue
+        with open(path, encoding="utf-8") as fh:
+            tree = ast.parse(fh.read())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                todo += [a.name for a in node.names if a.name.split(".")[0] == "engine"]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module \
+                    and node.module.split(".")[0] == "engine":
+                todo += [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+    return tuple(sorted(n for n, p in seen.items() if p is not None))
+
+
+def _module_file(name: str) -> str | None:
+    """The source file of engine module ``name``, or None when ``name`` is no module (an imported
+    function); found on disk beside this package, without importing anything."""
+    root = Path(__file__).resolve().parents[1]  # the engine package
+    parts = name.split(".")[1:]
+    for cand in (root.joinpath(*parts).with_suffix(".py") if parts else None, root.joinpath(*parts, "__init__.py")):
+        if cand is not None and cand.is_file():
+            return str(cand)
+    return None
+
+
+def algorithm_fingerprint(params: dict | None = None) -> str:
+    """Key for caches of fitted manifolds: a hash of the fitting code and the fit parameters.
+
+    ``params`` defaults to :class:`Manifold`'s defaults. A manifold cached under another
+    fingerprint was made by other code or settings and must be rebuilt.
+    """
+    params = Manifold().get_params() if params is None else params
+    return source_fingerprint(fit_modules(), {"file_version": FILE_VERSION, "params": params})
+
+
+class ManifoldFileError(ValueError):
+    """A manifold file cannot be read; the message names the file and the fault."""
+
+
+class Manifold(BaseEstimator):
+    """The visual speech manifold of a corpus.
+
+    Parameters
+    ----------
+    variance : float, default=0.99
+        Variance kept by the shape space X.
+    max_components : int, default=100
+        Shape components computed.
+    n_embedding : int, default=16
+        Dimensions of Y kept (the tangent frames are read in all of them, or the first
+        10, whichever predicts the lips' held-out movement better).
+    embedding_method : {"pca", "mds"}, default="pca"
+    n_landmarks : int or None, default=None
+        Landmark embedding with this many landmarks. None: chosen by size
+        (:func:`engine.manifold.buildplan.plan_build`: exact up to ``landmarks_above`` frames,
+        2,000 landmarks above).
+    landmarks_above : int, default=50000
+        Frames above which the embedding uses landmarks when ``n_landmarks`` is None.
+    n_states : int or None, default=None
+        K of the state graph (None: about N/30, see :class:`engine.graph.states.StateGraph`).
+    state_dims : int, default=3
+        Dimensions of Y clustered into states.
+    n_neighbors : int or None, default=None
+        Neighbourhood size of the local tangent frames. None: chosen for the corpus by
+        held-out validation (:class:`engine.manifold.tangent.TangentFrames`).
+    random_state : int, default=0
+    speaker_normalisation : {"auto", "mean", "mean+scale", "none"}, default="auto"
+        Per-speaker normalisation of the frames before the shape space
+        (:func:`engine.recordings.registration.normalise_speakers`; "auto": "mean" when the
+        utterances name two or more speakers). ``corpus_`` holds the normalised frames.
+    dynamics_scale : str, default="max"
+        How each block of the dynamic features G is scaled
+        (:class:`engine.manifold.dynamics.DynamicFeatures`): "max" (the paper's largest entry) or
+        "pQ", the Q-th percentile of absolute values (robust to outlying frames).
+
+    Attributes
+    ----------
+    corpus_ : Corpus
+    shape_ : ShapeSpace
+    dynamics_ : DynamicFeatures
+    embedding_ : Embedding
+    tangent_ : TangentFrames
+    states_ : StateGraph
+    Fx_ : ndarray of shape (N, m), float32
+        Shape coordinates F^x.
+    Fxv_ : ndarray of shape (N, m), float32
+        Their velocities F^x'.
+    G_ : ndarray of shape (N, 2m), float32
+    Fy_ : ndarray of shape (N, n_embedding), float32
+        The embedding F^y.
+    state_x_ : ndarray of shape (K, m) or None
+        The Delaunay inverse map at every state centroid, stored in the file so that
+        synthesis needs no tetrahedralisation in a new process (None when the states
+        live in other dims than the map's 3, when the build took the landmark path, or
+        the file predates it).
+    timings_ : dict of str to float
+        Seconds per stage of the last fit.
+    """
+
+    def __init__(self, *, variance=0.99, max_components=100, n_embedding=16, embedding_method="pca",
+                 n_landmarks=None, n_states=None, state_dims=3, n_neighbors=None, random_state=0,
+                 speaker_normalisation="auto", landmarks_above=50000, dynamics_scale="max"):
+        self.variance = variance
+        self.max_components = max_components
+        self.n_embedding = n_embedding
+        self.embedding_method = embedding_method
+        self.n_landmarks = n_landmarks
+        self.n_states = n_states
+        self.state_dims = state_dims
+        self.n_neighbors = n_neighbors
+        self.random_state = random_state
+        self.speaker_normalisation = speaker_normalisation
+        self.landmarks_above = landmarks_above
+        self.dynamics_scale = dynamics_scale
+
+    # ------------------------------------------------------------------ fitting
+    def fit(self, corpus: Corpus, *, progress: ProgressFn = None, executor=None):
+        """Fit every stage on ``corpus``. Cancelling (via ``progress``) leaves ``self`` unfitted.
+
+        ``executor``: None fits in-process; an :class:`engine.scale.executor.DaskExecutor` runs the
+        shape space, the embedding, the local tangent frames and the assignment to states
+        with the transition counts as Dask work (same results up to round-off).
+        """
+        from engine.manifold.buildplan import plan_build
+        from engine.graph.states import StateGraph
+        from engine.manifold.tangent import TangentFrames
+
+        if not isinstance(corpus, Corpus):
+            raise TypeError(f"fit expects an engine.recordings.corpus.Corpus, got {type(corpus).__name__}")
+        from engine.recordings.kinematics import lip_aperture
+        from engine.recordings.registration import normalise_speakers, warn_if_split
+
+        corpus = normalise_speakers(corpus, mode=self.speaker_normalisation, executor=executor)
+        N = corpus.n_frames
+        if N < max(12, self.n_embedding + 2):
+            raise ValueError(f"{corpus.name}: {N} frames are too few to build a manifold "
+                             f"(need at least {max(12, self.n_embedding + 2)})")
+        timings = {}
+        bounds = corpus.bounds
+
+        plan = plan_build(N, n_landmarks=self.n_landmarks, landmarks_above=self.landmarks_above)
+        t = time.perf_counter()
+        shape = ShapeSpace(max_components=self.max_components, variance=self.variance,
+                           random_state=self.random_state)
+        if executor is None:
+            Fx = shape.fit(corpus.frames, progress=progress).transform(corpus.frames)
+        else:
+            Fx = executor.fit_shape(shape, corpus.frames, progress=progress)
+        timings["shape"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        dyn = DynamicFeatures(scale=self.dynamics_scale).fit(Fx, bounds)
+        Fxv = velocities(Fx, bounds)
+        G = dyn.transform_pair(Fx, Fxv)
+        timings["dynamics"] = time.perf_counter() - t
+        report(progress, "dynamic features", 1, 1)
+
+        t = time.perf_counter()
+        emb = Embedding(n_components=self.n_embedding, method=self.embedding_method,
+                        n_landmarks=plan.n_landmarks, random_state=self.random_state)
+        emb = emb.fit(G, progress=progress) if executor is None else executor.fit_embedding(emb, G, progress=progress)
+        Fy = emb.embedding_
+        timings["embedding"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        report(progress, "tangent frames", 0, 1)
+        opening, source, unit = lip_aperture(corpus, executor=executor), "lip aperture", corpus.unit_label  # lips part
+        if opening is None:
+            opening, source, unit = np.asarray(Fx[:, 0], dtype=np.float64), "first shape component F^x_1", ""
+        tangent = TangentFrames(n_neighbors=self.n_neighbors, random_state=self.random_state).fit(
+            Fy, bounds, opening, rate=corpus.rate, source=source, unit=unit, executor=executor)
+        report(progress, "tangent frames", 1, 1)
+        timings["tangent"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        states = StateGraph(n_states=self.n_states, n_dims=min(self.state_dims, self.n_embedding),
+                            random_state=self.random_state).fit(Fy, bounds, progress=progress, executor=executor)
+        timings["states"] = time.perf_counter() - t
+        warn_if_split(states, corpus)  # names speakers / recordings when the graph splits along them
+
+        self.corpus_ = corpus
+        self.shape_, self.dynamics_, self.embedding_ = shape, dyn, emb
+        self.tangent_, self.states_ = tangent, states
+        self.Fx_, self.Fxv_, self.G_, self.Fy_ = Fx, Fxv, G, Fy
+        self._inverse = None
+        t = time.perf_counter()
+        report(progress, "inverse map", 0, 1)
+        # exact-sized builds tetrahedralise every frame (the inverse map synthesis uses anyway); above
+        # (a million frames) that costs minutes and gigabytes, so the map at the state points is read
+        # from local triangulations (engine.manifold.inverse.delaunay_at: the same tetrahedra)
+        self.state_x_ = self._state_x(local=plan.n_landmarks is not None)
+        report(progress, "inverse map", 1, 1)
+        timings["inverse map"] = time.perf_counter() - t
+        self.timings_ = timings
+        return self
+
+    def _state_x(self, *, local: bool = False):
+        """(K, m) the Delaunay inverse map at every state centroid (first 3 dims), or None.
+
+        ``local``: from local triangulations around each centroid (:func:`engine.manifold.inverse.delaunay_at`)
+        instead of the tetrahedralisation of every frame; a centroid it cannot place (outside
+        the hull, a degenerate neighbourhood) is mapped by the whole map.
+        """
+        C = np.asarray(self.states_.centroids_, dtype=np.float64)
+        if C.shape[1] != min(3, self.Fy_.shape[1]):
+            return None  # states in other dims than the map: synthesis maps its points itself
+        if not local or C.shape[1] != 3:
+            return np.asarray(self.inverse_map.transform(C))
+        from engine.manifold.inverse import delaunay_at
+
+        X = delaunay_at(self.Fy_, self.Fx_, C)
+        lost = np.isnan(X).any(axis=1)
+        if lost.any():
+            X[lost] = self.inverse_map.transform(C[lost])
+        return X.astype(np.asarray(self.Fx_).dtype)
+
+    def state_inverse(self):
+        """(K, m) the Delaunay inverse map at every state centroid (``state_x_``), or None when the
+        states live in other dims than the map's. A file without it (a large build of an older
+        Lipspace) gets it here, once, from local triangulations."""
+        check_is_fitted(self, "Fy_")
+        if getattr(self, "state_x_", None) is None:
+            self.state_x_ = self._state_x(local=True)
+        return self.state_x_
+
+    # -------------------------------------------------------------- projections
+    def project(self, frames, bounds=None) -> np.ndarray:
+        """Out-of-sample F^y for new frames (n, C) forming utterances ``bounds`` (default: one).
+
+        Up to ``engine.manifold.shape.SMALL_QUERY_ROWS`` frames on one BLAS thread (interactive).
+        """
+        check_is_fitted(self, "Fy_")
+        frames = np.atleast_2d(np.asarray(frames, dtype=np.float32))
+        if bounds is None:
+            bounds = np.array([[0, frames.shape[0]]])
+        with small_query_blas(frames.shape[0]):  # live mirror: a frame
+            Fx = self.shape_.transform(frames)
+            G = self.dynamics_.transform(Fx, bounds)
+            return self.embedding_.transform(G)
+
+    @property
+    def inverse_map(self):
+        """The Delaunay inverse map Y -> X, built on first use."""
+        check_is_fitted(self, "Fy_")
+        if getattr(self, "_inverse", None) is None:
+            from engine.manifold.inverse import InverseMap
+
+            self._inverse = InverseMap(n_dims=min(3, self.Fy_.shape[1])).fit(self.Fy_, self.Fx_)
+        return self._inverse
+
+    def summary(self) -> dict:
+        """Numbers for ``lipspace info`` and the GUI status bar."""
+        check_is_fitted(self, "Fy_")
+        c = self.corpus_
+        return {
+            "corpus": c.name, "frames": c.n_frames, "points": c.n_points, "rate_hz": c.rate,
+            "utterances": len(c.utterances), "duration_s": round(c.duration, 2),
+            "shape_components": int(self.shape_.n_components_),
+            "shape_variance_kept": float(self.shape_.recovered_ratio_[self.shape_.n_components_ - 1]),
+            "embedding_dims": int(self.Fy_.shape[1]), "embedding_method": self.embedding_method,
+            "Y_first3_recovered": float(self.embedding_.recovered_ratio_[min(2, self.Fy_.shape[1] - 1)]),
+            "n_states": int(self.states_.centroids_.shape[0]),
+        }
+
+    # ------------------------------------------------------------------ file i/o
+    _PARTS = {"shape": "shape_", "dynamics": "dynamics_", "embedding": "embedding_",
+              "tangent": "tangent_", "states": "states_"}
+
+    def save(self, path, *, include_frames: bool | None = None) -> Path:
+        """Write the fitted manifold (and its corpus) to one ``.npz`` file, atomically.
+
+        ``include_frames=None`` stores the corpus frames when they take at most
+        512 MiB; otherwise only F^x is stored and :meth:`load` reconstructs the frames
+        as ``mean + F^x X^T`` (the shape space's filtered reconstruction). Frames read
+        from a corpus stored in blocks (``engine.recordings.corpus_blocks``) are never copied
+        (unless ``include_frames=True``): the file references that corpus file instead
+        (:func:`engine.recordings.corpus_blocks.frames_reference`), and :meth:`load` reads the
+        blocks from it.
+        """
+        from engine.recordings.frame_blocks import BlockFrames
+
+        check_is_fitted(self, "Fy_")
+        path = Path(path)
+        reference = {}
+        if include_frames is None and isinstance(self.corpus_.frames, BlockFrames):
+            from engine.recordings.corpus_blocks import frames_reference
+
+            reference, include_frames = frames_reference(self.corpus_.frames, path), False
+        if include_frames is None:
+            include_frames = self.corpus_.frames.nbytes <= MAX_SAVED_FRAME_BYTES
+        d = {"manifold_version": np.array(FILE_VERSION),
+             "manifold_params": np.array(json.dumps(self.get_params())),
+             "manifold_timings": np.array(json.dumps(self.timings_)),
+             "Fx": self.Fx_, "Fxv": self.Fxv_, "G": self.G_, "Fy": self.Fy_}
+        if getattr(self, "state_x_", None) is not None:
+            d["state_x"] = self.state_x_
+        d.update(self.corpus_.to_arrays(include_frames=include_frames, base=path.resolve().parent))
+        d.update(reference)
+        for name, attr in self._PARTS.items():
+            d.update(dump_estimator(getattr(self, attr), name))
+        with atomic_write(path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **d)
+        return path
+
+    @classmethod
+    def load(cls, path, *, memory_map: bool | None = None) -> "Manifold":
+        """Read a manifold written by :meth:`save`, without refitting.
+
+        ``memory_map``: None (default) leaves the large per-frame arrays (of at least
+        ``engine.files.persist.MMAP_MIN_BYTES``) memory-mapped from the file, read-only, paged in
+        as they are used; True maps every array the file stores uncompressed; False reads
+        everything into memory. The checks below read mapped arrays a block at a time and
+        give the pages back, so a check does not make the file resident.
+
+        Every array is checked before use (see ``engine.files.validate``): dtypes, shapes
+        that fit together (N frames, m shape components, k embedding dims, L reference
+        points, K states), finiteness, index ranges (state labels < K, CSR indices
+        within the matrix), and the saved parameters are parsed against each
+        estimator's own parameters (unknown keys refused). Any fault raises
+        :class:`ManifoldFileError` naming the file and the field.
+        """
+        from engine.files.validate import FieldError
+
+        path = Path(path)
+        try:
+            d = read_npz(path, memory_map=memory_map)
+        except FileNotFoundError:
+            raise ManifoldFileError(f"{path}: no such manifold file") from None
+        except NpzReadError as exc:
+            raise ManifoldFileError(f"{path}: not a readable .npz manifold file ({exc.reason})") from None
+        if "manifold_version" not in d:
+            hint = " (it is a corpus file: build it with 'lipspace build')" if "corpus_version" in d else ""
+            raise ManifoldFileError(f"{path}: not a Lipspace manifold file{hint}")
+        try:
+            return cls._from_arrays(d, path)
+        except FieldError as exc:
+            raise ManifoldFileError(str(exc)) from None
+        except CorpusError as exc:
+            msg = str(exc)
+            raise ManifoldFileError(msg if msg.startswith(str(path)) else f"{path}: corpus part: {msg}") from None
+
+    @classmethod
+    def _from_arrays(cls, d, path) -> "Manifold":
+        from engine.files.validate import FieldError, check_array, check_scalar, parse_params
+        from engine.graph.states import StateGraph
+        from engine.manifold.tangent import TangentFrames
+
+        version = check_scalar(d, "manifold_version", source=path, kind="int")
+        if version == 1:
+            raise FieldError(path, "manifold_version", "format 1 was written by an older Lipspace whose tangent "
+                                                       "frames and classes were read in Y1-3 only; rebuild it "
+                                                       "from its corpus with 'lipspace build'")
+        if version > FILE_VERSION or version < 1:
+            raise FieldError(path, "manifold_version", f"format {version} is not one this Lipspace reads "
+                                                       f"({FILE_VERSION}); upgrade Lipspace")
+        self = parse_params(cls, check_scalar(d, "manifold_params", source=path, kind="str"),
+                            source=path, field="manifold_params")
+        dims = {}
+        self.Fx_ = check_array(d, "Fx", source=path, shape=("N", "m"), dims=dims)
+        self.Fxv_ = check_array(d, "Fxv", source=path, shape=("N", "m"), dims=dims)
+        self.G_ = check_array(d, "G", source=path, shape=("N", "2m"), dims=dims)
+        self.Fy_ = check_array(d, "Fy", source=path, shape=("N", "k"), dims=dims)
+        classes = {"shape": ShapeSpace, "dynamics": DynamicFeatures, "embedding": Embedding,
+                   "tangent": TangentFrames, "states": StateGraph}
+        for name, attr in cls._PARTS.items():
+            setattr(self, attr, load_estimator(classes[name], d, name, source=path, schema=_SCHEMA[name],
+                                               dims=dims))
+        _check_consistency(self, dims, path)
+        frames = None
+        if "corpus_frames" in d:
+            check_array(d, "corpus_frames", source=path, shape=("N", "C"), dims=dims, finite=False)  # see Corpus
+        elif "corpus_blocks_source" in d:  # the frames stay in the blocked corpus the manifold was built from
+            from engine.recordings.corpus_blocks import frames_from_reference
+
+            check_scalar(d, "corpus_blocks_source", source=path, kind="str")
+            frames = frames_from_reference(d, path, n_frames=dims["N"], n_columns=self.shape_.mean_.shape[0])
+        else:
+            frames = self.shape_.inverse_transform(self.Fx_)
+        self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path), base=Path(path).resolve().parent)
+        self.timings_ = _parse_timings(check_scalar(d, "manifold_timings", source=path, kind="str"), path)
+        self._inverse = None
+        self.state_x_ = None  # files written before it was stored: synthesis maps the states itself
+        if "state_x" in d:
+            dims.setdefault("K", self.states_.centroids_.shape[0])
+            self.state_x_ = check_array(d, "state_x", source=path, shape=("K", "m"), dims=dims)
+        return self
+
+
+#: fitted attributes each part must hold (see engine.files.persist.load_estimator for the spec)
+_F, _I, _B = "float", "int", "bool"
+_SCHEMA = {
+    "shape": {"mean_": dict(kind="array", dtype=_F, shape=("C",)),
+              "components_": dict(kind="array", dtype=_F, shape=("m", "C")),
+              "explained_variance_": dict(kind="array", dtype=_F, shape=("m",)),
+              "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("m",)),
+              "scree_": dict(kind="array", dtype=_F, shape=("M",)),
+              "recovered_ratio_": dict(kind="array", dtype=_F, shape=("M",)),
+              "n_components_": dict(kind="int", low=1)},
+    "dynamics": {"mean_": dict(kind="array", dtype=_F, shape=("m",)),
+                 "velocity_mean_": dict(kind="array", dtype=_F, shape=("m",)),
+                 "alpha_": dict(kind="float"), "beta_": dict(kind="float")},
+    "embedding": {"embedding_": dict(kind="array", dtype=_F, shape=("N", "k")),
+                  "reference_": dict(kind="array", dtype=_F, shape=("L", "2m")),
+                  "components_": dict(kind="array", dtype=_F, shape=("k", "L")),
+                  "center_": dict(kind="array", dtype=_F, shape=("L",)),
+                  "explained_variance_": dict(kind="array", dtype=_F, shape=("k",)),
+                  "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
+                  "recovered_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
+                  "landmarks_": dict(kind="array", dtype=_I, shape=("L",), low=0, high="N", none=True)},
+    "tangent": {"plane_point_": dict(kind="array", dtype=_F, shape=(3,)),
+                "plane_normal_": dict(kind="array", dtype=_F, shape=(3,)),
+                "S_": dict(kind="array", dtype=_F, shape=(3,)),
+                "shape_direction_": dict(kind="array", dtype=_F, shape=("t",)),
+                "velocity_direction_": dict(kind="array", dtype=_F, shape=("t",)),
+                "s_": dict(kind="array", dtype=_F, shape=("N", "t")),
+                "v_": dict(kind="array", dtype=_F, shape=("N", "t")),
+                "step_": dict(kind="array", dtype=_F, shape=("N", "t")),
+                "velocity_": dict(kind="array", dtype=_F, shape=("N",)),
+                "acceleration_": dict(kind="array", dtype=_F, shape=("N",)),
+                "opening_": dict(kind="array", dtype=_B, shape=("N",)),
+                "accelerating_": dict(kind="array", dtype=_B, shape=("N",)),
+                "classes_": dict(kind="array", dtype=_I, shape=("N",), low=-1, high=4),
+                "shape_coordinate_": dict(kind="array", dtype=_F, shape=("N",)),
+                "opening_source_": dict(kind="str"), "opening_unit_": dict(kind="str"),
+                "n_dims_": dict(kind="int", low=1),
+                "n_neighbors_": dict(kind="int", low=1)},
+    "states": {"centroids_": dict(kind="array", dtype=_F, shape=("K", "d")),
+               "labels_": dict(kind="array", dtype=_I, shape=("N",), low=0, high="K"),
+               "counts_": dict(kind="csr", dtype=_I, shape=("K", "K"), low=0),
+               "adjacency_": dict(kind="csr", dtype="number", shape=("K", "K")),
+               "transition_": dict(kind="csr", dtype=_F, shape=("K", "K"), low=0),
+               "n_scc_": dict(kind="int", low=1),
+               "scc_labels_": dict(kind="array", dtype=_I, shape=("K",), low=0),
+               "largest_scc_": dict(kind="int", low=0)},
+}
+
+
+def _check_consistency(m, dims, path):
+    """Relations between parts that shapes alone do not express."""
+    from engine.files.validate import FieldError
+
+    if m.shape_.n_components_ != dims["m"]:
+        raise FieldError(path, "shape/n_components_", f"{m.shape_.n_components_} but F^x has {dims['m']} columns")
+    if m.n_embedding != dims["k"]:
+        raise FieldError(path, "manifold_params.n_embedding", f"{m.n_embedding} but F^y has {dims['k']} columns")
+    if m.embedding_method != m.embedding_.method or m.embedding_.method not in ("pca", "mds"):
+        raise FieldError(path, "embedding/__params__.method",
+                         f"{m.embedding_.method!r} (manifold says {m.embedding_method!r}); expected 'pca' or 'mds'")
+    if dims["L"] < 1 or dims["K"] < 1 or dims["N"] < 2:
+        raise FieldError(path, "Fy", f"{dims['N']} frames, {dims['L']} reference points, {dims['K']} states: "
+                                     "too few to be a fitted manifold")
+    if dims["t"] > dims["k"] or dims["d"] > dims["k"] or m.tangent_.n_dims_ != dims["t"]:
+        raise FieldError(path, "tangent/s_", f"{dims['t']}-D tangent frames (n_dims_={m.tangent_.n_dims_}) / "
+                                             f"{dims['d']}-D states in a {dims['k']}-D embedding")
+    st = m.states_
+    if st.scc_labels_.size and st.scc_labels_.max() >= st.n_scc_:
+        raise FieldError(path, "states/scc_labels_", f"value {st.scc_labels_.max()} is out of range "
+                                                     f"(n_scc_={st.n_scc_})")
+    if st.largest_scc_ >= st.n_scc_:
+        raise FieldError(path, "states/largest_scc_", f"{st.largest_scc_} is out of range (n_scc_={st.n_scc_})")
+
+
+def _parse_timings(text, path) -> dict:
+    from engine.files.validate import FieldError
+
+    try:
+        t = json.loads(text)
+    except ValueError as exc:
+        raise FieldError(path, "manifold_timings", f"not valid JSON ({exc})") from None
+    if not isinstance(t, dict) or not all(isinstance(k, str) and isinstance(v, (int, float))
+                                          and not isinstance(v, bool) and np.isfinite(v) for k, v in t.items()):
+        raise FieldError(path, "manifold_timings", "expected a JSON object of stage name -> seconds")
+    return {k: float(v) for k, v in t.items()}

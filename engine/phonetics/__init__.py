@@ -1,0 +1,1 @@
+"""Phones: phone sets, pronunciation, targets from text/phones/states, speech audio and spectrograms."""

@@ -1,0 +1,1 @@
+"""Recordings: the corpus, blocked corpora, registration, kinematics, sensor layouts, speakers, orientation, head pose."""

@@ -1,0 +1,1 @@
+"""Scale: a build's heavy stages on Dask."""

@@ -1,0 +1,420 @@
+"""Dask execution of a build's heavy stages (issue 13).
+
+:class:`DaskExecutor` runs, on a ``distributed`` cluster,
+
+* per-frame work over a corpus stored in blocks (:meth:`DaskExecutor.map_frame_blocks`:
+  the per-speaker sums of the speaker normalisation, the lip aperture): the
+  :class:`engine.recordings.frame_blocks.BlockFrames` (paths, row counts, the per-speaker map)
+  travels once to each worker, every task reads its own block file;
+* the shape space PCA over F: F is stored on disk as one memory-mapped ``.npy`` file
+  per block of frames (the corpus's own blocks, or :func:`store_frame_blocks` for a
+  corpus in memory) and every worker reads its own blocks, speaker-normalised inside
+  the task (:func:`open_frame_blocks`); the randomized range finder's tall products
+  ``F X`` stay on the workers (``persist``), only thin ``C x r`` products come back;
+  F^x (N x m) is gathered at the end;
+* the embedding's products with the distance matrix D (distances to all frames or to
+  the landmarks), one task per block of rows of D, each formed on a worker and
+  dropped there; G (N x 2m) is scattered once, the thin (N x r) products come back;
+* the out-of-sample projection of new G (:meth:`DaskExecutor.project`) and the
+  K-means assignment of frames to states (:meth:`DaskExecutor.assign`), one task per
+  block.
+
+* the local tangent frames (:meth:`DaskExecutor.map_row_blocks` over
+  :func:`engine.manifold.local_gradients.gradients_block`: the fitted KD-tree, F^y, its steps and
+  the opening's changes travel once to each worker, every task returns its block of
+  anchors' local gradients);
+* the assignment of frames to states and the transition counts
+  (:func:`engine.graph.states.assign_and_count`: labels of the block and a sparse K x K count
+  matrix per task, summed on the client).
+
+The client keeps the small work: the dynamic features (O(N m), one pass), the
+zero-velocity plane and the movement classes (O(N) numpy), the mini-batch K-means fit
+(a few thousand frames per step) and the graph of K states. Without an executor :meth:`engine.manifold.model.Manifold.fit` runs
+the same algorithms in-process; the two agree up to round-off (same random draws,
+same range finder).
+
+The cluster is ``DaskExecutor.connect("local")`` (a ``distributed.LocalCluster`` with
+one single-threaded worker per core) or ``DaskExecutor.connect("tcp://host:8786")`` (an
+existing scheduler, e.g. started by dask-jobqueue). For a multi-node cluster the block
+directory must be on storage every worker can read (``chunk_dir``).
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from engine.files.atomic import atomic_write
+from engine.manifold.embedding import pairwise_distance_block
+from engine.recordings.frame_blocks import BlockFrames
+from engine.progress import ProgressFn, report
+from engine.manifold.shape import _range_settled, orthonormal_basis, thin_svd
+
+__all__ = ["DaskExecutor", "store_frame_blocks", "open_frame_blocks", "DEFAULT_BLOCK_FRAMES"]
+
+#: frames per on-disk block of F (and per task of the shape stage)
+DEFAULT_BLOCK_FRAMES = 8192
+
+
+def _block_slices(n: int, block: int) -> list[slice]:
+    """Row blocks of ``block`` rows; a last block shorter than half a block joins the one before
+    (every block stays taller than it is wide, as the tall-skinny QR needs)."""
+    starts = list(range(0, n, block))
+    if len(starts) > 1 and n - starts[-1] < block // 2:
+        starts.pop()
+    return [slice(s, starts[i + 1] if i + 1 < len(starts) else n) for i, s in enumerate(starts)]
+
+
+def store_frame_blocks(frames, directory, *, block_frames: int = DEFAULT_BLOCK_FRAMES) -> list[Path]:
+    """Write F (N, C) as ``block_00000.npy``, ... (float32, one per block of frames), atomically.
+
+    Returns
+    -------
+    list of Path
+        The block files in frame order.
+    """
+    frames = np.asarray(frames)
+    if frames.ndim != 2:
+        raise ValueError(f"frames must be 2-D (N, C), got shape {frames.shape}")
+    if int(block_frames) < 2:
+        raise ValueError(f"block_frames must be >= 2, got {block_frames}")
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for i, sl in enumerate(_block_slices(frames.shape[0], int(block_frames))):
+        path = directory / f"block_{i:05d}.npy"
+        with atomic_write(path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.save(fh, np.ascontiguousarray(frames[sl], dtype=np.float32))
+        paths.append(path)
+    return paths
+
+
+def _frame_rows(frames, a, b):
+    return frames.rows(a, b)
+
+
+def open_frame_blocks(frames):
+    """A dask array (N, C) float32 over block files: ``frames`` is an
+    :class:`engine.recordings.frame_blocks.BlockFrames` (read through its speaker normalisation, if
+    any) or a list of block file paths. Each block is read by the worker that computes
+    it (nothing passes through the client)."""
+    import dask
+    import dask.array as da
+
+    if not isinstance(frames, BlockFrames):
+        frames = BlockFrames.from_files(list(frames))
+    C = frames.shape[1]
+    parts = [da.from_delayed(dask.delayed(_frame_rows, pure=True)(frames, a, b), shape=(b - a, C), dtype=np.float32)
+             for a, b in frames.block_bounds]
+    return da.concatenate(parts, axis=0)
+
+
+def _first_nonfinite(block, a, b) -> int:
+    """First frame (global index) of rows ``[a, b)`` holding NaN or inf, or -1."""
+    ok = np.isfinite(block).all(axis=1)
+    return -1 if ok.all() else a + int(np.flatnonzero(~ok)[0])
+
+
+# ------------------------------------------------------------------ block tasks
+def _frames_task(fn, frames, a, b):
+    return fn(frames.rows(a, b), a, b)
+
+
+def _dist_times(Gb, cols, cols_sq, X, squared, extra):
+    Db = pairwise_distance_block(Gb, cols, cols_sq, squared=squared)
+    return Db @ X, (extra(Db) if extra is not None else None)
+
+
+def _dist_t_times(Gb, cols, cols_sq, Qb, squared):
+    return pairwise_distance_block(Gb, cols, cols_sq, squared=squared).T @ Qb
+
+
+def _orthonormal_columns(Y, passes: int = 2):
+    """An orthonormal basis of the columns of a tall dask array Y (N, r), left on the workers.
+
+    SVQB (Stathopoulos & Wu 2002), twice: the r x r Gram matrix Y^T Y is the only thing
+    brought back; ``Y V diag(w)^-1/2`` stays distributed. Used instead of dask's
+    tall-skinny QR, whose many small LAPACK calls took ~2 s for 4,500 x 110 on two
+    shared cores (the Gram pass: one GEMM per block). Directions with ``w`` below
+    1e-14 of the largest are kept at that floor, not dropped (the width r never changes).
+    """
+    for _ in range(passes):
+        Y64 = Y.astype(np.float64)
+        gram = (Y64.T @ Y64).compute()
+        w, V = np.linalg.eigh(0.5 * (gram + gram.T))
+        w = np.maximum(w, max(float(w.max()), 1e-300) * 1e-14)
+        Y = (Y64 @ (V / np.sqrt(w))).persist()
+    return Y
+
+
+def _centred_sumsq(block, mean32, rows: int = 1024):
+    """Sum of squares of ``block - mean32`` (float64 sums of float32 differences), as (1,)."""
+    total = 0.0
+    for s in range(0, block.shape[0], rows):
+        d = block[s:s + rows] - mean32
+        total += float(np.einsum("ij,ij->", d, d, dtype=np.float64))
+    return np.array([total])
+
+
+def _add(a, b):
+    if isinstance(a, tuple):
+        return tuple(_add(x, y) for x, y in zip(a, b))
+    return a + b
+
+
+class _DaskDistanceOperator:
+    """The interface of ``engine.manifold.embedding._DistanceOperator`` with one Dask task per block of rows."""
+
+    def __init__(self, G, cols, *, squared, block, progress, stage, client):
+        self.G, self.cols = G, cols
+        self.squared, self.block = squared, block
+        self.progress, self.stage = progress, stage
+        self.passes = 0
+        self.client = client
+        self.slices = _block_slices(G.shape[0], block)
+        self._blocks = [client.scatter(np.ascontiguousarray(G[sl]), hash=False) for sl in self.slices]
+        self._cols = client.scatter(np.ascontiguousarray(cols, dtype=np.float32), broadcast=True, hash=False)
+        self._cols_sq = client.scatter(np.einsum("ij,ij->i", cols, cols), broadcast=True, hash=False)
+
+    def _done(self):
+        self.passes += 1
+        report(self.progress, self.stage, self.passes, 0)
+
+    def matmat(self, X, extra=None):
+        X32 = self.client.scatter(np.asarray(X, dtype=np.float32), broadcast=True, hash=False)
+        futs = [self.client.submit(_dist_times, b, self._cols, self._cols_sq, X32, self.squared, extra,
+                                   pure=False) for b in self._blocks]
+        out = np.empty((self.G.shape[0], np.shape(X)[1]), dtype=np.float64)
+        stats = None
+        for sl, (prod, st) in zip(self.slices, self.client.gather(futs)):  # summed in block order
+            out[sl] = prod
+            if st is not None:
+                stats = st if stats is None else _add(stats, st)
+        self.last_stats = stats
+        self._done()
+        return out
+
+    def rmatmat(self, Q):
+        Q32 = np.asarray(Q, dtype=np.float32)
+        futs = [self.client.submit(_dist_t_times, b, self._cols, self._cols_sq, Q32[sl], self.squared, pure=False)
+                for b, sl in zip(self._blocks, self.slices)]
+        acc = np.zeros((self.cols.shape[0], Q32.shape[1]), dtype=np.float64)
+        for part in self.client.gather(futs):
+            acc += part
+        self._done()
+        return acc
+
+
+def _project_block(emb, Gb):
+    return emb.transform(Gb)
+
+
+def _assign_block(centroids, Yb):
+    return cKDTree(centroids).query(Yb)[1].astype(np.int32)
+
+
+class DaskExecutor:
+    """Runs the shape space and the embedding of a build on a Dask cluster.
+
+    Parameters
+    ----------
+    client : distributed.Client
+    chunk_dir : path or None, default=None
+        Where F is stored in blocks; None: a temporary folder removed by :meth:`close`.
+        With workers on other machines, give a folder they all read.
+    block_frames : int, default=DEFAULT_BLOCK_FRAMES
+        Frames per block of F (and per task).
+    own_cluster : bool, default=False
+        Close the client's cluster in :meth:`close` (set by :meth:`connect` ``("local")``).
+    """
+
+    def __init__(self, client, *, chunk_dir=None, block_frames: int = DEFAULT_BLOCK_FRAMES, own_cluster=False):
+        if int(block_frames) < 256:
+            raise ValueError(f"block_frames must be >= 256 (each block must be taller than the range finder "
+                             f"is wide), got {block_frames}")
+        self.client = client
+        self.block_frames = int(block_frames)
+        self._tmp = chunk_dir is None
+        self.chunk_dir = Path(tempfile.mkdtemp(prefix="lipspace-blocks-")) if chunk_dir is None else Path(chunk_dir)
+        self._own = own_cluster
+
+    @classmethod
+    def connect(cls, address: str, **kwargs) -> "DaskExecutor":
+        """``"local"``: a LocalCluster with one single-threaded worker per core (memory split
+        evenly); otherwise the address of a running scheduler (``tcp://host:8786``)."""
+        from distributed import Client, LocalCluster
+
+        if address == "local":
+            # ":0": the scheduler's HTTP server (it starts one even without a dashboard) on a free port, not
+            # 8787, which another cluster on the machine may hold ("Cluster failed to start: Port 8787 is in use")
+            cluster = LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, dashboard_address=":0")
+            return cls(Client(cluster), own_cluster=True, **kwargs)
+        try:
+            client = Client(address, timeout="20s")
+        except OSError as exc:
+            raise ValueError(f"cannot reach a Dask scheduler at {address!r} ({exc}); start one with "
+                             "'dask scheduler' or use --dask local") from None
+        return cls(client, **kwargs)
+
+    def describe(self) -> str:
+        """``"2 workers, 2 threads at tcp://..."`` for the command line."""
+        workers = self.client.scheduler_info().get("workers", {})
+        threads = sum(int(w.get("nthreads", 0)) for w in workers.values())
+        return f"{len(workers)} workers, {threads} threads at {self.client.scheduler.address}"
+
+    def close(self):
+        """Close the client (and the cluster it started) and remove temporary blocks."""
+        cluster = self.client.cluster if self._own else None
+        self.client.close()
+        if cluster is not None:
+            cluster.close()
+        if self._tmp:
+            shutil.rmtree(self.chunk_dir, ignore_errors=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def map_frame_blocks(self, fn, frames) -> list:
+        """``[fn(F[a:b], a, b) for each block file [a, b) of frames]``, one task per block, in order.
+
+        ``frames`` (an :class:`engine.recordings.frame_blocks.BlockFrames`: paths and small matrices)
+        travels once to every worker; each task reads its own block file (through the
+        speaker normalisation, if any) and returns only ``fn``'s result. Used by the
+        speaker normalisation's sums and the lip aperture (:func:`engine.recordings.frame_blocks.map_frames`).
+        """
+        ff = self.client.scatter(frames, broadcast=True, hash=False)
+        futs = [self.client.submit(_frames_task, fn, ff, a, b, pure=False) for a, b in frames.block_bounds]
+        return self.client.gather(futs)
+
+    # ------------------------------------------------------------ shape space
+    def fit_shape(self, shape, frames, *, progress: ProgressFn = None) -> np.ndarray:
+        """Fit ``shape`` (an unfitted :class:`engine.manifold.shape.ShapeSpace`) on F; return F^x (N, m).
+
+        The same randomized range finder as ``ShapeSpace.fit`` (same random draws and
+        power iterations) with F read block-wise by the workers.
+        """
+        import dask
+        import dask.array as da
+
+        if isinstance(frames, BlockFrames):  # stored in blocks already: the workers read them in place
+            shape._validate(frames, finite=False)  # finiteness: checked by the workers below
+        else:  # in memory: written out once as blocks for the workers
+            frames = BlockFrames.from_files(store_frame_blocks(shape._validate(frames), self.chunk_dir / "frames",
+                                                               block_frames=self.block_frames))
+        F = open_frame_blocks(frames)
+        N, C = F.shape
+        rng = np.random.default_rng(shape.random_state)
+        k = int(min(shape.max_components, N - 1, C))
+        p = min(10, min(N, C) - k)
+        mean = F.sum(axis=0, dtype=np.float64).compute() / N
+        if not np.isfinite(mean).all():  # NaN/inf somewhere: name the first frame, as in-process
+            bad = [i for i in self.map_frame_blocks(_first_nonfinite, frames) if i >= 0]
+            raise ValueError(f"frame {bad[0] if bad else '?'} holds NaN or inf; clean the corpus before fitting")
+        mean32 = mean.astype(np.float32)
+        steps, step = 2 * int(shape.n_iter) + 3, 0
+
+        def A_mat(X):  # (F - 1 mu^T) X, left on the workers
+            X = X.astype(np.float32)
+            return (F @ X - mean32 @ X).persist()
+
+        def At_mat(Y):  # (F - 1 mu^T)^T Y, thin, brought back; float32 GEMMs as in-process
+            Y = Y.astype(np.float32)
+            out, ysum = dask.compute(F.T @ Y, Y.sum(axis=0))
+            return out - np.outer(mean32, ysum)
+
+        def orth(Y):
+            return _orthonormal_columns(Y.rechunk({1: -1}))
+
+        Q = orth(A_mat(rng.standard_normal((C, k + p)).astype(np.float32)))
+        step += 1
+        report(progress, "shape space", step, steps)
+        tol = float(shape.tol or 0.0)
+        previous, it = None, 0
+        while True:  # ShapeSpace.fit's loop: the same iterations and the same early stop
+            Bt = At_mat(Q)  # (C, k+p): B^T for this Q, and the next iteration's input
+            step += 1
+            report(progress, "shape space", step, steps)
+            if it >= int(shape.n_iter):
+                break
+            settled, previous = _range_settled(Bt, k, float(shape.variance), tol, previous)
+            if settled:  # an iteration no longer moves the kept components
+                break
+            Q = orth(A_mat(orthonormal_basis(Bt)))  # the C x r basis: small, in-process, one BLAS thread
+            it += 1
+            step += 1
+            report(progress, "shape space", step, steps)
+        B = Bt.T
+        shape.n_iter_ = it
+        shape.n_range_ = k + p
+        _, s, Vt = thin_svd(B.astype(np.float64))
+        total = float(F.map_blocks(_centred_sumsq, mean32, chunks=((1,) * F.numblocks[0],), drop_axis=1,
+                                   dtype=np.float64).sum().compute())
+        shape._set_fitted(s[:k], Vt[:k], total, N, mean)
+        Fx = da.map_blocks(lambda b, m=shape.mean_, c=shape.components_: (b - m) @ c.T, F,
+                           chunks=(F.chunks[0], (shape.n_components_,)), dtype=np.float32)
+        (Fx,) = dask.compute(Fx)
+        step += 1
+        report(progress, "shape space", step, steps)
+        return np.ascontiguousarray(Fx, dtype=np.float32)
+
+    # -------------------------------------------------------------- embedding
+    def fit_embedding(self, emb, G, *, progress: ProgressFn = None):
+        """Fit ``emb`` (an unfitted :class:`engine.manifold.embedding.Embedding`) on G with its products with
+        D computed by Dask tasks; returns ``emb``."""
+        client = self.client
+
+        def factory(*args, **kwargs):
+            return _DaskDistanceOperator(*args, client=client, **kwargs)
+
+        emb._operator_factory = factory
+        try:
+            emb.fit(G, progress=progress)
+        finally:
+            del emb._operator_factory  # back to the class's in-process operator
+        return emb
+
+    # --------------------------------------------------------- out-of-sample
+    def _map_rows(self, fn, fixed, X, block):
+        fixed_f = self.client.scatter(fixed, broadcast=True, hash=False)
+        slices = _block_slices(X.shape[0], block) if X.shape[0] else []
+        futs = [self.client.submit(fn, fixed_f, np.ascontiguousarray(X[sl]), pure=False) for sl in slices]
+        return self.client.gather(futs)
+
+    def project(self, emb, G, *, block: int = 16384) -> np.ndarray:
+        """Out-of-sample F^y of dynamic features G (n, 2m) by a fitted embedding, one task per block."""
+        G = np.asarray(G, dtype=np.float32)
+        parts = self._map_rows(_project_block, emb, G, block)
+        return np.concatenate(parts) if parts else emb.transform(G)
+
+    def map_row_blocks(self, fn, n_rows: int, *shared, block: int = 65536) -> list:
+        """``[fn(start, stop, *shared) for each block of rows]``, one Dask task per block, in block order.
+
+        The ``shared`` arguments (arrays, fitted objects) are scattered once to every
+        worker; each task reads its own rows of them and returns only its block's
+        result. Used by the tangent frames (:func:`engine.manifold.local_gradients.gradients_block`)
+        and the state graph (:func:`engine.graph.states.assign_and_count`).
+        """
+        if int(block) < 1:
+            raise ValueError(f"block must be a positive number of rows, got {block}")
+        # hash=False: a random key per scatter. With content keys, identical data scattered by
+        # a client that has just closed (an earlier build on the same scheduler) can be released
+        # while this client's tasks wait for it ("lost dependencies")
+        futs = [self.client.scatter(a, broadcast=True, hash=False) for a in shared]
+        starts = range(0, int(n_rows), int(block))
+        tasks = [self.client.submit(fn, a, min(int(n_rows), a + int(block)), *futs, pure=False) for a in starts]
+        return self.client.gather(tasks)
+
+    def assign(self, centroids, Y, *, block: int = 65536) -> np.ndarray:
+        """K-means assignment: index of the nearest of ``centroids`` (K, d) for each row of Y (n, >= d)."""
+        centroids = np.asarray(centroids, dtype=np.float64)
+        Y = np.asarray(Y)[:, : centroids.shape[1]]
+        parts = self._map_rows(_assign_block, centroids, Y, block)
+        return np.concatenate(parts) if parts else np.zeros(0, np.int32)

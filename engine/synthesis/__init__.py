@@ -1,0 +1,1 @@
+"""Synthesis of lip trajectories from timed targets: every method, the registry and the per-corpus choice."""

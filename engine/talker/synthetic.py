@@ -1,0 +1,771 @@
+"""The embedded default corpus: a deterministic synthetic talker.
+
+Sentences are random word sequences from ``assets/wordlist.txt`` pronounced with the
+CMU dictionary (:mod:`engine.phonetics.phones`), with a pause ``sil`` at the start and end
+and durations from :class:`~engine.phonetics.phones.DurationModel`. Each phone sets targets
+for the fourteen articulatory controls (:data:`engine.talker.lipmodel.CONTROL_NAMES`); the targets of
+neighbouring phones are blended by Cohen & Massaro (1993) dominance functions
+(bilabials and labiodentals are protected: their closure / lip-to-teeth dominance is
+twenty times that of other phones), then passed through second-order, critically
+damped articulator dynamics (one natural frequency per control) with anticipation
+of the system's lag, plus small motor noise, a vowel's emphasis on its jaw opening and a
+slow postural drift of the corners, asymmetry and lateral jaw. With ``tissue=True``
+(opt-in) the lip tissue varies on its own too: phones drive vermilion roll and the chin's
+mentalis, each token's lip gestures vary in size independently of one another, a vowel's
+emphasis scales its lip gestures with its jaw, and each sentence has its own tissue
+posture. The controls drive the parametric lip surface of :mod:`engine.talker.lipmodel`; capture
+noise and registration error are added to the points.
+
+Plosives and the nasal differ in timing as the paper's Fig. 4 finds in real lips:
+the closure gesture of /p b/ peaks early in the phone and releases quickly (the
+burst), so their mid-points lie in the opening phase; /m/'s closure peaks late in
+the phone, so its mid-point lies in the closing phase.
+
+``Corpus.latent`` holds the controls after dynamics (one entry per name of
+:data:`engine.talker.lipmodel.CONTROL_NAMES`) and ``aperture``, the vertical distance (mm)
+between the upper and lower inner-lip midline points of the noise-free surface.
+"""
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import math
+import numbers
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.signal import lfilter
+from sklearn.base import BaseEstimator
+
+from engine.files.assets import asset_path
+from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
+from engine.talker.lipmodel import CONTROL_NAMES, KINEMATICS, SIGNED_CONTROLS, Anatomy, LipModel
+from engine.phonetics.phones import EXTRA_VOWELS, PAUSE, VOWELS, DurationModel, pronounce
+from engine.progress import report
+from engine.threads import one_blas_thread
+
+__all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker", "load_synthetic", "cache_folder",
+           "cache_token",
+           "phone_gestures", "gesture_phases", "lip_roles", "speaker_anatomy"]
+
+#: the lip model's coordinates (engine.talker.lipmodel): x the talker's left, y up, z forward, in mm
+LIP_MODEL_AXES = "x=left,y=up,z=forward"
+
+#: Bumped whenever the generated corpus changes for the same parameters (cache key).
+GENERATOR_VERSION = 6
+
+#: Preset: seconds of speech (frames = seconds * rate) and lip-surface resolution.
+PRESETS = {
+    "small": {"duration": 75.0, "resolution": "small", "speakers": 1},
+    "default": {"duration": 480.0, "resolution": "default", "speakers": 1},
+    "paper": {"duration": 28833 / 60.0, "resolution": "paper", "speakers": 1},
+    "multi": {"duration": 480.0, "resolution": "default", "speakers": 4},
+}
+
+# ---------------------------------------------------------------- phone targets
+# control order: jaw, round, spread, raise, closure, labiodental, protrude, depress, corner, asymmetry, jaw_lateral,
+# jaw_forward, roll, mentalis
+_J, _R, _S, _U, _C, _L, _P, _D, _K, _A, _X, _F, _O, _M = range(14)
+_NC = len(CONTROL_NAMES)
+_BASE = tuple(range(11))  # the controls that move in generator 4's talker (all but jaw_forward, roll, mentalis)
+#: Time to reach 63 % of a step (s) per control; natural frequency w = 2.146 / T63.
+#: Protrusion is slower than rounding (Perkell 1986); corners, asymmetry and the lateral
+#: jaw follow slow postural changes, the jaw's protrusion as its lateral shift; vermilion roll is
+#: as fast as rounding (the same muscle), the chin (mentalis) as slow as protrusion.
+T63 = np.array([0.060, 0.080, 0.070, 0.065, 0.060, 0.045, 0.100, 0.060, 0.150, 0.300, 0.120, 0.120, 0.080, 0.100])
+_WINDOW = 8  # gestures either side of a sample that contribute to its blend
+_TIMING_SD = 0.08  # s.d. of a gesture's timing, as a fraction of its phone's duration
+_SHAPE = np.array([1.5, 1.5, 1.5, 1.5, 2.0, 2.0, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5])  # dominance exponent c per control
+_LOOKAHEAD = (1.0, 0.15)  # dominance width (a * duration + b s) before a rounded / protruded phone
+_EMPHASIS_SD = 0.15  # s.d. of log jaw opening of a vowel (stress and emphasis)
+_TEMPO_SD = 0.08     # s.d. of log speaking rate between sentences
+#: slow postural drift per control (s.d. in control units; 0 = none), first-order, 0.4 Hz corner
+_DRIFT_SD = np.array([0.0, 0.05, 0.06, 0.05, 0.0, 0.0, 0.06, 0.05, 0.25, 0.25, 0.3, 0.2, 0.0, 0.0])
+_DRIFT_HZ = 0.4
+_LATERAL_JAW = 0.3   # s.d. over speakers of the lateral jaw shift per unit of jaw opening
+#: token-to-token variability of the lip gestures: a gesture's round, spread, raise, protrude,
+#: depress, corner, roll and mentalis targets each times exp(_TOKEN_SD * N(0, 1)), independently
+_TOKEN_SD = 0.25
+_TOKEN_CONTROLS = np.array([_R, _S, _U, _P, _D, _K, _O, _M])
+#: a vowel's emphasis factor (on its jaw opening) also scales its round, spread and protrude targets
+_EMPHASIS_CONTROLS = np.array([_J, _R, _S, _P])
+#: per-sentence posture of the lip tissue: roll offset N(0, s.d.), mentalis offset |N(0, s.d.)|
+_POSTURE_ROLL_SD, _POSTURE_MENTALIS_SD = 0.15, 0.10
+
+#: A second, independently parameterised talker (``SyntheticTalker(**HELD_OUT_TALKER)``):
+#: another seed (so another speaker's anatomy), faster speech, sloppier gesture timing,
+#: slower articulators, narrower coarticulation, more target jitter and noise. The
+#: method's defaults were never tuned on it; tests and docs/RESULTS.md use it as
+#: held-out data.
+HELD_OUT_TALKER = {"seed": 7, "tempo": 1.15, "timing_sd": 0.12, "dynamics_scale": 1.3, "coarticulation": 0.8,
+                   "jitter": 0.06, "noise": 0.25}
+#: defaults of the keyword-only generator-variant parameters (left out of the cache key at
+#: these values, so the default talker's cache files keep their names)
+_VARIANT_DEFAULTS = {"timing_sd": _TIMING_SD, "dynamics_scale": 1.0, "coarticulation": 1.0, "speakers": None,
+                     "registration": 0.3, "tissue": False, "kinematics": "classic"}
+
+
+@dataclass(frozen=True)
+class Gesture:
+    """One articulatory target of a phone, reached at ``frac`` of its duration
+    (a number, or one per control)."""
+
+    frac: float | tuple
+    target: tuple  # (14,)
+    alpha: tuple   # (14,) dominance magnitudes
+    before: tuple  # (14,) (a, b): dominance width = a * duration + b before the centre
+    after: tuple   # (14,) same after the centre
+
+
+def _vowel(*subs):
+    """Vowel gestures from (jaw, round, spread, raise) targets, one or two (diphthong).
+
+    Protrusion goes with rounding (0.85 of it), the corners rise with spreading and fall
+    a little with rounding, open vowels depress the lower lip a little, rounded vowels
+    evert the vermilion (0.3 of the rounding) and pout with the chin (mentalis, 0.2)."""
+    fracs = (0.5,) if len(subs) == 1 else (0.3, 0.8)
+    out = []
+    for f, (j, r, s, u) in zip(fracs, subs):
+        tgt = (j, r, s, u, 0.0, 0.0, 0.85 * r, 0.3 * max(j - 0.5, 0.0), 0.4 * s - 0.2 * r, 0.0, 0.0, 0.0, 0.3 * r,
+               0.2 * r)
+        alpha = (1.0, 1.0, 1.0, 0.8, 1.0, 1.0, 1.0, 0.8, 0.6, 0.05, 0.05, 0.3, 0.5, 0.5)
+        w = ((0.5, 0.03),) * _NC
+        wb = _with(_with(w, _R, _LOOKAHEAD), _P, _LOOKAHEAD) if r > 0.4 else w
+        out.append(Gesture(f, tgt, alpha, wb, w))
+    return tuple(out)
+
+
+def _cons(jaw=(0.2, 0.4), rnd=(0.1, 0.15), spr=(0.1, 0.15), rai=(0.1, 0.3), clo=(0.0, 0.6),
+          lab=(0.0, 0.6), pro=None, dep=(0.0, 0.2), cor=(0.0, 0.2), jfw=(0.0, 0.3), rol=(0.0, 0.2), mnt=(0.0, 0.2),
+          frac=0.5, before=None, after=None, jaw_frac=None):
+    if pro is None:
+        pro = (0.85 * rnd[0], rnd[1])
+    drift = ((0.0, 0.05), (0.0, 0.05))
+    tgt = tuple(v[0] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift + (jfw, rol, mnt))
+    alpha = tuple(v[1] for v in (jaw, rnd, spr, rai, clo, lab, pro, dep, cor) + drift + (jfw, rol, mnt))
+    w = ((0.5, 0.03),) * _NC
+    wb = w
+    if rnd[0] > 0.4 or pro[0] > 0.4:  # anticipatory (look-ahead) rounding and protrusion
+        wb = _with(_with(w, _R, _LOOKAHEAD), _P, _LOOKAHEAD)
+    b = tuple(before) if before else wb
+    a = tuple(after) if after else w
+    if jaw_frac is not None:
+        frac = (jaw_frac,) + (frac,) * (_NC - 1)
+    return (Gesture(frac, tgt, alpha, b, a),)
+
+
+def _with(widths, k, val):
+    widths = list(widths)
+    widths[k] = val
+    return tuple(widths)
+
+
+_W0 = ((0.5, 0.03),) * _NC
+_PROTECT = 20.0
+
+#: Gestures of every phone (targets in the order of CONTROL_NAMES: 0..1, the signed ones -1..1).
+PHONE_GESTURES = {
+    # vowels: (jaw, round, spread, raise)
+    "iy": _vowel((0.12, 0.0, 0.8, 0.25)), "ih": _vowel((0.25, 0.0, 0.5, 0.2)),
+    "eh": _vowel((0.45, 0.0, 0.35, 0.2)), "ae": _vowel((0.72, 0.0, 0.4, 0.3)),
+    "aa": _vowel((0.9, 0.05, 0.05, 0.15)), "ah": _vowel((0.6, 0.0, 0.1, 0.15)),
+    "ax": _vowel((0.35, 0.05, 0.1, 0.1)), "ao": _vowel((0.6, 0.75, 0.0, 0.1)),
+    "oh": _vowel((0.7, 0.5, 0.0, 0.1)), "uh": _vowel((0.3, 0.55, 0.0, 0.1)),
+    "uw": _vowel((0.2, 1.0, 0.0, 0.05)), "er": _vowel((0.35, 0.15, 0.15, 0.1)),
+    "ey": _vowel((0.4, 0.0, 0.45, 0.2), (0.22, 0.0, 0.55, 0.2)),
+    "ay": _vowel((0.85, 0.0, 0.1, 0.15), (0.3, 0.0, 0.5, 0.2)),
+    "aw": _vowel((0.85, 0.0, 0.1, 0.15), (0.3, 0.7, 0.0, 0.1)),
+    "oy": _vowel((0.6, 0.7, 0.0, 0.1), (0.28, 0.0, 0.45, 0.2)),
+    "ow": _vowel((0.45, 0.35, 0.0, 0.1), (0.3, 0.75, 0.0, 0.1)),
+    "ia": _vowel((0.25, 0.0, 0.5, 0.2), (0.38, 0.05, 0.1, 0.1)),
+    "ea": _vowel((0.5, 0.0, 0.3, 0.2), (0.38, 0.05, 0.1, 0.1)),
+    "ua": _vowel((0.3, 0.55, 0.0, 0.1), (0.38, 0.05, 0.1, 0.1)),
+    # bilabial plosives: closure peaks early and releases fast (the burst)
+    # (all bilabials are made with the jaw raised, with a dominant jaw target, so the jaw
+    # does much of the closing as in real speech instead of the lips alone)
+    # (the pressed lips roll the vermilion in, and the chin's mentalis helps raise the lower lip)
+    **dict.fromkeys(("p", "b"), _cons(jaw=(0.02, 2.5), rnd=(0.1, 0.1), spr=(0.1, 0.1), rai=(0.0, 0.3),
+                                      clo=(1.0, _PROTECT), rol=(-0.5, 1.0), mnt=(0.35, 0.8), frac=0.3,
+                                      before=_with(_W0, _C, (0.45, 0.01)), after=_with(_W0, _C, (0.2, 0.004)))),
+    # bilabial nasal: closure approached through the phone and reached late; the jaw
+    # keeps rising past the phone's end, so the whole lip-jaw complex is still closing
+    "m": _cons(jaw=(0.02, 2.5), rnd=(0.1, 0.1), spr=(0.1, 0.1), rai=(0.0, 0.3), clo=(1.0, _PROTECT),
+               rol=(-0.4, 1.0), mnt=(0.3, 0.8), frac=0.75, jaw_frac=1.3, before=_with(_W0, _C, (0.5, 0.01)), after=_with(_W0, _C, (0.45, 0.02))),
+    **dict.fromkeys(("f", "v"), _cons(jaw=(0.12, 0.6), rai=(0.25, 0.5), lab=(1.0, _PROTECT), jfw=(0.3, 0.5), rol=(-0.3, 0.6),
+                                      frac=0.45,
+                                      before=_with(_W0, _L, (0.4, 0.01)), after=_with(_W0, _L, (0.35, 0.01)))),
+    # dental fricatives: the lower lip drops to let the tongue tip show
+    **dict.fromkeys(("th", "dh"), _cons(jaw=(0.22, 0.5), spr=(0.2, 0.2), rai=(0.25, 0.3), dep=(0.35, 0.5),
+                                        jfw=(0.4, 0.5))),
+    **dict.fromkeys(("s", "z"), _cons(jaw=(0.08, 1.2), spr=(0.35, 0.4), rai=(0.2, 0.3), cor=(0.15, 0.3),
+                                      jfw=(0.6, 0.8))),
+    **dict.fromkeys(("t", "d"), _cons(jaw=(0.15, 0.7), jfw=(0.2, 0.3))),
+    **dict.fromkeys(("n", "l"), _cons(jaw=(0.2, 0.5), jfw=(0.2, 0.3))),
+    # postalveolars: strong protrusion with moderate rounding, both lips everted (funnel)
+    **dict.fromkeys(("sh", "zh", "ch", "jh"), _cons(jaw=(0.12, 0.8), rnd=(0.5, 1.2), rai=(0.35, 0.6),
+                                                    pro=(0.9, 1.5), dep=(0.4, 0.8), jfw=(0.5, 0.8), rol=(0.5, 0.8),
+                                                    mnt=(0.2, 0.5))),
+    "r": _cons(jaw=(0.2, 0.4), rnd=(0.55, 1.0), pro=(0.45, 0.8)),
+    "w": _cons(jaw=(0.12, 0.8), rnd=(1.0, 3.0), pro=(0.8, 2.0), rol=(0.3, 0.5), mnt=(0.2, 0.5)),
+    "y": _cons(jaw=(0.12, 0.6), spr=(0.55, 0.8), cor=(0.2, 0.4)),
+    **dict.fromkeys(("k", "g", "ng"), _cons(jaw=(0.25, 0.3), jfw=(-0.2, 0.3))),
+    "hh": _cons(jaw=(0.3, 0.1), rnd=(0.1, 0.05), spr=(0.1, 0.05), rai=(0.1, 0.05), clo=(0.0, 0.3), lab=(0.0, 0.3),
+                pro=(0.1, 0.05), dep=(0.0, 0.05), cor=(0.0, 0.05), jfw=(0.0, 0.05), rol=(0.0, 0.05), mnt=(0.0, 0.05)),
+    # pause: lips lightly together, jaw almost closed
+    PAUSE: _cons(jaw=(0.02, 1.5), rnd=(0.05, 0.6), spr=(0.1, 0.6), rai=(0.05, 0.6), clo=(0.7, 1.5), lab=(0.0, 1.0),
+                 pro=(0.0, 0.6), dep=(0.0, 0.6), cor=(0.0, 0.3), jfw=(0.0, 0.5), rol=(0.0, 0.3), mnt=(0.1, 0.3)),
+}
+
+
+_VOWELS = frozenset(VOWELS + EXTRA_VOWELS)
+
+
+def phone_gestures(phone: str) -> tuple:
+    """Articulatory gestures of ``phone`` (tuple of :class:`Gesture`)."""
+    try:
+        return PHONE_GESTURES[phone]
+    except KeyError:
+        raise ValueError(f"no articulatory targets for phone {phone!r}; known: {' '.join(sorted(PHONE_GESTURES))}") from None
+
+
+# ------------------------------------------------------------------ word list
+@functools.lru_cache(maxsize=1)
+def _lexicon() -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
+    path = asset_path("wordlist.txt")
+    words = [w.strip() for w in path.read_text(encoding="utf-8").splitlines()]
+    words = [w for w in words if w and not w.startswith("#")]
+    prons = tuple(tuple(pronounce(w)) for w in words)
+    keep = [i for i, p in enumerate(prons) if p]
+    return tuple(words[i] for i in keep), tuple(prons[i] for i in keep)
+
+
+# ---------------------------------------------------------------- the talker
+class SyntheticTalker(BaseEstimator):
+    """Deterministic synthetic talker producing a phone-aligned 3D lip corpus.
+
+    Parameters
+    ----------
+    preset : {"small", "default", "paper", "multi"}
+        ``"small"``: 75 s, 156 points (tests); ``"default"``: 8 minutes (28,800
+        frames at 60 Hz), 600 points; ``"paper"``: 28,833 frames, 4,260 points;
+        ``"multi"``: as ``"default"`` spoken by four speakers in turn.
+    n_sentences : int or None
+        Generate exactly this many sentences instead of the preset's duration.
+    duration : float or None
+        Seconds of speech (overrides the preset); the frame count is exactly
+        ``round(duration * rate)``.
+    resolution : str or (int, int) or None
+        Lip-surface resolution (overrides the preset), see :class:`LipModel`.
+    rate : float
+        Frame rate (Hz).
+    seed : int
+        Seed of the random generator; same parameters give identical corpora.
+    noise : float
+        Standard deviation (mm) of capture noise added to each coordinate
+        (independent, uniformly distributed).
+    jitter : float
+        Standard deviation of per-phone random variation of the control targets.
+    tempo : float
+        Speaking-rate factor of the duration model.
+    timing_sd : float, default=0.08
+        Standard deviation of a gesture's timing, as a fraction of its phone's duration.
+    dynamics_scale : float, default=1.0
+        Factor on every articulator's time constant (> 1: slower, smoother lips).
+    coarticulation : float, default=1.0
+        Factor on every dominance width (< 1: less overlap between neighbouring phones).
+    speakers : int or None
+        Speakers taking turns sentence by sentence, each with their own anatomy
+        (:func:`speaker_anatomy`); None: the preset's (1, or 4 for ``"multi"``).
+    registration : float, default=0.3
+        Size (mm) of the capture's registration error: a spatially smooth, slowly
+        varying displacement field over the surface of RMS ``registration`` per
+        coordinate (correspondence drift of dense registration), plus residual rigid
+        head motion of s.d. ``0.6 * registration`` mm and degrees (0 = perfect).
+    tissue : bool, default=False
+        The lip tissue's own variation (opt-in): phones drive the ``roll`` and
+        ``mentalis`` controls (bilabials press the lips in and raise the chin,
+        postalveolars and rounded vowels evert the lips), each token's lip gestures
+        vary in size independently (log-normal, s.d. 0.25), a vowel's emphasis scales
+        its lip gestures with its jaw opening, and each sentence has its own tissue
+        posture. False: ``roll`` and ``mentalis`` stay 0 and the other controls are
+        those of generator 4.
+    kinematics : {"classic", "calibrated"}, default="classic"
+        How the jaw, upper lip and corners move (:data:`engine.talker.lipmodel.KINEMATICS`).
+        ``"calibrated"`` (opt-in) moves them as real speakers' articulograph sensors do:
+        the jaw turns on an arc and protrudes on its own (the ``jaw_forward`` control,
+        driven by phones: forward for sibilants, dentals and labiodentals, back for
+        velars), the upper lip takes a third of the opening, and the corners descend with
+        the jaw and narrow and widen whole. ``"classic"``: ``jaw_forward`` stays 0 and the
+        frames are those of generator 5.
+    """
+
+    def __init__(self, *, preset="default", n_sentences=None, duration=None, resolution=None, rate=60.0,
+                 seed=0, noise=0.2, jitter=0.04, tempo=1.0, timing_sd=_TIMING_SD, dynamics_scale=1.0,
+                 coarticulation=1.0, speakers=None, registration=0.3, tissue=False, kinematics="classic"):
+        self.preset = preset
+        self.n_sentences = n_sentences
+        self.duration = duration
+        self.resolution = resolution
+        self.rate = rate
+        self.seed = seed
+        self.noise = noise
+        self.jitter = jitter
+        self.tempo = tempo
+        self.timing_sd = timing_sd
+        self.dynamics_scale = dynamics_scale
+        self.coarticulation = coarticulation
+        self.speakers = speakers
+        self.registration = registration
+        self.tissue = tissue
+        self.kinematics = kinematics
+
+    # -------------------------------------------------------------- validation
+    def _validate(self):
+        if self.preset not in PRESETS:
+            raise ValueError(f"unknown preset {self.preset!r}; use one of {sorted(PRESETS)}")
+        if not (isinstance(self.rate, numbers.Real) and 10 <= self.rate <= 1000):
+            raise ValueError(f"rate must be a frame rate in Hz between 10 and 1000, got {self.rate!r}")
+        if self.n_sentences is not None and (int(self.n_sentences) != self.n_sentences or self.n_sentences < 1):
+            raise ValueError(f"n_sentences must be a positive integer or None, got {self.n_sentences!r}")
+        dur = PRESETS[self.preset]["duration"] if self.duration is None else float(self.duration)
+        if not (np.isfinite(dur) and dur >= 3.0):
+            raise ValueError(f"duration must be at least 3 s of speech, got {dur!r}")
+        if not (np.isfinite(self.noise) and self.noise >= 0):
+            raise ValueError(f"noise must be >= 0 mm, got {self.noise!r}")
+        if not (np.isfinite(self.jitter) and 0 <= self.jitter <= 0.5):
+            raise ValueError(f"jitter must be in [0, 0.5], got {self.jitter!r}")
+        if not (np.isfinite(self.timing_sd) and 0 <= self.timing_sd <= 0.5):
+            raise ValueError(f"timing_sd must be in [0, 0.5] (fraction of a phone), got {self.timing_sd!r}")
+        for name in ("dynamics_scale", "coarticulation"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and 0.25 <= v <= 4.0):
+                raise ValueError(f"{name} must be a factor in [0.25, 4], got {v!r}")
+        if self.speakers is not None and (int(self.speakers) != self.speakers or not 1 <= self.speakers <= 100):
+            raise ValueError(f"speakers must be an integer in 1..100 or None, got {self.speakers!r}")
+        if not (np.isfinite(self.registration) and 0 <= self.registration <= 5):
+            raise ValueError(f"registration must be in [0, 5] (mm and degrees), got {self.registration!r}")
+        if not isinstance(self.tissue, (bool, np.bool_)):
+            raise ValueError(f"tissue must be True or False, got {self.tissue!r}")
+        if self.kinematics not in KINEMATICS:
+            raise ValueError(f"kinematics must be one of {sorted(KINEMATICS)}, got {self.kinematics!r}")
+        res = PRESETS[self.preset]["resolution"] if self.resolution is None else self.resolution
+        return dur, res
+
+    # -------------------------------------------------------------- sentences
+    def _sentence(self, rng, dm, words, prons, n_words):
+        dm = DurationModel(tempo=self.tempo * math.exp(_TEMPO_SD * rng.standard_normal()))  # this sentence's rate
+        idx = rng.integers(0, len(words), size=n_words)
+        phones, text = [PAUSE], []
+        for k, i in enumerate(idx):
+            if k and rng.random() < 0.08:
+                phones.append(PAUSE)
+            phones.extend(prons[i])
+            text.append(words[i])
+        phones.append(PAUSE)
+        d = dm.durations(phones, rng)
+        d[0] = rng.uniform(0.2, 0.4)
+        d[-1] = rng.uniform(0.25, 0.45)
+        inner = [k for k in range(1, len(phones) - 1) if phones[k] == PAUSE]
+        if inner:
+            d[inner] = rng.uniform(0.12, 0.25, size=len(inner))
+        # phrase-final lengthening of the two phones before a pause
+        for k in range(1, len(phones)):
+            if phones[k] == PAUSE and phones[k - 1] != PAUSE:
+                d[k - 1] *= 1.3
+                if k >= 2 and phones[k - 2] != PAUSE:
+                    d[k - 2] *= 1.1
+        sentence = " ".join(text)
+        return phones, d, sentence[:1].upper() + sentence[1:] + "."
+
+    def _sentences(self, rng, total_frames):
+        words, prons = _lexicon()
+        dm = DurationModel(tempo=self.tempo)
+        rate = float(self.rate)
+        out = []
+        if self.n_sentences is not None:
+            for _ in range(int(self.n_sentences)):
+                ph, d, txt = self._sentence(rng, dm, words, prons, int(rng.integers(4, 11)))
+                out.append((ph, d, txt, max(2, int(round(d.sum() * rate)))))
+            return out
+        remaining = total_frames
+        while True:
+            ph, d, txt = self._sentence(rng, dm, words, prons, int(rng.integers(4, 11)))
+            nf = max(2, int(round(d.sum() * rate)))
+            if nf <= remaining - 1.5 * rate:
+                out.append((ph, d, txt, nf))
+                remaining -= nf
+                continue
+            # last sentence: fill the remaining frames exactly
+            phones, durs, text = [PAUSE], [rng.uniform(0.2, 0.3)], []
+            tail_min = 0.15
+            while True:
+                i = int(rng.integers(0, len(words)))
+                dw = dm.durations(prons[i], rng)
+                if text and sum(durs) + dw.sum() + tail_min > remaining / rate:
+                    break
+                phones.extend(prons[i])
+                durs.extend(dw)
+                text.append(words[i])
+                if sum(durs) + tail_min > remaining / rate:
+                    break
+            budget = remaining / rate - tail_min
+            if sum(durs) > budget:  # one long word in a short remainder: speak it faster
+                durs = [x * budget / sum(durs) for x in durs]
+            phones.append(PAUSE)
+            durs.append(remaining / rate - sum(durs))
+            sentence = " ".join(text)
+            out.append((phones, np.array(durs), sentence[:1].upper() + sentence[1:] + ".", remaining))
+            return out
+
+    # -------------------------------------------------------------- articulation
+    def _controls(self, rng, phones, durs, n_frames, lateral=0.0):
+        """Controls after dynamics for one utterance, ndarray (n_frames, 14)."""
+        rate = float(self.rate)
+        sub = max(1, math.ceil(240.0 / rate))
+        fs = rate * sub
+        starts = np.concatenate([[0.0], np.cumsum(durs)[:-1]])
+        cen, tgt, alp, wb, wa, vow = [], [], [], [], [], []
+        for p, s, d in zip(phones, starts, durs):
+            gs = phone_gestures(p)
+            for g in gs:
+                frac = np.broadcast_to(np.asarray(g.frac, dtype=float), (_NC,))
+                jit = frac + float(self.timing_sd) * rng.standard_normal()
+                cen.append(s + np.clip(jit, np.minimum(frac, 0.0), np.maximum(frac, 1.0)) * d)
+                tgt.append(g.target)
+                alp.append(g.alpha)
+                wb.append([(a * d + b) * self.coarticulation for a, b in g.before])
+                wa.append([(a * d + b) * self.coarticulation for a, b in g.after])
+                vow.append(p in _VOWELS)
+        # the controls that move (the rest stay 0): generator 4's eleven, drawing the same random
+        # numbers, plus jaw_forward with the calibrated kinematics and roll and mentalis with
+        # the tissue variation; columns of the arrays below are these, in order
+        act = np.array(_BASE + ((_F,) if self.kinematics == "calibrated" else ()) + ((_O, _M) if self.tissue else ()))
+        col = {int(k): i for i, k in enumerate(act)}
+        nc = len(act)
+        cen = np.array(cen)[:, act]                                              # (E, nc)
+        tgt = np.array(tgt)[:, act]
+        if self.tissue:  # token-to-token variability: each lip gesture's size has its own log-normal factor
+            tok = [col[k] for k in _TOKEN_CONTROLS]
+            tgt[:, tok] *= np.exp(_TOKEN_SD * rng.standard_normal((len(cen), len(tok))))
+        tgt += self.jitter * rng.standard_normal((len(cen), nc))
+        # stress and emphasis: a vowel's jaw opening (with the tissue variation: and its lip
+        # gestures) varies by one log-normal factor
+        vow = np.array(vow)
+        emph = [col[k] for k in (_EMPHASIS_CONTROLS if self.tissue else [_J])]
+        tgt[np.ix_(vow, emph)] *= np.exp(_EMPHASIS_SD * rng.standard_normal(int(vow.sum())))[:, None]
+        low = _LOW[act]
+        tgt = np.clip(tgt, low, 1.0)                                           # the controls' ranges
+        alp, wb, wa = np.array(alp)[:, act], np.array(wb)[:, act], np.array(wa)[:, act]
+        omega = 2.146 / (T63[act] * float(self.dynamics_scale))
+        lead = 2.0 / omega                                   # group delay of the dynamics
+        n_sub = n_frames * sub
+        t = np.arange(n_sub) / fs
+        # each sample sees the _WINDOW gestures either side of it (sorted by centre)
+        order = np.argsort(cen.mean(1), kind="stable")
+        cen, tgt, alp, wb, wa = cen[order], tgt[order], alp[order], wb[order], wa[order]
+        near = np.searchsorted(cen.mean(1), t)[:, None] + np.arange(-_WINDOW, _WINDOW)[None, :]   # (n, 2W)
+        valid = (near >= 0) & (near < len(cen))
+        near = np.clip(near, 0, len(cen) - 1)
+        tau = t[:, None, None] + lead[None, None, :] - cen[near]                 # (n, 2W, 14)
+        w = np.where(tau < 0, wb[near], wa[near])
+        dom = alp[near] * np.exp(-(np.abs(tau) / w) ** _SHAPE[act]) * valid[:, :, None]
+        u = (dom * tgt[near]).sum(1) / (dom.sum(1) + 1e-12)                    # (n, 14)
+        u += 0.02 * rng.standard_normal(u.shape)                               # motor noise
+        # slow postural drift (expression, corners, asymmetry, lateral jaw), stationary from the start
+        pd = math.exp(-2 * math.pi * _DRIFT_HZ / fs)
+        u += _slow_process(rng, n_sub, nc, pd) * _DRIFT_SD[act]
+        if self.tissue:  # this sentence's posture of the lip tissue (rolled in or out, chin raised)
+            u[:, col[_O]] += _POSTURE_ROLL_SD * rng.standard_normal()
+            u[:, col[_M]] += abs(_POSTURE_MENTALIS_SD * rng.standard_normal())
+        u[:, col[_X]] += lateral * u[:, col[_J]]                               # this speaker's jaw path
+        p = np.exp(-omega / fs)
+        out = np.zeros((len(u), _NC))
+        for i, k in enumerate(act):
+            b, a = [1 - p[i]], [1.0, -p[i]]
+            zi = np.array([p[i]])  # = lfilter_zi(b, a): the state that holds a constant input
+            y, _ = lfilter(b, a, u[:, i], zi=zi * u[0, i])
+            y, _ = lfilter(b, a, y, zi=zi * u[0, i])
+            out[:, k] = y
+        return np.clip(out[::sub], _LOW, 1.0)
+
+    # -------------------------------------------------------------- generate
+    def generate(self, progress=None) -> Corpus:
+        """Generate the corpus.
+
+        Parameters
+        ----------
+        progress : callable(stage, done, total) or None
+
+        Returns
+        -------
+        Corpus
+            ``frames`` (n_frames, 3 * n_points) float32 in mm, ``faces``,
+            ``point_names``, phone-aligned utterances ``s0001``..., and ``latent``:
+            the fourteen controls, ``aperture`` (mm) and ``phase`` (see :func:`gesture_phases`).
+        """
+        dur, res = self._validate()
+        rng = np.random.default_rng(self.seed)
+        rate = float(self.rate)
+        n_spk = int(PRESETS[self.preset]["speakers"] if self.speakers is None else self.speakers)
+        anat = [speaker_anatomy(self.seed, k) for k in range(n_spk)]
+        lateral = [float(_LATERAL_JAW * np.random.default_rng([int(self.seed), 2000 + k]).standard_normal())
+                   for k in range(n_spk)]
+        lips = [LipModel(res, a, kinematics=self.kinematics) for a in anat]
+        lip = lips[0]
+        total = int(round(dur * rate))
+        report(progress, "sentences", 0, 1)
+        sents = self._sentences(rng, total)
+        report(progress, "sentences", 1, 1)
+        ctrls, utts, pos, who = [], [], 0, []
+        for k, (ph, d, txt, nf) in enumerate(sents):
+            report(progress, "articulation", k, len(sents))
+            spk = k % n_spk
+            ctrls.append(self._controls(rng, ph, d, nf, lateral[spk]))
+            ends = np.cumsum(d)
+            ends[-1] = nf / rate
+            st = np.concatenate([[0.0], ends[:-1]])
+            phones = tuple(PhoneInterval(float(a), float(b), p) for a, b, p in zip(st, ends, ph))
+            utts.append(Utterance(f"s{k + 1:04d}", pos, pos + nf, phones, None, txt,
+                                  f"spk{spk + 1}" if n_spk > 1 else ""))
+            who.append(np.full(nf, spk, np.int16))
+            pos += nf
+        report(progress, "articulation", len(sents), len(sents))
+        C = np.concatenate(ctrls)
+        who = np.concatenate(who)
+        n = C.shape[0]
+        frames = np.empty((n, 3 * lip.n_points), dtype=np.float32)
+        aperture = np.empty(n)
+        for k, lm in enumerate(lips):
+            aperture[who == k] = lm.aperture(C[who == k])
+        head = self._head_motion(rng, utts, n)
+        field = self._registration_field(rng, utts, n, lip)
+        chunk = max(1, 4_000_000 // (3 * lip.n_points))
+        for s in range(0, n, chunk):
+            report(progress, "geometry", s, n)
+            blk = frames[s:s + chunk]
+            w = who[s:s + chunk]
+            if n_spk == 1:
+                lip.deform(C[s:s + chunk], out=blk)
+            else:
+                for k in np.unique(w):
+                    blk[w == k] = lips[k].deform(C[s:s + chunk][w == k])
+            if head is not None:  # residual registration error: small rigid motion, P + w x P + t
+                P = blk.reshape(len(blk), -1, 3)
+                om, tr = head[0][s:s + chunk], head[1][s:s + chunk]
+                x, y, z = P[..., 0].copy(), P[..., 1].copy(), P[..., 2].copy()
+                for d, (a, b, u, v) in enumerate(((1, 2, z, y), (2, 0, x, z), (0, 1, y, x))):
+                    P[..., d] += om[:, a, None] * u - om[:, b, None] * v + tr[:, d, None]
+                with one_blas_thread():  # small products: one thread beats two contending ones
+                    blk += field[0][s:s + chunk] @ field[1]
+            if self.noise > 0:  # uniform capture noise of s.d. `noise` (7x cheaper than normal)
+                buf = rng.random(blk.shape, dtype=np.float32)
+                buf -= np.float32(0.5)
+                buf *= np.float32(self.noise * math.sqrt(12.0))
+                blk += buf
+        report(progress, "geometry", n, n)
+        latent = {name: C[:, k].astype(np.float64) for k, name in enumerate(CONTROL_NAMES)}
+        latent["aperture"] = aperture
+        bounds = np.array([[u.start, u.stop] for u in utts])
+        latent["phase"] = gesture_phases(aperture, bounds)
+        self.n_frames_ = int(n)
+        self.n_points_ = int(lip.n_points)
+        self.n_utterances_ = len(utts)
+        self.anatomies_ = anat
+        return Corpus(frames=frames, rate=rate, utterances=utts, dims=3, faces=lip.faces,
+                      point_names=lip.point_names, point_roles=lip_roles(lip), latent=latent,
+                      name=f"synthetic-{self.preset}", axes=LIP_MODEL_AXES)
+
+    def _registration_field(self, rng, utts, n, lip):
+        """(coefficients (n, K), basis (K, 3 * n_points)) of the smooth registration error:
+        products of low-order cosines over the rest surface's x and y (orders 0..3 each,
+        amplitude 1 / (1 + a + b)) for each coordinate, coefficients a first-order process
+        (1 Hz) per utterance; scaled so the RMS displacement per coordinate is
+        ``registration`` mm."""
+        V = lip.rest_vertices
+        u = (V[:, 0] - V[:, 0].min()) / np.ptp(V[:, 0])
+        v = (V[:, 1] - V[:, 1].min()) / np.ptp(V[:, 1])
+        basis = []
+        for a in range(4):
+            for b in range(4):
+                phi = np.cos(np.pi * a * u) * np.cos(np.pi * b * v) / (1.0 + a + b)
+                for d in range(3):
+                    f = np.zeros((len(V), 3))
+                    f[:, d] = phi
+                    basis.append(f.ravel())
+        B = np.array(basis, np.float32)                                  # (48, 3V)
+        B *= np.float32(self.registration / math.sqrt((B ** 2).sum() / B.shape[1]))
+        rate = float(self.rate)
+        ph = math.exp(-2 * math.pi * 1.0 / rate)
+        coef = np.empty((n, len(B)), np.float32)
+        for utt in utts:
+            coef[utt.start:utt.stop] = _slow_process(rng, utt.stop - utt.start, len(B), ph)
+        return coef, B
+
+    def _head_motion(self, rng, utts, n):
+        """(rotation vectors (n, 3) in radians, translations (n, 3) in mm) of the residual
+        registration error, or None when ``registration`` is 0: per utterance a slow
+        first-order process (0.3 Hz) of s.d. ``0.6 * registration`` (mm; degrees)."""
+        if not self.registration > 0:
+            return None
+        rate = float(self.rate)
+        ph = math.exp(-2 * math.pi * 0.3 / rate)
+        out = np.empty((n, 6), np.float32)
+        for u in utts:
+            out[u.start:u.stop] = _slow_process(rng, u.stop - u.start, 6, ph)
+        out *= np.float32(0.6 * self.registration)
+        out[:, :3] *= np.float32(np.pi / 180.0)
+        return out[:, :3], out[:, 3:]
+
+
+_LOW = np.array([-1.0 if n in SIGNED_CONTROLS else 0.0 for n in CONTROL_NAMES])
+
+
+def _slow_process(rng, n, k, pole):
+    """(n, k) independent first-order (AR(1)) processes of unit variance with ``pole``,
+    stationary from the first sample (its state drawn from the stationary distribution)."""
+    e = rng.standard_normal((n, k)) * math.sqrt(1 - pole * pole)
+    return lfilter([1.0], [1.0, -pole], e, axis=0, zi=rng.standard_normal(k)[None, :] * pole)[0]
+
+
+def speaker_anatomy(seed: int, speaker: int) -> Anatomy:
+    """The lip anatomy of speaker ``speaker`` of the talker with ``seed`` (drawn around the
+    adult mean, :meth:`engine.talker.lipmodel.Anatomy.draw`)."""
+    return Anatomy.draw(np.random.default_rng([int(seed), 1000 + int(speaker)]))
+
+
+def lip_roles(lip) -> list[str]:
+    """Point roles of a lip surface: the inner-contour midline points are the upper and lower
+    lip (their distance is the lip aperture, as :meth:`engine.talker.lipmodel.LipModel.aperture`
+    defines it), the inner-contour points at the commissures the corners, the rest lip."""
+    roles = ["lip"] * lip.n_points
+    up, low = lip.midline
+    roles[up], roles[low] = "upper_lip", "lower_lip"
+    left = lip.corner_column
+    roles[left] = "left_corner"
+    roles[lip.cols - 1 - left] = "right_corner"
+    return roles
+
+
+def gesture_phases(aperture, bounds) -> np.ndarray:
+    """The ground-truth phase of the lip gesture per frame, from the exact aperture.
+
+    Forward steps inside each utterance: opening when the aperture grows to the next
+    frame (step v), accelerating when the change of velocity has the sign of the velocity,
+    ``sign(v - v_prev) == sign(v)`` with ``v_prev`` the step into the frame (the engine's
+    convention for its four classes, ``engine.manifold.tangent.CLASS_NAMES``; the first frame of
+    an utterance takes its own step as ``v_prev``, so it counts as decelerating).
+
+    Returns
+    -------
+    int8 ndarray of shape (n,): 0 opening/accelerating, 1 opening/decelerating,
+    2 closing/accelerating, 3 closing/decelerating, -1 at the last frame of each
+    utterance (no forward step).
+    """
+    a = np.asarray(aperture, np.float64)
+    out = np.full(len(a), -1, np.int8)
+    for s, e in np.asarray(bounds):
+        if e - s < 2:
+            continue
+        v = np.diff(a[s:e])                 # forward step of frames s..e-2
+        prev = np.r_[v[0], v[:-1]]          # step into the frame (the first frame repeats its own)
+        acc = np.sign(v - prev) == np.sign(v)
+        out[s:e - 1] = np.where(v > 0, np.where(acc, 0, 1), np.where(acc, 2, 3))
+    return out
+
+
+# ------------------------------------------------------------------ caching
+def cache_folder(override=None) -> Path:
+    """Folder of cached corpora: ``override``, else ``$LIPSPACE_CACHE_DIR``, else the
+    platform's user cache folder for ``lipspace``."""
+    if override is not None:
+        return Path(override)
+    from engine.files.userdirs import user_dir
+
+    return user_dir("cache", "LIPSPACE_CACHE_DIR")
+
+
+def generator_fingerprint() -> str:
+    """A hash of the synthetic talker's code (this module, the lip model, the phonetics)."""
+    from engine.files.persist import source_fingerprint
+
+    return source_fingerprint(("engine.talker.synthetic", "engine.talker.lipmodel", "engine.phonetics.phones", "engine.recordings.corpus"))
+
+
+def _cache_key(params: dict) -> str:
+    # the generator's code is part of the key: an edit without a GENERATOR_VERSION bump still regenerates
+    blob = json.dumps({"version": GENERATOR_VERSION, "code": generator_fingerprint(), **params}, sort_keys=True,
+                      default=str)
+    return hashlib.sha256(blob.encode()).hexdigest()[:20]
+
+
+def cache_token(preset="default", **params) -> str:
+    """The preset part of a cached talker's file name: the preset, and the opt-in variants
+    (``_calibrated``, ``_tissue``) so that the cache keeps one entry of each apart."""
+    out = preset
+    if params.get("kinematics", "classic") != "classic":
+        out += f"_{params['kinematics']}"
+    if params.get("tissue", False):
+        out += "_tissue"
+    return out
+
+
+def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=False, **params) -> Corpus:
+    """The synthetic corpus for ``preset``, generated once and cached.
+
+    Parameters
+    ----------
+    preset : {"small", "default", "paper", "multi"}
+    progress : callable(stage, done, total) or None
+    cache_dir : path or None
+        Overrides ``$LIPSPACE_CACHE_DIR`` and the user cache folder.
+    audio : bool, default=False
+        Give every utterance speech audio (:mod:`engine.phonetics.speech_audio`, espeak-ng),
+        written once beside the cached corpus (``<cache file>-audio/``). Without
+        espeak-ng the corpus has no audio and its ``history`` says why.
+    **params
+        Further :class:`SyntheticTalker` parameters (``seed``, ``n_sentences``, ...).
+
+    Returns
+    -------
+    Corpus
+    """
+    talker = SyntheticTalker(preset=preset, **params)
+    talker._validate()
+    folder = cache_folder(cache_dir)
+    key = {k: v for k, v in talker.get_params().items() if not (k in _VARIANT_DEFAULTS and v == _VARIANT_DEFAULTS[k])}
+    path = folder / f"synthetic-{cache_token(preset, **params)}-{_cache_key(key)}.npz"
+    if path.is_file():
+        report(progress, "loading cache", 0, 1)
+        try:
+            corpus = Corpus.load(path)
+            # the lip model's unit and axes (cache files written before corpora named them)
+            corpus.units, corpus.axes = "mm", LIP_MODEL_AXES
+            report(progress, "loading cache", 1, 1)
+            return _with_audio(corpus, path, progress) if audio else corpus
+        except (CorpusError, OSError, ValueError):
+            pass  # damaged cache file: regenerate it
+    corpus = talker.generate(progress=progress)
+    try:
+        report(progress, "saving cache", 0, 1)
+        corpus.save(path)
+        report(progress, "saving cache", 1, 1)
+    except OSError:
+        pass  # a read-only cache folder only costs regeneration next time
+    return _with_audio(corpus, path, progress) if audio else corpus
+
+
+def _with_audio(corpus, path, progress):
+    """The corpus with speech audio in ``<path stem>-audio/``, or without it and a note why."""
+    import subprocess
+
+    from engine.phonetics.speech_audio import SpeechAudioUnavailable, add_speech_audio
+
+    try:
+        return add_speech_audio(corpus, path.with_name(path.stem + "-audio"), progress=progress)
+    except SpeechAudioUnavailable as exc:
+        corpus.history.append(f"speech audio: none; {exc}")
+    except (OSError, ValueError, subprocess.SubprocessError) as exc:
+        corpus.history.append(f"speech audio: none; generating it failed ({exc})")
+    return corpus

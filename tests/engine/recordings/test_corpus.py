@@ -1,0 +1,75 @@
+import numpy as np
+import pytest
+
+from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
+
+
+def make(frames=None, utts=None, **kw):
+    if frames is None:
+        frames = np.random.default_rng(0).standard_normal((20, 6)).astype(np.float32)
+    if utts is None:
+        utts = [Utterance("a", 0, 10, ((0.0, 0.05, "p"), (0.05, 0.15, "aa"))), Utterance("b", 10, 20)]
+    return Corpus(frames=frames, rate=60.0, utterances=utts, **kw)
+
+
+def test_valid_corpus_properties():
+    c = make()
+    assert c.n_frames == 20 and c.n_points == 2 and c.bounds.tolist() == [[0, 10], [10, 20]]
+    assert c.utterance_index.tolist() == [0] * 10 + [1] * 10
+    mids, labels, utt, st, en = c.phone_table()
+    assert labels.tolist() == ["p", "aa"]
+    assert mids.tolist() == [2, 6]  # 0.025 s * 60 = 1.5 -> 2 ; 0.1 s -> 6
+    assert isinstance(c.utterances[0].phones[0], PhoneInterval)
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(frames=np.full((20, 6), np.nan)), "NaN/inf"),
+        (dict(frames=np.ones((20, 5))), "multiple of dims"),
+        (dict(utts=[Utterance("a", 0, 10), Utterance("b", 10, 10), Utterance("c", 10, 20)]), "is empty"),
+        (dict(utts=[Utterance("a", 0, 10), Utterance("b", 11, 20)]), "starts at frame 11"),
+        (dict(utts=[Utterance("a", 0, 10)]), "cover 10 frames"),
+        (dict(utts=[Utterance("a", 0, 10, ((0.0, 0.5, "p"),)), Utterance("b", 10, 20)]), "outside the utterance"),
+        (dict(utts=[Utterance("a", 0, 10, ((0.0, 0.1, "p"), (0.05, 0.12, "b"))), Utterance("b", 10, 20)]),
+         "overlap"),
+        (dict(utts=[Utterance("a", 0, 10, ((0.1, 0.05, "p"),)), Utterance("b", 10, 20)]), "not after start"),
+        (dict(utts=[Utterance("a", 0, 10), Utterance("a", 10, 20)]), "appears twice"),
+        (dict(faces=np.array([[0, 1, 5]])), "faces index"),
+        (dict(point_names=["x"]), "point names"),
+        (dict(latent={"jaw": np.zeros(3)}), "latent"),
+    ],
+)
+def test_bad_corpora_raise(kwargs, message):
+    with pytest.raises(CorpusError, match=message):
+        make(**kwargs)
+
+
+def test_nan_message_names_frame():
+    F = np.zeros((20, 6), np.float32)
+    F[7, 3] = np.inf
+    with pytest.raises(CorpusError, match="frame 7 column 3"):
+        make(frames=F)
+
+
+def test_save_load_round_trip(tmp_path):
+    c = make(faces=np.array([[0, 1, 0]]), point_names=["l", "r"], latent={"jaw": np.arange(20.0)})
+    p = c.save(tmp_path / "c.npz")
+    d = Corpus.load(p)
+    np.testing.assert_array_equal(d.frames, c.frames)
+    assert d.utterances == c.utterances and d.point_names == ["l", "r"] and d.rate == 60.0
+    np.testing.assert_array_equal(d.latent["jaw"], c.latent["jaw"])
+    assert [f.name for f in tmp_path.iterdir()] == ["c.npz"]  # no temp file left behind
+
+
+def test_load_rejects_foreign_npz(tmp_path):
+    np.savez(tmp_path / "x.npz", a=np.zeros(3))
+    with pytest.raises(CorpusError, match="not a Lipspace corpus"):
+        Corpus.load(tmp_path / "x.npz")
+
+
+def test_subset_keeps_phones_and_reindexes():
+    c = make()
+    s = c.subset(["b"])
+    assert s.n_frames == 10 and s.utterances[0].start == 0
+    np.testing.assert_array_equal(s.frames, c.frames[10:])
