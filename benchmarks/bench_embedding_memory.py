@@ -41,7 +41,8 @@ def features(n_frames: int, n_points: int, seed: int = 0):
     """Dynamic features G (N, 2m) of a smooth random trajectory of ``n_points`` 3-D points."""
     import numpy as np
 
-    from engine.manifold.dynamics import DynamicFeatures, velocities
+    from engine.manifold.dynamics import DynamicFeatures
+    from engine.recordings.bounds import velocities
     from engine.manifold.shape import ShapeSpace
 
     rng = np.random.default_rng(seed)

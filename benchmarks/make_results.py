@@ -48,7 +48,7 @@ CORPORA = ("default", "held-out", "haskins", "faces")
 SECTION_FORMAT = 2
 PROTOCOLS = ("states", "oracle", "phones")
 #: code whose change makes a cached section stale
-CODE = ("engine.evaluation.protocols", "engine.evaluation.protocol_methods", "engine.evaluation.protocol_report", "engine.synthesis.learnt_paths",
+CODE = ("engine.evaluation.protocols", "engine.synthesis.protocol_methods", "engine.evaluation.protocol_report", "engine.synthesis.learnt_paths",
         "engine.synthesis.statepaths", "engine.synthesis.dominance", "engine.synthesis.sliding_window", "engine.synthesis.unitselection", "engine.synthesis.viterbi",
         "engine.graph.states", "engine.manifold.model", "engine.manifold.embedding", "engine.manifold.shape", "engine.manifold.dynamics", "engine.talker.synthetic",
         "engine.phonetics.targets", "engine.recordings.kinematics", "engine.evaluation.paired", "engine.recordings.registration", "engine.manifold.inverse_local")

@@ -100,7 +100,7 @@ def measure(name, corpus):
     from engine.manifold.class_agreement import class_agreement
     from engine.recordings.kinematics import lip_aperture
     from engine.manifold.model import Manifold
-    from engine.evaluation.talker_report import components_of_total
+    from engine.talker.report import components_of_total
 
     tracemalloc.start()
     t = time.perf_counter()

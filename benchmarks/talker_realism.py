@@ -1,6 +1,6 @@
 """How real the synthetic talker is to the method: generation time, X scree, Y1-3 variance,
 and the tangent classes' agreement with the exact ground truth next to the trivial
-Delta F^x_1 rule (engine.evaluation.talker_report), for the default and the held-out talker; and the
+Delta F^x_1 rule (engine.talker.report), for the default and the held-out talker; and the
 scree of four articulograph sensors (upper and lower lip, left corner, jaw) on the talker
 (engine.talker.virtual_sensors) beside the same sensors of real speakers (the Haskins IEEE pair,
 when --haskins-dir holds it).
@@ -50,7 +50,7 @@ def main(argv=None):
     from engine.manifold.model import Manifold
     from engine.talker.lipmodel import CONTROL_NAMES, LipModel
     from engine.talker.synthetic import HELD_OUT_TALKER, PRESETS, SyntheticTalker, speaker_anatomy
-    from engine.evaluation.talker_report import articulation_report, format_articulation, format_realism, talker_realism
+    from engine.talker.report import articulation_report, format_articulation, format_realism, talker_realism
     from engine.talker.virtual_sensors import SENSOR_ROLES, sensor_motion, sensor_scree, virtual_sensors
 
     print(f"BLAS: {blas_kernel()}")

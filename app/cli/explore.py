@@ -74,8 +74,6 @@ def run(args) -> int:
     from app.cli import CliError
 
     if args.camera is not None:  # the live mirror (app.models.live)
-        from app.views.live_view import run_live
-
         return run_live(args.manifold or args.file, args.camera, interocular_mm=args.interocular_mm)
     if args.file is not None:
         if args.kinematics != "classic":
@@ -98,3 +96,29 @@ def run(args) -> int:
 
     return launch(args.file, preset=args.preset, session=session, restore=args.restore, kinematics=args.kinematics,
                   notes=notes)
+
+
+def run_live(manifold_path, source, *, interocular_mm: float = 63.0) -> int:
+    """``lipspace explore --manifold M --camera SOURCE``: check the inputs, then open the window."""
+    from app.cli import CliError
+    from app.models.live import camera_source, check_video_manifold
+    from engine.manifold.model import Manifold, ManifoldFileError
+
+    if manifold_path is None:
+        raise CliError("--camera needs --manifold M: a manifold built from a video import "
+                       "(lipspace import talk.mp4 -o c.npz; lipspace build c.npz -o M)")
+    try:
+        camera_source(source)
+        manifold = Manifold.load(manifold_path)
+        check_video_manifold(manifold)
+        from engine.io.video.facemesh import require_mediapipe
+
+        require_mediapipe()
+    except (ValueError, ManifoldFileError, FileNotFoundError, ImportError) as exc:
+        raise CliError(f"{manifold_path}: {exc}" if "manifold was built" in str(exc) else str(exc)) from None
+    try:
+        from app.views.live_view import launch_live
+
+        return launch_live(manifold, source, interocular_mm=interocular_mm)
+    except ValueError as exc:  # the camera / stream cannot be opened
+        raise CliError(str(exc)) from None

@@ -92,7 +92,7 @@ def run(args) -> int:
         raise CliError(f"--dpi {args.dpi:g}: must be from 10 to at most {MAX_DPI} (print quality is 300-600)")
     if outdir.exists() and not outdir.is_dir():
         raise CliError(f"{outdir}: exists and is not a directory")
-    from app.figures._style import parse_width
+    from app.figures.style import parse_width
 
     try:
         width = parse_width(args.width)

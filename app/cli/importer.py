@@ -274,7 +274,7 @@ def _check_numbers(args) -> None:
     import math
 
     from app.cli import CliError
-    from engine.io._util import MOTION_RATE_RANGE
+    from engine.io import MOTION_RATE_RANGE
 
     lo, hi = MOTION_RATE_RANGE
     if args.rate is not None and not (math.isfinite(args.rate) and lo <= args.rate <= hi):

@@ -152,7 +152,7 @@ def run(args) -> int:
     print(f"shape X     {k} components hold {100 * sh.recovered_ratio_[k - 1]:.2f}% of the variance of the "
           f"{len(sh.scree_)} computed ({100 * sh.explained_variance_ratio_.sum():.2f}% of the total); "
           f"scree {', '.join(f'{100 * v:.1f}' for v in sh.scree_[:5])}%")
-    from engine.evaluation.talker_report import components_of_total
+    from engine.talker.report import components_of_total
 
     n_comp = len(sh.scree_)
     (n_total,) = components_of_total(sh.scree_, (0.95,))

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib import patheffects
 
-from app.figures._style import (ARBITRARY, below, frame_sv, journal, legend_below, new_figure, one_column,
+from app.figures.style import (ARBITRARY, below, frame_sv, journal, legend_below, new_figure, one_column,
                                 require_fitted, y3)
 
 __all__ = ["make_fig4", "PHONE_COLOURS", "ellipse_points"]
@@ -102,7 +102,7 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
         ax.set_xlabel(tan.sv_labels()[0])
         ax.set_ylabel(tan.sv_labels()[1])
     else:
-        from app.figures._style import plane_trace
+        from app.figures.style import plane_trace
 
         zl = plane_trace(ax, tan, (a, b), Y[np.concatenate([pc.members(p) for p in found])] if found else Y)
         ax.set_xlabel(f"$Y_{a + 1}$ {ARBITRARY}")

@@ -5,7 +5,7 @@ import numpy as np
 from matplotlib.colors import Normalize
 from matplotlib.lines import Line2D
 
-from app.figures._style import (ARBITRARY, CLASS_COLOURS, below, CMAP, CMAP_NEAR, ORIGINAL, S_COLOUR, UNREACHABLE,
+from app.figures.style import (ARBITRARY, CLASS_COLOURS, below, CMAP, CMAP_NEAR, ORIGINAL, S_COLOUR, UNREACHABLE,
                                  V_COLOUR, arrow, density, font_pt, frame_sv, journal, legend_below, marker_size,
                                  new_figure, one_column, plane_trace, rasterize_for, require_fitted, state_sv,
                                  sv_basis, y3)
@@ -56,7 +56,7 @@ def make_fig2a(manifold, *, utterance=None, n_local: int = 4, n_traj: int = 45, 
     trajectory (``n_traj`` frames of ``utterance``) as black arrows. The panels' sizes
     follow the data's extents and the figure's height follows them, so the equal-aspect
     panels fill their cells; the density colour bar and the legend lie below them. On one
-    journal column (:func:`app.figures._style.one_column`) the legend takes the 3-D view's
+    journal column (:func:`app.figures.style.one_column`) the legend takes the 3-D view's
     cell: a 3-D view an inch wide shows nothing the projections do not.
     """
     require_fitted(manifold, "tangent_")

@@ -7,7 +7,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
-from app.figures._style import (ARBITRARY, CMAP, draw_lips, fit_contour, font_pt, frame_sv, journal, legend_below,
+from app.figures.style import (ARBITRARY, CMAP, draw_lips, fit_contour, font_pt, frame_sv, journal, legend_below,
                                 new_figure, one_column, require_fitted, scale_bar, shape_points, shape_view,
                                 shared_limits, talker_frame, y3)
 
@@ -41,11 +41,11 @@ def make_fig1a(manifold, *, components=(0, 1), n_sd: float = 2.0, view=None, wid
     n_sd : float, default=2.0
     view : (int, int) or None
         Axes (horizontal, vertical) of the talker's view coordinates
-        (:func:`app.figures._style.shape_points`) to draw; None: the front view when the
+        (:func:`app.figures.style.shape_points`) to draw; None: the front view when the
         talker's frame is known (:func:`engine.recordings.orientation.anatomical_frame`), else the axes
-        of the widest spread of the mean shape (:func:`app.figures._style.front_view`).
+        of the widest spread of the mean shape (:func:`app.figures.style.front_view`).
     width : float, optional
-        Figure width in inches (default 180 mm, two journal columns; see :func:`app.figures._style.journal`).
+        Figure width in inches (default 180 mm, two journal columns; see :func:`app.figures.style.journal`).
     """
     require_fitted(manifold, "shape_")
     shape, corpus = manifold.shape_, manifold.corpus_
@@ -145,7 +145,7 @@ def make_fig1b(manifold, *, max_components: int | None = 30, width=None, height:
 def make_fig2c(manifold, *, n_shapes: int = 7, quantiles=(0.03, 0.97), view=None, width=None):
     """Fig. 2(c): lip shapes indexed by increasing S, the opening (the lip aperture).
 
-    Frames are ordered by their S coordinate (:func:`app.figures._style.frame_sv`). For each of
+    Frames are ordered by their S coordinate (:func:`app.figures.style.frame_sv`). For each of
     ``n_shapes`` evenly spaced quantiles in ``quantiles`` the shape drawn is the mean
     F^x of the frames in that quantile bin, reconstructed to the lip points
     (``shape_.inverse_transform``): an honest average of real frames, no inverse map.

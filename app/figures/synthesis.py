@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.figures._style import (ARBITRARY, GENERATED, ORIGINAL, below, font_pt, journal, legend_below, new_figure,
+from app.figures.style import (ARBITRARY, GENERATED, ORIGINAL, below, font_pt, journal, legend_below, new_figure,
                                 one_column, place_labels, require_fitted)
 
 __all__ = ["make_fig3", "default_utterance"]

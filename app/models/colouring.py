@@ -15,7 +15,10 @@ While ellipsoids are shown the points are dimmed (:func:`dim`) so the clusters s
 """
 from __future__ import annotations
 
+import functools
+import json
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -92,12 +95,34 @@ class Coloring:
 
 
 # ------------------------------------------------------------------------------ helpers
-def _map(values, cmap: str, clim) -> np.ndarray:
-    from matplotlib import colormaps
+_TABLE_FILE = Path(__file__).resolve().parent / "colour_tables.json"
 
+
+@functools.lru_cache(maxsize=None)
+def colour_table(name: str) -> np.ndarray:
+    """RGB entries (n, 3) float64 of colormap ``name``, read from the shipped ``colour_tables.json``
+    (matplotlib's entries, written by :mod:`app.figures.colour_tables`; no matplotlib import here)."""
+    tables = json.loads(_TABLE_FILE.read_text())
+    if name not in tables:
+        raise KeyError(f"no colour table {name!r} in {_TABLE_FILE}; it has {', '.join(sorted(tables))}")
+    table = np.asarray(tables[name], dtype=np.float64)
+    table.setflags(write=False)
+    return table
+
+
+def colormap_rgb(name: str, t) -> np.ndarray:
+    """Colours (..., 3) of ``t`` in [0, 1] on the 256-entry colormap ``name``, as matplotlib's
+    ``colormaps[name](t)`` gives them (entry ``floor(t * 256)``, the last for t = 1)."""
+    table = colour_table(name)
+    n = table.shape[0]
+    idx = np.clip((np.asarray(t, dtype=np.float64) * n).astype(np.int64), 0, n - 1)
+    return table[idx]
+
+
+def _map(values, cmap: str, clim) -> np.ndarray:
     lo, hi = clim
     t = (np.asarray(values, dtype=np.float64) - lo) / (hi - lo if hi > lo else 1.0)
-    rgb = colormaps[cmap](np.clip(np.nan_to_num(t, nan=0.0), 0, 1))[:, :3]
+    rgb = colormap_rgb(cmap, np.clip(np.nan_to_num(t, nan=0.0), 0, 1))
     rgb[~np.isfinite(values)] = UNREACHABLE_RGB
     return rgb.astype(np.float32)
 
@@ -130,11 +155,9 @@ def categorical_palette(n: int) -> np.ndarray:
     (tab20 stores light/dark pairs side by side), without their greys (grey means "no
     value" and "dimmed" in the explorer), cycled when ``n`` exceeds 54.
     """
-    from matplotlib import colormaps
-
     parts = []
     for name, step in (("tab20", 2), ("tab20b", 4), ("tab20c", 4)):
-        c = np.asarray(colormaps[name].colors)[:, :3]
+        c = colour_table(name)
         parts.append(np.concatenate([c[k::step] for k in range(step)]))
     base = np.concatenate(parts)
     base = base[np.ptp(base, axis=1) > 0.05]  # drop the greys
@@ -168,13 +191,11 @@ def hop_table(max_hops: int, direction: str) -> tuple[np.ndarray, float, float]:
     lo, hi : float
         The scale's range: each whole hop sits in the middle of its band.
     """
-    from matplotlib import colormaps
-
     H = max(int(max_hops), 0)
     a, b = _FAMILY_SPAN
     t = np.linspace(a, b, H + 1) if H > 0 else np.array([a])
-    fut = colormaps[FUTURE_CMAP](t)[:, :3]             # 0, 1, ..., H
-    past = colormaps[PAST_CMAP](t)[1:, :3][::-1]       # -H, ..., -1
+    fut = colormap_rgb(FUTURE_CMAP, t)                 # 0, 1, ..., H
+    past = colormap_rgb(PAST_CMAP, t)[1:][::-1]        # -H, ..., -1
     if direction == "future":
         table, lo = fut, -0.5
     elif direction == "past":

@@ -13,11 +13,11 @@ import sys
 
 from PySide6 import QtCore, QtWidgets
 
-from app.models.live import LiveSession, camera_source, check_video_manifold
+from app.models.live import LiveSession
 from app.views._common import RenderScheduler, close_plotter, make_plotter
 from app.views.live_scene import LiveScene
 
-__all__ = ["LiveWindow", "launch_live", "run_live"]
+__all__ = ["LiveWindow", "launch_live"]
 
 POLL_MS = 33
 
@@ -70,26 +70,3 @@ def launch_live(manifold, source, *, interocular_mm: float = 63.0) -> int:
     win = LiveWindow(session)
     win.show()
     return int(app.exec())
-
-
-def run_live(manifold_path, source, *, interocular_mm: float = 63.0) -> int:
-    """``lipspace explore --manifold M --camera SOURCE``: check the inputs, then open the window."""
-    from app.cli import CliError
-    from engine.manifold.model import Manifold, ManifoldFileError
-
-    if manifold_path is None:
-        raise CliError("--camera needs --manifold M: a manifold built from a video import "
-                       "(lipspace import talk.mp4 -o c.npz; lipspace build c.npz -o M)")
-    try:
-        camera_source(source)
-        manifold = Manifold.load(manifold_path)
-        check_video_manifold(manifold)
-        from engine.io.video.facemesh import require_mediapipe
-
-        require_mediapipe()
-    except (ValueError, ManifoldFileError, FileNotFoundError, ImportError) as exc:
-        raise CliError(f"{manifold_path}: {exc}" if "manifold was built" in str(exc) else str(exc)) from None
-    try:
-        return launch_live(manifold, source, interocular_mm=interocular_mm)
-    except ValueError as exc:  # the camera / stream cannot be opened
-        raise CliError(str(exc)) from None

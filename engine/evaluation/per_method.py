@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from engine.manifold.model import project_x
 from engine.progress import ProgressFn, report
 
 __all__ = ["evaluate", "EvaluationResult", "EVALUATION_METHODS", "DEFAULT_METHODS", "split_utterances",
@@ -155,29 +156,6 @@ def trajectory_errors(manifold, Fx_hat, frames) -> dict:
     err_x, err_p, _ = _error_arrays(manifold, Fx_hat, frames, dims)
     return {"rmse_x": float(np.sqrt((err_x ** 2).mean())), "mean_point_error": float(err_p.mean()),
             "max_point_error": float(err_p.max()), "frames": int(err_x.size)}
-
-
-def project_x(manifold, Fx) -> np.ndarray:
-    """Out-of-sample F^y of one utterance-long trajectory given in X.
-
-    The fitted manifold's own pipeline without its shape stage: velocities inside the
-    trajectory (one utterance), the fitted dynamic features, the embedding's
-    out-of-sample transform. ``project_x(m, m.shape_.transform(F))`` is ``m.project(F)``.
-
-    Parameters
-    ----------
-    manifold : Manifold
-        Fitted.
-    Fx : ndarray of shape (n, m)
-        Shape coordinates of consecutive frames of one utterance.
-
-    Returns
-    -------
-    ndarray of shape (n, n_embedding), float32
-    """
-    Fx = np.atleast_2d(np.asarray(Fx, dtype=np.float32))
-    G = manifold.dynamics_.transform(Fx, np.array([[0, Fx.shape[0]]]))
-    return manifold.embedding_.transform(G)
 
 
 def trajectory_y(manifold, trajectory, dims=Y_DIMS) -> np.ndarray:

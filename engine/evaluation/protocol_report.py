@@ -67,7 +67,7 @@ class ProtocolResult:
     # ---------------------------------------------------------------- building
     @classmethod
     def build(cls, per, *, n_boot, random_state, inverse, **kw):
-        """From per-utterance sums (:func:`engine.evaluation.protocol_methods.scores` plus protocol, method, utterance)."""
+        """From per-utterance sums (:func:`engine.synthesis.protocol_methods.scores` plus protocol, method, utterance)."""
         rows, comps = [], []
         keys = list(dict.fromkeys((p["protocol"], p["method"]) for p in per))
         slim = [_per_utterance(p) for p in per]

@@ -3,14 +3,14 @@
 Whole utterances are held out; everything is fitted on the rest. The targets of a
 held-out utterance are its phone mid-point frames (collisions merged; kinematic
 landmarks for a corpus without phones). The protocols and their methods are those of
-:mod:`engine.evaluation.protocol_methods`: ``states`` (the target states only), ``oracle`` (the
+:mod:`engine.synthesis.protocol_methods`: ``states`` (the target states only), ``oracle`` (the
 true X at the targets and the target states) and ``phones`` (the phones and their times
 only; run when the corpus has phone labels).
 
 Scores over the frames from the first to the last target, every method alike:
 ``rmse_x`` (Euclidean error in X, RMS over frames), ``rmse_y`` (the first :data:`Y_DIMS`
 dims of Y; *every* trajectory projected out-of-sample through the same fitted pipeline,
-:func:`engine.evaluation.per_method.project_x`, against the held-out utterance's own projection),
+:func:`engine.manifold.model.project_x`, against the held-out utterance's own projection),
 ``lve`` (lip-vertex error: per frame the largest Euclidean error over the points, in the
 corpus's units, averaged over frames), ``vel`` (RMSE of the velocity F^x', the first
 difference, against the real one) and ``smooth`` (RMS second difference of the
@@ -30,293 +30,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from engine.manifold.inverse_local import NEIGHBOR_CANDIDATES, select_neighbors
-from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, BlendAccumulator, fit_blend
 from engine.progress import ProgressFn, report
-from engine.evaluation.protocol_methods import (PROTOCOL_METHODS, PROTOCOLS, SLIDING_WINDOW_CANDIDATES, PhoneModels,
-                                     has_phone_labels, scores, trajectories)
-from engine.synthesis.statepaths import StateModel, anchor
+from engine.synthesis.protocol_methods import (PROTOCOL_METHODS, PROTOCOLS, PhoneModels, has_phone_labels, scores,
+                                               trajectories)
+from engine.synthesis.trajectory import phone_mids
+from engine.synthesis.statepaths import StateModel
+from engine.synthesis.validation import (FRAMES_PER_STATE_CANDIDATES, MIN_VALIDATION_UTTERANCES,
+                                         SMOOTHING_CANDIDATES, STATE_DIM_CANDIDATES, Y_DIMS, mid_frames,
+                                         select_settings)
 
 __all__ = ["PROTOCOLS", "PROTOCOL_METHODS", "STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES",
            "SMOOTHING_CANDIDATES", "Y_DIMS", "MIN_VALIDATION_UTTERANCES",
-           "select_settings", "evaluate_protocols", "hermite_only_blend"]
-
-STATE_DIM_CANDIDATES = (3, 5, 8)
-#: K candidates: one state per this many training frames (30: the state graph's default)
-FRAMES_PER_STATE_CANDIDATES = (30, 15, 8)
-SMOOTHING_CANDIDATES = (0.0, 1.0, 2.0, 3.0, 4.0, 6.0)
-Y_DIMS = 3
-#: training utterances below which there is no validation split (fixed defaults instead)
-MIN_VALIDATION_UTTERANCES = 3
-
-
-def _slice_rows(A, utts):
-    return np.concatenate([A[u.start:u.stop] for u in utts])
-
-
-def _bounds(utts):
-    n = np.cumsum([0] + [u.n_frames for u in utts])
-    return np.column_stack([n[:-1], n[1:]])
-
-
-def _phone_mids(corpus, utts):
-    """(mid-point frames into the concatenated rows of ``utts``, labels) of their phones."""
-    mids, labels, off = [], [], 0
-    for u in utts:
-        for p in u.phones:
-            mids.append(off + corpus.time_to_frame(u, p.mid) - u.start)
-            labels.append(p.label)
-        off += u.n_frames
-    return np.array(mids, dtype=np.int64), np.array(labels, dtype=str)
-
-
-def _mid_frames(manifold, uid, corpus=None):
-    from engine.phonetics.targets import targets_from_utterance
-
-    return targets_from_utterance(manifold, uid, corpus=corpus, on_collision="merge")
-
-
-def hermite_only_blend(m) -> dict:
-    """Blend weights that leave the state-velocity Hermite spline unchanged (no validation data)."""
-    return {"base_index": [0] * int(m), "neighbor_index": [0] * int(m), "beta": [0.0] * int(m), "sq_error": None,
-            "sq_bases": None, "frames": 0}
-
-
-def _defaults(manifold, cand, n_states, ids, phones):
-    d = min(cand, key=lambda x: abs(x - 5))
-    m = int(manifold.Fx_.shape[1])
-    protos = PROTOCOLS if phones else PROTOCOLS[:2]
-    return {"state_dims": d, "n_neighbors": 40, "n_states": n_states, "frames_per_state": None,
-            "sigma": {f"{p}/viterbi": 2.0 for p in protos}, "blend": {p: hermite_only_blend(m) for p in protos},
-            "sliding_window": SLIDING_WINDOW_CANDIDATES[-2], "protocols": list(protos), "validation": {},
-            "method_validation": {}, "best": {}, "val_ids": [],
-            "note": f"only {len(ids)} training utterance(s): no validation split; fixed defaults (state_dims {d}, "
-                    f"default K, k 40, Viterbi smoothing 2 frames; the manifold method without validated learnt "
-                    f"share is the state-velocity Hermite spline)"}
-
-
-class _Val:
-    """The validation utterances with what every candidate setting needs of them."""
-
-    def __init__(self, manifold, val):
-        self.m, self.utts = manifold, val
-        self.targets = [_mid_frames(manifold, u.id) for u in val]
-        self.X = [np.asarray(manifold.Fx_[u.start:u.stop], dtype=np.float64) for u in val]
-        self.F = [manifold.corpus_.frames[u.start:u.stop] for u in val]
-
-    def span(self, i):
-        f = self.targets[i].frames
-        return int(f[0]), int(f[-1]) + 1
-
-
-def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=STATE_DIM_CANDIDATES,
-                    sigmas=SMOOTHING_CANDIDATES, neighbors=NEIGHBOR_CANDIDATES, n_states=None,
-                    frames_per_state=FRAMES_PER_STATE_CANDIDATES, phones=None,
-                    sliding_windows=SLIDING_WINDOW_CANDIDATES, progress: ProgressFn = None) -> dict:
-    """Choose every setting on a validation split of the training utterances and measure every method there.
-
-    The fitted manifold's F^y stands for the training frames (the embedding saw the
-    validation utterances, as it sees all training data; the *states*, their
-    transitions, the learnt paths, the inverse maps and the phone models are fitted on
-    the fitting part only). For each candidate ``state_dims`` and K (``n_states`` if
-    given, else one state per ``frames_per_state`` frames): the manifold method's share
-    of the learnt paths per shape component (:func:`engine.synthesis.learnt_paths.fit_blend`) in
-    the states and oracle protocols. The (dims, K) whose manifold method has the smallest
-    states-protocol validation RMSE X win; at them the Viterbi path's smoothing per
-    protocol, the phones protocol's lattice blend and sliding-window setting, and every
-    method's validation RMSE X and LVE (the manifold method's with its weights fitted on
-    one half of the validation utterances and scored on the other, and vice versa).
-
-    Parameters
-    ----------
-    phones : bool or None
-        Run the phones protocol (None: when the corpus has phone labels).
-
-    Returns
-    -------
-    dict
-        ``state_dims``, ``frames_per_state`` (None when K was given), ``n_states``,
-        ``n_neighbors``, ``sigma`` ("protocol/viterbi" -> frames), ``blend`` (protocol ->
-        weights), ``sliding_window`` (context, output window, alpha), ``protocols``,
-        ``validation`` (per candidate "dims/frames-per-state"), ``method_validation``
-        (protocol -> method -> {"rmse_x", "lve"}), ``best`` (protocol -> method),
-        ``val_ids``, ``note``.
-    """
-    c = manifold.corpus_
-    ids = [u.id for u in c.utterances]
-    maxd = int(manifold.Fy_.shape[1])
-    cand = [int(d) for d in state_dims if 1 <= int(d) <= maxd]
-    if not cand:
-        raise ValueError(f"no candidate state_dims in {list(state_dims)} fits the {maxd} dims of F^y")
-    phones = has_phone_labels(c) if phones is None else bool(phones)
-    if len(ids) < MIN_VALIDATION_UTTERANCES:
-        return _defaults(manifold, cand, n_states, ids, phones)
-    rng = np.random.default_rng(random_state)
-    # at least two validation utterances where the corpus allows it: the manifold method's validation
-    # figure is then cross-fitted (weights from one half, scored on the other), never in-sample
-    n_val = min(len(ids) - 2, max(2 if len(ids) >= 4 else 1, int(round(val_fraction * len(ids)))))
-    val_ids = sorted(rng.choice(len(ids), size=n_val, replace=False).tolist())
-    val = [c.utterances[i] for i in val_ids]
-    fit = [u for i, u in enumerate(c.utterances) if i not in set(val_ids)]
-    Fy_fit, Fx_fit, Fxv_fit = (_slice_rows(A, fit) for A in (manifold.Fy_, manifold.Fx_, manifold.Fxv_))
-    b_fit = _bounds(fit)
-    mids = _phone_mids(c, fit) if phones else None
-    Fy_val, Fx_val = _slice_rows(manifold.Fy_, val), _slice_rows(manifold.Fx_, val).astype(np.float64)
-    V = _Val(manifold, val)
-    N_fit = len(Fy_fit)
-    if n_states is not None:
-        Ks = {None: max(2, int(round(n_states * N_fit / len(manifold.Fy_))))}
-    else:
-        Ks = {int(f): max(2, min(N_fit, int(round(N_fit / float(f))))) for f in frames_per_state}
-    table, best_key, best_err, best = {}, None, np.inf, None
-    steps = len(cand) * len(Ks) + 2
-    for j, d in enumerate(cand):
-        k, k_err = select_neighbors(Fy_fit, Fx_fit, Fy_val, Fx_val, n_dims=d, candidates=neighbors)
-        for i, (fps, K) in enumerate(Ks.items()):
-            report(progress, "validation", j * len(Ks) + i, steps)
-            sm = StateModel(state_dims=d, n_states=K, n_neighbors=k, random_state=random_state).fit(
-                Fy_fit, Fx_fit, Fxv_fit, b_fit, phones=mids)
-            acc = _accumulate(sm, V, ("states", "oracle"))
-            fitted = {p: fit_blend(_total(acc[p])) for p in acc}
-            frames = fitted["states"]["frames"]
-            row = {f"{p}/{name}": float(np.sqrt(sum(v) / frames)) for p in fitted
-                   for name, v in (("manifold", fitted[p]["sq_error"]), ("sv-hermite", fitted[p]["sq_bases"][0]))}
-            table[f"{d}/{fps}"] = {"dims": d, "frames_per_state": fps, "K": sm.n_states_, "k": k, "k_errors": k_err,
-                                   "rmse_x": row}
-            if row["states/manifold"] < best_err:
-                best_key, best_err, best = f"{d}/{fps}", row["states/manifold"], (sm, acc, fitted)
-    sm, acc, fitted = best
-    t = table[best_key]
-    protos = ("states", "oracle", "phones") if phones else ("states", "oracle")
-    report(progress, "validation", steps - 2, steps)
-    # the Viterbi path's smoothing per protocol, at the chosen states
-    lattice = [sm.phone_states(tg.frames, tg.labels) for tg in V.targets] if phones else None
-    sigma = _viterbi_sigmas(sm, V, sigmas, protos, lattice)
-    settings = {"state_dims": t["dims"], "frames_per_state": t["frames_per_state"], "n_neighbors": t["k"],
-                "sigma": {f"{p}/viterbi": s for p, s in sigma.items()}, "protocols": list(protos)}
-    models = None
-    if phones:
-        acc["phones"] = _accumulate(sm, V, ("phones",), lattice)["phones"]
-        fitted["phones"] = fit_blend(_total(acc["phones"]))
-        sw, sw_err = _choose_sliding_window(manifold, fit, V, sliding_windows)
-        settings["sliding_window"], settings["sliding_window_errors"] = sw, sw_err
-        models = PhoneModels.fit(manifold, fit, sliding=sw, exclude=[u.id for u in val])
-    settings["blend"] = fitted
-    report(progress, "validation", steps - 1, steps)
-    settings["method_validation"] = _method_validation(sm, settings, V, acc, models, protos, lattice)
-    settings["best"] = {p: min(r, key=lambda name: r[name]["rmse_x"]) for p, r in settings["method_validation"].items()}
-    fps = t["frames_per_state"]
-    settings.update(n_states=n_states if fps is None else max(2, int(round(len(manifold.Fy_) / fps))),
-                    validation=table, val_ids=[ids[i] for i in val_ids],
-                    note=f"chosen on {len(val_ids)} of {len(ids)} training utterances held out from the states")
-    report(progress, "validation", steps, steps)
-    return settings
-
-
-def _accumulate(sm, V, protos, lattice=None):
-    """Per protocol, per validation utterance: the blend sums of Hermite, pooled paths and truth."""
-    out = {p: [] for p in protos}
-    for i, tg in enumerate(V.targets):
-        f, n = tg.frames, tg.n_frames
-        lo, hi = V.span(i)
-        X = V.X[i]
-        st = sm.predict(manifold_y(V.m, V.utts[i])[f])
-        for p in protos:
-            s = lattice[i] if p == "phones" else st
-            xt = X[f] if p == "oracle" else None
-            B = sm.bases_x(f, s, n, xt)
-            P = sm.pooled_x(f, s, n, xt)
-            a = BlendAccumulator(len(BASES), len(NEIGHBOR_STEPS), X.shape[1])
-            a.add(B[:, lo:hi], P[:, lo:hi], X[lo:hi])
-            out[p].append(a)
-    return out
-
-
-def manifold_y(manifold, u):
-    """F^y (n, k) of a training utterance of the manifold."""
-    return np.asarray(manifold.Fy_[u.start:u.stop], dtype=np.float64)
-
-
-def _total(accs):
-    t = BlendAccumulator(*accs[0].dd.shape)
-    for a in accs:
-        t += a
-    return t
-
-
-def _viterbi_sigmas(sm, V, sigmas, protos, lattice):
-    sq = {(p, s): 0.0 for p in protos for s in sigmas}
-    for i, tg in enumerate(V.targets):
-        f, n = tg.frames, tg.n_frames
-        lo, hi = V.span(i)
-        X = V.X[i]
-        st = sm.predict(manifold_y(V.m, V.utts[i])[f])
-        paths = {}
-        if "states" in protos:
-            paths["states"] = paths["oracle"] = sm.path(f, st, n)[0]
-        if "phones" in protos:
-            paths["phones"] = sm.path(f, lattice[i], n)[0]
-        for p in protos:
-            for s in sigmas:
-                Xh = sm.path_x(paths[p], how="state-mean", sigma=s)
-                if p == "oracle":
-                    Xh = anchor(Xh, f, X[f])
-                sq[(p, s)] += float(((Xh - X)[lo:hi] ** 2).sum())
-    return {p: float(min(sigmas, key=lambda s: sq[(p, s)])) for p in protos}
-
-
-def _choose_sliding_window(manifold, fit, V, candidates):
-    from engine.synthesis.sliding_window import SlidingWindowRegressor
-    from engine.synthesis.trajectory import phone_sequences
-
-    seqs = phone_sequences(fit, manifold.Fx_)
-    rate = manifold.corpus_.rate
-    err = {}
-    for ctx, ow, alpha in candidates:
-        sw = SlidingWindowRegressor(context=int(ctx), output_window=int(ow), alpha=float(alpha)).fit(seqs, rate)
-        sq = n = 0
-        for i, tg in enumerate(V.targets):
-            lo, hi = V.span(i)
-            Xh = sw.predict(tg.phones, tg.n_frames, tg.rate)
-            sq += float(((Xh - V.X[i])[lo:hi] ** 2).sum())
-            n += hi - lo
-        err[f"{ctx}/{ow}/{alpha:g}"] = float(np.sqrt(sq / max(n, 1)))
-    best = min(err, key=err.get)
-    ctx, ow, alpha = best.split("/")
-    return (int(ctx), int(ow), float(alpha)), err
-
-
-def _method_validation(sm, settings, V, acc, models, protos, lattice):
-    """Validation RMSE X and LVE of every method at the chosen settings; the manifold's cross-fitted."""
-    halves = [[i for i in range(len(V.utts)) if i % 2 == h] for h in (0, 1)]
-    cross = {}
-    for p in protos:
-        w = [fit_blend(_total([acc[p][i] for i in half])) if half else settings["blend"][p] for half in halves]
-        cross[p] = {i: w[1 - h] for h in (0, 1) for i in halves[h]}  # each utterance scored with the other half's weights
-    sums = {}
-    mean_x = np.asarray(V.m.Fx_, np.float64).mean(axis=0)
-    for i, tg in enumerate(V.targets):
-        st = sm.predict(manifold_y(V.m, V.utts[i])[tg.frames])
-        trajs, _ = trajectories(sm, settings, tg, st, mean_x, phone_models=models, protocols=protos,
-                                lattice_states=None if lattice is None else lattice[i])
-        lo, hi = V.span(i)
-        for p in protos:
-            if len(V.utts) > 1:  # the manifold method scored with weights fitted on the other half
-                s = lattice[i] if p == "phones" else st
-                xt = V.X[i][tg.frames] if p == "oracle" else None
-                trajs[p]["manifold"] = _learnt(sm, tg.frames, s, tg.n_frames, cross[p][i], xt)
-            for name, X in trajs[p].items():
-                sc = scores(V.m, X, V.F[i], lo, hi)
-                a = sums.setdefault(p, {}).setdefault(name, [0.0, 0.0, 0])
-                a[0] += sc["sq_x"]
-                a[1] += sc["lve_sum"]
-                a[2] += sc["frames"]
-    return {p: {name: {"rmse_x": float(np.sqrt(a[0] / a[2])), "lve": a[1] / a[2]} for name, a in r.items()}
-            for p, r in sums.items()}
-
-
-def _learnt(sm, f, states, n, weights, x_targets):
-    return sm.learnt_x(f, states, n, weights, x_targets=x_targets)
+           "select_settings", "evaluate_protocols"]
 
 
 def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state=0, manifold_factory=None,
@@ -361,7 +86,7 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
     c = manifold.corpus_
     sm = StateModel(state_dims=d, n_states=settings.get("n_states"), n_neighbors=int(settings["n_neighbors"]),
                     random_state=random_state).fit(manifold.Fy_, manifold.Fx_, manifold.Fxv_, c.bounds,
-                                                   phones=_phone_mids(c, c.utterances) if phones else None)
+                                                   phones=phone_mids(c, c.utterances) if phones else None)
     models = None
     if "phones" in protos:
         models = PhoneModels.fit(manifold, c.utterances, sliding=tuple(settings["sliding_window"]))
@@ -372,7 +97,7 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
         u = corpus.utterance(uid)
         F = corpus.frames[u.start:u.stop]
         try:
-            tg = _mid_frames(manifold, uid, corpus)
+            tg = mid_frames(manifold, uid, corpus)
             Y = manifold.project(F).astype(np.float64)
             st = sm.predict(Y[tg.frames, :d])
             trajs, miss = trajectories(sm, settings, tg, st, mean_x, phone_models=models, protocols=protos)

@@ -7,18 +7,17 @@ numpy scalars, strings, lists of str, ``scipy.sparse`` matrices or None.
 :func:`read_npz` reads a file's arrays, large ones memory-mapped where the archive
 stores them uncompressed (as ``np.savez`` does): a manifold of ten million frames is
 then paged in from disk as it is used, not copied into memory whole.
-:func:`release_pages` gives back the resident pages of such a map after a pass over it.
+:func:`engine.files.mapped.release_pages` gives back the resident pages of such a map after a pass over it.
 """
 from __future__ import annotations
 
 import json
-import mmap
 import os
 
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["dump_estimator", "load_estimator", "read_npz", "NpzReadError", "release_pages", "MMAP_MIN_BYTES"]
+__all__ = ["dump_estimator", "load_estimator", "read_npz", "NpzReadError", "MMAP_MIN_BYTES"]
 
 #: arrays of at least this many bytes are memory-mapped by ``read_npz(..., memory_map=None)``
 MMAP_MIN_BYTES = 16 * 2**20
@@ -134,32 +133,6 @@ def _member_data(fh, info) -> int:
         raise ValueError(f"member {info.filename!r}: bad local file header")
     name_len, extra_len = struct.unpack("<HH", local[26:30])
     return info.header_offset + 30 + name_len + extra_len
-
-
-def release_pages(a) -> None:
-    """Give back the resident pages of the memory map under ``a`` (an ``np.memmap`` or a view of one).
-
-    The pages stay in the system's file cache; reading ``a`` again pages them back in. A pass
-    over a large mapped array (a finiteness check) then leaves the process's resident memory
-    as it was. Does nothing for an array in memory.
-    """
-    base = a
-    while base is not None and not isinstance(getattr(base, "_mmap", None), mmap.mmap):
-        base = getattr(base, "base", None)
-    mm = None if base is None else base._mmap
-    if mm is None or not hasattr(mm, "madvise") or not hasattr(mmap, "MADV_DONTNEED"):
-        return
-    try:
-        start = np.frombuffer(mm, dtype=np.uint8).ctypes.data
-        lo = a.ctypes.data - start
-        hi = lo + a.nbytes
-        page = mmap.PAGESIZE
-        lo = (lo // page) * page
-        hi = min(len(mm), -(-hi // page) * page)
-        if hi > lo:
-            mm.madvise(mmap.MADV_DONTNEED, lo, hi - lo)
-    except (ValueError, OSError, BufferError):
-        pass  # an advice only
 
 
 def _fitted_names(obj):

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.files.persist import release_pages
+from engine.files.mapped import release_pages
 
 __all__ = ["FieldError", "check_array", "check_scalar", "check_csr", "parse_params",
            "check_regular_file", "check_source_path", "DATA_SUFFIXES"]

@@ -25,7 +25,7 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils.validation import check_is_fitted
 
 from engine.recordings.corpus import CorpusWarning
-from engine.manifold.dynamics import check_bounds
+from engine.recordings.bounds import check_bounds
 from engine.graph.hop_paths import fewest_hop_path, hop_distances
 from engine.progress import ProgressFn, report
 

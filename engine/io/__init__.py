@@ -22,28 +22,41 @@ list of :class:`engine.recordings.corpus.PhoneInterval` for alignments) raise
 ``resample`` changes the frame rate per utterance, ``concat`` joins corpora, and
 :mod:`engine.io.writers.export` writes trajectories, mesh sequences and tables atomically.
 Heavy third-party readers (scipy.io, c3d, textgrids) are imported only when used.
-"""
-from engine.io.errors import ImportFormatError
-from engine.io.readers.alignment import read_alignment, read_lab, read_textgrid
-from engine.io.combine import concat
-from engine.io.dispatch import FORMATS, detect_format, read_corpus
-from engine.io.readers.ema import read_ema, read_est_track, write_est_track
-from engine.io.writers.export import (corpus_columns, point_columns, write_mesh_sequence, write_table_csv,
-                              write_trajectory_csv, write_trajectory_npy)
-from engine.io.readers.landmarks import read_csv_landmarks
-from engine.io.readers.markers import read_c3d
-from engine.io.readers.mesh import read_mesh_sequence, read_vertex_array
-from engine.io.readers.meshfile import read_mesh, read_obj, read_ply, read_vertex_labels, write_obj, write_ply
-from engine.io.readers.matrix import read_matrix
-from engine.io.readers.articulograph import read_pos, read_wave
-from engine.io.readers.mview import read_mview, read_mview_audio, write_audio
-from engine.io.resample import resample
 
-__all__ = [
-    "ImportFormatError", "read_corpus", "detect_format", "FORMATS", "read_alignment", "read_textgrid", "read_lab",
-    "read_ema", "read_est_track", "write_est_track", "read_mview", "read_mview_audio", "write_audio", "read_c3d",
-    "read_mesh_sequence", "read_vertex_array", "read_mesh", "read_obj", "read_ply", "write_obj", "write_ply",
-    "read_vertex_labels",
-    "read_csv_landmarks", "read_matrix", "read_pos", "read_wave", "resample", "concat", "write_trajectory_csv", "write_trajectory_npy",
-    "write_mesh_sequence", "write_table_csv", "point_columns", "corpus_columns",
-]
+Every name loads its module on first use, so ``import engine.io`` is light.
+"""
+from __future__ import annotations
+
+import importlib
+
+#: public name -> the module that defines it
+_WHERE = {
+    **dict.fromkeys(('ImportFormatError',), 'engine.io.errors'),
+    **dict.fromkeys(('read_alignment', 'read_lab', 'read_textgrid'), 'engine.io.readers.alignment'),
+    **dict.fromkeys(('concat',), 'engine.io.combine'),
+    **dict.fromkeys(('FORMATS', 'detect_format', 'read_corpus'), 'engine.io.dispatch'),
+    **dict.fromkeys(('read_ema', 'read_est_track', 'write_est_track'), 'engine.io.readers.ema'),
+    **dict.fromkeys(('corpus_columns', 'point_columns', 'write_mesh_sequence', 'write_table_csv', 'write_trajectory_csv', 'write_trajectory_npy'), 'engine.io.writers.export'),
+    **dict.fromkeys(('read_csv_landmarks',), 'engine.io.readers.landmarks'),
+    **dict.fromkeys(('read_c3d',), 'engine.io.readers.markers'),
+    **dict.fromkeys(('read_mesh_sequence', 'read_vertex_array'), 'engine.io.readers.mesh'),
+    **dict.fromkeys(('read_mesh', 'read_obj', 'read_ply', 'read_vertex_labels', 'write_obj', 'write_ply'), 'engine.io.readers.meshfile'),
+    **dict.fromkeys(('read_matrix',), 'engine.io.readers.matrix'),
+    **dict.fromkeys(('read_pos', 'read_wave'), 'engine.io.readers.articulograph'),
+    **dict.fromkeys(('read_mview', 'read_mview_audio', 'write_audio'), 'engine.io.readers.mview'),
+    **dict.fromkeys(('resample',), 'engine.io.rates'),
+    **dict.fromkeys(('MOTION_RATE_RANGE', 'AUDIO_RATE_RANGE'), 'engine.io._util'),
+}
+__all__ = list(_WHERE)
+
+
+def __getattr__(name):
+    if name in _WHERE:
+        value = getattr(importlib.import_module(_WHERE[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'engine.io' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_WHERE))

@@ -22,9 +22,10 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.recordings.bounds import velocities
 from engine.recordings.corpus import CorpusWarning
 
-__all__ = ["velocities", "check_bounds", "DynamicFeatures", "DynamicScaleWarning", "OUTLIER_RATIO"]
+__all__ = ["DynamicFeatures", "DynamicScaleWarning", "OUTLIER_RATIO"]
 
 #: a block whose max |entry| exceeds its 99th percentile by more than this warns
 OUTLIER_RATIO = 4.0
@@ -32,43 +33,6 @@ OUTLIER_RATIO = 4.0
 
 class DynamicScaleWarning(CorpusWarning):
     """A few extreme frames dominate the scale of a block of G (shape or velocity)."""
-
-
-def check_bounds(bounds, n_frames: int) -> np.ndarray:
-    """Validate utterance bounds: int (U, 2) contiguous ``[start, stop)`` covering 0..n_frames."""
-    b = np.asarray(bounds, dtype=np.int64)
-    if b.ndim != 2 or b.shape[1] != 2 or len(b) == 0:
-        raise ValueError(f"bounds must be an (n_utterances, 2) array of [start, stop), got shape {b.shape}")
-    if b[0, 0] != 0 or b[-1, 1] != n_frames or np.any(b[1:, 0] != b[:-1, 1]) or np.any(b[:, 1] <= b[:, 0]):
-        raise ValueError(
-            f"bounds must be contiguous non-empty ranges covering frames 0..{n_frames}; got {b[:3].tolist()}..."
-        )
-    return b
-
-
-def velocities(Fx, bounds) -> np.ndarray:
-    """First differences inside each utterance.
-
-    Parameters
-    ----------
-    Fx : ndarray of shape (N, m)
-    bounds : ndarray of shape (U, 2)
-
-    Returns
-    -------
-    Fxv : ndarray of shape (N, m), float32
-        ``Fx[i] - Fx[i-1]``; the first frame of each utterance copies its second frame's
-        difference (``Fx[1] - Fx[0]``); a one-frame utterance has zero velocity.
-    """
-    Fx = np.asarray(Fx, dtype=np.float32)
-    b = check_bounds(bounds, Fx.shape[0])
-    V = np.empty_like(Fx)
-    V[1:] = Fx[1:] - Fx[:-1]
-    starts, stops = b[:, 0], b[:, 1]
-    long = stops - starts >= 2
-    V[starts[long]] = V[starts[long] + 1]
-    V[starts[~long]] = 0.0
-    return V
 
 
 def _scale_quantile(scale) -> float | None:

@@ -17,13 +17,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from engine.io.writers.tidy import NA
+
 __all__ = ["FrameTable", "frame_table", "tangent_columns", "opening_measure", "class_intervals", "utterance_tiers",
            "write_textgrids", "CLASS_LABELS", "NA"]
 
 #: values of the ``class`` column, ``engine.manifold.tangent.CLASS_NAMES`` in snake_case
 CLASS_LABELS = ("opening_accelerating", "opening_decelerating", "closing_accelerating", "closing_decelerating")
-#: how a missing value is written (R's read.csv / readr and pandas read it as missing without options)
-NA = "NA"
 
 
 @dataclass

@@ -17,12 +17,13 @@ from sklearn.utils.validation import check_is_fitted
 from engine.files.atomic import atomic_write
 from engine.files.persist import NpzReadError, dump_estimator, load_estimator, read_npz, source_fingerprint
 from engine.recordings.corpus import Corpus, CorpusError
-from engine.manifold.dynamics import DynamicFeatures, velocities
+from engine.manifold.dynamics import DynamicFeatures
+from engine.recordings.bounds import velocities
 from engine.manifold.embedding import Embedding
 from engine.progress import ProgressFn, report
 from engine.manifold.shape import ShapeSpace, small_query_blas
 
-__all__ = ["Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
+__all__ = ["project_x", "Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
 
 FILE_VERSION = 2
 #: corpora whose frames exceed this are saved without F (reconstructed from F^x on load)
@@ -515,3 +516,26 @@ def _parse_timings(text, path) -> dict:
                                           and not isinstance(v, bool) and np.isfinite(v) for k, v in t.items()):
         raise FieldError(path, "manifold_timings", "expected a JSON object of stage name -> seconds")
     return {k: float(v) for k, v in t.items()}
+
+
+def project_x(manifold, Fx) -> np.ndarray:
+    """Out-of-sample F^y of one utterance-long trajectory given in X.
+
+    The fitted manifold's own pipeline without its shape stage: velocities inside the
+    trajectory (one utterance), the fitted dynamic features, the embedding's
+    out-of-sample transform. ``project_x(m, m.shape_.transform(F))`` is ``m.project(F)``.
+
+    Parameters
+    ----------
+    manifold : Manifold
+        Fitted.
+    Fx : ndarray of shape (n, m)
+        Shape coordinates of consecutive frames of one utterance.
+
+    Returns
+    -------
+    ndarray of shape (n, n_embedding), float32
+    """
+    Fx = np.atleast_2d(np.asarray(Fx, dtype=np.float32))
+    G = manifold.dynamics_.transform(Fx, np.array([[0, Fx.shape[0]]]))
+    return manifold.embedding_.transform(G)

@@ -59,7 +59,7 @@ def save_blocked(corpus: Corpus, path, *, block_frames: int = 8192, folder=None)
     list of Path
         The block files in frame order.
     """
-    from engine.scale.executor import store_frame_blocks
+    from engine.recordings.frame_blocks import store_frame_blocks
 
     if isinstance(block_frames, bool) or not isinstance(block_frames, (int, np.integer)) or block_frames < 256:
         raise ValueError(f"block_frames must be an integer >= 256 (each block taller than the shape range finder "

@@ -21,9 +21,14 @@ from __future__ import annotations
 
 import uuid
 from dataclasses import dataclass
+from pathlib import Path
+
 import numpy as np
 
-__all__ = ["BlockFrames", "SpeakerAffine", "map_frames", "row_windows", "speaker_runs", "WINDOW_ROWS", "WINDOW_BYTES"]
+from engine.files.atomic import atomic_write
+
+__all__ = ["BlockFrames", "SpeakerAffine", "map_frames", "row_windows", "speaker_runs", "WINDOW_ROWS", "WINDOW_BYTES",
+           "store_frame_blocks", "block_slices", "DEFAULT_BLOCK_FRAMES"]
 
 #: rows per window of the in-process loops over F (:func:`row_windows`), at most
 WINDOW_ROWS = 8192
@@ -321,3 +326,41 @@ def map_frames(fn, frames, *, executor=None) -> list:
     if executor is not None and isinstance(frames, BlockFrames) and hasattr(executor, "map_frame_blocks"):
         return executor.map_frame_blocks(fn, frames)
     return [fn(frames[a:b], a, b) for a, b in row_windows(*frames.shape)]
+
+
+#: frames per on-disk block of F (and per task of the shape stage)
+DEFAULT_BLOCK_FRAMES = 8192
+
+
+def block_slices(n: int, block: int) -> list[slice]:
+    """Row blocks of ``block`` rows; a last block shorter than half a block joins the one before
+    (every block stays taller than it is wide, as the tall-skinny QR needs)."""
+    starts = list(range(0, n, block))
+    if len(starts) > 1 and n - starts[-1] < block // 2:
+        starts.pop()
+    return [slice(s, starts[i + 1] if i + 1 < len(starts) else n) for i, s in enumerate(starts)]
+
+
+def store_frame_blocks(frames, directory, *, block_frames: int = DEFAULT_BLOCK_FRAMES) -> list[Path]:
+    """Write F (N, C) as ``block_00000.npy``, ... (float32, one per block of frames), atomically.
+
+    Returns
+    -------
+    list of Path
+        The block files in frame order.
+    """
+    frames = np.asarray(frames)
+    if frames.ndim != 2:
+        raise ValueError(f"frames must be 2-D (N, C), got shape {frames.shape}")
+    if int(block_frames) < 2:
+        raise ValueError(f"block_frames must be >= 2, got {block_frames}")
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for i, sl in enumerate(block_slices(frames.shape[0], int(block_frames))):
+        path = directory / f"block_{i:05d}.npy"
+        with atomic_write(path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.save(fh, np.ascontiguousarray(frames[sl], dtype=np.float32))
+        paths.append(path)
+    return paths

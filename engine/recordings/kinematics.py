@@ -82,9 +82,9 @@ def _aperture_rows(F, a, b, *, up, lo, dims):
 def aperture_velocity(aperture, bounds) -> np.ndarray:
     """Forward difference of the aperture per frame, inside utterances (frames/s not applied).
 
-    The first frame of each utterance uses a[1] - a[0] like :func:`engine.manifold.dynamics.velocities`.
+    The first frame of each utterance uses a[1] - a[0] like :func:`engine.recordings.bounds.velocities`.
     """
-    from engine.manifold.dynamics import velocities
+    from engine.recordings.bounds import velocities
 
     return velocities(np.asarray(aperture, np.float64)[:, None], bounds)[:, 0]
 

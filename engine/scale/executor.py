@@ -48,51 +48,13 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-from engine.files.atomic import atomic_write
 from engine.manifold.embedding import pairwise_distance_block
 from engine.recordings.frame_blocks import BlockFrames
 from engine.progress import ProgressFn, report
+from engine.recordings.frame_blocks import DEFAULT_BLOCK_FRAMES, block_slices, store_frame_blocks
 from engine.manifold.shape import _range_settled, orthonormal_basis, thin_svd
 
-__all__ = ["DaskExecutor", "store_frame_blocks", "open_frame_blocks", "DEFAULT_BLOCK_FRAMES"]
-
-#: frames per on-disk block of F (and per task of the shape stage)
-DEFAULT_BLOCK_FRAMES = 8192
-
-
-def _block_slices(n: int, block: int) -> list[slice]:
-    """Row blocks of ``block`` rows; a last block shorter than half a block joins the one before
-    (every block stays taller than it is wide, as the tall-skinny QR needs)."""
-    starts = list(range(0, n, block))
-    if len(starts) > 1 and n - starts[-1] < block // 2:
-        starts.pop()
-    return [slice(s, starts[i + 1] if i + 1 < len(starts) else n) for i, s in enumerate(starts)]
-
-
-def store_frame_blocks(frames, directory, *, block_frames: int = DEFAULT_BLOCK_FRAMES) -> list[Path]:
-    """Write F (N, C) as ``block_00000.npy``, ... (float32, one per block of frames), atomically.
-
-    Returns
-    -------
-    list of Path
-        The block files in frame order.
-    """
-    frames = np.asarray(frames)
-    if frames.ndim != 2:
-        raise ValueError(f"frames must be 2-D (N, C), got shape {frames.shape}")
-    if int(block_frames) < 2:
-        raise ValueError(f"block_frames must be >= 2, got {block_frames}")
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for i, sl in enumerate(_block_slices(frames.shape[0], int(block_frames))):
-        path = directory / f"block_{i:05d}.npy"
-        with atomic_write(path) as tmp:
-            with open(tmp, "wb") as fh:
-                np.save(fh, np.ascontiguousarray(frames[sl], dtype=np.float32))
-        paths.append(path)
-    return paths
-
+__all__ = ["DaskExecutor", "open_frame_blocks"]
 
 def _frame_rows(frames, a, b):
     return frames.rows(a, b)
@@ -176,7 +138,7 @@ class _DaskDistanceOperator:
         self.progress, self.stage = progress, stage
         self.passes = 0
         self.client = client
-        self.slices = _block_slices(G.shape[0], block)
+        self.slices = block_slices(G.shape[0], block)
         self._blocks = [client.scatter(np.ascontiguousarray(G[sl]), hash=False) for sl in self.slices]
         self._cols = client.scatter(np.ascontiguousarray(cols, dtype=np.float32), broadcast=True, hash=False)
         self._cols_sq = client.scatter(np.einsum("ij,ij->i", cols, cols), broadcast=True, hash=False)
@@ -384,7 +346,7 @@ class DaskExecutor:
     # --------------------------------------------------------- out-of-sample
     def _map_rows(self, fn, fixed, X, block):
         fixed_f = self.client.scatter(fixed, broadcast=True, hash=False)
-        slices = _block_slices(X.shape[0], block) if X.shape[0] else []
+        slices = block_slices(X.shape[0], block) if X.shape[0] else []
         futs = [self.client.submit(fn, fixed_f, np.ascontiguousarray(X[sl]), pure=False) for sl in slices]
         return self.client.gather(futs)
 

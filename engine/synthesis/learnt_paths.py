@@ -32,7 +32,7 @@ from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-__all__ = ["LearntPaths", "NEIGHBOR_STEPS", "BASES", "blend", "fit_blend", "BlendAccumulator"]
+__all__ = ["hermite_only_blend", "LearntPaths", "NEIGHBOR_STEPS", "BASES", "blend", "fit_blend", "BlendAccumulator"]
 
 #: numbers of pooled neighbour paths a component may use (chosen per component on validation)
 NEIGHBOR_STEPS = (8, 16, 32, 64, 128, 256)
@@ -274,3 +274,9 @@ def fit_blend(acc: BlendAccumulator) -> dict:
     return {"base_index": (best // nk).astype(int).tolist(), "neighbor_index": (best % nk).astype(int).tolist(),
             "beta": beta.reshape(nb * nk, m)[best, cols].tolist(), "sq_error": flat[best, cols].tolist(),
             "sq_bases": acc.rr.tolist(), "frames": int(acc.frames)}
+
+
+def hermite_only_blend(m) -> dict:
+    """Blend weights that leave the state-velocity Hermite spline unchanged (no validation data)."""
+    return {"base_index": [0] * int(m), "neighbor_index": [0] * int(m), "beta": [0.0] * int(m), "sq_error": None,
+            "sq_bases": None, "frames": 0}

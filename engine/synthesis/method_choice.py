@@ -28,7 +28,7 @@ __all__ = ["BEST", "choose_methods", "load_choice", "choice_path", "manifold_fin
 #: the method name that asks for the method measured best on validation
 BEST = "best"
 #: modules whose code decides the choice (part of the cache key)
-CHOICE_MODULES = ("engine.evaluation.protocols", "engine.evaluation.protocol_methods", "engine.synthesis.learnt_paths", "engine.synthesis.statepaths",
+CHOICE_MODULES = ("engine.evaluation.protocols", "engine.synthesis.protocol_methods", "engine.synthesis.learnt_paths", "engine.synthesis.statepaths",
                   "engine.synthesis.dominance", "engine.synthesis.sliding_window", "engine.synthesis.unitselection", "engine.graph.states",
                   "engine.synthesis.viterbi", "engine.manifold.inverse_local", "engine.synthesis.method_choice")
 #: settings kept in the cache (the rest of select_settings' answer is diagnostics)
@@ -97,7 +97,7 @@ def choose_methods(manifold, *, cache_dir=None, use_cache=True, progress=None) -
         if hit is not None:
             return hit
     from engine.files.atomic import atomic_write
-    from engine.evaluation.protocols import select_settings
+    from engine.synthesis.validation import select_settings
 
     s = select_settings(manifold, progress=progress)
     out = _jsonable({k: s[k] for k in _KEPT if k in s})

@@ -24,7 +24,8 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from engine.threads import single_blas_thread
-from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, target_frames
+from engine.synthesis.learnt_paths import hermite_only_blend
+from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, phone_mids, target_frames
 
 __all__ = ["LearntPathSynthesizer", "StateHermiteSynthesizer"]
 
@@ -45,7 +46,6 @@ class _StateModelSynthesizer(BaseEstimator):
         self.choice = choice
 
     def fit(self, manifold, progress=None):
-        from engine.evaluation.protocols import _phone_mids
         from engine.synthesis.statepaths import StateModel
 
         check_fitted_manifold(manifold)
@@ -56,7 +56,7 @@ class _StateModelSynthesizer(BaseEstimator):
             ch = choose_methods(manifold, progress=progress)
         self.choice_ = ch
         c = manifold.corpus_
-        phones = _phone_mids(c, c.utterances) if any(u.phones for u in c.utterances) else None
+        phones = phone_mids(c, c.utterances) if any(u.phones for u in c.utterances) else None
         self.model_ = StateModel(state_dims=int(ch["state_dims"]), n_states=ch.get("n_states"),
                                  n_neighbors=int(ch.get("n_neighbors", 40))).fit(
             manifold.Fy_, manifold.Fx_, manifold.Fxv_, c.bounds, phones=phones)
@@ -118,7 +118,6 @@ class LearntPathSynthesizer(_StateModelSynthesizer):
     method = "manifold"
 
     def _x(self, protocol, f, states, n, xt):
-        from engine.evaluation.protocols import hermite_only_blend
 
         w = (self.choice_.get("blend") or {}).get(protocol)
         if w is None:  # a protocol the validation did not measure (e.g. phones on a corpus without them)

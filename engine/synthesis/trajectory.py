@@ -15,7 +15,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 from sklearn.base import BaseEstimator, clone
 
-__all__ = ["Trajectory", "Synthesizer", "check_fitted_manifold", "target_frames", "smooth", "phone_sequences",
+__all__ = ["phone_mids", "Trajectory", "Synthesizer", "check_fitted_manifold", "target_frames", "smooth", "phone_sequences",
            "PhoneModelSynthesizer"]
 
 
@@ -145,3 +145,14 @@ class PhoneModelSynthesizer(BaseEstimator):
         return Trajectory(times=np.arange(targets.n_frames) / targets.rate, Fx=np.asarray(X, np.float32), Fy=None,
                           method=self.method, target_frames=f, target_labels=[t.label for t in targets.targets],
                           warnings=warnings)
+
+
+def phone_mids(corpus, utts):
+    """(mid-point frames into the concatenated rows of ``utts``, labels) of their phones."""
+    mids, labels, off = [], [], 0
+    for u in utts:
+        for p in u.phones:
+            mids.append(off + corpus.time_to_frame(u, p.mid) - u.start)
+            labels.append(p.label)
+        off += u.n_frames
+    return np.array(mids, dtype=np.int64), np.array(labels, dtype=str)

@@ -58,7 +58,7 @@ def sensor_scree(frames, points, *, fractions=(0.80, 0.90, 0.95)) -> dict:
         ``components`` (how many leading components reach each fraction of the variance)
         and ``scree`` (each component's fraction of the variance, largest first).
     """
-    from engine.evaluation.talker_report import components_for
+    from engine.talker.report import components_for
 
     X = _centred(frames, points)
     ev = np.linalg.svd(X, compute_uv=False) ** 2

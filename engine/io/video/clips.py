@@ -482,7 +482,7 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
     except CorpusError as exc:
         raise ImportFormatError(path, str(exc)) from None
     if resample is not None and abs(float(resample) - native) > 1e-9 * native:
-        from engine.io.resample import resample as resample_corpus
+        from engine.io.rates import resample as resample_corpus
 
         try:
             c = resample_corpus(c, float(resample))

@@ -18,7 +18,10 @@ import numpy as np
 
 from engine.files.atomic import atomic_write
 
-__all__ = ["write_frame_table", "sidecar_path", "TABLE_SUFFIXES", "have_parquet"]
+__all__ = ["write_frame_table", "sidecar_path", "TABLE_SUFFIXES", "have_parquet", "NA"]
+
+#: how a missing value is written (R's read.csv / readr and pandas read it as missing without options)
+NA = "NA"
 
 #: file endings :func:`write_frame_table` writes
 TABLE_SUFFIXES = (".csv", ".parquet")
@@ -73,7 +76,6 @@ def write_frame_table(path, table, *, sidecar=None, name=None) -> list[Path]:
     ``sidecar``: where the JSON goes (default :func:`sidecar_path` of ``path``); ``name``: the
     table's file name the JSON states (default ``path``'s), for writing to staged paths.
     """
-    from engine.manifold.frame_table import NA
 
     path = Path(path)
     suffix = path.suffix.lower()

@@ -16,7 +16,7 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 
 import app.figures as F
-from app.figures._style import CMAP, CMAP_NEAR, RASTERIZE_ABOVE, UNREACHABLE
+from app.figures.style import CMAP, CMAP_NEAR, RASTERIZE_ABOVE, UNREACHABLE
 
 
 @pytest.fixture(scope="module")
@@ -351,7 +351,7 @@ class _Boom(Artist):
 
 
 def test_failing_save_leaves_existing_file_untouched(tmp_path):
-    from app.figures._style import new_figure
+    from app.figures.style import new_figure
 
     fig = new_figure(2, 2)
     ax = fig.subplots()
@@ -538,7 +538,7 @@ def test_no_two_texts_of_a_figure_overlap(figs, name):
 
 
 def test_fig3_phone_labels_avoid_each_other_in_a_crowd():
-    from app.figures._style import new_figure, place_labels
+    from app.figures.style import new_figure, place_labels
 
     fig = new_figure(4, 3)
     ax = fig.subplots()

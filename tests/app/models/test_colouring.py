@@ -111,3 +111,24 @@ def test_categorical_palette_has_no_greys():
     p = categorical_palette(54)
     assert len(np.unique(p, axis=0)) == 54
     assert np.ptp(p, axis=1).min() > 0.05
+
+
+def test_shipped_colour_tables_are_matplotlibs_entry_by_entry():
+    """The colouring reads shipped tables (no matplotlib in app.models); they must be matplotlib's,
+    and a colour looked up through them must be what matplotlib's colormap gives."""
+    import json
+
+    import numpy as np
+    from matplotlib import colormaps
+
+    from app.figures.colour_tables import TABLE_FILE, TABLES, colour_tables
+    from app.models.colouring import colormap_rgb
+
+    shipped = json.loads(TABLE_FILE.read_text())
+    fresh = colour_tables()
+    assert sorted(shipped) == sorted(TABLES)
+    for name in TABLES:
+        np.testing.assert_allclose(shipped[name], fresh[name], atol=1e-7, err_msg=name)
+    t = np.r_[0.0, 1.0, np.random.default_rng(0).random(500), 0.5 - 1e-9, 255 / 256]
+    for name in ("jet", "YlOrRd_r", "PuBu_r"):
+        np.testing.assert_allclose(colormap_rgb(name, t), colormaps[name](t)[:, :3], atol=1e-7, err_msg=name)

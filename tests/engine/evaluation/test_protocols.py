@@ -191,7 +191,7 @@ def test_verdicts_say_where_the_manifold_loses(result):
 
 def test_every_method_is_scored_in_y_through_the_same_projection(result, small_corpus, split):
     """Recompute one method's Y error by hand: its X trajectory through project_x, nothing else."""
-    from engine.evaluation.per_method import project_x
+    from engine.manifold.model import project_x
 
     m = result.manifold
     assert m.corpus_.n_frames == result.n_train_frames

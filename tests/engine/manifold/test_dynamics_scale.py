@@ -4,7 +4,8 @@ import warnings
 import numpy as np
 import pytest
 
-from engine.manifold.dynamics import OUTLIER_RATIO, DynamicFeatures, DynamicScaleWarning, velocities
+from engine.manifold.dynamics import OUTLIER_RATIO, DynamicFeatures, DynamicScaleWarning
+from engine.recordings.bounds import velocities
 
 
 def _smooth_track(n=600, seed=0):

@@ -37,7 +37,7 @@ def test_save_load_round_trips_exactly(small_manifold, tmp_path):
 
 def test_memory_mapped_load_reads_the_same_arrays_from_the_file(small_manifold, tmp_path):
     """memory_map=True leaves every stored array on disk (read-only maps), equal to the fitted ones."""
-    from engine.files.persist import release_pages
+    from engine.files.mapped import release_pages
 
     path = small_manifold.save(tmp_path / "m.npz")
     m = Manifold.load(path, memory_map=True)

@@ -1,7 +1,8 @@
 import numpy as np
 import pytest
 
-from engine.manifold.dynamics import DynamicFeatures, velocities
+from engine.manifold.dynamics import DynamicFeatures
+from engine.recordings.bounds import velocities
 from engine.manifold.shape import ShapeSpace
 
 

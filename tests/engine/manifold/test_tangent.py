@@ -18,7 +18,8 @@ import pytest
 
 import engine.manifold.local_gradients as lg
 from engine.manifold.class_agreement import class_agreement
-from engine.manifold.dynamics import DynamicFeatures, velocities
+from engine.manifold.dynamics import DynamicFeatures
+from engine.recordings.bounds import velocities
 from engine.manifold.embedding import Embedding
 from engine.recordings.kinematics import lip_aperture
 from engine.manifold.local_gradients import central_difference, neighbor_candidates, select_neighbors

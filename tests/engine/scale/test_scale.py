@@ -51,7 +51,8 @@ def _max_angle(a, b):
 
 
 def test_frame_blocks_round_trip(tmp_path):
-    from engine.scale.executor import open_frame_blocks, store_frame_blocks
+    from engine.recordings.frame_blocks import store_frame_blocks
+    from engine.scale.executor import open_frame_blocks
 
     F = np.random.default_rng(0).standard_normal((2400, 7)).astype(np.float32)
     paths = store_frame_blocks(F, tmp_path, block_frames=1000)

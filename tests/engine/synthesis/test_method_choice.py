@@ -70,7 +70,7 @@ def test_the_choice_is_measured_once_and_keyed_by_the_data(small_manifold, tmp_p
 def test_state_model_synthesisers_resolve_every_kind_of_target(small_manifold):
     """A clicked state of the manifold's own graph, an F^y point and a phone label each become a state of the
     validated state model; the state-velocity Hermite spline passes through the states' mean X there."""
-    from engine.evaluation.protocols import hermite_only_blend
+    from engine.synthesis.learnt_paths import hermite_only_blend
     from engine.synthesis.state_synthesis import LearntPathSynthesizer, StateHermiteSynthesizer
 
     m = small_manifold

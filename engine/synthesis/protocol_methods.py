@@ -204,7 +204,7 @@ def scores(manifold, X, F, lo, hi, *, Y_true=None, y_dims=3) -> dict:
            "sq_v": float(((np.diff(Xh, axis=0) - np.diff(Xt, axis=0)) ** 2).sum()), "frames_v": n - 1,
            "acc": float((np.diff(Xh, 2, axis=0) ** 2).sum()), "acc_true": float((np.diff(Xt, 2, axis=0) ** 2).sum())}
     if Y_true is not None:
-        from engine.evaluation.per_method import project_x
+        from engine.manifold.model import project_x
 
         Yh = project_x(manifold, X)[lo:hi, :y_dims].astype(np.float64)
         out["sq_y"] = float(((Yh - np.asarray(Y_true, np.float64)[lo:hi, :y_dims]) ** 2).sum())

@@ -1,4 +1,4 @@
-"""engine.evaluation.talker_report: scree counts, the trivial rule's classes and the realism report on the small talker."""
+"""engine.talker.report: scree counts, the trivial rule's classes and the realism report on the small talker."""
 from __future__ import annotations
 
 import dataclasses
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from engine.talker.synthetic import gesture_phases
-from engine.evaluation.talker_report import components_for, format_realism, rule_classes, talker_realism
+from engine.talker.report import components_for, format_realism, rule_classes, talker_realism
 
 
 def test_components_for_counts_leading_components():
@@ -60,7 +60,7 @@ def test_realism_report_needs_the_ground_truth(small_manifold):
 
 def test_articulation_report_shares_activity_and_pairs():
     from engine.talker.lipmodel import CONTROL_NAMES, LipModel
-    from engine.evaluation.talker_report import articulation_report, format_articulation
+    from engine.talker.report import articulation_report, format_articulation
 
     lip = LipModel("small")
     rng = np.random.default_rng(0)
