@@ -655,8 +655,8 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
     ``notes`` (e.g. a --session file that could not be opened); the window opens anyway.
     """
     from app.files.autosave import Autosaver, resolve_recovery
-    from app.qt_app import make_application
     from app.files.session import SessionError, source_kinematics
+    from app.qt_app import make_application
     from app.user_messages import user_message
 
     app = make_application(sys.argv[:1])

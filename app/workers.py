@@ -21,8 +21,8 @@ import warnings
 from PySide6 import QtCore, QtWidgets
 
 from app.user_messages import UserError
-from engine.recordings.corpus import CorpusWarning
 from engine.progress import Cancelled
+from engine.recordings.corpus import CorpusWarning
 
 __all__ = ["Worker", "TaskRunner", "run_task", "run_blocking", "cancel_all", "WarningRouter", "WARNINGS"]
 

@@ -36,12 +36,12 @@ def main():
     ap.add_argument("--landmarks", type=int, default=None)
     args = ap.parse_args()
 
+    from engine.graph.states import StateGraph
     from engine.manifold.dynamics import DynamicFeatures
     from engine.manifold.embedding import Embedding
     from engine.manifold.shape import ShapeSpace
-    from engine.graph.states import StateGraph
-    from engine.talker.synthetic import load_synthetic
     from engine.manifold.tangent import TangentFrames
+    from engine.talker.synthetic import load_synthetic
 
     rows = []
     corpus = stage("corpus (cache/generate)", lambda: load_synthetic(preset=args.preset), rows)

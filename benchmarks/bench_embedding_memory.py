@@ -42,8 +42,8 @@ def features(n_frames: int, n_points: int, seed: int = 0):
     import numpy as np
 
     from engine.manifold.dynamics import DynamicFeatures
-    from engine.recordings.bounds import velocities
     from engine.manifold.shape import ShapeSpace
+    from engine.recordings.bounds import velocities
 
     rng = np.random.default_rng(seed)
     n_ctrl = 6  # a few articulatory controls drive the points, like the synthetic talker

@@ -57,8 +57,8 @@ def timed(name, fn, *, repeat=1, per=None):
 
 
 def _synthesize(m, seconds):
-    from engine.synthesis.methods import make_synthesizer
     from engine.phonetics.targets import targets_from_phones
+    from engine.synthesis.methods import make_synthesizer
 
     phones, _ = first_phones(m.corpus_, seconds)
     return make_synthesizer("viterbi", m, strict=False).synthesize(targets_from_phones(m, phones))

@@ -66,7 +66,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _gui_bench as gb  # noqa: E402
-from _playback_trace import CAUSES, LONG_FRAME_CPU_S, frame_table, late_causes, long_frames, PlaybackTrace  # noqa: E402
+from _playback_trace import CAUSES, LONG_FRAME_CPU_S, PlaybackTrace, frame_table, late_causes, long_frames  # noqa: E402
 
 
 def run_loop(app, s, max_seconds):
@@ -259,8 +259,8 @@ def main():
     app_, win = gb.open_window(m, src)
     c = m.corpus_
     u = max(c.utterances, key=lambda u: u.stop - u.start)
-    from engine.phonetics import targets as T
     from app.models.trajectories import synthesize_targets
+    from engine.phonetics import targets as T
 
     win.state.set_utterance(u.id)
     data, _ = synthesize_targets(m, T.targets_from_utterance(m, u.id, on_collision="merge"), "linear")

@@ -36,10 +36,10 @@ def main():
     args = ap.parse_args()
 
     from engine.manifold.model import Manifold
+    from engine.phonetics.targets import targets_from_phones
     from engine.synthesis.method_choice import best_method, choose_methods, describe, target_protocol
     from engine.synthesis.methods import make_synthesizer
     from engine.talker.synthetic import load_synthetic
-    from engine.phonetics.targets import targets_from_phones
 
     print(f"BLAS: {blas_kernel()}")
     corpus = timed(f"corpus '{args.preset}'", lambda: load_synthetic(preset=args.preset, cache_dir=args.cache_dir))

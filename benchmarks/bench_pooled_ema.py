@@ -46,8 +46,8 @@ def pooled_corpus(n_frames: int = N_FRAMES, seed: int = 0):
 
     import numpy as np
 
-    from engine.recordings.corpus import Corpus
     from engine.io import read_corpus, resample
+    from engine.recordings.corpus import Corpus
 
     files = sorted(os.path.join(DATA, f) for f in os.listdir(DATA) if f.endswith(".mat"))
     if not files:

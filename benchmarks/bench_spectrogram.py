@@ -84,8 +84,8 @@ def long_utterance_manifold(wav: Path, seconds: float):
     """The small talker with its first utterances joined into one of ``seconds`` whose audio is ``wav``."""
     from dataclasses import replace
 
-    from engine.recordings.corpus import PhoneInterval, Utterance
     from engine.manifold.model import Manifold
+    from engine.recordings.corpus import PhoneInterval, Utterance
     from engine.talker.synthetic import load_synthetic
 
     c = load_synthetic(preset="small")

@@ -102,9 +102,9 @@ def standin(n_frames=PAPER_FRAMES, seed=0, rate=60.0):
 
 def synthetic(preset):
     from engine.manifold.dynamics import DynamicFeatures
-    from engine.recordings.bounds import velocities
     from engine.manifold.embedding import Embedding
     from engine.manifold.shape import ShapeSpace
+    from engine.recordings.bounds import velocities
     from engine.talker.synthetic import load_synthetic
 
     corpus = load_synthetic(preset=preset)

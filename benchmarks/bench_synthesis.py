@@ -48,9 +48,9 @@ def main():
     args = ap.parse_args()
 
     from engine.manifold.model import Manifold
+    from engine.phonetics.targets import targets_from_phones, targets_from_points
     from engine.synthesis.methods import make_synthesizer
     from engine.talker.synthetic import load_synthetic
-    from engine.phonetics.targets import targets_from_phones, targets_from_points
 
     print("one-time set-up")
     if args.manifold:

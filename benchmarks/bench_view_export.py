@@ -40,8 +40,8 @@ def main():
     m, _src = gb.default_manifold(args.preset)
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
     from app.figures.export import save_plotter_image, save_plotter_vector
-    from app.scene import pick_display_point
     from app.models.state import AppState
+    from app.scene import pick_display_point
     from app.views.manifold_view import ManifoldView
 
     state = AppState(m)

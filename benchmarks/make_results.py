@@ -37,8 +37,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 from _common import peak_rss_mb  # noqa: E402
-from _results_tables import (contribution_cells, contribution_table, summary_cells,  # noqa: E402
-                             summary_table)
+from _results_tables import contribution_cells, contribution_table, summary_cells, summary_table  # noqa: E402
 
 #: where the Haskins pair is looked for (the same place as ``lipspace evaluate --haskins``)
 DEFAULT_HASKINS = REPO.parent / "shared" / "data" / "haskins-ieee"
@@ -163,8 +162,8 @@ def faces_corpus(faces_dir, store):
     from dataclasses import replace
 
     from app.cli.evaluate import normalise_per_speaker
-    from engine.recordings.corpus import Corpus
     from engine.io import concat
+    from engine.recordings.corpus import Corpus
     from engine.recordings.kinematics import kinematic_if_unlabelled
 
     clips = sorted(Path(faces_dir).glob("*.mp4"))

@@ -26,15 +26,15 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.recordings.corpus import Corpus, CorpusWarning, Utterance
 from engine.io import concat, read_corpus, resample
 from engine.io.readers.matrix import corpus_from_matrix
 from engine.manifold.class_agreement import class_agreement
+from engine.manifold.model import Manifold
+from engine.recordings.corpus import Corpus, CorpusWarning, Utterance
 from engine.recordings.kinematics import lip_aperture
 from engine.recordings.layouts import BUILTIN, read_layout
-from engine.manifold.model import Manifold
-from engine.talker.multispeaker import generate_recordings, layout_text
 from engine.recordings.registration import register
+from engine.talker.multispeaker import generate_recordings, layout_text
 
 HASKINS = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "haskins-ieee"
 

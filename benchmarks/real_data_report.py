@@ -98,8 +98,8 @@ def synthetic_corpora(*, quick=False):
 def measure(name, corpus):
     """A row of the table: the build of ``corpus`` with the defaults, and what it says."""
     from engine.manifold.class_agreement import class_agreement
-    from engine.recordings.kinematics import lip_aperture
     from engine.manifold.model import Manifold
+    from engine.recordings.kinematics import lip_aperture
     from engine.talker.report import components_of_total
 
     tracemalloc.start()

@@ -49,8 +49,8 @@ def main(argv=None):
 
     from engine.manifold.model import Manifold
     from engine.talker.lipmodel import CONTROL_NAMES, LipModel
-    from engine.talker.synthetic import HELD_OUT_TALKER, PRESETS, SyntheticTalker, speaker_anatomy
     from engine.talker.report import articulation_report, format_articulation, format_realism, talker_realism
+    from engine.talker.synthetic import HELD_OUT_TALKER, PRESETS, SyntheticTalker, speaker_anatomy
     from engine.talker.virtual_sensors import SENSOR_ROLES, sensor_motion, sensor_scree, virtual_sensors
 
     print(f"BLAS: {blas_kernel()}")

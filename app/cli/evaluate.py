@@ -266,10 +266,10 @@ def _run_protocols(args) -> int:
     import math
 
     from app.cli import CliError
-    from app.cli.synthesize import MAX_SMOOTHING_FRAMES
     from app.cli._common import progress_bar
-    from engine.manifold.model import Manifold
+    from app.cli.synthesize import MAX_SMOOTHING_FRAMES
     from engine.evaluation.protocols import evaluate_protocols
+    from engine.manifold.model import Manifold
 
     for name in ("smoothing", "neighbors", "state_dims", "states"):
         v = getattr(args, name)
@@ -336,8 +336,8 @@ def _run_protocols(args) -> int:
 
     with command_outputs(args) as outputs:  # both tables or neither
         if args.csv:
-            from engine.io.writers.export import write_table_csv
             from engine.evaluation.protocol_report import CSV_COLUMNS
+            from engine.io.writers.export import write_table_csv
 
             write_table_csv(outputs.file(args.csv, option="--csv"), result.csv_rows(), columns=CSV_COLUMNS)
         if args.markdown:

@@ -141,9 +141,9 @@ def summary(corpus) -> str:
 
 def run(args) -> int:
     from app.cli import CliError
-    from engine.recordings.corpus import CorpusError
     from engine.io import ImportFormatError, concat, resample
     from engine.io.dispatch import FORMAT_ALIASES, detect_format
+    from engine.recordings.corpus import CorpusError
     from engine.recordings.registration import register
 
     out = Path(args.output)
@@ -367,8 +367,8 @@ def _one_rate(parts, rate_out):
 
 def _input_errors():
     """Errors that make one input unreadable (reported and skipped when there are several inputs)."""
-    from engine.recordings.corpus import CorpusError
     from engine.io import ImportFormatError
+    from engine.recordings.corpus import CorpusError
 
     return (ImportFormatError, CorpusError, OSError, ValueError, TypeError)
 

@@ -5,7 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
-from app.files.source_loading import ANALYSIS_RATE  # the paper's 60 Hz, which velocities and the state graph are tuned to
+from app.files.source_loading import (
+    ANALYSIS_RATE,  # the paper's 60 Hz, which velocities and the state graph are tuned to
+)
 
 
 def add_arguments(p):

@@ -30,9 +30,9 @@ def add_arguments(p):
 def run(args) -> int:
     from app.cli import CliError
     from app.cli._common import command_outputs, load_manifold_arg
-    from engine.manifold.frame_table import frame_table, write_textgrids
     from engine.io.writers.praat import textgrid_names
     from engine.io.writers.tidy import TABLE_SUFFIXES, have_parquet, sidecar_path, write_frame_table
+    from engine.manifold.frame_table import frame_table, write_textgrids
 
     if args.output is None and args.textgrid_dir is None:
         raise CliError("nothing to write: give -o FRAMES.csv (or .parquet) and/or --textgrid DIR")

@@ -20,8 +20,8 @@ def table_filters() -> str:
 
 def export_frame_table(manifold, path, *, source: str = "", progress=None) -> list[Path]:
     """Write the per-frame table to ``path`` (.csv or .parquet) and its sidecar; returns both paths."""
-    from engine.manifold.frame_table import frame_table
     from engine.io.writers.tidy import write_frame_table
+    from engine.manifold.frame_table import frame_table
     from engine.progress import report
 
     report(progress, "frame table", 0, 1)

@@ -16,8 +16,15 @@ from __future__ import annotations
 from pathlib import Path
 
 from app.figures.clusters import make_fig4
-from app.figures.export import (FIGURE_FORMATS, VECTOR_3D_FORMATS, VectorExportUnavailable, save_figure,
-                                save_plotter_image, save_plotter_vector, vector_export_available)
+from app.figures.export import (
+    FIGURE_FORMATS,
+    VECTOR_3D_FORMATS,
+    VectorExportUnavailable,
+    save_figure,
+    save_plotter_image,
+    save_plotter_vector,
+    vector_export_available,
+)
 from app.figures.manifold import make_classes, make_fig2a, make_fig2b
 from app.figures.shape import make_fig1a, make_fig1b, make_fig2c, make_scree
 from app.figures.synthesis import make_fig3

@@ -4,8 +4,17 @@ from __future__ import annotations
 import numpy as np
 from matplotlib import patheffects
 
-from app.figures.style import (ARBITRARY, below, frame_sv, journal, legend_below, new_figure, one_column,
-                                require_fitted, y3)
+from app.figures.style import (
+    ARBITRARY,
+    below,
+    frame_sv,
+    journal,
+    legend_below,
+    new_figure,
+    one_column,
+    require_fitted,
+    y3,
+)
 
 __all__ = ["make_fig4", "PHONE_COLOURS", "ellipse_points"]
 

@@ -5,10 +5,32 @@ import numpy as np
 from matplotlib.colors import Normalize
 from matplotlib.lines import Line2D
 
-from app.figures.style import (ARBITRARY, CLASS_COLOURS, below, CMAP, CMAP_NEAR, ORIGINAL, S_COLOUR, UNREACHABLE,
-                                 V_COLOUR, arrow, density, font_pt, frame_sv, journal, legend_below, marker_size,
-                                 new_figure, one_column, plane_trace, rasterize_for, require_fitted, state_sv,
-                                 sv_basis, y3)
+from app.figures.style import (
+    ARBITRARY,
+    CLASS_COLOURS,
+    CMAP,
+    CMAP_NEAR,
+    ORIGINAL,
+    S_COLOUR,
+    UNREACHABLE,
+    V_COLOUR,
+    arrow,
+    below,
+    density,
+    font_pt,
+    frame_sv,
+    journal,
+    legend_below,
+    marker_size,
+    new_figure,
+    one_column,
+    plane_trace,
+    rasterize_for,
+    require_fitted,
+    state_sv,
+    sv_basis,
+    y3,
+)
 
 __all__ = ["make_fig2a", "make_fig2b", "make_classes", "choose_seed_states", "example_segment"]
 

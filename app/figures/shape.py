@@ -7,9 +7,25 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
-from app.figures.style import (ARBITRARY, CMAP, draw_lips, fit_contour, font_pt, frame_sv, journal, legend_below,
-                                new_figure, one_column, require_fitted, scale_bar, shape_points, shape_view,
-                                shared_limits, talker_frame, y3)
+from app.figures.style import (
+    ARBITRARY,
+    CMAP,
+    draw_lips,
+    fit_contour,
+    font_pt,
+    frame_sv,
+    journal,
+    legend_below,
+    new_figure,
+    one_column,
+    require_fitted,
+    scale_bar,
+    shape_points,
+    shape_view,
+    shared_limits,
+    talker_frame,
+    y3,
+)
 
 __all__ = ["make_fig1a", "make_fig1b", "make_fig2c", "make_scree"]
 

@@ -3,8 +3,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.figures.style import (ARBITRARY, GENERATED, ORIGINAL, below, font_pt, journal, legend_below, new_figure,
-                                one_column, place_labels, require_fitted)
+from app.figures.style import (
+    ARBITRARY,
+    GENERATED,
+    ORIGINAL,
+    below,
+    font_pt,
+    journal,
+    legend_below,
+    new_figure,
+    one_column,
+    place_labels,
+    require_fitted,
+)
 
 __all__ = ["make_fig3", "default_utterance"]
 
@@ -43,8 +54,8 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
         Write each mid-point's phone label beside its circle.
     """
     require_fitted(manifold, "states_")
-    from engine.synthesis.viterbi import ManifoldSynthesizer
     from engine.phonetics.targets import targets_from_utterance
+    from engine.synthesis.viterbi import ManifoldSynthesizer
 
     corpus = manifold.corpus_
     a, b = (int(v) for v in axes)

@@ -325,8 +325,8 @@ def _trajectory_from(a: dict, meta):
 
 
 def _targets_from(a: dict, meta):
-    from engine.recordings.corpus import PhoneInterval
     from engine.phonetics.targets import Target, TargetSequence
+    from engine.recordings.corpus import PhoneInterval
 
     if meta is None:
         return None

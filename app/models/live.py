@@ -117,8 +117,8 @@ class LiveProjector:
         return 0 if self._pose is not None else self.calibration_frames - len(self._calib)
 
     def _fit_pose(self):
-        from engine.io.video.facemesh import LIP_POINTS
         from engine.io.video.clips import head_pose_model
+        from engine.io.video.facemesh import LIP_POINTS
 
         ref = np.stack(self._calib)[:, len(LIP_POINTS):]
         self._pose = head_pose_model(self.interocular_mm).fit(ref)

@@ -6,11 +6,28 @@ positions, visibility) instead of re-adding actors on every click. Tests pass
 """
 from app.scene.handles import Handle
 from app.scene.lips import ContourHandle, LipsHandle, add_lip_contour, add_lips, lip_mesh
-from app.scene.manifold import (ORIGINAL_COLOUR, PATH_COLOUR, S_COLOUR, SYNTHETIC_COLOUR, V_COLOUR,
-                                PointsHandle, add_cluster_ellipsoids, add_global_axes, add_local_frame, label_zoom,
-                                add_manifold_points, add_marker, add_point_markers, add_state_path, add_trajectory,
-                                add_zero_velocity_plane, move_to_overlay, overlay_renderer, scene_scale,
-                                to_rgb8)
+from app.scene.manifold import (
+                                ORIGINAL_COLOUR,
+                                PATH_COLOUR,
+                                S_COLOUR,
+                                SYNTHETIC_COLOUR,
+                                V_COLOUR,
+                                PointsHandle,
+                                add_cluster_ellipsoids,
+                                add_global_axes,
+                                add_local_frame,
+                                add_manifold_points,
+                                add_marker,
+                                add_point_markers,
+                                add_state_path,
+                                add_trajectory,
+                                add_zero_velocity_plane,
+                                label_zoom,
+                                move_to_overlay,
+                                overlay_renderer,
+                                scene_scale,
+                                to_rgb8,
+)
 from app.scene.pick import ClickPicker, enable_click_picking, pick_display_point
 
 __all__ = ["Handle", "PointsHandle", "LipsHandle", "ContourHandle", "add_lip_contour", "ClickPicker",

@@ -31,8 +31,18 @@ from app import scene
 from app.audio import AudioPlayer, resolve_audio_path
 from app.models.playback import PlaybackClock
 from app.models.trajectories import lip_frames
-from app.views._common import (camera_of, close_plotter, connect_all, disconnect_all, drawing_frame,
-                               make_plotter, READOUT_INTERVAL_S, RenderScheduler, set_camera, Throttle)
+from app.views._common import (
+    READOUT_INTERVAL_S,
+    RenderScheduler,
+    Throttle,
+    camera_of,
+    close_plotter,
+    connect_all,
+    disconnect_all,
+    drawing_frame,
+    make_plotter,
+    set_camera,
+)
 
 __all__ = ["LipView", "READOUT_INTERVAL_S"]
 

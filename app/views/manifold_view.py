@@ -18,13 +18,21 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app import scene
 from app.models.colouring import CLASS_LABELS, ellipsoid_colors, point_colors
-from app.scene.colour_bar import add_scalar_bar, configure_scalar_bar
 from app.models.picking import CloudLocator, handle_pick, hover_text
-from app.scene.projection import project, standard_camera, view_transform
 from app.models.state import COLOR_MODES, HEMISPHERES
+from app.scene.colour_bar import add_scalar_bar, configure_scalar_bar
+from app.scene.projection import project, standard_camera, view_transform
+from app.views._common import (
+    RenderScheduler,
+    blocked,
+    camera_of,
+    close_plotter,
+    connect_all,
+    disconnect_all,
+    make_plotter,
+    set_camera,
+)
 from app.views.flow_layout import FlowLayout
-from app.views._common import (blocked, camera_of, close_plotter, connect_all,
-                               disconnect_all, make_plotter, RenderScheduler, set_camera)
 
 __all__ = ["ManifoldView", "axes_origin"]
 

@@ -23,7 +23,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.models.target_editing import remove_target
 from app.models.trajectories import METHOD_LABELS, synthesize_targets, trajectory_error
-from app.views._common import connect_all, disconnect_all, READOUT_INTERVAL_S, Throttle
+from app.views._common import READOUT_INTERVAL_S, Throttle, connect_all, disconnect_all
 from app.views.phone_timeline import PhoneTimeline
 from app.views.sound_panel import SoundPanel
 from app.views.sound_track import SoundTrack

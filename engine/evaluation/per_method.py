@@ -237,8 +237,8 @@ def fit_on_training_split(corpus, *, test_fraction=0.1, test_ids=None, random_st
 
 
 def _synthesizers(manifold, methods, params):
-    from engine.synthesis.viterbi import InterpolationSynthesizer, ManifoldSynthesizer
     from engine.synthesis.unitselection import UnitSelectionSynthesizer
+    from engine.synthesis.viterbi import InterpolationSynthesizer, ManifoldSynthesizer
 
     out = {}
     for m in methods:

@@ -31,13 +31,25 @@ from __future__ import annotations
 import numpy as np
 
 from engine.progress import ProgressFn, report
-from engine.synthesis.protocol_methods import (PROTOCOL_METHODS, PROTOCOLS, PhoneModels, has_phone_labels, scores,
-                                               trajectories)
-from engine.synthesis.trajectory import phone_mids
+from engine.synthesis.protocol_methods import (
+    PROTOCOL_METHODS,
+    PROTOCOLS,
+    PhoneModels,
+    has_phone_labels,
+    scores,
+    trajectories,
+)
 from engine.synthesis.statepaths import StateModel
-from engine.synthesis.validation import (FRAMES_PER_STATE_CANDIDATES, MIN_VALIDATION_UTTERANCES,
-                                         SMOOTHING_CANDIDATES, STATE_DIM_CANDIDATES, Y_DIMS, mid_frames,
-                                         select_settings)
+from engine.synthesis.trajectory import phone_mids
+from engine.synthesis.validation import (
+    FRAMES_PER_STATE_CANDIDATES,
+    MIN_VALIDATION_UTTERANCES,
+    SMOOTHING_CANDIDATES,
+    STATE_DIM_CANDIDATES,
+    Y_DIMS,
+    mid_frames,
+    select_settings,
+)
 
 __all__ = ["PROTOCOLS", "PROTOCOL_METHODS", "STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES",
            "SMOOTHING_CANDIDATES", "Y_DIMS", "MIN_VALIDATION_UTTERANCES",

@@ -24,10 +24,10 @@ from sklearn.cluster import KMeans, MiniBatchKMeans
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils.validation import check_is_fitted
 
-from engine.recordings.corpus import CorpusWarning
-from engine.recordings.bounds import check_bounds
 from engine.graph.hop_paths import fewest_hop_path, hop_distances
 from engine.progress import ProgressFn, report
+from engine.recordings.bounds import check_bounds
+from engine.recordings.corpus import CorpusWarning
 
 __all__ = ["StateGraph", "UnreachableError", "StateGraphConnectivityWarning", "default_n_states",
            "assign_and_count"]

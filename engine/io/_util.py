@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.recordings.corpus import PhoneInterval
 from engine.io.errors import ImportFormatError
+from engine.recordings.corpus import PhoneInterval
 
 __all__ = [
     "read_bytes", "decode_text", "parse_floats", "fill_gaps", "fit_phones",

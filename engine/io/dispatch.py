@@ -96,9 +96,9 @@ def _reader(fmt):
 @reports_repairs
 def _read_native(path, rate=None, alignment=None, tier=None):
     from engine.files.persist import NpzReadError, read_npz
-    from engine.recordings.corpus import Corpus
     from engine.io._util import check_rate, fit_phones
     from engine.io.readers.alignment import resolve_alignment
+    from engine.recordings.corpus import Corpus
 
     path = Path(path)
     if not path.exists():

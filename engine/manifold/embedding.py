@@ -23,8 +23,8 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from engine.progress import ProgressFn, report
 from engine.manifold.shape import orthonormal_basis, thin_svd
+from engine.progress import ProgressFn, report
 from engine.threads import one_blas_thread
 
 __all__ = ["Embedding", "pairwise_distance_block"]

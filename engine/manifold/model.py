@@ -16,12 +16,12 @@ from sklearn.utils.validation import check_is_fitted
 
 from engine.files.atomic import atomic_write
 from engine.files.persist import NpzReadError, dump_estimator, load_estimator, read_npz, source_fingerprint
-from engine.recordings.corpus import Corpus, CorpusError
 from engine.manifold.dynamics import DynamicFeatures
-from engine.recordings.bounds import velocities
 from engine.manifold.embedding import Embedding
-from engine.progress import ProgressFn, report
 from engine.manifold.shape import ShapeSpace, small_query_blas
+from engine.progress import ProgressFn, report
+from engine.recordings.bounds import velocities
+from engine.recordings.corpus import Corpus, CorpusError
 
 __all__ = ["project_x", "Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
 
@@ -165,8 +165,8 @@ class Manifold(BaseEstimator):
         shape space, the embedding, the local tangent frames and the assignment to states
         with the transition counts as Dask work (same results up to round-off).
         """
-        from engine.manifold.buildplan import plan_build
         from engine.graph.states import StateGraph
+        from engine.manifold.buildplan import plan_build
         from engine.manifold.tangent import TangentFrames
 
         if not isinstance(corpus, Corpus):

@@ -13,8 +13,8 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from engine.recordings.frame_blocks import BlockFrames
 from engine.progress import ProgressFn, report
+from engine.recordings.frame_blocks import BlockFrames
 from engine.threads import one_blas_thread
 
 __all__ = ["ShapeSpace"]

@@ -36,8 +36,8 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from engine.recordings.bounds import check_bounds
 from engine.manifold.local_gradients import central_difference, local_gradients, neighbor_candidates, select_neighbors
+from engine.recordings.bounds import check_bounds
 
 __all__ = ["TangentFrames", "CLASS_NAMES", "NO_STEP", "DRAWN_DIMS"]
 

@@ -42,11 +42,11 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.phonetics import espeak_phones
 from engine.files.atomic import write_text_atomic, write_wav_atomic
+from engine.phonetics import espeak_phones
 from engine.phonetics.phones import PAUSE, is_vowel, pronounce
-from engine.progress import report
 from engine.phonetics.time_warp import time_stretch, time_warp
+from engine.progress import report
 
 __all__ = ["SpeechAudioUnavailable", "AUDIO_VERSION", "espeak_path", "audio_method", "word_spans",
            "phone_mnemonics", "time_stretch", "time_warp", "utterance_audio", "add_speech_audio", "read_wav",

@@ -49,10 +49,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from engine.manifold.embedding import pairwise_distance_block
-from engine.recordings.frame_blocks import BlockFrames
-from engine.progress import ProgressFn, report
-from engine.recordings.frame_blocks import DEFAULT_BLOCK_FRAMES, block_slices, store_frame_blocks
 from engine.manifold.shape import _range_settled, orthonormal_basis, thin_svd
+from engine.progress import ProgressFn, report
+from engine.recordings.frame_blocks import DEFAULT_BLOCK_FRAMES, BlockFrames, block_slices, store_frame_blocks
 
 __all__ = ["DaskExecutor", "open_frame_blocks"]
 

@@ -18,7 +18,6 @@ import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-
 __all__ = ["SlidingWindowRegressor", "REGRESSORS"]
 
 REGRESSORS = ("ridge", "mlp")

@@ -23,9 +23,9 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from engine.threads import single_blas_thread
 from engine.synthesis.learnt_paths import hermite_only_blend
 from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, phone_mids, target_frames
+from engine.threads import single_blas_thread
 
 __all__ = ["LearntPathSynthesizer", "StateHermiteSynthesizer"]
 

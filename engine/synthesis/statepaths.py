@@ -271,8 +271,8 @@ class StateModel:
         ``warnings``). ``fixed`` (T,) holds a state for targets that have one (None for the
         others): the lattice keeps those and chooses the rest.
         """
-        from engine.synthesis.viterbi import phone_lattice
         from engine.phonetics.targets import resolve_phone as _resolve_phone
+        from engine.synthesis.viterbi import phone_lattice
 
         fixed = [None] * len(labels) if fixed is None else list(fixed)
         if not self.phone_table_ and any(s is None for s in fixed):

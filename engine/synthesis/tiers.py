@@ -42,8 +42,8 @@ def input_timeline(path, *, tier: str | None = None) -> Timeline:
 
 def _opening(manifold, traj):
     """(values (n,), column name, unit, description) of the synthesised frames' opening."""
-    from engine.recordings.corpus import Corpus, Utterance
     from engine.manifold.frame_table import opening_measure
+    from engine.recordings.corpus import Corpus, Utterance
     from engine.recordings.kinematics import lip_aperture
 
     c = manifold.corpus_
@@ -80,8 +80,8 @@ def synthesis_outputs(manifold, targets, traj, *, timeline: Timeline | None = No
         the target frames, labelled with their phones) and ``landmarks`` (the kinematic
         landmarks of the synthesised opening).
     """
-    from engine.manifold.frame_table import FrameTable
     from engine.io.writers.praat import IntervalTier, PointTier
+    from engine.manifold.frame_table import FrameTable
     from engine.recordings.kinematics import kinematic_landmarks
 
     rate = float(targets.rate)

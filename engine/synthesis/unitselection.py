@@ -34,8 +34,8 @@ import numpy as np
 from sklearn.base import BaseEstimator
 
 from engine.phonetics.targets import TargetSequence
-from engine.threads import single_blas_thread
 from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, target_frames
+from engine.threads import single_blas_thread
 
 __all__ = ["UnitSelectionSynthesizer", "OVERLAP_TABLE", "overlap_fraction", "crossfade_weights", "lip_class"]
 

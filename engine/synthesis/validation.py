@@ -16,12 +16,17 @@ import numpy as np
 
 from engine.manifold.inverse_local import NEIGHBOR_CANDIDATES, select_neighbors
 from engine.progress import ProgressFn, report
-from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, BlendAccumulator, fit_blend
-from engine.synthesis.protocol_methods import (PROTOCOLS, SLIDING_WINDOW_CANDIDATES, PhoneModels, has_phone_labels,
-                                               scores, trajectories)
-from engine.synthesis.learnt_paths import hermite_only_blend
-from engine.synthesis.trajectory import phone_mids
+from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, BlendAccumulator, fit_blend, hermite_only_blend
+from engine.synthesis.protocol_methods import (
+    PROTOCOLS,
+    SLIDING_WINDOW_CANDIDATES,
+    PhoneModels,
+    has_phone_labels,
+    scores,
+    trajectories,
+)
 from engine.synthesis.statepaths import StateModel, anchor
+from engine.synthesis.trajectory import phone_mids
 
 __all__ = ["STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES", "SMOOTHING_CANDIDATES", "Y_DIMS",
            "MIN_VALIDATION_UTTERANCES", "select_settings", "manifold_y", "mid_frames"]

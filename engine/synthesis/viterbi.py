@@ -34,10 +34,10 @@ from sklearn.base import BaseEstimator
 from engine.graph.bridges import bridge, forward_to
 from engine.phonetics.targets import TargetSequence
 from engine.phonetics.targets import resolve_phone as _resolve_phone
-from engine.threads import single_blas_thread
 from engine.synthesis.trajectory import Synthesizer, Trajectory, smooth
 from engine.synthesis.trajectory import check_fitted_manifold as _check_fitted_manifold
 from engine.synthesis.trajectory import target_frames as _target_frames
+from engine.threads import single_blas_thread
 
 __all__ = [
     "NoPathError", "MaxProductGraph", "log_transitions", "observed_transitions", "viterbi_path", "Trajectory", "Synthesizer",

@@ -40,10 +40,10 @@ from scipy.signal import lfilter
 from sklearn.base import BaseEstimator
 
 from engine.files.assets import asset_path
-from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
-from engine.talker.lipmodel import CONTROL_NAMES, KINEMATICS, SIGNED_CONTROLS, Anatomy, LipModel
 from engine.phonetics.phones import EXTRA_VOWELS, PAUSE, VOWELS, DurationModel, pronounce
 from engine.progress import report
+from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
+from engine.talker.lipmodel import CONTROL_NAMES, KINEMATICS, SIGNED_CONTROLS, Anatomy, LipModel
 from engine.threads import one_blas_thread
 
 __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker", "load_synthetic", "cache_folder",

@@ -199,13 +199,13 @@ def articulograph_manifold(*, n_speakers=2, n_utterances=2, duration_s=(2.0, 2.0
 
     import numpy as np
 
-    from engine.recordings.corpus import CorpusWarning, Utterance
     from engine.io import concat, resample
     from engine.io.readers.matrix import corpus_from_matrix
-    from engine.recordings.layouts import BUILTIN
     from engine.manifold.model import Manifold
-    from engine.talker.multispeaker import generate_recordings
+    from engine.recordings.corpus import CorpusWarning, Utterance
+    from engine.recordings.layouts import BUILTIN
     from engine.recordings.registration import register
+    from engine.talker.multispeaker import generate_recordings
 
     parts = []
     for r in generate_recordings(n_speakers=n_speakers, n_utterances=n_utterances, duration_s=duration_s,

@@ -10,9 +10,9 @@ pytestmark = pytest.mark.gui
 @pytest.fixture(scope="module")
 def blocked_manifold(tmp_path_factory, small_corpus):
     from app.files.source_loading import load_source
+    from engine.manifold.model import Manifold
     from engine.recordings.corpus_blocks import save_blocked
     from engine.recordings.frame_blocks import BlockFrames
-    from engine.manifold.model import Manifold
 
     corpus = small_corpus.subset([u.id for u in small_corpus.utterances if u.stop <= 1500])
     folder = tmp_path_factory.mktemp("blocked_window")

@@ -378,11 +378,9 @@ def test_textgrid_input_and_bad_input(win, tmp_path):
 
 
 def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
-    from app.models.trajectories import export_trajectory, trajectory_table
-    from engine.phonetics import targets as T
+    from app.models.trajectories import export_trajectory, lip_frames, synthesize_targets, trajectory_table
     from engine.io.readers.meshfile import read_obj
-    from app.models.trajectories import lip_frames
-    from app.models.trajectories import synthesize_targets
+    from engine.phonetics import targets as T
 
     m, s = app_manifold, win.state
     u = m.corpus_.utterances[0]

@@ -30,7 +30,6 @@ def test_unlabelled_sparse_markers_in_the_explorer(qapp, qtbot, ema_manifold, ma
         qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)
         s.set_playback(10)
         from engine.recordings.corpus import frame_points
-
         from engine.recordings.orientation import anatomical_frame
 
         talker = anatomical_frame(m.corpus_, m.shape_.mean_)  # the lips drawn seen from the front

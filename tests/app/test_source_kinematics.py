@@ -11,8 +11,13 @@ import pytest
 
 from app.files.cache import entries
 from app.files.session import SessionError, load_session, save_session, source_kinematics
-from app.files.source_loading import (KINEMATICS_CHOICES, cached_manifold_path, check_kinematics, load_source,
-                                talker_name)
+from app.files.source_loading import (
+    KINEMATICS_CHOICES,
+    cached_manifold_path,
+    check_kinematics,
+    load_source,
+    talker_name,
+)
 from app.models.state import AppState
 
 

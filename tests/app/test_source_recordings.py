@@ -47,8 +47,8 @@ def test_build_of_a_recording_fits_what_import_makes(tmp_path, capsys):
     """`lipspace build rec.csv` (and figures, clusters: app.cli._common.load_corpus_arg) read a foreign
     file as the window does: at 60 Hz with import's defaults, so no rate warning (before: fitted at
     200 Hz with a warning to run import first)."""
-    from engine.recordings.corpus import Corpus
     from engine.manifold.model import Manifold
+    from engine.recordings.corpus import Corpus
 
     rec = _csv_recording(tmp_path / "take2.csv")
     assert main(["build", str(rec), "-o", str(tmp_path / "m.npz"), "-q"]) == 0

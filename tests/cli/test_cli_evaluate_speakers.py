@@ -18,12 +18,12 @@ def _run(argv):
 
 
 def _two_speakers(register_as="utterance"):
-    from engine.recordings.corpus import Utterance
     from engine.io import concat, resample
     from engine.io.readers.matrix import corpus_from_matrix
+    from engine.recordings.corpus import Utterance
     from engine.recordings.layouts import BUILTIN
-    from engine.talker.multispeaker import generate_recordings
     from engine.recordings.registration import register
+    from engine.talker.multispeaker import generate_recordings
 
     parts = []
     for r in generate_recordings(n_speakers=2, n_utterances=4, duration_s=(2.0, 2.5), seed=3):

@@ -1,13 +1,12 @@
 """``lipspace explore`` without opening a window: display check, inputs, loading and the cache."""
 from __future__ import annotations
 
+import argparse
+
 import numpy as np
 import pytest
 
-import argparse
-
-from app.cli import CliError
-from app.cli import explore
+from app.cli import CliError, explore
 from app.cli.explore import EXIT_NO_DISPLAY, has_display
 from app.files.source_loading import cached_manifold_path, load_source, source_kind
 from engine.progress import Cancelled

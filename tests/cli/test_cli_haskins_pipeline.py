@@ -2,15 +2,14 @@
 import contextlib
 import csv
 import io
-
 import re
 
 import numpy as np
 import pytest
 
 from app.cli import main
-from engine.recordings.corpus import Corpus
 from engine.manifold.model import Manifold
+from engine.recordings.corpus import Corpus
 
 
 @pytest.fixture(scope="module")

@@ -5,10 +5,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.cli import SUBCOMMANDS, CliError
-from app.cli import importer
-from engine.recordings.corpus import Corpus
+from app.cli import SUBCOMMANDS, CliError, importer
 from engine.io import write_est_track, write_mesh_sequence
+from engine.recordings.corpus import Corpus
 
 
 def _repo_root():

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from engine.recordings.corpus import Corpus
 from engine.io import write_est_track
+from engine.recordings.corpus import Corpus
 
 
 @pytest.fixture(scope="module")

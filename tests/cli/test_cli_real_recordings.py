@@ -3,7 +3,6 @@ CSV without names, speaker origins 100 mm apart, offsets between utterances, hea
 phone labels) through import -> build -> info / clusters / synthesize / evaluate / figures."""
 import contextlib
 import io
-
 import re
 
 import numpy as np

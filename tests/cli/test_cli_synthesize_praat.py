@@ -7,7 +7,6 @@ import pytest
 from app.cli import main
 
 
-
 def _input(path):
     """A TextGrid laid out as Praat writes them: a word tier first, silence before the first phone (0.25 s)."""
     from engine.io.writers.praat import IntervalTier, write_textgrid
@@ -74,9 +73,9 @@ def test_a_real_recording_synthesised_from_its_own_labels_keeps_their_clock(moch
 
     pd = pytest.importorskip("pandas")
     from engine.io import read_alignment
-    from engine.synthesis.viterbi import make_synthesizer
-    from engine.synthesis.tiers import input_timeline, synthesis_outputs
     from engine.phonetics.targets import targets_from_textgrid
+    from engine.synthesis.tiers import input_timeline, synthesis_outputs
+    from engine.synthesis.viterbi import make_synthesizer
 
     m = mocha_manifold
     mfile = m.save(tmp_path / "mocha.npz")

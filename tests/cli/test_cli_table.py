@@ -102,9 +102,9 @@ def test_nothing_is_replaced_without_force(mfile, tmp_path, capsys):
 
 
 def test_textgrids_read_back_with_praat_textgrids(written, small_manifold):
-    from engine.manifold.frame_table import class_intervals, frame_table
     from engine.io import read_textgrid
     from engine.io.readers.alignment import _parse_textgrid
+    from engine.manifold.frame_table import class_intervals, frame_table
 
     c = small_manifold.corpus_
     t = frame_table(small_manifold)

@@ -96,8 +96,8 @@ def test_local_linear_inverse_on_one_thread(small_manifold, two_blas_threads, mo
 @pytest.mark.parametrize("method, inner", [("viterbi", "_path_x"), ("manifold", "_x"), ("linear", "target_x"),
                                            ("unitselection", "_sample")])
 def test_synthesis_on_one_thread(small_manifold, two_blas_threads, monkeypatch, method, inner):
-    from engine.synthesis.methods import make_synthesizer
     from engine.phonetics.targets import targets_from_utterance
+    from engine.synthesis.methods import make_synthesizer
 
     m = small_manifold
     syn = make_synthesizer(method, m)

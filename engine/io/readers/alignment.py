@@ -9,9 +9,9 @@ import math
 import re
 from pathlib import Path
 
-from engine.recordings.corpus import PhoneInterval
 from engine.io._util import decode_text, parse_floats, read_bytes
 from engine.io.errors import ImportFormatError
+from engine.recordings.corpus import PhoneInterval
 
 __all__ = ["read_textgrid", "read_lab", "read_alignment", "resolve_alignment", "textgrid_tiers", "PHONE_TIER_NAMES"]
 

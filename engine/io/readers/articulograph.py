@@ -28,8 +28,8 @@ import numpy as np
 
 from engine.io._util import decode_text, plausible_rate, read_bytes, uniform_rate
 from engine.io.errors import ImportFormatError
-from engine.io.repairs import reports_repairs
 from engine.io.readers.sensor_matrix import corpus_from_matrix
+from engine.io.repairs import reports_repairs
 from engine.recordings.layouts import LayoutError, get_layout
 
 __all__ = ["read_pos", "read_wave", "POS_MAGIC"]

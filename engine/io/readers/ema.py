@@ -23,11 +23,18 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.io._util import (
+    check_rate,
+    decode_text,
+    one_utterance_corpus,
+    parse_floats,
+    read_bytes,
+    sidecar_audio,
+    uniform_rate,
+)
 from engine.io._util import fill_gaps as _fill_gaps
-from engine.io._util import (check_rate, decode_text, one_utterance_corpus, parse_floats, read_bytes,
-                             sidecar_audio, uniform_rate)
-from engine.io.readers.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
+from engine.io.readers.alignment import resolve_alignment
 from engine.io.repairs import reports_repairs
 
 __all__ = ["read_ema", "read_est_track", "write_est_track", "MOCHA_CHANNELS", "MOCHA_SENSORS", "LIP_SENSORS"]

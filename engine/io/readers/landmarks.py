@@ -24,11 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.io._util import (decode_text, one_utterance_corpus, plausible_rate, read_bytes, sidecar_audio,
-                             uniform_rate)
+from engine.io._util import decode_text, one_utterance_corpus, plausible_rate, read_bytes, sidecar_audio, uniform_rate
 from engine.io._util import fill_gaps as _fill_gaps
-from engine.io.readers.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
+from engine.io.readers.alignment import resolve_alignment
 from engine.io.repairs import reports_repairs
 
 __all__ = ["read_csv_landmarks", "IBUG68_LIPS"]

@@ -9,8 +9,8 @@ import numpy as np
 
 from engine.io._util import check_rate, one_utterance_corpus, plausible_rate, read_bytes, sidecar_audio
 from engine.io._util import fill_gaps as _fill_gaps
-from engine.io.readers.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
+from engine.io.readers.alignment import resolve_alignment
 from engine.io.repairs import report_repair, reports_repairs
 
 __all__ = ["read_c3d"]

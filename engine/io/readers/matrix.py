@@ -17,8 +17,8 @@ import numpy as np
 
 from engine.io._util import decode_text, plausible_rate, read_bytes
 from engine.io.errors import ImportFormatError
-from engine.io.repairs import reports_repairs
 from engine.io.readers.sensor_matrix import corpus_from_matrix
+from engine.io.repairs import reports_repairs
 from engine.recordings.layouts import Layout, LayoutError, get_layout
 
 __all__ = ["read_matrix", "corpus_from_matrix", "MATRIX_EXTENSIONS"]

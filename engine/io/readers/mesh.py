@@ -9,10 +9,10 @@ import numpy as np
 
 from engine.io._util import fill_gaps as _fill_gaps
 from engine.io._util import natural_key, one_utterance_corpus, plausible_rate, sidecar_audio
-from engine.io.readers.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
-from engine.io.repairs import reports_repairs
+from engine.io.readers.alignment import resolve_alignment
 from engine.io.readers.meshfile import read_mesh
+from engine.io.repairs import reports_repairs
 
 __all__ = ["read_mesh_sequence", "read_vertex_array", "mesh_sequence_files"]
 

@@ -19,10 +19,10 @@ import numpy as np
 
 from engine.io._util import check_rate, one_utterance_corpus, plausible_rate, sidecar_audio
 from engine.io._util import fill_gaps as _fill_gaps
-from engine.io.readers.alignment import resolve_alignment
 from engine.io.errors import ImportFormatError
-from engine.io.repairs import reports_repairs
+from engine.io.readers.alignment import resolve_alignment
 from engine.io.readers.matfile import MatStruct, read_mat
+from engine.io.repairs import reports_repairs
 from engine.recordings.corpus import PhoneInterval
 
 __all__ = ["read_mview", "read_mview_audio", "write_audio", "MVIEW_LIP_SENSORS"]

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from engine.io._util import fill_gaps as _fill_gaps, one_utterance_corpus, sidecar_audio
-from engine.io.readers.alignment import resolve_alignment
+from engine.io._util import fill_gaps as _fill_gaps
+from engine.io._util import one_utterance_corpus, sidecar_audio
 from engine.io.errors import ImportFormatError
+from engine.io.readers.alignment import resolve_alignment
 from engine.recordings.layouts import LayoutError
 
 __all__ = ["corpus_from_matrix"]

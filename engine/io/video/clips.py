@@ -282,8 +282,8 @@ def _span(a, b, rate):
 
 def head_pose_model(interocular_mm: float = 63.0):
     """An unfitted :class:`engine.recordings.headpose.HeadPose` for :data:`engine.io.video.facemesh.REFERENCE_POINTS`."""
-    from engine.recordings.headpose import HeadPose
     from engine.io.video.facemesh import EYE_CORNERS, REFERENCE_POINTS
+    from engine.recordings.headpose import HeadPose
 
     pos = {p: k for k, p in enumerate(REFERENCE_POINTS)}
     eyes = tuple((pos[a], pos[b]) for a, b in EYE_CORNERS)
@@ -309,7 +309,6 @@ def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: 
     """
     from engine.io.combine import concat
     from engine.io.video.facemesh import LIP_POINTS
-
     from engine.recordings.headpose import check_interocular
 
     check_interocular(interocular_mm)
@@ -396,11 +395,10 @@ def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: fl
     ImportFormatError
         Empty, damaged or non-video file; no face in any frame; too few frames with a face.
     """
-    from engine.recordings.corpus import Corpus, CorpusError, Utterance
     from engine.io._util import check_rate, fit_phones
     from engine.io.readers.alignment import resolve_alignment
     from engine.io.video.facemesh import LIP_FACES, LIP_NAMES, LIP_POINTS, LIP_ROLES, REFERENCE_POINTS
-
+    from engine.recordings.corpus import Corpus, CorpusError, Utterance
     from engine.recordings.headpose import check_interocular
 
     path = Path(path)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import re
+
 import numpy as np
 import pytest
 
@@ -229,9 +230,9 @@ def test_lipspace_figures_takes_a_journal_width(lab_manifold, tmp_path, capsys):
 @pytest.mark.gui
 @pytest.mark.parametrize("size", [(900, 300), (640, 480), (360, 600)])
 def test_the_manifold_views_s_and_v_labels_stay_inside_the_view(qapp, lab_manifold, size):
+    from app.models.state import AppState
     from app.scene.manifold import AXES_LABEL_PX
     from app.scene.projection import project, view_transform
-    from app.models.state import AppState
     from app.views.manifold_view import ManifoldView
 
     v = ManifoldView(AppState(lab_manifold))

@@ -4,8 +4,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.models.colouring import (ELLIPSOID_COLOURS, OUTSIDE_RGB, RESERVED_COLOURS, UNREACHABLE_RGB, categorical_palette,
-                           delta_e, ellipsoid_colors, hemisphere_coloring, hop_table, phone_palette, point_colors)
+from app.models.colouring import (
+    ELLIPSOID_COLOURS,
+    OUTSIDE_RGB,
+    RESERVED_COLOURS,
+    UNREACHABLE_RGB,
+    categorical_palette,
+    delta_e,
+    ellipsoid_colors,
+    hemisphere_coloring,
+    hop_table,
+    phone_palette,
+    point_colors,
+)
 from app.models.state import COLOR_MODES, AppState
 
 

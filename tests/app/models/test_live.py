@@ -14,8 +14,8 @@ import pytest
 pytest.importorskip("mediapipe", reason="the [video] extra is not installed (pip install -e '.[video]')")
 skdata = pytest.importorskip("skimage.data", reason="scikit-image (the [video] extra) is not installed")
 
-from app.models.live import LatestFrame, LiveProjector, LiveSession, check_video_manifold  # noqa: E402
 from app.cli.explore import run_live  # noqa: E402
+from app.models.live import LatestFrame, LiveProjector, LiveSession, check_video_manifold  # noqa: E402
 from engine.io.video.clips import read_video, track_video  # noqa: E402
 from engine.io.video.synth import default_motion, moving_image_frames, write_video  # noqa: E402
 

@@ -336,7 +336,7 @@ def test_throttle_runs_at_most_once_per_slot_and_ends_on_the_latest(qapp):
 def test_readouts_called_while_a_frame_is_drawn_repaint_just_after_it(qapp, qtbot):
     from PySide6 import QtCore, QtWidgets
 
-    from app.views._common import drawing_frame, Throttle
+    from app.views._common import Throttle, drawing_frame
 
     label = QtWidgets.QLabel("")
     qtbot.addWidget(label)

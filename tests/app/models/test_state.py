@@ -286,8 +286,8 @@ def test_derived_data_prepared_ahead_is_used_by_every_state(app_manifold):
 # ----------------------------------------------------------------------------- targets from clicked states
 def test_selected_state_targets_are_inserted_and_synthesis_passes_through_them(app_manifold):
     from app.models.state import TARGET_SPACING
-    from engine.synthesis.methods import make_synthesizer
     from engine.phonetics.targets import TargetError
+    from engine.synthesis.methods import make_synthesizer
 
     m = app_manifold
     s = AppState(m)

@@ -84,8 +84,8 @@ def test_selection_path_and_trajectories_are_drawn_over_the_cloud(fresh, app_man
 
 
 def test_hover_reads_out_the_frame_under_the_pointer(fresh, qtbot, app_manifold):
-    from app.scene import pick_display_point
     from app.models.picking import hover_text
+    from app.scene import pick_display_point
 
     v, s, m = fresh, fresh.state, app_manifold
     i = _front_state_frame(v, m)
@@ -256,9 +256,9 @@ def test_a_level_of_detail_cloud_is_coloured_from_every_frame_and_clicks_find_un
     all frames, also one the view does not draw; the readout counts frames."""
     import app.models.lod
     from app.models.picking import frame_under_cursor
+    from app.models.state import AppState
     from app.scene import pick_display_point
     from app.scene.projection import project, view_transform
-    from app.models.state import AppState
     from app.views.manifold_view import ManifoldView
 
     m = app_manifold

@@ -68,8 +68,8 @@ def test_gltf_is_in_gltf_axes(lab_manifold, tmp_path):
 
 @pytest.mark.gui
 def test_lip_view_shows_the_corners_left_and_right_on_screen(qapp, lab_manifold):
-    from app.scene.projection import project, view_transform
     from app.models.state import AppState
+    from app.scene.projection import project, view_transform
     from app.views.lip_view import LipView
 
     view = LipView(AppState(lab_manifold))

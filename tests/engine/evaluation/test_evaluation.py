@@ -55,8 +55,8 @@ def test_per_utterance_errors_add_up(result):
 def test_trajectories_in_y(small_manifold):
     from engine.evaluation.per_method import trajectory_y
     from engine.manifold.model import project_x
-    from engine.synthesis.viterbi import InterpolationSynthesizer, ManifoldSynthesizer, Trajectory
     from engine.phonetics.targets import targets_from_utterance
+    from engine.synthesis.viterbi import InterpolationSynthesizer, ManifoldSynthesizer, Trajectory
 
     m = small_manifold
     u = m.corpus_.utterances[1]

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from engine.manifold.inverse_local import LocalLinearInverse, StateMeanInverse, select_neighbors
 from engine.evaluation.paired import paired_comparison
 from engine.evaluation.protocols import PROTOCOL_METHODS, evaluate_protocols, select_settings
+from engine.manifold.inverse_local import LocalLinearInverse, StateMeanInverse, select_neighbors
 from engine.synthesis.statepaths import StateModel, anchor, interpolate_targets
 
 #: a reduced candidate grid keeps the test fast; the generator of docs/RESULTS.md uses the full one

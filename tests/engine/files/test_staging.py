@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from engine.files.atomic import atomic_write
-from engine.io.writers.export import write_mesh_sequence, write_trajectory_csv
 from engine.files.staging import OutputExistsError, Outputs, user_path
+from engine.io.writers.export import write_mesh_sequence, write_trajectory_csv
 
 
 def _leftovers(d):

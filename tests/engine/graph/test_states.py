@@ -11,8 +11,8 @@ import scipy.sparse as sp
 
 import engine.graph.states as states_mod
 from engine.files.persist import dump_estimator, load_estimator
-from engine.progress import Cancelled
 from engine.graph.states import StateGraph, StateGraphConnectivityWarning, UnreachableError, default_n_states
+from engine.progress import Cancelled
 
 
 def _in_utterance_pairs(labels, bounds):

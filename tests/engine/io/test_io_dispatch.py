@@ -5,9 +5,8 @@ import shutil
 import numpy as np
 import pytest
 
+from engine.io import ImportFormatError, detect_format, read_corpus, write_est_track, write_obj, write_trajectory_csv
 from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
-from engine.io import (ImportFormatError, detect_format, read_corpus, write_est_track, write_obj,
-                       write_trajectory_csv)
 
 
 def _est(path):

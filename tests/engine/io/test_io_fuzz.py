@@ -12,9 +12,16 @@ import scipy.io
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from engine.io import (
+    ImportFormatError,
+    read_alignment,
+    read_corpus,
+    write_est_track,
+    write_obj,
+    write_ply,
+    write_trajectory_csv,
+)
 from engine.recordings.corpus import Corpus, CorpusError, Utterance
-from engine.io import (ImportFormatError, read_alignment, read_corpus, write_est_track, write_obj, write_ply,
-                       write_trajectory_csv)
 
 SETTINGS = settings(max_examples=50, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
 from engine.io import concat, resample
+from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
 
 
 def _corpus(signals, rate, *, latent=None, phones=None):

@@ -9,14 +9,26 @@ import pytest
 import scipy.io
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_io_c3d import _write as _write_c3d  # the C3D writer of the reader's own tests (rate, labels, invalid)
 
-from engine.io import (ImportFormatError, read_c3d, read_corpus, read_csv_landmarks, read_ema, read_mview,
-                       read_pos, read_textgrid, read_wave, write_audio, write_est_track, write_mesh_sequence,
-                       write_ply)
+from engine.io import (
+    ImportFormatError,
+    read_c3d,
+    read_corpus,
+    read_csv_landmarks,
+    read_ema,
+    read_mview,
+    read_pos,
+    read_textgrid,
+    read_wave,
+    write_audio,
+    write_est_track,
+    write_mesh_sequence,
+    write_ply,
+)
 from engine.io._util import IMPLAUSIBLE_COORDINATE, MAX_FILL_FRACTION, fill_gaps
 from engine.io.errors import ImportDataWarning
 from engine.io.repairs import collecting_repairs, frame_runs, report_repair
-from test_io_c3d import _write as _write_c3d  # the C3D writer of the reader's own tests (rate, labels, invalid)
 
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])

@@ -289,8 +289,8 @@ def test_bilabials_on_the_synthetic_manifold(small_manifold):
     /m/ on the closing side, /p b/ on the opening side; /p/ and /b/ overlap; dynamics pull /m/ away
     from /p/. It is no evidence about real lips; the engine's opening side must also stay within
     3 points of the trivial rule (the sign of the captured lips' own aperture change)."""
-    from engine.recordings.kinematics import lip_aperture
     from engine.manifold.local_gradients import central_difference
+    from engine.recordings.kinematics import lip_aperture
 
     m = small_manifold
     corpus = m.corpus_

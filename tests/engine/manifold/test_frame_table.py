@@ -6,8 +6,8 @@ import re
 import numpy as np
 import pytest
 
-from engine.manifold.frame_table import CLASS_LABELS, class_intervals, frame_table, utterance_tiers
 from engine.io.writers.praat import IntervalTier, PointTier, textgrid_names, textgrid_text, write_textgrid
+from engine.manifold.frame_table import CLASS_LABELS, class_intervals, frame_table, utterance_tiers
 
 
 @pytest.fixture(scope="module")
@@ -138,8 +138,8 @@ def test_textgrid_names_are_file_names_and_unique():
 def test_the_csv_quotes_only_what_needs_it_and_writes_na_for_missing(tmp_path):
     import csv
 
-    from engine.manifold.frame_table import FrameTable
     from engine.io.writers.tidy import sidecar_path, write_frame_table
+    from engine.manifold.frame_table import FrameTable
 
     t = FrameTable(columns={"phone": np.array(["a,b", 'say "x"', None, "two\nlines"], dtype=object),
                             "time_s": np.array([0.0, 1 / 60, np.nan, 2.5]), "frame": np.arange(4)},

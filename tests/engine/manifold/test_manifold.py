@@ -383,8 +383,8 @@ def test_state_inverse_table_of_the_landmark_path_comes_from_local_triangulation
     comes from triangulations of their neighbourhoods, the same values as the whole map's; a file
     without the table gets it on first synthesis, the same way."""
     from engine.manifold.inverse import InverseMap, delaunay_at
-    from engine.synthesis.viterbi import ManifoldSynthesizer
     from engine.phonetics.targets import targets_from_utterance
+    from engine.synthesis.viterbi import ManifoldSynthesizer
 
     assert small_manifold.state_x_ is not None
     m = Manifold(n_landmarks=300).fit(small_corpus)

@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 
 from engine.manifold.dynamics import DynamicFeatures
-from engine.recordings.bounds import velocities
 from engine.manifold.shape import ShapeSpace
+from engine.recordings.bounds import velocities
 
 
 @pytest.fixture(scope="module")

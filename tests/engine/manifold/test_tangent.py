@@ -19,12 +19,12 @@ import pytest
 import engine.manifold.local_gradients as lg
 from engine.manifold.class_agreement import class_agreement
 from engine.manifold.dynamics import DynamicFeatures
-from engine.recordings.bounds import velocities
 from engine.manifold.embedding import Embedding
-from engine.recordings.kinematics import lip_aperture
 from engine.manifold.local_gradients import central_difference, neighbor_candidates, select_neighbors
 from engine.manifold.shape import ShapeSpace
 from engine.manifold.tangent import CLASS_NAMES, NO_STEP, TangentFrames
+from engine.recordings.bounds import velocities
+from engine.recordings.kinematics import lip_aperture
 
 RATE = 60.0
 #: the synthetic talkers: measured opening 95.7 / 94.8 %, accelerating 79.2 / 81.5 % (trivial rule

@@ -17,8 +17,8 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
 from real_data_report import CLIPS, real_corpora  # noqa: E402
 
 from engine.manifold.class_agreement import ACCELERATING_BOUND, OPENING_BOUND, class_agreement  # noqa: E402
-from engine.recordings.kinematics import lip_aperture  # noqa: E402
 from engine.manifold.tangent import TangentFrames  # noqa: E402
+from engine.recordings.kinematics import lip_aperture  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,8 @@
 """The phone-set table: normalisation across ARPAbet / IPA / SAMPA / MRPA, classes."""
 import pytest
 
-from engine.phonetics import phonesets as ps
 from engine.files.assets import asset_path
+from engine.phonetics import phonesets as ps
 
 
 def test_inventory_matches_the_paper_set_and_phonetics():

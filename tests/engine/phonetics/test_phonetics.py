@@ -6,8 +6,19 @@ import pytest
 
 from engine.files.assets import asset_path
 from engine.phonetics.phones import (
-    CONSONANTS, PAPER_COUNTS, PAUSE, PHONES, VOWELS, DurationModel, UnknownPhoneError,
-    UnknownWordError, cmu_to_paper, is_vowel, parse_phones, phone_class, pronounce,
+    CONSONANTS,
+    PAPER_COUNTS,
+    PAUSE,
+    PHONES,
+    VOWELS,
+    DurationModel,
+    UnknownPhoneError,
+    UnknownWordError,
+    cmu_to_paper,
+    is_vowel,
+    parse_phones,
+    phone_class,
+    pronounce,
 )
 
 

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from engine.phonetics import speech_audio as sa
-from engine.recordings.corpus import PhoneInterval, Utterance
 from engine.phonetics.phones import PAUSE
+from engine.recordings.corpus import PhoneInterval, Utterance
 from engine.talker.synthetic import SyntheticTalker, load_synthetic
 
 needs_espeak = pytest.mark.skipif(sa.espeak_path() is None, reason="espeak-ng is not installed")

@@ -200,8 +200,8 @@ def test_files_of_an_older_version_are_made_again_and_current_ones_reused(tmp_pa
 def test_phones_espeak_merges_folds_or_assimilates_still_get_their_own_start(worker):
     # espeak-ng says 'ay ax' of "society" as one phone (aI@), folds the /l/ of "fills" into the vowel
     # and says the 'n' of "increase" as 'N' (before k)
-    from engine.recordings.corpus import PhoneInterval, Utterance
     from engine.phonetics.phones import pronounce
+    from engine.recordings.corpus import PhoneInterval, Utterance
 
     labels = pronounce("Society fills increase.", pauses=True)
     bounds = np.cumsum([0.0] + [0.3 if p == PAUSE else 0.08 for p in labels])

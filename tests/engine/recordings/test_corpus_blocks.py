@@ -59,8 +59,8 @@ def whole_and_blocked_builds(two_speakers, blocked_two_speakers):
     """In-process builds of the same corpus held whole and read from its blocks (windows of 300 rows,
     so that windows straddle the 256-row block files), the blocked one refusing to gather F."""
     import engine.recordings.frame_blocks as fb
-    from engine.recordings.frame_blocks import BlockFrames
     from engine.manifold.model import Manifold
+    from engine.recordings.frame_blocks import BlockFrames
 
     mp = pytest.MonkeyPatch()
     mp.setattr(fb, "WINDOW_ROWS", 300)
@@ -115,8 +115,8 @@ def test_manifold_file_references_the_blocked_corpus(whole_and_blocked_builds, b
     import shutil
 
     from engine.files.persist import read_npz
-    from engine.recordings.frame_blocks import BlockFrames
     from engine.manifold.model import Manifold, ManifoldFileError
+    from engine.recordings.frame_blocks import BlockFrames
 
     whole, blocked = whole_and_blocked_builds
     # the corpus and the manifold side by side in a folder of their own, as a user would keep them
@@ -149,8 +149,8 @@ def test_import_in_blocks_then_build_on_dask_reads_them_in_place(two_speakers, w
     inside their tasks), nothing is written out again, and the result matches the in-process build."""
     from scipy.linalg import subspace_angles
 
-    from engine.recordings.frame_blocks import BlockFrames
     from engine.manifold.model import Manifold
+    from engine.recordings.frame_blocks import BlockFrames
 
     whole, _ = whole_and_blocked_builds
     src = two_speakers.save(tmp_path / "whole.npz")

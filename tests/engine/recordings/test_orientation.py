@@ -9,8 +9,8 @@ import pytest
 
 from engine.io.readers.matrix import corpus_from_matrix
 from engine.recordings.layouts import BUILTIN
-from engine.talker.multispeaker import generate_recordings
 from engine.recordings.orientation import AxesError, anatomical_frame, parse_axes
+from engine.talker.multispeaker import generate_recordings
 
 #: the generator's axes: x anterior, y the talker's left, z up -> view rows (left, up, forward) in its coordinates
 CANONICAL = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])

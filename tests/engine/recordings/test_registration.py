@@ -2,13 +2,13 @@
 import numpy as np
 import pytest
 
-from engine.recordings.corpus import Corpus, CorpusError, Utterance
 from engine.io import concat
 from engine.io.readers.matrix import corpus_from_matrix
+from engine.recordings.corpus import Corpus, CorpusError, Utterance
 from engine.recordings.kinematics import kinematic_landmarks, lip_aperture, with_kinematic_labels
 from engine.recordings.layouts import read_layout
-from engine.talker.multispeaker import generate_recordings, layout_text
 from engine.recordings.registration import normalise_speakers, register
+from engine.talker.multispeaker import generate_recordings, layout_text
 
 
 def _corpus(recs, layout, points=None):

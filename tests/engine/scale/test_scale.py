@@ -91,9 +91,9 @@ def test_small_blocks_are_refused(executor):
 
 def test_dask_tangent_frames_and_states_equal_in_process_on_the_same_fy(executor, in_process):
     """Given the same F^y, the per-block Dask tasks reproduce the in-process tangent frames and state graph."""
-    from engine.recordings.kinematics import lip_aperture
     from engine.graph.states import StateGraph
     from engine.manifold.tangent import TangentFrames
+    from engine.recordings.kinematics import lip_aperture
 
     m = in_process
     b = m.corpus_.bounds

@@ -5,8 +5,8 @@ import copy
 import numpy as np
 import pytest
 
-from engine.synthesis import method_choice as mc
 from engine.phonetics.targets import Target, TargetSequence
+from engine.synthesis import method_choice as mc
 
 CHOICE = {"best": {"states": "manifold", "oracle": "manifold", "phones": "dominance"}, "blend": {},
           "method_validation": {"phones": {"manifold": {"rmse_x": 19.3, "lve": 2.8},

@@ -77,8 +77,8 @@ def test_bridge_equals_the_full_recursion_on_a_fitted_state_graph(small_manifold
 
 def test_synthesis_paths_unchanged(small_manifold):
     """ManifoldSynthesizer's state path is the gap-by-gap full Viterbi path (strict and not)."""
-    from engine.synthesis.viterbi import ManifoldSynthesizer
     from engine.phonetics.targets import Target, TargetSequence
+    from engine.synthesis.viterbi import ManifoldSynthesizer
 
     st = small_manifold.states_
     lab = np.asarray(st.labels_)

@@ -4,12 +4,29 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from engine.synthesis.viterbi import (ManifoldSynthesizer, MaxProductGraph, NoPathError,
-                              Synthesizer, Trajectory, log_transitions, observed_transitions, viterbi_path)
+from engine.phonetics.targets import (
+    Target,
+    TargetError,
+    TargetSequence,
+    UnknownPhoneError,
+    parse_phone_string,
+    targets_from_phones,
+    targets_from_points,
+    targets_from_text,
+    targets_from_textgrid,
+    targets_from_utterance,
+)
 from engine.synthesis.methods import make_synthesizer
-from engine.phonetics.targets import (Target, TargetError, TargetSequence, UnknownPhoneError, parse_phone_string,
-                            targets_from_phones, targets_from_points, targets_from_text, targets_from_textgrid,
-                            targets_from_utterance)
+from engine.synthesis.viterbi import (
+    ManifoldSynthesizer,
+    MaxProductGraph,
+    NoPathError,
+    Synthesizer,
+    Trajectory,
+    log_transitions,
+    observed_transitions,
+    viterbi_path,
+)
 
 
 # ---------------------------------------------------------------- Viterbi core
@@ -294,8 +311,8 @@ def test_inverse_dims_maps_state_means_through_a_higher_dimensional_map(small_ma
 
 def test_inverse_maps_beside_delaunay(small_manifold):
     """ManifoldSynthesizer(inverse=...): the same state path through the state means or the local-linear map."""
-    from engine.synthesis.viterbi import ManifoldSynthesizer
     from engine.phonetics.targets import targets_from_utterance
+    from engine.synthesis.viterbi import ManifoldSynthesizer
 
     m = small_manifold
     u = m.corpus_.utterances[2]
@@ -323,8 +340,8 @@ def test_inverse_maps_beside_delaunay(small_manifold):
 def test_stored_state_inverse_table_gives_the_delaunay_path_exactly(small_manifold, tmp_path):
     """The manifold file's state_x_ table replaces the tetrahedralisation in a new process."""
     from engine.manifold.model import Manifold
-    from engine.synthesis.viterbi import ManifoldSynthesizer
     from engine.phonetics.targets import targets_from_utterance
+    from engine.synthesis.viterbi import ManifoldSynthesizer
 
     m = Manifold.load(small_manifold.save(tmp_path / "m.npz"))
     assert m.state_x_ is not None and m._inverse is None

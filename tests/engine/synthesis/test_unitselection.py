@@ -2,8 +2,13 @@ import numpy as np
 import pytest
 
 from engine.phonetics.targets import targets_from_phones, targets_from_utterance
-from engine.synthesis.unitselection import (OVERLAP_TABLE, UnitSelectionSynthesizer, crossfade_weights, lip_class,
-                                  overlap_fraction)
+from engine.synthesis.unitselection import (
+    OVERLAP_TABLE,
+    UnitSelectionSynthesizer,
+    crossfade_weights,
+    lip_class,
+    overlap_fraction,
+)
 
 
 def test_overlap_table_is_the_papers_table_1():

@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from engine.recordings.corpus import Corpus
-from engine.talker.lipmodel import CONTROL_NAMES, SIGNED_CONTROLS, Anatomy, LipModel, vermilion_weight
 from engine.phonetics.phones import PAPER_COUNTS, PAUSE, PHONES
 from engine.progress import Cancelled
+from engine.recordings.corpus import Corpus
+from engine.talker.lipmodel import CONTROL_NAMES, SIGNED_CONTROLS, Anatomy, LipModel, vermilion_weight
 from engine.talker.synthetic import PHONE_GESTURES, SyntheticTalker, gesture_phases, load_synthetic
 
 
@@ -268,7 +268,7 @@ def test_manifold_of_the_small_corpus_is_paper_like(small_manifold):
 def test_generator_variants_leave_the_default_talker_unchanged(tmp_cache):
     """The held-out talker's keyword-only parameters: at their defaults nothing changes (same
     frames, same cache file name); the held-out talker differs in timing and dynamics."""
-    from engine.talker.synthetic import HELD_OUT_TALKER, _VARIANT_DEFAULTS
+    from engine.talker.synthetic import _VARIANT_DEFAULTS, HELD_OUT_TALKER
 
     a = SyntheticTalker(preset="small", n_sentences=3).generate()
     b = SyntheticTalker(preset="small", n_sentences=3, **_VARIANT_DEFAULTS).generate()

@@ -6,8 +6,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from engine.talker.synthetic import gesture_phases
 from engine.talker.report import components_for, format_realism, rule_classes, talker_realism
+from engine.talker.synthetic import gesture_phases
 
 
 def test_components_for_counts_leading_components():

@@ -2,8 +2,17 @@
 import numpy as np
 import pytest
 
-from engine.io import (ImportFormatError, read_corpus, read_mesh_sequence, read_obj, read_ply, read_vertex_array,
-                       write_mesh_sequence, write_obj, write_ply)
+from engine.io import (
+    ImportFormatError,
+    read_corpus,
+    read_mesh_sequence,
+    read_obj,
+    read_ply,
+    read_vertex_array,
+    write_mesh_sequence,
+    write_obj,
+    write_ply,
+)
 
 
 def _grid_mesh(nx=4, ny=3, seed=0):

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-from engine.recordings.corpus import CorpusError
 from engine.io import ImportFormatError, concat, read_corpus, read_mview, read_mview_audio, write_audio
+from engine.recordings.corpus import CorpusError
 
 
 def _repo_root():

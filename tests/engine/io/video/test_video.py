@@ -14,8 +14,8 @@ pytest.importorskip("mediapipe", reason="the [video] extra is not installed (pip
 skdata = pytest.importorskip("skimage.data", reason="scikit-image (the [video] extra) is not installed")
 
 from engine.io import ImportFormatError, detect_format, read_corpus  # noqa: E402
-from engine.io.video.facemesh import LIP_FACES, LIP_POINTS, LIP_RINGS  # noqa: E402
 from engine.io.video.clips import read_audio_track, read_video, segments  # noqa: E402
+from engine.io.video.facemesh import LIP_FACES, LIP_POINTS, LIP_RINGS  # noqa: E402
 from engine.io.video.synth import default_motion, moving_image_frames, write_video  # noqa: E402
 
 RATE = 30

@@ -5,9 +5,15 @@ import numpy as np
 import pytest
 
 import engine.io.writers.export as export
+from engine.io import (
+    corpus_columns,
+    read_mesh_sequence,
+    write_mesh_sequence,
+    write_table_csv,
+    write_trajectory_csv,
+    write_trajectory_npy,
+)
 from engine.recordings.corpus import Corpus, Utterance
-from engine.io import (corpus_columns, read_mesh_sequence, write_mesh_sequence, write_table_csv,
-                       write_trajectory_csv, write_trajectory_npy)
 
 
 def _rows(p):

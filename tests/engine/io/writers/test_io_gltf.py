@@ -46,8 +46,8 @@ def _played_frames(gltf, accessor):
 
 @pytest.fixture(scope="module")
 def synthesized(small_manifold):
-    from engine.synthesis.methods import make_synthesizer
     from engine.phonetics.targets import targets_from_phones
+    from engine.synthesis.methods import make_synthesizer
 
     targets = targets_from_phones(small_manifold, "sil 0.1 b 0.08 aa 0.12 m 0.08 sil 0.1")
     return make_synthesizer("viterbi", small_manifold, strict=False).synthesize(targets)
