@@ -1,16 +1,59 @@
 """Lipspace engine: the visual speech manifold, computed with numpy, scipy and scikit-learn.
 
-Never imports Qt, VTK or pyvista (checked by tests/engine/test_imports.py). The corpus
-names below load on first use, so importing a light module (``engine.progress``) does
-not import numpy: ``lipspace --help`` stays near bare Python's start-up.
+The public API, by stage (each name loads its module on first use, so ``import engine``
+stays as light as bare Python and ``lipspace --help`` starts fast):
+
+==========================  ==============================================================
+recordings                  :class:`Corpus`, :class:`Utterance`, :class:`PhoneInterval`,
+                            :func:`read_corpus` (every foreign format), :func:`read_alignment`,
+                            :func:`resample`, :func:`save_blocked` / :func:`load_blocked` (blocks)
+the synthetic talker        :func:`load_synthetic`, :class:`SyntheticTalker`
+the manifold                :class:`Manifold` (shape space, dynamic features, embedding,
+                            tangent frames, state graph, inverse map in one estimator)
+the state graph             :class:`StateGraph` (``Manifold.states_``), :func:`hemisphere`
+targets                     :func:`targets_from_text`, :func:`targets_from_phones`,
+                            :func:`targets_from_textgrid`, :func:`targets_from_utterance`,
+                            :func:`targets_from_points`
+synthesis                   :data:`METHODS`, :func:`make_synthesizer`, :class:`Trajectory`
+clusters                    :class:`PhoneClusters`, :func:`clusters_of`
+evaluation                  :func:`evaluate_protocols`
+==========================  ==============================================================
+
+Never imports Qt, VTK, pyvista or matplotlib (import-linter contracts in pyproject.toml).
 """
-__all__ = ["Corpus", "CorpusError", "CorpusWarning", "PhoneInterval", "Utterance"]
+from __future__ import annotations
+
+import importlib
+
 __version__ = "0.1.0"
+
+#: public name -> the module that defines it
+_WHERE = {
+    **dict.fromkeys(("Corpus", "CorpusError", "CorpusWarning", "PhoneInterval", "Utterance"),
+                    "engine.recordings.corpus"),
+    **dict.fromkeys(("load_blocked", "save_blocked"), "engine.recordings.corpus_blocks"),
+    **dict.fromkeys(("read_corpus", "read_alignment", "resample"), "engine.io"),
+    **dict.fromkeys(("load_synthetic", "SyntheticTalker"), "engine.talker.synthetic"),
+    **dict.fromkeys(("Manifold", "ManifoldFileError"), "engine.manifold.model"),
+    "StateGraph": "engine.graph.states",
+    **dict.fromkeys(("hemisphere", "Hemisphere"), "engine.graph.hemispheres"),
+    **dict.fromkeys(("targets_from_text", "targets_from_phones", "targets_from_textgrid", "targets_from_utterance",
+                     "targets_from_points", "Target", "TargetSequence"), "engine.phonetics.targets"),
+    **dict.fromkeys(("METHODS", "make_synthesizer"), "engine.synthesis.methods"),
+    "Trajectory": "engine.synthesis.trajectory",
+    **dict.fromkeys(("PhoneClusters", "clusters_of"), "engine.manifold.clusters"),
+    "evaluate_protocols": "engine.evaluation.protocols",
+}
+__all__ = sorted(_WHERE)
 
 
 def __getattr__(name):
-    if name in __all__:
-        from engine.recordings import corpus
-
-        return getattr(corpus, name)
+    if name in _WHERE:
+        value = getattr(importlib.import_module(_WHERE[name]), name)
+        globals()[name] = value
+        return value
     raise AttributeError(f"module 'engine' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_WHERE))
