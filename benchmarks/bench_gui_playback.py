@@ -48,7 +48,7 @@ On the virtual machine measured, long frames are time the machine took, charged 
 thread: steal arrives in the counters late and in lumps (a 19-ms frame charged 274 ms of
 CPU as its core's steal rose by 440 ms), some of it is never reported as steal, and the
 probe's fixed work is charged the same way at the same moments (docs/DECISIONS.md,
-"Playback lag within one frame period", "Long frames").
+I5).
 
 ``--tree DIR`` runs the explorer code of another checkout with this same script (e.g.
 the commit before a change, extracted with ``git archive REV | tar -x -C DIR``), for

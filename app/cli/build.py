@@ -64,7 +64,7 @@ def run(args) -> int:
         # a corpus stored in blocks ('lipspace import --block-frames') keeps its frames in the block files
         corpus = load_corpus_arg(args.corpus, synthetic_preset=args.preset, progress=progress,
                                  kinematics=args.kinematics, audio=True)
-        if abs(corpus.rate - ANALYSIS_RATE) > 3.0:  # README, "Real recordings"
+        if abs(corpus.rate - ANALYSIS_RATE) > 3.0:  # docs/USER_GUIDE.md, "Real recordings"
             print(f"lipspace build: warning: {corpus.name} is at {corpus.rate:g} Hz; the method's analysis rate is "
                   "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "
                   "'lipspace import CORPUS --resample 60 -o OUT.npz'", file=sys.stderr)

@@ -26,7 +26,7 @@ _METADATA = {".png": {"Software": "Lipspace"}, ".svg": {"Date": None, "Creator":
 
 
 class VectorExportUnavailable(RuntimeError):
-    """Kept for callers that catch it: vector export no longer depends on the VTK build."""
+    """Never raised: vector export does not depend on the VTK build; callers may still catch it."""
 
 
 def _suffix(path, allowed, what):

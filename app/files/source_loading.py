@@ -185,7 +185,7 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
 
 
 #: the method's analysis rate in Hz (the paper's 60 Hz), to which 'lipspace import' and :func:`read_recording`
-#: resample by default (see docs/DECISIONS.md, "Real recordings")
+#: resample by default (see docs/DECISIONS.md, A6)
 ANALYSIS_RATE = 60.0
 
 

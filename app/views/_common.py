@@ -9,8 +9,8 @@ __all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter"
 
 #: seconds between two repaints of the readouts that follow playback (caption, slider, the
 #: editor's timeline cursor): each repaint of an ordinary widget composes the main window
-#: and, measured, often the 3-D views' windows with it (docs/DECISIONS.md, "Playback at the
-#: corpus rate"); the manifold view's playback markers render at the same rate
+#: and, measured, often the 3-D views' windows with it (docs/DECISIONS.md, I2); the
+#: manifold view's playback markers render at the same rate
 READOUT_INTERVAL_S = 0.5
 
 
@@ -31,7 +31,7 @@ def make_plotter(parent):
 
     # no auto-update timer: views render on demand (RenderScheduler), so an idle window costs nothing.
     # No multisampling: with software OpenGL (Mesa llvmpipe) 4x MSAA costs 20-40 % of every frame
-    # (docs/DECISIONS.md, "GUI frame budget"); points are drawn as shaded spheres, which need none.
+    # (docs/DECISIONS.md, H3); points are drawn as shaded spheres, which need none.
     plotter = QtInteractor(parent, auto_update=False, multi_samples=0)
     plotter.set_background("white")
     # plain alpha blending for the few translucent things (zero-velocity plane, convex ellipsoids drawn
@@ -48,8 +48,8 @@ def _native_when_shown(widget) -> None:
     repaint of any of its widgets; in software OpenGL (Mesa llvmpipe) that composition
     cost more than a lip frame itself (15-25 ms at 1400x900). With each 3-D widget in a
     native window of its own, a render repaints that window alone, and a label or slider
-    repaint in the main window is a plain raster update (docs/DECISIONS.md, "Playback at
-    the corpus rate"). Requested once on screen: asked for at construction it measured
+    repaint in the main window is a plain raster update (docs/DECISIONS.md,
+    I2). Requested once on screen: asked for at construction it measured
     no better than none.
     """
     from PySide6 import QtCore
@@ -201,7 +201,7 @@ def drawing_frame():
     after its start (or, when none is, ``FRAME_GRACE`` of a slot later). A readout's
     repaint composes the whole main window (15-25 ms in software OpenGL): painted in the
     same pass as the lip frame it made that frame late by as much (docs/DECISIONS.md,
-    "Playback lag within one frame period").
+    I3).
     """
     global _frame_depth
     _frame_depth += 1
@@ -228,7 +228,7 @@ class Throttle:
     interval share the slot boundaries, so they repaint in the same turn of the event loop
     — one composition of the window every ``interval_s`` instead of one per readout per
     frame. In software OpenGL a composition of the whole window costs more than a lip
-    frame (docs/DECISIONS.md, "Playback at the corpus rate"). Called while a playback
+    frame (docs/DECISIONS.md, I2). Called while a playback
     frame is drawn (:func:`drawing_frame`), the call runs just after that frame is on
     screen.
 

@@ -1,4 +1,4 @@
-"""Build plan: which embedding and K-means path a corpus of N frames takes (issue 13).
+"""Build plan: which embedding and K-means path a corpus of N frames takes.
 
 One ``lipspace build`` serves every corpus size. The exact embedding (PCA of the full
 N x N distance matrix, block-wise) costs O(N^2) distance evaluations per pass; its CPU

@@ -1,4 +1,4 @@
-"""A corpus stored in blocks of frames on disk, for builds whose workers read their own blocks (issue 13).
+"""A corpus stored in blocks of frames on disk, for builds whose workers read their own blocks.
 
 Layout, written by :func:`save_blocked` (``lipspace import --block-frames N``)::
 

@@ -1,4 +1,4 @@
-"""Frames read a window at a time from block files, never gathered whole (issue 13).
+"""Frames read a window at a time from block files, never gathered whole.
 
 :class:`BlockFrames` stands for the frame matrix F (N, C) float32 of a corpus stored in
 blocks (``engine.recordings.corpus_blocks``): it holds only the block file paths, the rows each

@@ -12,7 +12,7 @@ reaches a maximum (``open``) or a minimum (``closed``), or its velocity peaks wh
 opening (``opening``) or closing (``closing``). They stand in for phone mid-points in
 corpora without phone labels: :func:`with_kinematic_labels` writes them as labelled
 intervals centred on each landmark, so targets, clusters, synthesis and evaluation
-work unchanged on them (see docs/DECISIONS.md, "Real recordings").
+work unchanged on them (see docs/DECISIONS.md, D6).
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Dask execution of a build's heavy stages (issue 13).
+"""Dask execution of a build's heavy stages.
 
 :class:`DaskExecutor` runs, on a ``distributed`` cluster,
 

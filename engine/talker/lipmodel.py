@@ -64,14 +64,14 @@ The controls (:data:`CONTROL_NAMES`; the signed ones, :data:`SIGNED_CONTROLS`, a
                  forward (1.5 mm), the mentolabial sulcus deepens, and the lower
                  vermilion is pushed up and out (1 mm); the inner contour is unchanged.
 
-Kinematics (:data:`KINEMATICS`). ``"classic"`` (the default) is the surface of generator 5,
-unchanged. ``"calibrated"`` moves the jaw, the upper lip and the corners as articulograph
-recordings of real speakers show (docs/DECISIONS.md, "A talker calibrated on real
-articulograph lips"): the jaw's arc and protrusion, the upper lip's larger share of the
-opening, corners that descend with the jaw, narrow and widen whole (the mouth's width
-change reaches 95 % at the commissure instead of 50 %) and slide forward and back over the
-curved face as they do, the upper and lower lips moving as one where they meet beyond the
-corners.
+Kinematics (:data:`KINEMATICS`). ``"classic"`` (the default) drops the lower lip almost
+straight, gives the upper lip a fifth of the opening and keeps the corners still.
+``"calibrated"`` moves the jaw, the upper lip and the corners as articulograph
+recordings of real speakers show (docs/DECISIONS.md, F7): the jaw's arc and
+protrusion, the upper lip's larger share of the opening, corners that descend with the
+jaw, narrow and widen whole (the mouth's width change reaches 95 % at the commissure
+instead of 50 %) and slide forward and back over the curved face as they do, the upper
+and lower lips moving as one where they meet beyond the corners.
 
 The inner-lip gap is kept non-negative with a soft contact (a softplus of width
 0.3 mm), so the lips never pass through each other and the aperture is a smooth,
@@ -155,7 +155,7 @@ class Anatomy:
         return asdict(self)
 
 
-# deformation magnitudes (mm or fractions); sources and assumptions in docs/DECISIONS.md
+# deformation magnitudes (mm or fractions); sources and assumptions in docs/DECISIONS.md, F5
 _GJ = 18.0         # inner gap added by full jaw opening
 _GR = 4.0          # upper-lip raise
 _KC = 3.0          # compression depth of full closure

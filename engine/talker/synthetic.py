@@ -69,7 +69,7 @@ PRESETS = {
 # jaw_forward, roll, mentalis
 _J, _R, _S, _U, _C, _L, _P, _D, _K, _A, _X, _F, _O, _M = range(14)
 _NC = len(CONTROL_NAMES)
-_BASE = tuple(range(11))  # the controls that move in generator 4's talker (all but jaw_forward, roll, mentalis)
+_BASE = tuple(range(11))  # the controls that move in the default talker (all but jaw_forward, roll, mentalis)
 #: Time to reach 63 % of a step (s) per control; natural frequency w = 2.146 / T63.
 #: Protrusion is slower than rounding (Perkell 1986); corners, asymmetry and the lateral
 #: jaw follow slow postural changes, the jaw's protrusion as its lateral shift; vermilion roll is
@@ -290,7 +290,7 @@ class SyntheticTalker(BaseEstimator):
         vary in size independently (log-normal, s.d. 0.25), a vowel's emphasis scales
         its lip gestures with its jaw opening, and each sentence has its own tissue
         posture. False: ``roll`` and ``mentalis`` stay 0 and the other controls are
-        those of generator 4.
+        unchanged.
     kinematics : {"classic", "calibrated"}, default="classic"
         How the jaw, upper lip and corners move (:data:`engine.talker.lipmodel.KINEMATICS`).
         ``"calibrated"`` (opt-in) moves them as real speakers' articulograph sensors do:
@@ -298,7 +298,7 @@ class SyntheticTalker(BaseEstimator):
         driven by phones: forward for sibilants, dentals and labiodentals, back for
         velars), the upper lip takes a third of the opening, and the corners descend with
         the jaw and narrow and widen whole. ``"classic"``: ``jaw_forward`` stays 0 and the
-        frames are those of generator 5.
+        frames are those of the classic lip model, bit for bit.
     """
 
     def __init__(self, *, preset="default", n_sentences=None, duration=None, resolution=None, rate=60.0,
@@ -438,7 +438,7 @@ class SyntheticTalker(BaseEstimator):
                 wb.append([(a * d + b) * self.coarticulation for a, b in g.before])
                 wa.append([(a * d + b) * self.coarticulation for a, b in g.after])
                 vow.append(p in _VOWELS)
-        # the controls that move (the rest stay 0): generator 4's eleven, drawing the same random
+        # the controls that move (the rest stay 0): the default talker's eleven, drawing the same random
         # numbers, plus jaw_forward with the calibrated kinematics and roll and mentalis with
         # the tissue variation; columns of the arrays below are these, in order
         act = np.array(_BASE + ((_F,) if self.kinematics == "calibrated" else ()) + ((_O, _M) if self.tissue else ()))

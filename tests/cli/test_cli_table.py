@@ -171,9 +171,10 @@ def _csv_shape(path) -> tuple[int, int]:
 
 
 def _readme_r_snippet() -> str:
-    text = (REPO / "README.md").read_text(encoding="utf-8")
+    """The R snippet of the user guide (docs/USER_GUIDE.md, "From Lipspace to R / Praat")."""
+    text = (REPO / "docs" / "USER_GUIDE.md").read_text(encoding="utf-8")
     m = re.search(r"<!-- r-snippet -->\n```r\n(.*?)```", text, re.S)
-    assert m, "README.md has no R snippet after <!-- r-snippet -->"
+    assert m, "docs/USER_GUIDE.md has no R snippet after <!-- r-snippet -->"
     return m.group(1)
 
 

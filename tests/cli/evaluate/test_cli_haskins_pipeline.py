@@ -97,7 +97,7 @@ def test_explorer_and_figures_open_a_foreign_file_directly(haskins_files, tmp_pa
     mat = haskins_files[0]
     assert source_kind(mat) == "foreign"
     m, src = load_source(mat, use_cache=False)
-    # fitted as 'lipspace import' makes it: the 100-Hz file at the 60-Hz analysis rate (DECISIONS, newcomer trial)
+    # fitted as 'lipspace import' makes it: the 100-Hz file at the 60-Hz analysis rate (docs/DECISIONS.md, H10)
     assert src["kind"] == "foreign" and len(m.corpus_.utterances) == 1 and m.corpus_.rate == pytest.approx(60.0)
     assert any(h.startswith("resampled 100 -> 60 Hz") for h in m.corpus_.history)
     assert main(["figures", mat, "-o", str(tmp_path / "figs"), "--only", "scree", "-q"]) == 0
