@@ -131,7 +131,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if kinematics == "classic":
             return f"The synthetic talker ({size})."
         return (f"The synthetic talker ({size}) whose jaw, upper lip and corners move as real speakers' "
-                "articulograph sensors do (opt-in, generator 6); compare it with the classic talker above.")
+                "articulograph sensors do (opt-in); compare it with the classic talker above.")
 
     def _make_menus(self):
         mb = self.menuBar()

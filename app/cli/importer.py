@@ -44,7 +44,7 @@ def add_arguments(p):
     p.add_argument("--layout", default=None, metavar="NAME_OR_FILE",
                    help="read a plain numeric matrix (.mat variable, .npy, CSV/TSV without names, .pos, NDI Wave "
                         "TSV) through a sensor layout: ema7x6, ema7x7, ag500, ag501, wave, or a layout file "
-                        "(see README, 'Sensor layouts')")
+                        "(see docs/USER_GUIDE.md, 'Real recordings')")
     p.add_argument("--variable", default=None, metavar="NAME", help="with --layout: the .mat variable to read")
     p.add_argument("--roles", default=None, metavar="ROLE=P,P;...",
                    help="set point roles by name or 0-based index, e.g. 'upper_lip=UL;lower_lip=LL' or, for a mesh's "
