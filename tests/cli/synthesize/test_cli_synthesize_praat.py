@@ -27,7 +27,9 @@ def test_the_textgrid_and_csv_line_up_with_the_input(mfile, tmp_path, capsys):
 
     src = _input(tmp_path / "in.TextGrid")
     out = tmp_path / "out.TextGrid"
-    assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(src), "--praat", str(out)]) == 0
+    # the paper's path: its trajectory has states, so the CSV has a state column
+    assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(src), "--method", "viterbi",
+                 "--praat", str(out)]) == 0
     assert "as the input" in capsys.readouterr().out
     g = _parse_textgrid(out)
     assert (g.xmin, g.xmax) == (0.0, 1.5) and list(g) == ["phones", "targets", "landmarks"]
@@ -51,7 +53,9 @@ def test_the_textgrid_and_csv_line_up_with_the_input(mfile, tmp_path, capsys):
 def test_praat_opens_it_with_the_input_span_and_the_targets(mfile, tmp_path, praat):
     src = _input(tmp_path / "in.TextGrid")
     out = tmp_path / "out.TextGrid"
-    assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(src), "--praat", str(out)]) == 0
+    # the paper's path: its trajectory has states, so the CSV has a state column
+    assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(src), "--method", "viterbi",
+                 "--praat", str(out)]) == 0
     got = praat('form C\n  sentence f x\nendform\nRead from file: f$\nn = Get number of points: 2\n'
                 'a = Get start time\nb = Get end time\nt = Get time of point: 2, 2\nlab$ = Get label of point: 2, 2\n'
                 'writeInfoLine: n, " ", a, " ", b, " ", fixed$ (t, 6), " ", lab$\n', out).split()
@@ -74,8 +78,8 @@ def test_a_real_recording_synthesised_from_its_own_labels_keeps_their_clock(moch
     pd = pytest.importorskip("pandas")
     from engine.io import read_alignment
     from engine.phonetics.targets import targets_from_textgrid
+    from engine.synthesis.methods import make_synthesizer
     from engine.synthesis.tiers import input_timeline, synthesis_outputs
-    from engine.synthesis.viterbi import make_synthesizer
 
     m = mocha_manifold
     mfile = m.save(tmp_path / "mocha.npz")
