@@ -23,7 +23,7 @@ Never imports Qt, VTK, pyvista or matplotlib (import-linter contracts in pyproje
 """
 from __future__ import annotations
 
-import importlib
+from engine._lazy import lazy_names
 
 __version__ = "0.1.0"
 
@@ -45,15 +45,4 @@ _WHERE = {
     "evaluate_protocols": "engine.evaluation.protocols",
 }
 __all__ = sorted(_WHERE)
-
-
-def __getattr__(name):
-    if name in _WHERE:
-        value = getattr(importlib.import_module(_WHERE[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'engine' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_WHERE))
+__getattr__, __dir__ = lazy_names("engine", _WHERE, globals())

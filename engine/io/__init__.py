@@ -27,7 +27,7 @@ Every name loads its module on first use, so ``import engine.io`` is light.
 """
 from __future__ import annotations
 
-import importlib
+from engine._lazy import lazy_names
 
 #: public name -> the module that defines it
 _WHERE = {
@@ -48,15 +48,4 @@ _WHERE = {
     **dict.fromkeys(('MOTION_RATE_RANGE', 'AUDIO_RATE_RANGE'), 'engine.io._util'),
 }
 __all__ = list(_WHERE)
-
-
-def __getattr__(name):
-    if name in _WHERE:
-        value = getattr(importlib.import_module(_WHERE[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'engine.io' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_WHERE))
+__getattr__, __dir__ = lazy_names("engine.io", _WHERE, globals())
