@@ -161,7 +161,7 @@ def main():
         timed("lips only (warm)", lambda: render_video(mp4, frames, rate=c.rate, faces=c.faces, dims=c.dims,
                                                        size=args.size), repeat=w, per=dur)
         print(f"  file size {mp4.stat().st_size / 2**20:.2f} MiB")
-        from engine.evaluation.per_method import trajectory_y
+        from engine.evaluation.measures import trajectory_y
 
         u = max(c.utterances, key=lambda x: x.n_frames)
         orig = c.frames[u.start:u.start + n]

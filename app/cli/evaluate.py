@@ -1,23 +1,21 @@
-"""``lipspace evaluate``: held-out synthesis, every method, one table.
+"""``lipspace evaluate``: held-out synthesis under equal-information protocols.
 
 Whole utterances are held out, the manifold is fitted on the rest, and each held-out
-utterance is resynthesised from its phones by every method and compared with the
-real lips (RMSE in X, mean and max per-point error in the corpus's units,
-correlation of the first three shape components, and RMSE Y3: the error in the first
-three dimensions of the manifold Y, where the paper's Fig. 3 draws its trajectories --
-the manifold method's state path before the inverse map, every X-space method's
-trajectory projected out-of-sample, against the held-out utterance's own projection).
-
-Default: the equal-information protocols of :mod:`engine.evaluation.protocols` -- ``states``
-(every method gets the target states), ``oracle`` (every method gets the oracle X at
-the targets and their states) and, for a corpus with phone labels, ``phones`` (the
-phones and their times only) -- with the mean-frame baseline, RMSE in X and in Y3
-(every trajectory through the same projection), the lip-vertex error (LVE), the
-velocity error and a smoothness figure, paired per-utterance statistics against the
-manifold, and a verdict line per measure saying where the manifold loses.
+utterance is resynthesised by every method of the protocols of
+:mod:`engine.evaluation.protocols` -- ``states`` (every method gets the target states),
+``oracle`` (every method gets the oracle X at the targets and their states) and, for a
+corpus with phone labels, ``phones`` (the phones and their times only) -- with the
+mean-frame baseline, RMSE in X and in Y3 (the first three dimensions of the manifold
+Y, every trajectory through the same out-of-sample projection), the lip-vertex error
+(LVE), the velocity error and a smoothness figure, paired per-utterance statistics
+against the manifold, and a verdict line per measure saying where the manifold loses.
 ``--state-dims``, the Viterbi smoothing and k are chosen on a validation split of the
-training utterances unless given. ``--methods`` prints the
-older per-method table (:func:`engine.evaluation.per_method.evaluate`) instead.
+training utterances unless given.
+
+``--methods`` and ``--inverse-dims`` belonged to an older per-method table whose
+methods did not get the same information; every one of its methods is scored by the
+protocols, and the options now stop with an error that says where
+(:data:`RETIRED_METHODS`).
 
 Input: corpus files in any importable format (several are joined, one utterance
 each), ``--haskins`` (the two Haskins IEEE samples beside the project), or nothing
@@ -28,12 +26,20 @@ from __future__ import annotations
 from pathlib import Path
 
 PRESETS = ("small", "default", "paper")
+#: the older per-method table's methods -> where the protocols score them
+RETIRED_METHODS = {
+    "manifold": "oracle/viterbi and oracle/manifold",
+    "linear": "oracle/linear",
+    "cubic": "oracle/pchip",
+    "unitselection": "phones/unitselection",
+    "manifold-phones": "phones/viterbi and phones/manifold",
+    "linear-phones": "phones/linear",
+    "cubic-phones": "phones/linear (no cubic through the phones' means)",
+}
 HASKINS_DIR = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "haskins-ieee"
 
 
 def add_arguments(p):
-    from engine.evaluation.per_method import DEFAULT_METHODS, EVALUATION_METHODS
-
     p.add_argument("corpus", nargs="*", metavar="CORPUS",
                    help="corpus file(s): native .npz or any importable format; omit for the synthetic talker")
     p.add_argument("--haskins", action="store_true",
@@ -44,12 +50,11 @@ def add_arguments(p):
                    help="fraction of utterances held out, at least one (default: %(default)s)")
     p.add_argument("--test-ids", default=None, metavar="ID,ID,...", help="hold out exactly these utterances")
     p.add_argument("--methods", default=None, metavar="M,M,...",
-                   help=f"print the older per-method table instead of the protocols, for these methods: "
-                        f"{', '.join(EVALUATION_METHODS)} (e.g. {','.join(DEFAULT_METHODS)})")
+                   help="retired (the older per-method table): its methods are rows of the protocols' table")
     p.add_argument("--states", type=int, default=None, help="K of the state graph (default: about N/30)")
     p.add_argument("--state-dims", type=int, default=None,
                    help="dims of Y clustered into states (default: chosen on a validation split of the "
-                        "training utterances; 3 for the --methods table)")
+                        "training utterances)")
     p.add_argument("--smoothing", type=float, default=None, metavar="FRAMES",
                    help="protocols: Gaussian smoothing of the Viterbi paths in frames (default: validated)")
     p.add_argument("--neighbors", type=int, default=None,
@@ -60,7 +65,7 @@ def add_arguments(p):
                         "per file, named by the file name's first field); mean (a bare --speaker-norm): always, "
                         "every utterance must name its speaker; none: never")
     p.add_argument("--inverse-dims", type=int, default=None,
-                   help="--methods table: dims of the Y -> X inverse map (default: the manifold's, 3)")
+                   help="retired with --methods: the protocols' table reports every inverse map")
     p.add_argument("--seed", type=int, default=0, help="seed of the split and the manifold (default: 0)")
     p.add_argument("--csv", metavar="OUT.csv", default=None,
                    help="also write the table as CSV (protocols: protocol, method, utterance, rmse_x, rmse_y, "
@@ -99,48 +104,21 @@ def _corpus(args, progress):
 
 
 def run(args) -> int:
+    if args.methods is not None or args.inverse_dims is not None:
+        raise _retired(args)
+    return _run_protocols(args)
+
+
+def _retired(args):
+    """The error for the retired per-method table's options: where the protocols score what they asked for."""
     from app.cli import CliError
-    from app.cli._common import progress_bar
 
-    if args.methods is None:
-        return _run_protocols(args)
-    from engine.evaluation.per_method import EVALUATION_METHODS, evaluate
-    from engine.manifold.model import Manifold
-
-    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
-    bad = [m for m in methods if m not in EVALUATION_METHODS]
-    if bad or not methods:
-        raise CliError(f"unknown method(s) {', '.join(bad) or '(none given)'}; choose from "
-                       f"{', '.join(EVALUATION_METHODS)}")
-    test_ids = [s.strip() for s in args.test_ids.split(",") if s.strip()] if args.test_ids else None
-    with progress_bar(disable=True if args.quiet else None) as progress:
-        corpus = _corpus(args, progress)
-
-        def factory(train):
-            return Manifold(n_states=args.states, state_dims=args.state_dims or 3, random_state=args.seed).fit(
-                train, progress=progress)
-
-        try:
-            result = evaluate(corpus, manifold_factory=factory, test_fraction=args.test_fraction, test_ids=test_ids,
-                              methods=methods, random_state=args.seed, progress=progress,
-                              synthesizer_params={"manifold": {"inverse_dims": args.inverse_dims}})
-        except ValueError as exc:
-            raise CliError(str(exc)) from None
-    print(result.format())
-    if args.csv:
-        from app.cli._common import command_outputs
-        from engine.io.writers.export import write_table_csv
-
-        with command_outputs(args) as outputs:
-            write_table_csv(outputs.file(args.csv, option="--csv"), result.table())
-        print(f"wrote {args.csv}")
-    if sum(int(r.get("utterances") or 0) for r in result.rows) == 0:
-        import sys
-
-        print("lipspace evaluate: every item failed: no method synthesised any held-out utterance (see the "
-              "failures above)", file=sys.stderr)
-        return 1
-    return 0
+    asked = [m.strip() for m in (args.methods or "").split(",") if m.strip()] or list(RETIRED_METHODS)
+    where = "; ".join(f"{m} -> {RETIRED_METHODS.get(m, 'no such method')}" for m in asked)
+    option = "--methods" if args.methods is not None else "--inverse-dims"
+    return CliError(f"{option} belonged to the older per-method table, which is retired because its methods did not "
+                    f"get the same information; run 'lipspace evaluate' without it: the protocols' table scores every "
+                    f"method ({where}), the inverse maps in its own table, and --csv writes the per-utterance rows")
 
 
 def haskins_speaker(utterance) -> str:
@@ -180,9 +158,9 @@ def _normalise_auto(corpus):
 def _unseen_speakers(corpus, test_ids, args) -> dict:
     """Speakers of the held-out utterances that no training utterance has: ``{speaker: n test utterances}``.
 
-    The split is the one the evaluation makes (:func:`engine.evaluation.per_method.split_utterances`, same seed).
+    The split is the one the evaluation makes (:func:`engine.evaluation.protocols.split_utterances`, same seed).
     """
-    from engine.evaluation.per_method import split_utterances
+    from engine.evaluation.protocols import split_utterances
 
     train, test = split_utterances(corpus, test_fraction=args.test_fraction, test_ids=test_ids,
                                    random_state=args.seed)

@@ -79,7 +79,7 @@ def _trajectory(args, manifold):
     """(frames, F^y path or None, label) of what is rendered."""
     from app.cli import CliError
     from app.cli.synthesize import _synthesizer, _targets
-    from engine.evaluation.per_method import trajectory_y
+    from engine.evaluation.measures import trajectory_y
 
     c = manifold.corpus_
     if args.method == "original":

@@ -149,15 +149,15 @@ def synthesize_targets(manifold, targets, method: str, synthesizers: dict | None
 
 
 def trajectory_error(manifold, synthetic, original) -> dict:
-    """Error of a synthetic trajectory against the captured original, as ``lipspace evaluate`` scores it.
+    """Error of a synthetic trajectory against the captured original.
 
     The first ``n = min(len(synthetic), len(original))`` frames are compared through
-    :func:`engine.evaluation.per_method.trajectory_errors`, so the editor's readout and the
-    evaluation table are the same numbers. Returns its dict: ``rmse_x`` (root mean
+    :func:`engine.evaluation.measures.trajectory_errors`; its RMSE in X is the one
+    ``lipspace evaluate`` reports per protocol and method. Returns its dict: ``rmse_x`` (root mean
     square over frames of the Euclidean error in X), ``mean_point_error`` and
     ``max_point_error`` (per-point Euclidean error in the corpus's units), ``frames``.
     """
-    from engine.evaluation.per_method import trajectory_errors
+    from engine.evaluation.measures import trajectory_errors
 
     n = min(len(synthetic), len(original))
     frames = manifold.corpus_.frames[np.asarray(original.frames[:n])]

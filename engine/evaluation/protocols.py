@@ -53,7 +53,72 @@ from engine.synthesis.validation import (
 
 __all__ = ["PROTOCOLS", "PROTOCOL_METHODS", "STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES",
            "SMOOTHING_CANDIDATES", "Y_DIMS", "MIN_VALIDATION_UTTERANCES",
-           "select_settings", "evaluate_protocols"]
+           "select_settings", "evaluate_protocols", "split_utterances", "fit_on_training_split"]
+
+
+def split_utterances(corpus, *, test_fraction=0.1, test_ids=None, random_state=0):
+    """Split a corpus's utterances into training and held-out ones.
+
+    Parameters
+    ----------
+    corpus : Corpus
+        At least two utterances.
+    test_fraction : float, default=0.1
+        In (0, 1): the share held out, at least one utterance and at most all but one;
+        ignored with ``test_ids``.
+    test_ids : sequence of str, optional
+        Hold out exactly these utterances.
+    random_state : int, default=0
+        Seeds the random choice of the held-out utterances.
+
+    Returns
+    -------
+    train_ids, test_ids : list of str
+        Training ids in corpus order; held-out ids as given, else in corpus order.
+    """
+    ids = [u.id for u in corpus.utterances]
+    if len(ids) < 2:
+        raise ValueError(f"{corpus.name} has {len(ids)} utterance(s); holding out whole utterances needs at least 2")
+    if test_ids is not None:
+        test = [str(t) for t in test_ids]
+        unknown = [t for t in test if t not in ids]
+        if unknown:
+            raise ValueError(f"test utterance(s) {unknown[:5]} not in {corpus.name}; it has {ids[:8]}...")
+        if len(set(test)) >= len(ids):
+            raise ValueError("every utterance is a test utterance; leave at least one for training")
+    else:
+        if not 0 < float(test_fraction) < 1:
+            raise ValueError(f"test_fraction must be in (0, 1), got {test_fraction}")
+        k = min(len(ids) - 1, max(1, int(round(float(test_fraction) * len(ids)))))
+        rng = np.random.default_rng(random_state)
+        test = sorted(rng.choice(len(ids), size=k, replace=False).tolist())
+        test = [ids[i] for i in test]
+    ts = set(test)
+    return [i for i in ids if i not in ts], test
+
+
+def fit_on_training_split(corpus, *, test_fraction=0.1, test_ids=None, random_state=0, manifold_factory=None,
+                          progress=None):
+    """Split ``corpus`` by whole utterances (:func:`split_utterances`) and fit a manifold on the training part only.
+
+    Returns
+    -------
+    train_ids, test_ids : list of str
+    train : Corpus
+        The training utterances.
+    manifold : Manifold
+        ``manifold_factory(train)``, or ``Manifold(random_state=random_state)`` fitted on ``train``.
+    """
+    train_ids, test = split_utterances(corpus, test_fraction=test_fraction, test_ids=test_ids,
+                                       random_state=random_state)
+    train = corpus.subset(train_ids)
+    if manifold_factory is None:
+        from engine.manifold.model import Manifold
+
+        manifold = Manifold(random_state=random_state).fit(train, progress=progress)
+    else:
+        manifold = manifold_factory(train)
+    return train_ids, test, train, manifold
 
 
 def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state=0, manifold_factory=None,
@@ -65,7 +130,7 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
     ----------
     corpus : Corpus
     test_fraction, test_ids, random_state
-        As :func:`engine.evaluation.per_method.split_utterances`.
+        As :func:`split_utterances`.
     manifold_factory : callable(train corpus) -> fitted Manifold, optional
     settings : dict, optional
         As returned by :func:`select_settings` (default: chosen by it on the training utterances).
@@ -83,7 +148,6 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
     -------
     ProtocolResult
     """
-    from engine.evaluation.per_method import fit_on_training_split
     from engine.evaluation.protocol_report import ProtocolResult
 
     train_ids, test, train, manifold = fit_on_training_split(

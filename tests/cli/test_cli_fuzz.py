@@ -459,9 +459,10 @@ def test_fuzz_evaluate_and_render(files, data, capsys):
     with tempfile.TemporaryDirectory() as out:
         o = Path(out)
         if cmd == "evaluate":
-            argv = ["evaluate", data.draw(_inputs(files)), "-q", "--methods", "linear"]
+            argv = ["evaluate", data.draw(_inputs(files)), "-q"]
             for opt in data.draw(st.lists(st.sampled_from(["--test-fraction", "--states", "--state-dims", "--seed",
-                                                           "--inverse-dims", "--test-ids"]), max_size=2, unique=True)):
+                                                           "--smoothing", "--neighbors", "--test-ids"]),
+                                          max_size=2, unique=True)):
                 argv += [opt, data.draw(NUMBERS)]
             if data.draw(st.booleans()):
                 argv += ["--csv", str(o / data.draw(st.sampled_from(["e.csv", "sub/e.csv", "."])))]

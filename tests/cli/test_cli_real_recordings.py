@@ -116,26 +116,11 @@ def test_unlabelled_clusters_synthesis_and_figures(good, tmp_path):
     assert (tmp_path / "f" / "fig3.png").is_file() and not (tmp_path / "f" / "fig4.png").exists()
 
 
-def test_evaluate_unlabelled_and_exit_status(good, tmp_path):
+def test_evaluate_unlabelled(good):
     corpus, _, _, _ = good
-    rc, out, err = _run(["evaluate", str(corpus), "--methods", "linear", "-q"])
+    rc, out, err = _run(["evaluate", str(corpus), "-q"])
     assert rc == 0, err
     assert "kinematic landmarks" in err and "linear" in out
-    # every held-out item failing exits non-zero: a test utterance without phones and, with no lip roles
-    # named, without kinematic landmarks either
-    from dataclasses import replace
-
-    from engine.recordings.kinematics import with_kinematic_labels
-
-    c = with_kinematic_labels(Corpus.load(corpus))
-    c = c.subset([u.id for u in c.utterances[:3]])  # small: 2 training utterances, no validation split
-    bare = c.utterances[0].id
-    c = replace(c, utterances=[replace(u, phones=()) if u.id == bare else u for u in c.utterances],
-                point_roles=None, point_names=[f"p{i}" for i in range(c.n_points)])
-    c.save(tmp_path / "part.npz")
-    rc, out, err = _run(["evaluate", str(tmp_path / "part.npz"), "--methods", "linear", "--test-ids", bare, "-q"])
-    assert rc == 1, out + err
-    assert "every item failed" in err
 
 
 def test_head_sensors_give_rigid_registration(tmp_path):

@@ -112,29 +112,19 @@ def test_best_method_follows_the_targets_and_is_named(mfile, small_manifold, cap
     assert f"RMSE X {choice['method_validation']['oracle'][best]['rmse_x']:.4g}" in out
 
 
-def test_evaluate_prints_the_table(small_corpus, tmp_path, capsys):
+def test_the_retired_per_method_table_says_where_its_methods_went(small_corpus, tmp_path, capsys):
     ids = [u.id for u in small_corpus.utterances]
     path = small_corpus.subset(ids[:7]).save(tmp_path / "c.npz")
     csv_out = tmp_path / "table.csv"
-    assert main(["evaluate", str(path), "--test-ids", ids[3], "--methods", "manifold,linear,unitselection", "-q",
-                 "--csv", str(csv_out)]) == 0
-    out = capsys.readouterr().out
-    assert "1 test utterance(s), 6 training" in out
-    head = next(line for line in out.splitlines() if line.startswith("method"))
-    assert "RMSE X" in head and "RMSE Y3" in head and "first 3 dims of the manifold Y" in out
-    for m in ("manifold", "linear", "unitselection"):
-        assert any(line.startswith(m) for line in out.splitlines())
-    rows = list(csv.DictReader(csv_out.read_text().splitlines()))
-    assert [r["method"] for r in rows] == ["manifold", "linear", "unitselection"]
-    assert all(float(r["rmse_x"]) > 0 and float(r["rmse_y"]) > 0 for r in rows)
-    assert main(["evaluate", str(path), "--methods", "manifold,magic", "-q"]) == 2
-    assert "unknown method(s) magic" in capsys.readouterr().err
-
-
-def test_evaluate_on_the_haskins_pair(shared_data, capsys):
-    assert main(["evaluate", "--haskins", "--methods", "linear,manifold", "-q"]) == 0
-    out = capsys.readouterr().out
-    assert "1 test utterance(s), 1 training" in out and "linear" in out
+    assert main(["evaluate", str(path), "--methods", "cubic,unitselection,magic", "-q", "--csv", str(csv_out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert "--methods belonged to the older per-method table" in err and "without it" in err
+    assert "cubic -> oracle/pchip; unitselection -> phones/unitselection; magic -> no such method" in err
+    assert not csv_out.exists()
+    assert main(["evaluate", str(path), "--inverse-dims", "3", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "--inverse-dims belonged to the older per-method table" in err and "linear-phones -> phones/linear" in err
 
 
 def test_inverse_choice_reaches_the_synthesiser(mfile, small_manifold, tmp_path):

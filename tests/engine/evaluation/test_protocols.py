@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from engine.evaluation.paired import paired_comparison
-from engine.evaluation.protocols import PROTOCOL_METHODS, evaluate_protocols, select_settings
+from engine.evaluation.protocols import PROTOCOL_METHODS, evaluate_protocols, select_settings, split_utterances
 from engine.manifold.inverse_local import LocalLinearInverse, StateMeanInverse, select_neighbors
 from engine.synthesis.statepaths import StateModel, anchor, interpolate_targets
 
@@ -260,3 +260,15 @@ def test_phones_protocol_baselines(result):
     lin = result.row("phones", "linear")["rmse_x"]
     for m in ("dominance", "sliding-window"):
         assert result.row("phones", m)["rmse_x"] < lin, m
+
+
+def test_split_by_whole_utterances(small_corpus):
+    train, test = split_utterances(small_corpus, test_fraction=0.2, random_state=3)
+    assert len(test) == round(0.2 * len(small_corpus.utterances)) and not set(train) & set(test)
+    assert split_utterances(small_corpus, test_fraction=0.2, random_state=3) == (train, test)
+    with pytest.raises(ValueError, match="test_fraction must be in"):
+        split_utterances(small_corpus, test_fraction=1.5)
+    with pytest.raises(ValueError, match=r"test utterance\(s\) \['nope'\]"):
+        split_utterances(small_corpus, test_ids=["nope"])
+    with pytest.raises(ValueError, match="every utterance is a test utterance"):
+        split_utterances(small_corpus, test_ids=[u.id for u in small_corpus.utterances])
