@@ -42,7 +42,6 @@ import warnings as _warnings
 
 import numpy as np
 
-from engine.graph.bridges import bridge
 from engine.manifold.inverse_local import LocalLinearInverse, StateMeanInverse
 from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, LearntPaths, blend
 from engine.synthesis.trajectory import smooth
@@ -174,7 +173,9 @@ class StateModel:
         return self.graph_.predict(Y).astype(np.int64)
 
     def path(self, frames, states, n_frames):
-        """Viterbi state path through ``states`` at ``frames``, held outside them.
+        """Viterbi state path through ``states`` at ``frames``, held outside them
+        (:func:`engine.synthesis.viterbi.join_states`, a missed gap ending at the reachable
+        state whose mean F^y is nearest the target's).
 
         Returns
         -------
@@ -182,33 +183,9 @@ class StateModel:
         missed : int
             Gaps that could not reach their target state in exactly their length.
         """
-        g = self._graph
-        f = np.asarray(frames, dtype=np.int64)
-        s = [int(x) for x in states]
-        path = np.empty(int(n_frames), dtype=np.int64)
-        path[: f[0] + 1] = s[0]
-        cur, missed = s[0], 0
-        for i in range(len(f) - 1):
-            n = int(f[i + 1] - f[i] + 1)
-            end = s[i + 1]
-            seg = bridge(g, cur, end, n)  # the Viterbi path, scored only where it can pass
-            if seg is None:
-                scores, hist = g.viterbi(cur, n)
-                missed += 1
-                ok = np.flatnonzero(np.isfinite(scores))
-                if ok.size == 0:
-                    seg = np.full(n, cur)
-                    seg[-1] = end
-                    path[f[i]: f[i + 1] + 1] = seg
-                    cur = end
-                    continue
-                c = self.state_y_
-                end = int(ok[np.argmin(np.linalg.norm(c[ok] - c[end], axis=1))])
-                seg = g.backtrack(hist, end)
-            path[f[i]: f[i + 1] + 1] = seg
-            cur = int(seg[-1])
-        path[f[-1]:] = path[f[-1]]
-        return path, missed
+        from engine.synthesis.viterbi import join_states
+
+        return join_states(self._graph, frames, [int(x) for x in states], n_frames, self.state_y_)
 
     def path_x(self, path, *, how="state-mean", sigma=0.0) -> np.ndarray:
         """X (n, m) of a state path by ``how`` in :data:`PATH_INVERSES`, smoothed by ``sigma`` frames."""

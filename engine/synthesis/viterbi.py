@@ -41,7 +41,7 @@ from engine.threads import single_blas_thread
 
 __all__ = [
     "NoPathError", "MaxProductGraph", "log_transitions", "observed_transitions", "viterbi_path", "Trajectory", "Synthesizer",
-    "ManifoldSynthesizer", "InterpolationSynthesizer", "phone_lattice", "phone_state_table",
+    "ManifoldSynthesizer", "InterpolationSynthesizer", "phone_lattice", "phone_state_table", "join_states",
 ]
 
 #: log-probability cost of a gap no path of its length bridges (``strict=False`` lattices)
@@ -241,6 +241,66 @@ def viterbi_path(log_transition, a, b, n) -> np.ndarray:
     if not np.isfinite(scores[int(b)]):
         raise NoPathError(_no_path_message(g, a, b, n))
     return g.backtrack(hist, b)
+
+
+def join_states(graph, frames, states, n_frames, centroids, *, on_miss=None):
+    """The state path through ``states`` at ``frames``: each gap's maximum-probability path of exactly its length.
+
+    Before the first target the path holds its state, after the last target the last
+    state. A gap no path bridges in exactly its frames ends at the state, reachable in
+    that many frames, whose centroid is nearest the target state's; when no path of
+    that length leaves the gap's first state at all, the path holds it and jumps to
+    the target state on the gap's last frame. Either way the next gap starts where
+    this one ended.
+
+    Parameters
+    ----------
+    graph : MaxProductGraph
+        Log transition probabilities of the states.
+    frames : ndarray of shape (T,) int
+        Target frames, increasing.
+    states : sequence of int, length T
+        Target states.
+    n_frames : int
+        Frames of the path (> ``frames[-1]``).
+    centroids : ndarray of shape (K, d)
+        Where each state is, to find the reachable state nearest a missed target.
+    on_miss : callable(gap, start, goal, end, n), optional
+        Called for each missed gap with its index, first state, target state, the
+        state it ends at (None when no path leaves ``start``) and its frames; it may
+        raise to refuse the miss.
+
+    Returns
+    -------
+    path : ndarray of shape (n_frames,) int64
+    missed : int
+        Gaps that could not reach their target state in exactly their length.
+    """
+    f = np.asarray(frames, dtype=np.int64)
+    path = np.empty(int(n_frames), dtype=np.int64)
+    path[: f[0] + 1] = states[0]
+    cur, missed = int(states[0]), 0
+    for g in range(len(f) - 1):
+        n = int(f[g + 1] - f[g] + 1)
+        goal = end = int(states[g + 1])
+        seg = bridge(graph, cur, goal, n)  # the Viterbi path, scored only where it can pass
+        if seg is None:
+            missed += 1
+            scores, back = graph.viterbi(cur, n)
+            ok = np.flatnonzero(np.isfinite(scores))
+            if ok.size:
+                end = int(ok[np.argmin(np.linalg.norm(centroids[ok] - centroids[goal], axis=1))])
+            if on_miss is not None:
+                on_miss(g, cur, goal, end if ok.size else None, n)
+            if ok.size:
+                seg = graph.backtrack(back, end)
+            else:
+                seg = np.full(n, cur)
+                seg[-1] = end
+        path[f[g]: f[g + 1] + 1] = seg
+        cur = int(seg[-1])
+    path[f[-1]:] = path[f[-1]]
+    return path, missed
 
 
 def _no_path_message(g, a, b, n) -> str:
@@ -452,37 +512,17 @@ class ManifoldSynthesizer(BaseEstimator):
             "use fewer states (K), or synthesise with strict=False")
 
     def _join(self, targets, f, states, warnings):
-        g_ = self._graph
-        n_total = targets.n_frames
-        path = np.empty(n_total, dtype=np.int64)
-        path[: f[0] + 1] = states[0]
-        cur = states[0]
-        for g in range(len(f) - 1):
-            n = int(f[g + 1] - f[g] + 1)
-            goal = states[g + 1]
-            seg = bridge(g_, cur, goal, n)  # the Viterbi path, scored only where it can pass
-            end = goal
-            if seg is None:
-                scores, back = g_.viterbi(cur, n)
-                exc = NoPathError(_no_path_message(g_, cur, goal, n))
-                if self.strict:
-                    raise self._gap_error(targets, f, g, exc)
-                ok = np.flatnonzero(np.isfinite(scores))
-                if ok.size:
-                    dist = np.linalg.norm(self.centroids_[ok] - self.centroids_[goal], axis=1)
-                    end = int(ok[np.argmin(dist)])
-                    warnings.append(f"gap {g} ({targets.targets[g].label!r} -> {targets.targets[g + 1].label!r}, "
-                                    f"{n} frames): target state {goal} unreachable in time; ended at state {end}")
-                    seg = g_.backtrack(back, end)
-                else:
-                    warnings.append(f"gap {g}: no path of {n} frames leaves state {cur}; held it and jumped "
-                                    f"to state {goal}")
-                    seg = np.full(n, cur)
-                    seg[-1] = end
-            path[f[g]: f[g + 1] + 1] = seg
-            cur = int(seg[-1])
-        path[f[-1]:] = path[f[-1]]
-        return path
+        def missed(g, cur, goal, end, n):
+            if self.strict:
+                raise self._gap_error(targets, f, g, NoPathError(_no_path_message(self._graph, cur, goal, n)))
+            if end is not None:
+                warnings.append(f"gap {g} ({targets.targets[g].label!r} -> {targets.targets[g + 1].label!r}, "
+                                f"{n} frames): target state {goal} unreachable in time; ended at state {end}")
+            else:
+                warnings.append(f"gap {g}: no path of {n} frames leaves state {cur}; held it and jumped "
+                                f"to state {goal}")
+
+        return join_states(self._graph, f, states, targets.n_frames, self.centroids_, on_miss=missed)[0]
 
     def _choose_phone_states(self, targets, f, fixed, warnings):
         """Viterbi over the lattice of candidate states per target (fixed targets: one candidate)."""
