@@ -29,7 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine.synthesis.statepaths import anchor, interpolate_targets
+from engine.synthesis.statepaths import anchor
+from engine.synthesis.trajectory import interpolate_targets
 
 __all__ = ["PROTOCOLS", "PROTOCOL_METHODS", "METHOD_LABELS", "PhoneModels", "trajectories", "scores",
            "has_phone_labels", "SLIDING_WINDOW_CANDIDATES"]

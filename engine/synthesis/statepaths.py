@@ -30,9 +30,9 @@ from the states, and the baselines that get the same information:
 :meth:`StateModel.phone_states`
     States of phone-only targets: a Viterbi over each phone's candidate states
     (:func:`engine.synthesis.viterbi.phone_lattice`).
-:func:`interpolate_targets`
-    Direct interpolation of target X: ``"linear"``, ``"pchip"`` (shape-preserving
-    monotone cubic) or ``"hermite"`` (cubic Hermite with given velocities).
+:func:`engine.synthesis.trajectory.interpolate_targets`
+    Direct interpolation of target X (the state-velocity Hermite spline's and the
+    baselines' interpolation).
 
 Every trajectory holds the first target before it and the last after it.
 """
@@ -44,11 +44,10 @@ import numpy as np
 
 from engine.manifold.inverse_local import LocalLinearInverse, StateMeanInverse
 from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, LearntPaths, blend
-from engine.synthesis.trajectory import smooth
+from engine.synthesis.trajectory import interpolate_targets, smooth
 
-__all__ = ["StateModel", "anchor", "interpolate_targets", "smooth", "INTERPOLATIONS", "PATH_INVERSES"]
+__all__ = ["StateModel", "anchor", "smooth", "PATH_INVERSES"]
 
-INTERPOLATIONS = ("linear", "pchip", "hermite")
 PATH_INVERSES = ("state-mean", "local-linear")
 
 
@@ -63,30 +62,6 @@ def anchor(X, frames, X_targets) -> np.ndarray:
     R = np.asarray(X_targets, dtype=np.float64) - X[f]
     t = np.arange(X.shape[0], dtype=np.float64)
     return X + np.column_stack([np.interp(t, f, R[:, j]) for j in range(X.shape[1])])
-
-
-def interpolate_targets(kind, frames, X_targets, n_frames, velocities=None) -> np.ndarray:
-    """Trajectory (n_frames, m) through target X at ``frames`` by ``kind`` in :data:`INTERPOLATIONS`.
-
-    ``velocities`` (T, m), in X per frame, is required by ``"hermite"``. With one
-    target, or two for ``"pchip"``, every kind is constant / linear.
-    """
-    from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
-
-    if kind not in INTERPOLATIONS:
-        raise ValueError(f"unknown interpolation {kind!r}; choose from {', '.join(INTERPOLATIONS)}")
-    f = np.asarray(frames, dtype=np.float64)
-    Xt = np.asarray(X_targets, dtype=np.float64)
-    t = np.clip(np.arange(int(n_frames), dtype=np.float64), f[0], f[-1])
-    if f.size == 1:
-        return np.repeat(Xt[:1], t.size, axis=0)
-    if kind == "linear" or (kind == "pchip" and f.size < 3):
-        return np.column_stack([np.interp(t, f, Xt[:, j]) for j in range(Xt.shape[1])])
-    if kind == "pchip":
-        return PchipInterpolator(f, Xt, axis=0)(t)
-    if velocities is None:
-        raise ValueError("hermite interpolation needs a velocity per target")
-    return CubicHermiteSpline(f, Xt, np.asarray(velocities, dtype=np.float64), axis=0)(t)
 
 
 class StateModel:

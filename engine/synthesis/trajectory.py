@@ -1,6 +1,7 @@
 """What every synthesis method shares: the synthesised :class:`Trajectory`, the
 :class:`Synthesizer` protocol, the checks of a fitted manifold and of the target
-frames, and the Gaussian smoothing of a path along its frames.
+frames, the Gaussian smoothing of a path along its frames and the direct
+interpolation of target X (:func:`interpolate_targets`).
 
 :mod:`engine.synthesis.viterbi` (the manifold method and the interpolation baselines),
 :mod:`engine.synthesis.unitselection` (the unit-selection baseline) and :mod:`engine.synthesis.statepaths`
@@ -16,7 +17,10 @@ from scipy.ndimage import gaussian_filter1d
 from sklearn.base import BaseEstimator, clone
 
 __all__ = ["phone_mids", "Trajectory", "Synthesizer", "check_fitted_manifold", "target_frames", "smooth", "phone_sequences",
-           "PhoneModelSynthesizer"]
+           "PhoneModelSynthesizer", "interpolate_targets", "INTERPOLATIONS"]
+
+#: kinds of :func:`interpolate_targets`
+INTERPOLATIONS = ("linear", "cubic", "pchip", "hermite")
 
 
 @dataclass
@@ -103,6 +107,35 @@ def smooth(A, sigma) -> np.ndarray:
     if float(sigma) == 0 or A.shape[0] < 2:
         return A
     return gaussian_filter1d(A, float(sigma), axis=0, mode="nearest")
+
+
+def interpolate_targets(kind, frames, X_targets, n_frames, velocities=None) -> np.ndarray:
+    """Trajectory (n_frames, m) through target X at ``frames`` by ``kind`` in :data:`INTERPOLATIONS`.
+
+    ``"linear"``, ``"cubic"`` (:class:`scipy.interpolate.CubicSpline`, not-a-knot ends),
+    ``"pchip"`` (shape-preserving monotone cubic) or ``"hermite"`` (cubic Hermite with
+    the given ``velocities`` (T, m), in X per frame). With one target every kind is
+    constant, with two ``"cubic"`` and ``"pchip"`` are linear. Before the first target
+    the first is held, after the last the last.
+    """
+    from scipy.interpolate import CubicHermiteSpline, CubicSpline, PchipInterpolator
+
+    if kind not in INTERPOLATIONS:
+        raise ValueError(f"unknown interpolation {kind!r}; choose from {', '.join(INTERPOLATIONS)}")
+    f = np.asarray(frames, dtype=np.float64)
+    Xt = np.asarray(X_targets, dtype=np.float64)
+    t = np.clip(np.arange(int(n_frames), dtype=np.float64), f[0], f[-1])
+    if f.size == 1:
+        return np.repeat(Xt[:1], t.size, axis=0)
+    if kind == "linear" or (kind in ("pchip", "cubic") and f.size < 3):
+        return np.column_stack([np.interp(t, f, Xt[:, j]) for j in range(Xt.shape[1])])
+    if kind == "cubic":
+        return CubicSpline(f, Xt, axis=0)(t)
+    if kind == "pchip":
+        return PchipInterpolator(f, Xt, axis=0)(t)
+    if velocities is None:
+        raise ValueError("hermite interpolation needs a velocity per target")
+    return CubicHermiteSpline(f, Xt, np.asarray(velocities, dtype=np.float64), axis=0)(t)
 
 
 def phone_sequences(utterances, Fx):

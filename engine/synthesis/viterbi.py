@@ -34,7 +34,7 @@ from sklearn.base import BaseEstimator
 from engine.graph.bridges import bridge, forward_to
 from engine.phonetics.targets import TargetSequence
 from engine.phonetics.targets import resolve_phone as _resolve_phone
-from engine.synthesis.trajectory import Synthesizer, Trajectory, smooth
+from engine.synthesis.trajectory import Synthesizer, Trajectory, interpolate_targets, smooth
 from engine.synthesis.trajectory import check_fitted_manifold as _check_fitted_manifold
 from engine.synthesis.trajectory import target_frames as _target_frames
 from engine.threads import single_blas_thread
@@ -652,18 +652,10 @@ class InterpolationSynthesizer(BaseEstimator):
     def synthesize(self, targets: TargetSequence) -> Trajectory:
         if not hasattr(self, "phone_means_"):
             raise ValueError("InterpolationSynthesizer is not fitted; call fit(manifold) first")
-        from scipy.interpolate import CubicSpline
-
         f = _target_frames(targets)
         warnings = []
         X = self.target_x(targets, warnings)
         t = np.arange(targets.n_frames, dtype=np.float64)
-        tc = np.clip(t, f[0], f[-1])
-        if f.size == 1:
-            out = np.repeat(X[:1], t.size, axis=0)
-        elif self.kind == "linear" or f.size < 3:
-            out = np.column_stack([np.interp(tc, f, X[:, j]) for j in range(X.shape[1])])
-        else:
-            out = CubicSpline(f.astype(np.float64), X, axis=0)(tc)
+        out = interpolate_targets(self.kind, f, X, targets.n_frames)
         return Trajectory(times=t / targets.rate, Fx=out.astype(np.float32), Fy=None, method=self.kind,
                           target_frames=f, target_labels=[x.label for x in targets.targets], warnings=warnings)

@@ -6,7 +6,8 @@ import pytest
 from engine.evaluation.paired import paired_comparison
 from engine.evaluation.protocols import PROTOCOL_METHODS, evaluate_protocols, select_settings, split_utterances
 from engine.manifold.inverse_local import LocalLinearInverse, StateMeanInverse, select_neighbors
-from engine.synthesis.statepaths import StateModel, anchor, interpolate_targets
+from engine.synthesis.statepaths import StateModel, anchor
+from engine.synthesis.trajectory import interpolate_targets
 
 #: a reduced candidate grid keeps the test fast; the generator of docs/RESULTS.md uses the full one
 GRID = {"state_dims": (3, 5), "sigmas": (0.0, 2.0), "neighbors": (20, 40), "frames_per_state": (30, 15)}

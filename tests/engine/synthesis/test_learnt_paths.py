@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, BlendAccumulator, LearntPaths, blend, fit_blend
-from engine.synthesis.statepaths import interpolate_targets
+from engine.synthesis.trajectory import interpolate_targets
 
 #: one transition: 12 frames of a tanh step from about -1 to about +1
 STEP = np.tanh(np.linspace(-2.5, 2.5, 12))
