@@ -4,6 +4,11 @@ The paper fits PCA with EM (Roweis 1997) because F is 28,833 x 12,784. Here a
 randomized range finder with implicit centring plays that role: it only ever
 multiplies F (block by block) by thin matrices, so neither a dense covariance
 (C x C) nor a centred copy of F is formed.
+
+The range finder (:meth:`ShapeSpace.fit_products`) sees F only through its products
+with thin matrices: :class:`FrameProducts` computes them in this process, block by
+block; :class:`engine.scale.executor.DaskExecutor` computes the same products on Dask
+workers and runs the same algorithm.
 """
 from __future__ import annotations
 
@@ -17,7 +22,7 @@ from engine.progress import ProgressFn, report
 from engine.recordings.frame_blocks import BlockFrames
 from engine.threads import one_blas_thread
 
-__all__ = ["ShapeSpace"]
+__all__ = ["ShapeSpace", "FrameProducts"]
 
 
 #: at most this many frames count as a small (interactive) query: one BLAS thread
@@ -95,6 +100,64 @@ def thin_svd(B):
         return np.linalg.svd(B, full_matrices=False)
 
 
+class FrameProducts:
+    """The products of the centred frames the range finder needs, computed in this process.
+
+    Any object with these attributes and methods can stand in (see
+    :meth:`ShapeSpace.fit_products`); thin results may be of any array type its own
+    methods accept back (the Dask executor keeps them on its workers).
+
+    Parameters
+    ----------
+    F : ndarray or BlockFrames of shape (N, C)
+    block_size : int
+        Rows of F multiplied at once.
+    """
+
+    def __init__(self, F, *, block_size=4096):
+        self.F = F
+        self.shape = tuple(F.shape)
+        self.block = max(1, int(block_size))
+
+    def mean(self) -> np.ndarray:
+        """The mean frame (C,), float64."""
+        N, C = self.shape
+        mean = np.zeros(C, dtype=np.float64)
+        for sl in _row_blocks(N, self.block):
+            mean += self.F[sl].sum(axis=0, dtype=np.float64)
+        return mean / N
+
+    def times(self, X, mean32):
+        """(F - 1 mu^T) X for X (C, r): (N, r) float32."""
+        X = X.astype(np.float32)
+        out = np.empty((self.shape[0], X.shape[1]), dtype=np.float32)
+        mx = mean32 @ X
+        for sl in _row_blocks(self.shape[0], self.block):
+            out[sl] = self.F[sl] @ X - mx
+        return out
+
+    def t_times(self, Y, mean32) -> np.ndarray:
+        """(F - 1 mu^T)^T Y for Y (N, r) from :meth:`times` or :meth:`orthonormal`: (C, r) float32."""
+        Y = Y.astype(np.float32)
+        out = np.zeros((self.shape[1], Y.shape[1]), dtype=np.float32)
+        for sl in _row_blocks(self.shape[0], self.block):
+            out += self.F[sl].T @ Y[sl]
+        out -= np.outer(mean32, Y.sum(axis=0))
+        return out
+
+    def orthonormal(self, Y):
+        """An orthonormal basis of the columns of Y (N, r) from :meth:`times`."""
+        return orthonormal_basis(Y)
+
+    def centred_sumsq(self, mean32) -> float:
+        """Sum of squares of F - 1 mu^T (float64 sums of float32 differences)."""
+        total = 0.0
+        for sl in _row_blocks(self.shape[0], self.block):  # no float64 copy of the block
+            d = self.F[sl] - mean32
+            total += float(np.einsum("ij,ij->", d, d, dtype=np.float64))
+        return total
+
+
 class ShapeSpace(BaseEstimator):
     """PCA shape space of lip frames.
 
@@ -148,9 +211,12 @@ class ShapeSpace(BaseEstimator):
         self.block_size = block_size
         self.random_state = random_state
 
-    def _validate(self, F, *, finite=True):
-        """Parameters, and F (N, C): 2-D, enough frames, (``finite``) no NaN/inf. F stored in
-        blocks (``engine.recordings.frame_blocks.BlockFrames``) is read a window at a time, never gathered."""
+    def validate_frames(self, F, *, finite=True):
+        """The parameters, and F (N, C) as :meth:`fit` checks them: 2-D, enough frames, (``finite``) no NaN/inf.
+
+        F stored in blocks (``engine.recordings.frame_blocks.BlockFrames``) is read a
+        window at a time, never gathered. Returns F (an ndarray unless stored in blocks).
+        """
         F = F if isinstance(F, BlockFrames) else np.asarray(F)
         if F.ndim != 2:
             raise ValueError(f"frames must be 2-D (n_frames, n_coordinates), got shape {F.shape}")
@@ -180,44 +246,41 @@ class ShapeSpace(BaseEstimator):
         progress : callable, optional
             ``progress(stage, done, total)``; raise :class:`engine.progress.Cancelled` to stop.
         """
-        F = self._validate(F)
-        N, C = F.shape
+        F = self.validate_frames(F)
+        return self.fit_products(FrameProducts(F, block_size=self.block_size), progress=progress)
+
+    def fit_products(self, products, *, progress: ProgressFn = None):
+        """Fit the shape space from the products of the frames with thin matrices.
+
+        The randomized range finder with implicit centring: ``k + 10`` random directions,
+        at most ``n_iter`` power iterations (stopped early by ``tol``), the SVD of the
+        small projected matrix.
+
+        Parameters
+        ----------
+        products : FrameProducts or alike
+            ``shape`` (N, C) of the frames (checked by :meth:`validate_frames`), ``mean()``,
+            ``times(X, mean32)``, ``t_times(Y, mean32)``, ``orthonormal(Y)`` and
+            ``centred_sumsq(mean32)``, as :class:`FrameProducts`.
+        progress : callable, optional
+        """
+        N, C = products.shape
         rng = np.random.default_rng(self.random_state)
         k = int(min(self.max_components, N - 1, C))
         p = min(10, min(N, C) - k)
-        block = max(1, int(self.block_size))
-        mean = np.zeros(C, dtype=np.float64)
-        for sl in _row_blocks(N, block):
-            mean += F[sl].sum(axis=0, dtype=np.float64)
-        mean /= N
+        mean = products.mean()
         mean32 = mean.astype(np.float32)
         total_steps = 2 * self.n_iter + 3
         step = 0
 
-        def A_mat(X):  # (F - 1 mu^T) @ X, X (C, r)
-            X = X.astype(np.float32)
-            out = np.empty((N, X.shape[1]), dtype=np.float32)
-            mx = mean32 @ X
-            for sl in _row_blocks(N, block):
-                out[sl] = F[sl] @ X - mx
-            return out
-
-        def At_mat(Y):  # (F - 1 mu^T)^T @ Y, Y (N, r)
-            Y = Y.astype(np.float32)
-            out = np.zeros((C, Y.shape[1]), dtype=np.float32)
-            for sl in _row_blocks(N, block):
-                out += F[sl].T @ Y[sl]
-            out -= np.outer(mean32, Y.sum(axis=0))
-            return out
-
-        Q = A_mat(rng.standard_normal((C, k + p)).astype(np.float32))
+        Q = products.times(rng.standard_normal((C, k + p)).astype(np.float32), mean32)
         step += 1
         report(progress, "shape space", step, total_steps)
-        Q = orthonormal_basis(Q)
+        Q = products.orthonormal(Q)
         tol = float(self.tol or 0.0)
         previous, it = None, 0
         while True:
-            Bt = At_mat(Q)  # (C, k+p): B^T for this Q, and the next iteration's input
+            Bt = products.t_times(Q, mean32)  # (C, k+p): B^T for this Q, and the next iteration's input
             step += 1
             report(progress, "shape space", step, total_steps)
             if it >= self.n_iter:
@@ -225,7 +288,8 @@ class ShapeSpace(BaseEstimator):
             settled, previous = _range_settled(Bt, k, float(self.variance), tol, previous)
             if settled:  # an iteration no longer moves the kept components
                 break
-            Q = orthonormal_basis(A_mat(orthonormal_basis(Bt)))
+            # the C x r basis: small, in-process, one BLAS thread; the N x r one by the products
+            Q = products.orthonormal(products.times(orthonormal_basis(Bt), mean32))
             it += 1
             step += 1
             report(progress, "shape space", step, total_steps)
@@ -233,10 +297,7 @@ class ShapeSpace(BaseEstimator):
         self.n_iter_ = it
         _, s, Vt = thin_svd(B.astype(np.float64))
         s, Vt = s[:k], Vt[:k]
-        total = 0.0
-        for sl in _row_blocks(N, block):  # squares summed in float64 without a float64 copy of the block
-            d = F[sl] - mean32
-            total += float(np.einsum("ij,ij->", d, d, dtype=np.float64))
+        total = products.centred_sumsq(mean32)
         report(progress, "shape space", total_steps, total_steps)
         self.n_range_ = k + p
         return self._set_fitted(s, Vt, total, N, mean)

@@ -49,7 +49,6 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from engine.manifold.embedding import pairwise_distance_block
-from engine.manifold.shape import _range_settled, orthonormal_basis, thin_svd
 from engine.progress import ProgressFn, report
 from engine.recordings.frame_blocks import DEFAULT_BLOCK_FRAMES, BlockFrames, block_slices, store_frame_blocks
 
@@ -179,6 +178,44 @@ def _assign_block(centroids, Yb):
     return cKDTree(centroids).query(Yb)[1].astype(np.int32)
 
 
+class _DaskFrameProducts:
+    """The range finder's products of the centred frames (:class:`engine.manifold.shape.FrameProducts`'s
+    interface) on the Dask workers: F read block-wise where it is stored, the thin N x r
+    matrices persisted there, only C x r results and r x r Gram matrices brought back."""
+
+    def __init__(self, executor, frames):
+        self.executor = executor
+        self.frames = frames
+        self.F = open_frame_blocks(frames)
+        self.shape = tuple(self.F.shape)
+
+    def mean(self) -> np.ndarray:
+        mean = self.F.sum(axis=0, dtype=np.float64).compute() / self.shape[0]
+        if not np.isfinite(mean).all():  # NaN/inf somewhere: name the first frame, as in-process
+            bad = [i for i in self.executor.map_frame_blocks(_first_nonfinite, self.frames) if i >= 0]
+            raise ValueError(f"frame {bad[0] if bad else '?'} holds NaN or inf; clean the corpus before fitting")
+        return mean
+
+    def times(self, X, mean32):  # (F - 1 mu^T) X, left on the workers
+        X = X.astype(np.float32)
+        return (self.F @ X - mean32 @ X).persist()
+
+    def t_times(self, Y, mean32) -> np.ndarray:  # (F - 1 mu^T)^T Y, thin, brought back; float32 GEMMs
+        import dask
+
+        Y = Y.astype(np.float32)
+        out, ysum = dask.compute(self.F.T @ Y, Y.sum(axis=0))
+        return out - np.outer(mean32, ysum)
+
+    def orthonormal(self, Y):
+        return _orthonormal_columns(Y.rechunk({1: -1}))
+
+    def centred_sumsq(self, mean32) -> float:
+        F = self.F
+        return float(F.map_blocks(_centred_sumsq, mean32, chunks=((1,) * F.numblocks[0],), drop_axis=1,
+                                  dtype=np.float64).sum().compute())
+
+
 class DaskExecutor:
     """Runs the shape space and the embedding of a build on a Dask cluster.
 
@@ -259,71 +296,24 @@ class DaskExecutor:
     def fit_shape(self, shape, frames, *, progress: ProgressFn = None) -> np.ndarray:
         """Fit ``shape`` (an unfitted :class:`engine.manifold.shape.ShapeSpace`) on F; return F^x (N, m).
 
-        The same randomized range finder as ``ShapeSpace.fit`` (same random draws and
-        power iterations) with F read block-wise by the workers.
+        ``ShapeSpace.fit_products``'s range finder (the same random draws, power
+        iterations and early stop) over :class:`_DaskFrameProducts`: F read block-wise by
+        the workers, the thin N x r matrices left on them.
         """
         import dask
         import dask.array as da
 
         if isinstance(frames, BlockFrames):  # stored in blocks already: the workers read them in place
-            shape._validate(frames, finite=False)  # finiteness: checked by the workers below
+            shape.validate_frames(frames, finite=False)  # finiteness: checked by the workers below
         else:  # in memory: written out once as blocks for the workers
-            frames = BlockFrames.from_files(store_frame_blocks(shape._validate(frames), self.chunk_dir / "frames",
+            frames = BlockFrames.from_files(store_frame_blocks(shape.validate_frames(frames), self.chunk_dir / "frames",
                                                                block_frames=self.block_frames))
-        F = open_frame_blocks(frames)
-        N, C = F.shape
-        rng = np.random.default_rng(shape.random_state)
-        k = int(min(shape.max_components, N - 1, C))
-        p = min(10, min(N, C) - k)
-        mean = F.sum(axis=0, dtype=np.float64).compute() / N
-        if not np.isfinite(mean).all():  # NaN/inf somewhere: name the first frame, as in-process
-            bad = [i for i in self.map_frame_blocks(_first_nonfinite, frames) if i >= 0]
-            raise ValueError(f"frame {bad[0] if bad else '?'} holds NaN or inf; clean the corpus before fitting")
-        mean32 = mean.astype(np.float32)
-        steps, step = 2 * int(shape.n_iter) + 3, 0
-
-        def A_mat(X):  # (F - 1 mu^T) X, left on the workers
-            X = X.astype(np.float32)
-            return (F @ X - mean32 @ X).persist()
-
-        def At_mat(Y):  # (F - 1 mu^T)^T Y, thin, brought back; float32 GEMMs as in-process
-            Y = Y.astype(np.float32)
-            out, ysum = dask.compute(F.T @ Y, Y.sum(axis=0))
-            return out - np.outer(mean32, ysum)
-
-        def orth(Y):
-            return _orthonormal_columns(Y.rechunk({1: -1}))
-
-        Q = orth(A_mat(rng.standard_normal((C, k + p)).astype(np.float32)))
-        step += 1
-        report(progress, "shape space", step, steps)
-        tol = float(shape.tol or 0.0)
-        previous, it = None, 0
-        while True:  # ShapeSpace.fit's loop: the same iterations and the same early stop
-            Bt = At_mat(Q)  # (C, k+p): B^T for this Q, and the next iteration's input
-            step += 1
-            report(progress, "shape space", step, steps)
-            if it >= int(shape.n_iter):
-                break
-            settled, previous = _range_settled(Bt, k, float(shape.variance), tol, previous)
-            if settled:  # an iteration no longer moves the kept components
-                break
-            Q = orth(A_mat(orthonormal_basis(Bt)))  # the C x r basis: small, in-process, one BLAS thread
-            it += 1
-            step += 1
-            report(progress, "shape space", step, steps)
-        B = Bt.T
-        shape.n_iter_ = it
-        shape.n_range_ = k + p
-        _, s, Vt = thin_svd(B.astype(np.float64))
-        total = float(F.map_blocks(_centred_sumsq, mean32, chunks=((1,) * F.numblocks[0],), drop_axis=1,
-                                   dtype=np.float64).sum().compute())
-        shape._set_fitted(s[:k], Vt[:k], total, N, mean)
+        products = _DaskFrameProducts(self, frames)
+        shape.fit_products(products, progress=progress)
+        F = products.F
         Fx = da.map_blocks(lambda b, m=shape.mean_, c=shape.components_: (b - m) @ c.T, F,
                            chunks=(F.chunks[0], (shape.n_components_,)), dtype=np.float32)
         (Fx,) = dask.compute(Fx)
-        step += 1
-        report(progress, "shape space", step, steps)
         return np.ascontiguousarray(Fx, dtype=np.float32)
 
     # -------------------------------------------------------------- embedding
