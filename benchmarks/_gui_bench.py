@@ -100,6 +100,20 @@ def add_manifold_argument(ap) -> None:
                     help="points the manifold view draws at most (app.models.lod.DEFAULT_MAX_POINTS; default its value)")
 
 
+def parse_bench_args(ap):
+    """Add ``--preset``, ``--manifold``, ``--max-points`` and the hidden ``--child``; parse; make sure there is a display
+    (:func:`ensure_display`) and apply ``--max-points``. Returns ``(args, cap)``, ``cap`` the option to
+    pass on to child processes."""
+    import argparse
+
+    ap.add_argument("--preset", default="default", help="the synthetic talker's preset ('talker')")
+    add_manifold_argument(ap)
+    ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    ensure_display()
+    return args, apply_max_points(args)
+
+
 def apply_max_points(args) -> list[str]:
     """Set the level of detail's cap from ``--max-points`` (in this process); returns the option for children."""
     if args.max_points is None:
@@ -145,6 +159,18 @@ def order_of_runs(specs, repeats: int) -> list[str]:
     for r in range(repeats):
         out += specs if r % 2 == 0 else specs[::-1]
     return out
+
+
+def run_marked_child(cmd, spec: str, mark: str = "RESULT") -> dict:
+    """Run a benchmark's child process on manifold ``spec``; the JSON it printed after ``mark``
+    (exits naming the manifold, with the end of the child's output, when it failed)."""
+    import json
+
+    p = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, env=os.environ)
+    line = [ln for ln in p.stdout.splitlines() if ln.startswith(mark + " ")]
+    if p.returncode != 0 or not line:
+        sys.exit(f"child on {spec} failed ({p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}")
+    return json.loads(line[0][len(mark) + 1:])
 
 
 def compare(label: str, per_spec: dict, unit: str = "ms", scale: float = 1e3) -> None:

@@ -30,7 +30,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import time
 
@@ -116,12 +115,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5, help="times each action is done in a process")
     ap.add_argument("--rounds", type=int, default=1, help="fresh processes per manifold")
-    ap.add_argument("--preset", default="default")
-    gb.add_manifold_argument(ap)
-    ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
-    args = ap.parse_args()
-    gb.ensure_display()
-    cap = gb.apply_max_points(args)
+    args, cap = gb.parse_bench_args(ap)
     if args.child is not None:
         print("RESULT " + json.dumps(run(args.child, args.repeats, args.preset)))
         return
@@ -130,12 +124,8 @@ def main():
     t_all = time.perf_counter()
     runs = {spec: [] for spec in specs}
     for spec in gb.order_of_runs(specs, args.rounds):
-        p = subprocess.run([sys.executable, __file__, "--child", spec, "--repeats", str(args.repeats), "--preset",
-                            args.preset, *cap], capture_output=True, text=True, env=os.environ)
-        line = [ln for ln in p.stdout.splitlines() if ln.startswith("RESULT ")]
-        if p.returncode != 0 or not line:
-            sys.exit(f"child on {spec} failed ({p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}")
-        r = json.loads(line[0][7:])
+        r = gb.run_marked_child([sys.executable, __file__, "--child", spec, "--repeats", args.repeats, "--preset",
+                                 args.preset, *cap], spec)
         runs[spec].append(r)
         print(f"   run [{gb.spec_label(spec)}]: {r['n_frames']:,} frames, peak RSS {r['rss_mb']:.0f} MiB, "
               f"load {r['load']:.1f}", flush=True)

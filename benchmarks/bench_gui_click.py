@@ -16,8 +16,8 @@ render that follows the click), the process's CPU time over the same span (all t
 the software rasteriser's included: less sensitive to other processes on a shared
 machine than wall time), and how many VTK renders the click caused in the manifold
 view and in the lip view. Each click's selection is checked against a search over
-every frame of the manifold (drawn or not: the level of detail draws at most 150,000
-points): the selected frame must be the one under the cursor (``app.models.picking.
+every frame of the manifold (drawn or not: above ``app.models.lod.DEFAULT_MAX_POINTS`` frames the view
+draws groups of frames): the selected frame must be the one under the cursor (``app.models.picking.
 frame_under_cursor`` over all N frames projected by the view's camera).
 
 * cold: the first click in a fresh process (window just opened);
@@ -38,7 +38,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import time
 
@@ -108,6 +107,31 @@ def click_once(app, win, frame, mlog, llog, timeout=20.0):
     return shown - t0, len(mlog.renders) - n_r, len(llog.renders) - n_l, parts, cpu, mouse, camera
 
 
+def frame_under_cursor_everywhere(win, mouse, camera):
+    """The frame under ``mouse`` by a search over every frame of the manifold (the check of a click)."""
+    import numpy as np
+
+    from app.models.picking import frame_under_cursor
+    from app.scene.projection import project
+
+    view = win.manifold_view
+    M, size = camera
+    Fy = win.state.manifold.Fy_
+    best, loc = [], view.locator
+    for a in range(0, Fy.shape[0], 1 << 20):  # blocks of frames: bounded memory at any N
+        xy, depth = project(np.asarray(Fy[a:a + (1 << 20), :3], np.float64), M, size)
+        i = frame_under_cursor(xy, depth, mouse, dot_radius=loc.dot_radius, radius=loc.radius)
+        if i is not None:
+            best.append((a + i, xy[i], depth[i]))
+    if not best:
+        return None
+    idx = np.array([b[0] for b in best])
+    xy = np.array([b[1] for b in best])
+    depth = np.array([b[2] for b in best])
+    i = frame_under_cursor(xy, depth, mouse, dot_radius=loc.dot_radius, radius=loc.radius)
+    return None if i is None else int(idx[i])
+
+
 def show_sound(app, win, timeout=60.0) -> dict:
     """Load the first utterance with audio into the editor; wait until its spectrogram is drawn."""
     from PySide6 import QtCore
@@ -133,31 +157,6 @@ def show_sound(app, win, timeout=60.0) -> dict:
     spec = ed.sound.display.spectrogram
     return {"utterance": uid, "shown_s": shown, "seconds": ed.sound.display.duration,
             "spectrogram": list(spec.power_db.shape), "dock_h": dock.height()}
-
-
-def frame_under_cursor_everywhere(win, mouse, camera):
-    """The frame under ``mouse`` by a search over every frame of the manifold (the check of a click)."""
-    import numpy as np
-
-    from app.models.picking import frame_under_cursor
-    from app.scene.projection import project
-
-    view = win.manifold_view
-    M, size = camera
-    Fy = win.state.manifold.Fy_
-    best, loc = [], view.locator
-    for a in range(0, Fy.shape[0], 1 << 20):  # blocks of frames: bounded memory at any N
-        xy, depth = project(np.asarray(Fy[a:a + (1 << 20), :3], np.float64), M, size)
-        i = frame_under_cursor(xy, depth, mouse, dot_radius=loc.dot_radius, radius=loc.radius)
-        if i is not None:
-            best.append((a + i, xy[i], depth[i]))
-    if not best:
-        return None
-    idx = np.array([b[0] for b in best])
-    xy = np.array([b[1] for b in best])
-    depth = np.array([b[2] for b in best])
-    i = frame_under_cursor(xy, depth, mouse, dot_radius=loc.dot_radius, radius=loc.radius)
-    return None if i is None else int(idx[i])
 
 
 def run_clicks(n_clicks: int, spec: str, preset: str, sound: str = "off") -> dict:
@@ -192,8 +191,7 @@ def run_clicks(n_clicks: int, spec: str, preset: str, sound: str = "off") -> dic
     out = {"spec": spec, "n_frames": int(m.Fy_.shape[0]), "n_points": int(win.state.cloud.n_points),
            "first": res[0], "warm": res[1:], "checks": checks, "load_s": loaded, "window_s": opened,
            "gl": gb.gl_renderer(win.manifold_view.plotter), "size": list(win.manifold_view.plotter.render_window.GetSize()),
-           "rss_mb": gb.peak_rss_mb(), "load": (load0 + os.getloadavg()[0]) / 2,
-           "sound": snd, "shown": shown}
+           "rss_mb": gb.peak_rss_mb(), "load": (load0 + os.getloadavg()[0]) / 2, "sound": snd, "shown": shown}
     win.close()
     return out
 
@@ -202,14 +200,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--clicks", type=int, default=21, help="warm clicks in each process")
     ap.add_argument("--repeats", type=int, default=3, help="fresh processes per manifold (each: 1 cold click)")
-    ap.add_argument("--preset", default="default")
     ap.add_argument("--sound", choices=("off", "on", "compare"), default="off",
                     help="the editor's waveform and spectrogram: not loaded, shown, or shown / hidden by turns")
-    gb.add_manifold_argument(ap)
-    ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
-    args = ap.parse_args()
-    gb.ensure_display()
-    cap = gb.apply_max_points(args)
+    args, cap = gb.parse_bench_args(ap)
     if args.child is not None:  # one fresh process: print its clicks as JSON
         print("RESULT " + json.dumps(run_clicks(args.clicks, args.child, args.preset, args.sound)))
         return
@@ -220,12 +213,8 @@ def main():
     t_all = time.perf_counter()
     runs = {spec: [] for spec in specs}
     for spec in gb.order_of_runs(specs, args.repeats):
-        p = subprocess.run([sys.executable, __file__, "--child", spec, "--clicks", str(args.clicks), "--preset",
-                            args.preset, "--sound", args.sound, *cap], capture_output=True, text=True, env=os.environ)
-        line = [ln for ln in p.stdout.splitlines() if ln.startswith("RESULT ")]
-        if p.returncode != 0 or not line:
-            sys.exit(f"child on {spec} failed ({p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}")
-        r = json.loads(line[0][7:])
+        r = gb.run_marked_child([sys.executable, __file__, "--child", spec, "--clicks", args.clicks, "--preset",
+                                 args.preset, "--sound", args.sound, *cap], spec)
         runs[spec].append(r)
         ok = sum(c["selected"] == c["under_cursor"] for c in r["checks"])
         print(f"   run [{gb.spec_label(spec)}] {len(runs[spec])}: {r['n_frames']:,} frames ({r['n_points']:,} drawn), "
@@ -257,15 +246,15 @@ def main():
         rss = ", ".join(f"{r['rss_mb']:.0f}" for r in rs)
         loads = ", ".join(f"{r['load_s']:.1f}" for r in rs)
         print(f"   peak RSS {rss} MiB; manifold loaded and prepared in {loads} s")
-        snd = rs[0].get("sound")
-        if snd:
-            print(f"   sound: utterance {snd['utterance']} ({snd['seconds']:.2f} s of audio), spectrogram "
-                  f"{snd['spectrogram'][0]} bands x {snd['spectrogram'][1]} frames drawn {1e3 * snd['shown_s']:.0f} ms "
-                  f"after Load; editor dock {snd['dock_h']} px high (cold clicks: with the sound shown)")
-        pairs = [(w, k) for r in rs for w, k in zip(r["warm"], r.get("shown", []))]
-        if pairs:
-            on = [w for w, k in pairs if k]
-            off = [w for w, k in pairs if not k]
+        if rs[0]["sound"]:
+            sd = rs[0]["sound"]
+            print(f"   sound: utterance {sd['utterance']} ({sd['seconds']:.2f} s of audio), spectrogram "
+                  f"{sd['spectrogram'][0]} bands x {sd['spectrogram'][1]} frames drawn {1e3 * sd['shown_s']:.0f} ms "
+                  f"after Load; editor dock {sd['dock_h']} px high (cold clicks: with the sound shown)")
+        pairs_of = [(w, k) for r in rs for w, k in zip(r["warm"], r["shown"])]
+        if pairs_of:
+            on = [w for w, k in pairs_of if k]
+            off = [w for w, k in pairs_of if not k]
             n = min(len(on), len(off))
             wall = np.asarray([w[0] for w in on[:n]]) / np.asarray([w[0] for w in off[:n]])
             cpu = np.asarray([w[4] for w in on[:n]]) / np.asarray([w[4] for w in off[:n]])

@@ -341,18 +341,12 @@ def main():
 
 def side_by_side(args, specs, cap) -> None:
     """Each manifold in fresh processes, alternating; the frame rates and lags side by side."""
-    import subprocess
-
     gb.header(f"playback in the lip view, side by side: {', '.join(gb.spec_label(s) for s in specs)}")
     runs = {spec: [] for spec in specs}
     for spec in gb.order_of_runs(specs, args.rounds):
         cmd = [sys.executable, os.path.abspath(__file__), "--manifold", spec, "--repeats", str(args.repeats),
                "--max-seconds", str(args.max_seconds), "--preset", args.preset, *cap]
-        p = subprocess.run(cmd, capture_output=True, text=True, env=os.environ)
-        line = [ln for ln in p.stdout.splitlines() if ln.startswith("SUMMARY ")]
-        if p.returncode != 0 or not line:
-            sys.exit(f"playback on {spec} failed ({p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}")
-        r = json.loads(line[0][8:])
+        r = gb.run_marked_child(cmd, spec, "SUMMARY")
         runs[spec].append(r)
         fps = ", ".join(f"{x['fps']:.1f}" for x in r["repeats"])
         lags = ", ".join(f"{x['lag_max']:.2f}" for x in r["repeats"])

@@ -178,13 +178,8 @@ def main():
     ap.add_argument("--cold", type=int, default=1, help="runs with an empty cache (each builds the talker) / with "
                                                         "the manifold's files dropped from the file cache")
     ap.add_argument("--warm", type=int, default=3, help="runs with the cache filled / the files in the file cache")
-    ap.add_argument("--preset", default="default")
-    gb.add_manifold_argument(ap)
-    ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--child-path", default=None, help=argparse.SUPPRESS)
-    args = ap.parse_args()
-    gb.ensure_display()
-    cap = gb.apply_max_points(args)
+    args, cap = gb.parse_bench_args(ap)
     if args.child is not None:
         child(float(args.child), args.preset, args.child_path)
         return

@@ -153,13 +153,19 @@ def _exponent(ns, ys):
     return float(np.polyfit(ns, ys, 1)[0]) if len(ns) > 1 else float("nan")
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[30000, 100000, 300000])
+def add_build_arguments(ap, *, sizes, work: str, what: str) -> None:
+    """``--sizes``, ``--resolution``, ``--dask`` and ``--work`` (default ``$TMPDIR/work``, holding ``what``)."""
+    ap.add_argument("--sizes", type=int, nargs="+", default=list(sizes))
     ap.add_argument("--resolution", default="small", help="lip model resolution (small: 156 points, paper: 4,260)")
     ap.add_argument("--dask", default=None, help="'local' or a scheduler address (default: in-process)")
-    ap.add_argument("--work", default=os.path.join(os.environ.get("TMPDIR", "/tmp"), "lipspace-bench-scale"),
-                    help="folder for the blocked corpora (reused) and the manifolds (default: %(default)s)")
+    ap.add_argument("--work", default=os.path.join(os.environ.get("TMPDIR", "/tmp"), work),
+                    help=f"folder for {what} (default: %(default)s)")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_build_arguments(ap, sizes=[30000, 100000, 300000], work="lipspace-bench-scale",
+                        what="the blocked corpora (reused) and the manifolds")
     ap.add_argument("--one", help=argparse.SUPPRESS)
     ap.add_argument("--generate", type=int, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)

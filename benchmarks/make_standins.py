@@ -137,12 +137,11 @@ def make_corpus(n: int, args, me) -> str:
 
 
 def main(argv=None) -> int:
+    import bench_scale
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[100000, 300000, 1000000])
-    ap.add_argument("--resolution", default="small", help="lip model resolution (small: 156 points)")
-    ap.add_argument("--dask", default=None, help="'local' or a scheduler address (default: in-process)")
-    ap.add_argument("--work", default=os.path.join(os.environ.get("TMPDIR", "/tmp"), "lipspace-standins"),
-                    help="folder for the corpora and manifolds (default: %(default)s)")
+    bench_scale.add_build_arguments(ap, sizes=[100000, 300000, 1000000], work="lipspace-standins",
+                                    what="the corpora and manifolds")
     ap.add_argument("--chunk-frames", type=int, default=1_000_000,
                     help="larger stand-ins are generated in parts of this many frames, one speaker each")
     ap.add_argument("--rebuild", action="store_true", help="build the manifold again even when it exists")
@@ -153,8 +152,6 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help=argparse.SUPPRESS)
     ap.add_argument("--speaker", default="", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    import bench_scale
-
     if args.generate:
         print(json.dumps(bench_scale.generate(args.generate, args.resolution, args.one)))
         return 0

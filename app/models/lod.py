@@ -256,7 +256,6 @@ def cloud_detail(Y, labels, *, max_points: int | None = None) -> CloudDetail:
     first = np.r_[True, ks[1:] != ks[:-1]]
     del ks
     starts = np.flatnonzero(first)
-    G = starts.size
     offsets = np.r_[starts, N].astype(np.int64)
     sizes = np.diff(offsets)
     group_of = np.empty(N, np.int64)

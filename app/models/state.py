@@ -140,7 +140,7 @@ def prepare_derived(manifold, progress=None) -> None:
     """Compute what the views derive from ``manifold`` ahead of showing it (Qt-free, any thread).
 
     The level of detail of the drawn cloud (:func:`app.models.lod.cloud_detail`: every frame up to
-    150,000, groups of frames above), the k-NN density of every frame (only while every frame
+    ``app.models.lod.DEFAULT_MAX_POINTS``, groups of frames above), the k-NN density of every frame (only while every frame
     is drawn: a grouped cloud carries its own density), the phone of every frame, the phone
     clusters and the state graph's cached forms for hemisphere and path queries are
     computed here, e.g. in the loading worker, and picked up by :meth:`AppState.set_manifold`,
