@@ -8,7 +8,6 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
 from app.figures.style import (
-    ARBITRARY,
     CMAP,
     draw_lips,
     fit_contour,
@@ -24,7 +23,6 @@ from app.figures.style import (
     shape_view,
     shared_limits,
     talker_frame,
-    y3,
 )
 
 __all__ = ["make_fig1a", "make_fig1b", "make_fig2c", "make_scree"]

@@ -288,7 +288,6 @@ def explain_split(states, corpus: Corpus) -> str | None:
     if comp.max() < 1:
         return None
     frame_comp = comp[np.asarray(states.labels_)]
-    N = len(frame_comp)
     big = [c for c in np.unique(frame_comp) if np.mean(frame_comp == c) >= 0.05]
     if len(big) < 2:
         return None
