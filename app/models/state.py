@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-__all__ = ["Event", "AppState", "TrajectoryData", "HEMISPHERES", "COLOR_MODES", "DEFAULT_HORIZON_MS",
+__all__ = ["Event", "AppState", "StateField", "FIELDS", "TrajectoryData", "HEMISPHERES", "COLOR_MODES", "DEFAULT_HORIZON_MS",
            "HORIZON_MAX_MS", "knn_density", "frame_phones", "frame_phone_codes", "state_path", "cluster_table",
            "original_trajectory", "prepare_derived", "insert_state_target", "TARGET_SPACING"]
 
@@ -66,17 +66,137 @@ class Event:
         return len(self._callbacks)
 
 
-class _Events:
-    """Namespace of the state's events: one per observable field, and ``changed``.
+def _index(what, limit):
+    """A check for an int index ``0 <= i < limit(state)`` (None allowed), naming ``what`` when refused."""
 
-    ``changed`` fires once per user action with the frozenset of the field names that
+    def check(state, value):
+        return state._check_index(value, None if value is None else limit(state), what)
+
+    return check
+
+
+def _one_of(choices, what):
+    def check(state, value):
+        if value not in choices:
+            raise ValueError(f"{what} must be one of {choices}, got {value!r}")
+        return value
+
+    return check
+
+
+def _horizon(state, ms):
+    if ms is not None:
+        if isinstance(ms, (bool, np.bool_)) or not isinstance(ms, (int, float, np.integer, np.floating)):
+            raise TypeError(f"horizon must be a number of milliseconds or None, got {ms!r}")
+        ms = float(ms)
+        if not (0.0 <= ms <= HORIZON_MAX_MS):
+            raise ValueError(f"horizon {ms:g} ms is outside 0..{HORIZON_MAX_MS:g} ms; use None for no horizon")
+    return ms
+
+
+def _labels(state, labels):
+    return frozenset(str(x) for x in labels)
+
+
+def _phone_filter(state, labels):
+    labels = _labels(state, labels)
+    if labels and state.manifold is not None:
+        known = set(state.phone_names)
+        bad = sorted(labels - known)
+        if bad:
+            raise ValueError(f"unknown phone(s) {', '.join(bad)}; this corpus has {', '.join(sorted(known))}")
+    return labels
+
+
+def _playback(state, k):
+    if k is not None and state.n_playback == 0:
+        raise RuntimeError("nothing to play: choose an utterance or synthesise a trajectory first")
+    return state._check_index(k, None if k is None else state.n_playback, "playback frame")
+
+
+def _same_value(old, new) -> bool:
+    return old is new or (type(old) is type(new) and old == new)
+
+
+def _same_path(old, new) -> bool:
+    return (old is None) == (new is None) and (old is None or np.array_equal(old, new))
+
+
+def _same_object(old, new) -> bool:
+    return old is new
+
+
+@dataclass(frozen=True)
+class StateField:
+    """One observable field of :class:`AppState`, declared once.
+
+    Parameters
+    ----------
+    name : str
+    default : object
+        The value of a new state, and after :meth:`AppState.set_manifold` (immutable).
+    check : callable(state, value) -> value, optional
+        Validates a new value and returns what is stored (raises with the value and the limit).
+    event : str, optional
+        Event announcing a change (default: ``name``); fields sharing one event are emitted
+        together, in declaration order (``trajectory``: original, synthetic).
+    view : bool
+        Part of the view :meth:`AppState.reset_view` (Esc) returns to its default.
+    same : callable(old, new) -> bool
+        When a new value is no change (nothing is announced).
+    """
+
+    name: str
+    default: object = None
+    check: object = None
+    event: str = ""
+    view: bool = False
+    same: object = _same_value
+
+    @property
+    def event_name(self) -> str:
+        return self.event or self.name
+
+
+#: every observable field of the state: the one place its name, default and check are given
+FIELDS = (
+    StateField("manifold", same=_same_object),
+    StateField("frame", check=_index("frame", lambda s: s.n_frames), view=True),
+    StateField("state", check=_index("state", lambda s: s.n_states), view=True),
+    StateField("target", check=_index("target state", lambda s: s.n_states), view=True),
+    StateField("path", view=True, same=_same_path),
+    StateField("hemisphere", "future", _one_of(HEMISPHERES, "hemisphere"), view=True),
+    StateField("horizon_ms", DEFAULT_HORIZON_MS, _horizon, view=True),
+    StateField("color_mode", "density", _one_of(COLOR_MODES, "colour mode"), view=True),
+    StateField("phone_filter", frozenset(), _phone_filter, view=True),
+    StateField("path_mode", False, lambda s, on: bool(on), view=True),
+    StateField("utterance"),
+    StateField("original", event="trajectory", same=_same_object),
+    StateField("synthetic", event="trajectory", same=_same_object),
+    StateField("visible_phones", frozenset(), _labels, view=True),
+    StateField("playback", check=_playback),
+    StateField("playing", False, lambda s, on: bool(on) and s.n_playback > 0),
+    StateField("component", check=_index("shape component", lambda s: int(s._require().shape_.n_components_)),
+               view=True),
+    StateField("hover", check=_index("hovered frame", lambda s: s.n_frames), view=True),
+)
+_FIELD = {f.name: f for f in FIELDS}
+#: event name -> the fields it announces, in declaration order
+_EVENT_FIELDS: dict = {}
+for _f in FIELDS:
+    _EVENT_FIELDS.setdefault(_f.event_name, []).append(_f.name)
+del _f
+
+
+class _Events:
+    """Namespace of the state's events: one per observable field (:data:`FIELDS`), and ``changed``.
+
+    ``changed`` fires once per user action with the frozenset of the event names that
     action changed (after every field event of that action), so a view that depends on
     several fields redraws once (see :meth:`AppState.batch`).
     """
 
-    NAMES = ("manifold", "frame", "state", "target", "path", "hemisphere", "horizon_ms", "color_mode",
-             "phone_filter", "path_mode", "utterance", "trajectory", "visible_phones", "playback", "playing",
-             "component", "hover")
+    NAMES = tuple(_EVENT_FIELDS)
 
     def __init__(self):
         for n in self.NAMES:
@@ -215,25 +335,13 @@ class AppState:
 
     def __init__(self, manifold=None):
         self.events = _Events()
+        for f in FIELDS:
+            setattr(self, f.name, f.default)
         self.manifold = manifold
         self.source: dict = {"path": None, "preset": "default"}
-        self.frame = self.state = self.target = None
-        self.path = None
-        self.hemisphere = "future"
-        self.horizon_ms = DEFAULT_HORIZON_MS
-        self.color_mode = "density"
-        self.phone_filter = frozenset()
-        self.path_mode = False
-        self.hover = None
-        self.utterance = None
-        self.original = self.synthetic = None
-        self.visible_phones = frozenset()
-        self.playback = None
-        self.playing = False
-        self.component = None
         self._take_prepared(manifold)
         self._batch_depth = 0
-        self._pending: dict = {}  # field name -> None, in order of first change (a batch's events)
+        self._pending: dict = {}  # event name -> None, in order of first change (a batch's events)
 
     # ------------------------------------------------------------- events
     @contextmanager
@@ -255,7 +363,7 @@ class AppState:
                 self._flush()
 
     def _emit(self, name: str) -> None:
-        """Announce that field ``name`` changed (held while a batch is open)."""
+        """Announce event ``name`` (held while a batch is open): the one path of every change."""
         self._pending.setdefault(name, None)
         if self._batch_depth == 0:
             self._flush()
@@ -268,11 +376,7 @@ class AppState:
                 names, self._pending = list(self._pending), {}
                 for name in names:
                     changed.setdefault(name, None)
-                    ev = getattr(self.events, name)
-                    if name == "trajectory":
-                        ev.emit(self.original, self.synthetic)
-                    else:
-                        ev.emit(getattr(self, name))
+                    getattr(self.events, name).emit(*(getattr(self, f) for f in _EVENT_FIELDS[name]))
         finally:
             self._batch_depth -= 1
             self._pending = {}
@@ -282,37 +386,28 @@ class AppState:
     # ----------------------------------------------------------- manifold
     @_batched
     def set_manifold(self, manifold, *, source: dict | None = None) -> None:
-        """Replace the manifold; clears every index-based selection."""
-        self.manifold = manifold
+        """Replace the manifold; every other field back to its default (:data:`FIELDS`).
+
+        A new file starts from the default view: no selection, colouring or readout of
+        the previous one survives, and each field that changes is announced after
+        ``manifold`` in the same action.
+        """
         if source is not None:
             self.source = dict(source)
         self._take_prepared(manifold)
-        self.frame = self.state = self.target = self.path = self.hover = None
-        self.utterance = self.original = self.synthetic = self.playback = self.component = None
-        self.playing = False
-        self.visible_phones = frozenset()
-        # a new file starts from the default view: no colouring or readout of the previous one survives
-        # (announced, so every observer of these fields hears of it in the same action)
-        self._set("phone_filter", frozenset())
-        self._set("color_mode", "density")
-        self._set("hemisphere", "future")
-        self._set("horizon_ms", DEFAULT_HORIZON_MS)
-        self._set("path_mode", False)
-        self._emit("manifold")
+        self._set("manifold", manifold, announce=True)
+        for f in FIELDS:
+            if f.name != "manifold":
+                self._set(f.name, f.default)
 
     @_batched
     def reset_view(self) -> None:
-        """Back to the default view of this manifold (Esc): no selection, path, component or hover,
-        density colouring, future hemisphere, default horizon, no phone filter or ellipsoids."""
-        self.clear_selection()
-        self._set("component", None)
-        self._set("hover", None)
-        self._set("path_mode", False)
-        self._set("color_mode", "density")
-        self._set("hemisphere", "future")
-        self._set("horizon_ms", DEFAULT_HORIZON_MS)
-        self._set("phone_filter", frozenset())
-        self._set("visible_phones", frozenset())
+        """Back to the default view of this manifold (Esc): every view field of :data:`FIELDS` at its
+        default (no selection, path, component or hover, density colouring, future hemisphere,
+        default horizon, no phone filter or ellipsoids); the utterance and trajectories stay."""
+        for f in FIELDS:
+            if f.view:
+                self._set(f.name, f.default)
 
     def _take_prepared(self, manifold) -> None:
         """Pick up what :func:`prepare_derived` computed for ``manifold`` (the rest is computed on demand)."""
@@ -423,6 +518,7 @@ class AppState:
 
     # ---------------------------------------------------------- selection
     def _check_index(self, value, limit, what):
+        """``value`` as an int in ``0..limit - 1`` (None passes); TypeError / IndexError naming ``what``."""
         if value is None:
             return None
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
@@ -443,7 +539,7 @@ class AppState:
         if i is None:
             self.clear_selection()
             return
-        i = self._check_index(i, self.n_frames, "frame")
+        i = self._checked("frame", i)
         s = int(self.manifold.states_.labels_[i])
         if as_target is None:
             as_target = self.path_mode and self.state is not None
@@ -457,7 +553,7 @@ class AppState:
     @_batched
     def select_state(self, s, *, as_target: bool = False) -> None:
         """Select state ``s`` directly (no particular frame), or make it the path target."""
-        s = self._check_index(s, self.n_states, "state")
+        s = self._checked("state", s)
         if as_target and self.state is not None:
             self.set_target(s)
             return
@@ -477,7 +573,6 @@ class AppState:
     @_batched
     def set_target(self, s) -> None:
         """Set the path target state (None clears it) and recompute the path."""
-        s = self._check_index(s, self.n_states, "target state")
         self._set("target", s)
         self._update_path()
 
@@ -502,16 +597,11 @@ class AppState:
         new = None
         if self.state is not None and self.target is not None:
             new = state_path(self.manifold, self.state, self.target)
-        old = self.path
-        if (old is None) != (new is None) or (new is not None and not np.array_equal(old, new)):
-            self.path = new
-            self._emit("path")
+        self._set("path", new)
 
     # -------------------------------------------------------------- modes
     @_batched
     def set_hemisphere(self, mode: str) -> None:
-        if mode not in HEMISPHERES:
-            raise ValueError(f"hemisphere must be one of {HEMISPHERES}, got {mode!r}")
         self._set("hemisphere", mode)
         if mode != "off" and self.state is not None and self.color_mode != "distance":
             self.set_color_mode("distance")
@@ -519,39 +609,25 @@ class AppState:
     @_batched
     def set_horizon(self, ms) -> None:
         """Time horizon of the hemisphere in milliseconds (None: no horizon, every reachable state)."""
-        if ms is not None:
-            if isinstance(ms, (bool, np.bool_)) or not isinstance(ms, (int, float, np.integer, np.floating)):
-                raise TypeError(f"horizon must be a number of milliseconds or None, got {ms!r}")
-            ms = float(ms)
-            if not (0.0 <= ms <= HORIZON_MAX_MS):
-                raise ValueError(f"horizon {ms:g} ms is outside 0..{HORIZON_MAX_MS:g} ms; use None for no horizon")
         self._set("horizon_ms", ms)
 
     @_batched
     def set_phone_filter(self, labels) -> None:
         """Phones the phone colouring shows (empty: all); unknown labels are refused with the known ones."""
-        labels = frozenset(str(x) for x in labels)
-        if labels and self.manifold is not None:
-            known = set(self.phone_names)
-            bad = sorted(labels - known)
-            if bad:
-                raise ValueError(f"unknown phone(s) {', '.join(bad)}; this corpus has {', '.join(sorted(known))}")
         self._set("phone_filter", labels)
 
     @_batched
     def set_hover(self, i) -> None:
         """Frame under the mouse pointer (None: none); shown in the readout, never selected."""
-        self._set("hover", None if i is None else self._check_index(i, self.n_frames, "hovered frame"))
+        self._set("hover", i)
 
     @_batched
     def set_color_mode(self, mode: str) -> None:
-        if mode not in COLOR_MODES:
-            raise ValueError(f"colour mode must be one of {COLOR_MODES}, got {mode!r}")
         self._set("color_mode", mode)
 
     @_batched
     def set_path_mode(self, on: bool) -> None:
-        self._set("path_mode", bool(on))
+        self._set("path_mode", on)
 
     # ----------------------------------------------------- trajectories
     @_batched
@@ -567,11 +643,11 @@ class AppState:
 
     @_batched
     def set_trajectories(self, *, original=..., synthetic=...) -> None:
-        """Set the original and/or synthetic trajectory (omit one to keep it)."""
+        """Set the original and/or synthetic trajectory (omit one to keep it); announced even when unchanged."""
         if original is not ...:
-            self.original = original
+            self._set("original", original)
         if synthetic is not ...:
-            self.synthetic = synthetic
+            self._set("synthetic", synthetic)
         self.set_playing(False)
         self._set("playback", None)
         self._emit("trajectory")
@@ -584,22 +660,16 @@ class AppState:
     @_batched
     def set_playback(self, k) -> None:
         """Current playback index into the trajectories (None: show the selection)."""
-        if k is not None:
-            if self.n_playback == 0:
-                raise RuntimeError("nothing to play: choose an utterance or synthesise a trajectory first")
-            k = self._check_index(k, self.n_playback, "playback frame")
         self._set("playback", k)
 
     @_batched
     def set_playing(self, on: bool) -> None:
         """Start or stop playback (starting with nothing to play is refused quietly)."""
-        on = bool(on) and self.n_playback > 0
         self._set("playing", on)
 
     # ------------------------------------------------------------ phones
     @_batched
     def set_visible_phones(self, labels) -> None:
-        labels = frozenset(str(x) for x in labels)
         self._set("visible_phones", labels)
 
     @_batched
@@ -611,17 +681,21 @@ class AppState:
     @_batched
     def set_component(self, index) -> None:
         """Shape component shown as a deformation (None: show the selection instead)."""
-        if index is not None:
-            index = self._check_index(index, int(self._require().shape_.n_components_), "shape component")
         self._set("component", index)
 
     # -------------------------------------------------------------- util
-    def _set(self, name, value) -> None:
-        old = getattr(self, name)
-        same = old is value or (type(old) is type(value) and old == value)
-        if not same:
+    def _checked(self, name, value):
+        """``value`` as field ``name``'s check accepts it (raises as the check does)."""
+        check = _FIELD[name].check
+        return value if check is None else check(self, value)
+
+    def _set(self, name, value, *, announce=False) -> None:
+        """Set field ``name`` through its check; announce it when it changed (or ``announce``)."""
+        f = _FIELD[name]
+        value = self._checked(name, value)
+        if announce or not f.same(getattr(self, name), value):
             setattr(self, name, value)
-            self._emit(name)
+            self._emit(f.event_name)
 
 
 # ======================================================================== derived data

@@ -372,3 +372,71 @@ def test_horizon_phone_filter_and_hover_validate(app_manifold):
         s.set_hover(app_manifold.Fy_.shape[0])
     s.set_horizon(None)
     assert s.horizon_ms is None
+
+
+# ----------------------------------------------------------------------------- the field table
+def test_every_field_is_declared_once_with_its_default_and_event(app_manifold):
+    from app.models.state import FIELDS
+
+    names = [f.name for f in FIELDS]
+    assert len(names) == len(set(names))
+    fresh = AppState()
+    for f in FIELDS:
+        assert getattr(fresh, f.name) == f.default  # a new state holds every default
+        assert hasattr(fresh.events, f.event_name)
+    # the events are the fields' events and ``changed``, nothing declared beside the table
+    assert set(fresh.events.NAMES) == {f.event_name for f in FIELDS}
+    # a new manifold returns every field but the manifold to its default, each change announced once
+    s = AppState(app_manifold)
+    s.select_frame(40)
+    s.set_color_mode("phone")
+    s.set_horizon(300)
+    s.set_utterance(app_manifold.corpus_.utterances[0].id)
+    s.set_playback(1)
+    changes = _changes(s)
+    s.set_manifold(app_manifold)
+    for f in FIELDS:
+        if f.name != "manifold":
+            assert getattr(s, f.name) == f.default or getattr(s, f.name) is f.default, f.name
+    assert len(changes) == 1
+    assert {"manifold", "frame", "state", "color_mode", "horizon_ms", "utterance", "trajectory",
+            "playback"} <= changes[0]
+
+
+def test_reset_view_touches_only_view_fields(app_manifold):
+    from app.models.state import FIELDS
+
+    s = AppState(app_manifold)
+    s.set_utterance(app_manifold.corpus_.utterances[0].id)
+    s.select_frame(40)
+    s.set_component(1)
+    kept = {f.name: getattr(s, f.name) for f in FIELDS if not f.view}
+    s.reset_view()
+    for f in FIELDS:
+        if f.view:
+            assert getattr(s, f.name) == f.default, f.name
+        else:  # the utterance and its trajectories stay
+            assert getattr(s, f.name) is kept[f.name], f.name
+    assert s.utterance is not None and s.original is not None
+
+
+def test_a_field_check_runs_on_every_path_that_sets_it(app_manifold):
+    """The table's check is the one place a value is validated: a setter that forgets it cannot exist."""
+    from app.models.state import FIELDS
+
+    s = AppState(app_manifold)
+    K = int(app_manifold.states_.centroids_.shape[0])
+    for call, err, match in ((lambda: s.set_target(K), IndexError, "target state"),
+                             (lambda: s.select_state(K), IndexError, "state"),
+                             (lambda: s.set_hemisphere("sideways"), ValueError, "hemisphere must be one of"),
+                             (lambda: s.set_color_mode("plaid"), ValueError, "colour mode must be one of"),
+                             (lambda: s._set("frame", -1), IndexError, "frame -1 out of range"),
+                             (lambda: s._set("color_mode", "plaid"), ValueError, "colour mode")):
+        before = {f.name: getattr(s, f.name) for f in FIELDS}
+        with pytest.raises(err, match=match):
+            call()
+        assert all(getattr(s, n) is v for n, v in before.items())  # a refused value leaves every field as it was
+    with pytest.raises(RuntimeError, match="nothing to play"):
+        s.set_playback(0)
+    s.set_playing(True)  # nothing to play: refused quietly
+    assert s.playing is False
