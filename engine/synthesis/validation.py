@@ -9,11 +9,19 @@ sliding-window regression's window and penalty. The method with the smallest val
 RMSE X per protocol is the one :mod:`engine.synthesis.method_choice` makes the default.
 Held-out evaluation (:mod:`engine.evaluation.protocols`) calls the same functions on its
 training utterances and never looks at held-out results here.
+
+The validation's cost is bounded at any corpus size (:func:`default_fit_frames`): a fit
+split larger than the budget -- the frames at which the smallest frames-per-state
+candidate reaches the state graph's cap on K -- is replaced by a random subset of its
+whole utterances within the budget, the validation utterances by a subset in the same
+proportion, and K (the candidates and the chosen ``n_states``) is capped as the state
+graph caps its default. A fit split within the budget is validated exactly as before.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from engine.graph.states import MAX_DEFAULT_STATES
 from engine.manifold.inverse_local import NEIGHBOR_CANDIDATES, select_neighbors
 from engine.progress import ProgressFn, report
 from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, BlendAccumulator, fit_blend, hermite_only_blend
@@ -29,7 +37,7 @@ from engine.synthesis.statepaths import StateModel, anchor
 from engine.synthesis.trajectory import phone_mids
 
 __all__ = ["STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES", "SMOOTHING_CANDIDATES", "Y_DIMS",
-           "MIN_VALIDATION_UTTERANCES", "select_settings", "manifold_y", "mid_frames"]
+           "MIN_VALIDATION_UTTERANCES", "select_settings", "default_fit_frames", "manifold_y", "mid_frames"]
 
 STATE_DIM_CANDIDATES = (3, 5, 8)
 #: K candidates: one state per this many training frames (30: the state graph's default)
@@ -42,6 +50,45 @@ MIN_VALIDATION_UTTERANCES = 3
 
 def _slice_rows(A, utts):
     return np.concatenate([A[u.start:u.stop] for u in utts])
+
+
+def default_fit_frames(frames_per_state=FRAMES_PER_STATE_CANDIDATES) -> int:
+    """The fit split's frame budget: ``MAX_DEFAULT_STATES * min(frames_per_state)`` (3000 * 8 = 24,000).
+
+    The most frames on which every K candidate (one state per ``frames_per_state``
+    frames) stays within the state graph's cap on its default K
+    (:data:`engine.graph.states.MAX_DEFAULT_STATES`), so a fit split within it is
+    validated as it always was, and a larger one costs what this many frames cost.
+    """
+    fps = [float(f) for f in frames_per_state]
+    if not fps or min(fps) <= 0:
+        raise ValueError(f"frames_per_state must be positive numbers of frames, got {list(frames_per_state)}")
+    return int(MAX_DEFAULT_STATES * min(fps))
+
+
+def _check_fit_frames(max_fit_frames, frames_per_state):
+    if max_fit_frames is None:
+        return default_fit_frames(frames_per_state)
+    try:
+        v = float(max_fit_frames)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if isinstance(max_fit_frames, bool) or not v >= 2:
+        raise ValueError(f"max_fit_frames must be a number of frames >= 2 (math.inf: no bound), got "
+                         f"{max_fit_frames!r}; pass None for the default budget of {default_fit_frames(frames_per_state)} "
+                         f"frames (MAX_DEFAULT_STATES {MAX_DEFAULT_STATES} x the smallest frames per state)")
+    return v
+
+
+def _within(utts, budget, rng, keep):
+    """A random subset of whole ``utts`` (in corpus order) whose frames stay within ``budget``; at least ``keep``."""
+    chosen, total = [], 0
+    for i in rng.permutation(len(utts)).tolist():
+        n = utts[i].n_frames
+        if total + n <= budget or len(chosen) < keep:
+            chosen.append(i)
+            total += n
+    return [utts[i] for i in sorted(chosen)]
 
 
 def _bounds(utts):
@@ -85,7 +132,8 @@ class _Val:
 def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=STATE_DIM_CANDIDATES,
                     sigmas=SMOOTHING_CANDIDATES, neighbors=NEIGHBOR_CANDIDATES, n_states=None,
                     frames_per_state=FRAMES_PER_STATE_CANDIDATES, phones=None,
-                    sliding_windows=SLIDING_WINDOW_CANDIDATES, progress: ProgressFn = None) -> dict:
+                    sliding_windows=SLIDING_WINDOW_CANDIDATES, max_fit_frames=None,
+                    progress: ProgressFn = None) -> dict:
     """Choose every setting on a validation split of the training utterances and measure every method there.
 
     The fitted manifold's F^y stands for the training frames (the embedding saw the
@@ -104,6 +152,13 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
     ----------
     phones : bool or None
         Run the phones protocol (None: when the corpus has phone labels).
+    max_fit_frames : int, float or None
+        The fit split's frame budget (None: :func:`default_fit_frames`; ``math.inf``: no
+        bound). A fit split over it is replaced by a random subset of its whole utterances
+        within it (seeded by ``random_state``), the validation utterances by a subset within
+        ``max_fit_frames * val_fraction / (1 - val_fraction)`` frames (at least two where
+        there are), K is capped at :data:`engine.graph.states.MAX_DEFAULT_STATES` (the
+        candidates that reach the cap merged into the first) and ``note`` says so.
 
     Returns
     -------
@@ -117,6 +172,9 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
     """
     c = manifold.corpus_
     ids = [u.id for u in c.utterances]
+    budget = _check_fit_frames(max_fit_frames, frames_per_state)
+    if not 0 < float(val_fraction) < 1:
+        raise ValueError(f"val_fraction must be in (0, 1), got {val_fraction}; the default is 0.2")
     maxd = int(manifold.Fy_.shape[1])
     cand = [int(d) for d in state_dims if 1 <= int(d) <= maxd]
     if not cand:
@@ -131,6 +189,13 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
     val_ids = sorted(rng.choice(len(ids), size=n_val, replace=False).tolist())
     val = [c.utterances[i] for i in val_ids]
     fit = [u for i, u in enumerate(c.utterances) if i not in set(val_ids)]
+    n_fit_all, n_val_all = sum(u.n_frames for u in fit), len(val)
+    bounded = n_fit_all > budget
+    if bounded:  # states on a subset of whole fit utterances, scored on a proportionate subset of the validation ones
+        fit = _within(fit, budget, rng, keep=1)
+        val = _within(val, budget * val_fraction / (1 - val_fraction), rng, keep=min(2, len(val)))
+        pos = {u.id: i for i, u in enumerate(c.utterances)}
+        val_ids = sorted(pos[u.id] for u in val)
     Fy_fit, Fx_fit, Fxv_fit = (_slice_rows(A, fit) for A in (manifold.Fy_, manifold.Fx_, manifold.Fxv_))
     b_fit = _bounds(fit)
     mids = phone_mids(c, fit) if phones else None
@@ -141,6 +206,12 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
         Ks = {None: max(2, int(round(n_states * N_fit / len(manifold.Fy_))))}
     else:
         Ks = {int(f): max(2, min(N_fit, int(round(N_fit / float(f))))) for f in frames_per_state}
+    if bounded and n_states is None:  # at most the state graph's cap; candidates that reach it are one candidate
+        capped = {}
+        for f, K in Ks.items():
+            if min(K, MAX_DEFAULT_STATES) not in capped.values():
+                capped[f] = min(K, MAX_DEFAULT_STATES)
+        Ks = capped
     table, best_key, best_err, best = {}, None, np.inf, None
     steps = len(cand) * len(Ks) + 2
     for j, d in enumerate(cand):
@@ -173,15 +244,24 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
         fitted["phones"] = fit_blend(_total(acc["phones"]))
         sw, sw_err = _choose_sliding_window(manifold, fit, V, sliding_windows)
         settings["sliding_window"], settings["sliding_window_errors"] = sw, sw_err
-        models = PhoneModels.fit(manifold, fit, sliding=sw, exclude=[u.id for u in val])
+        fit_ids = {u.id for u in fit}
+        models = PhoneModels.fit(manifold, fit, sliding=sw, exclude=[u.id for u in val] if not bounded else
+                                 [i for i in ids if i not in fit_ids])
     settings["blend"] = fitted
     report(progress, "validation", steps - 1, steps)
     settings["method_validation"] = _method_validation(sm, settings, V, acc, models, protos, lattice)
     settings["best"] = {p: min(r, key=lambda name: r[name]["rmse_x"]) for p, r in settings["method_validation"].items()}
     fps = t["frames_per_state"]
-    settings.update(n_states=n_states if fps is None else max(2, int(round(len(manifold.Fy_) / fps))),
-                    validation=table, val_ids=[ids[i] for i in val_ids],
-                    note=f"chosen on {len(val_ids)} of {len(ids)} training utterances held out from the states")
+    K = n_states if fps is None else max(2, int(round(len(manifold.Fy_) / fps)))
+    note = f"chosen on {len(val_ids)} of {len(ids)} training utterances held out from the states"
+    if bounded:
+        note += (f"; the fit split ({n_fit_all} frames) is over the {budget:.0f}-frame budget: the states were fitted "
+                 f"on a random subset of {len(fit)} whole fit utterances ({N_fit} frames) and scored on {len(val)} of "
+                 f"the {n_val_all} validation utterances")
+        if fps is not None:  # an n_states given is the caller's
+            K = min(K, MAX_DEFAULT_STATES)
+            note += f"; K at most {MAX_DEFAULT_STATES} (the state graph's cap)"
+    settings.update(n_states=K, validation=table, val_ids=[ids[i] for i in val_ids], note=note)
     report(progress, "validation", steps, steps)
     return settings
 
