@@ -244,9 +244,8 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
         fitted["phones"] = fit_blend(_total(acc["phones"]))
         sw, sw_err = _choose_sliding_window(manifold, fit, V, sliding_windows)
         settings["sliding_window"], settings["sliding_window_errors"] = sw, sw_err
-        fit_ids = {u.id for u in fit}
-        models = PhoneModels.fit(manifold, fit, sliding=sw, exclude=[u.id for u in val] if not bounded else
-                                 [i for i in ids if i not in fit_ids])
+        fit_ids = {u.id for u in fit}  # without a bound: exactly the validation utterances
+        models = PhoneModels.fit(manifold, fit, sliding=sw, exclude=[i for i in ids if i not in fit_ids])
     settings["blend"] = fitted
     report(progress, "validation", steps - 1, steps)
     settings["method_validation"] = _method_validation(sm, settings, V, acc, models, protos, lattice)
