@@ -106,6 +106,9 @@ class _Route:
 #: the process's one router (see :class:`WarningRouter`)
 WARNINGS = WarningRouter()
 
+#: a task's progress dialog opens once the task has run this long (ms); quicker tasks show none
+DIALOG_DELAY_MS = 300
+
 
 class Worker(QtCore.QObject):
     """Runs ``task(progress)`` once in its thread; emits progress / done / failed / cancelled."""
@@ -189,20 +192,27 @@ class TaskRunner(QtCore.QObject):
         self.warnings: list[str] = []
         self.worker.warned.connect(self._on_warned)
         self.dialog = None
+        self._progress = (title, 0, 0)  # the latest (stage, done, total), shown once the dialog opens
         if dialog:
             self.dialog = QtWidgets.QProgressDialog(title, "Cancel", 0, 0, parent if isinstance(
                 parent, QtWidgets.QWidget) else None)
             self.dialog.setWindowTitle("Lipspace")
-            self.dialog.setMinimumDuration(300)
             self.dialog.setAutoClose(False)
             self.dialog.setAutoReset(False)
             self.dialog.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
             self.dialog.canceled.connect(self.cancel)
+            self.dialog.reset()  # Qt's own show-after-minimumDuration timer is never started: _show_dialog
             self.worker.progress.connect(self._on_progress)
+            self._show_timer = QtCore.QTimer(self)
+            self._show_timer.setSingleShot(True)
+            self._show_timer.setInterval(DIALOG_DELAY_MS)
+            self._show_timer.timeout.connect(self._show_dialog)
 
     def start(self) -> "TaskRunner":
         WARNINGS.install()
         self.thread.start()
+        if self.dialog is not None:
+            self._show_timer.start()
         return self
 
     def cancel(self) -> None:
@@ -211,12 +221,23 @@ class TaskRunner(QtCore.QObject):
             self.dialog.setLabelText("Cancelling…")
 
     def _on_progress(self, stage, done, total):
+        """Keep the latest progress; the dialog shows it once it is open. A modal QProgressDialog's
+        ``setValue`` processes events (a repaint of the whole window, ~20 ms in software GL), so a
+        task done within :data:`DIALOG_DELAY_MS` never touches it."""
+        self._progress = (stage, done, total)
         d = self.dialog
-        if d is None or self.worker.cancel_requested:
+        if d is None or self.worker.cancel_requested or not d.isVisible():
             return
         d.setMaximum(max(total, 1))
         d.setValue(min(done, max(total, 1)))
         d.setLabelText(f"{stage}: {done}/{total}" if total > 1 else stage)
+
+    def _show_dialog(self) -> None:
+        """The task has run :data:`DIALOG_DELAY_MS`: open the progress dialog at its latest progress."""
+        if self.state != "running" or self.dialog is None or self.worker.cancel_requested:
+            return
+        self.dialog.show()
+        self._on_progress(*self._progress)
 
     def _on_warned(self, message):
         self.warnings.append(message)
@@ -227,9 +248,9 @@ class TaskRunner(QtCore.QObject):
         self.thread.quit()
         self.thread.wait()
         if self.dialog is not None:
-            # reset() stops the dialog's show-after-minimumDuration timer, which its first
-            # setValue started: a task done sooner would otherwise get its dialog shown
-            # after this close, modal, and never closed
+            self._show_timer.stop()
+            # reset() also stops the dialog's own show-after-minimumDuration timer (started by a
+            # setValue): a task done sooner would otherwise get its dialog shown after this close
             self.dialog.reset()
             self.dialog.close()
 

@@ -165,3 +165,50 @@ def test_memory_error_in_a_task_is_one_plain_message_with_the_size_and_a_hint(qa
     assert "MemoryError" not in msg and "allocate" not in msg and "dtype" not in msg and "\n" not in msg
     assert "MemoryError" in r.error[1]  # the traceback is kept for the details
 
+
+
+@pytest.mark.gui
+def test_a_quick_task_never_touches_its_progress_dialog(qapp, qtbot, monkeypatch):
+    """A modal QProgressDialog's setValue processes events (a whole-window repaint, ~20 ms in
+    software GL): a task done before the dialog would open must not call it."""
+    from PySide6 import QtWidgets
+
+    from app.workers import TaskRunner
+
+    calls: list = []
+    real = QtWidgets.QProgressDialog.setValue
+    monkeypatch.setattr(QtWidgets.QProgressDialog, "setValue", lambda self, v: (calls.append(v), real(self, v)))
+
+    def task(progress):
+        progress("quick", 0, 1)
+        progress("quick", 1, 1)
+        return 2
+
+    r = TaskRunner(task).start()
+    assert r.wait(10000) and r.state == "done" and r.result == 2
+    qtbot.wait(50)
+    assert calls == [] and not r.dialog.isVisible()
+
+
+@pytest.mark.gui
+def test_a_slow_task_opens_its_dialog_at_the_latest_progress(qapp, qtbot):
+    from app.workers import DIALOG_DELAY_MS, TaskRunner
+
+    release = threading.Event()
+
+    def task(progress):
+        progress("reading", 3, 10)
+        release.wait(20)
+        return 1
+
+    t0 = time.perf_counter()
+    r = TaskRunner(task, title="Reading").start()
+    try:
+        qtbot.waitUntil(lambda: r._progress == ("reading", 3, 10), timeout=5000)
+        if time.perf_counter() - t0 < 0.8 * DIALOG_DELAY_MS / 1000:
+            assert not r.dialog.isVisible()  # not before the delay
+        qtbot.waitUntil(r.dialog.isVisible, timeout=DIALOG_DELAY_MS + 5000)
+        assert r.dialog.value() == 3 and r.dialog.maximum() == 10 and r.dialog.labelText() == "reading: 3/10"
+    finally:
+        release.set()
+    assert r.wait(10000) and r.state == "done" and not r.dialog.isVisible()
