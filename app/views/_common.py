@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from contextlib import contextmanager
 
-__all__ = ["blocked", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all",
+__all__ = ["blocked", "reserve_lines", "set_readout", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all",
            "RenderScheduler", "Throttle", "READOUT_INTERVAL_S", "drawing_frame"]
 
 #: seconds between two repaints of the readouts that follow playback (caption, slider, the
@@ -23,6 +23,25 @@ def blocked(*widgets):
     finally:
         for w, o in zip(widgets, old):
             w.blockSignals(o)
+
+
+def reserve_lines(label, lines: int) -> None:
+    """Give a word-wrapped readout the height of ``lines`` lines from the start (see :func:`set_readout`)."""
+    m = label.contentsMargins()
+    label.setMinimumHeight(lines * label.fontMetrics().lineSpacing() + m.top() + m.bottom())
+
+
+def set_readout(label, text: str) -> None:
+    """Show ``text`` in a word-wrapped readout next to a 3-D view, whose height never shrinks.
+
+    A readout that wrapped onto one line more or less than before resized the 3-D view beside it:
+    the view jumped under the pointer and rendered again (its whole cloud: 35 ms at 1M frames in
+    software GL) on every click and hover. The label keeps the tallest height it has needed.
+    """
+    label.setText(text)
+    need = label.heightForWidth(label.width()) if label.width() > 0 else label.sizeHint().height()
+    if need > label.minimumHeight():
+        label.setMinimumHeight(need)
 
 
 def make_plotter(parent):
@@ -92,13 +111,17 @@ def close_plotter(plotter) -> None:
 class RenderScheduler:
     """Coalesce render requests: many state events in one pass give one render.
 
-    ``request()`` schedules one repaint of the plotter's widget on the next turn of the
-    Qt event loop. The widget's ``paintGL`` renders the scene exactly once (calling
-    ``plotter.render()`` instead would render twice: once into VTK's framebuffer, and
-    again in the ``paintGL`` its frame event schedules), and Qt composes every widget
-    painted in the same turn into one window update. ``request(min_interval_s=...)``
-    throttles: the render waits until that long after the previous one (the manifold
-    view follows playback this way while the lip view renders every frame).
+    ``request()`` marks the plotter's widget dirty at once (``update()``), so its
+    ``paintGL`` joins the next paint of the window: the scene is rendered exactly once
+    (calling ``plotter.render()`` instead would render twice: once into VTK's framebuffer,
+    and again in the ``paintGL`` its frame event schedules), and Qt composes it with every
+    other widget changed in the same pass into one window update (marking it dirty from a
+    timer instead let the other widgets' paint be composed first, then the view's: two
+    compositions, ~20 ms each in software GL). The request stays pending until the end of
+    the pass (a zero-time timer), so many state events in one pass count one render.
+    ``request(min_interval_s=...)`` throttles: the render waits until that long after the
+    previous one (the manifold view follows playback this way while the lip view renders
+    every frame).
     ``flush(sync=True)`` renders and composes now (always: a ``repaint()`` is deferred by
     Qt when the window was composed less than a screen refresh before).
 
@@ -121,6 +144,7 @@ class RenderScheduler:
         self.last_flush = 0.0
         self.last_duration = 0.0
         self._sync_next = False
+        self._marked = False  # the pending request has marked the widget dirty (see _mark)
         self._timer = QtCore.QTimer()
         # precise: a coarse timer (Qt's default) may fire up to 5 % of its interval early,
         # 25 ms of a 0.5-s throttle, and so render sooner than ``min_interval_s``
@@ -144,11 +168,26 @@ class RenderScheduler:
         if self.pending:
             if min_interval_s <= 0 and self._sync_next:
                 self._sync_next = False
-                self._timer.start(0)  # an unthrottled request overtakes a throttled one
+                self._mark()  # an unthrottled request overtakes a throttled one
             return
         self.pending = True
         self._sync_next = min_interval_s > 0
-        self._timer.start(wait_ms)
+        if self._sync_next:
+            self._timer.start(wait_ms)
+        else:
+            self._mark()
+
+    def _mark(self) -> None:
+        """Mark the widget dirty now (it paints with the window's next update); the request is done
+        when the pass ends."""
+        import time
+
+        self._marked = True
+        self.n_renders += 1
+        self.last_flush = time.perf_counter()
+        if not getattr(self.plotter, "_lipspace_closed", False):
+            self.plotter.interactor.update()
+        self._timer.start(0)
 
     def flush(self, *, sync: bool = False) -> None:
         """Render now if a request is pending (``sync``: paint and compose before returning)."""
@@ -156,13 +195,15 @@ class RenderScheduler:
 
         if not self.pending:
             return
+        marked, self._marked = self._marked, False
         self.pending = False
         self._sync_next = False
         self._timer.stop()
-        if getattr(self.plotter, "_lipspace_closed", False):
-            return
-        self.n_renders += 1
-        self.last_flush = time.perf_counter()
+        if getattr(self.plotter, "_lipspace_closed", False) or (marked and not sync):
+            return  # marked: the widget is dirty already and paints with the window
+        if not marked:
+            self.n_renders += 1
+            self.last_flush = time.perf_counter()
         widget = self.plotter.interactor
         if sync:
             from PySide6 import QtCore
@@ -178,7 +219,7 @@ class RenderScheduler:
 
     def stop(self) -> None:
         self._timer.stop()
-        self.pending = False
+        self.pending = self._marked = False
 
 
 #: fraction of a slot a readout held by playback frames waits past the slot's start for a frame

@@ -30,7 +30,9 @@ from app.views._common import (
     connect_all,
     disconnect_all,
     make_plotter,
+    reserve_lines,
     set_camera,
+    set_readout,
 )
 from app.views.flow_layout import FlowLayout
 
@@ -143,6 +145,7 @@ class ManifoldView(QtWidgets.QWidget):
             bar.addWidget(box)
         for label in (self.info, self.hover_label):  # long readouts wrap instead of widening the view
             label.setWordWrap(True)
+            reserve_lines(label, 2)  # and keep their height (set_readout): the 3-D view above keeps its size
         self.plotter = make_plotter(self)
         self.renderer = RenderScheduler(self.plotter)
         lay = QtWidgets.QVBoxLayout(self)
@@ -500,13 +503,13 @@ class ManifoldView(QtWidgets.QWidget):
         if s.target is not None:
             parts.append(f"target {s.target}: " + (f"{len(s.path) - 1} hops" if s.path is not None
                                                   else "unreachable"))
-        self.info.setText("; ".join(parts) if parts else "Click a point to select its state "
-                          "(Shift-click or tick Path for a path to a second state)")
+        set_readout(self.info, "; ".join(parts) if parts else "Click a point to select its state "
+                    "(Shift-click or tick Path for a path to a second state)")
 
     def _update_hover(self):
         s = self.state
-        self.hover_label.setText("" if s.hover is None or s.manifold is None else
-                                 "under the pointer: " + hover_text(s.manifold, s, s.hover))
+        set_readout(self.hover_label, "" if s.hover is None or s.manifold is None else
+                    "under the pointer: " + hover_text(s.manifold, s, s.hover))
 
     def _on_path(self, render=True):
         if "path" not in self.handles:

@@ -157,6 +157,60 @@ def test_one_click_recolours_once_renders_once_and_keeps_the_actors(win, qapp, a
     assert np.isfinite(points.values).any()
 
 
+def test_a_render_request_joins_the_window_paint_of_its_pass(win, qapp):
+    """A view asking for a render marks its widget dirty at once, so it is painted and composed with
+    the other widgets changed in the same pass: marking it from a timer let Qt compose the others
+    first and the view after (two compositions of the window, ~20 ms each in software GL)."""
+    from PySide6 import QtCore
+
+    view = win.manifold_view
+    for _ in range(5):
+        qapp.processEvents()
+    renders = []
+    obs = view.plotter.render_window.AddObserver("EndEvent", lambda *_a: renders.append(1))
+    try:
+        n = view.renderer.n_renders
+        view.renderer.request()
+        win.editor.readout.setText("another widget changed in the same pass")
+        view.renderer.request()  # coalesced
+        assert view.renderer.pending and view.renderer.n_renders == n + 1
+        # only the window's posted paint, no timer: the view is rendered in it
+        QtCore.QCoreApplication.sendPostedEvents(win, int(QtCore.QEvent.Type.UpdateRequest.value))
+        assert len(renders) == 1
+        for _ in range(5):
+            qapp.processEvents()
+        assert not view.renderer.pending and len(renders) == 1 and view.renderer.n_renders == n + 1
+    finally:
+        view.plotter.render_window.RemoveObserver(obs)
+
+
+def test_the_readouts_under_the_3d_view_never_resize_it(win, qapp, app_manifold):
+    """A readout re-wrapping onto more or fewer lines resized the 3-D view above it: the cloud
+    jumped under the pointer and was rendered again on a click or a hover."""
+    from app.views._common import set_readout
+
+    view, s = win.manifold_view, win.state
+    for _ in range(5):
+        qapp.processEvents()
+    size = view.plotter.interactor.size()
+    s.select_frame(int(app_manifold.corpus_.utterances[0].start))
+    s.set_hover(int(app_manifold.corpus_.utterances[0].start) + 1)
+    for _ in range(5):
+        qapp.processEvents()
+    assert view.info.text().startswith("frame") and view.hover_label.text().startswith("under the pointer")
+    assert view.plotter.interactor.size() == size  # two lines are reserved for each readout
+    label = view.info
+    set_readout(label, "a long readout " * 60)  # more lines than reserved: the label grows once ...
+    for _ in range(5):
+        qapp.processEvents()
+    tall, grown = label.minimumHeight(), view.plotter.interactor.size()
+    assert tall > 2 * label.fontMetrics().lineSpacing() and grown.height() < size.height()
+    set_readout(label, "short")  # ... and keeps that height
+    for _ in range(5):
+        qapp.processEvents()
+    assert label.minimumHeight() == tall and view.plotter.interactor.size() == grown
+
+
 def test_playback_shows_the_frame_due_by_the_clock_and_leaves_the_cloud_alone(win, qapp, app_manifold):
     m, s, lv, view = app_manifold, win.state, win.lip_view, win.manifold_view
     u = max(m.corpus_.utterances, key=lambda u: u.stop - u.start)
@@ -517,6 +571,36 @@ def test_clusters_panel_shows_ellipsoids_and_exports_table(win, tmp_path, app_ma
         back = list(csv.DictReader(fh))
     assert [r["phone"] for r in back] == [r["phone"] for r in rows]
     assert [int(r["count"]) for r in back] == counts
+
+
+def test_ticking_a_phone_redraws_only_the_swatches_that_change(win, monkeypatch):
+    """Each new icon makes the table re-measure its columns (~3 ms a row): a toggle that
+    set every row's icon cost 120 ms, more than the ellipsoid's render."""
+    from PySide6 import QtCore
+
+    import app.views.clusters_panel as cp
+    from app.models.colouring import ellipsoid_colors, phone_palette
+
+    panel, s = win.clusters, win.state
+    made = []
+    real = cp._swatch
+    monkeypatch.setattr(cp, "_swatch", lambda rgb: (made.append(tuple(rgb)), real(rgb))[1])
+    items = {panel.table.item(i, 0).text(): panel.table.item(i, 0) for i in range(panel.table.rowCount())}
+    a, b = [r["phone"] for r in panel.rows[:2]]
+    items[a].setCheckState(QtCore.Qt.CheckState.Checked)
+    assert s.visible_phones == {a} and made == [tuple(ellipsoid_colors({a})[a])]
+    made.clear()
+    items[b].setCheckState(QtCore.Qt.CheckState.Checked)
+    ell = ellipsoid_colors({a, b})
+    assert s.visible_phones == {a, b}
+    assert set(made) <= {tuple(ell[a]), tuple(ell[b])} and tuple(ell[b]) in made and len(made) <= 2
+    made.clear()
+    panel.none_btn.click()
+    palette = phone_palette(s)
+    assert sorted(made) == sorted([tuple(palette[a]), tuple(palette[b])])  # back to the phone colours
+    shown = {ph: it.data(cp._SWATCH_ROLE) for ph, it in items.items() if ph in palette}
+    assert shown == {ph: cp.QtGui.QColor.fromRgbF(*map(float, palette[ph])).name() for ph in shown}
+    assert all(it.checkState() == QtCore.Qt.CheckState.Unchecked for it in items.values())
 
 
 def test_worker_shows_engine_warnings_in_the_status_bar(win, qtbot):
