@@ -288,7 +288,9 @@ class ShapeSpace(BaseEstimator):
             settled, previous = _range_settled(Bt, k, float(self.variance), tol, previous)
             if settled:  # an iteration no longer moves the kept components
                 break
-            # the C x r basis: small, in-process, one BLAS thread; the N x r one by the products
+            # the C x r basis: small, in-process, one BLAS thread; the N x r one by the products.
+            # The old N x r Q goes first: with it, three N x r matrices would be held at once
+            del Q
             Q = products.orthonormal(products.times(orthonormal_basis(Bt), mean32))
             it += 1
             step += 1

@@ -8,10 +8,13 @@
   travels once to each worker, every task reads its own block file;
 * the shape space PCA over F: F is stored on disk as one memory-mapped ``.npy`` file
   per block of frames (the corpus's own blocks, or :func:`store_frame_blocks` for a
-  corpus in memory) and every worker reads its own blocks, speaker-normalised inside
-  the task (:func:`open_frame_blocks`); the randomized range finder's tall products
-  ``F X`` stay on the workers (``persist``), only thin ``C x r`` products come back;
-  F^x (N x m) is gathered at the end;
+  corpus in memory); every task reads one block, speaker-normalised, and multiplies it
+  in the same task (``F[a:b] X``, ``F[a:b]^T Y[a:b]``), so no block of F is ever held
+  as a task's result and a worker's memory is a block or two plus the thin products.
+  The randomized range finder's tall products ``F X`` (N x r, float32) stay on the
+  workers, one future per block; only ``C x r`` and ``r x r`` products come back,
+  summed in block order; F^x (N x m) is gathered at the end. (:func:`open_frame_blocks`
+  gives F as a dask array, for use outside the build);
 * the embedding's products with the distance matrix D (distances to all frames or to
   the landmarks), one task per block of rows of D, each formed on a worker and
   dropped there; G (N x 2m) is scattered once, the thin (N x r) products come back;
@@ -62,7 +65,9 @@ def open_frame_blocks(frames):
     """A dask array (N, C) float32 over block files: ``frames`` is an
     :class:`engine.recordings.frame_blocks.BlockFrames` (read through its speaker normalisation, if
     any) or a list of block file paths. Each block is read by the worker that computes
-    it (nothing passes through the client)."""
+    it (nothing passes through the client). Each block is a task's result, held until
+    every task using it is done; the build's shape space does not use it (its tasks
+    read a block and multiply it in one go)."""
     import dask
     import dask.array as da
 
@@ -94,31 +99,115 @@ def _dist_t_times(Gb, cols, cols_sq, Qb, squared):
     return pairwise_distance_block(Gb, cols, cols_sq, squared=squared).T @ Qb
 
 
-def _orthonormal_columns(Y, passes: int = 2):
-    """An orthonormal basis of the columns of a tall dask array Y (N, r), left on the workers.
-
-    SVQB (Stathopoulos & Wu 2002), twice: the r x r Gram matrix Y^T Y is the only thing
-    brought back; ``Y V diag(w)^-1/2`` stays distributed. Used instead of dask's
-    tall-skinny QR, whose many small LAPACK calls took ~2 s for 4,500 x 110 on two
-    shared cores (the Gram pass: one GEMM per block). Directions with ``w`` below
-    1e-14 of the largest are kept at that floor, not dropped (the width r never changes).
-    """
-    for _ in range(passes):
-        Y64 = Y.astype(np.float64)
-        gram = (Y64.T @ Y64).compute()
-        w, V = np.linalg.eigh(0.5 * (gram + gram.T))
-        w = np.maximum(w, max(float(w.max()), 1e-300) * 1e-14)
-        Y = (Y64 @ (V / np.sqrt(w))).persist()
-    return Y
+def _block_task(fn, frames, a, b, *args):
+    """``fn(F[a:b], *args)``: the block read and used in one task; only ``fn``'s result is kept."""
+    return fn(frames.rows(a, b), *args)
 
 
-def _centred_sumsq(block, mean32, rows: int = 1024):
-    """Sum of squares of ``block - mean32`` (float64 sums of float32 differences), as (1,)."""
+def _rows_sum(block):
+    return block.sum(axis=0, dtype=np.float64)
+
+
+def _rows_times(block, X, mx):
+    """``(F[a:b] - 1 mu^T) X`` from the block, X (C, r) and ``mu^T X`` (r,): (b - a, r) float32."""
+    return block @ X - mx
+
+
+def _rows_t_times(block, Yb):
+    """``F[a:b]^T Y[a:b]`` (C, r; a float32 GEMM) and the column sums of ``Y[a:b]`` (r,), as float64."""
+    return (block.T @ Yb).astype(np.float64), Yb.sum(axis=0, dtype=np.float64)
+
+
+def _rows_project(block, mean, components):
+    """F^x of the block: ``(F[a:b] - mean) components^T``."""
+    return (block - mean) @ components.T
+
+
+def _centred_sumsq(block, mean32, rows: int = 1024) -> float:
+    """Sum of squares of ``block - mean32`` (float64 sums of float32 differences)."""
     total = 0.0
     for s in range(0, block.shape[0], rows):
         d = block[s:s + rows] - mean32
         total += float(np.einsum("ij,ij->", d, d, dtype=np.float64))
-    return np.array([total])
+    return total
+
+
+def _rotated(Yb, Ws):
+    """A block of Y in float64 times every r x r matrix of ``Ws`` (P, r, r) in turn."""
+    y = Yb.astype(np.float64)
+    for W in Ws:
+        y = y @ W
+    return y
+
+
+def _rotated_gram(Yb, Ws):
+    y = _rotated(Yb, Ws)
+    return y.T @ y
+
+
+def _rotated32(Yb, Ws):
+    return _rotated(Yb, Ws).astype(np.float32)
+
+
+def _svqb_weights(gram):
+    """``V diag(w)^-1/2`` of the Gram matrix's eigenpairs; ``w`` below 1e-14 of the largest are
+    kept at that floor, not dropped (the width r never changes)."""
+    w, V = np.linalg.eigh(0.5 * (gram + gram.T))
+    w = np.maximum(w, max(float(w.max()), 1e-300) * 1e-14)
+    return V / np.sqrt(w)
+
+
+def _summed(client, futures, *, window: int = 64):
+    """Sum of the results of ``futures`` (arrays, floats or tuples of them) in their order.
+
+    ``futures`` is an iterable that submits its tasks as it is read (:meth:`_DaskFrameProducts._per_block`,
+    :func:`_map_thin`): at most two windows of tasks are out at once and a window's results
+    are gathered and dropped as the next one runs, so the workers hold a bounded number
+    of partial results whatever the number of blocks.
+    """
+    window = max(int(window), 4 * _total_threads(client))
+    total, pending = None, []
+    for fut in futures:
+        pending.append(fut)
+        if len(pending) == 2 * window:
+            total = _sum_into(total, client.gather(pending[:window]))
+            del pending[:window]
+    return _sum_into(total, client.gather(pending))
+
+
+def _sum_into(total, parts):
+    for part in parts:
+        total = part if total is None else _add(total, part)
+    return total
+
+
+def _total_threads(client) -> int:
+    workers = client.scheduler_info().get("workers", {})
+    return sum(int(w.get("nthreads", 0)) for w in workers.values())
+
+
+def _orthonormal_columns(client, Y, passes: int = 2) -> list:
+    """An orthonormal basis of the columns of a tall Y (N, r) held on the workers as one future per block.
+
+    SVQB (Stathopoulos & Wu 2002), ``passes`` times: the r x r Gram matrix is the only thing
+    brought back. A pass's rotated Y is not stored: the next pass's Gram task rotates its
+    block again (``Y W_1 ... W_p``, float64), and only the last rotation is kept, as float32
+    (the range finder's next GEMM takes float32), so that the workers hold at most two thin
+    N x r float32 matrices (Y and the basis), never float64 ones. Used instead of dask's
+    tall-skinny QR, whose many small LAPACK calls took ~2 s for 4,500 x 110 on two shared
+    cores (the Gram pass: one GEMM per block).
+    """
+    Ws = []  # the rotations W_1, ..., W_p so far
+    for _ in range(passes):
+        Ws.append(_svqb_weights(_summed(client, _map_thin(client, _rotated_gram, Y, np.asarray(Ws)))))
+    return list(_map_thin(client, _rotated32, Y, np.stack(Ws)))
+
+
+def _map_thin(client, fn, Y, shared):
+    """Futures of ``fn(Y[a:b], shared)``, one task per block's future of Y (submitted as they are
+    read), ``shared`` scattered once."""
+    shared = client.scatter(shared, broadcast=True, hash=False)
+    return (client.submit(fn, yb, shared, pure=False) for yb in Y)
 
 
 def _add(a, b):
@@ -180,40 +269,57 @@ def _assign_block(centroids, Yb):
 
 class _DaskFrameProducts:
     """The range finder's products of the centred frames (:class:`engine.manifold.shape.FrameProducts`'s
-    interface) on the Dask workers: F read block-wise where it is stored, the thin N x r
-    matrices persisted there, only C x r results and r x r Gram matrices brought back."""
+    interface) on the Dask workers.
+
+    Every task reads one block of F and multiplies it (``F[a:b] X``, ``F[a:b]^T Y[a:b]``,
+    its sums), returning only the thin or small result: no block of F is ever a task's
+    result, so a worker holds the block it is reading, not the blocks its later tasks will
+    need. The thin N x r matrices are lists of futures, one per block, left on the
+    workers; C x r, r x r and C results are summed on the client in block order.
+    """
 
     def __init__(self, executor, frames):
         self.executor = executor
+        self.client = executor.client
         self.frames = frames
-        self.F = open_frame_blocks(frames)
-        self.shape = tuple(self.F.shape)
+        self.shape = tuple(frames.shape)
+        self._frames = self.client.scatter(frames, broadcast=True, hash=False)
+
+    def _per_block(self, fn, *shared, thin=None):
+        """Futures of ``fn(F[a:b], *shared)`` (``thin``: and that block's future of an N x r matrix),
+        one task per block, in block order, each submitted as it is read. ``shared`` are
+        scattered once."""
+        shared = [self.client.scatter(x, broadcast=True, hash=False) for x in shared]
+        bounds = self.frames.block_bounds
+        own = [()] * len(bounds) if thin is None else [(yb,) for yb in thin]
+        return (self.client.submit(_block_task, fn, self._frames, a, b, *shared, *yb, pure=False)
+                for (a, b), yb in zip(bounds, own))
 
     def mean(self) -> np.ndarray:
-        mean = self.F.sum(axis=0, dtype=np.float64).compute() / self.shape[0]
+        mean = _summed(self.client, self._per_block(_rows_sum)) / self.shape[0]
         if not np.isfinite(mean).all():  # NaN/inf somewhere: name the first frame, as in-process
             bad = [i for i in self.executor.map_frame_blocks(_first_nonfinite, self.frames) if i >= 0]
             raise ValueError(f"frame {bad[0] if bad else '?'} holds NaN or inf; clean the corpus before fitting")
         return mean
 
-    def times(self, X, mean32):  # (F - 1 mu^T) X, left on the workers
+    def times(self, X, mean32) -> list:  # (F - 1 mu^T) X, left on the workers
         X = X.astype(np.float32)
-        return (self.F @ X - mean32 @ X).persist()
+        return list(self._per_block(_rows_times, X, mean32 @ X))
 
     def t_times(self, Y, mean32) -> np.ndarray:  # (F - 1 mu^T)^T Y, thin, brought back; float32 GEMMs
-        import dask
+        out, ysum = _summed(self.client, self._per_block(_rows_t_times, thin=Y))
+        return (out - np.outer(mean32, ysum)).astype(np.float32)
 
-        Y = Y.astype(np.float32)
-        out, ysum = dask.compute(self.F.T @ Y, Y.sum(axis=0))
-        return out - np.outer(mean32, ysum)
-
-    def orthonormal(self, Y):
-        return _orthonormal_columns(Y.rechunk({1: -1}))
+    def orthonormal(self, Y) -> list:
+        return _orthonormal_columns(self.client, Y)
 
     def centred_sumsq(self, mean32) -> float:
-        F = self.F
-        return float(F.map_blocks(_centred_sumsq, mean32, chunks=((1,) * F.numblocks[0],), drop_axis=1,
-                                  dtype=np.float64).sum().compute())
+        return float(_summed(self.client, self._per_block(_centred_sumsq, mean32)))
+
+    def project(self, mean, components) -> np.ndarray:
+        """F^x = (F - mean) components^T (N, m), gathered block by block."""
+        parts = self.client.gather(list(self._per_block(_rows_project, mean, components)))
+        return np.concatenate(parts)
 
 
 class DaskExecutor:
@@ -297,12 +403,9 @@ class DaskExecutor:
         """Fit ``shape`` (an unfitted :class:`engine.manifold.shape.ShapeSpace`) on F; return F^x (N, m).
 
         ``ShapeSpace.fit_products``'s range finder (the same random draws, power
-        iterations and early stop) over :class:`_DaskFrameProducts`: F read block-wise by
-        the workers, the thin N x r matrices left on them.
+        iterations and early stop) over :class:`_DaskFrameProducts`: every task reads one
+        block of F and multiplies it, the thin N x r matrices are left on the workers.
         """
-        import dask
-        import dask.array as da
-
         if isinstance(frames, BlockFrames):  # stored in blocks already: the workers read them in place
             shape.validate_frames(frames, finite=False)  # finiteness: checked by the workers below
         else:  # in memory: written out once as blocks for the workers
@@ -310,10 +413,7 @@ class DaskExecutor:
                                                                block_frames=self.block_frames))
         products = _DaskFrameProducts(self, frames)
         shape.fit_products(products, progress=progress)
-        F = products.F
-        Fx = da.map_blocks(lambda b, m=shape.mean_, c=shape.components_: (b - m) @ c.T, F,
-                           chunks=(F.chunks[0], (shape.n_components_,)), dtype=np.float32)
-        (Fx,) = dask.compute(Fx)
+        Fx = products.project(shape.mean_, shape.components_)
         return np.ascontiguousarray(Fx, dtype=np.float32)
 
     # -------------------------------------------------------------- embedding

@@ -123,3 +123,36 @@ def test_dask_build_states_and_classes_agree(dask_manifold, in_process):
     d, m = dask_manifold, in_process
     assert adjusted_rand_score(m.states_.labels_, d.states_.labels_) > STATE_ARI_MIN
     assert np.mean(d.tangent_.classes_ == m.tangent_.classes_) > CLASS_AGREEMENT_MIN
+
+
+def test_shape_tasks_never_return_a_block_of_frames(executor, dask_cluster, tmp_path):
+    """Every task of the Dask shape space reads its block of F and multiplies it: none returns a block of
+    F, which a worker would hold until every task using it had run (blocks piling up). Largest result
+    seen by the scheduler: a thin block (512 x 30 float32) or a C x r sum, not 512 x 300."""
+    from distributed.diagnostics.plugin import SchedulerPlugin
+
+    from engine.manifold.shape import ShapeSpace
+    from engine.recordings.frame_blocks import BlockFrames, store_frame_blocks
+
+    class LargestResult(SchedulerPlugin):
+        largest = (0, None)
+
+        def transition(self, key, start, finish, *args, **kwargs):
+            if finish == "memory" and kwargs.get("nbytes", 0) > self.largest[0]:
+                self.largest = (kwargs["nbytes"], key)
+
+    rng = np.random.default_rng(1)
+    F = (rng.standard_normal((2048, 8)) @ rng.standard_normal((8, 300)) * 3 + 0.01 *
+         rng.standard_normal((2048, 300)) + 5).astype(np.float32)
+    frames = BlockFrames.from_files(store_frame_blocks(F, tmp_path, block_frames=512))
+    plugin = LargestResult()
+    dask_cluster.scheduler.add_plugin(plugin, name="largest-result")
+    try:
+        Fx = executor.fit_shape(ShapeSpace(max_components=20), frames)
+    finally:
+        dask_cluster.scheduler.remove_plugin(name="largest-result")
+    block_bytes = 512 * F.shape[1] * 4
+    assert 0 < plugin.largest[0] < block_bytes / 2, plugin.largest
+    ref = ShapeSpace(max_components=20).fit(F)
+    assert Fx.shape[1] == ref.n_components_
+    assert _max_angle(Fx, ref.transform(F)) < ANGLE_TOL_DEG
