@@ -458,8 +458,10 @@ class TrajectoryEditor(QtWidgets.QWidget):
     def synthesize(self):
         """Synthesise the current targets with the chosen method in a worker thread."""
         from app.user_messages import plain_errors
-        from app.workers import run_task
+        from app.workers import DIALOG_DELAY_MS, run_task
 
+        if self._runner is not None and self._runner.state == "running":
+            return self._runner  # one synthesis at a time
         if self.targets is None and not self.load():
             return None
         m, tg, method = self.state.manifold, self.targets, self.method
@@ -476,12 +478,18 @@ class TrajectoryEditor(QtWidgets.QWidget):
             progress("synthesising", 1, 1)
             return data, err
 
-        self.synth_btn.setEnabled(False)
-        self.readout.setText(f"synthesising with {method}…")
         self._runner = run_task(plain_errors(task, doing=f"synthesise with {method}"), parent=self,
                                 title="Synthesising", on_done=self._on_synth,
                                 on_error=self._on_synth_error, on_cancel=lambda: self._on_synth_error("cancelled", ""))
+        # most syntheses take a few ms: nothing is repainted before their result (a repaint composes the
+        # window, ~20 ms in software GL); one still running when its dialog opens shows it here too
+        QtCore.QTimer.singleShot(DIALOG_DELAY_MS, self, lambda r=self._runner: self._show_busy(r, method))
         return self._runner
+
+    def _show_busy(self, runner, method: str) -> None:
+        if runner is self._runner and runner.state == "running":
+            self.synth_btn.setEnabled(False)
+            self.readout.setText(f"synthesising with {method}…")
 
     def _on_synth(self, result):
         data, err = result

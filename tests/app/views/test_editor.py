@@ -179,6 +179,41 @@ def test_every_synthesis_warning_is_listed(ed, qtbot, editor_window):
 
 
 @pytest.mark.gui
+def test_a_synthesis_shows_busy_only_when_it_outlasts_the_dialog_delay(ed, qtbot, editor_window, monkeypatch):
+    """A quick synthesis repaints nothing before its result; a slow one disables the button and says
+    so once its dialog opens, and a second Synthesise meanwhile starts nothing."""
+    import threading
+
+    import app.views.trajectory_editor as te
+    from app.workers import DIALOG_DELAY_MS
+
+    ed.set_method("linear")
+    before = ed.readout.text()
+    runner = ed.synthesize()
+    assert ed.synth_btn.isEnabled() and ed.readout.text() == before  # nothing painted before the result
+    qtbot.waitUntil(lambda: runner.state != "running", timeout=30000)
+    qtbot.wait(DIALOG_DELAY_MS + 100)
+    assert runner.state == "done" and ed.synth_btn.isEnabled() and "synthesising" not in ed.readout.text()
+
+    release, real = threading.Event(), te.synthesize_targets
+
+    def slow(*args, **kwargs):
+        release.wait(20)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(te, "synthesize_targets", slow)
+    try:
+        runner = ed.synthesize()
+        assert ed.synthesize() is runner  # one at a time
+        qtbot.waitUntil(lambda: not ed.synth_btn.isEnabled(), timeout=DIALOG_DELAY_MS + 5000)
+        assert ed.readout.text() == "synthesising with linear…" and runner.state == "running"
+    finally:
+        release.set()
+    qtbot.waitUntil(lambda: runner.state != "running", timeout=30000)
+    assert runner.state == "done" and ed.synth_btn.isEnabled() and "synthesising" not in ed.readout.text()
+
+
+@pytest.mark.gui
 def test_space_plays_and_arrows_step_through_the_state(ed, qtbot, editor_window):
     from PySide6 import QtCore
 
