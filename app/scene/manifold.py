@@ -134,11 +134,13 @@ def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: floa
     return h
 
 
-def add_point_markers(plotter, Y, color, *, point_size: float = 8.0, name: str = "markers") -> Handle:
-    """Plain points of one colour (e.g. a phone's cluster members), not pickable."""
+def add_point_markers(plotter, Y, color, *, point_size: float = 8.0, spheres: bool = True,
+                      name: str = "markers") -> Handle:
+    """Plain points of one colour (e.g. a phone's cluster members), not pickable; ``spheres``: shaded
+    as small spheres, else flat dots (several times cheaper per frame in software OpenGL)."""
     mesh = pv.PolyData(_xyz(Y, "points", 1).astype(np.float32))
-    actor = plotter.add_mesh(mesh, color=color, point_size=point_size, render_points_as_spheres=True, name=name,
-                             pickable=False, reset_camera=False, render=False)
+    actor = plotter.add_mesh(mesh, color=color, point_size=point_size, render_points_as_spheres=bool(spheres),
+                             name=name, pickable=False, reset_camera=False, render=False)
     return Handle(plotter, mesh, actor)
 
 

@@ -603,6 +603,20 @@ def test_ticking_a_phone_redraws_only_the_swatches_that_change(win, monkeypatch)
     assert all(it.checkState() == QtCore.Qt.CheckState.Unchecked for it in items.values())
 
 
+def test_a_large_cluster_s_members_are_flat_dots(win, monkeypatch):
+    """Members shaded as spheres cost 50-70 ms of a render at 12,759 points in software GL: above the
+    view's sphere limit they are drawn as flat dots, as the cloud is."""
+    view, s = win.manifold_view, win.state
+    a, b = [r["phone"] for r in win.clusters.rows if r["phone"] not in view.members][:2]  # never shown yet
+    s.set_visible_phones({a})
+    assert view.members[a].actor.prop.render_points_as_spheres  # a few hundred members: spheres
+    n_b = len(s.clusters.members(b))
+    monkeypatch.setattr(view, "SPHERE_POINTS_MAX", n_b - 1)
+    s.set_visible_phones({a, b})
+    assert view.members[b].mesh.n_points == n_b and not view.members[b].actor.prop.render_points_as_spheres
+    s.set_visible_phones(())
+
+
 def test_worker_shows_engine_warnings_in_the_status_bar(win, qtbot):
     import warnings
 
