@@ -4,7 +4,8 @@ from __future__ import annotations
 import math
 from contextlib import contextmanager
 
-__all__ = ["blocked", "reserve_lines", "set_readout", "make_plotter", "camera_of", "set_camera", "close_plotter", "connect_all", "disconnect_all",
+__all__ = ["blocked", "reserve_lines", "set_readout", "make_plotter", "camera_of", "set_camera", "close_plotter",
+           "connect_all", "disconnect_all",
            "RenderScheduler", "Throttle", "READOUT_INTERVAL_S", "drawing_frame"]
 
 #: seconds between two repaints of the readouts that follow playback (caption, slider, the

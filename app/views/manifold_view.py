@@ -575,8 +575,9 @@ class ManifoldView(QtWidgets.QWidget):
                                                                colours[ph], name=f"ellipsoid_{ph}")
             members = Y[self.state.clusters.members(ph), :3]
             small = len(members) <= self.SPHERE_POINTS_MAX
-            self.members[ph] = scene.add_point_markers(self.plotter, members, colours[ph], point_size=7 if small else 4,
-                                                       spheres=small, name=f"members_{ph}")
+            self.members[ph] = scene.add_point_markers(self.plotter, members, colours[ph],
+                                                       point_size=7 if small else 4, spheres=small,
+                                                       name=f"members_{ph}")
         for ph in self.ellipsoids:
             on = ph in want
             self.ellipsoids[ph].set_visible(on)
