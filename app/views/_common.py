@@ -145,7 +145,6 @@ class RenderScheduler:
         self.last_flush = 0.0
         self.last_duration = 0.0
         self._sync_next = False
-        self._marked = False  # the pending request has marked the widget dirty (see _mark)
         self._timer = QtCore.QTimer()
         # precise: a coarse timer (Qt's default) may fire up to 5 % of its interval early,
         # 25 ms of a 0.5-s throttle, and so render sooner than ``min_interval_s``
@@ -183,7 +182,6 @@ class RenderScheduler:
         when the pass ends."""
         import time
 
-        self._marked = True
         self.n_renders += 1
         self.last_flush = time.perf_counter()
         if not getattr(self.plotter, "_lipspace_closed", False):
@@ -196,7 +194,7 @@ class RenderScheduler:
 
         if not self.pending:
             return
-        marked, self._marked = self._marked, False
+        marked = not self._sync_next  # an unthrottled request has marked the widget dirty already (_mark)
         self.pending = False
         self._sync_next = False
         self._timer.stop()
@@ -220,7 +218,7 @@ class RenderScheduler:
 
     def stop(self) -> None:
         self._timer.stop()
-        self.pending = self._marked = False
+        self.pending = False
 
 
 #: fraction of a slot a readout held by playback frames waits past the slot's start for a frame
