@@ -113,13 +113,13 @@ class _DistanceOperator:
         report(self.progress, self.stage, self.passes, 0)
 
     def matmat(self, X, extra=None):
-        """Return D @ X, (N, r) float64.
+        """Return D @ X, (N, r) float64, Fortran-ordered (so it can be orthonormalised in place).
 
         ``extra(D_block)`` returns per-block statistics (a float, an ndarray or a tuple
         of them); their sum over blocks is left in ``last_stats``.
         """
         X32 = np.asarray(X, dtype=np.float32)
-        out = np.empty((self.G.shape[0], X32.shape[1]), dtype=np.float64)
+        out = np.empty((self.G.shape[0], X32.shape[1]), dtype=np.float64, order="F")  # QR'd in place
         stats = [None]
 
         def one(sl):
@@ -145,6 +145,22 @@ class _DistanceOperator:
 
         self._map(lambda sl: self.block_rows(sl).T @ Q32[sl], reduce)
         return acc
+
+
+def _largest_signs(Q, W, *, block: int = 1 << 16) -> np.ndarray:
+    """Per column of U = Q W (Q (N, r), W (r, k)): the sign of its entry of largest magnitude (the first
+    such row), 0 read as +1; U is formed ``block`` rows at a time."""
+    best = np.full(W.shape[1], -1.0)
+    sign = np.ones(W.shape[1])
+    for s in range(0, Q.shape[0], block):
+        U = Q[s:s + block] @ W
+        i = np.argmax(np.abs(U), axis=0)
+        v = U[i, np.arange(W.shape[1])]
+        better = np.abs(v) > best  # strictly: ties keep the earlier row, as one argmax over all rows does
+        best[better] = np.abs(v[better])
+        sign[better] = np.sign(v[better])
+    sign[sign == 0] = 1
+    return sign
 
 
 def _add(a, b):
@@ -243,7 +259,7 @@ class Embedding(BaseEstimator):
             Fy, comps, center, ev, total = self._fit_pca(op, N, L, k, r, rng)
         else:
             Fy, comps, center, ev, total = self._fit_mds(op, N, L, k, r, rng, lm)
-        self.embedding_ = Fy.astype(np.float32)
+        self.embedding_ = np.ascontiguousarray(Fy, dtype=np.float32)
         self.components_ = comps.astype(np.float32)
         self.center_ = center.astype(np.float32)
         self.explained_variance_ = ev
@@ -262,12 +278,15 @@ class Embedding(BaseEstimator):
             return float(np.einsum("ij,ij->", Db, Db, dtype=np.float64)), Db.sum(axis=0, dtype=np.float64)
 
         # first pass: D @ Omega, and the sum of squares and column sums of D
+        # every N x r array is centred in place and orthonormalised in place, and none outlives
+        # its use: at ten million frames each is 2 GB and the client holds at most two
         Om = rng.standard_normal((L, r))
         Y = op.matmat(Om, extra=acc)
         sumsq, colsum = op.last_stats
         c = colsum / N
-        Y -= np.outer(np.ones(N), c @ Om)
-        Q = orthonormal_basis(Y)
+        Y -= (c @ Om)[None, :]
+        Q = orthonormal_basis(Y, overwrite=True)
+        del Y
 
         def At(Qm):  # A^T Q = D^T Q - c 1^T Q
             if L == N:  # D symmetric
@@ -276,20 +295,21 @@ class Embedding(BaseEstimator):
                 out = op.rmatmat(Qm)
             return out - np.outer(c, Qm.sum(axis=0))
 
-        def A(Xm):
-            return op.matmat(Xm) - np.outer(np.ones(N), c @ Xm)
+        def A(Xm):  # A X = D X - 1 c^T X, a new (N, r) Fortran-ordered array
+            out = op.matmat(Xm)
+            out -= (c @ Xm)[None, :]
+            return out
 
         for _ in range(int(self.n_iter)):
             Z = orthonormal_basis(At(Q))
-            Q = orthonormal_basis(A(Z))
+            del Q
+            Q = orthonormal_basis(A(Z), overwrite=True)
         B = At(Q).T  # (r, L)
         Ub, s, Vt = thin_svd(B)
         s, Vt = s[:k], Vt[:k]
-        U = Q @ Ub[:, :k]
-        # deterministic signs: largest |score| positive
-        big = np.argmax(np.abs(U), axis=0)
-        sign = np.sign(U[big, np.arange(k)])
-        sign[sign == 0] = 1
+        # deterministic signs: largest |score| of U = Q Ub positive, U read a block of rows at a time
+        sign = _largest_signs(Q, Ub[:, :k])
+        del Q
         Vt *= sign[:, None]
         # F^y as the rows of A projected on the axes (one more pass): the same numbers as the
         # out-of-sample projection of the training frames, also in the weakest axes, where the

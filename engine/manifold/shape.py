@@ -81,17 +81,21 @@ def _range_settled(Bt, k: int, variance: float, tol: float, previous):
     return previous is not None and _moved_degrees(previous, estimate) < tol, estimate
 
 
-def orthonormal_basis(M):
+def orthonormal_basis(M, *, overwrite=False):
     """Q of the reduced QR decomposition of ``M`` (n, r), same dtype, on one BLAS thread.
 
     scipy's LAPACK wrapper releases the GIL while it works; ``numpy.linalg.qr`` holds it
     (seconds at 28,800 rows), which froze the explorer's window while a worker thread
     fitted the shape space.
+
+    ``overwrite=True`` lets LAPACK factorise a Fortran-ordered ``M`` in place (``M`` is
+    destroyed, Q may share its memory): the same numbers without the two n x r copies,
+    which at ten million rows are gigabytes each.
     """
     from scipy.linalg import qr
 
     with one_blas_thread():  # small factorisations; the GEMMs over F keep every thread
-        return qr(M, mode="economic", check_finite=False)[0]
+        return qr(M, mode="economic", check_finite=False, overwrite_a=overwrite)[0]
 
 
 def thin_svd(B):

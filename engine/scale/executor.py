@@ -46,6 +46,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
+from collections import deque
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +57,9 @@ from engine.progress import ProgressFn, report
 from engine.recordings.frame_blocks import DEFAULT_BLOCK_FRAMES, BlockFrames, block_slices, store_frame_blocks
 
 __all__ = ["DaskExecutor", "open_frame_blocks"]
+
+#: rows of G per embedding task: a whole number of the in-process blocks of D
+_TASK_ROWS = 1 << 16
 
 def _frame_rows(frames, a, b):
     return frames.rows(a, b)
@@ -90,13 +94,25 @@ def _frames_task(fn, frames, a, b):
     return fn(frames.rows(a, b), a, b)
 
 
-def _dist_times(Gb, cols, cols_sq, X, squared, extra):
-    Db = pairwise_distance_block(Gb, cols, cols_sq, squared=squared)
-    return Db @ X, (extra(Db) if extra is not None else None)
+def _dist_times(Gb, cols, cols_sq, X, squared, extra, sub):
+    """(D[rows] X, the sum of ``extra`` over its sub-blocks) for a task's rows of G, D formed ``sub`` rows at a time."""
+    out = np.empty((Gb.shape[0], X.shape[1]), dtype=np.float32)
+    stats = None
+    for a in range(0, Gb.shape[0], sub):
+        Db = pairwise_distance_block(Gb[a:a + sub], cols, cols_sq, squared=squared)
+        np.matmul(Db, X, out=out[a:a + sub])
+        if extra is not None:
+            st = extra(Db)
+            stats = st if stats is None else _add(stats, st)
+    return out, stats
 
 
-def _dist_t_times(Gb, cols, cols_sq, Qb, squared):
-    return pairwise_distance_block(Gb, cols, cols_sq, squared=squared).T @ Qb
+def _dist_t_times(Gb, cols, cols_sq, Qb, squared, sub):
+    """D[rows]^T Q[rows] for a task's rows of G, float64, D formed ``sub`` rows at a time."""
+    acc = np.zeros((cols.shape[0], Qb.shape[1]), dtype=np.float64)
+    for a in range(0, Gb.shape[0], sub):
+        acc += pairwise_distance_block(Gb[a:a + sub], cols, cols_sq, squared=squared).T @ Qb[a:a + sub]
+    return acc
 
 
 def _block_task(fn, frames, a, b, *args):
@@ -217,7 +233,14 @@ def _add(a, b):
 
 
 class _DaskDistanceOperator:
-    """The interface of ``engine.manifold.embedding._DistanceOperator`` with one Dask task per block of rows."""
+    """The interface of ``engine.manifold.embedding._DistanceOperator`` with one Dask task per block of rows.
+
+    A task takes :data:`_TASK_ROWS` rows of G (a whole number of the in-process blocks) and
+    forms its rows of D one in-process block at a time, so at ten million frames a pass is
+    ~150 tasks, not ~10,000. Results are written into the output (or summed) in block
+    order as they arrive, with at most two windows of tasks out: the client never holds a
+    pass's results twice.
+    """
 
     def __init__(self, G, cols, *, squared, block, progress, stage, client):
         self.G, self.cols = G, cols
@@ -225,7 +248,8 @@ class _DaskDistanceOperator:
         self.progress, self.stage = progress, stage
         self.passes = 0
         self.client = client
-        self.slices = block_slices(G.shape[0], block)
+        self.window = max(8, 4 * _total_threads(client))
+        self.slices = block_slices(G.shape[0], max(block, _TASK_ROWS // block * block))
         self._blocks = [client.scatter(np.ascontiguousarray(G[sl]), hash=False) for sl in self.slices]
         self._cols = client.scatter(np.ascontiguousarray(cols, dtype=np.float32), broadcast=True, hash=False)
         self._cols_sq = client.scatter(np.einsum("ij,ij->i", cols, cols), broadcast=True, hash=False)
@@ -234,13 +258,28 @@ class _DaskDistanceOperator:
         self.passes += 1
         report(self.progress, self.stage, self.passes, 0)
 
+    def _in_order(self, submit):
+        """``(slice, result)`` of ``submit(i)`` for every block i, in block order, ``window`` tasks ahead."""
+        pending = deque()
+        for i, sl in enumerate(self.slices):
+            pending.append((sl, submit(i)))
+            if len(pending) > self.window:
+                done, fut = pending.popleft()
+                yield done, fut.result()
+        while pending:
+            done, fut = pending.popleft()
+            yield done, fut.result()
+
     def matmat(self, X, extra=None):
         X32 = self.client.scatter(np.asarray(X, dtype=np.float32), broadcast=True, hash=False)
-        futs = [self.client.submit(_dist_times, b, self._cols, self._cols_sq, X32, self.squared, extra,
-                                   pure=False) for b in self._blocks]
-        out = np.empty((self.G.shape[0], np.shape(X)[1]), dtype=np.float64)
+        out = np.empty((self.G.shape[0], np.shape(X)[1]), dtype=np.float64, order="F")  # QR'd in place
         stats = None
-        for sl, (prod, st) in zip(self.slices, self.client.gather(futs)):  # summed in block order
+
+        def submit(i):
+            return self.client.submit(_dist_times, self._blocks[i], self._cols, self._cols_sq, X32, self.squared,
+                                      extra, self.block, pure=False)
+
+        for sl, (prod, st) in self._in_order(submit):  # summed in block order
             out[sl] = prod
             if st is not None:
                 stats = st if stats is None else _add(stats, st)
@@ -249,11 +288,14 @@ class _DaskDistanceOperator:
         return out
 
     def rmatmat(self, Q):
-        Q32 = np.asarray(Q, dtype=np.float32)
-        futs = [self.client.submit(_dist_t_times, b, self._cols, self._cols_sq, Q32[sl], self.squared, pure=False)
-                for b, sl in zip(self._blocks, self.slices)]
-        acc = np.zeros((self.cols.shape[0], Q32.shape[1]), dtype=np.float64)
-        for part in self.client.gather(futs):
+        acc = np.zeros((self.cols.shape[0], np.shape(Q)[1]), dtype=np.float64)
+
+        def submit(i):
+            Qb = np.ascontiguousarray(Q[self.slices[i]], dtype=np.float32)
+            return self.client.submit(_dist_t_times, self._blocks[i], self._cols, self._cols_sq, Qb, self.squared,
+                                      self.block, pure=False)
+
+        for _, part in self._in_order(submit):
             acc += part
         self._done()
         return acc
