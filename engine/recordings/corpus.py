@@ -95,6 +95,8 @@ class Utterance:
 
 
 def _as_phones(phones) -> tuple[PhoneInterval, ...]:
+    if type(phones) is tuple and all(type(p) is PhoneInterval for p in phones):
+        return phones  # already phones (a file's, built by PhoneInterval._many): kept, not rebuilt
     out = []
     for p in phones:
         if isinstance(p, PhoneInterval):
@@ -162,7 +164,8 @@ class Corpus:
     def __post_init__(self):
         if not isinstance(self.frames, BlockFrames):  # frames stored in blocks stay there (engine.recordings.frame_blocks)
             self.frames = np.asarray(self.frames, dtype=np.float32)
-        self.utterances = [replace(u, phones=_as_phones(u.phones)) for u in self.utterances]
+        self.utterances = [u if (ph := _as_phones(u.phones)) is u.phones else replace(u, phones=ph)
+                           for u in self.utterances]
         self.rate = float(self.rate)
         if self.faces is not None:
             self.faces = np.asarray(self.faces, dtype=np.int64)
