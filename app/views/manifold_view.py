@@ -20,6 +20,7 @@ from app import scene
 from app.models.colouring import CLASS_LABELS, ellipsoid_colors, point_colors
 from app.models.picking import CloudLocator, handle_pick, hover_text
 from app.models.state import COLOR_MODES, HEMISPHERES
+from app.scene import legend as scene_legend
 from app.scene.colour_bar import add_scalar_bar, configure_scalar_bar
 from app.scene.projection import project, standard_camera, view_transform
 from app.views._common import (
@@ -79,6 +80,7 @@ class ManifoldView(QtWidgets.QWidget):
         self.locator = None
         self.coloring = None
         self._legend_mode = None
+        self.legend = None  # the phone legend's vtkLegendBoxActor while one is shown
 
         self.color_box = QtWidgets.QComboBox()
         for m in COLOR_MODES:
@@ -201,7 +203,7 @@ class ManifoldView(QtWidgets.QWidget):
         p.clear_actors()
         scene.overlay_renderer(p).RemoveAllViewProps()
         self.handles, self.ellipsoids, self.members = {}, {}, {}
-        self._legend_mode = None
+        self._legend_mode, self.legend = None, None  # cleared with the other actors
         m = self.state.manifold
         if m is None:
             self.renderer.request()
@@ -451,13 +453,12 @@ class ManifoldView(QtWidgets.QWidget):
         self._bar.SetVisibility(c.cmap is not None and self.points_box.isChecked())
         legend = tuple((n, tuple(col)) for n, col in c.legend)
         if legend != self._legend_mode:
-            if self._legend_mode:
-                self.plotter.remove_legend(render=False)
+            if self.legend is not None:
+                scene_legend.remove_legend(self.plotter, self.legend)
+                self.legend = None
             if legend:
-                rows = len(legend)
-                self.plotter.add_legend([[n, col] for n, col in legend], bcolor="white", border=False,
-                                        size=(0.22, min(0.6, 0.035 * rows + 0.02)), loc="lower left",
-                                        face="circle")
+                self.legend = scene_legend.add_legend(self.plotter, legend,
+                                                      size=(0.22, min(0.6, 0.035 * len(legend) + 0.02)))
             self._legend_mode = legend or None
         self._update_info()
         if render:

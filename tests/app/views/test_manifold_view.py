@@ -121,12 +121,21 @@ def test_phone_colouring_has_a_legend_and_a_filter(fresh, qtbot, app_manifold):
     v, s = fresh, fresh.state
     v.color_box.setCurrentIndex(v.color_box.findData("phone"))
     assert v.phone_edit.isEnabled()
-    legend = v.plotter.legend
+    legend = v.legend
     assert legend is not None and legend.GetNumberOfEntries() <= 17
-    v.phone_edit.setText("p b m")
-    v.phone_edit.editingFinished.emit()
+    assert legend in list(v.plotter.actors.values())
+    renders = []
+    obs = v.plotter.render_window.AddObserver("EndEvent", lambda *_a: renders.append(1))
+    try:
+        v.phone_edit.setText("p b m")
+        v.phone_edit.editingFinished.emit()
+        assert renders == []  # the new legend is added without a render of its own: the scheduler renders once
+    finally:
+        v.plotter.render_window.RemoveObserver(obs)
     assert s.phone_filter == {"p", "b", "m"}
-    assert v.plotter.legend.GetNumberOfEntries() == 3
+    assert v.legend is not legend and v.legend.GetNumberOfEntries() == 3
+    assert sorted(v.legend.GetEntryString(i) for i in range(3)) == ["b", "m", "p"]
+    assert legend not in list(v.plotter.actors.values())  # the old box is gone
     s.set_visible_phones(["p"])                                          # ellipsoid shown: points dimmed
     from app.models.colouring import OUTSIDE_RGB
 
