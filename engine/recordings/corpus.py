@@ -320,9 +320,22 @@ class Corpus:
         return np.array([i for i, r in enumerate(self.point_roles) if r == role], dtype=np.int64)
 
     def utterance(self, uid: str) -> Utterance:
-        for u in self.utterances:
-            if u.id == uid:
-                return u
+        """The utterance named ``uid`` (KeyError naming a few known ones if none is).
+
+        Found through an id -> position table kept beside ``utterances`` (a scan of every
+        utterance took milliseconds per lookup at ten million frames); a position whose
+        utterance no longer has that id (the list was changed) rebuilds the table.
+        """
+        table = self.__dict__.get("_positions")
+        for rebuild in (table is None or table[0] is not self.utterances, True):
+            if rebuild:
+                table = (self.utterances, {u.id: i for i, u in enumerate(self.utterances)})
+                self.__dict__["_positions"] = table
+            i = table[1].get(uid)
+            if i is not None and i < len(self.utterances) and self.utterances[i].id == uid:
+                return self.utterances[i]
+            if rebuild:
+                break  # a table just built has no such id
         raise KeyError(f"no utterance {uid!r} in {self.name}; known: {[u.id for u in self.utterances[:5]]}...")
 
     def points(self, i: int) -> np.ndarray:

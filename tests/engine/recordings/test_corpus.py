@@ -73,3 +73,19 @@ def test_subset_keeps_phones_and_reindexes():
     s = c.subset(["b"])
     assert s.n_frames == 10 and s.utterances[0].start == 0
     np.testing.assert_array_equal(s.frames, c.frames[10:])
+
+
+def test_utterance_lookup_follows_changes_to_the_list():
+    from engine.recordings.corpus import Corpus, Utterance
+
+    c = Corpus(frames=np.zeros((30, 6), np.float32), rate=60, dims=3,
+               utterances=[Utterance("a", 0, 10), Utterance("b", 10, 20), Utterance("c", 20, 30)])
+    assert c.utterance("b").start == 10 and c.utterance("c").stop == 30
+    c.utterances[1] = Utterance("z", 10, 20)  # replaced in place: the same list, the same length
+    assert c.utterance("z").start == 10
+    with pytest.raises(KeyError, match="no utterance 'b'"):
+        c.utterance("b")
+    c.utterances = [Utterance("q", 0, 30)]  # a new list
+    assert c.utterance("q").stop == 30
+    with pytest.raises(KeyError, match="no utterance 'a'"):
+        c.utterance("a")
