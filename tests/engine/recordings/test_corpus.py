@@ -76,8 +76,6 @@ def test_subset_keeps_phones_and_reindexes():
 
 
 def test_utterance_lookup_follows_changes_to_the_list():
-    from engine.recordings.corpus import Corpus, Utterance
-
     c = Corpus(frames=np.zeros((30, 6), np.float32), rate=60, dims=3,
                utterances=[Utterance("a", 0, 10), Utterance("b", 10, 20), Utterance("c", 20, 30)])
     assert c.utterance("b").start == 10 and c.utterance("c").stop == 30
