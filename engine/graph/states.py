@@ -34,6 +34,11 @@ __all__ = ["StateGraph", "UnreachableError", "StateGraphConnectivityWarning", "d
 
 #: above this many frames K-means runs as MiniBatchKMeans
 MINIBATCH_ABOVE = 20000
+#: MiniBatchKMeans fits its centroids on a uniform random subset of at most this many frames (every frame
+#: is then assigned): scikit-learn draws each mini-batch with a probability vector over all N frames, so a
+#: step costs O(N) (a quarter of an hour of steps at 10M frames); early stopping takes a few hundred
+#: batches of 4,096, under this many frames in all
+KMEANS_FIT_FRAMES = 1_000_000
 #: default K is about one state per this many frames ...
 FRAMES_PER_STATE = 30
 #: ... bounded to this range
@@ -265,6 +270,9 @@ class StateGraph(BaseEstimator):
             # duplicate frames can leave fewer distinct clusters than K; empty ones are dropped below
             warnings.simplefilter("ignore", ConvergenceWarning)
             if N > MINIBATCH_ABOVE:
+                if N > KMEANS_FIT_FRAMES:  # the same frames for the same random_state
+                    pick = np.random.default_rng(self.random_state).choice(N, KMEANS_FIT_FRAMES, replace=False)
+                    Y, N = Y[np.sort(pick)], KMEANS_FIT_FRAMES
                 bs = int(min(N, self.batch_size))
                 km = MiniBatchKMeans(n_clusters=K, batch_size=bs, n_init=1, random_state=self.random_state,
                                      init_size=int(min(N, max(3 * bs, 2 * K))), max_no_improvement=10,

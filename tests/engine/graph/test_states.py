@@ -219,6 +219,26 @@ def test_minibatch_branch(monkeypatch):
     assert g.n_scc_ == 1 and g.future(m[0])[m[5]] == 5 and g.future(m[5])[m[0]] == 1
 
 
+def test_minibatch_centroids_from_a_subset_every_frame_assigned(monkeypatch):
+    """Above KMEANS_FIT_FRAMES the centroids come from that many frames (the same ones for the same
+    random_state) and every frame still gets the nearest centroid's label."""
+    from sklearn.cluster import MiniBatchKMeans
+
+    monkeypatch.setattr(states_mod, "MINIBATCH_ABOVE", 50)
+    monkeypatch.setattr(states_mod, "KMEANS_FIT_FRAMES", 150)
+    seen = []
+    fit = MiniBatchKMeans.fit
+    monkeypatch.setattr(MiniBatchKMeans, "fit", lambda self, X, *a, **k: (seen.append(len(X)), fit(self, X, *a, **k))[1])
+    utts = [[0, 1, 2, 3, 4, 5, 0, 1, 2]] * 40  # 360 frames of 6 handmade states
+    g, m = _fit_handmade(utts, 6, batch_size=48)
+    assert seen == [150]
+    Fy, bounds, _ = _handmade(utts, 6)
+    np.testing.assert_array_equal(g.predict(Fy), g.labels_)  # all 360 frames assigned to their nearest state
+    assert len(np.unique(g.labels_)) == 6 and g.future(m[0])[m[5]] == 5
+    g2, _ = _fit_handmade(utts, 6, batch_size=48)
+    np.testing.assert_array_equal(g2.centroids_, g.centroids_)  # the same subset for the same random_state
+
+
 def test_default_number_of_states():
     assert default_n_states(4500) == 150
     assert default_n_states(28833) == 961
