@@ -745,10 +745,11 @@ def frame_phone_codes(corpus) -> tuple[np.ndarray, list[str]]:
     them, ``len(names)`` where no phone covers frame i. Vectorised over the phones (no
     loop over frames or phones in Python).
     """
+    from engine.recordings.corpus import label_codes
+
     N = corpus.n_frames
     _mid, labs, _utt, a, b = corpus.phone_table()
-    labels, inv = np.unique(labs, return_inverse=True)
-    inv = inv.reshape(-1)
+    labels, inv = label_codes(labs)  # np.unique's result, without sorting a million strings
     e = np.maximum(b, a + 1)
     codes = np.full(N, len(labels), np.int64)
     if len(a) and np.all(a[1:] >= a[:-1]):  # phones in corpus order (as Corpus.validate keeps them)

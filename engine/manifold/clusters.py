@@ -33,6 +33,7 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from engine.phonetics import phonesets
+from engine.recordings.corpus import label_codes
 
 __all__ = ["PhoneClusters", "bhattacharyya", "dprime", "MEASURES", "clusters_of", "LABEL_KINDS"]
 
@@ -204,8 +205,7 @@ class PhoneClusters(BaseEstimator):
         phoneset = phonesets.detect_phoneset(labels)
         keep = np.ones(len(labels), bool)
         # each distinct label is looked up once (a million-frame corpus has ~10^5 phones of ~50 labels)
-        distinct, which = np.unique(np.asarray(labels, dtype=str), return_inverse=True)
-        which = which.reshape(-1)
+        distinct, which = label_codes(labels)
         if self.exclude_pauses:
             keep = ~np.array([phonesets.is_pause(x, phoneset=phoneset) for x in distinct], bool)[which]
         if self.normalize_labels:
@@ -215,7 +215,8 @@ class PhoneClusters(BaseEstimator):
         labels = np.asarray(labels, dtype=object)[keep]
         mids = mids[keep]
 
-        names, inverse, counts = np.unique(labels.astype(str), return_inverse=True, return_counts=True)
+        names, inverse = label_codes(labels.astype(str))
+        counts = np.bincount(inverse, minlength=names.size)
         order = sorted(range(names.size), key=lambda i: (-counts[i], names[i]))
         kept = [i for i in order if counts[i] >= self.min_count]
         dropped = [i for i in order if counts[i] < self.min_count]
@@ -281,7 +282,8 @@ class PhoneClusters(BaseEstimator):
         if mids.ndim != 1 or (mids.size and not np.issubdtype(mids.dtype, np.integer)):
             raise ValueError(f"mid_frames must be a 1-D integer array, got shape {mids.shape} {mids.dtype}")
         mids = mids.astype(np.int64)
-        labels = [str(x) for x in labels]
+        labels = labels.tolist() if isinstance(labels, np.ndarray) and labels.dtype.kind == "U" else \
+            [str(x) for x in labels]
         if len(labels) != mids.size:
             raise ValueError(f"{len(labels)} labels for {mids.size} mid_frames; give one label per phone instance")
         bad = np.flatnonzero((mids < 0) | (mids >= N))

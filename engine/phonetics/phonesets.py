@@ -322,7 +322,7 @@ def detect_phoneset(labels) -> str:
     Pauses do not count. Returns ``"arpabet"`` when nothing is recognised.
     """
     table = _table()
-    distinct = {str(x).strip() for x in labels}
+    distinct = {str(x).strip() for x in set(labels.tolist() if hasattr(labels, "tolist") else labels)}
     distinct = {x for x in distinct if x and x.lower() not in table.pauses and x not in table.pauses}
     score = {s: sum(_match(x, s, table) is not None for x in distinct) for s in PHONESETS}
     return max(PHONESETS, key=lambda s: (score[s], -PHONESETS.index(s)))

@@ -14,7 +14,7 @@ import numpy as np
 from engine.files.atomic import atomic_write
 from engine.recordings.frame_blocks import BlockFrames
 
-__all__ = ["CorpusError", "CorpusWarning", "PhoneInterval", "Utterance", "Corpus"]
+__all__ = ["CorpusError", "CorpusWarning", "PhoneInterval", "Utterance", "Corpus", "label_codes"]
 
 FORMAT_VERSION = 1
 #: largest coordinate magnitude a corpus holds (the importers treat larger samples as dropouts)
@@ -57,7 +57,13 @@ class PhoneInterval:
             p = new(cls)
             p.__dict__.update(start=t0, end=t1, label=lab)
             out.append(p)
-        return tuple(out)
+        return _Phones(out)
+
+
+class _Phones(tuple):
+    """A tuple of PhoneInterval built by :meth:`PhoneInterval._many`: a corpus keeps it as it is."""
+
+    __slots__ = ()
 
 
 @dataclass(frozen=True)
@@ -95,8 +101,10 @@ class Utterance:
 
 
 def _as_phones(phones) -> tuple[PhoneInterval, ...]:
+    if type(phones) is _Phones:
+        return phones  # a file's phones (PhoneInterval._many): kept, not rebuilt
     if type(phones) is tuple and all(type(p) is PhoneInterval for p in phones):
-        return phones  # already phones (a file's, built by PhoneInterval._many): kept, not rebuilt
+        return phones  # already phones: kept
     out = []
     for p in phones:
         if isinstance(p, PhoneInterval):
@@ -226,28 +234,7 @@ class Corpus:
                     "(utterances must be contiguous, in order, covering all frames)"
                 )
             expected = u.stop
-            dur = u.n_frames / self.rate
-            prev_end = -np.inf
-            tol = 0.5 / self.rate + 1e-9
-            for k, p in enumerate(u.phones):
-                # (the message is made only for a fault: a million-frame corpus has a million phones)
-                if not (math.isfinite(p.start) and math.isfinite(p.end)):
-                    raise CorpusError(f"{self._where(u, k, p)}: times must be finite")
-                if not p.label:
-                    raise CorpusError(f"{self._where(u, k, p)}: empty label")
-                if p.end <= p.start:
-                    raise CorpusError(f"{self._where(u, k, p)}: end is not after start")
-                if p.start < prev_end - 1e-9:
-                    raise CorpusError(
-                        f"{self._where(u, k, p)}: starts before the previous phone ends at {prev_end:.4f} s "
-                        "(intervals must be sorted and not overlap)"
-                    )
-                if p.start < -1e-9 or p.end > dur + tol:
-                    raise CorpusError(
-                        f"{self._where(u, k, p)}: lies outside the utterance (0-{dur:.4f} s, {u.n_frames} frames "
-                        f"at {self.rate:g} Hz)"
-                    )
-                prev_end = p.end
+        self._validate_phones()
         if expected != F.shape[0]:
             raise CorpusError(
                 f"{self.name}: utterances cover {expected} frames but frames has {F.shape[0]} rows"
@@ -275,6 +262,57 @@ class Corpus:
         for k, v in self.latent.items():
             if v.shape[0] != F.shape[0]:
                 raise CorpusError(f"{self.name}: latent {k!r} has {v.shape[0]} rows, frames have {F.shape[0]}")
+
+    def _validate_phones(self) -> None:
+        """Every phone's checks at once (a ten-million-frame corpus has 1.6 million phones); the first
+        utterance with a faulty phone is then checked phone by phone for the message."""
+        from itertools import chain
+        from operator import attrgetter
+
+        per_utt = [u.phones for u in self.utterances]
+        counts = np.fromiter(map(len, per_utt), np.int64, count=len(per_utt))
+        n = int(counts.sum())
+        if n == 0:
+            return
+        flat = list(chain.from_iterable(per_utt))
+        s = np.fromiter(map(attrgetter("start"), flat), np.float64, count=n)
+        e = np.fromiter(map(attrgetter("end"), flat), np.float64, count=n)
+        labelled = np.fromiter(map(bool, map(attrgetter("label"), flat)), bool, count=n)
+        utt = np.repeat(np.arange(len(per_utt)), counts)
+        dur = (self.bounds @ np.array([-1, 1]))[utt] / self.rate
+        prev = np.r_[-np.inf, e[:-1]]
+        prev[np.r_[0, np.cumsum(counts)[:-1]][counts > 0]] = -np.inf  # an utterance's first phone
+        with np.errstate(invalid="ignore"):
+            ok = (np.isfinite(s) & np.isfinite(e) & labelled & (e > s) & (s >= prev - 1e-9) & (s >= -1e-9)
+                  & (e <= dur + (0.5 / self.rate + 1e-9)))
+        if not ok.all():
+            u = self.utterances[int(utt[np.argmin(ok)])]
+            self._check_phones(u)  # raises, naming the phone
+            raise CorpusError(f"{self.name}: utterance {u.id!r} has a phone that fails the checks")
+
+    def _check_phones(self, u) -> None:
+        """Raise CorpusError naming the first faulty phone of ``u``."""
+        dur = u.n_frames / self.rate
+        prev_end = -np.inf
+        tol = 0.5 / self.rate + 1e-9
+        for k, p in enumerate(u.phones):
+            if not (math.isfinite(p.start) and math.isfinite(p.end)):
+                raise CorpusError(f"{self._where(u, k, p)}: times must be finite")
+            if not p.label:
+                raise CorpusError(f"{self._where(u, k, p)}: empty label")
+            if p.end <= p.start:
+                raise CorpusError(f"{self._where(u, k, p)}: end is not after start")
+            if p.start < prev_end - 1e-9:
+                raise CorpusError(
+                    f"{self._where(u, k, p)}: starts before the previous phone ends at {prev_end:.4f} s "
+                    "(intervals must be sorted and not overlap)"
+                )
+            if p.start < -1e-9 or p.end > dur + tol:
+                raise CorpusError(
+                    f"{self._where(u, k, p)}: lies outside the utterance (0-{dur:.4f} s, {u.n_frames} frames "
+                    f"at {self.rate:g} Hz)"
+                )
+            prev_end = p.end
 
     def _where(self, u, k, p) -> str:
         return f"{self.name}: utterance {u.id!r} phone {k} ({p.label!r} {p.start:.4f}-{p.end:.4f} s)"
@@ -355,10 +393,17 @@ class Corpus:
         labels : ndarray of shape (n_phones,) str
         utterance : ndarray of shape (n_phones,) int, utterance number
         start_frames, end_frames : ndarray of shape (n_phones,) int
+
+        The arrays are read-only and kept while the utterances are the same objects (they and
+        their phones are frozen), so the views' several readers build them once.
         """
         from itertools import chain
         from operator import attrgetter
 
+        key = (self.rate, [id(u) for u in self.utterances])
+        kept = self.__dict__.get("_phone_table")
+        if kept is not None and kept[0] == key:
+            return kept[1]
         per_utt = [u.phones for u in self.utterances]
         flat = list(chain.from_iterable(per_utt))
         utt = np.repeat(np.arange(len(per_utt), dtype=np.int64),
@@ -372,7 +417,11 @@ class Corpus:
         def frame(t):  # time_to_frame, for every phone at once (np.rint rounds half to even, as round)
             return np.clip(lo + np.rint(t * self.rate).astype(np.int64), lo, hi)
 
-        return frame(times.sum(axis=1) * 0.5), labs, utt, frame(times[:, 0]), frame(times[:, 1])
+        table = (frame(times.sum(axis=1) * 0.5), labs, utt, frame(times[:, 0]), frame(times[:, 1]))
+        for a in table:
+            a.flags.writeable = False
+        self.__dict__["_phone_table"] = (key, table)
+        return table
 
     def subset(self, ids) -> "Corpus":
         """A new corpus holding only the utterances named in ``ids`` (in corpus order)."""
@@ -519,6 +568,25 @@ class Corpus:
         except Exception as exc:  # arrays of the wrong shape or type
             reason = f"its arrays do not form a corpus ({exc})"
         raise CorpusError(f"{path}: cannot read as a Lipspace corpus (.npz): {reason}")
+
+
+def label_codes(labels) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(np.asarray(labels, dtype=str), return_inverse=True)`` by hashing, not sorting strings.
+
+    Parameters
+    ----------
+    labels : sequence of str or ndarray of str, shape (n,)
+
+    Returns
+    -------
+    names : ndarray of str, sorted distinct labels
+    inverse : ndarray of shape (n,) int64, ``names[inverse] == labels``
+    """
+    seq = labels.tolist() if isinstance(labels, np.ndarray) else [str(x) for x in labels]
+    names = sorted(set(seq))  # code-point order, as numpy sorts strings
+    pos = {x: i for i, x in enumerate(names)}
+    inverse = np.fromiter(map(pos.__getitem__, seq), np.int64, count=len(seq))
+    return np.array(names, dtype=str), inverse
 
 
 def _absolute(audio) -> str:

@@ -87,3 +87,37 @@ def test_utterance_lookup_follows_changes_to_the_list():
     assert c.utterance("q").stop == 30
     with pytest.raises(KeyError, match="no utterance 'a'"):
         c.utterance("a")
+
+
+def test_label_codes_are_numpy_unique():
+    from engine.recordings.corpus import label_codes
+
+    labels = ["sil", "aa", "b", "aa", "", "Z", "zh", "é", "b", "sil"]
+    names, inv = label_codes(labels)
+    ref_names, ref_inv = np.unique(np.asarray(labels, dtype=str), return_inverse=True)
+    np.testing.assert_array_equal(names, ref_names)
+    np.testing.assert_array_equal(inv, ref_inv.reshape(-1))
+    names2, inv2 = label_codes(np.asarray(labels, dtype=str))
+    np.testing.assert_array_equal(names2, ref_names)
+    np.testing.assert_array_equal(inv2, inv)
+
+
+def test_phone_table_is_kept_until_the_utterances_change():
+    c = make(frames=np.zeros((100, 6), np.float32),
+             utts=[Utterance("a", 0, 50, (PhoneInterval(0.0, 0.2, "p"), PhoneInterval(0.2, 0.5, "a"))),
+                   Utterance("b", 50, 100, (PhoneInterval(0.1, 0.4, "m"),))])
+    t1 = c.phone_table()
+    assert c.phone_table() is t1  # built once
+    assert not t1[0].flags.writeable  # readers cannot change what the next reader gets
+    np.testing.assert_array_equal(t1[1], ["p", "a", "m"])
+    c.utterances[1] = Utterance("b", 50, 100, (PhoneInterval(0.1, 0.4, "b"),))  # a new utterance object
+    t2 = c.phone_table()
+    assert t2 is not t1 and t2[1].tolist() == ["p", "a", "b"]
+
+
+def test_a_faulty_phone_is_named_among_many_valid_ones():
+    good = tuple(PhoneInterval(0.01 * k, 0.01 * k + 0.01, "a") for k in range(100))
+    bad = good[:57] + (PhoneInterval(good[57].start, good[57].start, "a"),) + good[58:]  # zero length
+    utts = [Utterance(f"u{i}", 60 * i, 60 * i + 60, good) for i in range(3)] + [Utterance("u3", 180, 240, bad)]
+    with pytest.raises(CorpusError, match="utterance 'u3' phone 57 .*end is not after start"):
+        make(frames=np.zeros((240, 6), np.float32), utts=utts)
