@@ -400,10 +400,10 @@ class Corpus:
         from itertools import chain
         from operator import attrgetter
 
-        key = (self.rate, [id(u) for u in self.utterances])
-        kept = self.__dict__.get("_phone_table")
-        if kept is not None and kept[0] == key:
-            return kept[1]
+        kept = self.__dict__.get("_phone_table")  # (rate, the utterance objects, the table)
+        if (kept is not None and kept[0] == self.rate and len(kept[1]) == len(self.utterances)
+                and all(a is b for a, b in zip(kept[1], self.utterances))):
+            return kept[2]
         per_utt = [u.phones for u in self.utterances]
         flat = list(chain.from_iterable(per_utt))
         utt = np.repeat(np.arange(len(per_utt), dtype=np.int64),
@@ -420,7 +420,7 @@ class Corpus:
         table = (frame(times.sum(axis=1) * 0.5), labs, utt, frame(times[:, 0]), frame(times[:, 1]))
         for a in table:
             a.flags.writeable = False
-        self.__dict__["_phone_table"] = (key, table)
+        self.__dict__["_phone_table"] = (self.rate, tuple(self.utterances), table)
         return table
 
     def subset(self, ids) -> "Corpus":
