@@ -5,7 +5,9 @@ across utterance boundaries: no velocity, transition or path crosses one.
 """
 from __future__ import annotations
 
+import gc
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -530,12 +532,13 @@ class Corpus:
         # each utterance's phones in file order, found by one sort (not a scan of every phone per utterance)
         by_utt = np.argsort(np.asarray(p_utt), kind="stable")
         cuts = np.searchsorted(np.asarray(p_utt)[by_utt], np.arange(len(ids) + 1))
-        times, labels = np.asarray(p_t)[by_utt].tolist(), np.asarray(p_lab)[by_utt].tolist()
-        for k, (b, uid) in enumerate(zip(bounds.tolist(), ids.tolist())):
-            a, e = int(cuts[k]), int(cuts[k + 1])
-            phones = PhoneInterval._many(times[a:e], labels[a:e])
-            wav = _resolve(str(audio[k]), base, str(audio_abs[k]) if audio_abs is not None else "")
-            utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k])))
+        with _collection_paused():
+            times, labels = _as_list(np.asarray(p_t)[by_utt]), _as_list(np.asarray(p_lab)[by_utt])
+            for k, (b, uid) in enumerate(zip(bounds.tolist(), ids.tolist())):
+                a, e = int(cuts[k]), int(cuts[k + 1])
+                phones = PhoneInterval._many(times[a:e], labels[a:e])
+                wav = _resolve(str(audio[k]), base, str(audio_abs[k]) if audio_abs is not None else "")
+                utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k])))
         try:
             return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
                        latent=latent, name=name, point_roles=roles, registration=registration, history=history,
@@ -568,6 +571,31 @@ class Corpus:
         except Exception as exc:  # arrays of the wrong shape or type
             reason = f"its arrays do not form a corpus ({exc})"
         raise CorpusError(f"{path}: cannot read as a Lipspace corpus (.npz): {reason}")
+
+
+@contextmanager
+def _collection_paused():
+    """Python's cyclic garbage collector off while a file's phones become objects.
+
+    Each full collection walks every tracked object, and 1.6 million phones (ten million
+    frames) set several off, each holding the GIL -- and so the window's event loop, when a
+    worker thread loads -- for 0.3-0.7 s. Nothing built here forms a cycle.
+    """
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
+
+
+def _as_list(a, chunk: int = 1 << 16) -> list:
+    """``a.tolist()`` a block of rows at a time: one call over a million rows holds the GIL for a second."""
+    out = []
+    for s in range(0, len(a), chunk):
+        out.extend(a[s:s + chunk].tolist())
+    return out
 
 
 def label_codes(labels) -> tuple[np.ndarray, np.ndarray]:
