@@ -257,6 +257,9 @@ def _blend_summary(w) -> str:
     bases = [BASES[i] for i in (w.get("base_index") or [0] * beta.size)]
     if not np.any(beta > 0) and set(bases) == {"hermite"}:
         return "no learnt share (the state-velocity Hermite spline)"
+    if not np.any(beta > 0) and set(bases) == {"calibrated"}:
+        return ("no learnt share (the Hermite spline with the state velocities calibrated on the targets' observed X; "
+                "through the states' own means, the state-velocity Hermite spline)")
     ks = [NEIGHBOR_STEPS[i] for i in w["neighbor_index"]]
     parts = [f"X{j + 1} {b} + {s:.2f}×{k}" for j, (b, s, k) in enumerate(zip(bases, beta, ks))][:6]
     counts = ", ".join(f"{bases.count(b)} {b}" for b in BASES if b in bases)

@@ -18,12 +18,17 @@ for several ``k`` at once. A segment never crosses an utterance boundary.
 
 How much of that pooled path a synthesiser should use, per shape component, is a
 question for validation data (:func:`fit_blend`): a trajectory is a *base* interpolation
-through the targets -- the state-velocity Hermite spline, PCHIP or linear, whichever
+through the targets -- the state-velocity Hermite spline, PCHIP, linear or the Hermite
+spline with calibrated velocities (:mod:`engine.synthesis.calibration`), whichever
 validates best for that component -- plus ``beta_j`` times the pooled path's deviation
 from it, component ``j`` pooling ``k_j`` neighbours (:func:`blend`). Components the
 manifold carries (opening, rounding) keep close to the states; components it hardly
 carries pool many neighbours, where the states' own means are noisy estimates; where the
 states' velocities mislead (little training speech), a base without them takes over.
+Given the validation utterances one by one, :func:`fit_blend` chooses each component's
+base and ``k`` by their error on each utterance with ``beta`` fitted on the others, so a
+handful of validation utterances cannot buy a flexible blend that only fits themselves.
+Without validation data the base is the calibrated spline (:func:`prior_blend`).
 """
 from __future__ import annotations
 
@@ -32,13 +37,16 @@ from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-__all__ = ["hermite_only_blend", "LearntPaths", "NEIGHBOR_STEPS", "BASES", "blend", "fit_blend", "BlendAccumulator"]
+__all__ = ["prior_blend", "LearntPaths", "NEIGHBOR_STEPS", "BASES", "PRIOR_BASE", "blend", "fit_blend",
+           "BlendAccumulator"]
 
 #: numbers of pooled neighbour paths a component may use (chosen per component on validation)
 NEIGHBOR_STEPS = (8, 16, 32, 64, 128, 256)
-#: base interpolations through the targets a component may build on (chosen per component on validation;
-#: the first is the a-priori choice where there is no validation data)
-BASES = ("hermite", "pchip", "linear")
+#: base interpolations through the targets a component may build on (chosen per component on validation):
+#: the state-velocity Hermite spline, PCHIP, linear, and the Hermite spline with calibrated velocities
+BASES = ("hermite", "pchip", "linear", "calibrated")
+#: the base where there is no validation data
+PRIOR_BASE = BASES.index("calibrated")
 
 
 class LearntPaths(BaseEstimator):
@@ -243,40 +251,61 @@ class BlendAccumulator:
             self.rr[i] += (R ** 2).sum(axis=0)
         self.frames += T.shape[0]
 
-    def __iadd__(self, other):
-        self.dd += other.dd
-        self.dr += other.dr
-        self.rr += other.rr
-        self.frames += other.frames
-        return self
 
-
-def fit_blend(acc: BlendAccumulator) -> dict:
+def fit_blend(acc) -> dict:
     """Per component the base, k and beta in [0, 1] with the least squared error on the validation frames.
 
-    For each base and k, beta = <D, R> / <D, D> clipped to [0, 1] (least squares); the
-    (base, k) with the smallest error wins.
+    For each base and k, beta = <D, R> / <D, D> clipped to [0, 1] (least squares). Given one
+    :class:`BlendAccumulator` the (base, k) with the smallest error on its frames wins.
+    Given one per validation utterance, each (base, k) -- and each base alone -- is scored
+    by leave one utterance out: every utterance's error with beta fitted on the others,
+    summed; the winner's beta is then fitted on all of them.
+
+    Parameters
+    ----------
+    acc : BlendAccumulator or sequence of BlendAccumulator
 
     Returns
     -------
     dict
         ``base_index``, ``neighbor_index`` (m,) int into :data:`BASES` and the neighbour
-        steps, ``beta`` (m,), ``sq_error`` (m,) the validation squared error per component,
+        steps, ``beta`` (m,), ``sq_error`` (m,) the validation squared error per component
+        (left out utterance by utterance where they were given one by one),
         ``sq_bases`` (len(BASES), m) that of each base alone, ``frames``.
     """
-    with np.errstate(invalid="ignore", divide="ignore"):
-        beta = np.clip(np.where(acc.dd > 0, acc.dr / acc.dd, 0.0), 0.0, 1.0)
-    err = acc.rr[:, None, :] - 2 * beta * acc.dr + beta ** 2 * acc.dd  # (nb, nk, m)
-    nb, nk, m = err.shape
-    flat = err.reshape(nb * nk, m)
+    parts = [acc] if isinstance(acc, BlendAccumulator) else list(acc)
+    dd = np.stack([a.dd for a in parts])  # (U, nb, nk, m)
+    dr = np.stack([a.dr for a in parts])
+    rr = np.stack([a.rr for a in parts])  # (U, nb, m)
+    DD, DR, RR = dd.sum(axis=0), dr.sum(axis=0), rr.sum(axis=0)
+    beta = _share(DR, DD)
+    nb, nk, m = DD.shape
+    if len(parts) < 2:
+        err = RR[:, None, :] - 2 * beta * DR + beta ** 2 * DD  # (nb, nk, m)
+    else:
+        out = _share(DR[None] - dr, DD[None] - dd)  # each utterance's beta, fitted on the others
+        err = (rr[:, :, None, :] - 2 * out * dr + out ** 2 * dd).sum(axis=0)
+        err = np.concatenate([err, RR[:, None, :]], axis=1)  # slot nk: the base alone (beta 0)
+    width = err.shape[1]
+    flat = err.reshape(nb * width, m)
     best = np.argmin(flat, axis=0)
+    b, k = best // width, best % width
     cols = np.arange(m)
-    return {"base_index": (best // nk).astype(int).tolist(), "neighbor_index": (best % nk).astype(int).tolist(),
-            "beta": beta.reshape(nb * nk, m)[best, cols].tolist(), "sq_error": flat[best, cols].tolist(),
-            "sq_bases": acc.rr.tolist(), "frames": int(acc.frames)}
+    alone = k == nk
+    k = np.where(alone, 0, k)
+    return {"base_index": b.astype(int).tolist(), "neighbor_index": k.astype(int).tolist(),
+            "beta": np.where(alone, 0.0, beta[b, k, cols]).tolist(), "sq_error": flat[best, cols].tolist(),
+            "sq_bases": RR.tolist(), "frames": int(sum(a.frames for a in parts))}
 
 
-def hermite_only_blend(m) -> dict:
-    """Blend weights that leave the state-velocity Hermite spline unchanged (no validation data)."""
-    return {"base_index": [0] * int(m), "neighbor_index": [0] * int(m), "beta": [0.0] * int(m), "sq_error": None,
-            "sq_bases": None, "frames": 0}
+def _share(dr, dd):
+    """beta = dr / dd clipped to [0, 1] (0 where dd is 0)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.clip(np.where(dd > 0, dr / dd, 0.0), 0.0, 1.0)
+
+
+def prior_blend(m) -> dict:
+    """Blend weights without validation data: every component the calibrated spline (:data:`PRIOR_BASE`),
+    no learnt share."""
+    return {"base_index": [PRIOR_BASE] * int(m), "neighbor_index": [0] * int(m), "beta": [0.0] * int(m),
+            "sq_error": None, "sq_bases": None, "frames": 0}

@@ -23,7 +23,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from engine.synthesis.learnt_paths import hermite_only_blend
+from engine.synthesis.learnt_paths import prior_blend
 from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, phone_mids, target_frames
 from engine.threads import single_blas_thread
 
@@ -121,7 +121,7 @@ class LearntPathSynthesizer(_StateModelSynthesizer):
 
         w = (self.choice_.get("blend") or {}).get(protocol)
         if w is None:  # a protocol the validation did not measure (e.g. phones on a corpus without them)
-            w = hermite_only_blend(self.model_.inverse_.means_.shape[1])
+            w = prior_blend(self.model_.inverse_.means_.shape[1])
         return self.model_.learnt_x(f, states, n, w, x_targets=xt)
 
 

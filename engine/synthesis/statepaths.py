@@ -24,8 +24,10 @@ from the states, and the baselines that get the same information:
     The state-velocity Hermite spline: cubic Hermite through the target states' mean
     F^x (or given X at the targets) with the states' mean velocity F^x'.
 :meth:`StateModel.learnt_x`
-    The manifold synthesis: the state-velocity Hermite spline plus, per shape component,
-    a validated share of the pooled training paths' deviation from it
+    The manifold synthesis: per shape component a validated base interpolation through
+    the targets (the state-velocity Hermite spline, PCHIP, linear, or the spline with
+    velocities calibrated on the targets, :mod:`engine.synthesis.calibration`) plus a
+    validated share of the pooled training paths' deviation from it
     (:func:`engine.synthesis.learnt_paths.blend`).
 :meth:`StateModel.phone_states`
     States of phone-only targets: a Viterbi over each phone's candidate states
@@ -43,6 +45,7 @@ import warnings as _warnings
 import numpy as np
 
 from engine.manifold.inverse_local import LocalLinearInverse, StateMeanInverse
+from engine.synthesis.calibration import calibrated_spline
 from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, LearntPaths, blend
 from engine.synthesis.trajectory import interpolate_targets, smooth
 
@@ -186,13 +189,24 @@ class StateModel:
 
     def bases_x(self, frames, states, n_frames, x_targets=None, which=BASES) -> np.ndarray:
         """The base interpolations of :data:`engine.synthesis.learnt_paths.BASES` through the targets
-        (len(BASES), n_frames, m); those not in ``which`` are zeros."""
+        (len(BASES), n_frames, m); those not in ``which`` are zeros.
+
+        ``"calibrated"`` is :func:`engine.synthesis.calibration.calibrated_spline` through
+        ``x_targets``; without them (the targets are the states' own means) it is the
+        state-velocity Hermite spline.
+        """
         st = np.asarray(states, dtype=np.int64)
         X = self.inverse_.means_[st] if x_targets is None else np.asarray(x_targets, dtype=np.float64)
         V = self.inverse_.velocity_means_[st]
         out = np.zeros((len(BASES), int(n_frames), X.shape[1]))
         for i, kind in enumerate(BASES):
-            if kind in which:
+            if kind not in which:
+                continue
+            if kind == "calibrated" and x_targets is not None:
+                out[i] = calibrated_spline(frames, X, V, n_frames)
+            elif kind == "calibrated":
+                out[i] = interpolate_targets("hermite", frames, X, n_frames, V)
+            else:
                 out[i] = interpolate_targets(kind, frames, X, n_frames, V)
         return out
 

@@ -1,6 +1,8 @@
 """Settings of the synthesis methods, chosen on a validation split of the training utterances.
 
 :func:`select_settings` splits off a fifth of the training utterances (whole utterances),
+or, for a corpus too small to give that split :data:`MIN_SPLIT_UTTERANCES` of them, holds
+each training utterance out in turn (leave one out, pooled over the folds),
 fits the state model on the rest and measures, per protocol of
 :mod:`engine.synthesis.protocol_methods`, every candidate setting and every method:
 ``state_dims``, the number of states K, the manifold method's share of the learnt paths
@@ -24,7 +26,7 @@ import numpy as np
 from engine.graph.states import MAX_DEFAULT_STATES
 from engine.manifold.inverse_local import NEIGHBOR_CANDIDATES, select_neighbors
 from engine.progress import ProgressFn, report
-from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, BlendAccumulator, fit_blend, hermite_only_blend
+from engine.synthesis.learnt_paths import BASES, NEIGHBOR_STEPS, BlendAccumulator, fit_blend, prior_blend
 from engine.synthesis.protocol_methods import (
     PROTOCOLS,
     SLIDING_WINDOW_CANDIDATES,
@@ -37,7 +39,7 @@ from engine.synthesis.statepaths import StateModel, anchor
 from engine.synthesis.trajectory import phone_mids
 
 __all__ = ["STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES", "SMOOTHING_CANDIDATES", "Y_DIMS",
-           "MIN_VALIDATION_UTTERANCES", "select_settings", "default_fit_frames", "manifold_y", "mid_frames"]
+           "MIN_VALIDATION_UTTERANCES", "MIN_SPLIT_UTTERANCES", "select_settings", "default_fit_frames", "manifold_y", "mid_frames"]
 
 STATE_DIM_CANDIDATES = (3, 5, 8)
 #: K candidates: one state per this many training frames (30: the state graph's default)
@@ -46,6 +48,9 @@ SMOOTHING_CANDIDATES = (0.0, 1.0, 2.0, 3.0, 4.0, 6.0)
 Y_DIMS = 3
 #: training utterances below which there is no validation split (fixed defaults instead)
 MIN_VALIDATION_UTTERANCES = 3
+#: validation utterances a single split must hold: fewer cannot show a two-sided sign test at p < 0.05 between two
+#: methods, so a smaller corpus is validated by leave one out (where its frames allow: :func:`_splits`)
+MIN_SPLIT_UTTERANCES = 6
 
 
 def _slice_rows(A, utts):
@@ -107,12 +112,12 @@ def _defaults(manifold, cand, n_states, ids, phones):
     m = int(manifold.Fx_.shape[1])
     protos = PROTOCOLS if phones else PROTOCOLS[:2]
     return {"state_dims": d, "n_neighbors": 40, "n_states": n_states, "frames_per_state": None,
-            "sigma": {f"{p}/viterbi": 2.0 for p in protos}, "blend": {p: hermite_only_blend(m) for p in protos},
+            "sigma": {f"{p}/viterbi": 2.0 for p in protos}, "blend": {p: prior_blend(m) for p in protos},
             "sliding_window": SLIDING_WINDOW_CANDIDATES[-2], "protocols": list(protos), "validation": {},
             "method_validation": {}, "best": {}, "val_ids": [],
             "note": f"only {len(ids)} training utterance(s): no validation split; fixed defaults (state_dims {d}, "
                     f"default K, k 40, Viterbi smoothing 2 frames; the manifold method without validated learnt "
-                    f"share is the state-velocity Hermite spline)"}
+                    f"share is the Hermite spline with calibrated state velocities)"}
 
 
 class _Val:
@@ -129,6 +134,48 @@ class _Val:
         return int(f[0]), int(f[-1]) + 1
 
 
+class _Fold:
+    """One split of the training utterances: the fitting part's rows and the validation utterances."""
+
+    def __init__(self, manifold, fit, val, phones):
+        self.fit = fit
+        self.Fy, self.Fx, self.Fxv = (_slice_rows(A, fit) for A in (manifold.Fy_, manifold.Fx_, manifold.Fxv_))
+        self.bounds = _bounds(fit)
+        self.mids = phone_mids(manifold.corpus_, fit) if phones else None
+        self.Fy_val = _slice_rows(manifold.Fy_, val)
+        self.Fx_val = _slice_rows(manifold.Fx_, val).astype(np.float64)
+        self.V = _Val(manifold, val)
+
+
+def _splits(corpus, val_fraction, rng, budget):
+    """The validation's folds, [(fit utterances, validation utterances), ...], and what a bound left out.
+
+    One split of ``val_fraction`` of the utterances (at least two where the corpus allows it,
+    so that the manifold method's validation figure is cross-fitted, never in-sample) when it
+    holds at least :data:`MIN_SPLIT_UTTERANCES` or when holding each utterance out in turn
+    would fit the states on more than :func:`default_fit_frames` frames in all (what one
+    split at the budget costs); else every training utterance is held out once (leave one
+    out). A single split over ``budget`` is bounded as :func:`select_settings` says; the
+    second value is then (the fit split's frames, its validation utterances) before the
+    bound, else None.
+    """
+    utts = list(corpus.utterances)
+    n = len(utts)
+    n_val = min(n - 2, max(2 if n >= 4 else 1, int(round(val_fraction * n))))
+    if n_val < MIN_SPLIT_UTTERANCES and (n - 1) * sum(u.n_frames for u in utts) <= default_fit_frames():
+        return [([v for v in utts if v is not u], [u]) for u in utts], None
+    held = set(rng.choice(n, size=n_val, replace=False).tolist())
+    val = [u for i, u in enumerate(utts) if i in held]
+    fit = [u for i, u in enumerate(utts) if i not in held]
+    n_fit_all, n_val_all = sum(u.n_frames for u in fit), len(val)
+    if n_fit_all <= budget:
+        return [(fit, val)], None
+    # states on a subset of whole fit utterances, scored on a proportionate subset of the validation ones
+    fit = _within(fit, budget, rng, keep=1)
+    val = _within(val, budget * val_fraction / (1 - val_fraction), rng, keep=min(2, len(val)))
+    return [(fit, val)], (n_fit_all, n_val_all)
+
+
 def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=STATE_DIM_CANDIDATES,
                     sigmas=SMOOTHING_CANDIDATES, neighbors=NEIGHBOR_CANDIDATES, n_states=None,
                     frames_per_state=FRAMES_PER_STATE_CANDIDATES, phones=None,
@@ -139,14 +186,19 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
     The fitted manifold's F^y stands for the training frames (the embedding saw the
     validation utterances, as it sees all training data; the *states*, their
     transitions, the learnt paths, the inverse maps and the phone models are fitted on
-    the fitting part only). For each candidate ``state_dims`` and K (``n_states`` if
-    given, else one state per ``frames_per_state`` frames): the manifold method's share
-    of the learnt paths per shape component (:func:`engine.synthesis.learnt_paths.fit_blend`) in
-    the states and oracle protocols. The (dims, K) whose manifold method has the smallest
-    states-protocol validation RMSE X win; at them the Viterbi path's smoothing per
-    protocol, the phones protocol's lattice blend and sliding-window setting, and every
-    method's validation RMSE X and LVE (the manifold method's with its weights fitted on
-    one half of the validation utterances and scored on the other, and vice versa).
+    the fitting part only). A corpus too small for a split of
+    :data:`MIN_SPLIT_UTTERANCES` validation utterances is validated by leave one out
+    instead (every training utterance held out in turn, the sums below pooled over the
+    folds) where that costs no more than one split at the default frame budget. For each candidate ``state_dims``
+    and K (``n_states`` if given, else one state per ``frames_per_state`` frames): the
+    manifold method's share of the learnt paths per shape component
+    (:func:`engine.synthesis.learnt_paths.fit_blend`) in the states and oracle protocols.
+    The (dims, K) whose manifold method has the smallest states-protocol validation RMSE
+    X win; at them the Viterbi path's smoothing per protocol, the phones protocol's
+    lattice blend and sliding-window setting, and every method's validation RMSE X and
+    LVE (the manifold method's with its weights fitted on one half of the validation
+    utterances and scored on the other, and vice versa; with leave one out, on the other
+    folds).
 
     Parameters
     ----------
@@ -183,80 +235,66 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
     if len(ids) < MIN_VALIDATION_UTTERANCES:
         return _defaults(manifold, cand, n_states, ids, phones)
     rng = np.random.default_rng(random_state)
-    # at least two validation utterances where the corpus allows it: the manifold method's validation
-    # figure is then cross-fitted (weights from one half, scored on the other), never in-sample
-    n_val = min(len(ids) - 2, max(2 if len(ids) >= 4 else 1, int(round(val_fraction * len(ids)))))
-    val_ids = sorted(rng.choice(len(ids), size=n_val, replace=False).tolist())
-    val = [c.utterances[i] for i in val_ids]
-    fit = [u for i, u in enumerate(c.utterances) if i not in set(val_ids)]
-    n_fit_all, n_val_all = sum(u.n_frames for u in fit), len(val)
-    bounded = n_fit_all > budget
-    if bounded:  # states on a subset of whole fit utterances, scored on a proportionate subset of the validation ones
-        fit = _within(fit, budget, rng, keep=1)
-        val = _within(val, budget * val_fraction / (1 - val_fraction), rng, keep=min(2, len(val)))
-        pos = {u.id: i for i, u in enumerate(c.utterances)}
-        val_ids = sorted(pos[u.id] for u in val)
-    Fy_fit, Fx_fit, Fxv_fit = (_slice_rows(A, fit) for A in (manifold.Fy_, manifold.Fx_, manifold.Fxv_))
-    b_fit = _bounds(fit)
-    mids = phone_mids(c, fit) if phones else None
-    Fy_val, Fx_val = _slice_rows(manifold.Fy_, val), _slice_rows(manifold.Fx_, val).astype(np.float64)
-    V = _Val(manifold, val)
-    N_fit = len(Fy_fit)
-    if n_states is not None:
-        Ks = {None: max(2, int(round(n_states * N_fit / len(manifold.Fy_))))}
-    else:
-        Ks = {int(f): max(2, min(N_fit, int(round(N_fit / float(f))))) for f in frames_per_state}
-    if bounded and n_states is None:  # at most the state graph's cap; candidates that reach it are one candidate
-        capped = {}
-        for f, K in Ks.items():
-            if min(K, MAX_DEFAULT_STATES) not in capped.values():
-                capped[f] = min(K, MAX_DEFAULT_STATES)
-        Ks = capped
+    splits, bounded = _splits(c, val_fraction, rng, budget)
+    folds = [_Fold(manifold, fit, val, phones) for fit, val in splits]
+    Ks = [_k_candidates(len(f.Fy), len(manifold.Fy_), n_states, frames_per_state, bounded is not None)
+          for f in folds]
     table, best_key, best_err, best = {}, None, np.inf, None
-    steps = len(cand) * len(Ks) + 2
+    steps = len(cand) * len(Ks[0]) + 2
     for j, d in enumerate(cand):
-        k, k_err = select_neighbors(Fy_fit, Fx_fit, Fy_val, Fx_val, n_dims=d, candidates=neighbors)
-        for i, (fps, K) in enumerate(Ks.items()):
-            report(progress, "validation", j * len(Ks) + i, steps)
-            sm = StateModel(state_dims=d, n_states=K, n_neighbors=k, random_state=random_state).fit(
-                Fy_fit, Fx_fit, Fxv_fit, b_fit, phones=mids)
-            acc = _accumulate(sm, V, ("states", "oracle"))
-            fitted = {p: fit_blend(_total(acc[p])) for p in acc}
+        k, k_err = _select_neighbors(folds, d, neighbors)
+        for i, fps in enumerate(Ks[0]):
+            report(progress, "validation", j * len(Ks[0]) + i, steps)
+            sms = [StateModel(state_dims=d, n_states=K[fps], n_neighbors=k, random_state=random_state).fit(
+                f.Fy, f.Fx, f.Fxv, f.bounds, phones=f.mids) for f, K in zip(folds, Ks)]
+            acc = _accumulate(sms, folds, ("states", "oracle"))
+            fitted = {p: fit_blend(acc[p]) for p in acc}
             frames = fitted["states"]["frames"]
             row = {f"{p}/{name}": float(np.sqrt(sum(v) / frames)) for p in fitted
                    for name, v in (("manifold", fitted[p]["sq_error"]), ("sv-hermite", fitted[p]["sq_bases"][0]))}
-            table[f"{d}/{fps}"] = {"dims": d, "frames_per_state": fps, "K": sm.n_states_, "k": k, "k_errors": k_err,
+            table[f"{d}/{fps}"] = {"dims": d, "frames_per_state": fps,
+                                   "K": int(round(np.mean([sm.n_states_ for sm in sms]))), "k": k, "k_errors": k_err,
                                    "rmse_x": row}
             if row["states/manifold"] < best_err:
-                best_key, best_err, best = f"{d}/{fps}", row["states/manifold"], (sm, acc, fitted)
-    sm, acc, fitted = best
+                best_key, best_err, best = f"{d}/{fps}", row["states/manifold"], (sms, acc, fitted)
+    sms, acc, fitted = best
     t = table[best_key]
     protos = ("states", "oracle", "phones") if phones else ("states", "oracle")
     report(progress, "validation", steps - 2, steps)
     # the Viterbi path's smoothing per protocol, at the chosen states
-    lattice = [sm.phone_states(tg.frames, tg.labels) for tg in V.targets] if phones else None
-    sigma = _viterbi_sigmas(sm, V, sigmas, protos, lattice)
+    lattice = [[sm.phone_states(tg.frames, tg.labels) for tg in f.V.targets] for sm, f in zip(sms, folds)] \
+        if phones else None
+    sigma = _viterbi_sigmas(sms, folds, sigmas, protos, lattice)
     settings = {"state_dims": t["dims"], "frames_per_state": t["frames_per_state"], "n_neighbors": t["k"],
                 "sigma": {f"{p}/viterbi": s for p, s in sigma.items()}, "protocols": list(protos)}
     models = None
     if phones:
-        acc["phones"] = _accumulate(sm, V, ("phones",), lattice)["phones"]
-        fitted["phones"] = fit_blend(_total(acc["phones"]))
-        sw, sw_err = _choose_sliding_window(manifold, fit, V, sliding_windows)
+        acc["phones"] = _accumulate(sms, folds, ("phones",), lattice)["phones"]
+        fitted["phones"] = fit_blend(acc["phones"])
+        sw, sw_err = _choose_sliding_window(manifold, folds, sliding_windows)
         settings["sliding_window"], settings["sliding_window_errors"] = sw, sw_err
-        fit_ids = {u.id for u in fit}  # without a bound: exactly the validation utterances
-        models = PhoneModels.fit(manifold, fit, sliding=sw, exclude=[i for i in ids if i not in fit_ids])
+        models = []
+        for f in folds:
+            fit_ids = {u.id for u in f.fit}  # without a bound: exactly the validation utterances
+            models.append(PhoneModels.fit(manifold, f.fit, sliding=sw, exclude=[i for i in ids if i not in fit_ids]))
     settings["blend"] = fitted
     report(progress, "validation", steps - 1, steps)
-    settings["method_validation"] = _method_validation(sm, settings, V, acc, models, protos, lattice)
+    settings["method_validation"] = _method_validation(sms, settings, folds, acc, models, protos, lattice)
     settings["best"] = {p: min(r, key=lambda name: r[name]["rmse_x"]) for p, r in settings["method_validation"].items()}
     fps = t["frames_per_state"]
     K = n_states if fps is None else max(2, int(round(len(manifold.Fy_) / fps)))
-    note = f"chosen on {len(val_ids)} of {len(ids)} training utterances held out from the states"
+    pos = {u.id: i for i, u in enumerate(c.utterances)}
+    val_ids = sorted(pos[u.id] for f in folds for u in f.V.utts)
+    if len(folds) > 1:
+        note = (f"chosen by leave one out over the {len(ids)} training utterances (each held out from the states "
+                f"in turn; a split would hold fewer than {MIN_SPLIT_UTTERANCES})")
+    else:
+        note = f"chosen on {len(val_ids)} of {len(ids)} training utterances held out from the states"
     if bounded:
+        f, (n_fit_all, n_val_all) = folds[0], bounded
         note += (f"; the fit split ({n_fit_all} frames) is over the {budget:.0f}-frame budget: the states were fitted "
-                 f"on a random subset of {len(fit)} whole fit utterances ({N_fit} frames) and scored on {len(val)} of "
-                 f"the {n_val_all} validation utterances")
+                 f"on a random subset of {len(f.fit)} whole fit utterances ({len(f.Fy)} frames) and scored on "
+                 f"{len(f.V.utts)} of the {n_val_all} validation utterances")
         if fps is not None:  # an n_states given is the caller's
             K = min(K, MAX_DEFAULT_STATES)
             note += f"; K at most {MAX_DEFAULT_STATES} (the state graph's cap)"
@@ -265,22 +303,53 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
     return settings
 
 
-def _accumulate(sm, V, protos, lattice=None):
-    """Per protocol, per validation utterance: the blend sums of Hermite, pooled paths and truth."""
+def _k_candidates(n_fit, n_all, n_states, frames_per_state, bounded):
+    """K per candidate (frames per state, or None when ``n_states`` is given) for ``n_fit`` fitting frames."""
+    if n_states is not None:
+        return {None: max(2, int(round(n_states * n_fit / n_all)))}
+    Ks = {int(f): max(2, min(n_fit, int(round(n_fit / float(f))))) for f in frames_per_state}
+    if not bounded:
+        return Ks
+    capped = {}  # at most the state graph's cap; candidates that reach it are one candidate
+    for f, K in Ks.items():
+        if min(K, MAX_DEFAULT_STATES) not in capped.values():
+            capped[f] = min(K, MAX_DEFAULT_STATES)
+    return capped
+
+
+def _select_neighbors(folds, d, neighbors):
+    """k of the local-linear inverse with the smallest validation error pooled over the folds, and the errors."""
+    if len(folds) == 1:
+        f = folds[0]
+        return select_neighbors(f.Fy, f.Fx, f.Fy_val, f.Fx_val, n_dims=d, candidates=neighbors)
+    sq, n = {}, 0
+    for f in folds:
+        _, err = select_neighbors(f.Fy, f.Fx, f.Fy_val, f.Fx_val, n_dims=d, candidates=neighbors)
+        for k, e in err.items():
+            sq.setdefault(k, []).append(e ** 2 * len(f.Fy_val))
+        n += len(f.Fy_val)
+    errors = {k: float(np.sqrt(sum(v) / n)) for k, v in sq.items() if len(v) == len(folds)}
+    return min(errors, key=errors.get), errors
+
+
+def _accumulate(sms, folds, protos, lattice=None):
+    """Per protocol, per validation utterance (fold by fold): the blend sums of the bases, pooled paths and truth."""
     out = {p: [] for p in protos}
-    for i, tg in enumerate(V.targets):
-        f, n = tg.frames, tg.n_frames
-        lo, hi = V.span(i)
-        X = V.X[i]
-        st = sm.predict(manifold_y(V.m, V.utts[i])[f])
-        for p in protos:
-            s = lattice[i] if p == "phones" else st
-            xt = X[f] if p == "oracle" else None
-            B = sm.bases_x(f, s, n, xt)
-            P = sm.pooled_x(f, s, n, xt)
-            a = BlendAccumulator(len(BASES), len(NEIGHBOR_STEPS), X.shape[1])
-            a.add(B[:, lo:hi], P[:, lo:hi], X[lo:hi])
-            out[p].append(a)
+    for j, (sm, fold) in enumerate(zip(sms, folds)):
+        V = fold.V
+        for i, tg in enumerate(V.targets):
+            f, n = tg.frames, tg.n_frames
+            lo, hi = V.span(i)
+            X = V.X[i]
+            st = sm.predict(manifold_y(V.m, V.utts[i])[f])
+            for p in protos:
+                s = lattice[j][i] if p == "phones" else st
+                xt = X[f] if p == "oracle" else None
+                B = sm.bases_x(f, s, n, xt)
+                P = sm.pooled_x(f, s, n, xt)
+                a = BlendAccumulator(len(BASES), len(NEIGHBOR_STEPS), X.shape[1])
+                a.add(B[:, lo:hi], P[:, lo:hi], X[lo:hi])
+                out[p].append(a)
     return out
 
 
@@ -289,83 +358,87 @@ def manifold_y(manifold, u):
     return np.asarray(manifold.Fy_[u.start:u.stop], dtype=np.float64)
 
 
-def _total(accs):
-    t = BlendAccumulator(*accs[0].dd.shape)
-    for a in accs:
-        t += a
-    return t
-
-
-def _viterbi_sigmas(sm, V, sigmas, protos, lattice):
+def _viterbi_sigmas(sms, folds, sigmas, protos, lattice):
     sq = {(p, s): 0.0 for p in protos for s in sigmas}
-    for i, tg in enumerate(V.targets):
-        f, n = tg.frames, tg.n_frames
-        lo, hi = V.span(i)
-        X = V.X[i]
-        st = sm.predict(manifold_y(V.m, V.utts[i])[f])
-        paths = {}
-        if "states" in protos:
-            paths["states"] = paths["oracle"] = sm.path(f, st, n)[0]
-        if "phones" in protos:
-            paths["phones"] = sm.path(f, lattice[i], n)[0]
-        for p in protos:
-            for s in sigmas:
-                Xh = sm.path_x(paths[p], how="state-mean", sigma=s)
-                if p == "oracle":
-                    Xh = anchor(Xh, f, X[f])
-                sq[(p, s)] += float(((Xh - X)[lo:hi] ** 2).sum())
+    for j, (sm, fold) in enumerate(zip(sms, folds)):
+        V = fold.V
+        for i, tg in enumerate(V.targets):
+            f, n = tg.frames, tg.n_frames
+            lo, hi = V.span(i)
+            X = V.X[i]
+            st = sm.predict(manifold_y(V.m, V.utts[i])[f])
+            paths = {}
+            if "states" in protos:
+                paths["states"] = paths["oracle"] = sm.path(f, st, n)[0]
+            if "phones" in protos:
+                paths["phones"] = sm.path(f, lattice[j][i], n)[0]
+            for p in protos:
+                for s in sigmas:
+                    Xh = sm.path_x(paths[p], how="state-mean", sigma=s)
+                    if p == "oracle":
+                        Xh = anchor(Xh, f, X[f])
+                    sq[(p, s)] += float(((Xh - X)[lo:hi] ** 2).sum())
     return {p: float(min(sigmas, key=lambda s: sq[(p, s)])) for p in protos}
 
 
-def _choose_sliding_window(manifold, fit, V, candidates):
+def _choose_sliding_window(manifold, folds, candidates):
     from engine.synthesis.sliding_window import SlidingWindowRegressor
     from engine.synthesis.trajectory import phone_sequences
 
-    seqs = phone_sequences(fit, manifold.Fx_)
     rate = manifold.corpus_.rate
     err = {}
     for ctx, ow, alpha in candidates:
-        sw = SlidingWindowRegressor(context=int(ctx), output_window=int(ow), alpha=float(alpha)).fit(seqs, rate)
         sq = n = 0
-        for i, tg in enumerate(V.targets):
-            lo, hi = V.span(i)
-            Xh = sw.predict(tg.phones, tg.n_frames, tg.rate)
-            sq += float(((Xh - V.X[i])[lo:hi] ** 2).sum())
-            n += hi - lo
+        for fold in folds:
+            sw = SlidingWindowRegressor(context=int(ctx), output_window=int(ow), alpha=float(alpha)).fit(
+                phone_sequences(fold.fit, manifold.Fx_), rate)
+            V = fold.V
+            for i, tg in enumerate(V.targets):
+                lo, hi = V.span(i)
+                Xh = sw.predict(tg.phones, tg.n_frames, tg.rate)
+                sq += float(((Xh - V.X[i])[lo:hi] ** 2).sum())
+                n += hi - lo
         err[f"{ctx}/{ow}/{alpha:g}"] = float(np.sqrt(sq / max(n, 1)))
     best = min(err, key=err.get)
     ctx, ow, alpha = best.split("/")
     return (int(ctx), int(ow), float(alpha)), err
 
 
-def _method_validation(sm, settings, V, acc, models, protos, lattice):
-    """Validation RMSE X and LVE of every method at the chosen settings; the manifold's cross-fitted."""
-    halves = [[i for i in range(len(V.utts)) if i % 2 == h] for h in (0, 1)]
+def _method_validation(sms, settings, folds, acc, models, protos, lattice):
+    """Validation RMSE X and LVE of every method at the chosen settings; the manifold's cross-fitted.
+
+    Each validation utterance's manifold trajectory takes the blend weights fitted on the
+    utterances of the other folds (one split: of the other half of its utterances).
+    """
+    owner = [j for j, f in enumerate(folds) for _ in f.V.utts]
+    n = len(owner)
+    group = owner if len(folds) > 1 else [i % 2 for i in range(n)]
     cross = {}
     for p in protos:
-        w = [fit_blend(_total([acc[p][i] for i in half])) if half else settings["blend"][p] for half in halves]
-        cross[p] = {i: w[1 - h] for h in (0, 1) for i in halves[h]}  # each utterance scored with the other half's weights
+        w = {g: fit_blend([acc[p][i] for i in range(n) if group[i] != g]) if n > 1 else settings["blend"][p]
+             for g in set(group)}
+        cross[p] = [w[g] for g in group]
     sums = {}
-    mean_x = np.asarray(V.m.Fx_, np.float64).mean(axis=0)
-    for i, tg in enumerate(V.targets):
-        st = sm.predict(manifold_y(V.m, V.utts[i])[tg.frames])
-        trajs, _ = trajectories(sm, settings, tg, st, mean_x, phone_models=models, protocols=protos,
-                                lattice_states=None if lattice is None else lattice[i])
-        lo, hi = V.span(i)
-        for p in protos:
-            if len(V.utts) > 1:  # the manifold method scored with weights fitted on the other half
-                s = lattice[i] if p == "phones" else st
-                xt = V.X[i][tg.frames] if p == "oracle" else None
-                trajs[p]["manifold"] = _learnt(sm, tg.frames, s, tg.n_frames, cross[p][i], xt)
-            for name, X in trajs[p].items():
-                sc = scores(V.m, X, V.F[i], lo, hi)
-                a = sums.setdefault(p, {}).setdefault(name, [0.0, 0.0, 0])
-                a[0] += sc["sq_x"]
-                a[1] += sc["lve_sum"]
-                a[2] += sc["frames"]
+    mean_x = np.asarray(folds[0].V.m.Fx_, np.float64).mean(axis=0)
+    flat = 0
+    for j, (sm, fold) in enumerate(zip(sms, folds)):
+        V = fold.V
+        for i, tg in enumerate(V.targets):
+            st = sm.predict(manifold_y(V.m, V.utts[i])[tg.frames])
+            trajs, _ = trajectories(sm, settings, tg, st, mean_x, phone_models=None if models is None else models[j],
+                                    protocols=protos, lattice_states=None if lattice is None else lattice[j][i])
+            lo, hi = V.span(i)
+            for p in protos:
+                if n > 1:  # the manifold method scored with weights fitted on the other utterances
+                    s = lattice[j][i] if p == "phones" else st
+                    xt = V.X[i][tg.frames] if p == "oracle" else None
+                    trajs[p]["manifold"] = sm.learnt_x(tg.frames, s, tg.n_frames, cross[p][flat], x_targets=xt)
+                for name, X in trajs[p].items():
+                    sc = scores(V.m, X, V.F[i], lo, hi)
+                    a = sums.setdefault(p, {}).setdefault(name, [0.0, 0.0, 0])
+                    a[0] += sc["sq_x"]
+                    a[1] += sc["lve_sum"]
+                    a[2] += sc["frames"]
+            flat += 1
     return {p: {name: {"rmse_x": float(np.sqrt(a[0] / a[2])), "lve": a[1] / a[2]} for name, a in r.items()}
             for p, r in sums.items()}
-
-
-def _learnt(sm, f, states, n, weights, x_targets):
-    return sm.learnt_x(f, states, n, weights, x_targets=x_targets)

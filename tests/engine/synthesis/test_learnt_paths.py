@@ -88,3 +88,30 @@ def test_fit_blend_recovers_the_base_and_share_and_never_leaves_zero_to_one():
     out = blend(B, P, w["base_index"], w["neighbor_index"], w["beta"])
     np.testing.assert_allclose(out[:, 0], B[0, :, 0] + w["beta"][0] * (P[2, :, 0] - B[0, :, 0]))
     assert sum(w["sq_error"]) < np.min(np.sum(w["sq_bases"], axis=1))
+
+
+def test_fit_blend_over_utterances_chooses_by_leaving_each_one_out():
+    """Given one accumulator per validation utterance, a share that fits one utterance's own noise is not
+    bought: the component keeps its base alone, where the fit on all frames pooled takes a share of it."""
+    rng = np.random.default_rng(4)
+    n, m, U = 80, 2, 4
+    accs, pooled = [], BlendAccumulator(len(BASES), len(NEIGHBOR_STEPS), m)
+    for u in range(U):
+        B = rng.normal(size=(len(BASES), n, m))
+        noise = rng.normal(0, 0.3, (n, m))
+        truth = B[1] + noise  # both components: the second base
+        P = np.stack([B[1] + rng.normal(0, 1, (n, m)) for _ in NEIGHBOR_STEPS])
+        truth[:, 0] += 0.6 * (P[3, :, 0] - B[1, :, 0])  # component 0 also takes a real share of step 3
+        # component 1's pooled paths: the first utterance's own noise there, unrelated noise elsewhere
+        P[:, :, 1] = B[1, :, 1] + (noise[:, 1] if u == 0 else rng.normal(0, 0.3, (len(NEIGHBOR_STEPS), n)))
+        a = BlendAccumulator(len(BASES), len(NEIGHBOR_STEPS), m)
+        a.add(B, P, truth)
+        accs.append(a)
+        pooled.add(B, P, truth)
+    cv, fitted = fit_blend(accs), fit_blend(pooled)
+    assert cv["frames"] == fitted["frames"] == U * n
+    assert cv["base_index"] == [1, 1] and cv["neighbor_index"][0] == 3
+    assert cv["beta"][0] == pytest.approx(0.6, abs=0.05)
+    assert cv["beta"][1] == 0.0 and fitted["beta"][1] > 0.1  # bought on all frames pooled, not when left out
+    assert cv["sq_error"][1] == pytest.approx(cv["sq_bases"][1][1])  # the base alone, scored as such
+    assert all(c >= f - 1e-9 for c, f in zip(cv["sq_error"], fitted["sq_error"]))  # left out never looks better

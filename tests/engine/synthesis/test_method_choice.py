@@ -70,12 +70,12 @@ def test_the_choice_is_measured_once_and_keyed_by_the_data(small_manifold, tmp_p
 def test_state_model_synthesisers_resolve_every_kind_of_target(small_manifold):
     """A clicked state of the manifold's own graph, an F^y point and a phone label each become a state of the
     validated state model; the state-velocity Hermite spline passes through the states' mean X there."""
-    from engine.synthesis.learnt_paths import hermite_only_blend
+    from engine.synthesis.learnt_paths import prior_blend
     from engine.synthesis.state_synthesis import LearntPathSynthesizer, StateHermiteSynthesizer
 
     m = small_manifold
     choice = {"state_dims": 5, "n_states": 120, "n_neighbors": 20,
-              "blend": {p: hermite_only_blend(m.Fx_.shape[1]) for p in ("states", "oracle", "phones")}}
+              "blend": {p: prior_blend(m.Fx_.shape[1]) for p in ("states", "oracle", "phones")}}
     sh = StateHermiteSynthesizer(choice=choice).fit(m)
     tg = _seq([Target(2, "", 3), Target(12, "", None, np.asarray(m.Fy_[100], np.float64)), Target(24, "aa")])
     tr = sh.synthesize(tg)

@@ -100,3 +100,33 @@ def test_a_bad_budget_names_value_limit_and_fix(small_manifold, bad):
 def test_a_bad_val_fraction_names_its_range(small_manifold):
     with pytest.raises(ValueError, match=r"val_fraction must be in \(0, 1\), got 1.5"):
         val.select_settings(small_manifold, val_fraction=1.5, **GRID)
+
+
+@pytest.fixture(scope="module")
+def tiny_manifold(small_corpus):
+    """Five utterances of the small talker: a split of a fifth would hold two."""
+    from engine.manifold.model import Manifold
+
+    return Manifold().fit(small_corpus.subset([u.id for u in small_corpus.utterances[:5]]))
+
+
+def test_a_corpus_too_small_for_a_split_is_validated_by_leaving_each_utterance_out(tiny_manifold, fits):
+    """Every training utterance is held out once from the states, the learnt paths and the inverse maps."""
+    m = tiny_manifold
+    utts = m.corpus_.utterances
+    assert (len(utts) - 1) * m.corpus_.n_frames <= val.default_fit_frames()
+    s = val.select_settings(m, **GRID)
+    assert s["val_ids"] == [u.id for u in utts]
+    assert "leave one out" in s["note"] and f"fewer than {val.MIN_SPLIT_UTTERANCES}" in s["note"]
+    per_candidate = len(utts)
+    assert len(fits) == per_candidate * len(GRID["frames_per_state"])
+    for j, (Fy, bounds, K) in enumerate(fits):
+        held = utts[j % per_candidate]  # the folds in corpus order, one per utterance
+        kept = [u for u in utts if u is not held]
+        assert [b - a for a, b in bounds] == [u.n_frames for u in kept]
+        np.testing.assert_array_equal(Fy, np.concatenate([m.Fy_[u.start:u.stop] for u in kept]))
+        assert K == max(2, round(len(Fy) / GRID["frames_per_state"][j // per_candidate]))
+    # every method measured on all five, the manifold's weights fitted on the other folds
+    assert set(s["method_validation"]) == {"states", "oracle"} and s["best"]["states"] in s["method_validation"]["states"]
+    assert s["blend"]["states"]["frames"] == sum(
+        int(t.frames[-1]) + 1 - int(t.frames[0]) for t in (val.mid_frames(m, u.id) for u in utts))
