@@ -5,8 +5,9 @@ error and by how much, always as Δ = manifold − other (negative: the manifold
 erred less): against the runner-up when the manifold method wins, against the winner
 when another method does -- the mean per-utterance difference with its 95 % bootstrap
 interval, the relative difference of the pooled errors, on how many utterances the
-winner wins, and the paired tests. A manifold method that equals another exactly (no
-validation split: it is then the state-velocity Hermite spline) is a tie, not a win.
+winner wins, and the paired tests; a corpus with one test utterance pairs the gaps between
+its targets instead (X and LVE). A manifold method that equals another exactly (no
+validation split: it is then a spline through the targets) is a tie, not a win.
 The cells are computed when a corpus is run and cached with its section, so the
 summary can be assembled from sections computed at different times.
 """
@@ -23,7 +24,12 @@ def _delta(c) -> str:
     """Δ = reference − baseline of a paired comparison (negative: the reference erred less), with its interval."""
     if not np.isfinite(c["ci_low"]):
         return f"{0.0 - c['mean_diff']:+.3g} (one utterance)"
-    return f"{-c['mean_diff']:+.3g} [{-c['ci_high']:+.3g}, {-c['ci_low']:+.3g}]"
+    return f"{-c['mean_diff']:+.3g} [{-c['ci_high']:+.3g}, {-c['ci_low']:+.3g}]" + _over(c)
+
+
+def _over(c) -> str:
+    """What a comparison paired: nothing said for utterances, the gaps of one utterance said."""
+    return f" over {c['n']} gaps of one utterance" if c.get("unit") == "gaps" else ""
 
 
 def summary_cells(result, measure="rmse_x") -> dict:
@@ -41,7 +47,7 @@ def summary_cells(result, measure="rmse_x") -> dict:
         out[p] = {"winner": "tie" if tie else winner, "other": other, "delta": -c["mean_diff"],
                   "ci_low": -c["ci_high"], "ci_high": -c["ci_low"], "n": c["n"],
                   "winner_wins": c["wins"] if winner == REFERENCE else c["losses"], "p_sign": c["p_sign"],
-                  "p_wilcoxon": c["p_wilcoxon"], "percent": 100 * (ref - o) / o}
+                  "p_wilcoxon": c["p_wilcoxon"], "percent": 100 * (ref - o) / o, "unit": c.get("unit", "utterances")}
     return out
 
 
@@ -51,13 +57,14 @@ def format_cell(cell) -> str:
     if cell["winner"] == "tie":
         return f"tie: manifold = {cell['other']} (identical trajectories)"
     if np.isfinite(cell["ci_low"]):
-        d = f"Δ {cell['delta']:+.3g} [{cell['ci_low']:+.3g}, {cell['ci_high']:+.3g}]"
+        d = f"Δ {cell['delta']:+.3g} [{cell['ci_low']:+.3g}, {cell['ci_high']:+.3g}]" + _over(cell)
         tests = f"; p {cell['p_sign']:.2g} sign / {cell['p_wilcoxon']:.2g} signed-rank"
     else:
         d, tests = f"Δ {cell['delta']:+.3g} (one utterance)", ""
     who = f"vs {cell['other']}" if cell["winner"] == REFERENCE else "manifold vs it"
+    unit = " gaps" if cell.get("unit") == "gaps" else ""
     return (f"**{cell['winner']}**: {who} {d}, {cell['percent']:+.1f} %; wins {cell['winner_wins']}/{cell['n']}"
-            + tests)
+            + unit + tests)
 
 
 def summary_table(entries, protocols, measure_label) -> list[str]:

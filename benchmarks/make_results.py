@@ -291,8 +291,9 @@ def _document(sections, commit, code, total):
         "method with the lowest pooled error and the margin Δ = manifold − other (negative: `manifold` erred "
         "less), against the runner-up when `manifold` wins and against the winner otherwise: the mean "
         "per-utterance difference with its 95 % bootstrap interval, the relative difference of the pooled "
-        "errors, the utterances the winner wins, and the sign-test / signed-rank p-values. One-utterance "
-        "corpora (Haskins) have no interval and no test.",
+        "errors, the utterances the winner wins, and the sign-test / signed-rank p-values. A corpus with one "
+        "test utterance (each Haskins direction) pairs the gaps between its targets instead: interval, wins and "
+        "tests over those gaps, which are parts of one sentence, not independent utterances.",
         "",
         *summary_table(summary, PROTOCOLS, "RMSE X"),
         "",

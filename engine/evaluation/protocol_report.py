@@ -3,8 +3,13 @@
 Aggregates pool frames over utterances (RMS over all compared frames; LVE averaged
 over all compared frames). Each non-reference method is compared with ``manifold``
 utterance by utterance (:func:`engine.evaluation.paired.paired_comparison`): a positive mean
-difference means the manifold erred less. A table's *verdict* names every method
-whose pooled error is below the manifold's -- where the manifold loses, it says so.
+difference means the manifold erred less. With a single test utterance there is nothing
+to pair over utterances; X and LVE are then compared gap by gap (the frames from one
+target to the next, each gap's RMSE X and mean LVE), so a one-sentence corpus still
+gets an interval and a test -- of that sentence's gaps, which are not independent
+utterances and say nothing about other sentences or speakers. A table's *verdict* names
+every method whose pooled error is below the manifold's -- where the manifold loses, it
+says so.
 """
 from __future__ import annotations
 
@@ -20,6 +25,8 @@ __all__ = ["ProtocolResult", "CSV_COLUMNS"]
 CSV_COLUMNS = ("protocol", "method", "utterance", "rmse_x", "rmse_y", "lve", "vel", "smooth")
 #: measures compared utterance by utterance (``smooth`` is descriptive: neither higher nor lower is better)
 _MEASURES = ("rmse_x", "rmse_y", "lve", "vel")
+#: measures that a one-utterance test compares gap by gap (the frames between two targets)
+_GAP_MEASURES = ("rmse_x", "lve")
 _LABEL = {"rmse_x": "RMSE X", "rmse_y": "RMSE Y3", "lve": "LVE", "vel": "vel. error"}
 REFERENCE = "manifold"
 
@@ -74,15 +81,20 @@ class ProtocolResult:
         for proto, m in keys:
             ps = [p for p in per if p["protocol"] == proto and p["method"] == m]
             rows.append({"protocol": proto, "method": m, "utterances": len(ps), **_pooled(ps)})
+        raw = {(p["protocol"], p["method"], p["utterance"]): p for p in per}
         for proto in dict.fromkeys(k[0] for k in keys):
             ref = {p["utterance"]: p for p in slim if p["protocol"] == proto and p["method"] == REFERENCE}
             for _, m in [k for k in keys if k[0] == proto and k[1] != REFERENCE]:
                 other = {p["utterance"]: p for p in slim if p["protocol"] == proto and p["method"] == m}
                 uids = [u for u in ref if u in other]
                 for meas in _MEASURES:
-                    c = paired_comparison([ref[u][meas] for u in uids], [other[u][meas] for u in uids],
-                                          n_boot=n_boot, random_state=random_state)
-                    comps.append({"protocol": proto, "method": m, "measure": meas, **c.as_dict()})
+                    a, b, unit = [ref[u][meas] for u in uids], [other[u][meas] for u in uids], "utterances"
+                    if len(uids) == 1 and meas in _GAP_MEASURES:
+                        ga, gb = (_gap_errors(raw.get((proto, x, uids[0])), meas) for x in (REFERENCE, m))
+                        if ga is not None and gb is not None and ga.size >= 2:
+                            a, b, unit = ga, gb, "gaps"
+                    c = paired_comparison(a, b, n_boot=n_boot, random_state=random_state)
+                    comps.append({"protocol": proto, "method": m, "measure": meas, **c.as_dict(), "unit": unit})
         inv = [{"map": k, "frames": v["frames"], "rmse_x": float(np.sqrt(v["sq_x"] / v["frames"])),
                 "lve": v["lve_sum"] / v["frames"],
                 "r2": [float(x) for x in 1.0 - np.asarray(v["sq_comp"]) / np.maximum(np.asarray(v["var_comp"]), 1e-300)]}
@@ -137,8 +149,8 @@ class ProtocolResult:
         for r in sorted(better, key=lambda r: r[measure]):
             c = self.comparison(protocol, r["method"], measure)
             parts.append(f"{r['method']} ({r[measure]:.4g}, {100 * (ref - r[measure]) / ref:.0f} % lower; "
-                         f"better on {c['losses']} of {c['n']} utterances, sign test p = {c['p_sign']:.2g}, "
-                         f"signed-rank p = {c['p_wilcoxon']:.2g})")
+                         f"better on {c['losses']} of {c['n']} {c.get('unit', 'utterances')}, sign test p = "
+                         f"{c['p_sign']:.2g}, signed-rank p = {c['p_wilcoxon']:.2g})")
         return f"manifold ({ref:.4g}) LOSES on {_LABEL[measure]} to " + "; ".join(parts) + "."
 
     # ---------------------------------------------------------------- output
@@ -174,6 +186,10 @@ class ProtocolResult:
             lines.append(f"state graph: {w}")
         if self.failures:
             lines.append(f"{len(self.failures)} utterance(s) not scored, e.g. {self.failures[0]}")
+        gaps = [c["n"] for c in self.comparisons if c.get("unit") == "gaps"]
+        if gaps:
+            lines.append(f"one test utterance: the intervals, wins and tests of X and LVE are over its {max(gaps)} gaps "
+                         f"between targets (those of Y3 and velocity cannot be paired)")
         return lines
 
     def _table(self, protocol):
@@ -243,6 +259,17 @@ def _pooled(ps) -> dict:
     out["rmse_y"] = (float(np.sqrt(sum(p["sq_y"] for p in ps) / n)) if all("sq_y" in p for p in ps)
                      else float("nan"))
     return out
+
+
+def _gap_errors(p, measure):
+    """Per gap between targets of one scored utterance (:func:`engine.synthesis.protocol_methods.scores` with
+    ``gaps``): its RMSE X or mean LVE; None without gap sums."""
+    if p is None or "gap_frames" not in p:
+        return None
+    n = np.asarray(p["gap_frames"], dtype=np.float64)
+    if measure == "rmse_x":
+        return np.sqrt(np.asarray(p["gap_sq_x"], dtype=np.float64) / n)
+    return np.asarray(p["gap_lve"], dtype=np.float64) / n
 
 
 def _per_utterance(p) -> dict:

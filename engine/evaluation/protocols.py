@@ -185,7 +185,7 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
         for p, methods in trajs.items():
             for m, X in methods.items():
                 per.append({"protocol": p, "method": m, "utterance": uid,
-                            **scores(manifold, X, F, lo, hi, Y_true=Y, y_dims=Y_DIMS)})
+                            **scores(manifold, X, F, lo, hi, Y_true=Y, y_dims=Y_DIMS, gaps=tg.frames)})
         if inverse_table:
             _inverse_errors(inv, manifold, sm, F, Y)
     report(progress, "protocols", len(test), len(test))

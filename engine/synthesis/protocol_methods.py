@@ -185,14 +185,16 @@ def trajectories(sm, settings, tg, states, mean_x, *, phone_models=None, protoco
     return out, missed
 
 
-def scores(manifold, X, F, lo, hi, *, Y_true=None, y_dims=3) -> dict:
+def scores(manifold, X, F, lo, hi, *, Y_true=None, y_dims=3, gaps=None) -> dict:
     """Sums over frames [lo, hi) of one trajectory's errors against the real frames ``F`` (n, C).
 
     Returns ``frames``, ``sq_x`` (squared Euclidean error in X), ``lve_sum`` (per frame the
     largest per-point error), ``sq_v`` over ``frames_v`` (velocity error: the first
     difference of X against the real one), ``acc`` and ``acc_true`` (squared second
-    differences of the trajectory and of the real one), and with ``Y_true`` ``sq_y`` (the
-    first ``y_dims`` of Y, the trajectory projected out-of-sample).
+    differences of the trajectory and of the real one), with ``Y_true`` ``sq_y`` (the
+    first ``y_dims`` of Y, the trajectory projected out-of-sample), and with ``gaps`` (the
+    target frames, increasing, from ``lo`` to ``hi - 1``) the sums per gap between them:
+    ``gap_frames``, ``gap_sq_x`` and ``gap_lve`` (lists; the last gap holds its end frame).
     """
     X = np.asarray(X, dtype=np.float64)
     Xt = manifold.shape_.transform(F[lo:hi]).astype(np.float64)
@@ -204,6 +206,12 @@ def scores(manifold, X, F, lo, hi, *, Y_true=None, y_dims=3) -> dict:
     out = {"frames": n, "sq_x": float(((Xh - Xt) ** 2).sum()), "lve_sum": float(lve.sum()),
            "sq_v": float(((np.diff(Xh, axis=0) - np.diff(Xt, axis=0)) ** 2).sum()), "frames_v": n - 1,
            "acc": float((np.diff(Xh, 2, axis=0) ** 2).sum()), "acc_true": float((np.diff(Xt, 2, axis=0) ** 2).sum())}
+    if gaps is not None and len(gaps) >= 2:
+        cuts = np.append(np.asarray(gaps, dtype=np.int64)[:-1], hi) - lo
+        sq = ((Xh - Xt) ** 2).sum(axis=1)
+        out["gap_frames"] = np.diff(cuts).tolist()
+        out["gap_sq_x"] = np.add.reduceat(sq, cuts[:-1]).tolist()
+        out["gap_lve"] = np.add.reduceat(lve, cuts[:-1]).tolist()
     if Y_true is not None:
         from engine.manifold.model import project_x
 
