@@ -332,24 +332,29 @@ def _select_neighbors(folds, d, neighbors):
     return min(errors, key=errors.get), errors
 
 
-def _accumulate(sms, folds, protos, lattice=None):
-    """Per protocol, per validation utterance (fold by fold): the blend sums of the bases, pooled paths and truth."""
-    out = {p: [] for p in protos}
+def _utterances(sms, folds):
+    """Every validation utterance, fold by fold: (fold index j, index i in the fold, the fold's state model,
+    its :class:`_Val`, the targets, the scored span (lo, hi), the true X (n, m), the target states)."""
     for j, (sm, fold) in enumerate(zip(sms, folds)):
         V = fold.V
         for i, tg in enumerate(V.targets):
-            f, n = tg.frames, tg.n_frames
             lo, hi = V.span(i)
-            X = V.X[i]
-            st = sm.predict(manifold_y(V.m, V.utts[i])[f])
-            for p in protos:
-                s = lattice[j][i] if p == "phones" else st
-                xt = X[f] if p == "oracle" else None
-                B = sm.bases_x(f, s, n, xt)
-                P = sm.pooled_x(f, s, n, xt)
-                a = BlendAccumulator(len(BASES), len(NEIGHBOR_STEPS), X.shape[1])
-                a.add(B[:, lo:hi], P[:, lo:hi], X[lo:hi])
-                out[p].append(a)
+            yield j, i, sm, V, tg, lo, hi, V.X[i], sm.predict(manifold_y(V.m, V.utts[i])[tg.frames])
+
+
+def _accumulate(sms, folds, protos, lattice=None):
+    """Per protocol, per validation utterance (fold by fold): the blend sums of the bases, pooled paths and truth."""
+    out = {p: [] for p in protos}
+    for j, i, sm, _V, tg, lo, hi, X, st in _utterances(sms, folds):
+        f, n = tg.frames, tg.n_frames
+        for p in protos:
+            s = lattice[j][i] if p == "phones" else st
+            xt = X[f] if p == "oracle" else None
+            B = sm.bases_x(f, s, n, xt)
+            P = sm.pooled_x(f, s, n, xt)
+            a = BlendAccumulator(len(BASES), len(NEIGHBOR_STEPS), X.shape[1])
+            a.add(B[:, lo:hi], P[:, lo:hi], X[lo:hi])
+            out[p].append(a)
     return out
 
 
@@ -360,24 +365,19 @@ def manifold_y(manifold, u):
 
 def _viterbi_sigmas(sms, folds, sigmas, protos, lattice):
     sq = {(p, s): 0.0 for p in protos for s in sigmas}
-    for j, (sm, fold) in enumerate(zip(sms, folds)):
-        V = fold.V
-        for i, tg in enumerate(V.targets):
-            f, n = tg.frames, tg.n_frames
-            lo, hi = V.span(i)
-            X = V.X[i]
-            st = sm.predict(manifold_y(V.m, V.utts[i])[f])
-            paths = {}
-            if "states" in protos:
-                paths["states"] = paths["oracle"] = sm.path(f, st, n)[0]
-            if "phones" in protos:
-                paths["phones"] = sm.path(f, lattice[j][i], n)[0]
-            for p in protos:
-                for s in sigmas:
-                    Xh = sm.path_x(paths[p], how="state-mean", sigma=s)
-                    if p == "oracle":
-                        Xh = anchor(Xh, f, X[f])
-                    sq[(p, s)] += float(((Xh - X)[lo:hi] ** 2).sum())
+    for j, i, sm, _V, tg, lo, hi, X, st in _utterances(sms, folds):
+        f, n = tg.frames, tg.n_frames
+        paths = {}
+        if "states" in protos:
+            paths["states"] = paths["oracle"] = sm.path(f, st, n)[0]
+        if "phones" in protos:
+            paths["phones"] = sm.path(f, lattice[j][i], n)[0]
+        for p in protos:
+            for s in sigmas:
+                Xh = sm.path_x(paths[p], how="state-mean", sigma=s)
+                if p == "oracle":
+                    Xh = anchor(Xh, f, X[f])
+                sq[(p, s)] += float(((Xh - X)[lo:hi] ** 2).sum())
     return {p: float(min(sigmas, key=lambda s: sq[(p, s)])) for p in protos}
 
 
@@ -420,25 +420,19 @@ def _method_validation(sms, settings, folds, acc, models, protos, lattice):
         cross[p] = [w[g] for g in group]
     sums = {}
     mean_x = np.asarray(folds[0].V.m.Fx_, np.float64).mean(axis=0)
-    flat = 0
-    for j, (sm, fold) in enumerate(zip(sms, folds)):
-        V = fold.V
-        for i, tg in enumerate(V.targets):
-            st = sm.predict(manifold_y(V.m, V.utts[i])[tg.frames])
-            trajs, _ = trajectories(sm, settings, tg, st, mean_x, phone_models=None if models is None else models[j],
-                                    protocols=protos, lattice_states=None if lattice is None else lattice[j][i])
-            lo, hi = V.span(i)
-            for p in protos:
-                if n > 1:  # the manifold method scored with weights fitted on the other utterances
-                    s = lattice[j][i] if p == "phones" else st
-                    xt = V.X[i][tg.frames] if p == "oracle" else None
-                    trajs[p]["manifold"] = sm.learnt_x(tg.frames, s, tg.n_frames, cross[p][flat], x_targets=xt)
-                for name, X in trajs[p].items():
-                    sc = scores(V.m, X, V.F[i], lo, hi)
-                    a = sums.setdefault(p, {}).setdefault(name, [0.0, 0.0, 0])
-                    a[0] += sc["sq_x"]
-                    a[1] += sc["lve_sum"]
-                    a[2] += sc["frames"]
-            flat += 1
+    for flat, (j, i, sm, V, tg, lo, hi, Xv, st) in enumerate(_utterances(sms, folds)):
+        trajs, _ = trajectories(sm, settings, tg, st, mean_x, phone_models=None if models is None else models[j],
+                                protocols=protos, lattice_states=None if lattice is None else lattice[j][i])
+        for p in protos:
+            if n > 1:  # the manifold method scored with weights fitted on the other utterances
+                s = lattice[j][i] if p == "phones" else st
+                xt = Xv[tg.frames] if p == "oracle" else None
+                trajs[p]["manifold"] = sm.learnt_x(tg.frames, s, tg.n_frames, cross[p][flat], x_targets=xt)
+            for name, X in trajs[p].items():
+                sc = scores(V.m, X, V.F[i], lo, hi)
+                a = sums.setdefault(p, {}).setdefault(name, [0.0, 0.0, 0])
+                a[0] += sc["sq_x"]
+                a[1] += sc["lve_sum"]
+                a[2] += sc["frames"]
     return {p: {name: {"rmse_x": float(np.sqrt(a[0] / a[2])), "lve": a[1] / a[2]} for name, a in r.items()}
             for p, r in sums.items()}
