@@ -12,9 +12,10 @@ turn any :class:`engine.phonetics.targets.TargetSequence` into X:
   at the targets is used (``oracle``) and which validated weights the manifold method
   takes.
 
-:class:`LearntPathSynthesizer` (method ``"manifold"``) is the state-velocity Hermite
-spline plus the validated share of the training paths between the states
-(:meth:`StateModel.learnt_x`); :class:`StateHermiteSynthesizer` (``"sv-hermite"``) the
+:class:`LearntPathSynthesizer` (method ``"manifold"``) is, per shape component, the
+validated base interpolation through the targets (without validation data the spline
+with velocities calibrated on the targets) plus the validated share of the training
+paths between the states (:meth:`StateModel.learnt_x`); :class:`StateHermiteSynthesizer` (``"sv-hermite"``) the
 spline alone.
 """
 from __future__ import annotations
@@ -113,7 +114,7 @@ class _StateModelSynthesizer(BaseEstimator):
 
 
 class LearntPathSynthesizer(_StateModelSynthesizer):
-    """The manifold synthesis: state-velocity Hermite plus the validated share of the learnt paths."""
+    """The manifold synthesis: a validated base through the targets plus the validated share of the learnt paths."""
 
     method = "manifold"
 
