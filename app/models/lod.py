@@ -170,6 +170,21 @@ def _count(keys) -> int:
     return 1 + int(np.count_nonzero(s[1:] != s[:-1]))
 
 
+def _grouped(Y, labels, lo, hi, h, n_states):
+    """Every frame sorted by (state, cell) group, then frame: (order (N,), first (N,) bool: a group starts here)."""
+    N = Y.shape[0]
+    key = _keys(Y, labels, lo, hi, h, n_states)
+    if int(key.max()) >= 2**62 // N:  # renumber the (state, cell) pairs so that key * N fits in int64
+        key = np.unique(key, return_inverse=True)[1].reshape(-1)
+    both = np.sort(key * N + np.arange(N, dtype=np.int64))  # by group, then frame: one sort of N numbers
+    del key
+    ks = both // N
+    first = np.r_[True, ks[1:] != ks[:-1]]
+    del ks
+    both %= N
+    return both, first
+
+
 def cloud_detail(Y, labels, *, max_points: int | None = None) -> CloudDetail:
     """Group the frames for drawing: every frame while N <= ``max_points``, else by state and grid cell.
 
@@ -215,13 +230,23 @@ def cloud_detail(Y, labels, *, max_points: int | None = None) -> CloudDetail:
     # search the edge: groups fall as the cells grow (G ~ h^-a); secant steps in log-log, first on a
     # random sample of the frames (each step sorts its keys), then on every frame from there
     tried: dict = {}
+    kept: dict = {}  # on every frame: the grouping of the finest grid within the cap so far, to be used as is
     target = 0.5 * (_FILL + 1.0) * max_points
+
+    def count(Ys, ls, h, memo):
+        if memo is not tried:
+            return _count(_keys(Ys, ls, lo, hi, h, K))
+        order, first = _grouped(Ys, ls, lo, hi, h, K)
+        g = int(np.count_nonzero(first))
+        if g <= max_points and (not kept or h < kept["h"]):
+            kept.update(h=h, order=order, first=first)
+        return g
 
     def search(Ys, ls, h, slope, steps, memo):
         def groups(h):
             h = float(min(max(h, h_min), big))
             if h not in memo:
-                memo[h] = _count(_keys(Ys, ls, lo, hi, h, K))
+                memo[h] = count(Ys, ls, h, memo)
             return h, memo[h]
 
         h, g = groups(h)
@@ -245,16 +270,8 @@ def cloud_detail(Y, labels, *, max_points: int | None = None) -> CloudDetail:
     search(Y, labels, h, slope, _MAX_STEPS, tried)
     ok = [hh for hh, gg in tried.items() if gg <= max_points]
     h = min(ok) if ok else big  # the finest grid within the cap; else whole states (K groups)
-    key = _keys(Y, labels, lo, hi, h, K)
-    if int(key.max()) >= 2**62 // N:  # renumber the (state, cell) pairs so that key * N fits in int64
-        key = np.unique(key, return_inverse=True)[1].reshape(-1)
-    both = np.sort(key * N + np.arange(N, dtype=np.int64))  # by group, then frame: one sort of N numbers
-    del key
-    order = both % N
-    ks = both // N
-    del both
-    first = np.r_[True, ks[1:] != ks[:-1]]
-    del ks
+    order, first = (kept["order"], kept["first"]) if kept.get("h") == h else _grouped(Y, labels, lo, hi, h, K)
+    kept.clear()
     starts = np.flatnonzero(first)
     offsets = np.r_[starts, N].astype(np.int64)
     sizes = np.diff(offsets)
