@@ -229,24 +229,26 @@ def cloud_detail(Y, labels, *, max_points: int | None = None) -> CloudDetail:
     h_min = float(extent.max()) * 2.0**-40 + 1e-300  # cell numbers stay far inside int64
     # search the edge: groups fall as the cells grow (G ~ h^-a); secant steps in log-log, first on a
     # random sample of the frames (each step sorts its keys), then on every frame from there
-    tried: dict = {}
-    kept: dict = {}  # on every frame: the grouping of the finest grid within the cap so far, to be used as is
+    kept: dict = {}  # on every frame: the grouping of the finest grid within the cap so far, used as is
     target = 0.5 * (_FILL + 1.0) * max_points
 
-    def count(Ys, ls, h, memo):
-        if memo is not tried:
-            return _count(_keys(Ys, ls, lo, hi, h, K))
-        order, first = _grouped(Ys, ls, lo, hi, h, K)
+    def on_sample(Ys, ls):
+        return lambda h: _count(_keys(Ys, ls, lo, hi, h, K))
+
+    def on_every_frame(h):
+        order, first = _grouped(Y, labels, lo, hi, h, K)
         g = int(np.count_nonzero(first))
         if g <= max_points and (not kept or h < kept["h"]):
             kept.update(h=h, order=order, first=first)
         return g
 
-    def search(Ys, ls, h, slope, steps, memo):
+    def search(count, h, slope, steps):
+        memo = {}
+
         def groups(h):
             h = float(min(max(h, h_min), big))
             if h not in memo:
-                memo[h] = count(Ys, ls, h, memo)
+                memo[h] = count(h)
             return h, memo[h]
 
         h, g = groups(h)
@@ -266,12 +268,13 @@ def cloud_detail(Y, labels, *, max_points: int | None = None) -> CloudDetail:
     slope = 2.5
     if N > 2 * _SAMPLE:
         pick = np.random.default_rng(0).choice(N, _SAMPLE, replace=False)
-        h, slope = search(Y[pick], labels[pick], h, slope, _MAX_STEPS, {})
-    search(Y, labels, h, slope, _MAX_STEPS, tried)
-    ok = [hh for hh, gg in tried.items() if gg <= max_points]
-    h = min(ok) if ok else big  # the finest grid within the cap; else whole states (K groups)
-    order, first = (kept["order"], kept["first"]) if kept.get("h") == h else _grouped(Y, labels, lo, hi, h, K)
-    kept.clear()
+        h, slope = search(on_sample(Y[pick], labels[pick]), h, slope, _MAX_STEPS)
+    search(on_every_frame, h, slope, _MAX_STEPS)
+    if kept:  # the finest grid within the cap
+        h, order, first = kept["h"], kept["order"], kept["first"]
+    else:  # none within it: whole states (K groups)
+        h = big
+        order, first = _grouped(Y, labels, lo, hi, h, K)
     starts = np.flatnonzero(first)
     offsets = np.r_[starts, N].astype(np.int64)
     sizes = np.diff(offsets)

@@ -204,10 +204,8 @@ class StateModel:
                 continue
             if kind == "calibrated" and x_targets is not None:
                 out[i] = calibrated_spline(frames, X, V, n_frames)
-            elif kind == "calibrated":
-                out[i] = interpolate_targets("hermite", frames, X, n_frames, V)
-            else:
-                out[i] = interpolate_targets(kind, frames, X, n_frames, V)
+            else:  # through the states' own means "calibrated" is the state-velocity spline
+                out[i] = interpolate_targets("hermite" if kind == "calibrated" else kind, frames, X, n_frames, V)
         return out
 
     def learnt_x(self, frames, states, n_frames, weights, x_targets=None) -> np.ndarray:
