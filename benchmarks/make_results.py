@@ -3,6 +3,7 @@
 Usage: python benchmarks/make_results.py [--out docs/RESULTS.md] [--preset default|small] [--seed 0]
                                          [--corpus default held-out haskins faces] [--haskins-dir DIR]
                                          [--faces-dir DIR] [--cache-dir DIR] [--results-cache DIR]
+                                         [--speaker-norm mean|mean+scale]
 
 Corpora (every number in the file is computed by this script from current code):
 
@@ -14,6 +15,10 @@ Corpora (every number in the file is computed by this script from current code):
 ``faces``     the five real talking-face clips, each imported with ``lipspace import`` (60 Hz),
               pooled as one corpus of five speakers (each clip's mean frame removed), every clip
               held out in turn (leave one clip out) with kinematic key frames as targets.
+
+``--speaker-norm mean+scale`` also scales each speaker's spread to the pooled spread in the two
+real corpora (a sensitivity run: write it elsewhere with ``--out``; RESULTS.md is made with
+``mean``, the default of ``lipspace build`` and ``evaluate``).
 
 Settings are chosen per corpus (and per fold) on a validation split of its training
 utterances (:func:`engine.evaluation.protocols.select_settings`). Each corpus's section is cached
@@ -43,6 +48,8 @@ from _results_tables import contribution_cells, contribution_table, summary_cell
 DEFAULT_HASKINS = REPO.parent / "shared" / "data" / "haskins-ieee"
 DEFAULT_FACES = REPO.parent / "shared" / "data" / "talking-faces"
 CORPORA = ("default", "held-out", "haskins", "faces")
+#: per-speaker normalisations of the real corpora, and what a title adds for each
+_SPREAD = {"mean": "", "mean+scale": ", spreads equalised"}
 #: layout of a cached section; a section of another layout is recomputed
 SECTION_FORMAT = 2
 PROTOCOLS = ("states", "oracle", "phones")
@@ -138,15 +145,16 @@ def run_haskins(args):
         sec.markdown.append(f"### Haskins pair\n\nNot run: no Haskins samples (*.mat) in {Path(args.haskins_dir).name}/.\n")
         return sec
     raw = name_haskins_speakers(read_corpus([str(p) for p in mats]))
-    norm = normalise_per_speaker(raw)
+    norm = normalise_per_speaker(raw, mode=args.speaker_norm)
     ids = [u.id for u in raw.utterances]
     for test in ids:
         who = haskins_speaker(raw.utterance(test))
         r = _run(f"Haskins, test {who}", norm, args.seed, test_ids=[test])
-        r.notes.append("per-speaker mean frame removed (engine.recordings.registration.normalise_speakers, mode 'mean', "
-                       "speakers named by the file name's first field)")
+        r.notes.append(f"per-speaker mean frame removed (engine.recordings.registration.normalise_speakers, mode "
+                       f"'{args.speaker_norm}', speakers named by the file name's first field)")
         sec.add(f"Haskins, test {who} (normalised)", r,
-                f"Haskins pair, cross-speaker: test speaker {who}, speaker means removed", validation=False)
+                f"Haskins pair, cross-speaker: test speaker {who}, speaker means removed{_SPREAD[args.speaker_norm]}",
+                validation=False)
     test = ids[1]
     who = haskins_speaker(raw.utterance(test))
     r = _run("Haskins raw", raw, args.seed, test_ids=[test], inverse_table=False)
@@ -157,8 +165,9 @@ def run_haskins(args):
     return sec
 
 
-def faces_corpus(faces_dir, store):
-    """The five clips, each imported with ``lipspace import`` at 60 Hz (once; kept in ``store``), pooled."""
+def faces_corpus(faces_dir, store, mode="mean"):
+    """The five clips, each imported with ``lipspace import`` at 60 Hz (once; kept in ``store``), pooled and
+    normalised per speaker (``mode``: "mean" or "mean+scale")."""
     from dataclasses import replace
 
     from app.cli.evaluate import normalise_per_speaker
@@ -183,14 +192,14 @@ def faces_corpus(faces_dir, store):
         log.append(f"{clip.name}: {c.n_frames} frames at {c.rate:g} Hz")
     pooled = concat(parts, name="talking-faces")
     labelled, note = kinematic_if_unlabelled(pooled)
-    return normalise_per_speaker(labelled), log + ([note] if note else [])
+    return normalise_per_speaker(labelled, mode=mode), log + ([note] if note else [])
 
 
 def run_faces(args):
     from engine.evaluation.protocol_report import ProtocolResult
 
     sec = Section("faces")
-    corpus, log = faces_corpus(args.faces_dir, Path(args.results_cache) / "faces")
+    corpus, log = faces_corpus(args.faces_dir, Path(args.results_cache) / "faces", args.speaker_norm)
     if corpus is None:
         sec.markdown.append(f"### Talking faces\n\nNot run: no clips (*.mp4) in {Path(args.faces_dir).name}/.\n")
         return sec
@@ -198,7 +207,7 @@ def run_faces(args):
              for u in corpus.utterances]
     r = ProtocolResult.merge(folds, n_boot=2000, random_state=args.seed, notes=[
         "five real clips (one speaker each), imported with lipspace import (60 Hz) and pooled; each clip's mean "
-        "frame removed (engine.recordings.registration.normalise_speakers); targets: kinematic key frames (aperture "
+        f"frame removed{_SPREAD[args.speaker_norm]} (engine.recordings.registration.normalise_speakers); targets: kinematic key frames (aperture "
         "maxima / minima, peak opening / closing velocities); leave one clip out: five folds, each fitted and "
         "validated on the other four clips only; the settings shown are the first fold's", *log])
     sec.add("Talking faces, 5 clips (leave one out)", r, "Talking faces: five real clips pooled, leave one clip out",
@@ -217,6 +226,8 @@ def main():
     ap.add_argument("--faces-dir", default=str(DEFAULT_FACES))
     ap.add_argument("--cache-dir", default=None, help="synthetic talker cache")
     ap.add_argument("--results-cache", default=None, help="per-corpus sections (default: <cache>/make-results)")
+    ap.add_argument("--speaker-norm", default="mean", choices=tuple(_SPREAD),
+                    help="per-speaker normalisation of the real corpora (default: %(default)s)")
     args = ap.parse_args()
     if args.results_cache is None:
         from engine.files.userdirs import user_dir
@@ -233,7 +244,8 @@ def main():
     todo = list(args.corpus or CORPORA)
     sections = {}
     for key in CORPORA:
-        path = store / f"{key}-{args.preset}-seed{args.seed}.json"
+        spread = "-" + args.speaker_norm if key in ("haskins", "faces") and args.speaker_norm != "mean" else ""
+        path = store / f"{key}-{args.preset}-seed{args.seed}{spread}.json"
         cached = json.loads(path.read_text(encoding="utf-8")) if key not in todo and path.exists() else None
         if cached is not None and cached.get("format") == SECTION_FORMAT:
             sections[key] = cached

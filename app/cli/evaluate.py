@@ -59,11 +59,13 @@ def add_arguments(p):
                    help="protocols: Gaussian smoothing of the Viterbi paths in frames (default: validated)")
     p.add_argument("--neighbors", type=int, default=None,
                    help="protocols: k of the local-linear inverse (default: validated)")
-    p.add_argument("--speaker-norm", nargs="?", const="mean", default="auto", choices=("auto", "mean", "none"),
+    p.add_argument("--speaker-norm", nargs="?", const="mean", default="auto",
+                   choices=("auto", "mean", "mean+scale", "none"),
                    help="per-speaker normalisation: each speaker's mean frame removed first. auto (default, as "
                         "'lipspace build'): when the utterances name 2 or more speakers (with --haskins one speaker "
                         "per file, named by the file name's first field); mean (a bare --speaker-norm): always, "
-                        "every utterance must name its speaker; none: never")
+                        "every utterance must name its speaker; mean+scale: always, and each speaker's spread "
+                        "scaled to the pooled spread (as 'lipspace build --speaker-norm mean+scale'); none: never")
     p.add_argument("--inverse-dims", type=int, default=None,
                    help="retired with --methods: the protocols' table reports every inverse map")
     p.add_argument("--seed", type=int, default=0, help="seed of the split and the manifold (default: 0)")
@@ -133,18 +135,21 @@ def name_haskins_speakers(corpus):
     return replace(corpus, utterances=[replace(u, speaker=haskins_speaker(u)) for u in corpus.utterances])
 
 
-def normalise_per_speaker(corpus):
-    """Each speaker's mean frame removed (:func:`engine.recordings.registration.normalise_speakers`, mode "mean").
+def normalise_per_speaker(corpus, *, mode="mean"):
+    """Each speaker's mean frame removed (:func:`engine.recordings.registration.normalise_speakers`).
 
-    Raises ValueError when an utterance names no speaker.
+    ``mode`` is ``"mean"`` or ``"mean+scale"`` (each speaker's spread also scaled to the pooled
+    spread). Raises ValueError when an utterance names no speaker or for another mode.
     """
     from engine.recordings.registration import normalise_speakers
 
+    if mode not in ("mean", "mean+scale"):
+        raise ValueError(f"per-speaker normalisation {mode!r}; expected 'mean' or 'mean+scale'")
     blank = [u.id for u in corpus.utterances if not u.speaker]
     if blank:
         raise ValueError(f"{corpus.name}: utterance {blank[0]!r} names no speaker; per-speaker normalisation needs "
                          f"one per utterance (import with speakers, or use --haskins for the Haskins pair)")
-    return normalise_speakers(corpus, mode="mean")
+    return normalise_speakers(corpus, mode=mode)
 
 
 def _normalise_auto(corpus):
@@ -175,10 +180,12 @@ def _unseen_speakers(corpus, test_ids, args) -> dict:
 
 
 def _unseen_text(corpus, unseen, normalised) -> str:
+    """The warning for held-out speakers without training utterances; ``normalised``: the mode applied, or None."""
     who = ", ".join(f"{s} ({n} utterance{'s' * (n != 1)})" for s, n in unseen["unseen"].items())
     trained = ", ".join(unseen["trained"][:6]) or "unnamed speakers"
     disjoint = "train and test speakers are disjoint: " if unseen["all"] else ""
-    tail = ("per-speaker normalisation removes each speaker's mean frame, not how each one moves" if normalised else
+    done = "removes each speaker's mean frame" + (" and equalises their spreads" if normalised == "mean+scale" else "")
+    tail = (f"per-speaker normalisation {done}, not how each one moves" if normalised else
             "without per-speaker normalisation the errors mostly measure the offset between the speakers' lips")
     return (f"{disjoint}the held-out speaker(s) {who} have no training utterance; the manifold is trained on "
             f"{trained} only and tested on lips it never saw ({tail}). For a within-speaker test hold out "
@@ -262,15 +269,17 @@ def _run_protocols(args) -> int:
         if args.haskins:
             corpus = name_haskins_speakers(corpus)
         spoken = [s for s in corpus.speakers if s]
-        normalise = args.speaker_norm == "mean" or (args.speaker_norm == "auto" and len(corpus.speakers) >= 2)
+        explicit = args.speaker_norm in ("mean", "mean+scale")
+        normalise = explicit or (args.speaker_norm == "auto" and len(corpus.speakers) >= 2)
+        spread = " and its spread scaled to the pooled spread" if args.speaker_norm == "mean+scale" else ""
         if normalise:
             try:
-                corpus = normalise_per_speaker(corpus) if args.speaker_norm == "mean" else \
+                corpus = normalise_per_speaker(corpus, mode=args.speaker_norm) if explicit else \
                     _normalise_auto(corpus)
             except ValueError as exc:
                 raise CliError(str(exc)) from None
-            how = "--speaker-norm mean" if args.speaker_norm == "mean" else "as 'lipspace build' does"
-            notes.append(f"per-speaker normalisation: each speaker's mean frame removed "
+            how = f"--speaker-norm {args.speaker_norm}" if explicit else "as 'lipspace build' does"
+            notes.append(f"per-speaker normalisation: each speaker's mean frame removed{spread} "
                          f"({', '.join(s or '(unnamed)' for s in corpus.speakers)}; {how})")
         elif len(spoken) >= 2:
             notes.append(f"no per-speaker normalisation (--speaker-norm none) over {len(spoken)} speakers")
@@ -283,7 +292,7 @@ def _run_protocols(args) -> int:
 
             from engine.recordings.corpus import CorpusWarning
 
-            msg = _unseen_text(corpus, unseen, normalise)
+            msg = _unseen_text(corpus, unseen, (args.speaker_norm if explicit else "mean") if normalise else None)
             warnings.warn(CorpusWarning(msg), stacklevel=2)
             notes.append(f"warning: {msg}")
         speaker_norm = "none" if args.speaker_norm == "none" else "auto"

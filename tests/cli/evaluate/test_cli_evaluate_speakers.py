@@ -78,3 +78,28 @@ def test_islands_of_the_training_graph_are_named_as_the_cause():
     cause = gap_cause(SimpleNamespace(manifold=m, state_warnings=[], n_states=20), corpus, {})
     assert cause.startswith("likely cause: the training state graph (20 states) splits into 2 islands")
     assert "along speakers" in cause
+
+
+def test_spreads_can_be_equalised_too(two):
+    """`--speaker-norm mean+scale` is what `build --speaker-norm mean+scale` does: the run differs from `mean`, names
+    the mode, and the warning about unseen speakers says the spreads were equalised."""
+    import numpy as np
+
+    from app.cli.evaluate import normalise_per_speaker
+    from engine.recordings.corpus import Corpus
+
+    test = "S2_U01,S2_U02,S2_U03,S2_U04"
+    rc, out, err = _run(["evaluate", str(two), "--test-ids", test, "-q", "--speaker-norm", "mean+scale"])
+    assert rc == 0, err
+    assert ("per-speaker normalisation: each speaker's mean frame removed and its spread scaled to the pooled spread "
+            "(S1, S2; --speaker-norm mean+scale)") in out
+    assert "per-speaker normalisation removes each speaker's mean frame and equalises their spreads" in err
+    rc, out_mean, _ = _run(["evaluate", str(two), "--test-ids", test, "-q", "--speaker-norm", "mean"])
+    assert rc == 0 and out_mean.split("protocol 'states'")[1] != out.split("protocol 'states'")[1]
+    corpus = Corpus.load(two)
+    scaled = normalise_per_speaker(corpus, mode="mean+scale")
+    spk = np.array([u.speaker for u in corpus.utterances])[corpus.utterance_index]
+    rms = [np.sqrt(((scaled.frames[spk == k] - scaled.frames[spk == k].mean(0)) ** 2).mean()) for k in ("S1", "S2")]
+    np.testing.assert_allclose(rms[0], rms[1], rtol=1e-3)
+    with pytest.raises(ValueError, match="expected 'mean' or 'mean\\+scale'"):
+        normalise_per_speaker(corpus, mode="scale")
