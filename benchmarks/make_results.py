@@ -207,9 +207,10 @@ def run_faces(args):
              for u in corpus.utterances]
     r = ProtocolResult.merge(folds, n_boot=2000, random_state=args.seed, notes=[
         "five real clips (one speaker each), imported with lipspace import (60 Hz) and pooled; each clip's mean "
-        f"frame removed{_SPREAD[args.speaker_norm]} (engine.recordings.registration.normalise_speakers); targets: kinematic key frames (aperture "
-        "maxima / minima, peak opening / closing velocities); leave one clip out: five folds, each fitted and "
-        "validated on the other four clips only; the settings shown are the first fold's", *log])
+        f"frame removed{_SPREAD[args.speaker_norm]} (engine.recordings.registration.normalise_speakers); targets: "
+        "kinematic key frames (aperture maxima / minima, peak opening / closing velocities); leave one clip out: "
+        "five folds, each fitted and validated on the other four clips only; the settings shown are the first "
+        "fold's", *log])
     sec.add("Talking faces, 5 clips (leave one out)", r, "Talking faces: five real clips pooled, leave one clip out",
             validation=False)
     return sec
