@@ -271,14 +271,15 @@ def _run_protocols(args) -> int:
         spoken = [s for s in corpus.speakers if s]
         explicit = args.speaker_norm in ("mean", "mean+scale")
         normalise = explicit or (args.speaker_norm == "auto" and len(corpus.speakers) >= 2)
-        spread = " and its spread scaled to the pooled spread" if args.speaker_norm == "mean+scale" else ""
+        mode = args.speaker_norm if explicit else "mean"  # what auto does with two or more speakers
+        spread = " and its spread scaled to the pooled spread" if mode == "mean+scale" else ""
         if normalise:
             try:
-                corpus = normalise_per_speaker(corpus, mode=args.speaker_norm) if explicit else \
+                corpus = normalise_per_speaker(corpus, mode=mode) if explicit else \
                     _normalise_auto(corpus)
             except ValueError as exc:
                 raise CliError(str(exc)) from None
-            how = f"--speaker-norm {args.speaker_norm}" if explicit else "as 'lipspace build' does"
+            how = f"--speaker-norm {mode}" if explicit else "as 'lipspace build' does"
             notes.append(f"per-speaker normalisation: each speaker's mean frame removed{spread} "
                          f"({', '.join(s or '(unnamed)' for s in corpus.speakers)}; {how})")
         elif len(spoken) >= 2:
@@ -292,7 +293,7 @@ def _run_protocols(args) -> int:
 
             from engine.recordings.corpus import CorpusWarning
 
-            msg = _unseen_text(corpus, unseen, (args.speaker_norm if explicit else "mean") if normalise else None)
+            msg = _unseen_text(corpus, unseen, mode if normalise else None)
             warnings.warn(CorpusWarning(msg), stacklevel=2)
             notes.append(f"warning: {msg}")
         speaker_norm = "none" if args.speaker_norm == "none" else "auto"
