@@ -152,6 +152,20 @@ class StateGraph(BaseEstimator):
         "batch_size": [Interval(Integral, 1, None, closed="left")],
     }
 
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: N frames,
+    #: K states, d dims of the centroids)
+    _persisted_attributes = {
+        "centroids_": dict(kind="array", dtype="float", shape=("K", "d")),
+        "labels_": dict(kind="array", dtype="int", shape=("N",), low=0, high="K"),
+        "counts_": dict(kind="csr", dtype="int", shape=("K", "K"), low=0),
+        "adjacency_": dict(kind="csr", dtype="number", shape=("K", "K")),
+        "transition_": dict(kind="csr", dtype="float", shape=("K", "K"), low=0),
+        "n_scc_": dict(kind="int", low=1),
+        "scc_labels_": dict(kind="array", dtype="int", shape=("K",), low=0),
+        "largest_scc_": dict(kind="int", low=0),
+    }
+
     def __init__(self, *, n_states=None, n_dims=3, random_state=0, batch_size=4096):
         self.n_states = n_states
         self.n_dims = n_dims

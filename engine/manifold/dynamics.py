@@ -79,6 +79,16 @@ class DynamicFeatures(BaseEstimator):
 
     _parameter_constraints = {"scale": SCALES}
 
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: m shape
+    #: components)
+    _persisted_attributes = {
+        "mean_": dict(kind="array", dtype="float", shape=("m",)),
+        "velocity_mean_": dict(kind="array", dtype="float", shape=("m",)),
+        "alpha_": dict(kind="float"),
+        "beta_": dict(kind="float"),
+    }
+
     def __init__(self, *, scale="max"):
         self.scale = scale
 

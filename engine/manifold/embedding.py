@@ -223,6 +223,20 @@ class Embedding(BaseEstimator):
         "random_state": ["random_state"],
     }
 
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: N frames,
+    #: m shape components, k embedding dims, L reference points)
+    _persisted_attributes = {
+        "embedding_": dict(kind="array", dtype="float", shape=("N", "k")),
+        "reference_": dict(kind="array", dtype="float", shape=("L", "2m")),
+        "components_": dict(kind="array", dtype="float", shape=("k", "L")),
+        "center_": dict(kind="array", dtype="float", shape=("L",)),
+        "explained_variance_": dict(kind="array", dtype="float", shape=("k",)),
+        "explained_variance_ratio_": dict(kind="array", dtype="float", shape=("k",)),
+        "recovered_ratio_": dict(kind="array", dtype="float", shape=("k",)),
+        "landmarks_": dict(kind="array", dtype="int", shape=("L",), low=0, high="N", none=True),
+    }
+
     def __init__(self, *, n_components=10, method="pca", n_landmarks=None, n_iter=2, oversample=10,
                  random_state=0):
         self.n_components = n_components

@@ -430,8 +430,8 @@ class Manifold(BaseEstimator):
         classes = {"shape": ShapeSpace, "dynamics": DynamicFeatures, "embedding": Embedding,
                    "tangent": TangentFrames, "states": StateGraph}
         for name, attr in cls._PARTS.items():
-            setattr(self, attr, load_estimator(classes[name], d, name, source=path, schema=_SCHEMA[name],
-                                               dims=dims))
+            setattr(self, attr, load_estimator(classes[name], d, name, source=path,
+                                               schema=classes[name]._persisted_attributes, dims=dims))
         _check_consistency(self, dims, path)
         frames = None
         if "corpus_frames" in d:
@@ -451,55 +451,6 @@ class Manifold(BaseEstimator):
             dims.setdefault("K", self.states_.centroids_.shape[0])
             self.state_x_ = check_array(d, "state_x", source=path, shape=("K", "m"), dims=dims)
         return self
-
-
-#: fitted attributes each part must hold (see engine.files.persist.load_estimator for the spec)
-_F, _I, _B = "float", "int", "bool"
-_SCHEMA = {
-    "shape": {"mean_": dict(kind="array", dtype=_F, shape=("C",)),
-              "components_": dict(kind="array", dtype=_F, shape=("m", "C")),
-              "explained_variance_": dict(kind="array", dtype=_F, shape=("m",)),
-              "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("m",)),
-              "scree_": dict(kind="array", dtype=_F, shape=("M",)),
-              "recovered_ratio_": dict(kind="array", dtype=_F, shape=("M",)),
-              "n_components_": dict(kind="int", low=1)},
-    "dynamics": {"mean_": dict(kind="array", dtype=_F, shape=("m",)),
-                 "velocity_mean_": dict(kind="array", dtype=_F, shape=("m",)),
-                 "alpha_": dict(kind="float"), "beta_": dict(kind="float")},
-    "embedding": {"embedding_": dict(kind="array", dtype=_F, shape=("N", "k")),
-                  "reference_": dict(kind="array", dtype=_F, shape=("L", "2m")),
-                  "components_": dict(kind="array", dtype=_F, shape=("k", "L")),
-                  "center_": dict(kind="array", dtype=_F, shape=("L",)),
-                  "explained_variance_": dict(kind="array", dtype=_F, shape=("k",)),
-                  "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
-                  "recovered_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
-                  "landmarks_": dict(kind="array", dtype=_I, shape=("L",), low=0, high="N", none=True)},
-    "tangent": {"plane_point_": dict(kind="array", dtype=_F, shape=(3,)),
-                "plane_normal_": dict(kind="array", dtype=_F, shape=(3,)),
-                "S_": dict(kind="array", dtype=_F, shape=(3,)),
-                "shape_direction_": dict(kind="array", dtype=_F, shape=("t",)),
-                "velocity_direction_": dict(kind="array", dtype=_F, shape=("t",)),
-                "s_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "v_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "step_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "velocity_": dict(kind="array", dtype=_F, shape=("N",)),
-                "acceleration_": dict(kind="array", dtype=_F, shape=("N",)),
-                "opening_": dict(kind="array", dtype=_B, shape=("N",)),
-                "accelerating_": dict(kind="array", dtype=_B, shape=("N",)),
-                "classes_": dict(kind="array", dtype=_I, shape=("N",), low=-1, high=4),
-                "shape_coordinate_": dict(kind="array", dtype=_F, shape=("N",)),
-                "opening_source_": dict(kind="str"), "opening_unit_": dict(kind="str"),
-                "n_dims_": dict(kind="int", low=1),
-                "n_neighbors_": dict(kind="int", low=1)},
-    "states": {"centroids_": dict(kind="array", dtype=_F, shape=("K", "d")),
-               "labels_": dict(kind="array", dtype=_I, shape=("N",), low=0, high="K"),
-               "counts_": dict(kind="csr", dtype=_I, shape=("K", "K"), low=0),
-               "adjacency_": dict(kind="csr", dtype="number", shape=("K", "K")),
-               "transition_": dict(kind="csr", dtype=_F, shape=("K", "K"), low=0),
-               "n_scc_": dict(kind="int", low=1),
-               "scc_labels_": dict(kind="array", dtype=_I, shape=("K",), low=0),
-               "largest_scc_": dict(kind="int", low=0)},
-}
 
 
 def _check_consistency(m, dims, path):

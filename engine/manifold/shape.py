@@ -217,6 +217,19 @@ class ShapeSpace(BaseEstimator):
         "random_state": ["random_state"],
     }
 
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: N frames,
+    #: C coordinates per frame, m kept components, M computed components)
+    _persisted_attributes = {
+        "mean_": dict(kind="array", dtype="float", shape=("C",)),
+        "components_": dict(kind="array", dtype="float", shape=("m", "C")),
+        "explained_variance_": dict(kind="array", dtype="float", shape=("m",)),
+        "explained_variance_ratio_": dict(kind="array", dtype="float", shape=("m",)),
+        "scree_": dict(kind="array", dtype="float", shape=("M",)),
+        "recovered_ratio_": dict(kind="array", dtype="float", shape=("M",)),
+        "n_components_": dict(kind="int", low=1),
+    }
+
     def __init__(self, *, max_components=100, variance=0.99, n_iter=3, tol=0.05, block_size=4096,
                  random_state=0):
         self.max_components = max_components

@@ -136,6 +136,30 @@ class TangentFrames(BaseEstimator):
         "random_state": ["random_state"],
     }
 
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: N frames,
+    #: t dims of the frames)
+    _persisted_attributes = {
+        "plane_point_": dict(kind="array", dtype="float", shape=(3,)),
+        "plane_normal_": dict(kind="array", dtype="float", shape=(3,)),
+        "S_": dict(kind="array", dtype="float", shape=(3,)),
+        "shape_direction_": dict(kind="array", dtype="float", shape=("t",)),
+        "velocity_direction_": dict(kind="array", dtype="float", shape=("t",)),
+        "s_": dict(kind="array", dtype="float", shape=("N", "t")),
+        "v_": dict(kind="array", dtype="float", shape=("N", "t")),
+        "step_": dict(kind="array", dtype="float", shape=("N", "t")),
+        "velocity_": dict(kind="array", dtype="float", shape=("N",)),
+        "acceleration_": dict(kind="array", dtype="float", shape=("N",)),
+        "opening_": dict(kind="array", dtype="bool", shape=("N",)),
+        "accelerating_": dict(kind="array", dtype="bool", shape=("N",)),
+        "classes_": dict(kind="array", dtype="int", shape=("N",), low=NO_STEP, high=len(CLASS_NAMES)),
+        "shape_coordinate_": dict(kind="array", dtype="float", shape=("N",)),
+        "opening_source_": dict(kind="str"),
+        "opening_unit_": dict(kind="str"),
+        "n_dims_": dict(kind="int", low=1),
+        "n_neighbors_": dict(kind="int", low=1),
+    }
+
     def __init__(self, *, n_neighbors=None, n_dims=None, zero_velocity_quantile=0.1, random_state=0):
         self.n_neighbors = n_neighbors
         self.n_dims = n_dims
