@@ -95,7 +95,7 @@ def test_levels_that_never_share_a_text_are_refused_naming_both():
 def test_default_contrasts():
     assert default_contrasts(["b", "a", "b"], "x") == [("a", "b")]
     assert default_contrasts(["n", "a", "s"], "emotion", ["n", "a", "s"]) == [("n", "a"), ("n", "s")]
-    with pytest.raises(ComparisonError, match="field 'speaker' has one level \\(F01 \\(2\\)\\); a comparison needs two"):
+    with pytest.raises(ComparisonError, match="'speaker' has one level \\(F01 \\(2\\)\\); a comparison needs two"):
         default_contrasts(["F01", "F01"], "speaker")
     with pytest.raises(ComparisonError, match="has 3 levels: .*choose two"):
         default_contrasts(["n", "a", "s"], "emotion")
