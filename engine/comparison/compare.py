@@ -161,6 +161,11 @@ class ConditionComparison(BaseEstimator):
                                   alpha=self.alpha) for a, b in contrasts]
         uidx = c.utterance_index
         notes = []
+        normalised = [h for h in c.history if h.startswith("speaker normalisation")]
+        if normalised and (by == "speaker" or any(d.kind == "between speakers" for d in designs)):
+            notes.append(f"the manifold was fitted after {normalised[-1].split(':')[0]}: each speaker's mean lip shape "
+                         "was removed first, so a difference between the speakers' average shapes is not part of "
+                         "this comparison; how they move about it is")
         clusters, kind = self._clusters(manifold, notes)
         dyn = utterance_dynamics(manifold, horizon_s=self.horizon_s, progress=progress)
         K = manifold.states_.centroids_.shape[0]

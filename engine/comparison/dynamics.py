@@ -71,7 +71,7 @@ def hemisphere_sizes(graph, labels, horizon_s: float, rate: float, *, progress=N
     return out
 
 
-def utterance_dynamics(manifold, *, horizon_s: float = 0.1, progress=None) -> UtteranceDynamics:
+def utterance_dynamics(manifold, *, horizon_s: float = 0.1, unit_index=None, progress=None) -> UtteranceDynamics:
     """The per-utterance sums of every dynamics measure of a fitted manifold (module docstring).
 
     Parameters
@@ -79,6 +79,9 @@ def utterance_dynamics(manifold, *, horizon_s: float = 0.1, progress=None) -> Ut
     manifold : engine.manifold.model.Manifold, fitted
     horizon_s : float
         Horizon of the future hemisphere (seconds; 0.1 = the window's default).
+    unit_index : ndarray of shape (N,) or None
+        The unit whose sums each frame adds to (default: its utterance). ``np.arange(N)`` gives
+        every frame its own row: what a test treating frames as independent would resample.
     progress : callable(stage, done, total) or None
 
     Returns
@@ -90,10 +93,11 @@ def utterance_dynamics(manifold, *, horizon_s: float = 0.1, progress=None) -> Ut
     c = manifold.corpus_
     tangent, states = manifold.tangent_, manifold.states_
     uidx = c.utterance_index
-    n_utt = len(c.utterances)
+    owner = uidx if unit_index is None else np.asarray(unit_index, np.int64)
+    n_owners = len(c.utterances) if unit_index is None else int(owner.max(initial=-1)) + 1
 
     def per_utt(x):
-        return np.bincount(uidx, weights=np.asarray(x, np.float64), minlength=n_utt)
+        return np.bincount(owner, weights=np.asarray(x, np.float64), minlength=n_owners)
 
     cls = np.asarray(tangent.classes_)
     step = cls >= 0

@@ -64,11 +64,24 @@ class FamilyResult:
 
 
 def level_sums(S, w_a: np.ndarray, w_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(w_a @ S, w_b @ S)`` as dense (n, D) arrays, S dense or sparse."""
+    """``(w_a @ S, w_b @ S)`` as dense (n, D) arrays, S dense or sparse (``run_families`` transposes a sparse S
+    once, not per batch)."""
+    if isinstance(S, _Transposed):
+        return np.asarray((S.T @ w_a.T).T), np.asarray((S.T @ w_b.T).T)
     if sp.issparse(S):
-        St = S.T.tocsr()
-        return np.asarray((St @ w_a.T).T), np.asarray((St @ w_b.T).T)
+        return level_sums(_Transposed(S.T.tocsr()), w_a, w_b)
     return w_a @ S, w_b @ S
+
+
+class _Transposed:
+    """A sparse S held as its csr transpose (D, U), so that every batch's product is S^T @ W^T."""
+
+    def __init__(self, T):
+        self.T = T
+
+
+def _prepared(S):
+    return _Transposed(S.T.tocsr()) if sp.issparse(S) else S
 
 
 def _observed(design):
@@ -96,9 +109,10 @@ def run_families(design, families: list[Family], *, n_permutations: int = 4999, 
     """
     rng = np.random.default_rng(random_state)
     w_a, w_b = _observed(design)
+    mats = [_prepared(f.S) for f in families]
     est, obs = [], []
-    for f in families:
-        sa, sb = level_sums(f.S, w_a, w_b)
+    for f, S in zip(families, mats):
+        sa, sb = level_sums(S, w_a, w_b)
         e, t = f.statistic(sa, sb)
         e, t = np.asarray(e, np.float64)[0], np.asarray(t, np.float64)[0]
         est.append(np.where(np.isfinite(e), e, np.nan))
@@ -117,7 +131,7 @@ def run_families(design, families: list[Family], *, n_permutations: int = 4999, 
     for wb in permutation_draws(design, n_permutations, rng):
         wa = 1.0 - wb
         for i, f in enumerate(families):
-            sa, sb = level_sums(f.S, wa, wb)
+            sa, sb = level_sums(mats[i], wa, wb)
             t = np.asarray(f.statistic(sa, sb)[1], np.float64)
             ok = np.isfinite(t)
             exceed[i] += (ok & (t >= obs[i] - _TIES * np.abs(obs[i]))).sum(axis=0)
@@ -138,7 +152,7 @@ def run_families(design, families: list[Family], *, n_permutations: int = 4999, 
         report(progress, "bootstrap", 0, n_bootstrap)
         for ba, bb in bootstrap_draws(design, n_bootstrap, rng):
             for i, f in enumerate(families):
-                sa, sb = level_sums(f.S, ba, bb)
+                sa, sb = level_sums(mats[i], ba, bb)
                 draws[i].append(np.asarray(f.statistic(sa, sb)[0], np.float32))
             done += len(ba)
             report(progress, "bootstrap", done, n_bootstrap)

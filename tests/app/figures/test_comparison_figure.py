@@ -6,6 +6,7 @@ from app.figures.comparison import MIN_TEXT_PT, make_comparison
 from app.figures.export import save_figure
 from app.models.palette import SessionPalette
 from engine.comparison.compare import ConditionComparison
+from tests.app.figures.test_figures_journal import _recorded_texts
 
 
 @pytest.fixture(scope="module")
@@ -17,25 +18,10 @@ def result(conditions):
 
 
 def _texts(fig):
-    """Every text the renderer draws: (string, size in pt, (x0, y0, x1, y1) in pixels from the top left)."""
-    from matplotlib.backends.backend_agg import RendererAgg
-
-    rec, orig = [], RendererAgg.draw_text
-
-    def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
-        w, h, d = self.get_text_width_height_descent(s, prop, ismath)
-        a = np.radians(angle)
-        R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
-        c = np.array([[0, -d], [w, -d], [w, h - d], [0, h - d]]) @ R.T + [x, self.height - y]
-        rec.append((s, prop.get_size_in_points(), (*c.min(axis=0), *c.max(axis=0)), self.width, self.height))
-        return orig(self, gc, x, y, s, prop, angle, ismath, mtext)
-
-    RendererAgg.draw_text = draw_text
-    try:
+    """Every text the renderer draws: (string, size in pt, (x0, y0, x1, y1) from the top left, width, height)."""
+    with _recorded_texts() as rec:
         fig.canvas.draw()
-    finally:
-        RendererAgg.draw_text = orig
-    return rec
+    return [(s, size, (*lo, *hi), w, h) for s, lo, hi, size, w, h in rec]
 
 
 @pytest.mark.parametrize("mm", [85.0, 180.0])

@@ -62,6 +62,7 @@ def test_a_lab_corpus_compared_by_speaker_from_a_corpus_file(lab_corpus, tmp_pat
     assert "field 'speaker' (ABC 3, KLM 3, XYM 3 utterances)" in out
     assert "design: between utterances: ABC 3 vs KLM 3 utterances; utterances exchangeable" in out
     assert "note: the speakers are compared as individuals" in err
+    assert "speaker normalisation mean over 3 speakers: each speaker's mean lip shape was removed first" in err
     assert "has no phone labels: using" in err and "kinematic landmarks" in err  # the clusters are landmarks
     rows = _rows(stats)
     assert list(rows[0]) == list(COLUMNS)
