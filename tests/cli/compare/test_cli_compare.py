@@ -147,3 +147,17 @@ def test_an_existing_output_is_refused_before_any_work_and_replaced_with_force(l
     rc, _, err = _run([*argv, "--force"])
     assert rc == 0, err
     assert _rows(stats)[0]["field"] == "speaker"
+
+
+def test_a_stop_during_the_resampling_writes_nothing(lab_corpus, tmp_path, monkeypatch):
+    import engine.comparison.compare as compare
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(compare, "run_families", interrupted)
+    stats, fig = tmp_path / "stats.csv", tmp_path / "diff.pdf"
+    rc, _, err = _run(["compare", str(lab_corpus), "--by", "speaker", "--levels", "ABC,KLM", "--csv", str(stats),
+                       "--figure", str(fig), "-q"])
+    assert rc == 130 and "interrupted; nothing was written" in err
+    assert not stats.exists() and not fig.exists() and not list(tmp_path.glob(".*part*"))
