@@ -5,6 +5,7 @@ import csv
 import io
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -161,3 +162,25 @@ def test_a_stop_during_the_resampling_writes_nothing(lab_corpus, tmp_path, monke
                        "--figure", str(fig), "-q"])
     assert rc == 130 and "interrupted; nothing was written" in err
     assert not stats.exists() and not fig.exists() and not list(tmp_path.glob(".*part*"))
+
+
+def test_the_guide_s_haskins_comparison(shared_data, tmp_path):
+    """docs/USER_GUIDE.md, "Comparing conditions": the two Haskins sentences, import -> build -> compare."""
+    files = sorted(str(p) for p in (shared_data / "haskins-ieee").glob("*.mat"))
+    if len(files) < 2:
+        pytest.skip("the Haskins IEEE pair is not in ../shared/data/haskins-ieee")
+    corpus, mfile = tmp_path / "haskins.npz", tmp_path / "haskins-m.npz"
+    assert _run(["import", *files, "--speaker-from", "prefix", "-o", str(corpus), "-q"])[0] == 0
+    assert _run(["build", str(corpus), "-o", str(mfile), "-q"])[0] == 0
+    stats, fig = tmp_path / "stats.csv", tmp_path / "diff.pdf"
+    rc, out, err = _run(["compare", str(mfile), "--by", "speaker", "--paired-by", "text", "--csv", str(stats),
+                         "--figure", str(fig), "-q"])
+    assert rc == 0, err
+    guide = (Path(__file__).resolve().parents[3] / "docs" / "USER_GUIDE.md").read_text(encoding="utf-8")
+    for line in out.splitlines()[:5]:
+        if line.startswith(("design:", "cannot test:", "F01_")):
+            assert line in guide, line
+    rows = {(r["measure"], r["target"], r["space"]): r for r in _rows(stats)}
+    assert float(rows[("opening speed", "while opening", "")]["estimate"]) == pytest.approx(0.65, abs=0.005)
+    assert float(rows[("centre shift", "DH", "X")]["estimate"]) == pytest.approx(1.42, abs=0.005)
+    assert fig.stat().st_size > 1000
