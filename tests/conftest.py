@@ -96,3 +96,16 @@ def dask_cluster():
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0")
     yield cluster
     cluster.close()
+
+
+@pytest.fixture(scope="session")
+def conditions():
+    """``(ConditionCorpus, Manifold)``: three conditions of the small synthetic talker, each of 10 sentences said
+    twice (paired by text) -- ``a`` as spoken, ``b`` with wider bilabial releases, ``c`` with slower closing
+    (:mod:`engine.talker.conditions`) -- and the one manifold fitted on all of them."""
+    from engine.manifold.model import Manifold
+    from engine.talker.conditions import condition_corpus
+
+    cc = condition_corpus(conditions={"a": "none", "b": "bilabial_release", "c": "slow_closing"}, n_texts=10,
+                          repetitions=2, preset="small", seed=0)
+    return cc, Manifold().fit(cc.corpus)
