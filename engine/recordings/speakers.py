@@ -11,10 +11,13 @@ A corpus of many recordings names its speakers in the file names or the folders
                 e.g. ``re:^(spk[0-9]+)`` or ``re:^([A-Z]{3})`` for ``ABCFIA01.mat``.
 
 A rule that does not fit the names gives a corpus whose speaker normalisation is wrong
-without any error: every file its own speaker (each utterance normalised on its own), or
-one speaker for recordings whose names say they are several people.
-:func:`check_assignment` finds both and says what to do; ``lipspace import`` prints
-its sentences as warnings.
+without any error: every file its own speaker (each utterance normalised on its own), one
+speaker for recordings whose names say they are several people, or a speaker code fused
+with a condition code (``XYZFIA``: speaker, sex and emotion). :func:`check_assignment`
+finds all three from the names' scheme (:mod:`engine.recordings.file_names`) and says
+what to do and what the pattern it proposes would give; ``lipspace import`` prints its
+sentences as warnings. :func:`suggest_fields` is the note that proposes a
+``--fields-from`` pattern keeping every part of the names as a field.
 """
 from __future__ import annotations
 

@@ -177,3 +177,26 @@ def test_gestural_landmarks_are_synthesis_targets(lab_files, tmp_path):
     rc, _, err = _run(["synthesize", "--manifold", str(lab_files[1]), "--utterance", u.id, "--key-frames",
                        "gestures:PEAK", "--method", "linear", "-o", str(tmp_path / "u.csv"), "-q"])
     assert rc == 2 and "landmark(s) ['PEAK']; expected some of GONS, PVEL, NONS, MAXC, NOFFS, PVEL2, GOFFS" in err
+
+
+def _guide_gesture_snippet() -> str:
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "USER_GUIDE.md").read_text(encoding="utf-8")
+    m = re.search(r"<!-- r-gesture-snippet -->\n```r\n(.*?)```", text, re.S)
+    assert m, "docs/USER_GUIDE.md has no R snippet after <!-- r-gesture-snippet -->"
+    return m.group(1)
+
+
+@needs_r
+def test_the_guides_r_snippet_summarises_the_gesture_table(written, tmp_path):
+    shutil.copy(written[0] / "gestures.csv", tmp_path / "gestures.csv")
+    (tmp_path / "g.R").write_text("r <- local({\n" + _guide_gesture_snippet() + "})\nprint(r)\n"
+                                  'cat("ROWS", nrow(r), ncol(r), "\\n")\n')
+    r = subprocess.run([RSCRIPT, "g.R"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    if "there is no package called" in r.stderr:
+        pytest.skip("R has no readr")
+    assert r.returncode == 0, r.stderr
+    rows, cols = r.stdout.split("ROWS")[1].split()
+    assert int(rows) == 9 and int(cols) == 4  # 3 speakers x 3 emotions: speaker, emotion, nucleus_s, pvel_toward

@@ -19,8 +19,9 @@ aperture closing for /p/ and opening after it); ``target="max"`` takes maxima in
 
 Targets are the track's extrema standing out by ``prominence`` of its robust range
 over the corpus (5th-95th percentile), at least ``min_separation_s`` apart; the
-movement toward a target is searched back to the previous opposite extremum, the
-movement away forward to the next. Crossing times are interpolated linearly between
+peak speed toward a target is searched back to the previous opposite extremum, the
+peak speed away forward to the next; onset and offset as far as the neighbouring
+targets. Crossing times are interpolated linearly between
 frames, peak times by a parabola through the peak frame and its neighbours, so
 landmarks are not tied to the frame grid. A landmark that cannot be found (a gesture
 cut by the utterance's start or end, a movement with no speed) is missing (NaN).
@@ -196,12 +197,14 @@ def gestures_of_signal(x, bounds, rate: float, *, target: str = "min", threshold
         if not peaks.size:
             continue
         troughs, _ = find_peaks(-seg, prominence=prom, distance=dist)
-        for p in peaks.tolist():
+        plist = peaks.tolist()
+        for i, p in enumerate(plist):
             before = troughs[troughs < p]
             after = troughs[troughs > p]
             w0 = int(before[-1]) if before.size else 0
             w1 = int(after[0]) if after.size else b - a - 1
-            row, speeds = _landmarks(seg, vel, p, w0, w1, threshold)
+            lim = (plist[i - 1] + 1 if i else 0, plist[i + 1] - 1 if i + 1 < len(plist) else b - a - 1)
+            row, speeds = _landmarks(seg, vel, p, w0, w1, threshold, lim)
             utt.append(k)
             times.append(row / rate)
             pv.append(speeds)
@@ -213,9 +216,11 @@ def gestures_of_signal(x, bounds, rate: float, *, target: str = "min", threshold
                       peak_velocity=np.array(pv, np.float64).reshape(G, 2), maxc_value=np.array(mv, np.float64))
 
 
-def _landmarks(y, v, p, w0, w1, theta):
+def _landmarks(y, v, p, w0, w1, theta, lim):
     """Landmark positions (fractional frames within the utterance, NaN missing) of the gesture whose target is
-    frame ``p`` of ``y`` (a maximum), searched in ``[w0, w1]``; and the two peak speeds."""
+    frame ``p`` of ``y`` (a maximum), its peak speeds searched in ``[w0, w1]`` (between the opposite extrema),
+    its onset and offset up to the neighbouring targets ``lim`` (the speed's sign changes at the extremum
+    between, possibly between two frames); and the two peak speeds."""
     nan = np.nan
     out = np.full(7, nan)
     toward, away = v[w0:p + 1], -v[p:w1 + 1]  # speed toward the target (y rising), away from it (falling)
@@ -225,14 +230,14 @@ def _landmarks(y, v, p, w0, w1, theta):
     if i1 is not None and v[i1] > 0:
         out[1], speeds[0] = _parabola(v, i1)
         th = theta * v[i1]
-        out[0] = _crossing(v, i1, w0 - 1, th)  # backward from PVEL
+        out[0] = _crossing(v, i1, lim[0] - 1, th)  # backward from PVEL
         out[2] = _crossing(v, i1, p + 1 if i2 is None else i2 + 1, th)  # forward toward the target
     if i2 is not None and -v[i2] > 0:
         t2, s2 = _parabola(-v, i2)
         out[5], speeds[1] = t2, s2
         th = theta * (-v[i2])
         out[4] = _crossing(-v, i2, (w0 if i1 is None else i1) - 1, th)  # backward from PVEL2
-        out[6] = _crossing(-v, i2, w1 + 1, th)
+        out[6] = _crossing(-v, i2, lim[1] + 1, th)
     lo = out[2] if np.isfinite(out[2]) else p
     hi = out[4] if np.isfinite(out[4]) else p
     out[3] = _extremum(y, min(lo, p), max(hi, p))
