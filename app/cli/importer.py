@@ -196,7 +196,8 @@ def run(args) -> int:
         kw = _options(args, fmt)
         if fmt == "video" and rate_out is not None:  # each video (of a folder too) at that rate before joining
             kw["resample"] = rate_out
-        groups = [inputs] if fmt == "mesh" and len(inputs) > 1 else [[p] for p in inputs]
+        sequences = fmt == "mesh" and len(inputs) > 1 and not all(Path(p).is_dir() for p in inputs)
+        groups = [inputs] if sequences else [[p] for p in inputs]  # frame files: one sequence; folders: one each
         warned = _check_speakers(groups, args, fmt)
         fields = check_fields(groups, args, fmt, folders, quiet_hint=warned)
         policy = quality_policy(args)

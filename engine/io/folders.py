@@ -16,7 +16,8 @@
   as utterance id, so that ids stay unique.
 
 A folder of mesh frames (``.obj`` / ``.ply``) stays one utterance and a folder of videos
-stays one speaker's clips (their readers take the folder itself).
+stays one speaker's clips (their readers take the folder itself); with ``recursive``, a
+folder whose recordings are such subfolders gives one input per subfolder.
 """
 from __future__ import annotations
 
@@ -139,6 +140,12 @@ def expand_folders(inputs, *, format: str | None = None, recursive: bool = False
         if format in _KEEP_WHOLE or (format is None and _whole(item)):
             out.paths.append(str(item))  # a mesh sequence, or one speaker's videos: their readers take the folder
             continue
+        subs = _whole_subfolders(item, format) if recursive else []
+        if subs:  # one mesh sequence (or one speaker's videos) per subfolder
+            out.paths += [str(d) for d in subs]
+            shown = ", ".join(d.name for d in subs[:4]) + (" ..." if len(subs) > 4 else "")
+            out.notes.append(f"{item}: {len(subs)} subfolders read as one recording each ({shown})")
+            continue
         files, skipped = _walk(item, recursive)
         fmt, ext = _folder_format(files, format)
         if ext is None:
@@ -173,6 +180,20 @@ def expand_folders(inputs, *, format: str | None = None, recursive: bool = False
             note += f"; left out {len(left)}: {', '.join(left[:6])}{' ...' if len(left) > 6 else ''}"
         out.notes.append(note)
     return out
+
+
+def _whole_subfolders(folder: Path, format) -> list:
+    """The subfolders of ``folder`` that are each read whole (mesh frames, videos), when its recordings are all in
+    such subfolders; [] otherwise."""
+    if format not in (None, *_KEEP_WHOLE):
+        return []
+    from engine.io.dispatch import _EXT
+
+    direct = [f for f in folder.iterdir() if f.is_file() and _EXT.get(f.suffix.lower()) is not None]
+    subs = sorted((d for d in folder.iterdir() if d.is_dir() and not d.name.startswith(".")),
+                  key=lambda d: _natural(d, folder))
+    whole = [d for d in subs if _whole(d)]
+    return whole if whole and not direct else []
 
 
 def _whole(folder: Path) -> bool:

@@ -58,7 +58,8 @@ def test_the_lab_table_with_missing_and_extra_rows_is_warned_about_and_nothing_i
 
 def test_pattern_and_table_together_and_their_conflicts(ag501_lab, tmp_path):
     folder, *_ = ag501_lab
-    rc, _, err = _import(folder, tmp_path / "c.npz", "--fields-from", PATTERN, "--metadata", str(folder / "metadata.csv"))
+    rc, _, err = _import(folder, tmp_path / "c.npz", "--fields-from", PATTERN, "--metadata",
+                         str(folder / "metadata.csv"))
     assert rc == 0, err
     c = Corpus.load(tmp_path / "c.npz")
     assert c.utterance("EFFSA02").speaker == "EF"  # the pattern names what the table misses
@@ -153,3 +154,46 @@ def test_the_real_ag501_folder_imports_with_its_tag_files_left_out(shared_data, 
     assert "quality: no rms above 9.27 in ch6 (median 2.89), ch7 (median 3.36), ch8 (median 3.07)" in err
     c = Corpus.load(tmp_path / "g.npz")
     assert [u.id for u in c.utterances] == ["0021", "0022"] and np.isfinite(np.asarray(c.frames)).all()
+
+
+def test_recursive_folders_of_mesh_frames_are_one_utterance_each(tmp_path):
+    from engine.io.readers.meshfile import write_obj
+
+    root = tmp_path / "meshes"
+    for k, name in enumerate(("sentence02", "sentence10", "sentence01")):
+        for i in range(12):
+            V = np.array([[0, 0, 0], [10, 0, 0], [0, 5 + np.sin(i / 2 + k), 0]], float)
+            write_obj(root / name / f"frame{i:03d}.obj", V, np.array([[0, 1, 2]]))
+    rc, _, err = _run(["import", str(root), "-r", "--rate", "60", "-q", "--jobs", "1", "-o", str(tmp_path / "m.npz")])
+    assert rc == 0, err
+    assert "3 subfolders read as one recording each (sentence01, sentence02, sentence10)" in err
+    c = Corpus.load(tmp_path / "m.npz")
+    assert len(c.utterances) == 3 and [u.n_frames for u in c.utterances] == [12, 12, 12]
+
+
+def test_a_folder_of_ndi_wave_exports_with_state_and_error_columns(tmp_path):
+    from engine.talker.lab_files import lab_sweeps, wave_tsv
+
+    d = tmp_path / "wave"
+    d.mkdir()
+    for k, s in enumerate(lab_sweeps(speakers=(("S01", "F"), ("S02", "M")), emotions=("NE",), texts=2,
+                                     duration_s=(0.8, 0.9), seed=4)):
+        X = s.positions[::2, 5:9]  # UL LL LC RC at 125 Hz
+        err = np.full(X.shape[:2], 0.3)
+        state = np.full(X.shape[:2], "OK", dtype=object)
+        if s.speaker == "S02":
+            err[20:24, 0] = 1.5  # a short burst on the upper lip
+            state[30, 1] = "Missing"
+        (d / f"{s.name}.tsv").write_text(wave_tsv(X, rate=125.0, state=state, error=err))
+    (d / "layout.txt").write_text("base: wave\nsensor UL upper_lip\nsensor LL lower_lip\nsensor LC left_corner\n"
+                                  "sensor RC right_corner\n")
+    rc, _, err = _run(["import", str(d), "--format", "wave", "--layout", str(d / "layout.txt"), "-q", "--jobs", "1",
+                       "--fields-from", r"re:^(?P<speaker>S[0-9]+)(?P<sex>[FM])", "--quality", "mask",
+                       "--quality-threshold", "1", "-o", str(tmp_path / "w.npz")])
+    assert rc == 0, err
+    assert "4 .tsv recordings (wave)" in err and "left out 1: layout.txt" in err
+    assert "quality: UL: speaker S01 median 0.3, 0.0% of samples above" in err
+    assert "mask at threshold 1: 8 samples in runs of at most 6 frames (50 ms) above it interpolated" in err
+    assert "status not OK" in err
+    c = Corpus.load(tmp_path / "w.npz")
+    assert c.speakers == ["S01", "S02"] and field_values(c, "sex").tolist() == ["F", "F", "M", "M"]

@@ -69,7 +69,8 @@ def _table(tmp_path, text, name="meta.csv", encoding="utf-8"):
 
 
 def test_a_spreadsheet_csv_with_bom_semicolons_and_na_reads(tmp_path):
-    p = _table(tmp_path, "\ufeffFile;Speaker ID;Sex;Group;\r\nXYZFIA01.pos;XYZ;F;NA;\r\nXYZFIA02.pos;XYZ;F;control;\r\n")
+    p = _table(tmp_path, "\ufeffFile;Speaker ID;Sex;Group;\r\n"
+                         "XYZFIA01.pos;XYZ;F;NA;\r\nXYZFIA02.pos;XYZ;F;control;\r\n")
     t = read_metadata_table(p)
     assert t.key == "File" and t.fields == ["speaker_id", "sex", "group"]
     assert t.rows["XYZFIA01.pos"] == {"speaker_id": "XYZ", "sex": "F", "group": ""}
