@@ -210,11 +210,15 @@ def check_assignment(paths, speakers, *, rule: str | None) -> list[str]:
 
 def suggest_fields(paths) -> str:
     """A note for an import that names no fields: the names' scheme and the ``--fields-from`` pattern that would
-    keep its parts, with what it would give ("" when the names share no scheme with a varying part)."""
+    keep its parts, with what it would give ("" when the names share no scheme, or none of its parts other than
+    the speaker repeats like a condition)."""
     from engine.recordings.file_names import name_structure
 
     st = name_structure(paths)
-    if st is None or len(st.fields) < 2 or all(len(st.levels(k)) < 2 for k, _ in st.fields):
+    n = len(paths)
+    # only a scheme with a condition-like part (2 or more levels, each of 2 or more files on average) is worth
+    # keeping as fields; a number unique to each file is an id, not a condition
+    if st is None or not any(2 <= len(st.levels(k)) <= n // 2 for k, _ in st.fields[1:]):
         return ""
     return (f"the file names follow one scheme; --fields-from 're:{st.pattern}' would keep its parts as fields: "
             f"{st.describe()} (rename the groups as you like; lipspace info, table and evaluate --by use them)")
