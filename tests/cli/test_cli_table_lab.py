@@ -3,8 +3,6 @@ with its landmark times, durations, peak velocities and manifold states, gesture
 per-gesture table read in R, and errors per level of a field."""
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import shutil
 import subprocess
@@ -12,39 +10,30 @@ import subprocess
 import numpy as np
 import pytest
 
-from app.cli import main
-
 PATTERN = r"re:^(?P<speaker>[A-Z]+?)(?P<sex>[FM])(?P<emotion>[A-Z]{2})(?P<text>[0-9]+)$"
 RSCRIPT = shutil.which("Rscript")
 needs_r = pytest.mark.skipif(RSCRIPT is None, reason="R is not installed (apt-get install r-base-core; .ci/run does)")
 
 
-def _run(argv):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = main(argv)
-    return rc, out.getvalue(), err.getvalue()
-
-
 @pytest.fixture(scope="module")
-def lab_files(ag501_lab, tmp_path_factory):
+def lab_files(ag501_lab, tmp_path_factory, cli):
     """(corpus file, manifold file) of the lab folder imported with its fields, bad samples masked."""
     folder, *_ = ag501_lab
     d = tmp_path_factory.mktemp("labtable")
-    rc, _, err = _run(["import", str(folder), "--layout", str(folder / "lab.layout"), "--fields-from", PATTERN,
-                       "--quality", "mask", "-q", "--jobs", "1", "-o", str(d / "corpus.npz")])
+    rc, _, err = cli(["import", str(folder), "--layout", str(folder / "lab.layout"), "--fields-from", PATTERN,
+                      "--quality", "mask", "-q", "--jobs", "1", "-o", str(d / "corpus.npz")])
     assert rc == 0, err
-    rc, _, err = _run(["build", str(d / "corpus.npz"), "-o", str(d / "manifold.npz"), "-q"])
+    rc, _, err = cli(["build", str(d / "corpus.npz"), "-o", str(d / "manifold.npz"), "-q"])
     assert rc == 0, err
     return d / "corpus.npz", d / "manifold.npz"
 
 
 @pytest.fixture(scope="module")
-def written(lab_files, tmp_path_factory):
+def written(lab_files, tmp_path_factory, cli):
     d = tmp_path_factory.mktemp("labout")
-    rc, out, err = _run(["table", str(lab_files[1]), "-o", str(d / "frames.csv"), "--tracks",
-                         "lip_protrusion,speed_UL,LL_up,rms_UL", "--gestures", "lip_aperture,lip_protrusion",
-                         "--gesture-table", str(d / "gestures.csv"), "--textgrid", str(d / "grids")])
+    rc, out, err = cli(["table", str(lab_files[1]), "-o", str(d / "frames.csv"), "--tracks",
+                        "lip_protrusion,speed_UL,LL_up,rms_UL", "--gestures", "lip_aperture,lip_protrusion",
+                        "--gesture-table", str(d / "gestures.csv"), "--textgrid", str(d / "grids")])
     assert rc == 0, err
     return d, out, err
 
@@ -127,26 +116,26 @@ def test_r_reads_the_gesture_table_and_summarises_by_emotion(written, tmp_path):
     assert int(n) == rows and num == "TRUE" and chr_ == "TRUE" and int(levels) == 3 and int(na) == 0
 
 
-def test_table_options_that_cannot_be_followed_are_refused(lab_files, tmp_path):
+def test_table_options_that_cannot_be_followed_are_refused(lab_files, tmp_path, cli):
     m = str(lab_files[1])
-    rc, _, err = _run(["table", m, "-o", str(tmp_path / "f.csv"), "--tracks", "speed_TT"])
+    rc, _, err = cli(["table", m, "-o", str(tmp_path / "f.csv"), "--tracks", "speed_TT"])
     assert rc == 2 and "--tracks speed_TT: " in err and "has no such track" in err and "speed_UL" in err
-    rc, _, err = _run(["table", m, "--gesture-table", str(tmp_path / "g.csv")])
+    rc, _, err = cli(["table", m, "--gesture-table", str(tmp_path / "g.csv")])
     assert rc == 2 and "--gesture-table needs --gestures TRACK" in err
-    rc, _, err = _run(["table", m, "-o", str(tmp_path / "f.csv"), "--tracks", "UL_up", "--lowpass", "45"])
+    rc, _, err = cli(["table", m, "-o", str(tmp_path / "f.csv"), "--tracks", "UL_up", "--lowpass", "45"])
     assert rc == 2 and "--lowpass: low-pass cut-off 45 Hz: must be above 0 and below the Nyquist frequency 30 Hz" in err
-    rc, _, err = _run(["table", m, "--gestures", "UL_up", "--gesture-table", str(tmp_path / "g.csv")])
+    rc, _, err = cli(["table", m, "--gestures", "UL_up", "--gesture-table", str(tmp_path / "g.csv")])
     assert rc == 2 and "say whether its gestures move to a minimum or a maximum" in err
     assert not list(tmp_path.iterdir())
-    rc, out, _ = _run(["table", m, "--tracks", "list"])
+    rc, out, _ = cli(["table", m, "--tracks", "list"])
     assert rc == 0 and "lip_protrusion" in out.split() and "rms_UL" in out.split()
 
 
 @pytest.mark.slow
-def test_evaluate_reports_errors_per_level_of_a_field(lab_files, tmp_path):
-    rc, out, err = _run(["evaluate", str(lab_files[0]), "--by", "emotion", "-q", "--test-ids",
-                         "XYZFNE02,EFFAN01,ABCDMSA01,EFFSA01", "--state-dims", "4", "--smoothing", "1",
-                         "--neighbors", "8", "--csv", str(tmp_path / "e.csv")])
+def test_evaluate_reports_errors_per_level_of_a_field(lab_files, tmp_path, cli):
+    rc, out, err = cli(["evaluate", str(lab_files[0]), "--by", "emotion", "-q", "--test-ids",
+                        "XYZFNE02,EFFAN01,ABCDMSA01,EFFSA01", "--state-dims", "4", "--smoothing", "1",
+                        "--neighbors", "8", "--csv", str(tmp_path / "e.csv")])
     assert rc == 0, err
     assert "per level of 'emotion'" in out and "AN (n=1)" in out and "SA (n=2)" in out
     head = (tmp_path / "e.csv").read_text().splitlines()[0]
@@ -156,12 +145,12 @@ def test_evaluate_reports_errors_per_level_of_a_field(lab_files, tmp_path):
     assert any(x.startswith("emotion,SA,states,manifold,2,") for x in lv)
 
 
-def test_evaluate_by_a_field_the_corpus_lacks_stops_before_the_work(lab_files):
-    rc, _, err = _run(["evaluate", str(lab_files[0]), "--by", "group", "-q"])
+def test_evaluate_by_a_field_the_corpus_lacks_stops_before_the_work(lab_files, cli):
+    rc, _, err = cli(["evaluate", str(lab_files[0]), "--by", "group", "-q"])
     assert rc == 2 and "--by group: " in err and "its fields: speaker, sex, emotion, text" in err
 
 
-def test_gestural_landmarks_are_synthesis_targets(lab_files, tmp_path):
+def test_gestural_landmarks_are_synthesis_targets(lab_files, tmp_path, cli):
     from engine.manifold.model import Manifold
     from engine.recordings.signals.gestures import find_gestures, gesture_key_frames
 
@@ -169,13 +158,13 @@ def test_gestural_landmarks_are_synthesis_targets(lab_files, tmp_path):
     u = m.corpus_.utterances[2]
     want = gesture_key_frames(find_gestures(m.corpus_, "lip_aperture"), u.id, m.corpus_.bounds,
                               landmarks=("GONS", "MAXC", "GOFFS"))
-    rc, out, err = _run(["synthesize", "--manifold", str(lab_files[1]), "--utterance", u.id, "--key-frames",
-                         "gestures:GONS+MAXC+GOFFS", "--method", "linear", "-o", str(tmp_path / "t.csv"),
-                         "-q"])
+    rc, out, err = cli(["synthesize", "--manifold", str(lab_files[1]), "--utterance", u.id, "--key-frames",
+                        "gestures:GONS+MAXC+GOFFS", "--method", "linear", "-o", str(tmp_path / "t.csv"),
+                        "-q"])
     assert rc == 0, err
     assert f"through {want.size} targets from utterance {u.id!r}" in out
-    rc, _, err = _run(["synthesize", "--manifold", str(lab_files[1]), "--utterance", u.id, "--key-frames",
-                       "gestures:PEAK", "--method", "linear", "-o", str(tmp_path / "u.csv"), "-q"])
+    rc, _, err = cli(["synthesize", "--manifold", str(lab_files[1]), "--utterance", u.id, "--key-frames",
+                      "gestures:PEAK", "--method", "linear", "-o", str(tmp_path / "u.csv"), "-q"])
     assert rc == 2 and "landmark(s) ['PEAK']; expected some of GONS, PVEL, NONS, MAXC, NOFFS, PVEL2, GOFFS" in err
 
 

@@ -3,35 +3,24 @@ file names and from the lab's table, sensor quality reported and acted on, and b
 about, naming the file and the field, with nothing lost."""
 from __future__ import annotations
 
-import contextlib
 import csv
-import io
 
 import numpy as np
-import pytest
 
-from app.cli import main
 from engine.recordings.corpus import Corpus
 from engine.recordings.metadata import field_levels, field_names, field_values
 
 PATTERN = r"re:^(?P<speaker>[A-Z]+?)(?P<sex>[FM])(?P<emotion>[A-Z]{2})(?P<text>[0-9]+)$"
 
 
-def _run(argv):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = main(argv)
-    return rc, out.getvalue(), err.getvalue()
+def _import(cli, folder, out, *extra):
+    return cli(["import", str(folder), "--layout", str(folder / "lab.layout"), "-q", "--jobs", "1", "-o", str(out),
+                *extra])
 
 
-def _import(folder, out, *extra):
-    return _run(["import", str(folder), "--layout", str(folder / "lab.layout"), "-q", "--jobs", "1", "-o", str(out),
-                 *extra])
-
-
-def test_a_folder_with_a_file_name_pattern(ag501_lab, tmp_path):
+def test_a_folder_with_a_file_name_pattern(ag501_lab, tmp_path, cli):
     folder, sweeps, paths = ag501_lab
-    rc, out, err = _import(folder, tmp_path / "c.npz", "--fields-from", PATTERN)
+    rc, out, err = _import(cli, folder, tmp_path / "c.npz", "--fields-from", PATTERN)
     assert rc == 0, err
     assert f"folder {folder}: 18 .pos recordings (matrix) in natural order; left out 3: lab.layout, metadata.csv, " \
            "notes.txt" in err
@@ -44,9 +33,9 @@ def test_a_folder_with_a_file_name_pattern(ag501_lab, tmp_path):
     assert "warning" not in err  # the pattern names the speakers: no speaker suggestion
 
 
-def test_the_lab_table_with_missing_and_extra_rows_is_warned_about_and_nothing_is_lost(ag501_lab, tmp_path):
+def test_the_lab_table_with_missing_and_extra_rows_is_warned_about_and_nothing_is_lost(ag501_lab, tmp_path, cli):
     folder, sweeps, paths = ag501_lab
-    rc, out, err = _import(folder, tmp_path / "c.npz", "--metadata", str(folder / "metadata.csv"))
+    rc, out, err = _import(cli, folder, tmp_path / "c.npz", "--metadata", str(folder / "metadata.csv"))
     assert rc == 0, err
     assert f"warning: {folder / 'metadata.csv'}: no row for 1 of 18 inputs (EFFSA02.pos); their fields speaker, sex, " \
            "emotion, text, session are missing (NA)" in err
@@ -56,41 +45,41 @@ def test_the_lab_table_with_missing_and_extra_rows_is_warned_about_and_nothing_i
     assert field_values(c, "session").tolist().count("") == 1 and c.utterance("EFFSA02").speaker == ""
 
 
-def test_pattern_and_table_together_and_their_conflicts(ag501_lab, tmp_path):
+def test_pattern_and_table_together_and_their_conflicts(ag501_lab, tmp_path, cli):
     folder, *_ = ag501_lab
-    rc, _, err = _import(folder, tmp_path / "c.npz", "--fields-from", PATTERN, "--metadata",
+    rc, _, err = _import(cli, folder, tmp_path / "c.npz", "--fields-from", PATTERN, "--metadata",
                          str(folder / "metadata.csv"))
     assert rc == 0, err
     c = Corpus.load(tmp_path / "c.npz")
     assert c.utterance("EFFSA02").speaker == "EF"  # the pattern names what the table misses
     bad = tmp_path / "bad.csv"
     bad.write_text("file,emotion\nXYZFNE01.pos,HA\n")
-    rc, _, err = _import(folder, tmp_path / "d.npz", "--fields-from", PATTERN, "--metadata", str(bad))
+    rc, _, err = _import(cli, folder, tmp_path / "d.npz", "--fields-from", PATTERN, "--metadata", str(bad))
     assert rc == 2 and "XYZFNE01.pos: field 'emotion' is 'NE' by --fields-from but 'HA' in" in err
-    rc, _, err = _import(folder, tmp_path / "d.npz", "--fields-from", PATTERN, "--speaker", "X")
+    rc, _, err = _import(cli, folder, tmp_path / "d.npz", "--fields-from", PATTERN, "--speaker", "X")
     assert rc == 2 and "--speaker and a 'speaker' field (--fields-from) both name the speakers" in err
     assert not (tmp_path / "d.npz").exists()
 
 
-def test_a_pattern_that_matches_nothing_names_the_files(ag501_lab, tmp_path):
+def test_a_pattern_that_matches_nothing_names_the_files(ag501_lab, tmp_path, cli):
     folder, *_ = ag501_lab
-    rc, _, err = _import(folder, tmp_path / "c.npz", "--fields-from", r"re:^(?P<speaker>S[0-9]+)_")
+    rc, _, err = _import(cli, folder, tmp_path / "c.npz", "--fields-from", r"re:^(?P<speaker>S[0-9]+)_")
     assert rc == 2 and "matches none of the 18 file names" in err and "ABCDMAN01" in err
     assert not (tmp_path / "c.npz").exists()
 
 
-def test_without_fields_the_names_structure_is_suggested_and_right(ag501_lab, tmp_path):
+def test_without_fields_the_names_structure_is_suggested_and_right(ag501_lab, tmp_path, cli):
     folder, *_ = ag501_lab
-    rc, _, err = _import(folder, tmp_path / "c.npz")
+    rc, _, err = _import(cli, folder, tmp_path / "c.npz")
     assert rc == 0
     assert "all 18 inputs are one unnamed speaker" in err and "3 speakers x 3 condition levels x 2 item levels" in err
     assert "speaker 3 levels (ABCDM 6, EFF 6, XYZF 6 files)" in err
 
 
-def test_quality_is_reported_per_speaker_and_masked_or_dropped(ag501_lab, tmp_path):
+def test_quality_is_reported_per_speaker_and_masked_or_dropped(ag501_lab, tmp_path, cli):
     folder, *_ = ag501_lab
     report = tmp_path / "quality.csv"
-    rc, _, err = _import(folder, tmp_path / "k.npz", "--fields-from", PATTERN, "--quality-report", str(report))
+    rc, _, err = _import(cli, folder, tmp_path / "k.npz", "--fields-from", PATTERN, "--quality-report", str(report))
     assert rc == 0, err
     line = next(x for x in err.splitlines() if "quality: UL:" in x)
     import re
@@ -102,30 +91,30 @@ def test_quality_is_reported_per_speaker_and_masked_or_dropped(ag501_lab, tmp_pa
     assert len(rows) == 18 * 7 and set(rows[0]) >= {"utterance", "sensor", "share_above", "longest_run_s", "action"}
     xyz_ul = [float(r["share_above"]) for r in rows if r["sensor"] == "UL" and r["utterance"].startswith("XYZ")]
     assert min(xyz_ul) > 0.5
-    rc, info, _ = _run(["info", str(tmp_path / "k.npz")])
+    rc, info, _ = cli(["info", str(tmp_path / "k.npz")])
     assert rc == 0 and "\nquality     rms above" in info and "keep: every sample kept as recorded" in info
     assert "\nfields      speaker 3 levels" in info and "            emotion 3 levels: AN 6, NE 6, SA 6" in info
-    rc, _, err = _import(folder, tmp_path / "d.npz", "--fields-from", PATTERN, "--quality", "drop")
+    rc, _, err = _import(cli, folder, tmp_path / "d.npz", "--fields-from", PATTERN, "--quality", "drop")
     assert rc == 0, err
     c = Corpus.load(tmp_path / "d.npz")
     assert "XYZ" not in c.speakers and "utterance(s) with longer runs dropped: XYZF" in err
-    rc, _, err = _import(folder, tmp_path / "m.npz", "--fields-from", PATTERN, "--quality", "mask",
+    rc, _, err = _import(cli, folder, tmp_path / "m.npz", "--fields-from", PATTERN, "--quality", "mask",
                          "--quality-threshold", "12", "--quality-max-gap", "40")
     assert rc == 0, err
     assert "quality: mask at threshold 12:" in err and "runs of at most 10 frames (40 ms)" in err
 
 
-def test_quality_asked_of_files_without_it_is_refused(lab_folder, tmp_path):
+def test_quality_asked_of_files_without_it_is_refused(lab_folder, tmp_path, cli):
     folder, paths = lab_folder  # MAT files with the 6-value layout: ema7x6 has rms at value 5
-    rc, _, err = _run(["import", *map(str, paths), "--layout", "ema7x6", "-q", "--jobs", "1", "-o",
-                       str(tmp_path / "c.npz"), "--quality", "mask"])
+    rc, _, err = cli(["import", *map(str, paths), "--layout", "ema7x6", "-q", "--jobs", "1", "-o",
+                      str(tmp_path / "c.npz"), "--quality", "mask"])
     assert rc == 0, err  # ema7x6 has an rms value
-    rc, _, err = _run(["import", str(folder), "--format", "mview", "-q", "--jobs", "1", "-o", str(tmp_path / "d.npz"),
-                       "--quality", "drop"])
+    rc, _, err = cli(["import", str(folder), "--format", "mview", "-q", "--jobs", "1", "-o", str(tmp_path / "d.npz"),
+                      "--quality", "drop"])
     assert rc == 2
 
 
-def test_recursive_folders_of_speakers(ag501_lab, tmp_path):
+def test_recursive_folders_of_speakers(ag501_lab, tmp_path, cli):
     import shutil
 
     folder, sweeps, paths = ag501_lab
@@ -134,20 +123,20 @@ def test_recursive_folders_of_speakers(ag501_lab, tmp_path):
         d.mkdir(parents=True)
         for k, p in enumerate([p for p in paths if p.stem.startswith(spk)][:2]):
             shutil.copy(p, d / f"take{k + 1:02d}.pos")
-    rc, _, err = _run(["import", str(root), "--layout", str(folder / "lab.layout"), "-q", "--jobs", "1", "-o",
-                       str(tmp_path / "c.npz")])
+    rc, _, err = cli(["import", str(root), "--layout", str(folder / "lab.layout"), "-q", "--jobs", "1", "-o",
+                      str(tmp_path / "c.npz")])
     assert rc == 2 and "holds no matrix recordings" in err and "0 files (none) and 2 subfolders" in err
-    rc, _, err = _run(["import", str(root), "-r", "--layout", str(folder / "lab.layout"), "-q", "--jobs", "1",
-                       "--speaker-from", "dir", "-o", str(tmp_path / "c.npz")])
+    rc, _, err = cli(["import", str(root), "-r", "--layout", str(folder / "lab.layout"), "-q", "--jobs", "1",
+                      "--speaker-from", "dir", "-o", str(tmp_path / "c.npz")])
     assert rc == 0, err
     c = Corpus.load(tmp_path / "c.npz")
     assert [u.id for u in c.utterances] == ["S1/take01", "S1/take02", "S2/take01", "S2/take02"]
     assert c.speakers == ["S1", "S2"]
 
 
-def test_the_real_ag501_folder_imports_with_its_tag_files_left_out(shared_data, tmp_path):
-    rc, _, err = _run(["import", str(shared_data / "ag501-greek"), "-q", "--jobs", "1", "--points", "ch6,ch7,ch8",
-                       "--roles", "upper_lip=ch6;lower_lip=ch7;jaw=ch8", "-o", str(tmp_path / "g.npz")])
+def test_the_real_ag501_folder_imports_with_its_tag_files_left_out(shared_data, tmp_path, cli):
+    rc, _, err = cli(["import", str(shared_data / "ag501-greek"), "-q", "--jobs", "1", "--points", "ch6,ch7,ch8",
+                      "--roles", "upper_lip=ch6;lower_lip=ch7;jaw=ch8", "-o", str(tmp_path / "g.npz")])
     assert rc == 0, err
     assert "2 .pos recordings (pos) in natural order; left out 4: 0021-tags.txt, 0022-tags.txt, SOURCE.txt, " \
            "words.txt" in err
@@ -156,7 +145,7 @@ def test_the_real_ag501_folder_imports_with_its_tag_files_left_out(shared_data, 
     assert [u.id for u in c.utterances] == ["0021", "0022"] and np.isfinite(np.asarray(c.frames)).all()
 
 
-def test_recursive_folders_of_mesh_frames_are_one_utterance_each(tmp_path):
+def test_recursive_folders_of_mesh_frames_are_one_utterance_each(tmp_path, cli):
     from engine.io.readers.meshfile import write_obj
 
     root = tmp_path / "meshes"
@@ -164,14 +153,14 @@ def test_recursive_folders_of_mesh_frames_are_one_utterance_each(tmp_path):
         for i in range(12):
             V = np.array([[0, 0, 0], [10, 0, 0], [0, 5 + np.sin(i / 2 + k), 0]], float)
             write_obj(root / name / f"frame{i:03d}.obj", V, np.array([[0, 1, 2]]))
-    rc, _, err = _run(["import", str(root), "-r", "--rate", "60", "-q", "--jobs", "1", "-o", str(tmp_path / "m.npz")])
+    rc, _, err = cli(["import", str(root), "-r", "--rate", "60", "-q", "--jobs", "1", "-o", str(tmp_path / "m.npz")])
     assert rc == 0, err
     assert "3 subfolders read as one recording each (sentence01, sentence02, sentence10)" in err
     c = Corpus.load(tmp_path / "m.npz")
     assert len(c.utterances) == 3 and [u.n_frames for u in c.utterances] == [12, 12, 12]
 
 
-def test_a_folder_of_ndi_wave_exports_with_state_and_error_columns(tmp_path):
+def test_a_folder_of_ndi_wave_exports_with_state_and_error_columns(tmp_path, cli):
     from engine.talker.lab_files import lab_sweeps, wave_tsv
 
     d = tmp_path / "wave"
@@ -187,9 +176,9 @@ def test_a_folder_of_ndi_wave_exports_with_state_and_error_columns(tmp_path):
         (d / f"{s.name}.tsv").write_text(wave_tsv(X, rate=125.0, state=state, error=err))
     (d / "layout.txt").write_text("base: wave\nsensor UL upper_lip\nsensor LL lower_lip\nsensor LC left_corner\n"
                                   "sensor RC right_corner\n")
-    rc, _, err = _run(["import", str(d), "--format", "wave", "--layout", str(d / "layout.txt"), "-q", "--jobs", "1",
-                       "--fields-from", r"re:^(?P<speaker>S[0-9]+)(?P<sex>[FM])", "--quality", "mask",
-                       "--quality-threshold", "1", "-o", str(tmp_path / "w.npz")])
+    rc, _, err = cli(["import", str(d), "--format", "wave", "--layout", str(d / "layout.txt"), "-q", "--jobs", "1",
+                      "--fields-from", r"re:^(?P<speaker>S[0-9]+)(?P<sex>[FM])", "--quality", "mask",
+                      "--quality-threshold", "1", "-o", str(tmp_path / "w.npz")])
     assert rc == 0, err
     assert "4 .tsv recordings (wave)" in err and "left out 1: layout.txt" in err
     assert "quality: UL: speaker S01 median 0.3, 0.0% of samples above" in err
