@@ -109,3 +109,24 @@ def conditions():
     cc = condition_corpus(conditions={"a": "none", "b": "bilabial_release", "c": "slow_closing"}, n_texts=10,
                           repetitions=2, preset="small", seed=0)
     return cc, Manifold().fit(cc.corpus)
+
+
+#: the lab folder's speakers (code, sex) and emotions, as a lab names its files (XYZFNE01.pos ...)
+LAB_SPEAKERS = (("XYZ", "F"), ("ABCD", "M"), ("EF", "F"))
+LAB_EMOTIONS = ("NE", "AN", "SA")
+
+
+@pytest.fixture(scope="session")
+def ag501_lab(tmp_path_factory):
+    """A lab's AG501 folder (engine.talker.lab_files): 3 speakers x 3 emotions x 2 texts as ``<spk><sex><emo><nn>.pos``
+    sweeps with real headers and rms columns, speaker XYZ's upper-lip coil bad, the lab's layout file, a metadata
+    table (``;``, BOM) missing one recording and naming one that is not there, and a notes file.
+
+    Returns ``(folder, sweeps, pos paths)``."""
+    from engine.talker.lab_files import BadSensor, lab_sweeps, write_ag501_folder
+
+    folder = tmp_path_factory.mktemp("ag501") / "session1"
+    sweeps = lab_sweeps(speakers=LAB_SPEAKERS, emotions=LAB_EMOTIONS, texts=2, duration_s=(0.8, 1.0),
+                        bad=BadSensor("XYZ"), seed=11)
+    paths = write_ag501_folder(folder, sweeps, leave_out=("EFFSA02",), extra=("QRSMNE01",))
+    return folder, sweeps, paths

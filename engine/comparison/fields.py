@@ -5,18 +5,16 @@ group, ...); its *levels* are the distinct values. :func:`utterance_fields` is t
 place where fields are read from a corpus; everything downstream takes the levels as
 arrays, one string per utterance, with ``""`` for an unknown value.
 
-Where the fields come from today (``utterance_fields``):
+Where the fields come from (``utterance_fields``):
 
 * ``speaker``: :attr:`engine.recordings.corpus.Utterance.speaker` (always present);
-* ``text``: :attr:`Utterance.text` when some utterance has one;
-* any named per-utterance fields the corpus carries, looked up by duck typing (the block
-  marked *metadata lookup* below): a mapping ``{name: one value per utterance}`` held by the
-  corpus (attribute ``fields``, ``metadata`` or ``utterance_fields``), or a mapping ``{name:
-  value}`` held by each utterance (attribute ``fields`` or ``metadata``). A field found
-  there replaces ``speaker`` or ``text`` of the same name.
+* ``text``: :attr:`Utterance.text` (the sentence) when some utterance has one;
+* every named field the corpus's utterances carry (``Utterance.fields``, read through
+  :mod:`engine.recordings.metadata`: from file-name patterns and metadata tables at import,
+  kept in corpus and manifold files). A field named ``text`` replaces the sentence.
 
-:func:`attach_fields` gives a corpus fields in the place ``utterance_fields`` reads them
-(the generated corpora of tests and benchmarks use it).
+:func:`attach_fields` sets fields on a corpus's utterances (the generated corpora of tests
+and benchmarks use it).
 """
 from __future__ import annotations
 
@@ -24,6 +22,9 @@ from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
+
+from engine.recordings.metadata import field_names, with_fields
+from engine.recordings.metadata import field_values as metadata_values
 
 __all__ = ["FieldError", "utterance_fields", "attach_fields", "level_counts", "describe_fields", "field_values"]
 
@@ -61,18 +62,9 @@ def utterance_fields(corpus) -> dict[str, np.ndarray]:
     texts = [getattr(u, "text", "") or "" for u in utts]
     if any(t.strip() for t in texts):
         out["text"] = _as_values(texts, n, "text", name)
-    # ---- metadata lookup (duck-typed): the corpus's own named fields, wherever it keeps them ----
-    for attr in ("fields", "metadata", "utterance_fields"):
-        table = getattr(corpus, attr, None)
-        if isinstance(table, Mapping):
-            for key, values in table.items():
-                out[str(key)] = _as_values(values, n, str(key), name)
-    for attr in ("fields", "metadata"):
-        per_utt = [getattr(u, attr, None) for u in utts]
-        if n and all(isinstance(m, Mapping) for m in per_utt):
-            for key in dict.fromkeys(k for m in per_utt for k in m):
-                out[str(key)] = _as_values([m.get(key, "") for m in per_utt], n, str(key), name)
-    # ---- end of the metadata lookup ----
+    for key in field_names(corpus):
+        if key != "speaker":
+            out[key] = _as_values(metadata_values(corpus, key), n, key, name)
     return out
 
 
@@ -90,9 +82,8 @@ def attach_fields(corpus, fields: Mapping):
     """
     n = len(corpus.utterances)
     checked = {str(k): _as_values(v, n, str(k), getattr(corpus, "name", "corpus")) for k, v in fields.items()}
-    out = replace(corpus)
-    out.utterance_fields = {**dict(getattr(corpus, "utterance_fields", None) or {}), **checked}
-    return out
+    utts = [with_fields(u, {k: v[i] for k, v in checked.items()}) for i, u in enumerate(corpus.utterances)]
+    return replace(corpus, utterances=utts)
 
 
 def level_counts(values) -> dict[str, int]:

@@ -87,6 +87,9 @@ class Utterance:
     speaker : str
         Who spoke it ("" = unknown). Multi-speaker corpora are normalised per speaker
         before the shape space (:mod:`engine.recordings.registration`).
+    fields : tuple of (str, str)
+        Other metadata fields, ``(name, value)`` in order (sex, emotion, text number,
+        session, group ...; :mod:`engine.recordings.metadata` reads them).
     """
 
     id: str
@@ -96,6 +99,7 @@ class Utterance:
     audio: str | None = None
     text: str = ""
     speaker: str = ""
+    fields: tuple[tuple[str, str], ...] = ()
 
     @property
     def n_frames(self) -> int:
@@ -489,6 +493,9 @@ class Corpus:
         if self.axes:
             d["corpus_axes"] = np.array(self.axes)
         d["corpus_units"] = np.array(self.units)
+        from engine.recordings.field_arrays import fields_to_arrays
+
+        d.update(fields_to_arrays(self.utterances))
         if base is not None:
             d["corpus_utt_audio_abs"] = np.array([_absolute(u.audio) for u in self.utterances], dtype=str)
         for k, v in self.latent.items():
@@ -504,9 +511,11 @@ class Corpus:
         exists, that one. Absolute paths (files written before) are kept.
         """
         from engine.files.validate import FieldError, check_corpus_arrays
+        from engine.recordings.field_arrays import fields_from_arrays
 
         try:  # dtypes, shapes and index ranges checked before anything is built from them
             check_corpus_arrays(d, source=source, frames_given=frames is not None)
+            fields = fields_from_arrays(d, len(d["corpus_utt_ids"]), source=source)
         except FieldError as exc:
             raise CorpusError(str(exc)) from None
         try:
@@ -546,7 +555,8 @@ class Corpus:
                 a, e = int(cuts[k]), int(cuts[k + 1])
                 phones = PhoneInterval._many(times[a:e], labels[a:e])
                 wav = _resolve(str(audio[k]), base, str(audio_abs[k]) if audio_abs is not None else "")
-                utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k])))
+                utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k]),
+                                      fields[k] if fields is not None else ()))
         try:
             return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
                        latent=latent, name=name, point_roles=roles, registration=registration, history=history,

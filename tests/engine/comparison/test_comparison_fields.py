@@ -36,11 +36,16 @@ def test_attached_fields_are_read_and_replace_the_attributes():
     assert f["text"].tolist() == ["x", "y"]
 
 
-def test_fields_held_by_the_utterances_are_read():
+def test_fields_read_on_import_are_read_after_a_save(tmp_path):
+    from dataclasses import replace
+
+    from engine.recordings.metadata import with_fields
+
     c = _corpus(["A", "B"])
-    for u, sex in zip(c.utterances, ("F", "M")):
-        object.__setattr__(u, "metadata", {"sex": sex})
-    assert utterance_fields(c)["sex"].tolist() == ["F", "M"]
+    c = replace(c, utterances=[with_fields(u, {"sex": sex}) for u, sex in zip(c.utterances, ("F", "M"))])
+    c.save(tmp_path / "c.npz")
+    f = utterance_fields(Corpus.load(tmp_path / "c.npz"))
+    assert f["sex"].tolist() == ["F", "M"] and f["speaker"].tolist() == ["A", "B"]
 
 
 def test_a_field_of_the_wrong_length_names_it():
