@@ -271,10 +271,10 @@ def test_a_level_of_detail_cloud_is_coloured_from_every_frame_and_clicks_find_un
     from app.views.manifold_view import ManifoldView
 
     m = app_manifold
-    import app.models.state
+    import app.models.state.derived
 
     monkeypatch.setattr(app.models.lod, "DEFAULT_MAX_POINTS", 800)
-    monkeypatch.setattr(app.models.state, "_PREPARED", type(app.models.state._PREPARED)())  # not another test's cloud
+    monkeypatch.setattr(app.models.state.derived, "PREPARED", type(app.models.state.derived.PREPARED)())  # not another test's cloud
     s = AppState(m)
     v = ManifoldView(s)
     try:
