@@ -12,7 +12,7 @@ import signal
 import sys
 from pathlib import Path
 
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.models.state import AppState
 from app.window.exports import ANIMATION_FILTERS, FIGURE_FILTERS, TRAJECTORY_FILTERS, ExportActions
@@ -82,6 +82,10 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
 
         self.summary_label = QtWidgets.QLabel("no manifold loaded")
         self.statusBar().addPermanentWidget(self.summary_label)
+        from app.window.undo import SettingsRecorder
+
+        self.view_undo_stack = QtGui.QUndoStack(self)  # the view's settings (the editor keeps its own edits)
+        self.settings_recorder = SettingsRecorder(self.state, self.view_undo_stack)
         self._make_menus()
         self.state.events.manifold.connect(self._on_manifold)
         self.autosaver = autosave
@@ -90,13 +94,21 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
         if autosave is not None:
             self._autosave_timer.start(1000)
         self.layout_restored = self.settings.restore_layout(self)
+        # the editor's dock is as tall as what the editor shows: no room kept for a sound that is off or absent,
+        # neither now nor from a layout saved while a sound was shown
+        self.editor.heightWanted.connect(self._fit_editor_dock)
+        self._fit_editor_dock()
+        # why there is no sound, said once each in the status bar (no device or library, no espeak-ng)
+        self._said: set = set()
+        self.editor.notice.connect(self.say_once)
+        self.state.events.playing.connect(self._check_sound)
         if manifold is not None:
             self.set_manifold(manifold, source=source)
 
     #: smallest useful size of each view: below it the window stops shrinking instead of
     #: collapsing a dock to nothing (the Lips dock vanished at 1179 x 407 before)
     VIEW_MINIMUM = {"manifold": (360, 260), "lips": (240, 170), "clusters": (240, 150), "scree": (240, 150),
-                    "editor": (560, 190)}
+                    "editor": (560, 120)}
 
     def _set_minimum_sizes(self) -> None:
         views = {"manifold": self.manifold_view, **{k: d.widget() for k, d in self.docks.items()}}
@@ -208,13 +220,42 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
 
     #: the docks' first sizes (pixels), given at construction and again by View > Reset layout:
     #: (docks, their sizes, the direction measured)
+    #: (the editor's dock is fitted to what the editor shows instead: _fit_editor_dock)
     DOCK_SIZES = ((("lips",), (480,), QtCore.Qt.Orientation.Horizontal),
-                  (("lips", "clusters"), (420, 380), QtCore.Qt.Orientation.Vertical),
-                  (("editor",), (230,), QtCore.Qt.Orientation.Vertical))
+                  (("lips", "clusters"), (420, 380), QtCore.Qt.Orientation.Vertical))
 
     def _size_docks(self) -> None:
         for keys, sizes, direction in self.DOCK_SIZES:
             self.resizeDocks([self.docks[k] for k in keys], list(sizes), direction)
+
+    def say_once(self, message: str, ms: int = 15000) -> bool:
+        """Show ``message`` in the status bar, unless it was said already in this window (returns whether it was shown)."""
+        if message in self._said:
+            return False
+        self._said.add(message)
+        self.statusBar().showMessage(message, ms)
+        return True
+
+    def _check_sound(self, playing: bool) -> None:
+        """Playback with a sound the machine cannot play: why, once."""
+        from app.files.sound import playback_audio
+
+        audio = self.lip_view.audio
+        if playing and not audio.available and playback_audio(self.state) is not None:
+            self.say_once(f"no sound: {audio.reason}; the lips play silent")
+
+    def _fit_editor_dock(self, height: int | None = None) -> None:
+        """Give the editor's dock the height its contents need (``height``: the editor's size hint)."""
+        dock = self.docks["editor"]
+        if dock.isFloating() or not dock.isVisible() and self.isVisible():
+            return
+        want = height if height is not None else self.editor.sizeHint().height()
+        title = dock.height() - dock.widget().height()
+        if dock.isVisible() and dock.widget().height() > 0 and title > 0:
+            self._dock_title = title  # the dock's title bar, measured once laid out
+        title = getattr(self, "_dock_title", dock.fontMetrics().height() + 6)
+        self.resizeDocks([dock], [max(int(want), self.editor.minimumHeight()) + title],
+                         QtCore.Qt.Orientation.Vertical)
 
     def reset_layout(self) -> None:
         """View > Reset layout: every dock back where it started, shown, at its first size."""
@@ -223,6 +264,7 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
             dock.show()
         self.restoreState(self._default_layout)
         self._size_docks()
+        self._fit_editor_dock()
 
     def closeEvent(self, event):
         from app.workers import cancel_all

@@ -1,4 +1,4 @@
-"""World -> screen for a pyvista view: the camera's matrix, projected points, hover look-up, standard views.
+"""World -> screen (numpy only): a view's camera matrix, projected points, hover look-up, standard views.
 
 The hover readout and the vector export both need where each point lands on the
 screen; the VTK side is one function (:func:`view_transform`), the rest is numpy.

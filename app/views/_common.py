@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from contextlib import contextmanager
 
-__all__ = ["blocked", "reserve_lines", "set_readout", "make_plotter", "camera_of", "set_camera", "close_plotter",
+__all__ = ["blocked", "reserve_lines", "set_readout", "elided_label", "make_plotter", "camera_of", "set_camera", "close_plotter",
            "connect_all", "disconnect_all",
            "RenderScheduler", "Throttle", "READOUT_INTERVAL_S", "drawing_frame"]
 
@@ -43,6 +43,43 @@ def set_readout(label, text: str) -> None:
     need = label.heightForWidth(label.width()) if label.width() > 0 else label.sizeHint().height()
     if need > label.minimumHeight():
         label.setMinimumHeight(need)
+
+
+def elided_label(text: str = ""):
+    """A one-line QLabel that elides its text at the right ("…") when narrow, the whole text in its tooltip.
+
+    Never wraps onto a second line under a dock's tab bar, never widens its dock, never cuts a
+    word to a fragment without saying so.
+    """
+    from PySide6 import QtCore, QtWidgets
+
+    class _Elided(QtWidgets.QLabel):
+        def __init__(self, text):
+            super().__init__()
+            self._full = ""
+            self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Fixed)
+            self.setText(text)
+
+        def setText(self, text):  # noqa: N802 - Qt override
+            self._full = str(text)
+            self.setToolTip(self._full)
+            self._elide()
+
+        def text(self):  # the whole text, as set
+            return self._full
+
+        def resizeEvent(self, event):  # noqa: N802 - Qt override
+            super().resizeEvent(event)
+            self._elide()
+
+        def minimumSizeHint(self):  # noqa: N802 - Qt override
+            return QtCore.QSize(0, super().minimumSizeHint().height())
+
+        def _elide(self):
+            shown = self.fontMetrics().elidedText(self._full, QtCore.Qt.TextElideMode.ElideRight, max(self.width(), 1))
+            QtWidgets.QLabel.setText(self, shown)
+
+    return _Elided(text)
 
 
 def make_plotter(parent):

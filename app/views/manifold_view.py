@@ -27,17 +27,21 @@ from app.views._common import (
     make_plotter,
     set_camera,
 )
+from app.views.manifold.camera import ManifoldCamera
 from app.views.manifold.controls import ManifoldControls
 from app.views.manifold.layers import ManifoldLayers, axes_origin
+from app.views.manifold.legends import ManifoldLegends
 
 __all__ = ["ManifoldView", "axes_origin"]
 
 
-class ManifoldView(ManifoldControls, ManifoldLayers, QtWidgets.QWidget):
+class ManifoldView(ManifoldControls, ManifoldLayers, ManifoldLegends, ManifoldCamera, QtWidgets.QWidget):
     """3-D view of the manifold bound to an :class:`app.models.state.AppState`.
 
     Its controls and readouts are :class:`app.views.manifold.controls.ManifoldControls`, its
-    scene :class:`app.views.manifold.layers.ManifoldLayers`.
+    scene :class:`app.views.manifold.layers.ManifoldLayers`, its legends
+    :class:`app.views.manifold.legends.ManifoldLegends`, its camera
+    :class:`app.views.manifold.camera.ManifoldCamera`.
     """
 
     def __init__(self, state, parent=None):
@@ -50,8 +54,7 @@ class ManifoldView(ManifoldControls, ManifoldLayers, QtWidgets.QWidget):
         self.picker = None
         self.locator = None
         self.coloring = None
-        self._legend_mode = None
-        self.legend = None  # the phone legend's vtkLegendBoxActor while one is shown
+        self._forget_legends()
 
         bar = self._make_controls()
         self.plotter = make_plotter(self)
@@ -65,8 +68,9 @@ class ManifoldView(ManifoldControls, ManifoldLayers, QtWidgets.QWidget):
         lay.addWidget(self.hover_label)
 
         self._connect_controls(state)
+        # Esc clears the selection and nothing else (the view's settings have their own reset, and undo)
         self.esc_shortcut = QtGui.QShortcut(QtGui.QKeySequence(QtCore.Qt.Key.Key_Escape), self)
-        self.esc_shortcut.activated.connect(state.reset_view)
+        self.esc_shortcut.activated.connect(state.clear_selection)
         # hover: the latest pointer position is looked up at most every HOVER_INTERVAL_MS
         self._hover_pos = None
         self._hover_xy = None
@@ -82,6 +86,7 @@ class ManifoldView(ManifoldControls, ManifoldLayers, QtWidgets.QWidget):
         self._connections = [
             (ev.changed, self._on_changed),
             (ev.path_mode, lambda on: self._sync_box(self.path_box, on)),
+            (ev.hidden_layers, lambda _h: self._sync_layer_boxes()),
         ]
         self.n_recolors = 0
         connect_all(self._connections)
@@ -134,6 +139,8 @@ class ManifoldView(ManifoldControls, ManifoldLayers, QtWidgets.QWidget):
             self._sync_phone_edit()
             self.rebuild()
             return
+        if "palette" in names:  # a session's palette: every category colour may change
+            names = names | {"color_mode", "visible_phones"}
         if names & {"hover"}:
             self._update_hover()
         if "points" not in self.handles:
@@ -156,15 +163,21 @@ class ManifoldView(ManifoldControls, ManifoldLayers, QtWidgets.QWidget):
             self._on_path(render=False)
         if "trajectory" in names:
             self._on_trajectories(render=False)
-        if "visible_phones" in names:
+        if names & {"visible_phones", "ellipsoid_opacity"}:
             self._on_phones(render=False)
+        if "hidden_layers" in names:
+            self._on_layers(render=False)
         if recolor:
             self._recolor(render=False)
         elif selection or "path" in names:
             self._update_info()
         if names & {"playback", "playing"} and "trajectory" not in names:
             self._on_playback(render=False)
-        if recolor or selection or names & {"path", "trajectory", "visible_phones", "horizon_ms", "phone_filter"}:
+            shown = any(r[0] == "playback position" for r in self.legend_rows.get("glyphs", ()))
+            if shown != (self.state.playback is not None):  # the playback row comes and goes, once
+                self._update_legends()
+        if recolor or selection or names & {"path", "trajectory", "visible_phones", "horizon_ms", "phone_filter",
+                                            "ellipsoid_opacity", "hidden_layers"}:
             self.renderer.request()
         elif names & {"playback", "playing"}:
             if "playing" in names and self.state.playing:

@@ -109,12 +109,19 @@ class ExportActions:
         path = str(path)
         from engine.progress import Cancelled
 
+        from app.models.task_status import ProgressEstimate
+
         dlg = QtWidgets.QProgressDialog("Rendering the video…", "Cancel", 0, 100, self)
         dlg.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
+        dlg.setAutoReset(False)  # the last frame must not reset (and re-arm) it before the file is written
+        dlg.setAutoClose(False)
+        estimate = ProgressEstimate()
 
-        def progress(_stage, done, total):  # off-screen VTK stays in the GUI thread
+        def progress(stage, done, total):  # off-screen VTK stays in the GUI thread
+            estimate.report(stage, done, total)
             dlg.setMaximum(total)
-            dlg.setValue(done)
+            dlg.setValue(min(done, total))
+            dlg.setLabelText(f"Rendering the video: {estimate.text()}")
             QtWidgets.QApplication.processEvents()
             if dlg.wasCanceled():
                 raise Cancelled("export cancelled")
@@ -124,7 +131,10 @@ class ExportActions:
         except Cancelled:
             self.statusBar().showMessage("export cancelled; nothing was written", 5000)
         finally:
-            dlg.close()
+            # reset() stops the dialog's own show-after-4-s timer; a close alone left it to show again
+            dlg.reset()
+            dlg.hide()
+            dlg.deleteLater()
 
     def export_clusters(self, path) -> Path:
         from engine.io.writers.export import write_table_csv

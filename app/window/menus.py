@@ -75,10 +75,12 @@ class MenuActions:
         f.addSeparator()
         self._act(f, "&Quit", self.close, QtGui.QKeySequence.StandardKey.Quit)
         e = mb.addMenu("&Edit")
-        stack = self.editor.undo_stack
-        self.undo_action = stack.createUndoAction(self, "&Undo")
+        # one history: the editor's target edits and the view's settings, in the order they were made
+        from app.window.undo import History
+
+        self.history = History([self.editor.undo_stack, self.view_undo_stack], parent=self)
+        self.undo_action, self.redo_action = self.history.undo_action, self.history.redo_action
         self.undo_action.setShortcut(QtGui.QKeySequence.StandardKey.Undo)
-        self.redo_action = stack.createRedoAction(self, "&Redo")
         self.redo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Shift+Z"), QtGui.QKeySequence("Ctrl+Y")])
         e.addAction(self.undo_action)
         e.addAction(self.redo_action)
@@ -86,12 +88,36 @@ class MenuActions:
         for key, dock in self.docks.items():
             v.addAction(dock.toggleViewAction())
         v.addSeparator()
+        self.frame_action = self._act(v, "&Frame the selection", self.manifold_view.frame_selection,
+                                      QtGui.QKeySequence("F"))
+        self.frame_action.setToolTip("Bring the ticked clusters and the selection into view (F)")
+        self.clear_selection_action = self._act(v, "&Clear the selection", self.state.clear_selection)
+        self.clear_selection_action.setToolTip("Esc in the manifold view")
+        layers = v.addMenu("Show in the 3-D view")
+        self.layer_actions = {}
+        for key, text in (("points", "&Points"), ("plane", "Zero-velocity &plane"), ("axes", "&Axes (Y1-Y3, S, V)"),
+                          ("legend", "&Legends")):
+            a = layers.addAction(text)
+            a.setCheckable(True)
+            a.setChecked(key not in self.state.hidden_layers)
+            a.toggled.connect(lambda on, k=key: self.state.set_layer_visible(k, on))
+            self.layer_actions[key] = a
+        self.state.events.hidden_layers.connect(self._sync_layer_actions)
+        self.reset_settings_action = self._act(v, "Reset view &settings", self.state.reset_settings)
+        self.reset_settings_action.setToolTip("Colouring, hemisphere, horizon, phone filter, ellipsoids and layers "
+                                              "back to their defaults (undo with Ctrl+Z); the selection stays")
         self._act(v, "Reset 3-D cameras", self.reset_cameras)
         self._act(v, "Reset &layout", self.reset_layout)
         h = mb.addMenu("&Help")
         self._act(h, "&User guide", self.show_user_guide, QtGui.QKeySequence.StandardKey.HelpContents)
         self._act(h, "&Keyboard shortcuts", self.show_shortcuts)
         self._act(h, "&About Lipspace", self._about)
+
+    def _sync_layer_actions(self, hidden) -> None:
+        for key, a in self.layer_actions.items():
+            a.blockSignals(True)
+            a.setChecked(key not in hidden)
+            a.blockSignals(False)
 
     def _act(self, menu, text, slot, shortcut=None):
         a = QtGui.QAction(text, self)

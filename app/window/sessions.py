@@ -38,13 +38,18 @@ class SessionActions:
 
         targets = apply_session(self.state, d)
         self.editor.apply_settings(d.get("extra", {}).get("editor", {}))
-        if targets is not None:  # the editor's (edited) key targets
-            self.editor.restore_targets(targets)
+        if targets is not None:  # the editor's (edited) key targets, and its word tier
+            from engine.recordings.corpus import PhoneInterval
+
+            words = d.get("extra", {}).get("editor", {}).get("words") or []
+            self.editor.restore_targets(targets, words=tuple(PhoneInterval(float(a), float(b), str(w))
+                                                            for a, b, w in words))
         cams = d.get("cameras", {})
         if "manifold" in cams:
             self.manifold_view.set_camera(cams["manifold"])
         if "lips" in cams:
             self.lip_view.set_camera(cams["lips"])
+        self.view_undo_stack.clear()  # a session is a document of its own: nothing of before to undo
 
     def open_session(self, path):
         """Open a session file: reload its source if it differs from what is shown, then restore it."""

@@ -90,7 +90,10 @@ def test_click_selects_frame_colours_hemisphere_and_links_lips(win, qtbot, app_m
     assert np.array_equal(np.isnan(values), ~np.isfinite(future))
     np.testing.assert_allclose(values[~np.isnan(values)], future[np.isfinite(future)])
     rgb = view.handles["points"].rgb
-    assert np.all(rgb[mine][:, 0] > 100) and np.all(rgb[mine][:, 2] < 40)  # hop 0 = red
+    from app.models.colouring import FUTURE_CMAP, colormap_rgb
+
+    hop0 = np.rint(255 * colormap_rgb(FUTURE_CMAP, 0.0)).astype(int)
+    assert np.all(np.abs(rgb[mine].astype(int) - hop0) <= 1)  # hop 0: the future map's darkest colour
     # linked lip view shows the captured frame
     np.testing.assert_allclose(win.lip_view.main.points, _points(m, m.corpus_.frames[s.frame]), atol=1e-5)
     assert not np.allclose(win.lip_view.main.points, before)
@@ -286,12 +289,15 @@ def test_synthesise_typed_text_draws_red_trajectory(win, qtbot, app_manifold):
     ed.synthesize()
     qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)
     syn = view.handles["synthetic"]
-    assert syn.visible and syn.mesh.n_points == len(s.synthetic) == ed.targets.n_frames
+    assert syn.visible and len(syn.points) == len(s.synthetic) == ed.targets.n_frames
+    assert len(syn.arrows[0]) == 5                            # cones show which way it runs
     hidden = [view.handles[k] for k in ("points", "plane", "marker")]
     try:
         for h in hidden:
             h.set_visible(False)
         view._bar.SetVisibility(False)  # the colour bar's red end
+        for box in view.legends.values():  # and the legend's row naming the red trajectory
+            box.SetVisibility(False)
         assert _red_pixels(view.plotter) > 30  # the synthetic trajectory is red
         syn.set_visible(False)
         assert _red_pixels(view.plotter) == 0  # and nothing else is
@@ -299,6 +305,9 @@ def test_synthesise_typed_text_draws_red_trajectory(win, qtbot, app_manifold):
         for h in hidden:
             h.set_visible(True)
         view._bar.SetVisibility(True)
+        view._update_legends()
+        for key, box in view.legends.items():
+            box.SetVisibility(bool(view.legend_rows[key]))
         syn.set_visible(True)
     # playback without an original shows the synthetic lips alone
     s.set_playback(5)
@@ -573,13 +582,12 @@ def test_clusters_panel_shows_ellipsoids_and_exports_table(win, tmp_path, app_ma
     assert [int(r["count"]) for r in back] == counts
 
 
-def test_ticking_a_phone_redraws_only_the_swatches_that_change(win, monkeypatch):
-    """Each new icon makes the table re-measure its columns (~3 ms a row): a toggle that
-    set every row's icon cost 120 ms, more than the ellipsoid's render."""
+def test_ticking_a_phone_redraws_no_swatch_and_each_shows_the_session_colour(win, monkeypatch):
+    """Each new icon makes the table re-measure its columns (~3 ms a row): a toggle that set every row's
+    icon cost 120 ms. A swatch is its label's one palette colour, ticked or not, so a toggle sets none."""
     from PySide6 import QtCore
 
     import app.views.clusters_panel as cp
-    from app.models.colouring import ellipsoid_colors, phone_palette
 
     panel, s = win.clusters, win.state
     made = []
@@ -588,18 +596,12 @@ def test_ticking_a_phone_redraws_only_the_swatches_that_change(win, monkeypatch)
     items = {panel.table.item(i, 0).text(): panel.table.item(i, 0) for i in range(panel.table.rowCount())}
     a, b = [r["phone"] for r in panel.rows[:2]]
     items[a].setCheckState(QtCore.Qt.CheckState.Checked)
-    assert s.visible_phones == {a} and made == [tuple(ellipsoid_colors({a})[a])]
-    made.clear()
     items[b].setCheckState(QtCore.Qt.CheckState.Checked)
-    ell = ellipsoid_colors({a, b})
-    assert s.visible_phones == {a, b}
-    assert set(made) <= {tuple(ell[a]), tuple(ell[b])} and tuple(ell[b]) in made and len(made) <= 2
-    made.clear()
+    assert s.visible_phones == {a, b} and made == []
     panel.none_btn.click()
-    palette = phone_palette(s)
-    assert sorted(made) == sorted([tuple(palette[a]), tuple(palette[b])])  # back to the phone colours
-    shown = {ph: it.data(cp._SWATCH_ROLE) for ph, it in items.items() if ph in palette}
-    assert shown == {ph: cp.QtGui.QColor.fromRgbF(*map(float, palette[ph])).name() for ph in shown}
+    assert made == []
+    shown = {ph: it.data(cp._SWATCH_ROLE) for ph, it in items.items()}
+    assert shown == {ph: cp.QtGui.QColor.fromRgbF(*s.palette.colour("phone", ph)).name() for ph in shown}
     assert all(it.checkState() == QtCore.Qt.CheckState.Unchecked for it in items.values())
 
 

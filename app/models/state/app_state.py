@@ -13,7 +13,7 @@ import numpy as np
 
 from app.models.state.derived import DerivedCaches
 from app.models.state.events import Batching, Events, batched
-from app.models.state.fields import EVENT_FIELDS, FIELD, FIELDS
+from app.models.state.fields import EVENT_FIELDS, FIELD, FIELDS, SETTINGS
 from app.models.state.targets import insert_state_target, state_path
 from app.models.state.trajectory import original_trajectory
 
@@ -62,6 +62,8 @@ class AppState(Batching, DerivedCaches):
     """
 
     _event_fields = EVENT_FIELDS
+    _setting_fields = frozenset(SETTINGS)
+    _selection_events = frozenset({"frame", "state", "target"})
 
     def __init__(self, manifold=None):
         self.events = Events(EVENT_FIELDS)
@@ -71,6 +73,7 @@ class AppState(Batching, DerivedCaches):
         self.source: dict = {"path": None, "preset": "default"}
         self._take_prepared(manifold)
         self._init_batching()
+        self.palette = self._palette_for(manifold)
 
     # ----------------------------------------------------------- manifold
     @batched
@@ -88,15 +91,61 @@ class AppState(Batching, DerivedCaches):
         for f in FIELDS:
             if f.name != "manifold":
                 self._set(f.name, f.default)
+        self._set("palette", self._palette_for(manifold))
 
     @batched
     def reset_view(self) -> None:
-        """Back to the default view of this manifold (Esc): every view field of :data:`FIELDS` at its
+        """Back to the default view of this manifold: every view field of :data:`FIELDS` at its
         default (no selection, path, component or hover, density colouring, future hemisphere,
         default horizon, no phone filter or ellipsoids); the utterance and trajectories stay."""
         for f in FIELDS:
             if f.view:
                 self._set(f.name, f.default)
+
+    # ----------------------------------------------------------- settings
+    @batched
+    def reset_settings(self) -> None:
+        """Every view setting (:data:`app.models.state.fields.SETTINGS`: colouring, hemisphere, horizon,
+        phone filter, path mode, ellipsoids and their opacity, hidden layers) back to its default, as
+        one action (undone as one); the selection stays."""
+        for name in SETTINGS:
+            self._set(name, FIELD[name].default)
+
+    @batched
+    def apply_settings(self, values: dict) -> None:
+        """Set the view settings ``values`` (``{name: value}``, e.g. an undo's ``before``) as one action."""
+        bad = sorted(set(values) - set(SETTINGS))
+        if bad:
+            raise KeyError(f"not view settings: {', '.join(bad)}; the settings are {', '.join(SETTINGS)}")
+        for name in SETTINGS:  # declaration order: the colour mode after the hemisphere, as the setters do
+            if name in values:
+                self._set(name, values[name])
+
+    def settings_values(self) -> dict:
+        """``{name: value}`` of every view setting."""
+        return {name: getattr(self, name) for name in SETTINGS}
+
+    @batched
+    def set_ellipsoid_opacity(self, opacity) -> None:
+        """How opaque the cluster ellipsoids' fill is, 0 (outline only) to 1."""
+        self._set("ellipsoid_opacity", opacity)
+
+    @batched
+    def set_layer_visible(self, layer: str, visible: bool) -> None:
+        """Show or hide a layer of the manifold view (:data:`app.models.state.fields.LAYERS`)."""
+        hidden = set(self.hidden_layers)
+        (hidden.discard if visible else hidden.add)(str(layer))
+        self._set("hidden_layers", hidden)
+
+    @batched
+    def set_hidden_layers(self, layers) -> None:
+        """The layers of the manifold view hidden (:data:`app.models.state.fields.LAYERS`)."""
+        self._set("hidden_layers", layers)
+
+    @batched
+    def set_palette(self, palette) -> None:
+        """The session's category colours (a :class:`app.models.palette.SessionPalette`; e.g. from a session)."""
+        self._set("palette", palette)
 
     # ---------------------------------------------------------- selection
     def _check_index(self, value, limit, what):
@@ -241,13 +290,37 @@ class AppState(Batching, DerivedCaches):
 
     @batched
     def set_playback(self, k) -> None:
-        """Current playback index into the trajectories (None: show the selection)."""
+        """Current playback index into the trajectories (None: show the selection). While a range plays
+        (:meth:`play`), reaching its stop shows its last frame and stops."""
+        stop = self.play_stop
+        if self.playing and stop is not None and k is not None and k >= stop - 1:
+            self._set("playback", stop - 1)
+            self.set_playing(False)
+            return
         self._set("playback", k)
 
     @batched
     def set_playing(self, on: bool) -> None:
-        """Start or stop playback (starting with nothing to play is refused quietly)."""
+        """Start or stop playback (starting with nothing to play is refused quietly); stopping ends a range."""
         self._set("playing", on)
+        if not self.playing:
+            self._set("play_stop", None)
+
+    @batched
+    def play(self, start: int = 0, stop: int | None = None) -> bool:
+        """Play frames ``start`` up to (not including) ``stop`` (None: to the end) and stop there, as
+        Praat's Tab plays a selection. Returns False (nothing changes) when there is nothing to play."""
+        n = self.n_playback
+        if n == 0:
+            return False
+        start = int(min(max(int(start), 0), n - 1))
+        stop = None if stop is None else int(min(max(int(stop), start + 1), n))
+        with self.batch():
+            self.set_playing(False)
+            self._set("playback", start)
+            self._set("playing", True)
+            self._set("play_stop", None if stop is None or stop >= n else stop)
+        return True
 
     # ------------------------------------------------------------ phones
     @batched
@@ -275,6 +348,8 @@ class AppState(Batching, DerivedCaches):
         """Set field ``name`` through its check; announce it when it changed (or ``announce``)."""
         f = FIELD[name]
         value = self._checked(name, value)
-        if announce or not f.same(getattr(self, name), value):
+        old = getattr(self, name)
+        if announce or not f.same(old, value):
+            self._note_before(name, old)
             setattr(self, name, value)
             self._emit(f.event_name)

@@ -49,6 +49,9 @@ def prepare_derived(manifold, progress=None) -> None:
         out["clusters"], out["cluster_kind"], out["cluster_note"] = clusters_of(manifold)
     except ValueError:
         pass  # the panel computes (and reports) it when shown
+    from app.models.palette import SessionPalette
+
+    out["palette"] = SessionPalette.for_corpus(manifold.corpus_)
     report(progress, stage, 4, 4)
     PREPARED[manifold] = out
 
@@ -151,6 +154,17 @@ class DerivedCaches:
         self._phones = None
         self._derived: dict = {}  # per-manifold values of the views, computed once (see derived)
         self._utt_starts = None
+
+    def _palette_for(self, manifold):
+        """The session palette of ``manifold``'s corpus (prepared in the loading worker, else made now)."""
+        if manifold is None:
+            return None
+        pre = PREPARED.get(manifold, {})
+        if "palette" in pre:
+            return pre["palette"]
+        from app.models.palette import SessionPalette
+
+        return SessionPalette.for_corpus(manifold.corpus_)
 
     def _require(self):
         if self.manifold is None:

@@ -46,7 +46,9 @@ class Events:
 
     ``changed`` fires once per user action with the frozenset of the event names that
     action changed (after every field event of that action), so a view that depends on
-    several fields redraws once (see :meth:`Batching.batch`).
+    several fields redraws once (see :meth:`Batching.batch`). ``settings`` fires after it, once
+    per action that changed a view setting, with ``(before, after)``: dicts of those settings'
+    values (what the window's undo stack records).
     """
 
     def __init__(self, names):
@@ -54,6 +56,7 @@ class Events:
         for n in self.NAMES:
             setattr(self, n, Event(n))
         self.changed = Event("changed")
+        self.settings = Event("settings")
 
 
 def batched(method):
@@ -70,15 +73,22 @@ def batched(method):
 class Batching:
     """Holds events while a batch is open and sends each once when the outermost batch ends.
 
-    The owner sets ``events`` (an :class:`Events`) and ``_event_fields`` (event name -> the
-    attribute names it carries, in order), and calls :meth:`_init_batching`.
+    The owner sets ``events`` (an :class:`Events`), ``_event_fields`` (event name -> the
+    attribute names it carries, in order) and ``_setting_fields`` (the fields announced on
+    ``events.settings``), calls :meth:`_init_batching`, and :meth:`_note_before` before it
+    changes a field.
     """
 
     _event_fields: dict = {}
+    _setting_fields: frozenset = frozenset()
+    #: events whose action's setting changes are consequences, not choices (a click that colours by hop
+    #: distance): not announced on ``events.settings``
+    _selection_events: frozenset = frozenset()
 
     def _init_batching(self) -> None:
         self._batch_depth = 0
         self._pending: dict = {}  # event name -> None, in order of first change (a batch's events)
+        self._before: dict = {}  # setting -> its value before this action first changed it
 
     @contextmanager
     def batch(self):
@@ -98,6 +108,11 @@ class Batching:
             if self._batch_depth == 0:
                 self._flush()
 
+    def _note_before(self, name: str, old) -> None:
+        """Remember a setting's value before this action first changes it (for ``events.settings``)."""
+        if name in self._setting_fields and name not in self._before:
+            self._before[name] = old
+
     def _emit(self, name: str) -> None:
         """Announce event ``name`` (held while a batch is open): the one path of every change."""
         self._pending.setdefault(name, None)
@@ -116,5 +131,14 @@ class Batching:
         finally:
             self._batch_depth -= 1
             self._pending = {}
+        before, self._before = self._before, {}
         if changed:
             self.events.changed.emit(frozenset(changed))
+        moved = {k: v for k, v in before.items() if not _same(v, getattr(self, k))}
+        if moved and "manifold" not in changed and not self._selection_events & set(changed):
+            # changed and back is no change; a new manifold starts anew; a click's own colouring is the click's
+            self.events.settings.emit(moved, {k: getattr(self, k) for k in moved})
+
+
+def _same(a, b) -> bool:
+    return a is b or (type(a) is type(b) and a == b)

@@ -16,8 +16,8 @@ from app.views.flow_layout import FlowLayout
 
 __all__ = ["ManifoldControls", "COLOR_LABELS", "HEMI_LABELS", "HORIZON_SLIDER_MS"]
 
-COLOR_LABELS = {"density": "Density", "class": "Tangent class", "phone": "Phone", "utterance": "Utterance",
-                "distance": "Hop distance"}
+COLOR_LABELS = {"density": "Density", "class": "Tangent class", "phone": "Phone", "speaker": "Speaker",
+                "utterance": "Utterance", "distance": "Hop distance"}
 HEMI_LABELS = {"future": "Future hemisphere", "past": "Past hemisphere", "both": "Past and future",
                "off": "No hemisphere"}
 #: the horizon slider runs 0..HORIZON_SLIDER_MS in whole frame periods; the "Horizon" box off means no horizon
@@ -40,17 +40,20 @@ class ManifoldControls:
         self.path_box = QtWidgets.QCheckBox("Path")
         self.path_box.setToolTip("Tick (or hold Shift) and click a second point to draw the minimum-distance "
                                  "path between the two states")
-        self.points_box = QtWidgets.QCheckBox("Points")
-        self.points_box.setChecked(True)
-        self.points_box.setToolTip("Show the frames (hide them to see trajectories and paths alone)")
-        self.plane_box = QtWidgets.QCheckBox("Plane")
-        self.plane_box.setChecked(True)
-        self.plane_box.setToolTip("Show the zero-velocity plane")
-        self.axes_box = QtWidgets.QCheckBox("S, V")
-        self.axes_box.setChecked(True)
-        self.axes_box.setToolTip("Show the global shape (S) and velocity (V) directions")
-        self.clear_btn = QtWidgets.QPushButton("Clear")
-        self.clear_btn.setToolTip("Clear the selection and reset colours, horizon and readouts (Esc)")
+        self.layer_boxes = {}
+        for key, label, tip in (("points", "Points", "Show the frames (hide them to see trajectories and paths alone)"),
+                                ("plane", "Plane", "Show the zero-velocity plane"),
+                                ("axes", "Axes", "Show the named axes Y1-Y3 and the global shape (S) and velocity (V) "
+                                 "directions"),
+                                ("legend", "Legend", "Show the legends of the colours and of every glyph drawn")):
+            box = QtWidgets.QCheckBox(label)
+            box.setChecked(True)
+            box.setToolTip(tip)
+            self.layer_boxes[key] = box
+        self.points_box, self.plane_box, self.axes_box = (self.layer_boxes[k] for k in ("points", "plane", "axes"))
+        self.clear_btn = QtWidgets.QPushButton("Clear selection")
+        self.clear_btn.setToolTip("Clear the selected frame, state, target and path (Esc); colours, horizon, filter "
+                                  "and ellipsoids stay (View › Reset view settings resets them)")
         self.horizon_box = QtWidgets.QCheckBox("Horizon")
         self.horizon_box.setChecked(True)
         self.horizon_box.setToolTip("Colour only the states reachable within the time horizon (untick: every "
@@ -85,7 +88,7 @@ class ManifoldControls:
         bar = FlowLayout(spacing=10)
         for group in ((QtWidgets.QLabel("Colour:"), self.color_box, self.phone_edit),
                       (self.hemi_box, self.horizon_box, self.horizon_slider, self.horizon_label),
-                      (self.path_box, self.points_box, self.plane_box, self.axes_box),
+                      (self.path_box, *self.layer_boxes.values()),
                       (*self.view_btns.values(), self.clear_btn)):
             box = QtWidgets.QWidget()
             row = QtWidgets.QHBoxLayout(box)
@@ -103,13 +106,17 @@ class ManifoldControls:
         self.color_box.currentIndexChanged.connect(lambda _: state.set_color_mode(self.color_box.currentData()))
         self.hemi_box.currentIndexChanged.connect(lambda _: state.set_hemisphere(self.hemi_box.currentData()))
         self.path_box.toggled.connect(state.set_path_mode)
-        self.points_box.toggled.connect(self._show_points)
-        self.plane_box.toggled.connect(lambda on: self._set_visible("plane", on))
-        self.axes_box.toggled.connect(self._show_axes)
-        self.clear_btn.clicked.connect(state.reset_view)
+        for key, box in self.layer_boxes.items():
+            box.toggled.connect(lambda on, k=key: state.set_layer_visible(k, on))
+        self.clear_btn.clicked.connect(state.clear_selection)
         self.horizon_box.toggled.connect(lambda _on: self._push_horizon())
         self.horizon_slider.valueChanged.connect(lambda _v: self._push_horizon())
         self.phone_edit.editingFinished.connect(self._push_phone_filter)
+
+    def _sync_layer_boxes(self):
+        for key, box in self.layer_boxes.items():
+            with blocked(box):
+                box.setChecked(key not in self.state.hidden_layers)
 
     def _sync_mode_boxes(self):
         with blocked(self.color_box, self.hemi_box):

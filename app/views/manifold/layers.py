@@ -1,19 +1,21 @@
 """The manifold view's scene layers: the cloud, plane, S and V, markers, paths, trajectories, ellipsoids.
 
 A part of :class:`app.views.manifold_view.ManifoldView` (a mixin): builds the layers with the
-:mod:`app.scene` builders once per manifold and brings each up to date in place.
+:mod:`app.scene` builders once per manifold and brings each up to date in place. Trajectories
+and the path carry cones pointing the way they run; cluster ellipsoids take their label's
+colour from the session palette, with an opaque outline and a fill of the chosen opacity.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from app import scene
-from app.models.colouring import ellipsoid_colors, point_colors
+from app.models.colour_maps import RESERVED_COLOURS
+from app.models.colouring import point_colors
 from app.models.picking import CloudLocator
-from app.scene import legend as scene_legend
+from app.models.view_legend import ellipsoid_kind
+from app.scene.axes import add_embedding_axes, axis_labels
 from app.scene.colour_bar import add_scalar_bar, configure_scalar_bar
-from app.scene.projection import project, standard_camera, view_transform
-from app.views._common import blocked
 
 __all__ = ["ManifoldLayers", "axes_origin"]
 
@@ -49,7 +51,7 @@ class ManifoldLayers:
         p.clear_actors()
         scene.overlay_renderer(p).RemoveAllViewProps()
         self.handles, self.ellipsoids, self.members = {}, {}, {}
-        self._legend_mode, self.legend = None, None  # cleared with the other actors
+        self._forget_legends()  # cleared with the other actors
         m = self.state.manifold
         if m is None:
             self.renderer.request()
@@ -69,12 +71,16 @@ class ManifoldLayers:
         h["plane"] = scene.add_zero_velocity_plane(p, t.plane_point_, t.plane_normal_, 1.1 * L)
         h["axes"] = scene.add_global_axes(p, axes_origin(Y, t.plane_point_, t.S_, t.plane_normal_, L), t.S_,
                                           t.plane_normal_, 0.45 * L)
+        shares = getattr(getattr(m, "embedding_", None), "explained_variance_ratio_", None)
+        h["yaxes"] = add_embedding_axes(p, np.column_stack(np.asarray(cloud.bounds)).ravel(), axis_labels(shares))
         h["local"] = scene.add_local_frame(p, length=0.18 * L)
-        h["marker"] = scene.add_marker(p, None, 0.018 * L, color=(1.0, 0.85, 0.0), name="selected")
-        h["target"] = scene.add_marker(p, None, 0.018 * L, color=(0.0, 0.8, 0.8), name="target")
-        h["path"] = scene.add_state_path(p, m.states_.centroids_[:, :3], None, node_radius=0.006 * L)
-        h["original"] = scene.add_trajectory(p, None, scene.ORIGINAL_COLOUR, name="original")
-        h["synthetic"] = scene.add_trajectory(p, None, scene.SYNTHETIC_COLOUR, name="synthetic")
+        h["marker"] = scene.add_marker(p, None, 0.018 * L, color=RESERVED_COLOURS["selected"], name="selected")
+        h["target"] = scene.add_marker(p, None, 0.018 * L, color=RESERVED_COLOURS["target"], name="target")
+        arrow = self.ARROW_SIZE * L  # the cones that show which way a trajectory or path runs
+        h["path"] = scene.add_state_path(p, m.states_.centroids_[:, :3], None, node_radius=0.006 * L,
+                                         arrow_size=arrow)
+        h["original"] = scene.add_trajectory(p, None, scene.ORIGINAL_COLOUR, name="original", arrow_size=arrow)
+        h["synthetic"] = scene.add_trajectory(p, None, scene.SYNTHETIC_COLOUR, name="synthetic", arrow_size=arrow)
         h["play_o"] = scene.add_marker(p, None, 0.016 * L, color=scene.ORIGINAL_COLOUR, name="play_original")
         h["play_s"] = scene.add_marker(p, None, 0.016 * L, color=scene.SYNTHETIC_COLOUR, name="play_synthetic")
         for key in self.OVERLAY:  # drawn over the cloud: never buried inside it
@@ -83,73 +89,45 @@ class ManifoldLayers:
         # a click or the pointer finds its frame among every frame, drawn or not
         self.locator = CloudLocator(m.Fy_, cloud, dot_radius=0.5 * size)
         self.picker = scene.enable_click_picking(p, h["points"].actor, self._on_pick, locate=self.frame_at)
-        self._set_visible("plane", self.plane_box.isChecked())
-        self._show_points(self.points_box.isChecked())
-        self._show_axes(self.axes_box.isChecked())
-        with blocked(self.path_box):
-            self.path_box.setChecked(self.state.path_mode)
+        self._on_layers(render=False)
+        self._sync_layer_boxes()
+        self._sync_box(self.path_box, self.state.path_mode)
         self._on_mode(render=False)
         self._on_selection(render=False, recolor=False)  # _on_mode has coloured the points
         self._on_path(render=False)
         self._on_trajectories(render=False)
         self._on_phones(render=False)
         self._install_hover()
+        self._update_hover()  # the last file's pointer readout goes with it
         self.standard_view("default", render=False)
         p.camera_set = True  # keep this framing (pyvista re-frames everything on first camera access otherwise)
+        self._update_legends()
         self.renderer.request()
 
     #: handles drawn in the overlay layer, over the cloud
     OVERLAY = ("marker", "target", "path", "local", "original", "synthetic", "play_o", "play_s")
     #: milliseconds between two hover look-ups while the pointer moves
     HOVER_INTERVAL_MS = 60
+    #: length of the direction cones on trajectories and paths, as a share of the cloud's extent
+    ARROW_SIZE = 0.035
 
-    def standard_view(self, name: str, render: bool = True) -> None:
-        """Put the camera in a standard view: "side" (S–V plane), "top" (down V) or "default"."""
-        m = self.state.manifold
-        if m is None or "points" not in self.handles:
+    def _on_layers(self, render=True) -> None:
+        """Show the layers the state does not hide (points, plane, S / V and the named axes, legends)."""
+        h, hidden = self.handles, self.state.hidden_layers
+        if "points" not in h:
             return
-        t = m.tangent_
-        # the cloud's bounds stand for every frame (the camera only reads their extent)
-        pos, focal, up = standard_camera(name, self.state.cloud.bounds, t.plane_point_, t.S_, t.plane_normal_)
-        cam = self.plotter.renderer.GetActiveCamera()
-        cam.SetPosition(*pos)
-        cam.SetFocalPoint(*focal)
-        cam.SetViewUp(*up)
-        ren = self.plotter.renderer
-        lo, hi = np.reshape(self.handles["points"].mesh.bounds, (3, 2)).T
-        tips = self.handles["axes"].get("tips") if isinstance(self.handles.get("axes"), dict) else None
-        if tips is not None:  # the S and V labels stand beyond the cloud: frame them too
-            lo, hi = np.minimum(lo, tips.min(axis=0)), np.maximum(hi, tips.max(axis=0))
-        ren.ResetCamera(*np.column_stack([lo, hi]).ravel())  # fit the cloud and the labels, same direction
-        if tips is not None:  # and keep the labels' text inside the view, not cut at its edge
-            for _ in range(2):
-                M, size = view_transform(self.plotter)
-                z = scene.label_zoom(project(tips, M, size)[0], size)
-                if z >= 0.999:
-                    break
-                cam.Zoom(z)
-        ren.ResetCameraClippingRange()
+        h["points"].set_visible("points" not in hidden)
+        h["plane"].set_visible("plane" not in hidden)
+        axes = "axes" not in hidden
+        for k in ("S", "V"):
+            h["axes"][k].set_visible(axes)
+        if "labels" in h["axes"]:
+            h["axes"]["labels"].SetVisibility(axes)
+        h["yaxes"]["lines"].set_visible(axes)
+        h["yaxes"]["labels"].SetVisibility(axes)
+        self._bar.SetVisibility("points" not in hidden and self.coloring is not None and self.coloring.cmap is not None)
+        self._update_legends()
         if render:
-            self.renderer.request()
-
-    def _set_visible(self, key, on):
-        if key in self.handles:
-            self.handles[key].set_visible(on)
-            self.renderer.request()
-
-    def _show_points(self, on):
-        if "points" in self.handles:
-            self.handles["points"].set_visible(on)
-            self._bar.SetVisibility(on and self.coloring is not None and self.coloring.cmap is not None)
-            self.renderer.request()
-
-    def _show_axes(self, on):
-        axes = self.handles.get("axes")
-        if axes:
-            for k in ("S", "V"):
-                axes[k].set_visible(on)
-            if "labels" in axes:
-                axes["labels"].SetVisibility(on)
             self.renderer.request()
 
     def _on_mode(self, render=True):
@@ -164,16 +142,8 @@ class ManifoldLayers:
         self.coloring = c
         self.handles["points"].set_colors(c.rgb, c.values)
         configure_scalar_bar(self._bar, c)
-        self._bar.SetVisibility(c.cmap is not None and self.points_box.isChecked())
-        legend = tuple((n, tuple(col)) for n, col in c.legend)
-        if legend != self._legend_mode:
-            if self.legend is not None:
-                scene_legend.remove_legend(self.plotter, self.legend)
-                self.legend = None
-            if legend:
-                self.legend = scene_legend.add_legend(self.plotter, legend,
-                                                      size=(0.22, min(0.6, 0.035 * len(legend) + 0.02)))
-            self._legend_mode = legend or None
+        self._bar.SetVisibility(c.cmap is not None and "points" not in self.state.hidden_layers)
+        self._update_legends()
         self._update_info()
         if render:
             self.renderer.request()
@@ -200,6 +170,7 @@ class ManifoldLayers:
             h["target"].set_visible(False)
         if recolor and s.color_mode == "distance":
             self._recolor(render=False)
+        self._update_legends()
         self._update_info()
         if render:
             self.renderer.request()
@@ -210,6 +181,7 @@ class ManifoldLayers:
         p = self.state.path
         C = self.state.manifold.states_.centroids_[:, :3]
         self.handles["path"].update(C[p] if p is not None else None)
+        self._update_legends()
         self._update_info()
         if render:
             self.renderer.request()
@@ -221,6 +193,7 @@ class ManifoldLayers:
             traj = getattr(self.state, key)
             self.handles[key].update(None if traj is None else np.asarray(traj.Y)[:, :3])
         self._on_playback(render=False)
+        self._update_legends()
         if render:
             self.renderer.request()
 
@@ -255,18 +228,21 @@ class ManifoldLayers:
         self.renderer.request(min_interval_s=wait)
 
     def _on_phones(self, render=True):
+        """The shown clusters' ellipsoids and member points, each in its label's palette colour."""
         if "points" not in self.handles:
             return
-        want = self.state.visible_phones
-        colours = ellipsoid_colors(want)
-        Y = self.state.manifold.Fy_
+        s = self.state
+        want = s.visible_phones
+        kind = ellipsoid_kind(s) if want or self.ellipsoids else "phone"
+        Y = s.manifold.Fy_
         for ph in sorted(want - set(self.ellipsoids)):
-            verts, faces = self.state.clusters.ellipsoid(ph)
-            self.ellipsoids[ph] = scene.add_cluster_ellipsoids(self.plotter, np.asarray(verts)[:, :3], faces,
-                                                               colours[ph], name=f"ellipsoid_{ph}")
-            members = Y[self.state.clusters.members(ph), :3]
+            colour = s.palette.colour(kind, ph)
+            verts, faces = s.clusters.ellipsoid(ph)
+            self.ellipsoids[ph] = scene.add_cluster_ellipsoids(self.plotter, np.asarray(verts)[:, :3], faces, colour,
+                                                               opacity=s.ellipsoid_opacity, name=f"ellipsoid_{ph}")
+            members = Y[s.clusters.members(ph), :3]
             small = len(members) <= self.SPHERE_POINTS_MAX
-            self.members[ph] = scene.add_point_markers(self.plotter, members, colours[ph],
+            self.members[ph] = scene.add_point_markers(self.plotter, members, colour,
                                                        point_size=7 if small else 4, spheres=small,
                                                        name=f"members_{ph}")
         for ph in self.ellipsoids:
@@ -274,7 +250,10 @@ class ManifoldLayers:
             self.ellipsoids[ph].set_visible(on)
             self.members[ph].set_visible(on)
             if on:
-                self.ellipsoids[ph].actor.prop.color = colours[ph]
-                self.members[ph].actor.prop.color = colours[ph]
+                colour = s.palette.colour(kind, ph)
+                self.ellipsoids[ph].set_color(colour)
+                self.ellipsoids[ph].set_opacity(s.ellipsoid_opacity)
+                self.members[ph].actor.prop.color = colour
+        self._update_legends()
         if render:
             self.renderer.request()
