@@ -74,6 +74,9 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
             dock.setWidget(widget)
             self.addDockWidget(area, dock)
             self.docks[key] = dock
+        # the editor's title on its side: on a laptop's screen every pixel of height goes to the 3-D view
+        ed = self.docks["editor"]
+        ed.setFeatures(ed.features() | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetVerticalTitleBar)
         self.tabifyDockWidget(self.docks["clusters"], self.docks["scree"])
         self.docks["clusters"].raise_()
         self._size_docks()
@@ -114,6 +117,9 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
         views = {"manifold": self.manifold_view, **{k: d.widget() for k, d in self.docks.items()}}
         for key, view in views.items():
             hint = view.minimumSizeHint()  # never below what the view's own layout needs
+            if key == "editor":  # its height follows its width (its controls wrap): it keeps it itself
+                view.setMinimumWidth(max(self.VIEW_MINIMUM[key][0], hint.width()))
+                continue
             view.setMinimumSize(max(self.VIEW_MINIMUM[key][0], hint.width()),
                                 max(self.VIEW_MINIMUM[key][1], hint.height()))
         self.setMinimumSize(self.minimumSizeHint())
@@ -222,7 +228,13 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
     #: (docks, their sizes, the direction measured)
     #: (the editor's dock is fitted to what the editor shows instead: _fit_editor_dock)
     DOCK_SIZES = ((("lips",), (480,), QtCore.Qt.Orientation.Horizontal),
-                  (("lips", "clusters"), (420, 380), QtCore.Qt.Orientation.Vertical))
+                  (("lips", "clusters"), (380, 420), QtCore.Qt.Orientation.Vertical))
+    #: below this window height the editor's tiers and sound are drawn lower (a laptop's screen)
+    COMPACT_BELOW = 900
+
+    def resizeEvent(self, event):
+        super().resizeEvent(event)
+        self.editor.set_compact(self.height() < self.COMPACT_BELOW)
 
     def _size_docks(self) -> None:
         for keys, sizes, direction in self.DOCK_SIZES:
@@ -249,11 +261,10 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
         dock = self.docks["editor"]
         if dock.isFloating() or not dock.isVisible() and self.isVisible():
             return
-        want = height if height is not None else self.editor.sizeHint().height()
-        title = dock.height() - dock.widget().height()
-        if dock.isVisible() and dock.widget().height() > 0 and title > 0:
-            self._dock_title = title  # the dock's title bar, measured once laid out
-        title = getattr(self, "_dock_title", dock.fontMetrics().height() + 6)
+        want = height if height is not None else self.editor.needed_height()
+        title = 0  # the title bar stands on the dock's side (DockWidgetVerticalTitleBar): no height
+        if not dock.features() & QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetVerticalTitleBar:
+            title = max(dock.height() - dock.widget().height(), dock.fontMetrics().height() + 6)
         self.resizeDocks([dock], [max(int(want), self.editor.minimumHeight()) + title],
                          QtCore.Qt.Orientation.Vertical)
 

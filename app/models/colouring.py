@@ -37,7 +37,7 @@ __all__ = ["Coloring", "CLASS_LABELS", "UNREACHABLE_RGB", "OUTSIDE_RGB", "DENSIT
            "colour_table", "colormap_rgb", "DENSITY_TITLE", "UNKNOWN_SPEAKER"]
 
 #: the colour bar's title in density mode: the value and its unit
-DENSITY_TITLE = "log density\n(ln frames per unit³ of Y)"
+DENSITY_TITLE = "log density\n(ln frames/unit³)"
 #: how the legend names utterances that name no speaker
 UNKNOWN_SPEAKER = "(speaker not named)"
 

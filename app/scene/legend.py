@@ -15,7 +15,23 @@ import numpy as np
 __all__ = ["add_legend", "set_entries", "remove_legend", "SYMBOLS"]
 
 SYMBOLS = ("circle", "line", "arrow", "ring", "square")
-_FACES: dict = {}  # one glyph per symbol for every entry
+#: the names' colour: dark, so a pale category colour (yellow) stays readable; the symbol carries the colour
+TEXT_RGB = (0.1, 0.1, 0.1)
+_FACES: dict = {}  # one glyph per symbol
+_COLOURED: dict = {}  # one coloured copy per (symbol, colour)
+
+
+def _coloured(symbol: str, rgb):
+    """The ``symbol``'s glyph with every point in ``rgb`` (0-255), made once per colour."""
+    import numpy as np
+
+    key = (symbol, tuple(int(c) for c in rgb))
+    if key not in _COLOURED:
+        face = _face(symbol).copy()
+        face.point_data["rgb"] = np.tile(np.asarray(key[1], np.uint8), (face.n_points, 1))
+        face.point_data.active_scalars_name = "rgb"
+        _COLOURED[key] = face
+    return _COLOURED[key]
 
 
 def _face(symbol: str):
@@ -85,10 +101,11 @@ def set_entries(actor, entries, *, size, loc="lower left") -> None:
     from pyvista.plotting.renderer import map_loc_to_pos
 
     actor.SetNumberOfEntries(len(entries))
+    actor.ScalarVisibilityOn()  # each symbol in its colour (its scalars), each name in dark text (readable on white)
     for i, entry in enumerate(entries):
         text, colour = entry[0], entry[1]
         symbol = entry[2] if len(entry) > 2 else "circle"
-        actor.SetEntry(i, _face(symbol), str(text), list(pv.Color(colour).float_rgb))
+        actor.SetEntry(i, _coloured(symbol, pv.Color(colour).int_rgb), str(text), list(TEXT_RGB))
     x, y, (w, h) = map_loc_to_pos(loc, size, border=0.05)
     actor.SetPosition(x, y)
     actor.SetPosition2(w, h)

@@ -54,6 +54,8 @@ class ClustersPanel(QtWidgets.QWidget):
         for j, (_k, _h, tip) in enumerate(COLUMNS):
             self.table.horizontalHeaderItem(j).setToolTip(tip)
         self.table.verticalHeader().setVisible(False)
+        # rows as tall as their text needs: a laptop's screen shows five of them and more
+        self.table.verticalHeader().setDefaultSectionSize(self.table.fontMetrics().height() + 6)
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectionBehavior.SelectRows)
         self.table.setSortingEnabled(True)

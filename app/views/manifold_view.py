@@ -64,8 +64,11 @@ class ManifoldView(ManifoldControls, ManifoldLayers, ManifoldLegends, ManifoldCa
         lay.setSpacing(0)
         lay.addLayout(bar)
         lay.addWidget(self.plotter.interactor, 1)
-        lay.addWidget(self.info)
-        lay.addWidget(self.hover_label)
+        readouts = QtWidgets.QHBoxLayout()
+        readouts.setContentsMargins(4, 1, 4, 1)
+        readouts.addWidget(self.info, 3)
+        readouts.addWidget(self.hover_label, 2)
+        lay.addLayout(readouts)
 
         self._connect_controls(state)
         # Esc clears the selection and nothing else (the view's settings have their own reset, and undo)
@@ -183,6 +186,10 @@ class ManifoldView(ManifoldControls, ManifoldLayers, ManifoldLegends, ManifoldCa
             if "playing" in names and self.state.playing:
                 self._play_started = time.perf_counter()
             self._request_playback_render()
+
+    def resizeEvent(self, event):
+        super().resizeEvent(event)
+        self._update_legends()  # their boxes keep a size in pixels, so their text keeps one size
 
     # ---------------------------------------------------------------- misc
     def camera(self) -> list:

@@ -99,6 +99,8 @@ class PhoneTimeline(TimeKeys, QtWidgets.QWidget):
     WORD_H, PHONE_H, TARGET_H, AXIS_H = 22, 30, 24, 18
     #: height without a word tier (the editor sizes the strip from :meth:`tiers_height`)
     HEIGHT = 2 + PHONE_H + TARGET_H + AXIS_H + 2
+    #: the rows' heights on a small screen (:meth:`set_compact`)
+    COMPACT = (18, 24, 20, 16)
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -125,6 +127,14 @@ class PhoneTimeline(TimeKeys, QtWidgets.QWidget):
         self._drag = self._bdrag = None
         if self.selected is not None and (targets is None or self.selected >= len(targets.targets)):
             self.select(None)
+        self.update()
+
+    def set_compact(self, on: bool) -> None:
+        """Lower rows (a laptop's screen) or the full ones."""
+        self.WORD_H, self.PHONE_H, self.TARGET_H, self.AXIS_H = self.COMPACT if on else (
+            PhoneTimeline.WORD_H, PhoneTimeline.PHONE_H, PhoneTimeline.TARGET_H, PhoneTimeline.AXIS_H)
+        self.HEIGHT = 2 + self.PHONE_H + self.TARGET_H + self.AXIS_H + 2
+        self.setMinimumHeight(self.HEIGHT)
         self.update()
 
     def tiers_height(self) -> int:
@@ -264,8 +274,15 @@ class PhoneTimeline(TimeKeys, QtWidgets.QWidget):
         for ms in ticks:
             x = self._x(ms / 1000.0 * t.rate)
             qp.drawLine(QtCore.QPointF(x, y_axis), QtCore.QPointF(x, y_axis + 4))
-            qp.drawText(QtCore.QRectF(x - 40, y_axis + 3, 80, 14), QtCore.Qt.AlignmentFlag.AlignHCenter,
-                        f"{ms} ms" if ms == ticks[-1] or ms == 0 else f"{ms}")
+            rect = QtCore.QRectF(x - 40, y_axis + 3, 80, 14)  # centred on its tick, never cut at an edge
+            align = QtCore.Qt.AlignmentFlag.AlignHCenter
+            if rect.left() < 0:
+                rect.moveLeft(0.0)
+                align = QtCore.Qt.AlignmentFlag.AlignLeft
+            elif rect.right() > self.width():
+                rect.moveRight(float(self.width()))
+                align = QtCore.Qt.AlignmentFlag.AlignRight
+            qp.drawText(rect, align, f"{ms} ms" if ms == ticks[-1] or ms == 0 else f"{ms}")
         if self.cursor is not None:
             qp.setPen(QtGui.QPen(QtGui.QColor("black"), 2))
             x = self._x(self.cursor)

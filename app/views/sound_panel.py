@@ -1,7 +1,8 @@
 """The sound under the trajectory editor's timeline: waveform and a Praat-style wide-band spectrogram.
 
 Drawing, and the timeline's time input: a click sets the cursor, a drag selects a stretch,
-Praat's keys work here as in the timeline (:class:`app.views.phone_timeline.TimeKeys`). The arrays come from :mod:`engine.phonetics.spectrogram` (computed in a worker
+Praat's keys work here as in the timeline (:class:`app.views.phone_timeline.TimeKeys`).
+The arrays come from :mod:`engine.phonetics.spectrogram` (computed in a worker
 thread by the editor, :mod:`app.views.trajectory_editor`); this widget maps time to
 pixels exactly as :class:`app.views.phone_timeline.PhoneTimeline` maps frames (same
 margin, same width: the editor sizes both), so phone boundaries, targets and the
@@ -45,6 +46,8 @@ class SoundPanel(TimeKeys, QtWidgets.QWidget):
     SPEC_HEIGHT = 112
     GAP = 2
     HEIGHT = WAVE_HEIGHT + GAP + SPEC_HEIGHT
+    #: waveform and spectrogram heights on a small screen (:meth:`set_compact`)
+    COMPACT = (24, 60)
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -100,6 +103,13 @@ class SoundPanel(TimeKeys, QtWidgets.QWidget):
             if f is not None:
                 x = self.frame_x(f)
                 self.update(QtCore.QRect(int(math.floor(x)) - 2, 0, 5, self.height()))
+
+    def set_compact(self, on: bool) -> None:
+        """A lower waveform and spectrogram (a laptop's screen), or the full ones."""
+        self.WAVE_HEIGHT, self.SPEC_HEIGHT = self.COMPACT if on else (SoundPanel.WAVE_HEIGHT, SoundPanel.SPEC_HEIGHT)
+        self.HEIGHT = self.WAVE_HEIGHT + self.GAP + self.SPEC_HEIGHT
+        self.setFixedHeight(self.HEIGHT)
+        self.update()
 
     def set_time_selection(self, span) -> None:
         """Shade the selected stretch ``(first, last)`` frame (None: none)."""

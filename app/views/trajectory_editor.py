@@ -26,15 +26,25 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.models.target_editing import remove_target
 from app.models.trajectories import METHOD_LABELS, synthesize_targets, trajectory_error
-from app.views._common import READOUT_INTERVAL_S, Throttle, connect_all, disconnect_all
+from app.views._common import READOUT_INTERVAL_S, Throttle, connect_all, disconnect_all, elided_label
 from app.views.editor.commands import TargetsEdit
 from app.views.editor.timeline_control import ZOOM_RANGE, TimelineControl
+from app.views.flow_layout import FlowLayout
 
 __all__ = ["TrajectoryEditor", "TargetsEdit", "ZOOM_RANGE", "ADD_STATE_SHORTCUT", "REMOVE_SHORTCUT"]
 
 SOURCES = (("utterance", "Utterance"), ("text", "Text"), ("phones", "Phones + durations"), ("textgrid", "TextGrid"))
 ADD_STATE_SHORTCUT = "Ctrl+T"
 REMOVE_SHORTCUT = "Delete"
+
+
+def _words_up_to(text: str, n: int) -> str:
+    """``text``'s whole words up to ``n`` characters, "…" where it goes on (never a word cut)."""
+    text = " ".join(str(text).split())
+    if len(text) <= n:
+        return text
+    cut = text[:n + 1].rsplit(" ", 1)[0] if " " in text[:n + 1] else text[:n]
+    return cut.rstrip(" ,.;:") + "…"
 
 
 # ============================================================================ the editor
@@ -70,7 +80,9 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
         for key, label in SOURCES:
             self.source_box.addItem(label, key)
         self.utt_box = QtWidgets.QComboBox()
-        self.utt_box.setMinimumContentsLength(10)
+        # whole names ("s0001 — Ranch ..."), not "s0001 — Ranc": as wide as the longest, up to 48 characters
+        self.utt_box.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToContents)
+        self.utt_box.setMinimumContentsLength(16)
         self.text_edit = QtWidgets.QLineEdit()
         self.text_edit.setPlaceholderText("type English text, e.g. 'Herb's birthday'")
         self.browse_btn = QtWidgets.QPushButton("Open…")
@@ -110,9 +122,10 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
                   self.synth_btn, self.play_btn, self.save_tiers_btn, self.zoom_in_btn, self.zoom_out_btn,
                   self.fit_btn):
             b.setFocusPolicy(QtCore.Qt.FocusPolicy.TabFocus)
-        self.readout = QtWidgets.QLabel("")
-        self.readout.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
-        self.readout.setWordWrap(True)
+        # one line, elided (the whole text in its tooltip): a long message never grows the editor
+        self.readout = elided_label("")
+        self.readout.setMinimumWidth(200)
+        self.readout.setMaximumWidth(560)
         # the tiers and the sound under them share one scrolled strip: one width, one scroll bar
         self._make_tracks(state)
         self.warnings_list = QtWidgets.QListWidget()
@@ -120,25 +133,28 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
         self.warnings_list.setMaximumHeight(72)
         self.warnings_list.setVisible(False)
 
-        row1 = QtWidgets.QHBoxLayout()
-        for w in (QtWidgets.QLabel("Input:"), self.source_box, self.utt_box, self.text_edit, self.browse_btn,
-                  self.oracle_box, self.load_btn, self.add_state_btn):
-            row1.addWidget(w)
-        row1.setStretchFactor(self.text_edit, 1)
-        row1.addStretch(0)
-        row2 = QtWidgets.QHBoxLayout()
-        for w in (QtWidgets.QLabel("Method:"), self.method_box, self.synth_btn, self.play_btn, self.remove_btn,
-                  self.reset_btn, self.save_tiers_btn, QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn,
-                  self.fit_btn, self.sound_box):
-            row2.addWidget(w)
-        row2.addWidget(self.readout, 1)
+        self.text_edit.setMinimumWidth(260)
+        # the controls in groups that wrap to a new row (never clipped): two rows at 1280 px
+        bar = FlowLayout(spacing=10, margins=(0, 0, 0, 0), row_spacing=3)
+        for group in ((QtWidgets.QLabel("Input:"), self.source_box, self.utt_box, self.text_edit, self.browse_btn,
+                       self.oracle_box, self.load_btn, self.add_state_btn),
+                      (QtWidgets.QLabel("Method:"), self.method_box, self.synth_btn, self.play_btn),
+                      (self.remove_btn, self.reset_btn, self.save_tiers_btn),
+                      (QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn, self.fit_btn, self.sound_box),
+                      (self.readout,)):
+            box = QtWidgets.QWidget()
+            row = QtWidgets.QHBoxLayout(box)
+            row.setContentsMargins(0, 0, 0, 0)
+            row.setSpacing(4)
+            for w in group:
+                row.addWidget(w)
+            bar.addWidget(box)
         lay = QtWidgets.QVBoxLayout(self)
-        lay.setContentsMargins(4, 4, 4, 4)
-        lay.setSpacing(3)
-        lay.addLayout(row1)
+        lay.setContentsMargins(4, 2, 4, 2)
+        lay.setSpacing(2)
+        lay.addLayout(bar)
         lay.addWidget(self.scroll)
         lay.addWidget(self.warnings_list)
-        lay.addLayout(row2)
         self._layout_tracks()
 
         self.source_box.currentIndexChanged.connect(lambda _i: self._sync_inputs())
@@ -179,7 +195,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
             from engine.synthesis.methods import METHODS
         except ImportError as exc:  # synthesis unavailable: say so, keep the rest working
             BEST, METHODS = None, ()
-            self.readout.setText(f"synthesis unavailable: {exc}")
+            self.say(f"synthesis unavailable: {exc}")
         for m in ((BEST,) if BEST else ()) + tuple(METHODS):
             self.method_box.addItem(METHOD_LABELS.get(m, m), m)
         if BEST:
@@ -236,7 +252,9 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
         self.utt_box.clear()
         if m is not None:
             for u in m.corpus_.utterances:
-                self.utt_box.addItem(f"{u.id}" + (f" — {u.text[:40]}" if u.text else ""), u.id)
+                self.utt_box.addItem(f"{u.id}" + (f" — {_words_up_to(u.text, 30)}" if u.text else ""), u.id)
+                self.utt_box.setItemData(self.utt_box.count() - 1, f"{u.id}: {u.text}",
+                                         QtCore.Qt.ItemDataRole.ToolTipRole)
         self.utt_box.blockSignals(False)
         self.add_state_btn.setEnabled(m is not None and self.state.state is not None)
         self._sync_inputs()
@@ -312,17 +330,20 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
         except ValueError as exc:
             return self._show_error(exc)
         self.edit_targets(tg, f"add state {self.state.state}")
-        self.readout.setText(f"state {self.state.state} added as a target: {len(tg.targets)} targets over "
+        self.say(f"state {self.state.state} added as a target: {len(tg.targets)} targets over "
                              f"{tg.n_frames} frames; press Synthesise")
         return True
 
-    def _show_error(self, exc) -> bool:
-        import html
+    def say(self, text: str, *, error: bool = False) -> None:
+        """Show ``text`` in the readout line (in red for an error; elided, whole in its tooltip)."""
+        self.readout.setStyleSheet("color: #b00" if error else "")
+        self.readout.setText(text)
 
+    def _show_error(self, exc) -> bool:
         from app.user_messages import user_message
 
         text = user_message(exc, doing="make targets") if isinstance(exc, BaseException) else str(exc)
-        self.readout.setText(f"<span style='color:#b00'>{html.escape(text)}</span>")
+        self.say(text, error=True)
         return False
 
     def _set_targets(self, targets, message: str, words=()) -> bool:
@@ -349,7 +370,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
             self.sound.set_span(targets.n_frames, targets.rate, targets.phones)
         self.sound_track.show(None if targets is None else targets.utterance)
         self._layout_tracks()
-        self.readout.setText(message)
+        self.say(message)
         self._sync_buttons()
 
     def edit_targets(self, targets, text: str) -> None:
@@ -403,7 +424,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
             return None
         m, tg, method = self.state.manifold, self.targets, self.method
         if method is None:
-            self.readout.setText("no synthesis method available")
+            self.say("no synthesis method available")
             return None
         orig = self.state.original if (self.source == "utterance" and self.state.original is not None
                                        and len(self.state.original) == tg.n_frames) else None
@@ -436,7 +457,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
     def _show_busy(self, runner, method: str) -> None:
         if runner is self._runner and runner.state == "running":
             self.synth_btn.setEnabled(False)
-            self.readout.setText(f"synthesising with {method}…")
+            self.say(f"synthesising with {method}…")
 
     def _on_synth(self, result):
         data, err = result
@@ -456,7 +477,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
             text += f"; {data.extra['sound_note']}"
             self.notice.emit(data.extra["sound_note"])
         self.last_error = err
-        self.readout.setText(text)
+        self.say(text)
 
     def _show_warnings(self, synthetic) -> None:
         """List every warning of the synthetic trajectory shown (none: the list hides)."""
@@ -468,9 +489,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
 
     def _on_synth_error(self, message, _tb=""):
         self.synth_btn.setEnabled(True)
-        import html
-
-        self.readout.setText(f"<span style='color:#b00'>synthesis failed: {html.escape(message)}</span>")
+        self.say(f"synthesis failed: {message}", error=True)
 
     def settings(self) -> dict:
         """Editor settings for session files."""

@@ -107,9 +107,8 @@ class ExportActions:
         if not path:
             return
         path = str(path)
-        from engine.progress import Cancelled
-
         from app.models.task_status import ProgressEstimate
+        from engine.progress import Cancelled
 
         dlg = QtWidgets.QProgressDialog("Rendering the video…", "Cancel", 0, 100, self)
         dlg.setWindowModality(QtCore.Qt.WindowModality.WindowModal)

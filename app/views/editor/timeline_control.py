@@ -49,7 +49,6 @@ class TimelineControl:
         self.sound_box.setChecked(True)
         self.sound_box.setToolTip("Show the utterance's waveform and wide-band spectrogram under the phones "
                                   "(where it has audio)")
-        self._min_height_without_sound = None
         self._press = None  # (frame, x) where the mouse went down on the time axis
         self.scroll = QtWidgets.QScrollArea()
         self.scroll.setWidget(self.tracks)
@@ -96,7 +95,7 @@ class TimelineControl:
         view_w = self.scroll.viewport().width()
         width = max(int(round(view_w * self.zoom)), 1)
         tl.resize(width, tl.tiers_height())
-        self.sound.resize(width, SoundPanel.HEIGHT)
+        self.sound.resize(width, self.sound.HEIGHT)
         self.tracks.resize(width, self._tracks_height())
         if anchor is not None and tl.targets is not None:
             bar.setValue(int(round(tl._x(anchor[0]) - anchor[1])))
@@ -128,10 +127,10 @@ class TimelineControl:
         return True
 
     def _tracks_height(self) -> int:
-        return self.timeline.tiers_height() + (SoundPanel.HEIGHT if self.sound.isVisibleTo(self.tracks) else 0)
+        return self.timeline.tiers_height() + (self.sound.HEIGHT if self.sound.isVisibleTo(self.tracks) else 0)
 
     def _layout_tracks(self) -> None:
-        """Show the sound under the tiers when asked for and the utterance has audio; size the strip to what it shows."""
+        """Show the sound under the tiers when asked for and the utterance has audio; size the strip to it."""
         show = self.sound_box.isChecked() and self.sound_track.wanted is not None
         self.sound.setVisible(show)
         self.timeline.resize(self.timeline.width(), self.timeline.tiers_height())
@@ -139,17 +138,39 @@ class TimelineControl:
         h = self._tracks_height()
         self.tracks.resize(self.timeline.width(), h)
         self.scroll.setFixedHeight(h + self.scroll.horizontalScrollBar().sizeHint().height() + 4)
-        # the dock grows by the sound's height while it shows (an explicit minimum height, as the
-        # window sets one, would otherwise clip it), and gives it back after
-        if show and self._min_height_without_sound is None:
-            self._min_height_without_sound = self.minimumHeight()
-        if self._min_height_without_sound is not None:
-            need = self.layout().totalMinimumSize().height() if show else 0
-            self.setMinimumHeight(max(self._min_height_without_sound, need))
-            if not show:
-                self._min_height_without_sound = None
-        self.updateGeometry()
-        self.heightWanted.emit(self.sizeHint().height())
+        self._update_height()
+
+    def needed_height(self) -> int:
+        """The height the editor's contents need at its width (its controls wrap into rows)."""
+        lay = self.layout()
+        if lay is None:
+            return self.sizeHint().height()
+        return lay.totalHeightForWidth(max(self.width(), 1)) if lay.hasHeightForWidth() else \
+            lay.totalSizeHint().height()
+
+    def _update_height(self) -> None:
+        """Keep the editor exactly as tall as it needs: its minimum (nothing clipped), and the dock's height
+        (no room kept for a sound that is off or absent, nor for controls that fit fewer rows)."""
+        need = self.needed_height()
+        if need != self.minimumHeight():
+            self.setMinimumHeight(need)
+        if need != getattr(self, "_wanted", None):
+            self._wanted = need
+            self.heightWanted.emit(need)
+
+    def resizeEvent(self, ev):
+        super().resizeEvent(ev)
+        self._update_height()
+
+    def set_compact(self, on: bool) -> None:
+        """Lower tiers and sound, for a small screen (the window decides from its height)."""
+        if getattr(self, "compact", None) == bool(on):
+            return
+        self.compact = bool(on)
+        self.timeline.set_compact(on)
+        self.sound.set_compact(on)
+        self.set_zoom(self.zoom)
+        self._layout_tracks()
 
     def eventFilter(self, obj, ev):
         if obj is self.scroll.viewport() and ev.type() == QtCore.QEvent.Type.Resize:
@@ -224,7 +245,7 @@ class TimelineControl:
     def _nothing_to_play(self) -> bool:
         if self.state.n_playback:
             return False
-        self.readout.setText("nothing to play yet: press Synthesise, or choose an utterance")
+        self.say("nothing to play yet: press Synthesise, or choose an utterance")
         return True
 
     def play_selection(self) -> bool:
@@ -293,4 +314,4 @@ class TimelineControl:
         except (OSError, ValueError) as exc:
             self._show_error(user_message(exc, doing="save the TextGrid", path=path))
             return
-        self.readout.setText(f"wrote {Path(out).name}: the tiers as edited")
+        self.say(f"wrote {Path(out).name}: the tiers as edited")

@@ -11,7 +11,7 @@ from PySide6 import QtCore, QtWidgets
 from app.models.colouring import CLASS_LABELS
 from app.models.picking import hover_text
 from app.models.state.fields import COLOR_MODES, HEMISPHERES
-from app.views._common import blocked, reserve_lines, set_readout
+from app.views._common import blocked, elided_label
 from app.views.flow_layout import FlowLayout
 
 __all__ = ["ManifoldControls", "COLOR_LABELS", "HEMI_LABELS", "HORIZON_SLIDER_MS"]
@@ -33,10 +33,12 @@ class ManifoldControls:
         for m in COLOR_MODES:
             self.color_box.addItem(COLOR_LABELS[m], m)
         self.color_box.setToolTip("Colour the points by")
+        self.color_box.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToContents)
         self.hemi_box = QtWidgets.QComboBox()
         for m in HEMISPHERES:
             self.hemi_box.addItem(HEMI_LABELS[m], m)
         self.hemi_box.setToolTip("Which hemisphere of the clicked state to colour by directed hop distance")
+        self.hemi_box.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToContents)
         self.path_box = QtWidgets.QCheckBox("Path")
         self.path_box.setToolTip("Tick (or hold Shift) and click a second point to draw the minimum-distance "
                                  "path between the two states")
@@ -79,13 +81,15 @@ class ManifoldControls:
             b.setToolTip(tip)
             b.clicked.connect(lambda _=False, k=key: self.standard_view(k))
             self.view_btns[key] = b
-        self.info = QtWidgets.QLabel("Click a point to select its state")
-        self.hover_label = QtWidgets.QLabel("")
+        # the selection and the pointer's frame share one line under the view, each elided (whole in its
+        # tooltip): their height never changes, so the 3-D view never jumps, and a laptop's screen keeps it tall
+        self.info = elided_label("Click a point to select its state")
+        self.hover_label = elided_label("")
         self.hover_label.setStyleSheet("color: #444")
 
         # controls in groups that wrap to a new row in a narrow window (FlowLayout): the view's minimum
         # width is that of its widest group, not of every control side by side
-        bar = FlowLayout(spacing=10)
+        bar = FlowLayout(spacing=10, row_spacing=3)
         for group in ((QtWidgets.QLabel("Colour:"), self.color_box, self.phone_edit),
                       (self.hemi_box, self.horizon_box, self.horizon_slider, self.horizon_label),
                       (self.path_box, *self.layer_boxes.values()),
@@ -97,9 +101,6 @@ class ManifoldControls:
             for w in group:
                 row.addWidget(w)
             bar.addWidget(box)
-        for label in (self.info, self.hover_label):  # long readouts wrap instead of widening the view
-            label.setWordWrap(True)
-            reserve_lines(label, 2)  # and keep their height (set_readout): the 3-D view above keeps its size
         return bar
 
     def _connect_controls(self, state) -> None:
@@ -184,11 +185,11 @@ class ManifoldControls:
         if s.target is not None:
             parts.append(f"target {s.target}: " + (f"{len(s.path) - 1} hops" if s.path is not None
                                                   else "unreachable"))
-        set_readout(self.info, "; ".join(parts) if parts else "Click a point to select its state "
+        self.info.setText("; ".join(parts) if parts else "Click a point to select its state "
                     "(Shift-click or tick Path for a path to a second state)")
 
     def _update_hover(self):
         s = self.state
-        set_readout(self.hover_label, "" if s.hover is None or s.manifold is None else
+        self.hover_label.setText("" if s.hover is None or s.manifold is None else
                     "under the pointer: " + hover_text(s.manifold, s, s.hover))
 

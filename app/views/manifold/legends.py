@@ -12,10 +12,10 @@ from __future__ import annotations
 from app.models.view_legend import glyph_legend, point_legend
 from app.scene import legend as scene_legend
 
-__all__ = ["ManifoldLegends", "ROW_HEIGHT"]
+__all__ = ["ManifoldLegends", "ROW_PX"]
 
-#: a legend row's height as a share of the view's
-ROW_HEIGHT = 0.034
+#: a legend row's height in pixels (the box is sized to it at every size of the view, so its text keeps one size)
+ROW_PX = 15
 
 
 class ManifoldLegends:
@@ -43,11 +43,14 @@ class ManifoldLegends:
             "glyphs": () if off else tuple(glyph_legend(s, hidden=s.hidden_layers, local_frame=local)),
         }
         where = {"points": "lower left", "glyphs": "upper left"}
+        W, H = (max(int(v), 1) for v in self.plotter.renderer.GetSize())
+        sized = (W, H) == getattr(self, "_legend_size", None)
+        self._legend_size = (W, H)
         for key, new in rows.items():
-            if new == self.legend_rows.get(key) and key in self.legends:
+            if new == self.legend_rows.get(key) and key in self.legends and sized:
                 continue
-            width = min(0.34, 0.05 + 0.0085 * max([len(r[0]) for r in new], default=1))
-            size = (width, min(0.6, ROW_HEIGHT * len(new) + 0.02))
+            chars = max([len(r[0]) for r in new], default=1)
+            size = (min(0.45, (28 + 6.2 * chars) / W), min(0.6, (ROW_PX * len(new) + 6) / H))
             if key not in self.legends:
                 self.legends[key] = scene_legend.add_legend(self.plotter, list(new), size=size, loc=where[key],
                                                             name=f"{key}-legend")

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from app.models.colour_maps import lightness
 from app.models.colouring import (
     DENSITY_CMAP,
     FUTURE_CMAP,
@@ -15,7 +16,6 @@ from app.models.colouring import (
     hop_table,
     point_colors,
 )
-from app.models.colour_maps import lightness
 from app.models.state import COLOR_MODES, AppState
 
 

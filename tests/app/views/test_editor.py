@@ -425,8 +425,6 @@ def test_a_phone_boundary_drags_undoes_and_writes_a_textgrid(ed, qtbot, editor_w
 
 @pytest.mark.gui
 def test_labels_are_elided_with_a_tooltip_and_never_struck_through(ed, qtbot, editor_window):
-    from PySide6 import QtCore
-
     assert ed.set_text("a breath of air", source="text")
     tl = ed.timeline
     assert [w.label for w in tl.words] == ["a", "breath", "of", "air"]
