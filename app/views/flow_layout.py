@@ -21,6 +21,16 @@ class FlowLayout(QtWidgets.QLayout):
         self.row_spacing = spacing if row_spacing is None else int(row_spacing)  # between rows
         self.setContentsMargins(*margins)
 
+    def add_group(self, widgets) -> None:
+        """Add ``widgets`` side by side as one item: a group that wraps as a whole, never split."""
+        box = QtWidgets.QWidget()
+        row = QtWidgets.QHBoxLayout(box)
+        row.setContentsMargins(0, 0, 0, 0)
+        row.setSpacing(4)
+        for w in widgets:
+            row.addWidget(w)
+        self.addWidget(box)
+
     # QLayout's item interface
     def addItem(self, item):  # noqa: N802 (Qt)
         self._items.append(item)

@@ -126,6 +126,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
         self.readout = elided_label("")
         self.readout.setMinimumWidth(200)
         self.readout.setMaximumWidth(560)
+        self.readout.setSizePolicy(QtWidgets.QSizePolicy.Policy.Preferred, QtWidgets.QSizePolicy.Policy.Fixed)
         # the tiers and the sound under them share one scrolled strip: one width, one scroll bar
         self._make_tracks(state)
         self.warnings_list = QtWidgets.QListWidget()
@@ -142,13 +143,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
                       (self.remove_btn, self.reset_btn, self.save_tiers_btn),
                       (QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn, self.fit_btn, self.sound_box),
                       (self.readout,)):
-            box = QtWidgets.QWidget()
-            row = QtWidgets.QHBoxLayout(box)
-            row.setContentsMargins(0, 0, 0, 0)
-            row.setSpacing(4)
-            for w in group:
-                row.addWidget(w)
-            bar.addWidget(box)
+            bar.add_group(group)
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(4, 2, 4, 2)
         lay.setSpacing(2)

@@ -53,6 +53,7 @@ for W, H, suffix in SIZES:
     w = MainWindow(m, source={"path": None, "preset": preset})
     w.resize(W, H)
     w.show()
+    w.docks["clusters"].raise_()  # not the tab the last window left raised
     pump()
     s, ed = w.state, w.editor
     # 1. the future hemisphere of a frame on the opening side, a path to a far state, an utterance: the legends
@@ -91,6 +92,8 @@ for W, H, suffix in SIZES:
     wait(ed.synthesize())
     pump()
     s.set_playback(len(s.synthetic) // 2)
+    w.reset_cameras()
+    w.frame_action.trigger()  # nothing selected: the trajectory framed
     n = ed.targets.n_frames
     ed.set_time_selection((0.3 * n, 0.6 * n))
     save(w, "synthesis_editor", suffix)

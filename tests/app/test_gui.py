@@ -659,6 +659,8 @@ def test_open_runs_in_a_worker_with_status_bar_progress_and_cancel(win, qtbot, t
         assert prog.bar.maximum() == 0
         runner.worker.progress.emit("shape space", 2, 9)
         assert (prog.bar.maximum(), prog.bar.value()) == (9, 2) and "shape space 2/9" in prog.label.text()
+        runner.worker.progress.emit("shape space", 3, 9)                 # a count made: the time left is said
+        assert "shape space 3/9" in prog.label.text() and " left" in prog.label.text()
         prog.cancel_btn.click()
         qtbot.waitUntil(lambda: runner.state != "running", timeout=30000)
     finally:

@@ -94,13 +94,7 @@ class ManifoldControls:
                       (self.hemi_box, self.horizon_box, self.horizon_slider, self.horizon_label),
                       (self.path_box, *self.layer_boxes.values()),
                       (*self.view_btns.values(), self.clear_btn)):
-            box = QtWidgets.QWidget()
-            row = QtWidgets.QHBoxLayout(box)
-            row.setContentsMargins(0, 0, 0, 0)
-            row.setSpacing(4)
-            for w in group:
-                row.addWidget(w)
-            bar.addWidget(box)
+            bar.add_group(group)
         return bar
 
     def _connect_controls(self, state) -> None:
