@@ -77,8 +77,9 @@ def add_arguments(p):
     add_lab_arguments(p)  # --recursive, --fields-from, --metadata, --quality ... (app.cli.import_lab)
     p.add_argument("--template", default=None, metavar="MESH", help="template OBJ/PLY giving faces for .npy input")
     p.add_argument("--audio-dir", default=None, metavar="DIR",
-                   help="MVIEW .mat input: write each file's AUDIO to DIR/<stem>.wav and link it; video input: "
-                        "where each utterance's audio track goes (default: <output stem>_audio/ beside the output)")
+                   help="MVIEW .mat input: where each file's AUDIO goes as <stem>.wav, linked to its utterance; "
+                        "video input: where each utterance's audio track goes (default for both: <output "
+                        "stem>_audio/ beside the output)")
     p.add_argument("--interocular-mm", type=float, default=None, metavar="MM",
                    help="video input: assumed distance between the eye centres, which sets the mm scale "
                         "(default: 63, the mean adult interpupillary distance)")
@@ -309,11 +310,12 @@ def _check_numbers(args) -> None:
 def _stage_audio(args, fmt, kw, outputs):
     """(the audio folder the corpus will name, the staging folder the readers write to) or (None, None).
 
-    MVIEW .mat input writes each file's AUDIO with ``--audio-dir``; video input writes each
-    utterance's audio track (default ``<output stem>_audio/``). A WAV already there is
-    refused unless ``--force`` (before anything is read when the names are known)."""
-    if fmt == "mview" and args.audio_dir:
-        final = Path(args.audio_dir)
+    MVIEW .mat input writes each file's AUDIO, video input each utterance's audio track, into
+    ``--audio-dir`` (default ``<output stem>_audio/``). A WAV already there is refused unless
+    ``--force`` (before anything is read when the names are known)."""
+    if fmt == "mview" and (args.audio_dir or any(_has_audio(p) for p in args.inputs if Path(p).is_file())):
+        out = Path(args.output)
+        final = Path(args.audio_dir or out.with_name(out.stem + "_audio"))
         names = [Path(p).stem + ".wav" for p in args.inputs]
     elif fmt == "video":
         final, names = Path(kw["audio_dir"]), None
@@ -394,6 +396,17 @@ def _input_errors():
     return (ImportFormatError, CorpusError, OSError, ValueError, TypeError)
 
 
+def _has_audio(src) -> bool:
+    """Whether an MVIEW file holds an ``AUDIO`` entry (a file without one imports silent, as it is)."""
+    from engine.io import ImportFormatError, read_mview_audio
+
+    try:
+        read_mview_audio(src)
+    except ImportFormatError as exc:
+        return "has no AUDIO entry" not in str(exc)  # a damaged AUDIO entry is still said, by write_audio
+    return True
+
+
 def _read_group(g, job):
     """The corpus of one input (a file, or the frame files of one mesh sequence)."""
     from engine.io import read_corpus, write_audio
@@ -401,7 +414,7 @@ def _read_group(g, job):
 
     src = g if len(g) > 1 else g[0]
     c = read_corpus(src, format=job["format"], rate=job["rate"], alignment=job["alignment"], **job["options"])
-    if job["audio_dir"] and job["format"] == "mview":
+    if job["audio_dir"] and job["format"] == "mview" and _has_audio(src):
         with collecting_repairs() as notes:  # e.g. non-finite samples written as silence
             wav = write_audio(src, Path(job["audio_dir"]) / (Path(src).stem + ".wav"))
         c = replace(c, utterances=[replace(u, audio=str(wav)) for u in c.utterances],

@@ -90,6 +90,9 @@ class Utterance:
     fields : tuple of (str, str)
         Other metadata fields, ``(name, value)`` in order (sex, emotion, text number,
         session, group ...; :mod:`engine.recordings.metadata` reads them).
+    words : tuple of PhoneInterval
+        The word tier where the source has one (a Haskins file's ``WORDS``), seconds from
+        the utterance start, labels as given; () when the source has none.
     """
 
     id: str
@@ -100,6 +103,7 @@ class Utterance:
     text: str = ""
     speaker: str = ""
     fields: tuple[tuple[str, str], ...] = ()
+    words: tuple = ()
 
     @property
     def n_frames(self) -> int:
@@ -482,6 +486,11 @@ class Corpus:
             "corpus_phone_times": np.array([[p[1], p[2]] for p in phones], dtype=np.float64).reshape(-1, 2),
             "corpus_phone_labels": np.array([p[3] for p in phones], dtype=str),
         }
+        words = [(k, w.start, w.end, w.label) for k, u in enumerate(self.utterances) for w in u.words]
+        if words:  # the word tiers, where the source had them (files without them read as before)
+            d["corpus_word_utt"] = np.array([w[0] for w in words], dtype=np.int64)
+            d["corpus_word_times"] = np.array([[w[1], w[2]] for w in words], dtype=np.float64).reshape(-1, 2)
+            d["corpus_word_labels"] = np.array([w[3] for w in words], dtype=str)
         if include_frames:
             d["corpus_frames"] = self.frames
         if self.faces is not None:
@@ -542,6 +551,7 @@ class Corpus:
             axes = str(d["corpus_axes"]) if "corpus_axes" in keys else ""
             units = str(d["corpus_units"]) if "corpus_units" in keys else ""  # older files did not say
             audio_abs = d["corpus_utt_audio_abs"] if "corpus_utt_audio_abs" in keys else None
+            words = _words_of(d, len(ids)) if "corpus_word_utt" in keys else None
             rate, dims, name = float(d["corpus_rate"]), int(d["corpus_dims"]), str(d["corpus_name"])
         except KeyError as exc:
             raise CorpusError(f"{source}: not a Lipspace corpus file (missing {exc.args[0]!r})") from None
@@ -556,7 +566,8 @@ class Corpus:
                 phones = PhoneInterval._many(times[a:e], labels[a:e])
                 wav = _resolve(str(audio[k]), base, str(audio_abs[k]) if audio_abs is not None else "")
                 utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k]),
-                                      fields[k] if fields is not None else ()))
+                                      fields=fields[k] if fields is not None else (),
+                                      words=words[k] if words is not None else ()))
         try:
             return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
                        latent=latent, name=name, point_roles=roles, registration=registration, history=history,
@@ -614,6 +625,20 @@ def _as_list(a, chunk: int = 1 << 16) -> list:
     for s in range(0, len(a), chunk):
         out.extend(a[s:s + chunk].tolist())
     return out
+
+
+def _words_of(d, n_utterances: int) -> list[tuple]:
+    """Each utterance's word tier from a file's ``corpus_word_*`` arrays."""
+    utt = np.asarray(d["corpus_word_utt"], dtype=np.int64).reshape(-1)
+    times = np.asarray(d["corpus_word_times"], dtype=np.float64).reshape(-1, 2)
+    labels = np.asarray(d["corpus_word_labels"]).reshape(-1)
+    if not (len(utt) == len(times) == len(labels)) or (len(utt) and (utt.min() < 0 or utt.max() >= n_utterances)):
+        raise CorpusError(f"word tiers: {len(utt)} utterance indices, {len(times)} times, {len(labels)} labels "
+                          f"for {n_utterances} utterances; expected one of each per word, indices in range")
+    out: list[list] = [[] for _ in range(n_utterances)]
+    for k, (t0, t1), lab in zip(utt.tolist(), times.tolist(), labels.tolist()):
+        out[k].append(PhoneInterval(float(t0), float(t1), str(lab)))
+    return [tuple(w) for w in out]
 
 
 def label_codes(labels) -> tuple[np.ndarray, np.ndarray]:
