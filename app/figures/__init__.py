@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from app.figures.classes import make_classes
 from app.figures.clusters import make_fig4
 from app.figures.export import (
     FIGURE_FORMATS,
@@ -25,7 +26,8 @@ from app.figures.export import (
     save_plotter_vector,
     vector_export_available,
 )
-from app.figures.manifold import make_classes, make_fig2a, make_fig2b
+from app.figures.hops import make_fig2b
+from app.figures.manifold import make_fig2a
 from app.figures.shape import make_fig1a, make_fig1b, make_fig2c, make_scree
 from app.figures.synthesis import make_fig3
 
@@ -50,7 +52,7 @@ FIGURES = {
 #: name -> one-line description (menus, ``lipspace figures --help``)
 DESCRIPTIONS = {
     "fig1a": "first two principal components of X as lip shapes, coloured by displacement",
-    "fig1b": "residual variance vs number of components, X blue, Y red",
+    "fig1b": "residual variance vs number of components, X and Y",
     "fig2a": "the manifold in the first three dims of Y: density, S, V, s_i, v_i, a trajectory",
     "fig2b": "directed hop distances from an opening, a zero-velocity and a closing state",
     "fig2c": "lip shapes indexed by increasing S",
