@@ -41,7 +41,7 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
     matched through :func:`engine.phonetics.phonesets.normalize`, so ``B``/``P``/``M`` of an
     ARPAbet corpus are found), their ``n_sd`` ellipse and their mean (square).
     Phones the corpus lacks (or has fewer than ``min_count`` mid-points of) are
-    skipped with a note on the figure.
+    skipped with a note on the figure; with none of them found, ValueError (no empty figure).
 
     Parameters
     ----------
@@ -110,6 +110,10 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
         sq.set_gid(f"fig4:mean:{phone}")
         found[phone] = {"label": pc.phones_[i], "count": int(len(idx)), "opening_fraction": frac,
                         "mean": np.asarray(mean), "cov": None if not sv else cov}
+    if not found:  # an empty figure is no figure
+        raise ValueError(f"none of {', '.join(f'/{p}/' for p in phones)} has {min_count} or more mid-points in "
+                         f"{manifold.corpus_.name} (phones with clusters: {' '.join(pc.phones_) or 'none'}); "
+                         "choose phones the corpus has")
     if sv:
         zl = ax.axhline(0.0, color="k", ls=":", lw=1.0, label="zero velocity")
         ax.set_xlabel(tan.sv_labels()[0])

@@ -12,19 +12,9 @@ import numpy as np
 import pyvista as pv
 
 from app.scene.handles import Handle
+from app.scene.sensors import add_sensors, as_points
 
 __all__ = ["lip_mesh", "point_normals", "LipsHandle", "add_lips", "lip_colours", "SKIN", "mouth_interior", "MOUTH"]
-
-
-def _points(points):
-    P = np.array(points, dtype=np.float32)  # a copy: meshes must not share the caller's memory
-    if P.ndim == 1:
-        if P.size % 3:
-            raise ValueError(f"a flat frame must hold 3 coordinates per point, got {P.size} values")
-        P = P.reshape(-1, 3)
-    if P.ndim != 2 or P.shape[1] != 3 or len(P) == 0:
-        raise ValueError(f"lip points must have shape (V, 3) with V > 0, got {P.shape}")
-    return np.ascontiguousarray(P)
 
 
 def lip_mesh(points, faces=None) -> pv.PolyData:
@@ -35,7 +25,7 @@ def lip_mesh(points, faces=None) -> pv.PolyData:
     points : ndarray of shape (V, 3) (or a flat frame of 3V values)
     faces : ndarray of shape (F, 3) int or None
     """
-    P = _points(points)
+    P = as_points(points)
     if faces is None or len(faces) == 0:
         return pv.PolyData(P)
     Fc = np.asarray(faces, dtype=np.int64)
@@ -112,7 +102,7 @@ class LipsHandle(Handle):
             self.overlay.remove()
 
     def update(self, points) -> None:
-        P = _points(points)
+        P = as_points(points)
         if P.shape[0] != self.mesh.n_points:
             raise ValueError(f"frame has {P.shape[0]} points, the mesh has {self.mesh.n_points}")
         self.mesh.points[:] = P + self.offset
@@ -145,8 +135,6 @@ def add_lips(plotter, points, faces=None, *, color=(0.85, 0.45, 0.45), offset=(0
     (:func:`mouth_interior`).
     """
     if drawing is not None and drawing.kind != "surface":
-        from app.scene.sensors import add_sensors
-
         return add_sensors(plotter, drawing, points, color=color, offset=offset, name=name, labels=labels,
                            point_size=max(point_size, 12.0) if drawing.kind == "sensors" else point_size)
     mesh = lip_mesh(points, faces)
@@ -183,8 +171,6 @@ def add_lips(plotter, points, faces=None, *, color=(0.85, 0.45, 0.45), offset=(0
         mapper.ScalarVisibilityOn()
     overlay = None
     if drawing is not None and drawing.has_aperture:  # the aperture over the measured surface
-        from app.scene.sensors import add_sensors
-
         overlay = add_sensors(plotter, drawing, points, offset=offset, name=f"{name}_overlay", labels=False,
                               markers=False)
     return LipsHandle(plotter, mesh, actor, offset, extras, overlay)

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 
-__all__ = ["SensorsHandle", "add_sensors", "OTHER_COLOUR", "APERTURE_COLOUR"]
+__all__ = ["SensorsHandle", "add_sensors", "as_points", "OTHER_COLOUR", "APERTURE_COLOUR"]
 
 #: jaw, reference and tongue sensors
 OTHER_COLOUR = (0.55, 0.55, 0.58)
@@ -28,14 +28,16 @@ APERTURE_COLOUR = (0.15, 0.15, 0.18)
 LABEL_OFFSET = 0.14
 
 
-def _pts(points) -> np.ndarray:
+def as_points(points) -> np.ndarray:
+    """One frame as a fresh float32 array (V, 3) (a flat frame of 3V values too); meshes never share the caller's
+    memory."""
     P = np.array(points, dtype=np.float32)
     if P.ndim == 1:
         if P.size % 3:
             raise ValueError(f"a flat frame must hold 3 coordinates per point, got {P.size} values")
         P = P.reshape(-1, 3)
     if P.ndim != 2 or P.shape[1] != 3 or len(P) == 0:
-        raise ValueError(f"points must have shape (V, 3) with V > 0, got {P.shape}")
+        raise ValueError(f"lip points must have shape (V, 3) with V > 0, got {P.shape}")
     return P
 
 
@@ -106,7 +108,7 @@ class SensorsHandle:
         self.plotter, self.drawing = plotter, drawing
         self.offset = np.asarray(offset, np.float32)
         self.name = name
-        P = _pts(points)
+        P = as_points(points)
         self._n = len(P)
         ref = P[:, :2]
         self._centre = ref.mean(axis=0)
@@ -168,7 +170,7 @@ class SensorsHandle:
 
     # ------------------------------------------------------------------ per frame
     def update(self, points) -> None:
-        P = _pts(points)
+        P = as_points(points)
         if P.shape[0] != self._n:
             raise ValueError(f"frame has {P.shape[0]} points, the sensors are {self._n}")
         Q = P + self.offset
@@ -219,7 +221,8 @@ class SensorsHandle:
             side = -1.0 if np.any(off > 0) else 1.0
             return (mid + np.array([side * 1.4 * self._reach, 0.0, 0.0])).astype(np.float32)
         low = P[:, 1].min()
-        return np.array([mid[0], low - 1.6 * self._reach, mid[2]], np.float32)
+        below = 2.8 if self._label_of else 1.6  # under the lowest sensor's own label, where there is one
+        return np.array([mid[0], low - below * self._reach, mid[2]], np.float32)
 
     # ------------------------------------------------------------------ handle
     @property

@@ -160,7 +160,7 @@ class LipView(QtWidgets.QWidget):
         P = np.concatenate([np.asarray(h.points, np.float64) + np.asarray(h.offset, np.float64) for h in handles])
         lo, hi = P.min(axis=0), P.max(axis=0)
         ext = float(np.ptp(P[:, :2], axis=0).max()) or 1.0
-        pad = (0.12 if self.drawing.kind == "surface" else 0.45) * ext
+        pad = (0.12 if self.drawing.kind == "surface" else 0.55) * ext
         self.plotter.reset_camera(render=False, bounds=[lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad, lo[2],
                                                         hi[2]])
 

@@ -559,7 +559,7 @@ def _drawn_texts(fig):
         for axis in ax._axis_map.values():
             for t in axis.get_major_ticks() + axis.get_minor_ticks():
                 tick_texts.update({id(t.label1), id(t.label2)})
-            if ax.name != "3d":
+            if ax.name != "3d" and ax.axison:  # an axes switched off draws no tick labels
                 for t in axis._update_ticks():
                     out += [lab for lab in (t.label1, t.label2) if lab.get_visible()]
     out += [t for t in fig.findobj(Text) if id(t) not in tick_texts and t.get_visible()]
@@ -688,3 +688,8 @@ def test_vector_export_shades_a_smooth_surface_with_the_windows_normals(can_rend
     assert vc[0, 0, :3] == pytest.approx([shade(n_vtk[0])] * 3, abs=1e-5)   # face 0's corner at point 0
     assert vc[1, 0, :3] == pytest.approx([shade(n_vtk[0])] * 3, abs=1e-5)   # face 1's corner at point 0
     assert vc[0, 2, :3] == pytest.approx([shade(n_vtk[2])] * 3, abs=1e-5)
+
+
+def test_fig4_without_any_of_its_phones_is_refused_not_drawn_empty(m):
+    with pytest.raises(ValueError, match=r"none of /zz/, /qq/ has 3 or more mid-points .*choose phones"):
+        F.make_fig4(m, phones=("zz", "qq"))

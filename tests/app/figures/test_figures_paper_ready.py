@@ -74,9 +74,9 @@ def corpus_figures(request, tmp_path_factory, small_manifold, make_articulograph
                                                                   duration_s=(2.0, 2.5), seed=5, n_states=40),
              "midsagittal": lambda: _midsagittal_manifold(tmp),
              "video": lambda: _video_manifold(tmp)}[request.param]()
+    has_phones = any(u.phones for u in m.corpus_.utterances)  # before landmarks stand in for them
     m = _labelled(m) if request.param != "talker" else m
     out = {}
-    has_phones = any(u.phones for u in m.corpus_.utterances)
     for w in WIDTHS_MM:
         for name in F.FIGURES:
             if name == "fig4" and not has_phones:
