@@ -1,12 +1,15 @@
 """The paper's figure set, rendered with matplotlib (Agg) from a fitted manifold.
 
-Each figure is ``make_<name>(manifold, **opts) -> matplotlib.figure.Figure``; the
-figure carries a ``lipspace`` dict attribute with the numbers it shows (seed
-states, chosen utterance, errors...). :data:`FIGURES` maps names to functions in
-paper order; :func:`export_figure` renders one and saves it atomically as PNG, SVG
-or PDF. 3-D views of the GUI are saved with :func:`save_plotter_image` (PNG, at a DPI) and
-:func:`save_plotter_vector` (SVG/PDF/EPS redrawn from the scene's data as vector paths,
-:mod:`app.figures.view_vector`).
+Each figure is ``make_<name>(manifold, *, width=None, palette=None, **opts) ->
+matplotlib.figure.Figure``, laid out for a journal width (:mod:`app.figures.style`) and coloured
+with the session's palette (None: the corpus's own, :func:`app.figures.colours.palette_for`) and
+the window's colour maps; the figure carries a ``lipspace`` dict attribute with the numbers it
+shows (seed states, chosen utterance, errors...). :data:`FIGURES` maps names to functions in
+paper order; :func:`export_figure` renders one and saves it atomically as PNG, SVG or PDF:
+``lipspace figures`` and the window's File › Export figure both call it. The window's 3-D
+views are written by :mod:`app.figures.view_export` (PNG, SVG and PDF from one figure of the
+scene, :mod:`app.figures.view_vector`); :func:`save_plotter_image` (a screenshot at a DPI) and
+:func:`save_plotter_vector` remain for scripts.
 
 No pyplot: every figure owns an Agg canvas, so this works without a display and
 never disturbs a Qt event loop.

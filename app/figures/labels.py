@@ -94,7 +94,7 @@ def place_labels(ax, xy, labels, *, fontsize: float = 7.0, color="0.25", marker_
                     t = ax.annotate(str(lab), xy=(x, y), xytext=(dx, dy), textcoords="offset points", ha=ha,
                                     va=va, fontsize=fontsize, color=color, annotation_clip=False)
                     t.set_in_layout(False)
-                    bb = t.get_window_extent(renderer).expanded(1.0, 1.0)
+                    bb = t.get_window_extent(renderer)
                     bb = Bbox.from_extents(bb.x0 - pad, bb.y0 - pad, bb.x1 + pad, bb.y1 + pad)
                     free = (not any(bb.overlaps(o) for o in placed) and frame.contains(bb.x0, bb.y0)
                             and frame.contains(bb.x1, bb.y1) and not _crosses(bb, segs))

@@ -320,8 +320,6 @@ def _place_bar(ax, line, corner):
 def key_cell(ax, unit: str, drawing, *, gid=None):
     """A cell of its own beside lip-shape panels of the same size and limits: a scale bar (in ``unit``) in its
     middle and, for a profile, the face direction under it. Returns the bar."""
-    from matplotlib.text import Text  # noqa: F401 - the cell holds only these
-
     ax.set_aspect("equal")
     ax.set_axis_off()
     x0, x1 = ax.get_xlim()
