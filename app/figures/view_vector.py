@@ -290,9 +290,13 @@ def _labels_2d(ax, actor, M, size, z):
         if src is None or name not in src.point_data:
             return
         xy, _ = project(np.asarray(src.points, dtype=np.float64), M, size)
-        colour = alg.GetLabelTextProperty().GetColor() if hasattr(alg, "GetLabelTextProperty") else (0, 0, 0)
+        prop = alg.GetTextProperty() if hasattr(alg, "GetTextProperty") else None
+        colour = prop.GetColor() if prop is not None else (0, 0, 0)
+        # justified as on screen: a label's text runs away from what it names
+        ha = {"Left": "left", "Right": "right"}.get(prop.GetJustificationAsString() if prop else "", "center")
+        va = {"Bottom": "bottom", "Top": "top"}.get(prop.GetVerticalJustificationAsString() if prop else "", "center")
         for (x, y), text in zip(xy, src.point_data[name]):
-            ax.text(x, y, str(text), fontsize=font_pt(), ha="center", va="center", zorder=z, color=colour)
+            ax.text(x, y, str(text), fontsize=font_pt(), ha=ha, va=va, zorder=z, color=colour)
     elif hasattr(actor, "GetInput") and hasattr(actor, "GetTextProperty"):  # vtkTextActor
         text = actor.GetInput()
         if text:

@@ -24,8 +24,10 @@ __all__ = ["SensorsHandle", "add_sensors", "as_points", "OTHER_COLOUR", "APERTUR
 OTHER_COLOUR = (0.55, 0.55, 0.58)
 #: the aperture's line and value
 APERTURE_COLOUR = (0.15, 0.15, 0.18)
-#: labels stand this fraction of the sensors' extent away from their sensor
+#: the unit of the labels' spacing: this fraction of the sensors' extent
 LABEL_OFFSET = 0.14
+#: a label's text starts this many units from its sensor, running away from it
+GAP = 0.9
 
 
 def as_points(points) -> np.ndarray:
@@ -76,6 +78,13 @@ def _label_directions(ref, which, reach) -> list:
     return out
 
 
+def _justification(d) -> tuple[str, str]:
+    """How a label in direction ``d`` from its sensor is justified at its anchor, so its text runs away from it."""
+    if abs(d[0]) >= 0.5 * float(np.hypot(*d)):
+        return ("left" if d[0] > 0 else "right"), "center"
+    return "center", ("bottom" if d[1] > 0 else "top")
+
+
 def _lines(points, pairs) -> pv.PolyData:
     """A PolyData of straight lines between ``pairs`` (E, 2) of ``points`` (V, 3) (no lines: points only)."""
     mesh = pv.PolyData(np.asarray(points, np.float32))
@@ -92,13 +101,17 @@ class SensorsHandle:
     drawing : app.models.lip_drawing.LipDrawing
     offset : ndarray (3,)
         Added to every frame (two trajectories side by side).
-    markers, segments, aperture_line, label_points : pyvista.PolyData or None
+    markers, segments, aperture_line : pyvista.PolyData or None
     actor : vtk actor
         The lip sensors' spheres (the handle's colour).
     actors : list of vtk actors
         Everything drawn.
     label_texts : list of str
         The labels as drawn now (the sensors' names, the aperture's value, "front").
+    label_anchors : ndarray (len(label_texts), 3)
+        Where each label's text starts (it runs away from what it names).
+    label_actors : list of vtk actors
+        One label set per justification.
     aperture_value : float or None
         The drawn frame's aperture in the corpus's unit.
     """
@@ -143,28 +156,37 @@ class SensorsHandle:
         self._label_of = [i for i, t in enumerate(drawing.labels) if t] if labels else []
         self._dirs = _label_directions(ref, self._label_of, self._reach)
         self._front = labels and drawing.view == "profile" and drawing.forward is not None
-        n_labels = len(self._label_of) + int(drawing.has_aperture) + int(self._front)
-        self.label_points, self.label_actor = None, None
-        self.label_texts = [str(drawing.labels[i]) for i in self._label_of] + \
-            ([""] if drawing.has_aperture else []) + (["front"] if self._front else [])
         if self._front:
             self._arrow = pv.Arrow(start=(0, 0, 0), direction=(float(drawing.forward[0]), float(drawing.forward[1]), 0),
                                    scale=2.0 * self._reach, tip_length=0.3, tip_radius=0.12, shaft_radius=0.04)
             self._arrow_base = np.asarray(self._arrow.points, np.float32).copy()
             self.actors.append(plotter.add_mesh(self._arrow, color=(0.3, 0.3, 0.3), name=f"{name}_front",
                                                 pickable=False, reset_camera=False, render=False))
-        if n_labels:
-            self.label_points = pv.PolyData(np.zeros((n_labels, 3), np.float32))
-            arr = pv.convert_string_array(np.asarray(self.label_texts, dtype=str))
+        # each label's text runs away from what it names (justified at its anchor): never over its sensor
+        self.label_texts = [str(drawing.labels[i]) for i in self._label_of]
+        self._justify = [_justification(d) for d in self._dirs]
+        if drawing.has_aperture:
+            self.label_texts.append("")
+            self._justify.append(self._aperture_side(P))
+        if self._front:
+            self.label_texts.append("front")
+            self._justify.append(("center", "bottom"))
+        self.label_anchors = np.zeros((len(self.label_texts), 3), np.float32)
+        self._label_sets = []  # (polydata, actor, label indices), one per justification
+        for just in dict.fromkeys(self._justify):
+            which = [k for k, j in enumerate(self._justify) if j == just]
+            pts = pv.PolyData(np.zeros((len(which), 3), np.float32))
+            arr = pv.convert_string_array(np.asarray([self.label_texts[k] for k in which], dtype=str))
             arr.SetName("sensor_labels")
-            self.label_points.GetPointData().AddArray(arr)
-            self.label_actor = plotter.add_point_labels(self.label_points, "sensor_labels", font_size=13,
-                                                        point_size=1, show_points=False, shape_opacity=0.0,
-                                                        shape=None, text_color=(0.1, 0.1, 0.1),
-                                                        always_visible=True, name=f"{name}_labels",
-                                                        render=False, reset_camera=False)
-            self.label_actor.GetMapper().PlaceAllLabelsOn()  # never hidden where two labels would touch
-            self.actors.append(self.label_actor)
+            pts.GetPointData().AddArray(arr)
+            actor = plotter.add_point_labels(pts, "sensor_labels", font_size=13, point_size=1, show_points=False,
+                                             shape_opacity=0.0, shape=None, text_color=(0.1, 0.1, 0.1),
+                                             always_visible=True, name=f"{name}_labels_{just[0]}_{just[1]}",
+                                             justification_horizontal=just[0], justification_vertical=just[1],
+                                             render=False, reset_camera=False)
+            actor.GetMapper().PlaceAllLabelsOn()  # never hidden where two labels would touch
+            self._label_sets.append((pts, actor, which))
+            self.actors.append(actor)
         self.aperture_value = None
         self.update(P)
 
@@ -184,45 +206,60 @@ class SensorsHandle:
         if self.segments is not None:
             self.segments.points[:] = Q
             self.segments.Modified()
-        anchors, k = [], 0
+        anchors = []
         for i, d in zip(self._label_of, self._dirs):
-            anchors.append(np.asarray(Q[i], np.float32) + np.array([d[0], d[1], 0.0], np.float32) * self._reach)
+            anchors.append(np.asarray(Q[i], np.float32) + np.array([d[0], d[1], 0.0], np.float32) * GAP * self._reach)
         if self.drawing.has_aperture:
             top, bottom, value = self.drawing.aperture(P)
             self.aperture_value = value
             self.aperture_line.points[:] = np.stack([top, bottom]) + self.offset
             self.aperture_line.Modified()
             anchors.append(self._aperture_anchor(P, top, bottom) + self.offset)
-            k = len(self._label_of)
-            self.label_texts[k] = self.drawing.aperture_text(value)
+            self.label_texts[len(self._label_of)] = self.drawing.aperture_text(value)
         if self._front:
             lo, hi = P.min(axis=0), P.max(axis=0)
             base = np.array([hi[0] + self._reach, hi[1] + self._reach, 0.5 * (lo[2] + hi[2])], np.float32)
             self._arrow.points[:] = self._arrow_base + base + self.offset
             self._arrow.Modified()
-            anchors.append(base + self.offset + np.array([self._reach, 0.9 * self._reach, 0.0], np.float32))
-        if self.label_points is not None:
-            self.label_points.points[:] = np.asarray(anchors, np.float32)
-            arr = self.label_points.GetPointData().GetAbstractArray("sensor_labels")
-            for j, text in enumerate(self.label_texts):
-                arr.SetValue(j, text)
+            anchors.append(base + self.offset + np.array([self._reach, 0.25 * self._reach, 0.0], np.float32))
+        if anchors:
+            self.label_anchors = np.asarray(anchors, np.float32)
+        for pts, _actor, which in self._label_sets:
+            pts.points[:] = self.label_anchors[which]
+            arr = pts.GetPointData().GetAbstractArray("sensor_labels")
+            for j, k in enumerate(which):
+                arr.SetValue(j, self.label_texts[k])
             arr.Modified()
-            self.label_points.Modified()
+            pts.Modified()
 
-    def _aperture_anchor(self, P, top, bottom):
-        """The aperture value's anchor: beside the line on a side no other sensor lies on, else under the shape."""
+    def _aperture_side(self, P):
+        """The aperture value's justification: beside the line (on a side no other sensor lies on), else under."""
+        top, bottom, _ = self.drawing.aperture(P)
+        side = self._free_side(P, top, bottom)
+        return ("left", "center") if side > 0 else ("right", "center") if side < 0 else ("center", "top")
+
+    def _free_side(self, P, top, bottom) -> int:
+        """+1 / -1: the side of the aperture line (view x) no other sensor lies on; 0: none (or a surface)."""
         mid = 0.5 * (top + bottom)
         rest = np.setdiff1d(np.arange(len(P)), np.r_[self.drawing.upper, self.drawing.lower])
-        off = P[rest, 0] - mid[0] if self.drawing.kind == "sensors" and len(rest) else None
+        if self.drawing.kind != "sensors" or not len(rest):
+            return 0 if self.drawing.kind != "sensors" else 1
         span = max(float(np.linalg.norm(top - bottom)), 1e-9)
-        if off is not None:
-            off = off[np.abs(off) > 0.05 * span]
-        if off is not None and not (np.any(off > 0) and np.any(off < 0)):
-            side = -1.0 if np.any(off > 0) else 1.0
-            return (mid + np.array([side * 1.4 * self._reach, 0.0, 0.0])).astype(np.float32)
-        low = P[:, 1].min()
-        below = 2.8 if self._label_of else 1.6  # under the lowest sensor's own label, where there is one
-        return np.array([mid[0], low - below * self._reach, mid[2]], np.float32)
+        off = P[rest, 0] - mid[0]
+        off = off[np.abs(off) > 0.05 * span]
+        if np.any(off > 0) and np.any(off < 0):
+            return 0
+        return -1 if np.any(off > 0) else 1
+
+    def _aperture_anchor(self, P, top, bottom):
+        """The aperture value's anchor: beside the line's middle on the free side, else under the lowest sensor
+        and its label."""
+        mid = 0.5 * (top + bottom)
+        side = self._free_side(P, top, bottom)
+        if side:
+            return (mid + np.array([side * GAP * self._reach, 0.0, 0.0])).astype(np.float32)
+        below = 2.2 if self._label_of else GAP  # under the lowest sensor's own label, where there is one
+        return np.array([mid[0], P[:, 1].min() - below * self._reach, mid[2]], np.float32)
 
     # ------------------------------------------------------------------ handle
     @property
@@ -242,6 +279,10 @@ class SensorsHandle:
     def set_visible(self, visible: bool) -> None:
         for a in self.actors:
             a.SetVisibility(bool(visible))
+
+    @property
+    def label_actors(self) -> list:
+        return [actor for _pts, actor, _which in self._label_sets]
 
     def set_colour(self, color) -> None:
         """The lip sensors' colour (their lines a darker shade)."""

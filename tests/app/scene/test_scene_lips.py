@@ -43,9 +43,14 @@ def test_sensors_are_spheres_straight_lines_labels_and_the_aperture(plotter):
     np.testing.assert_allclose(h.points, Q, atol=1e-5)
     np.testing.assert_allclose(np.asarray(h.aperture_line.points) - [1.0, 0, 0], Q[:2], atol=1e-5)
     assert h.label_texts[-1] == f"{np.linalg.norm(Q[0] - Q[1]):.1f} mm"
-    arr = h.label_points.GetPointData().GetAbstractArray("sensor_labels")
-    assert [arr.GetValue(k) for k in range(arr.GetNumberOfValues())] == h.label_texts
-    assert h.label_actor.GetMapper().GetPlaceAllLabels()  # never hidden where two would touch
+    drawn = {}
+    for pts, actor, which in h._label_sets:  # each label set justified so its text runs away from its sensor
+        arr = pts.GetPointData().GetAbstractArray("sensor_labels")
+        drawn.update({k: arr.GetValue(j) for j, k in enumerate(which)})
+        assert actor.GetMapper().GetPlaceAllLabels()  # never hidden where two would touch
+    assert [drawn[k] for k in range(len(h.label_texts))] == h.label_texts
+    for d, (ha, va) in zip(h._dirs, h._justify):  # the text runs away from its sensor
+        assert {"left": d[0] > 0, "right": d[0] < 0}.get(ha, True) and {"bottom": d[1] > 0, "top": d[1] < 0}.get(va, True)
     h.set_visible(False)
     assert not h.visible and not any(a.GetVisibility() for a in h.actors)
     plotter.render()

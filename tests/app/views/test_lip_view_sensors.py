@@ -74,7 +74,7 @@ def test_four_lip_sensors_are_spheres_joined_by_lines_with_the_aperture_in_mm(qa
         ll, rc = P[names.index("LL")], P[names.index("RC")]
         inside = 0.5 * (0.5 * (ul + lc) + 0.5 * (ll + rc))  # half-way across the mouth, off every line
         assert not _ink(img, lv.plotter, inside + 0.15 * (lc - ul), r=1)
-        assert h.label_actor.GetMapper().GetPlaceAllLabels()  # every label placed, none hidden
+        assert all(a.GetMapper().GetPlaceAllLabels() for a in h.label_actors)  # every label placed, none hidden
         assert "sensors as measured" in lv.caption.toolTip()
 
 
@@ -108,9 +108,12 @@ def test_haskins_jaw_and_lower_lip_labels_do_not_hide_each_other(qapp, shared_da
         h = w.lip_view.main
         _screen(qapp, w.lip_view)
         assert {"UL", "LL", "ML", "JAW", "JAWL"} <= set(h.label_texts)
-        anchors = np.asarray(h.label_points.points)[:5]
-        gaps = [np.linalg.norm(a[:2] - b[:2]) for i, a in enumerate(anchors) for b in anchors[i + 1:]]
-        assert min(gaps) >= 1.9 * h._reach
+        from app.scene.sensors import GAP
+
+        # the labels' directions keep them apart (at full spacing; the texts start GAP of it out, running away)
+        anchors = np.array([np.asarray(h.points)[i, :2] + d * h._reach for i, d in zip(h._label_of, h._dirs)])
+        gaps = [np.linalg.norm(a - b) for i, a in enumerate(anchors) for b in anchors[i + 1:]]
+        assert min(gaps) >= 1.9 * h._reach and 0 < GAP <= 1
 
 
 def test_an_alignment_running_past_the_data_is_said_when_the_recording_is_opened(midsagittal, qapp, qtbot,
