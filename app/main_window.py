@@ -14,7 +14,7 @@ from pathlib import Path
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.models.state import AppState
-from app.views.export_dialog import FIGURE_FILTERS  # File > Export figure's filters, where its dialogs are
+from app.views.export_dialog import FIGURE_FILTERS  # noqa: F401 - File > Export figure's filters, with its dialogs
 
 __all__ = ["MainWindow", "launch", "stop_on_signals"]
 

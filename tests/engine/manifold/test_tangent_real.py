@@ -24,7 +24,6 @@ from engine.recordings.kinematics import lip_aperture  # noqa: E402
 @pytest.fixture(scope="module")
 def corpora(shared_data):
     import importlib.util
-
     import warnings
 
     from engine.io.errors import ImportDataWarning
