@@ -266,15 +266,85 @@ def _printf(fmt: str, value: float) -> str:
         return f"{value:.3g}"
 
 
-def _legend(ax, legend):
+#: a legend box's symbol (app.scene.legend.SYMBOLS) as a matplotlib legend handle's style
+_HANDLE_STYLE = {"circle": {"ls": "none", "marker": "o"}, "square": {"ls": "none", "marker": "s"},
+                 "line": {"ls": "-", "marker": ">", "markevery": [1]}, "arrow": {"ls": "-", "marker": ">", "lw": 0.6,
+                                                                             "markevery": [1]},
+                 "ring": {"ls": "none", "marker": "o", "mfc": "none"}}
+
+
+def _entry(legend, k):
+    """Entry ``k`` of a vtkLegendBoxActor: (text, symbol colour, symbol name). The colour is the symbol's own
+    (its ``rgb`` point scalars, :mod:`app.scene.legend`), else the entry's colour; the name is the symbol's tag."""
+    symbol = legend.GetEntrySymbol(k)
+    colour, kind = legend.GetEntryColor(k), "circle"
+    if symbol is not None:
+        pd = symbol.GetPointData().GetArray("rgb")
+        if pd is not None and pd.GetNumberOfTuples():
+            colour = tuple(c / 255.0 for c in pd.GetTuple(0)[:3])
+        tag = symbol.GetFieldData().GetAbstractArray("symbol")
+        if tag is not None and tag.GetNumberOfValues():
+            kind = str(tag.GetValue(0))
+    return legend.GetEntryString(k), tuple(colour), kind
+
+
+def _handles(legend) -> list:
+    """A vtkLegendBoxActor's entries as matplotlib legend handles: each symbol (a marker, a line or an arrow)
+    in its colour."""
     from matplotlib.lines import Line2D
 
-    handles = []
+    out = []
     for k in range(legend.GetNumberOfEntries()):
-        handles.append(Line2D([], [], ls="none", marker="o", ms=5, color=legend.GetEntryColor(k),
-                              label=legend.GetEntryString(k)))
-    if handles:
-        ax.legend(handles=handles, loc="lower left", fontsize=font_pt(-1), frameon=False)
+        text, colour, kind = _entry(legend, k)
+        style = dict(_HANDLE_STYLE.get(kind, _HANDLE_STYLE["circle"]))
+        out.append(Line2D([0, 1], [0, 0], color=colour, ms=4, label=text, **style))
+    return out
+
+
+def _legend(ax, legend):
+    """A vtkLegendBoxActor as a matplotlib legend in the same corner of the view, on the same translucent
+    white box (the view as on screen)."""
+    from matplotlib.legend import Legend
+
+    handles = _handles(legend)
+    if not handles:
+        return None
+    x, y = legend.GetPosition()
+    w, h = legend.GetPosition2()
+    top, right = y + h / 2 > 0.5, x + w / 2 > 0.5
+    loc = f"{'upper' if top else 'lower'} {'right' if right else 'left'}"
+    anchor = (x + w if right else x, y + h if top else y)
+    leg = Legend(ax, handles, [hd.get_label() for hd in handles], loc=loc, bbox_to_anchor=anchor,
+                 bbox_transform=ax.transAxes, fontsize=font_pt(-1), frameon=True, framealpha=0.85,
+                 borderaxespad=0.0, handlelength=1.6, labelspacing=0.3, borderpad=0.3)
+    leg.get_frame().set_edgecolor("none")
+    leg.set_zorder(1000)
+    ax.add_artist(leg)  # one artist per legend box: a second box must not replace the first
+    return leg
+
+
+def _legend_below(fig, boxes) -> None:
+    """Every legend box's entries in one legend below the view (a journal width: the screen's corner boxes,
+    at print text sizes, would cover a third of the view): the figure grows by the legend's height and
+    every axes keeps its size in inches."""
+    handles = [hd for b in boxes for hd in _handles(b)]
+    if not handles:
+        return
+    from app.figures.style import one_column
+
+    W, H0 = fig.get_size_inches()
+    leg = fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=2 if one_column(W) else 3,
+                     fontsize=font_pt(-1), frameon=False, handlelength=1.6, labelspacing=0.3, columnspacing=1.2,
+                     borderaxespad=0.0)
+    leg.set_gid("view:legend")
+    fig.draw_without_rendering()
+    strip = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.06  # inches
+    H = H0 + strip
+    for a in fig.axes:
+        p = a.get_position()
+        a.set_position([p.x0, (p.y0 * H0 + strip) / H, p.width, p.height * H0 / H])
+    fig.set_size_inches(W, H)
+    leg.set_bbox_to_anchor((0.5, (strip - 0.03) / H), transform=fig.transFigure)
 
 
 def _labels_2d(ax, actor, M, size, z):
@@ -314,8 +384,10 @@ def scene_figure(plotter, *, title: str | None = None, width: float | None = Non
     title : str, optional
         Drawn at the top, above everything else.
     width : float, optional
-        Width in inches (85 mm: one journal column); the height keeps the view's proportions.
-        Default: as on screen (the view's pixels at :data:`SCREEN_DPI`).
+        Width in inches (85 mm: one journal column); the view keeps its proportions and the
+        view's legend boxes go into one legend below it (the figure grows by its height).
+        Default: as on screen (the view's pixels at :data:`SCREEN_DPI`, each legend box in its
+        corner).
 
     Returns
     -------
@@ -331,12 +403,13 @@ def scene_figure(plotter, *, title: str | None = None, width: float | None = Non
     w, h = size
     if w < 2 or h < 2:
         raise ValueError(f"the 3-D view is {w}x{h} pixels on screen; show it (open its dock) before exporting it")
+    journal_width = width is not None
     width = w / SCREEN_DPI if width is None else float(width)
     with rc_context(journal_rc(width)):
-        return _scene_figure(plotter, M, size, title, width)
+        return _scene_figure(plotter, M, size, title, width, below=journal_width)
 
 
-def _scene_figure(plotter, M, size, title, width):
+def _scene_figure(plotter, M, size, title, width, *, below=False):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -383,7 +456,7 @@ def _scene_figure(plotter, M, size, title, width):
                 else:
                     counts["n_polygons"] += len(p[1])
             z = _draw(ax, prims, z, pt)
-    bars = []
+    bars, boxes = [], []
     for ren in renderers:
         props = ren.GetViewProps()
         props.InitTraversal()
@@ -395,9 +468,14 @@ def _scene_figure(plotter, M, size, title, width):
             if cls == "vtkScalarBarActor":
                 bars.append(_scalar_bar(fig, a, size))
             elif cls == "vtkLegendBoxActor":
-                _legend(ax, a)
+                boxes.append(a)
             else:
                 _labels_2d(ax, a, M, size, z + 1)
+    if below:
+        _legend_below(fig, boxes)
+    else:
+        for b in boxes:
+            _legend(ax, b)
     if title:
         fig.suptitle(title, fontsize=font_pt(1), y=0.985, va="top")
     for cax in bars:  # at a journal width the bar's labels are larger against the view: keep them on the page

@@ -64,7 +64,7 @@ def main() -> int:
              "Every figure of `lipspace figures` (and of the window's File › Export figure, which calls the same",
              f"functions) at one journal column, {WIDTH_MM:g} mm wide, as a journal prints it: text of 6 pt or more,",
              "each axis spanning its data, the window's own colour maps for density and hop distance",
-             "(`app.models.colouring`) and perceptually uniform ones elsewhere, categorical colours from the",
+             "(`app.models.colour_maps`) and perceptually uniform ones elsewhere, categorical colours from the",
              "session palette. Sensor data are drawn as sensors: markers joined by straight lines, the lip",
              "aperture a dashed segment with its value.",
              "", "Made by `docs/figures/make_gallery.py` from generated corpora of four kinds; do not edit by hand.",

@@ -113,3 +113,48 @@ def test_the_vector_view_has_no_grid_the_screen_lacks(qapp, ema, main_window_fac
     patches = [p for p in ax.patches if isinstance(p, PathPatch)]
     assert len(patches) == 1 and patches[0].get_edgecolor()[3] == 0  # the plane, filled once, no edges
     assert not any(isinstance(c, PolyCollection) and c.get_facecolors()[:, 3].max() < 1 for c in ax.collections)
+
+
+def _vtk_legend_entries(plotter) -> list:
+    """(text, symbol colour) of every entry of the view's visible legend boxes, as on screen."""
+    from app.figures.view_vector import _entry
+
+    out = []
+    props = plotter.renderer.GetViewProps()
+    props.InitTraversal()
+    for _ in range(props.GetNumberOfItems()):
+        a = props.GetNextProp()
+        if a.GetVisibility() and type(a).__name__ == "vtkLegendBoxActor":
+            out += [_entry(a, k)[:2] for k in range(a.GetNumberOfEntries())]
+    return out
+
+
+def test_every_legend_box_of_the_view_is_in_the_export_in_its_colours(qapp, ema, main_window_factory):
+    """Both legend boxes (the points' and the glyphs'), every entry with its symbol's colour: below the view at a
+    journal width (the figure grows, the view keeps its size), in their corners as on screen."""
+    from matplotlib.colors import to_rgb
+
+    from app.figures.view_export import view_figure
+
+    with main_window_factory(qapp, ema, size=(1300, 850)) as w:
+        w.state.select_frame(20)
+        for _ in range(10):
+            qapp.processEvents()
+        plotter = w._view_plotter("manifold")
+        entries = _vtk_legend_entries(plotter)
+        journal = view_figure(plotter, width=85 / 25.4)
+        screen = view_figure(plotter, width=None)
+    texts = [t for t, _ in entries]
+    assert "selected frame" in texts and "beyond the horizon" in texts  # the glyphs' box and the points' box
+    (below,) = [leg for leg in journal.legends if leg.get_gid() == "view:legend"]
+    drawn = {t.get_text(): to_rgb(h.get_color()) for t, h in zip(below.get_texts(), below.legend_handles)}
+    assert list(drawn) == texts
+    for text, colour in entries:
+        assert np.allclose(drawn[text], colour, atol=1e-3), text
+    view = journal.axes[0].get_window_extent()
+    assert view.width / journal.dpi == pytest.approx(85 / 25.4, rel=1e-3)  # the view keeps the column's width
+    assert below.get_window_extent().y1 <= view.y0 + 1  # the legend lies below the view, not over it
+    from matplotlib.legend import Legend
+
+    corner = [t.get_text() for leg in screen.axes[0].artists if isinstance(leg, Legend) for t in leg.get_texts()]
+    assert sorted(corner) == sorted(texts) and not screen.legends
