@@ -316,13 +316,20 @@ def reach_in_box(o, vec, lo, hi) -> float:
 
 def data_limits(ax, x, y, *, margin: float = 0.04):
     """Set ``ax``'s limits to the data's range (``x``, ``y``) with ``margin`` of it on each side: an axis spans
-    what it shows, never an arrow's or a guide line's reach."""
+    what it shows, never an arrow's or a guide line's reach. The margin never carries an axis across zero:
+    data that are all >= 0 (a lip aperture) start at 0 at the lowest, all <= 0 end at 0 at the highest, so no
+    negative aperture is implied."""
     x, y = np.asarray(x, float), np.asarray(y, float)
     for setter, v in ((ax.set_xlim, x), (ax.set_ylim, y)):
         v = v[np.isfinite(v)]
         lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
         pad = margin * (hi - lo) if hi > lo else max(abs(hi), 1.0) * 0.05
-        setter(lo - pad, hi + pad)
+        a, b = lo - pad, hi + pad
+        if lo >= 0 > a:
+            a = 0.0
+        if hi <= 0 < b:
+            b = 0.0
+        setter(a, b)
 
 
 # ---------------------------------------------------------------- journal layout helpers

@@ -121,6 +121,19 @@ def test_fig1b_residuals_in_the_palettes_X_and_Y_colours_non_increasing(figs, m)
         assert np.allclose(y[1:], expect, equal_nan=True)
 
 
+def test_an_axis_margin_never_implies_a_negative_aperture():
+    """A lip aperture from 0.1 to 15.5 mm starts at 0, not at -0.5 (the margin would carry it across zero); data
+    on both sides of zero keep the margin on both sides."""
+    from app.figures.style import data_limits
+
+    ax = Figure().subplots()
+    data_limits(ax, [0.1, 7.0, 15.5], [-200.0, 0.0, 180.0])
+    assert ax.get_xlim() == (0.0, pytest.approx(15.5 + 0.04 * 15.4))
+    assert ax.get_ylim() == (pytest.approx(-200 - 0.04 * 380), pytest.approx(180 + 0.04 * 380))
+    data_limits(ax, [-3.0, -0.05], [10.0, 20.0])
+    assert ax.get_xlim()[1] == 0.0 and ax.get_ylim()[0] == pytest.approx(9.6)
+
+
 def test_residuals_leave_the_numerical_floor_undrawn():
     r = F.shape.residuals([0.5, 0.5, 0.0])
     assert r[0] == 1.0 and r[1] == 0.5 and np.isnan(r[2]) and np.isnan(r[3])
