@@ -16,7 +16,7 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 
 import app.figures as F
-from app.figures.colours import GENERATED, ORIGINAL, density_cmap, future_cmap
+from app.figures.colours import GENERATED, ORIGINAL, UNREACHABLE, density_cmap, future_cmap
 from app.figures.style import RASTERIZE_ABOVE
 
 
