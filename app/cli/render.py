@@ -177,7 +177,7 @@ def run(args) -> int:
     with progress_bar(disable=True if args.quiet else None) as progress:
         try:
             render_video(out, frames, rate=c.rate, faces=c.faces, dims=c.dims, roles=c.point_roles or None,
-                         orientation=anatomical_frame(c, manifold.shape_.mean_),
+                         orientation=anatomical_frame(c, manifold.shape_.mean_), unit=c.unit_label,
                          names=c.point_names or None, original=original, Y=Y,
                          Y_original=Y_original, cloud=manifold.Fy_[:, :3] if Y is not None else None, audio=audio,
                          size=args.size, crf=args.crf, title=title, progress=progress)

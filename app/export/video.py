@@ -90,13 +90,14 @@ def _mover(handle, faces):
     The mesh is drawn flat-shaded (as in the lip view), so VTK takes the normals from the
     triangles themselves; with smooth shading the vertex normals are recomputed in numpy
     (:func:`app.scene.lips.point_normals`, the normals ``compute_normals`` gives). Markers
-    and contour tubes use the handle's own ``update``.
+    and sensors use the handle's own ``update``.
     """
     from app.scene.lips import point_normals
 
-    mesh = handle.mesh
-    if hasattr(handle, "contour") or faces is None or not len(faces) or "Normals" not in mesh.point_data:
+    mesh = getattr(handle, "mesh", None)
+    if mesh is None or faces is None or not len(faces) or "Normals" not in mesh.point_data:
         return handle.update
+    overlay = getattr(handle, "overlay", None)
     smooth = handle.actor.GetProperty().GetInterpolationAsString() != "Flat"
     F = np.asarray(faces, np.int64)
     n_points = mesh.n_points
@@ -111,6 +112,8 @@ def _mover(handle, faces):
         if smooth:
             mesh.point_data["Normals"][:] = point_normals(P, F)
         mesh.Modified()
+        if overlay is not None:  # the aperture over the surface
+            overlay.update(P - offset)
 
     return move
 
@@ -118,7 +121,7 @@ def _mover(handle, faces):
 class _Scene:
     """The off-screen plotter and the handles moved every frame."""
 
-    def __init__(self, frames, original, faces, Y, Y_original, cloud, size, sensors):
+    def __init__(self, frames, original, faces, Y, Y_original, cloud, size, drawing):
         import pyvista as pv
 
         w, h = _even(size[0]), _even(size[1])
@@ -126,12 +129,12 @@ class _Scene:
         self.plotter = p = pv.Plotter(off_screen=True, shape=(1, 2) if panel else (1, 1), border=False,
                                       window_size=(2 * w if panel else w, h), lighting="none")
         try:
-            self._build(p, frames, original, faces, Y, Y_original, cloud, h, sensors)
+            self._build(p, frames, original, faces, Y, Y_original, cloud, h, drawing)
         except BaseException:
             p.close()
             raise
 
-    def _build(self, p, frames, original, faces, Y, Y_original, cloud, h, sensors):
+    def _build(self, p, frames, original, faces, Y, Y_original, cloud, h, drawing):
         import pyvista as pv
 
         from app import scene
@@ -149,27 +152,25 @@ class _Scene:
         dot = max(8.0, min(24.0, h / 20.0)) if frames.shape[1] <= 50 else 8.0
         if original is None:
             self.main = scene.add_lips(p, frames[0], faces, color=SYNTH_COLOUR, point_size=dot, name="lips_main",
-                                       **sensors)
+                                       drawing=drawing)
             bounds_pts = frames.reshape(-1, 3)
         else:
             self.main = scene.add_lips(p, original[0], faces, color=MAIN_COLOUR, point_size=dot, name="lips_main",
-                                       **sensors)
+                                       drawing=drawing)
             self.second = scene.add_lips(p, frames[0], faces, color=SYNTH_COLOUR, offset=offset, point_size=dot,
-                                         name="lips_second", **sensors)
+                                         name="lips_second", drawing=drawing, labels=False)
             bounds_pts = np.concatenate([original.reshape(-1, 3), frames.reshape(-1, 3) + offset])
-        step = max(1, len(frames) // 60)
-        for handle, seq, off in ((self.main, frames if original is None else original, 0.0),
-                                 (self.second, frames, offset)):
-            if handle is not None and hasattr(handle, "contour"):  # a contour tube reaches past its markers
-                tube = np.concatenate([handle.contour.transform(f) for f in seq[::step]]) + off
-                bounds_pts = np.concatenate([bounds_pts, tube])
         lo, hi = bounds_pts.min(0), bounds_pts.max(0)
+        if drawing is not None and drawing.kind == "sensors":  # the labels stand beside the sensors
+            pad = 0.3 * float(np.ptp(bounds_pts[:, :2], axis=0).max())
+            lo, hi = lo - [pad, pad, 0], hi + [pad, pad, 0]
         self.move_main = _mover(self.main, faces)
         self.move_second = None if self.second is None else _mover(self.second, faces)
         p.view_xy(render=False)
         p.reset_camera(render=False, bounds=[lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]])
-        tubes = hasattr(self.main, "contour")
-        p.camera.zoom(1.3 if (faces is not None and len(faces)) else 1.15 if tubes else 1.05)  # dots need a margin
+        labelled = drawing is not None and drawing.kind == "sensors"
+        # a surface, or sensors with their labels beside them, or bare dots: each needs its margin
+        p.camera.zoom(1.3 if (faces is not None and len(faces)) else 1.0 if labelled else 1.05)
         self.text = p.add_text("", position=(8, 6), font_size=10, color="black")
         self.marker = None
         if panel:
@@ -280,7 +281,7 @@ class _Encoder:
 
 def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=None, names=None, original=None,
                  Y=None, Y_original=None, cloud=None, audio=None, size=(640, 480), title: str = "", crf: int = 20,
-                 progress=None, orientation=None) -> Path:
+                 progress=None, orientation=None, unit: str = "mm") -> Path:
     """Render a lip trajectory to an MP4 (H.264 + AAC), one video frame per trajectory frame.
 
     Parameters
@@ -296,8 +297,9 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=
     dims : {2, 3}
         Coordinates per point in ``frames``.
     roles, names : sequence of str, optional
-        ``Corpus.point_roles`` / ``point_names``: sparse lip markers are drawn as the lip
-        view draws them, a labelled contour tube (:func:`app.scene.add_lip_contour`).
+        ``Corpus.point_roles`` / ``point_names``: sensors are drawn as the lip view draws them
+        (:func:`app.models.lip_drawing.drawing_of`: spheres joined by straight lines, labelled, the lip
+        aperture with its value).
     original : array of shape (n0, dims * V), optional
         The original utterance, drawn beside the trajectory on the left (as in the lip
         view's playback); the shorter sequence holds its last frame.
@@ -323,6 +325,8 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=
         The talker's frame (:func:`engine.recordings.orientation.anatomical_frame`): the lips are drawn
         in it, seen from the front (upper lip up, the talker's left on the right). None
         draws the data's x right, y up.
+    unit : str
+        The coordinates' unit, written with the lip aperture.
 
     Returns
     -------
@@ -361,7 +365,13 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=
 
     quiet = _QuietWithoutDisplay()
     try:
-        scene = _Scene(F, O, faces, Y, Y_original, cloud, size, {"roles": roles, "names": names})
+        drawing = None
+        if roles is not None or names is not None or faces is not None:
+            from app.models.lip_drawing import drawing_of
+
+            drawing = drawing_of(F.mean(axis=0), dims=dims, faces=faces, roles=roles, names=names, unit=unit,
+                                 facing_known=orientation is not None and orientation.source != "none")
+        scene = _Scene(F, O, faces, Y, Y_original, cloud, size, drawing)
     except BaseException:
         quiet.restore()
         raise

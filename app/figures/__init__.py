@@ -1,12 +1,15 @@
 """The paper's figure set, rendered with matplotlib (Agg) from a fitted manifold.
 
-Each figure is ``make_<name>(manifold, **opts) -> matplotlib.figure.Figure``; the
-figure carries a ``lipspace`` dict attribute with the numbers it shows (seed
-states, chosen utterance, errors...). :data:`FIGURES` maps names to functions in
-paper order; :func:`export_figure` renders one and saves it atomically as PNG, SVG
-or PDF. 3-D views of the GUI are saved with :func:`save_plotter_image` (PNG, at a DPI) and
-:func:`save_plotter_vector` (SVG/PDF/EPS redrawn from the scene's data as vector paths,
-:mod:`app.figures.view_vector`).
+Each figure is ``make_<name>(manifold, *, width=None, palette=None, **opts) ->
+matplotlib.figure.Figure``, laid out for a journal width (:mod:`app.figures.style`) and coloured
+with the session's palette (None: the corpus's own, :func:`app.figures.colours.palette_for`) and
+the window's colour maps; the figure carries a ``lipspace`` dict attribute with the numbers it
+shows (seed states, chosen utterance, errors...). :data:`FIGURES` maps names to functions in
+paper order; :func:`export_figure` renders one and saves it atomically as PNG, SVG or PDF:
+``lipspace figures`` and the window's File › Export figure both call it. The window's 3-D
+views are written by :mod:`app.figures.view_export` (PNG, SVG and PDF from one figure of the
+scene, :mod:`app.figures.view_vector`); :func:`save_plotter_image` (a screenshot at a DPI) and
+:func:`save_plotter_vector` remain for scripts.
 
 No pyplot: every figure owns an Agg canvas, so this works without a display and
 never disturbs a Qt event loop.
@@ -15,6 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from app.figures.classes import make_classes
 from app.figures.clusters import make_fig4
 from app.figures.export import (
     FIGURE_FORMATS,
@@ -25,7 +29,8 @@ from app.figures.export import (
     save_plotter_vector,
     vector_export_available,
 )
-from app.figures.manifold import make_classes, make_fig2a, make_fig2b
+from app.figures.hops import make_fig2b
+from app.figures.manifold import make_fig2a
 from app.figures.shape import make_fig1a, make_fig1b, make_fig2c, make_scree
 from app.figures.synthesis import make_fig3
 
@@ -50,7 +55,7 @@ FIGURES = {
 #: name -> one-line description (menus, ``lipspace figures --help``)
 DESCRIPTIONS = {
     "fig1a": "first two principal components of X as lip shapes, coloured by displacement",
-    "fig1b": "residual variance vs number of components, X blue, Y red",
+    "fig1b": "residual variance vs number of components, X and Y",
     "fig2a": "the manifold in the first three dims of Y: density, S, V, s_i, v_i, a trajectory",
     "fig2b": "directed hop distances from an opening, a zero-velocity and a closing state",
     "fig2c": "lip shapes indexed by increasing S",

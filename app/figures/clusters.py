@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib import patheffects
 
+from app.figures.colours import lightness, palette_for
 from app.figures.style import (
     ARBITRARY,
     below,
@@ -16,11 +17,11 @@ from app.figures.style import (
     y3,
 )
 
-__all__ = ["make_fig4", "PHONE_COLOURS", "ellipse_points"]
+__all__ = ["make_fig4", "ellipse_points"]
 
-#: the paper's colours: /b/ red, /p/ green, /m/ yellow
-PHONE_COLOURS = {"b": "red", "p": "green", "m": "yellow"}
 _OUTLINE = [patheffects.withStroke(linewidth=2.6, foreground="0.15")]
+#: a phone colour this light (CIELAB L*) gets a dark outline on its ellipse, to stand out on white
+LIGHT = 75.0
 
 
 def ellipse_points(mean, cov, n_sd: float = 2.0, n_points: int = 100) -> np.ndarray:
@@ -33,26 +34,29 @@ def ellipse_points(mean, cov, n_sd: float = 2.0, n_points: int = 100) -> np.ndar
 
 @journal
 def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd: float = 2.0,
-              min_count: int = 3, width=None, height: float | None = None):
-    """Fig. 4: mid-points of /b/ (red), /p/ (green), /m/ (yellow) with 2-s.d. ellipses.
+              min_count: int = 3, width=None, height: float | None = None, palette=None):
+    """Fig. 4: mid-points of /b/, /p/ and /m/ with 2-s.d. ellipses, in the session palette's phone colours.
 
     Each phone's mid-point frames (:class:`engine.manifold.clusters.PhoneClusters`; labels are
     matched through :func:`engine.phonetics.phonesets.normalize`, so ``B``/``P``/``M`` of an
     ARPAbet corpus are found), their ``n_sd`` ellipse and their mean (square).
     Phones the corpus lacks (or has fewer than ``min_count`` mid-points of) are
-    skipped with a note on the figure.
+    skipped with a note on the figure; with none of them found, ValueError (no empty figure).
 
     Parameters
     ----------
     phones : sequence of str, default=("b", "p", "m")
     colours : sequence of colours, optional
-        One per phone; default :data:`PHONE_COLOURS` (the paper's), else matplotlib's cycle.
+        One per phone; default the session palette's (``palette.colour("phone", label)``, the
+        colours the window gives these phones).
     axes : "sv" or (int, int), default="sv"
         ``"sv"``: the (S, V) plane, the opening (x) and its velocity read on the
         manifold (y), where the zero-velocity plane is the dotted line V = 0 and the
         opening half of the cycle lies above it; ellipses are the 2-s.d. ellipses of
         the members' (S, V). A pair of Y dims (0-based) shows those dims, with
         :meth:`PhoneClusters.ellipse` and the plane's trace.
+    palette : app.models.palette.SessionPalette, optional
+        The session's palette (default: the corpus's own).
     """
     require_fitted(manifold, "tangent_")
     from engine.manifold.clusters import PhoneClusters
@@ -60,8 +64,8 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
     tan = manifold.tangent_
     pc = PhoneClusters.from_manifold(manifold, n_dims=min(3, manifold.Fy_.shape[1]), min_count=min_count)
     if colours is None:
-        cycle = ["C0", "C1", "C4", "C5", "C6", "C8", "C9"]
-        colours = [PHONE_COLOURS.get(str(p).lower(), cycle[k % len(cycle)]) for k, p in enumerate(phones)]
+        pal = palette_for(manifold, palette)
+        colours = [pal.colour("phone", _corpus_label(pc, p)) for p in phones]
     if len(colours) != len(phones):
         raise ValueError(f"{len(colours)} colours for {len(phones)} phones; give one colour per phone")
     sv = isinstance(axes, str)
@@ -100,12 +104,16 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
         sc.set_gid(f"fig4:points:{phone}")
         closed = np.vstack([ell, ell[:1]])
         line, = ax.plot(closed[:, 0], closed[:, 1], "-", color=col, lw=1.6, zorder=4,
-                        path_effects=_OUTLINE if col in ("yellow", "y", "#ffff00") else None)
+                        path_effects=_OUTLINE if _light(col) else None)
         line.set_gid(f"fig4:ellipse:{phone}")
         sq, = ax.plot(*mean, "s", ms=10, mfc=col, mec="k", mew=1.2, zorder=5)
         sq.set_gid(f"fig4:mean:{phone}")
         found[phone] = {"label": pc.phones_[i], "count": int(len(idx)), "opening_fraction": frac,
                         "mean": np.asarray(mean), "cov": None if not sv else cov}
+    if not found:  # an empty figure is no figure
+        raise ValueError(f"none of {', '.join(f'/{p}/' for p in phones)} has {min_count} or more mid-points in "
+                         f"{manifold.corpus_.name} (phones with clusters: {' '.join(pc.phones_) or 'none'}); "
+                         "choose phones the corpus has")
     if sv:
         zl = ax.axhline(0.0, color="k", ls=":", lw=1.0, label="zero velocity")
         ax.set_xlabel(tan.sv_labels()[0])
@@ -137,6 +145,20 @@ def make_fig4(manifold, *, phones=("b", "p", "m"), colours=None, axes="sv", n_sd
         txt.set_gid("fig4:note")
     fig.lipspace.update(found=found, missing=missing)
     return fig
+
+
+def _corpus_label(pc, phone) -> str:
+    """The corpus's own label of ``phone`` (``B`` for ``b`` in an ARPAbet corpus): the level the palette colours."""
+    try:
+        return str(pc.phones_[pc.index(phone)])
+    except ValueError:
+        return str(phone)
+
+
+def _light(colour) -> bool:
+    from matplotlib.colors import to_rgb
+
+    return bool(lightness(to_rgb(colour)) > LIGHT)
 
 
 def _separation_note(pc, phones) -> str:

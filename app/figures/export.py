@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from app.figures.style import SCREEN_DPI
 from engine.files.atomic import atomic_write
 
 __all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure", "suffix_from_filter", "filter_suffixes", "save_vector_figure",
@@ -67,8 +68,6 @@ def save_figure(fig, path, *, dpi: float = 200, transparent: bool = False) -> Pa
     return Path(path)
 
 
-#: the screen resolution a view's pixels are taken to have (a PNG at this DPI is the window's size)
-SCREEN_DPI = 96.0
 
 
 def save_plotter_image(plotter, path, *, scale: int = 1, dpi: float | None = None,

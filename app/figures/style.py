@@ -2,15 +2,16 @@
 
 Every figure is a :class:`matplotlib.figure.Figure` with its own
 :class:`~matplotlib.backends.backend_agg.FigureCanvasAgg`, so nothing touches
-pyplot's global state and no display is needed. Colours follow the paper:
-blue = low / far / sparse, red = high / near / dense (matplotlib's ``jet``).
+pyplot's global state and no display is needed. Colours are the window's
+(:mod:`app.figures.colours`); lip shapes are drawn by :mod:`app.figures.lipshapes`.
 
 Figures are made for a journal page (:func:`journal`): the width is one column
 (85 mm) or two (180 mm, the default) and every figure lays itself out for it, with
-fonts of fixed point sizes (8 pt, 7 pt on one column; never below 6 pt) so that
-they print at the size a journal asks for without scaling; legends sit outside the
-plotting areas; manifold coordinates are labelled "(arbitrary units)", lip shapes
-carry a scale bar in the corpus's unit.
+fonts of fixed point sizes (8 pt, 7 pt on one column; never below 6 pt, and no
+mathtext, whose sub- and superscripts print smaller) so that they print at the size a
+journal asks for without scaling; legends sit outside the plotting areas; manifold
+coordinates are labelled "(arbitrary units)", lip shapes carry a scale bar in the
+corpus's unit.
 """
 from __future__ import annotations
 
@@ -18,29 +19,14 @@ import functools
 import re
 
 import numpy as np
-from matplotlib import colormaps, rc_context, rcParams
+from matplotlib import rc_context, rcParams
 from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.collections import PolyCollection
-from matplotlib.colors import Normalize, to_rgba
 from matplotlib.figure import Figure
 
-#: colour map of the paper's figures: blue (low) -> red (high)
-CMAP = colormaps["jet"]
-#: reversed: red (near) -> blue (far), for geodesic distances
-CMAP_NEAR = colormaps["jet_r"]
-#: unreachable states in distance plots
-UNREACHABLE = "#b0b0b0"
-#: original trajectories are black, generated ones red (paper figs 2a, 3)
-ORIGINAL = "black"
-GENERATED = "red"
-#: global / local shape and velocity directions
-S_COLOUR = "#006400"   # dark green
-V_COLOUR = "#8b008b"   # dark magenta
-#: the four tangent classes (engine.manifold.tangent.TangentFrames.classes_ 0..3)
-CLASS_COLOURS = ("#d62728", "#ff9896", "#1f4fb4", "#8fb8ff")
-
+#: the screen resolution a view's pixels are taken to have (an "as on screen" export is the window's size at it)
+SCREEN_DPI = 96.0
 #: above this many points, large scatters are rasterised inside SVG/PDF
-RASTERIZE_ABOVE = 4000
+RASTERIZE_ABOVE = 1500
 
 #: journal column widths in mm: one column and two columns (the default)
 COLUMN_WIDTHS_MM = {"85mm": 85.0, "180mm": 180.0}
@@ -172,13 +158,23 @@ def require_fitted(manifold, *attrs):
                          "fit one with Manifold().fit(corpus) or load one with Manifold.load(path)")
 
 
+def fit_lines(fig, text, size: float, *, share: float = 0.9) -> str:
+    """``text`` broken into lines ``share`` of the figure's width holds at ``size`` points, before the layout
+    sees it (a line wider than the figure collapses the constrained layout)."""
+    import textwrap
+
+    chars = max(20, int(share * fig.get_figwidth() * 72.0 / (0.55 * size)))
+    return "\n".join(textwrap.fill(line, chars) for line in str(text).split("\n"))
+
+
 def below(ax, text, *, fontsize=None):
     """A note under an axes' x label, inside the constrained layout (never overlapping)."""
+    size = font_pt(-1) if fontsize is None else fontsize
+    text = fit_lines(ax.figure, text, size)
     # anchored under the x label itself (wherever the layout puts it), not at a fixed offset that a
     # tall tick label or x label can reach
     t = ax.annotate(text, xy=(0.5, 0.0), xycoords=ax.xaxis.label, xytext=(0, -3), textcoords="offset points",
-                    va="top", ha="center", fontsize=font_pt(-1) if fontsize is None else fontsize, color="0.25",
-                    annotation_clip=False)
+                    va="top", ha="center", fontsize=size, color="0.25", annotation_clip=False)
     t.set_gid("note")
     return t
 
@@ -277,194 +273,63 @@ def density(pts, *, bins: int | None = None, sigma: float = 1.5) -> np.ndarray:
     return (r - r.min()) / max(r.max() - r.min(), 1.0)
 
 
-def arrow(ax, start, vec, *, color, label=None, lw=1.8, head=8.0, gid=None, fontsize=None):
-    """An annotated arrow from ``start`` along ``vec`` (2-D data coordinates)."""
+def halo(width: float = 2.2):
+    """A white outline behind text or lines drawn over data, so they stay legible on any colour."""
+    from matplotlib import patheffects
+
+    return [patheffects.withStroke(linewidth=width, foreground="white")]
+
+
+def arrow(ax, start, vec, *, color, label=None, lw=1.8, head=8.0, gid=None, fontsize=None, zorder=6):
+    """An arrow from ``start`` along ``vec`` (2-D data coordinates), drawn above the data; ``label`` is written
+    just beyond its tip, in the arrow's direction, with a white halo."""
     start = np.asarray(start, dtype=float)
-    end = start + np.asarray(vec, dtype=float)
-    ann = ax.annotate("", xy=end, xytext=start,
+    vec = np.asarray(vec, dtype=float)
+    end = start + vec
+    ann = ax.annotate("", xy=end, xytext=start, zorder=zorder,
                       arrowprops=dict(arrowstyle=f"-|>,head_length={head / 20:.2f},head_width={head / 40:.2f}",
                                       color=color, lw=lw, shrinkA=0, shrinkB=0))
     if gid:
         ann.set_gid(gid)
     if label:
-        t = ax.annotate(label, xy=end, xytext=(3, 3), textcoords="offset points", color=color,
-                        fontsize=font_pt() if fontsize is None else fontsize, fontweight="bold")
+        d = ax.transData.transform(end) - ax.transData.transform(start)
+        n = float(np.hypot(*d))
+        u = d / n if n > 1e-9 else np.array([1.0, 0.0])
+        t = ax.annotate(label, xy=end, xytext=(5 * u[0], 5 * u[1]), textcoords="offset points", color=color,
+                        fontsize=font_pt() if fontsize is None else fontsize, fontweight="bold", zorder=zorder + 1,
+                        ha="left" if u[0] > 0.3 else "right" if u[0] < -0.3 else "center",
+                        va="bottom" if u[1] > 0.3 else "top" if u[1] < -0.3 else "center",
+                        path_effects=halo(), annotation_clip=False)
         t.set_gid(f"{gid}:label" if gid else None)
     return ann
 
 
-# ---------------------------------------------------------------- lip shapes
-def front_view(points, dims: int, view=None) -> tuple[int, int, int | None]:
-    """Axes (horizontal, vertical, depth) of a front view of lip points (V, 3).
-
-    ``view`` may give them explicitly. 2-D data is drawn x–y. For 3-D data the
-    horizontal axis is the one with the widest spread of the points (mouth width),
-    the vertical the next (height) and depth the narrowest (protrusion).
-    """
-    if view is not None:
-        h, v = int(view[0]), int(view[1])
-        rest = [k for k in range(3) if k not in (h, v)]
-        return h, v, (rest[0] if dims == 3 else None)
-    if dims == 2:
-        return 0, 1, None
-    spread = np.ptp(np.asarray(points, dtype=np.float64), axis=0)
-    order = np.argsort(-spread, kind="stable")
-    return int(order[0]), int(order[1]), int(order[2])
+def reach_in_box(o, vec, lo, hi) -> float:
+    """How far from ``o`` along ``vec`` the box [lo, hi] extends (inf if unbounded or ``o`` is outside it)."""
+    o, vec = np.asarray(o, float), np.asarray(vec, float)
+    if np.any(o < lo) or np.any(o > hi):
+        return float("inf")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(vec > 0, (hi - o) / vec, np.where(vec < 0, (lo - o) / vec, np.inf))
+    return float(np.min(t))
 
 
-def draw_shape(ax, points, *, dims, faces=None, values=None, norm=None, cmap=CMAP, color="#c86464",
-               view=None, size=None, gid=None):
-    """Draw one lip shape (V, 3) in front view on ``ax``.
-
-    With ``faces`` the mesh is drawn as painter-sorted, Lambert-shaded triangles
-    (viewer on the side of ``horizontal x vertical``); without, the points are a
-    scatter. ``values`` (V,) colour it through ``cmap``/``norm``; otherwise ``color``.
-    Returns the collection drawn.
-    """
-    P = np.asarray(points, dtype=np.float64)
-    h, v, dep = front_view(P, dims, view)
-    xy = P[:, [h, v]]
-    cols = _colours(values, norm, cmap)
-    if faces is not None and len(faces) and dep is not None:
-        F = np.asarray(faces)
-        tri = P[F]                                         # (T, 3, 3)
-        nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
-        view_dir = np.cross(np.eye(3)[h], np.eye(3)[v])   # towards the viewer
-        shade = 0.55 + 0.45 * np.abs(nrm @ view_dir)
-        depth = tri.mean(axis=1) @ view_dir
-        order = np.argsort(depth, kind="stable")          # far first
-        base = cols[F].mean(axis=1) if cols is not None else np.tile(to_rgba(color), (len(F), 1))
-        fc = base.copy()
-        fc[:, :3] *= shade[:, None]
-        pc = PolyCollection(tri[order][:, :, [h, v]], facecolors=fc[order], edgecolors="none",
-                            linewidths=0, antialiased=False, rasterized=rasterize_for(len(F)))
-        ax.add_collection(pc)
-        ax.update_datalim(xy)
-        ax.autoscale_view()
-        coll = pc
-    else:
-        s = size if size is not None else marker_size(len(P), big=30.0, small=2.0)
-        coll = ax.scatter(xy[:, 0], xy[:, 1], s=s, c=cols if cols is not None else color, linewidths=0,
-                          rasterized=rasterize_for(len(P)))
-    return _shape_panel(ax, coll, gid)
-
-
-def _colours(values, norm, cmap):
-    """RGBA (V, 4) of ``values`` through ``cmap`` / ``norm`` (their own range without one), or None."""
-    if values is None:
-        return None
-    norm = norm or Normalize(float(np.min(values)), float(np.max(values)) or 1.0)
-    return cmap(norm(np.asarray(values, dtype=np.float64)))
-
-
-def _shape_panel(ax, coll, gid):
-    """A lip-shape panel: equal aspect, no ticks or spines (a scale bar gives the size); ``coll`` gets ``gid``."""
-    ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
-    for sp in ax.spines.values():
-        sp.set_visible(False)
-    if gid:
-        coll.set_gid(gid)
-    return coll
-
-
-def talker_frame(manifold):
-    """The talker's frame of the manifold's corpus (:func:`engine.recordings.orientation.anatomical_frame`)."""
-    from engine.recordings.orientation import anatomical_frame
-
-    return anatomical_frame(manifold.corpus_, manifold.shape_.mean_)
-
-
-def shape_points(manifold, frame_row, frame=None) -> np.ndarray:
-    """One frame row (C,) as points (V, 3) in the talker's view coordinates (x the talker's left, y up, z
-    towards the viewer; 2-D: x forward, y up, z = 0), ``frame`` as :func:`talker_frame` gives it."""
-    from engine.recordings.corpus import frame_points
-
-    frame = talker_frame(manifold) if frame is None else frame
-    row = frame.view_frames(np.asarray(frame_row, np.float64)[None])[0]
-    return frame_points(row, manifold.corpus_.dims).astype(np.float64)
-
-
-def shape_view(manifold, view, frame=None):
-    """``view`` if given; else (0, 1), the front view of :func:`shape_points`, when the talker's frame is
-    known, and None (the widest spread) when it is not."""
-    if view is not None:
-        return view
-    frame = talker_frame(manifold) if frame is None else frame
-    return (0, 1) if frame.source != "none" else None
-
-
-def place_labels(ax, xy, labels, *, fontsize: float = 7.0, color="0.25", marker_pt: float = 7.0,
-                 radii_pt=(4.0, 8.0, 13.0, 19.0), placed_texts=None) -> int:
-    """Write ``labels`` beside the data points ``xy`` without any two labels overlapping.
-
-    Each label tries positions around its point (8 directions at growing distances,
-    north-east first) and takes the first whose box overlaps no label placed before it,
-    no other point's marker and stays inside the axes; failing that, the first that
-    overlaps no label and stays inside the figure. A label with no free place is left out.
-    Labels do not take part in the figure's layout, so the layout (and the checked places)
-    stay as computed here. ``placed_texts``: a list that receives the annotations drawn.
-
-    Parameters
-    ----------
-    ax : matplotlib Axes
-    xy : ndarray of shape (n, 2), data coordinates
-    labels : sequence of str, length n
-    marker_pt : float
-        Diameter of the points' markers in points (kept clear of labels).
-
-    Returns
-    -------
-    int
-        Number of labels left out.
-    """
-    from matplotlib.transforms import Bbox
-
-    fig = ax.figure
-    fig.draw_without_rendering()  # the final layout: positions below are in display units of it
-    renderer = fig.canvas.get_renderer()
-    xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-    disp = ax.transData.transform(xy)
-    half = 0.5 * marker_pt * fig.dpi / 72.0
-    markers = [Bbox.from_extents(x - half, y - half, x + half, y + half) for x, y in disp]
-    frame = ax.get_window_extent(renderer)
-    page = fig.bbox
-    angles = np.radians([45, 135, -45, -135, 0, 180, 90, -90])
-    placed, left_out = [], 0
-    for k, ((x, y), lab) in enumerate(zip(xy, labels)):
-        best = None
-        for strict in (True, False):
-            for r in radii_pt:
-                for a in angles:
-                    dx, dy = r * np.cos(a), r * np.sin(a)
-                    ha = "left" if dx > 0.5 else "right" if dx < -0.5 else "center"
-                    va = "bottom" if dy > 0.5 else "top" if dy < -0.5 else "center"
-                    t = ax.annotate(str(lab), xy=(x, y), xytext=(dx, dy), textcoords="offset points", ha=ha,
-                                    va=va, fontsize=fontsize, color=color, annotation_clip=False)
-                    t.set_in_layout(False)
-                    bb = t.get_window_extent(renderer)
-                    free = (not any(bb.overlaps(o) for o in placed) and page.contains(bb.x0, bb.y0)
-                            and page.contains(bb.x1, bb.y1))
-                    if strict:
-                        free = (free and not any(bb.overlaps(m) for j, m in enumerate(markers) if j != k)
-                                and frame.contains(bb.x0, bb.y0) and frame.contains(bb.x1, bb.y1))
-                    if free:
-                        best = (t, bb)
-                        break
-                    t.remove()
-                if best:
-                    break
-            if best:
-                break
-        if best is None:
-            left_out += 1
-            continue
-        placed.append(best[1])
-        if placed_texts is not None:
-            placed_texts.append(best[0])
-    return left_out
+def data_limits(ax, x, y, *, margin: float = 0.04):
+    """Set ``ax``'s limits to the data's range (``x``, ``y``) with ``margin`` of it on each side: an axis spans
+    what it shows, never an arrow's or a guide line's reach. The margin never carries an axis across zero:
+    data that are all >= 0 (a lip aperture) start at 0 at the lowest, all <= 0 end at 0 at the highest, so no
+    negative aperture is implied."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    for setter, v in ((ax.set_xlim, x), (ax.set_ylim, y)):
+        v = v[np.isfinite(v)]
+        lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
+        pad = margin * (hi - lo) if hi > lo else max(abs(hi), 1.0) * 0.05
+        a, b = lo - pad, hi + pad
+        if lo >= 0 > a:
+            a = 0.0
+        if hi <= 0 < b:
+            b = 0.0
+        setter(a, b)
 
 
 # ---------------------------------------------------------------- journal layout helpers
@@ -489,77 +354,3 @@ def nice_length(span: float) -> float:
         if m * 10 ** k <= target:
             return float(m * 10 ** k)
     return float(10 ** k)
-
-
-def scale_bar(ax, unit: str, *, length=None, gid=None):
-    """A horizontal scale bar in the lower left of a lip-shape panel, labelled with its length and ``unit``.
-
-    Call after the panel's limits are final. Returns the bar's Line2D.
-    """
-    x0, x1 = ax.get_xlim()
-    y0, y1 = ax.get_ylim()
-    L = nice_length(x1 - x0) if length is None else float(length)
-    bx, by = x0 + 0.06 * (x1 - x0), y0 + 0.06 * (y1 - y0)
-    line, = ax.plot([bx, bx + L], [by, by], color="0.15", lw=1.2, solid_capstyle="butt")
-    t = ax.annotate(f"{L:g} {unit}", xy=(bx + L / 2, by), xytext=(0, 1.5), textcoords="offset points", ha="center",
-                    va="bottom", fontsize=font_pt(-1), color="0.15")
-    if gid:
-        line.set_gid(gid)
-        t.set_gid(f"{gid}:label")
-    return line
-
-
-def fit_contour(manifold, frame=None):
-    """A :class:`engine.recordings.lipcontour.LipContour` fitted on the mean shape in view coordinates, for sparse lip
-    markers with roles (3-D, no faces); None otherwise (meshes are drawn as meshes)."""
-    c = manifold.corpus_
-    if c.faces is not None or c.point_roles is None or c.dims != 3:
-        return None
-    from engine.recordings.lipcontour import LipContour
-
-    try:
-        return LipContour(n_samples=64).fit(shape_points(manifold, manifold.shape_.mean_, frame), c.point_roles)
-    except ValueError:
-        return None
-
-
-def draw_lips(ax, points, *, dims, faces=None, contour=None, values=None, norm=None, cmap=CMAP, color="#c86464",
-              view=None, gid=None):
-    """One lip shape (V, 3, view coordinates) on ``ax``: a mesh, sparse markers on their lip contour (a closed
-    outline through them, lightly filled, the sensors as dots on it), or bare points.
-
-    Returns the collection of the drawn points (sensors) or triangles, with ``gid``.
-    """
-    if contour is None or faces is not None:
-        return draw_shape(ax, points, dims=dims, faces=faces, values=values, norm=norm, cmap=cmap, color=color,
-                          view=view, gid=gid)
-    h, v = (0, 1) if view is None else (int(view[0]), int(view[1]))
-    C = contour.contour(np.asarray(points, np.float64))
-    loop = np.vstack([C[:, [h, v]], C[:1, [h, v]]])
-    ax.fill(loop[:, 0], loop[:, 1], color=color, alpha=0.22, lw=0, zorder=1)
-    outline, = ax.plot(loop[:, 0], loop[:, 1], color=color, lw=1.4, zorder=2)
-    if gid:
-        outline.set_gid(f"{gid}:contour")
-    P = np.asarray(points, np.float64)
-    cols = _colours(values, norm, cmap)
-    coll = ax.scatter(P[:, h], P[:, v], s=14, c=cols if cols is not None else color, edgecolors="0.2",
-                      linewidths=0.4, zorder=3)
-    ax.update_datalim(loop)
-    return _shape_panel(ax, coll, gid)
-
-
-def shared_limits(axs, shapes, *, contour=None, view=None, margin=0.15, below=0.0):
-    """Equal limits on every panel of ``axs`` holding all ``shapes`` (list of (V, 3) view points; their contours
-    too) with ``margin`` of the larger extent on every side, so no shape touches a panel's edge, and ``below``
-    of it more at the bottom (room for a :func:`scale_bar`)."""
-    h, v = (0, 1) if view is None else (int(view[0]), int(view[1]))
-    pts = [np.asarray(P, np.float64)[:, [h, v]] for P in shapes]
-    if contour is not None:
-        pts += [contour.contour(np.asarray(P, np.float64))[:, [h, v]] for P in shapes]
-    allp = np.concatenate(pts)
-    lo, hi = allp.min(axis=0), allp.max(axis=0)
-    span = float(max(np.ptp(allp, axis=0).max(), 1e-9))
-    pad = margin * span
-    for ax in axs:
-        ax.set_xlim(lo[0] - pad, hi[0] + pad)
-        ax.set_ylim(lo[1] - pad - below * span, hi[1] + pad)

@@ -12,18 +12,22 @@ surfaces (the lips) as Gouraud triangles shaded from their vertex normals, as on
 Layered renderers (the manifold view's overlay) are drawn after the main one, as on
 screen.
 
-The result is a :class:`matplotlib.figure.Figure` the size of the view (at 100 dpi),
-saved by :func:`app.figures.export.save_plotter_vector` as SVG or PDF.
+The result is a :class:`matplotlib.figure.Figure` the width of a journal column (or any
+width: as on screen, the view's pixels at :data:`SCREEN_DPI`), the view's proportions kept,
+its text at the journal's sizes (:func:`app.figures.style.journal_rc`, never below 6 pt):
+PNG, SVG and PDF are all written from it (:mod:`app.figures.view_export`), so they carry
+the same labels as the screen. Translucent flat surfaces (the zero-velocity plane) are one
+filled outline, not polygons side by side, whose overlapping edges would print as a grid.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from app.figures.style import SCREEN_DPI, font_pt
 from app.scene.projection import project, view_transform
 
 __all__ = ["scene_figure"]
 
-DPI = 100.0
 
 
 def _matrix(actor) -> np.ndarray:
@@ -107,7 +111,8 @@ def _actor_primitives(actor, M, size, view_dir):
             # smooth-shaded opaque surfaces (the lips) are drawn as Gouraud triangles: flat facets
             # showed where the window shows a smooth surface; see-through ones stay flat polygons
             smooth = prop.GetInterpolation() != 0 and base[3] >= 1.0 and (per_point is None or col[:, 3].min() >= 1.0)
-            edges = bool(prop.GetEdgeVisibility())
+            # edges as the screen shows them: on opaque surfaces (a see-through one shows none)
+            edges = bool(prop.GetEdgeVisibility()) and base[3] >= 1.0
             edge_col = np.array([*prop.GetEdgeColor(), base[3]])
             tri3 = [ids for ids in tri if len(ids) == 3]
             other = [ids for ids in tri if len(ids) != 3]
@@ -167,7 +172,8 @@ def _gouraud_artist(verts, colours, zorder):
     return a
 
 
-def _draw(ax, prims, zbase):
+def _draw(ax, prims, zbase, pt):
+    """Draw ``prims`` on ``ax`` from z-order ``zbase``; ``pt``: points per screen pixel (markers, lines)."""
     from matplotlib.collections import LineCollection, PolyCollection
 
     z = zbase
@@ -176,11 +182,11 @@ def _draw(ax, prims, zbase):
         if kind == "points":
             _, xy, depth, col, size = prim
             order = np.argsort(-depth)  # far first
-            s = (max(size, 1.0) * 72.0 / DPI) ** 2
+            s = (max(size, 1.0) * pt) ** 2
             ax.scatter(xy[order, 0], xy[order, 1], s=s, c=col[order], marker="o", linewidths=0, zorder=z)
         elif kind == "line":
             _, xy, depth, col, width = prim
-            ax.add_collection(LineCollection([xy], colors=[col], linewidths=max(width, 0.5) * 72.0 / DPI,
+            ax.add_collection(LineCollection([xy], colors=[col], linewidths=max(width, 0.5) * pt,
                                              capstyle="round", joinstyle="round", zorder=z))
         elif kind == "gouraud":
             _, tris, depth, vcol = prim
@@ -189,9 +195,19 @@ def _draw(ax, prims, zbase):
         else:
             _, faces, depth, fcol, edge = prim
             order = np.argsort(-depth)
+            if edge is None and len(faces) > 1 and fcol[:, 3].max() < 1.0 and np.ptp(fcol, axis=0).max() < 1e-3:
+                # one see-through colour (the zero-velocity plane): one outline filled once; polygons side by
+                # side would overlap their edges and print as a grid that is not on screen
+                from matplotlib.patches import PathPatch
+                from matplotlib.path import Path
+
+                path = Path.make_compound_path(*[Path(np.vstack([f, f[:1]]), closed=True) for f in faces])
+                ax.add_patch(PathPatch(path, facecolor=fcol[0], edgecolor="none", lw=0, zorder=z))
+                z += 1
+                continue
             pc = PolyCollection([faces[k] for k in order], facecolors=fcol[order], zorder=z,
                                 edgecolors=[edge] if edge is not None else fcol[order],
-                                linewidths=0.4 if edge is not None else 0.25)
+                                linewidths=0.4 * pt if edge is not None else 0.25 * pt)
             ax.add_collection(pc)
         z += 1
     return z
@@ -214,29 +230,121 @@ def _scalar_bar(fig, bar, size):
         labels = bar.GetCustomLabels()
         ticks = [labels.GetValue(k) for k in range(labels.GetNumberOfTuples())]
         norm = BoundaryNorm(np.linspace(lo, hi, n + 1), n)
-    else:
-        ticks = None
+        texts = [f"{t:.0f}" for t in ticks]
+    else:  # the labels the screen shows: evenly spaced from the lowest to the highest, in the bar's format
+        ticks = list(np.linspace(lo, hi, max(bar.GetNumberOfLabels(), 2)))
         norm = Normalize(lo, hi)
+        texts = [_printf(bar.GetLabelFormat() or "%-#6.3g", t) for t in ticks]
     cb = ColorbarBase(cax, cmap=cmap, norm=norm, ticks=ticks, orientation="vertical")
     if cb.solids is not None:
         cb.solids.set_rasterized(False)  # matplotlib rasterises bars of 50+ colours: keep them vector
-    if ticks is not None:
-        cb.set_ticklabels([f"{t:.0f}" for t in ticks])
-    cb.ax.tick_params(labelsize=8)
+    cb.set_ticklabels(texts)
+    cb.ax.tick_params(labelsize=font_pt(-1), width=0.5, length=2)
     # right-aligned over the bar: the bar sits at the view's right edge, a title running right would be cut
-    cax.set_title(bar.GetTitle() or "", fontsize=9, pad=8, loc="right")
+    cax.set_title(bar.GetTitle() or "", fontsize=font_pt(-1), pad=4, loc="right")
     return cax
 
 
-def _legend(ax, legend):
+def _inside(fig, cax) -> None:
+    """Move the colour bar's axes ``cax`` (with its labels and title) back inside the figure where they stick out."""
+    fig.draw_without_rendering()
+    r = fig.canvas.get_renderer()
+    bb = cax.get_tightbbox(r)
+    page = fig.bbox
+    dx = min(0.0, page.x1 - 2.0 - bb.x1) + max(0.0, page.x0 + 2.0 - bb.x0)
+    dy = min(0.0, page.y1 - 2.0 - bb.y1) + max(0.0, page.y0 + 2.0 - bb.y0)
+    if dx or dy:
+        pos = cax.get_position()
+        cax.set_position([pos.x0 + dx / page.width, pos.y0 + dy / page.height, pos.width, pos.height])
+
+
+def _printf(fmt: str, value: float) -> str:
+    """``value`` in a C printf format as VTK writes its labels (``"%-#6.3g"``), without padding."""
+    try:
+        return (fmt % value).strip()
+    except (TypeError, ValueError):
+        return f"{value:.3g}"
+
+
+#: a legend box's symbol (app.scene.legend.SYMBOLS) as a matplotlib legend handle's style
+_HANDLE_STYLE = {"circle": {"ls": "none", "marker": "o"}, "square": {"ls": "none", "marker": "s"},
+                 "line": {"ls": "-", "marker": ">", "markevery": [1]}, "arrow": {"ls": "-", "marker": ">", "lw": 0.6,
+                                                                             "markevery": [1]},
+                 "ring": {"ls": "none", "marker": "o", "mfc": "none"}}
+
+
+def _entry(legend, k):
+    """Entry ``k`` of a vtkLegendBoxActor: (text, symbol colour, symbol name). The colour is the symbol's own
+    (its ``rgb`` point scalars, :mod:`app.scene.legend`), else the entry's colour; the name is the symbol's tag."""
+    symbol = legend.GetEntrySymbol(k)
+    colour, kind = legend.GetEntryColor(k), "circle"
+    if symbol is not None:
+        pd = symbol.GetPointData().GetArray("rgb")
+        if pd is not None and pd.GetNumberOfTuples():
+            colour = tuple(c / 255.0 for c in pd.GetTuple(0)[:3])
+        tag = symbol.GetFieldData().GetAbstractArray("symbol")
+        if tag is not None and tag.GetNumberOfValues():
+            kind = str(tag.GetValue(0))
+    return legend.GetEntryString(k), tuple(colour), kind
+
+
+def _handles(legend) -> list:
+    """A vtkLegendBoxActor's entries as matplotlib legend handles: each symbol (a marker, a line or an arrow)
+    in its colour."""
     from matplotlib.lines import Line2D
 
-    handles = []
+    out = []
     for k in range(legend.GetNumberOfEntries()):
-        handles.append(Line2D([], [], ls="none", marker="o", ms=6, color=legend.GetEntryColor(k),
-                              label=legend.GetEntryString(k)))
-    if handles:
-        ax.legend(handles=handles, loc="lower left", fontsize=8, frameon=False)
+        text, colour, kind = _entry(legend, k)
+        style = dict(_HANDLE_STYLE.get(kind, _HANDLE_STYLE["circle"]))
+        out.append(Line2D([0, 1], [0, 0], color=colour, ms=4, label=text, **style))
+    return out
+
+
+def _legend(ax, legend):
+    """A vtkLegendBoxActor as a matplotlib legend in the same corner of the view, on the same translucent
+    white box (the view as on screen)."""
+    from matplotlib.legend import Legend
+
+    handles = _handles(legend)
+    if not handles:
+        return None
+    x, y = legend.GetPosition()
+    w, h = legend.GetPosition2()
+    top, right = y + h / 2 > 0.5, x + w / 2 > 0.5
+    loc = f"{'upper' if top else 'lower'} {'right' if right else 'left'}"
+    anchor = (x + w if right else x, y + h if top else y)
+    leg = Legend(ax, handles, [hd.get_label() for hd in handles], loc=loc, bbox_to_anchor=anchor,
+                 bbox_transform=ax.transAxes, fontsize=font_pt(-1), frameon=True, framealpha=0.85,
+                 borderaxespad=0.0, handlelength=1.6, labelspacing=0.3, borderpad=0.3)
+    leg.get_frame().set_edgecolor("none")
+    leg.set_zorder(1000)
+    ax.add_artist(leg)  # one artist per legend box: a second box must not replace the first
+    return leg
+
+
+def _legend_below(fig, boxes) -> None:
+    """Every legend box's entries in one legend below the view (a journal width: the screen's corner boxes,
+    at print text sizes, would cover a third of the view): the figure grows by the legend's height and
+    every axes keeps its size in inches."""
+    handles = [hd for b in boxes for hd in _handles(b)]
+    if not handles:
+        return
+    from app.figures.style import one_column
+
+    W, H0 = fig.get_size_inches()
+    leg = fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=2 if one_column(W) else 3,
+                     fontsize=font_pt(-1), frameon=False, handlelength=1.6, labelspacing=0.3, columnspacing=1.2,
+                     borderaxespad=0.0)
+    leg.set_gid("view:legend")
+    fig.draw_without_rendering()
+    strip = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.06  # inches
+    H = H0 + strip
+    for a in fig.axes:
+        p = a.get_position()
+        a.set_position([p.x0, (p.y0 * H0 + strip) / H, p.width, p.height * H0 / H])
+    fig.set_size_inches(W, H)
+    leg.set_bbox_to_anchor((0.5, (strip - 0.03) / H), transform=fig.transFigure)
 
 
 def _labels_2d(ax, actor, M, size, z):
@@ -252,17 +360,22 @@ def _labels_2d(ax, actor, M, size, z):
         if src is None or name not in src.point_data:
             return
         xy, _ = project(np.asarray(src.points, dtype=np.float64), M, size)
+        prop = alg.GetTextProperty() if hasattr(alg, "GetTextProperty") else None
+        colour = prop.GetColor() if prop is not None else (0, 0, 0)
+        # justified as on screen: a label's text runs away from what it names
+        ha = {"Left": "left", "Right": "right"}.get(prop.GetJustificationAsString() if prop else "", "center")
+        va = {"Bottom": "bottom", "Top": "top"}.get(prop.GetVerticalJustificationAsString() if prop else "", "center")
         for (x, y), text in zip(xy, src.point_data[name]):
-            ax.text(x, y, str(text), fontsize=11, ha="center", va="center", zorder=z)
+            ax.text(x, y, str(text), fontsize=font_pt(), ha=ha, va=va, zorder=z, color=colour)
     elif hasattr(actor, "GetInput") and hasattr(actor, "GetTextProperty"):  # vtkTextActor
         text = actor.GetInput()
         if text:
             pos = actor.GetPosition()
-            ax.text(pos[0], pos[1], text, fontsize=actor.GetTextProperty().GetFontSize() * 0.75,
-                    ha="left", va="bottom", zorder=z, color=actor.GetTextProperty().GetColor())
+            ax.text(pos[0], pos[1], text, fontsize=font_pt(-1), ha="left", va="bottom", zorder=z,
+                    color=actor.GetTextProperty().GetColor())
 
 
-def scene_figure(plotter, *, title: str | None = None):
+def scene_figure(plotter, *, title: str | None = None, width: float | None = None):
     """A matplotlib Figure drawing ``plotter``'s current view as vector primitives.
 
     Parameters
@@ -270,23 +383,41 @@ def scene_figure(plotter, *, title: str | None = None):
     plotter : pyvista plotter (open; its camera as shown)
     title : str, optional
         Drawn at the top, above everything else.
+    width : float, optional
+        Width in inches (85 mm: one journal column); the view keeps its proportions and the
+        view's legend boxes go into one legend below it (the figure grows by its height).
+        Default: as on screen (the view's pixels at :data:`SCREEN_DPI`, each legend box in its
+        corner).
 
     Returns
     -------
     matplotlib.figure.Figure
-        Sized as the view (``window pixels / 100`` inches); its ``lipspace`` dict holds
-        ``n_points`` (markers drawn), ``n_polygons`` and ``n_lines``.
+        Its ``lipspace`` dict holds ``n_points`` (markers drawn), ``n_polygons``, ``n_lines``,
+        ``texts`` (every label drawn: the view's own, as on screen) and ``width_mm``.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+    from matplotlib import rc_context
 
-    main = plotter.renderer
+    from app.figures.style import journal_rc
+
     M, size = view_transform(plotter)
     w, h = size
     if w < 2 or h < 2:
         raise ValueError(f"the 3-D view is {w}x{h} pixels on screen; show it (open its dock) before exporting it")
-    fig = Figure(figsize=(w / DPI, h / DPI), dpi=DPI)
+    journal_width = width is not None
+    width = w / SCREEN_DPI if width is None else float(width)
+    with rc_context(journal_rc(width)):
+        return _scene_figure(plotter, M, size, title, width, below=journal_width)
+
+
+def _scene_figure(plotter, M, size, title, width, *, below=False):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    main = plotter.renderer
+    w, h = size
+    fig = Figure(figsize=(width, width * h / w), dpi=100)
     FigureCanvasAgg(fig)
+    pt = width * 72.0 / w  # points per screen pixel
     bg = main.GetBackground()
     fig.patch.set_facecolor(bg)
     ax = fig.add_axes([0, 0, 1, 1])
@@ -324,7 +455,8 @@ def scene_figure(plotter, *, title: str | None = None):
                     counts["n_lines"] += 1
                 else:
                     counts["n_polygons"] += len(p[1])
-            z = _draw(ax, prims, z)
+            z = _draw(ax, prims, z, pt)
+    bars, boxes = [], []
     for ren in renderers:
         props = ren.GetViewProps()
         props.InitTraversal()
@@ -334,12 +466,23 @@ def scene_figure(plotter, *, title: str | None = None):
                 continue
             cls = type(a).__name__
             if cls == "vtkScalarBarActor":
-                _scalar_bar(fig, a, size)
+                bars.append(_scalar_bar(fig, a, size))
             elif cls == "vtkLegendBoxActor":
-                _legend(ax, a)
+                boxes.append(a)
             else:
                 _labels_2d(ax, a, M, size, z + 1)
+    if below:
+        _legend_below(fig, boxes)
+    else:
+        for b in boxes:
+            _legend(ax, b)
     if title:
-        fig.suptitle(title, fontsize=11, y=0.985, va="top")
+        fig.suptitle(title, fontsize=font_pt(1), y=0.985, va="top")
+    for cax in bars:  # at a journal width the bar's labels are larger against the view: keep them on the page
+        _inside(fig, cax)
+    from matplotlib.text import Text
+
+    counts["texts"] = [t.get_text() for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip()]
+    counts["width_mm"] = width * 25.4
     fig.lipspace = counts
     return fig

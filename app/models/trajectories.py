@@ -144,7 +144,9 @@ def synthesize_targets(manifold, targets, method: str, synthesizers: dict | None
     data = TrajectoryData(Y=np.asarray(Y, np.float32), Fx=np.asarray(traj.Fx, np.float32), frames=None,
                           label=METHOD_LABELS.get(method, method).split(" (")[0], rate=float(targets.rate),
                           extra={"method": method, "method_note": note, "warnings": list(traj.warnings),
-                                 "target_frames": np.asarray(traj.target_frames)})
+                                 "target_frames": np.asarray(traj.target_frames),
+                                 # what the exports put on the timeline (app.export.trajectory)
+                                 "targets": targets, "trajectory": traj})
     return data, traj
 
 

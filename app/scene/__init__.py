@@ -5,7 +5,7 @@ positions, visibility) instead of re-adding actors on every click. Tests pass
 ``pyvista.Plotter(off_screen=True)``; the explorer passes its ``QtInteractor``.
 """
 from app.scene.handles import Handle
-from app.scene.lips import ContourHandle, LipsHandle, add_lip_contour, add_lips, lip_mesh
+from app.scene.lips import LipsHandle, add_lips, lip_mesh
 from app.scene.manifold import (
                                 ORIGINAL_COLOUR,
                                 PATH_COLOUR,
@@ -29,8 +29,9 @@ from app.scene.manifold import (
                                 to_rgb8,
 )
 from app.scene.pick import ClickPicker, enable_click_picking, pick_display_point
+from app.scene.sensors import SensorsHandle, add_sensors
 
-__all__ = ["Handle", "PointsHandle", "LipsHandle", "ContourHandle", "add_lip_contour", "ClickPicker",
+__all__ = ["Handle", "PointsHandle", "LipsHandle", "SensorsHandle", "add_sensors", "ClickPicker",
            "add_manifold_points", "add_zero_velocity_plane",
            "add_global_axes", "label_zoom", "add_local_frame", "add_trajectory", "add_cluster_ellipsoids", "add_state_path",
            "add_marker", "add_point_markers", "add_lips", "lip_mesh", "enable_click_picking", "pick_display_point",

@@ -59,6 +59,7 @@ def _face(symbol: str):
             n = len(a)
             quads = [[4, i, (i + 1) % n, n + (i + 1) % n, n + i] for i in range(n)]
             face = pv.PolyData(pts, faces=np.ravel(quads)).triangulate()
+        face.field_data["symbol"] = [symbol]  # what a figure redraws it as (app.figures.view_vector)
         _FACES[symbol] = face
     return _FACES[symbol]
 

@@ -1,8 +1,10 @@
-"""The lip view's geometry: a mesh over the corpus faces, or sparse markers as a lip contour.
+"""The lip view's geometry: a measured surface over the corpus faces, or the sensors as sensors.
 
-With no faces and 3 to 20 lip points (by their roles), the markers are drawn as lips:
-a tube along the interpolated outer lip contour (:class:`engine.recordings.lipcontour.LipContour`),
-the markers as spheres and a label per sensor; otherwise as bare spheres.
+What is drawn follows :class:`app.models.lip_drawing.LipDrawing` (the figures follow it too): a
+corpus with faces (a mesh sequence, FaceMesh landmarks tracked in a video, the synthetic
+talker's lip model) is that surface, smooth-shaded, with the lip aperture over it when the
+point roles give it; sensors are spheres joined by straight lines with labels and the aperture
+(:mod:`app.scene.sensors`). Nothing is interpolated between sensors.
 """
 from __future__ import annotations
 
@@ -10,20 +12,9 @@ import numpy as np
 import pyvista as pv
 
 from app.scene.handles import Handle
+from app.scene.sensors import add_sensors, as_points
 
-__all__ = ["lip_mesh", "point_normals", "LipsHandle", "ContourHandle", "add_lips", "add_lip_contour", "lip_colours", "SKIN",
-           "mouth_interior", "MOUTH"]
-
-
-def _points(points):
-    P = np.array(points, dtype=np.float32)  # a copy: meshes must not share the caller's memory
-    if P.ndim == 1:
-        if P.size % 3:
-            raise ValueError(f"a flat frame must hold 3 coordinates per point, got {P.size} values")
-        P = P.reshape(-1, 3)
-    if P.ndim != 2 or P.shape[1] != 3 or len(P) == 0:
-        raise ValueError(f"lip points must have shape (V, 3) with V > 0, got {P.shape}")
-    return np.ascontiguousarray(P)
+__all__ = ["lip_mesh", "point_normals", "LipsHandle", "add_lips", "lip_colours", "SKIN", "mouth_interior", "MOUTH"]
 
 
 def lip_mesh(points, faces=None) -> pv.PolyData:
@@ -34,7 +25,7 @@ def lip_mesh(points, faces=None) -> pv.PolyData:
     points : ndarray of shape (V, 3) (or a flat frame of 3V values)
     faces : ndarray of shape (F, 3) int or None
     """
-    P = _points(points)
+    P = as_points(points)
     if faces is None or len(faces) == 0:
         return pv.PolyData(P)
     Fc = np.asarray(faces, dtype=np.int64)
@@ -77,13 +68,15 @@ class LipsHandle(Handle):
 
     ``offset`` (3,) is added to every frame (to show two trajectories side by side).
     ``extras``: further actors shown, hidden and removed with the lips (the mouth's dark
-    interior behind a synthetic lip mesh).
+    interior behind a synthetic lip mesh). ``overlay``: a :class:`app.scene.sensors.SensorsHandle`
+    moved with the lips (the aperture over a measured surface), or None.
     """
 
-    def __init__(self, plotter, mesh, actor, offset, extras=()):
+    def __init__(self, plotter, mesh, actor, offset, extras=(), overlay=None):
         super().__init__(plotter, mesh, actor)
         self.offset = np.asarray(offset, np.float32)
         self.extras = tuple(extras)
+        self.overlay = overlay
         # the triangles as VTK's normals filter left them (consistently ordered), for the
         # per-frame normals in numpy (vtkPolyDataNormals through pyvista: ~1.6 ms a frame)
         cells = np.asarray(mesh.faces) if mesh.n_cells else np.zeros(0, np.int64)
@@ -94,14 +87,22 @@ class LipsHandle(Handle):
         super().set_visible(visible)
         for a in self.extras:
             a.SetVisibility(bool(visible))
+        if self.overlay is not None:
+            self.overlay.set_visible(visible)
+
+    def set_colour(self, color) -> None:
+        """The surface's (or markers') colour."""
+        self.actor.prop.color = color
 
     def remove(self) -> None:
         super().remove()
         for a in self.extras:
             self.plotter.remove_actor(a, render=False)
+        if self.overlay is not None:
+            self.overlay.remove()
 
     def update(self, points) -> None:
-        P = _points(points)
+        P = as_points(points)
         if P.shape[0] != self.mesh.n_points:
             raise ValueError(f"frame has {P.shape[0]} points, the mesh has {self.mesh.n_points}")
         self.mesh.points[:] = P + self.offset
@@ -113,152 +114,66 @@ class LipsHandle(Handle):
                 del self.mesh.point_data["Normals"]
                 self.mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
         self.mesh.Modified()
+        if self.overlay is not None:
+            self.overlay.update(P)
 
     @property
     def points(self) -> np.ndarray:
         return np.asarray(self.mesh.points) - self.offset
 
 
-class ContourHandle(LipsHandle):
-    """Sparse lip markers drawn as a contour tube, sphere markers and sensor labels, moved frame by frame.
-
-    ``mesh`` is the tube; ``markers`` the markers' PolyData; ``contour`` the fitted
-    :class:`engine.recordings.lipcontour.LipContour`; ``labels`` the label actor (or None).
-    """
-
-    def __init__(self, plotter, mesh, actor, offset, contour, markers, marker_actor, labels, label_points):
-        super().__init__(plotter, mesh, actor, offset)
-        self.contour = contour
-        self.markers, self.marker_actor = markers, marker_actor
-        self.labels, self.label_points = labels, label_points
-        self._n = markers.n_points
-
-    def update(self, points) -> None:
-        P = _points(points)
-        if P.shape[0] != self._n:
-            raise ValueError(f"frame has {P.shape[0]} points, the lip markers are {self._n}")
-        self.mesh.points[:] = self.contour.transform(P) + self.offset
-        # the tube's triangles as add_lip_contour's normals filter ordered them: VTK's normals, in numpy
-        self.mesh.point_data["Normals"][:] = point_normals(self.mesh.points, self._triangles)
-        self.mesh.Modified()
-        self.markers.points[:] = P + self.offset
-        self.markers.Modified()
-        if self.label_points is not None:
-            self.label_points.points[:] = P + self.offset
-            self.label_points.Modified()
-
-    @property
-    def points(self) -> np.ndarray:
-        return np.asarray(self.markers.points) - self.offset
-
-    def set_visible(self, visible: bool) -> None:
-        for a in (self.actor, self.marker_actor, self.labels):
-            if a is not None:
-                a.SetVisibility(bool(visible))
-
-    def remove(self) -> None:
-        for a in (self.actor, self.marker_actor, self.labels):
-            if a is not None:
-                self.plotter.remove_actor(a, render=False)
-
-
-def add_lip_contour(plotter, points, roles=None, names=None, *, color=(0.85, 0.45, 0.45), offset=(0.0, 0.0, 0.0),
-                    point_size: float = 10.0, name: str = "lips", labels: bool = True,
-                    reference=None) -> ContourHandle:
-    """Draw sparse lip markers as lips: contour tube + spheres + sensor labels.
-
-    Parameters
-    ----------
-    plotter : any pyvista plotter
-    points : ndarray of shape (V, 3)
-        The frame drawn.
-    roles : sequence of str or None
-        Point roles (``Corpus.point_roles``); lip roles form the contour, others are
-        drawn as markers only. None: every point is on the contour.
-    names : sequence of str or None
-        Sensor names for the labels.
-    reference : ndarray of shape (V, 3), optional
-        Frame that fixes the contour's point order (default: ``points``; pass the mean frame).
-
-    Raises
-    ------
-    ValueError
-        When the points cannot form a contour (fewer than 3 or more than 20 lip points).
-    """
-    from engine.recordings.lipcontour import LipContour
-
-    P = _points(points)
-    off = np.asarray(offset, np.float32)
-    contour = LipContour().fit(_points(reference) if reference is not None else P, roles)
-    tube = pv.PolyData(contour.transform(P) + off,
-                       np.hstack([np.full((len(contour.faces_), 1), 3, np.int64), contour.faces_]).ravel())
-    tube.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
-    # Phong over the tube's own normals, without pyvista's per-render smooth-shading filter (see add_lips)
-    actor = plotter.add_mesh(tube, color=color, specular=0.3, name=name, pickable=False, reset_camera=False,
-                             render=False)
-    actor.prop.interpolation = "phong"
-    markers = pv.PolyData(P + off)
-    marker_actor = plotter.add_mesh(markers, color=(0.15, 0.15, 0.15), point_size=point_size,
-                                    render_points_as_spheres=True, name=f"{name}_markers", pickable=False,
-                                    reset_camera=False, render=False)
-    label_actor, label_points = None, None
-    if labels and names is not None:
-        label_points = pv.PolyData(P + off)
-        label_actor = plotter.add_point_labels(label_points, [str(n) for n in names], font_size=12,
-                                               point_size=1, shape_opacity=0.4, name=f"{name}_labels",
-                                               always_visible=True, render=False, reset_camera=False)
-    return ContourHandle(plotter, tube, actor, off, contour, markers, marker_actor, label_actor, label_points)
-
-
 def add_lips(plotter, points, faces=None, *, color=(0.85, 0.45, 0.45), offset=(0.0, 0.0, 0.0),
-             point_size: float = 8.0, name: str = "lips", roles=None, names=None) -> LipsHandle:
-    """Draw one lip frame; returns a handle whose :meth:`LipsHandle.update` moves it.
+             point_size: float = 8.0, name: str = "lips", names=None, drawing=None, labels: bool = True):
+    """Draw one lip frame; returns a handle whose ``update(points)`` moves it.
 
-    Without ``faces``, markers with roles (or names) that can form a lip contour are
-    drawn as one (:func:`add_lip_contour`); otherwise as spheres. A mesh is smooth-shaded;
-    with the synthetic lip model's point names its vermilion takes ``color``, the skin
-    around it a skin tone (:func:`lip_colours`), and a dark mouth interior is drawn behind
-    it (:func:`mouth_interior`).
+    With a ``drawing`` (:func:`app.models.lip_drawing.lip_drawing` of the corpus) its sensors are
+    drawn as sensors (:func:`app.scene.sensors.add_sensors`: spheres, straight lines, labels when
+    ``labels``, the aperture) and a measured surface as a surface with the aperture over it.
+    Without one: a mesh over ``faces``, or bare spheres. A mesh is smooth-shaded; with the
+    synthetic lip model's point names (``names``) its vermilion takes ``color``, the skin around it
+    a skin tone (:func:`lip_colours`), and a dark mouth interior is drawn behind it
+    (:func:`mouth_interior`).
     """
-    if (faces is None or len(faces) == 0) and (roles is not None or names is not None):
-        try:
-            return add_lip_contour(plotter, points, roles, names, color=color, offset=offset, name=name)
-        except ValueError:
-            pass  # not a lip marker set: spheres below
+    if drawing is not None and drawing.kind != "surface":
+        return add_sensors(plotter, drawing, points, color=color, offset=offset, name=name, labels=labels,
+                           point_size=max(point_size, 12.0) if drawing.kind == "sensors" else point_size)
     mesh = lip_mesh(points, faces)
     mesh.points[:] = mesh.points + np.asarray(offset, np.float32)
     if faces is None or len(faces) == 0:
         actor = plotter.add_mesh(mesh, color=color, point_size=point_size, render_points_as_spheres=True, name=name,
                                  pickable=False, reset_camera=False, render=False)
-    else:
-        # smooth (Gouraud) shading over point normals shared by the triangles around each
-        # point: no facets, and no per-triangle colour steps that show as seams in exports
-        mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
-        rgb = lip_colours(mesh.n_points, color, names)
-        extras = []
-        if rgb is not None:
-            mesh.point_data["lip_rgb"] = rgb
-            mesh.point_data.active_scalars_name = "lip_rgb"
-            extras.append(plotter.add_mesh(mouth_interior(np.asarray(mesh.points)), color=MOUTH, lighting=False,
-                                           name=f"{name}_interior", pickable=False, reset_camera=False,
-                                           render=False))
-        # the mesh goes to the mapper as it is: pyvista's smooth_shading=True and scalars= would put its
-        # Python smooth-shading and active-scalars filters in between, which re-run at every render of a
-        # moved frame (2.4 ms of a playback frame's two meshes) for the same picture. The mesh carries
-        # its own point normals (LipsHandle.update keeps them): Phong-shaded, as smooth_shading sets it.
-        # (coloured by the per-point RGB, the property keeps the colour pyvista gives a scalar-coloured
-        # mesh: it tints the specular highlight, as before)
-        actor = plotter.add_mesh(mesh, color=color if rgb is None else plotter.renderer.next_color, specular=0.25,
-                                 specular_power=12.0, name=name, pickable=False, reset_camera=False, render=False)
-        actor.prop.interpolation = "phong"
-        if rgb is not None:  # coloured by the per-point RGB itself, as scalars="lip_rgb", rgb=True did
-            mapper = actor.GetMapper()
-            mapper.SetScalarModeToUsePointData()
-            mapper.SetColorModeToDirectScalars()
-            mapper.SetArrayName("lip_rgb")
-            mapper.ScalarVisibilityOn()
-        return LipsHandle(plotter, mesh, actor, offset, extras)
-    return LipsHandle(plotter, mesh, actor, offset)
+        return LipsHandle(plotter, mesh, actor, offset)
+    # smooth (Gouraud) shading over point normals shared by the triangles around each
+    # point: no facets, and no per-triangle colour steps that show as seams in exports
+    mesh.compute_normals(cell_normals=False, split_vertices=False, inplace=True)
+    rgb = lip_colours(mesh.n_points, color, names)
+    extras = []
+    if rgb is not None:
+        mesh.point_data["lip_rgb"] = rgb
+        mesh.point_data.active_scalars_name = "lip_rgb"
+        extras.append(plotter.add_mesh(mouth_interior(np.asarray(mesh.points)), color=MOUTH, lighting=False,
+                                       name=f"{name}_interior", pickable=False, reset_camera=False,
+                                       render=False))
+    # the mesh goes to the mapper as it is: pyvista's smooth_shading=True and scalars= would put its
+    # Python smooth-shading and active-scalars filters in between, which re-run at every render of a
+    # moved frame (2.4 ms of a playback frame's two meshes) for the same picture. The mesh carries
+    # its own point normals (LipsHandle.update keeps them): Phong-shaded, as smooth_shading sets it.
+    # (coloured by the per-point RGB, the property keeps the colour pyvista gives a scalar-coloured
+    # mesh: it tints the specular highlight, as before)
+    actor = plotter.add_mesh(mesh, color=color if rgb is None else plotter.renderer.next_color, specular=0.25,
+                             specular_power=12.0, name=name, pickable=False, reset_camera=False, render=False)
+    actor.prop.interpolation = "phong"
+    if rgb is not None:  # coloured by the per-point RGB itself, as scalars="lip_rgb", rgb=True did
+        mapper = actor.GetMapper()
+        mapper.SetScalarModeToUsePointData()
+        mapper.SetColorModeToDirectScalars()
+        mapper.SetArrayName("lip_rgb")
+        mapper.ScalarVisibilityOn()
+    overlay = None
+    if drawing is not None and drawing.has_aperture:  # the aperture over the measured surface
+        overlay = add_sensors(plotter, drawing, points, offset=offset, name=f"{name}_overlay", labels=False,
+                              markers=False)
+    return LipsHandle(plotter, mesh, actor, offset, extras, overlay)
 
 
 #: colour of the mouth's interior seen through the lips' aperture

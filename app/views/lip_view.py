@@ -126,23 +126,43 @@ class LipView(QtWidgets.QWidget):
             self.renderer.request()
             return
         c = m.corpus_
+        from app.models.lip_drawing import lip_drawing
         from engine.recordings.orientation import anatomical_frame
 
         self.orientation = anatomical_frame(c, m.shape_.mean_)  # points drawn in the talker's frame, seen from the front
         mean = self._points(m.shape_.mean_)
+        # what is drawn: a measured surface as a surface, sensors as sensors (app.models.lip_drawing, as the figures)
+        self.drawing = lip_drawing(c, mean, frame=self.orientation)
         ext = mean.max(0) - mean.min(0)
-        self.offset = np.array([1.25 * max(float(ext[0]), 1e-6), 0.0, 0.0])
-        sensors = {"roles": c.point_roles, "names": c.point_names}  # sparse markers: a labelled lip contour
-        self.main = scene.add_lips(p, mean, c.faces, color=MAIN_COLOUR, name="lips_main", **sensors)
+        # side by side, with room between them for the sensors' labels (a profile is narrow: its own height)
+        room = 1.25 if self.drawing.kind == "surface" else 1.6
+        self.offset = np.array([room * max(float(ext[0]), float(ext[1]) if self.drawing.view == "profile" else 0.0,
+                                           1e-6), 0.0, 0.0])
+        self.main = scene.add_lips(p, mean, c.faces, color=MAIN_COLOUR, name="lips_main", names=c.point_names,
+                                   drawing=self.drawing)
         self.second = scene.add_lips(p, mean, c.faces, color=SYNTH_COLOUR, offset=self.offset, name="lips_second",
-                                     **sensors)
+                                     names=c.point_names, drawing=self.drawing, labels=False)
         self.second.set_visible(False)
         self._on_trajectories(render=False)
         # the lips face the viewer: the talker's frame puts forward on +z, up on +y, the talker's left on +x
         p.view_xy(render=False)
-        p.reset_camera(render=False)
+        self._frame_camera()
         p.camera_set = True
         self.refresh()
+
+    def _frame_camera(self) -> None:
+        """Frame the lips shown (one or both) with room for what stands beside the sensors: their labels,
+        the aperture's value, a profile's face direction."""
+        handles = [h for h in (self.main, self.second) if h is not None and h.visible]
+        if not handles:
+            self.plotter.reset_camera(render=False)
+            return
+        P = np.concatenate([np.asarray(h.points, np.float64) + np.asarray(h.offset, np.float64) for h in handles])
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        ext = float(np.ptp(P[:, :2], axis=0).max()) or 1.0
+        pad = (0.12 if self.drawing.kind == "surface" else 0.55) * ext
+        self.plotter.reset_camera(render=False, bounds=[lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad, lo[2],
+                                                        hi[2]])
 
     def _points(self, row) -> np.ndarray:
         """One frame row (C,) as points (V, 3) in the talker's view coordinates (engine.recordings.orientation)."""
@@ -202,11 +222,11 @@ class LipView(QtWidgets.QWidget):
         self.main.update(self._points(main))
         if second is not None:
             self.second.update(self._points(second))
-            self.second.actor.prop.color = second_colour
+            self.second.set_colour(second_colour)
         if self.second.visible != (second is not None):  # frame one mesh or both, once per change
             self.second.set_visible(second is not None)
-            self.plotter.reset_camera(render=False)
-        self.caption.setToolTip(text)  # the whole text where two lines are too few
+            self._frame_camera()
+        self.caption.setToolTip(f"{text}\n{self.drawing.note}")  # the whole text where two lines are too few
         if s.playing:  # readouts at a few per second: each of their repaints composes the window
             self._caption_readout(text)
             if slider is not None:

@@ -5,12 +5,13 @@ from pathlib import Path
 
 from PySide6 import QtCore, QtWidgets
 
+from app.views.export_dialog import FIGURE_FILTERS
+
 __all__ = ["ExportActions", "TRAJECTORY_FILTERS", "ANIMATION_FILTERS", "FIGURE_FILTERS"]
 
 #: File > Export dialogs' filters; the suffixes each writes are read from them (app.figures.export.filter_suffixes)
 TRAJECTORY_FILTERS = "CSV table (*.csv);;NumPy array (*.npy);;OBJ mesh sequence (*.obj);;PLY mesh sequence (*.ply)"
 ANIMATION_FILTERS = "glTF binary (*.glb);;glTF (*.gltf);;MP4 video (*.mp4)"
-FIGURE_FILTERS = "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)"
 
 
 class ExportActions:
@@ -20,14 +21,12 @@ class ExportActions:
         """The plotter of the ``"manifold"`` or ``"lips"`` view."""
         return {"manifold": self.manifold_view.plotter, "lips": self.lip_view.plotter}[which]
 
-    def export_view(self, which: str, path, *, dpi=None) -> Path:
-        """Save the manifold or lip view as PNG (at ``dpi``) or SVG/PDF (vector, from the scene's data)."""
-        from app.figures import save_plotter_image, save_plotter_vector
+    def export_view(self, which: str, path, *, width=None, dpi=None) -> Path:
+        """Save the manifold or lip view as PNG, SVG or PDF, all from one figure of the scene
+        (:func:`app.figures.view_export.export_view`; ``width`` inches, None: as on screen)."""
+        from app.figures.view_export import DEFAULT_DPI, export_view
 
-        plotter = self._view_plotter(which)
-        if Path(path).suffix.lower() == ".png":
-            return save_plotter_image(plotter, path, dpi=dpi)
-        return save_plotter_vector(plotter, path)
+        return export_view(self._view_plotter(which), path, width=width, dpi=dpi or DEFAULT_DPI)
 
     def _save_path(self, title: str, filters: str, start: str | None = None) -> Path | None:
         """Ask where to save (None: cancelled). A name typed without one of the suffixes ``filters``
@@ -39,44 +38,14 @@ class ExportActions:
         return suffix_from_filter(path, chosen, filter_suffixes(filters)) if path else None
 
     def export_view_dialog(self, which):
-        path = self._save_path(f"Export {which} view", FIGURE_FILTERS)
-        if path:
-            dpi = None
-            if path.suffix.lower() == ".png":
-                dpi, ok = QtWidgets.QInputDialog.getInt(self, "PNG resolution", "Dots per inch (96 = as on screen):",
-                                                        150, 30, 1200, 10)
-                if not ok:
-                    return
-                self._report(lambda: self.export_view(which, path, dpi=dpi), f"wrote {path}",
-                             f"export the {which} view")
-                return
-            # vector: the scene is read here (VTK, GUI thread); writing the file, most of the time, runs in a worker
-            from app.figures.export import save_vector_figure
-            from app.figures.view_vector import scene_figure
-            from app.user_messages import plain_errors
-            from app.workers import run_task
+        from app.views.export_dialog import export_view_dialog
 
-            fig = scene_figure(self._view_plotter(which))
-            run_task(plain_errors(lambda progress: save_vector_figure(fig, path), doing=f"export the {which} view"),
-                     parent=self, title=f"Writing {path.name}", dialog=False,
-                     on_done=lambda p: self.statusBar().showMessage(f"wrote {p}", 5000))
-            self.statusBar().showMessage(f"writing {path.name}…")
+        export_view_dialog(self, which)
 
     def export_figure_dialog(self, name):
-        if self.state.manifold is None:
-            return
-        path = self._save_path(f"Export figure {name}", FIGURE_FILTERS, str(Path(self.last_dir) / f"{name}.png"))
-        if not path:
-            return
-        from app.figures import UTTERANCE_FIGURES, export_figure
-        from app.user_messages import plain_errors
-        from app.workers import run_task
+        from app.views.export_dialog import export_figure_dialog
 
-        m = self.state.manifold
-        opts = {"utterance": self.state.utterance} if (name in UTTERANCE_FIGURES and self.state.utterance) else {}
-        run_task(plain_errors(lambda progress: export_figure(name, m, path, **opts), doing=f"write figure {name}"),
-                 parent=self, title=f"Rendering {name}",
-                 on_done=lambda p: self.statusBar().showMessage(f"wrote {p}", 5000))
+        export_figure_dialog(self, name)
 
     def current_trajectory(self):
         """The trajectory File > Export writes: the synthetic one if any, else the original."""
@@ -90,11 +59,22 @@ class ExportActions:
             return
         path = self._save_path(f"Export trajectory ({traj.label})", TRAJECTORY_FILTERS)
         if path:
-            from app.models.trajectories import export_trajectory
+            from app.export.trajectory import export_trajectory
 
             path = str(path)
             self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}",
                          "export the trajectory")
+
+    def export_textgrid_dialog(self):
+        """The trajectory shown (a synthesis: its phones, targets and landmarks) as a Praat TextGrid."""
+        traj = self.current_trajectory()
+        path = self._save_path(f"Export {traj.label} as TextGrid", "Praat TextGrid (*.TextGrid)",
+                               str(Path(self.last_dir) / f"{traj.label or 'synthesis'}.TextGrid")) if traj else None
+        if path:
+            from app.export.trajectory import export_textgrid
+
+            self._report(lambda: export_textgrid(self.state.manifold, traj, path), f"wrote {path}",
+                         "export the TextGrid")
 
     def export_animation(self, path, progress=None) -> list[Path]:
         """The current trajectory as a glTF morph animation (.glb/.gltf, WAV beside) or an MP4."""

@@ -68,6 +68,7 @@ class MenuActions:
                           lambda _=False, n=name: self.export_figure_dialog(n))
             a.setToolTip(DESCRIPTIONS.get(name, ""))
         self._act(f, "Export &trajectory (CSV, NPY, OBJ, PLY)…", self.export_trajectory_dialog)
+        self._act(f, "Export synthesis as TextGrid…", self.export_textgrid_dialog)
         self._act(f, "Export &animation (glTF, MP4)…", self.export_animation_dialog)
         self._act(f, "Export &cluster table (CSV)…", self.export_clusters_dialog)
         self._act(f, "Export frame ta&ble (CSV, Parquet)…", self.export_frame_table_dialog)

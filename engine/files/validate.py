@@ -282,6 +282,8 @@ def check_corpus_arrays(d, *, source, frames_given: bool = False) -> None:
         check_array(d, "corpus_point_names", source=source, kind="str", shape=("_v",), dims=dims)
     if "corpus_utt_speaker" in d:
         check_array(d, "corpus_utt_speaker", source=source, kind="str", shape=("U",), dims=dims)
+    if "corpus_utt_duration" in d:
+        check_array(d, "corpus_utt_duration", source=source, kind="float", shape=("U",), dims=dims, low=0)
     if "corpus_axes" in d:
         check_scalar(d, "corpus_axes", source=source, kind="str")
     if "corpus_units" in d:

@@ -171,7 +171,7 @@ def fill_gaps(X: np.ndarray, missing: np.ndarray, *, path, names=None, fill: boo
     return X
 
 
-#: pause labels of common aligners: a trailing pause past the data is cut without a word
+#: pause labels of common aligners: a trailing pause past the data is cut with a note, never refused
 _PAUSES = frozenset({"sil", "sp", "spn", "pau", "#", "h#", "<sil>", "silence", "_", "<p:>", "breath"})
 #: an alignment's speech running past the data by more than this (s) is cut with a warning ...
 ALIGNMENT_OVERRUN_WARN = 0.1
@@ -191,7 +191,9 @@ def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneI
     cut and reported (:func:`engine.io.repairs.report_repair`) naming both durations; one
     :data:`ALIGNMENT_OVERRUN_RATIO` times as long as the data (and over 1 s longer) is
     refused with an :class:`ImportFormatError` naming ``path`` (a different
-    recording's alignment, or a wrong frame rate).
+    recording's alignment, or a wrong frame rate). One that runs past the data by less, or
+    only with a pause (MOCHA's final silence), is cut and reported too: the user is told
+    where the utterance ends.
     """
     dur = n_frames / float(rate)
     labelled = [(float(p.start), float(p.end)) for p in phones
@@ -208,6 +210,14 @@ def fit_phones(phones, n_frames: int, rate: float, *, path=None) -> tuple[PhoneI
         from engine.io.repairs import report_repair
 
         report_repair(path, f"{what}; it was cut at the end of the data ({lost} phone{'s' * (lost != 1)} dropped)")
+    else:  # a pause (or speech by less than the warning's margin) past the data: cut, and said
+        last = max(((float(p.end), str(p.label).strip()) for p in phones if str(p.label).strip()), default=None)
+        if last is not None and last[0] > dur + 0.5 / float(rate):
+            from engine.io.repairs import report_repair
+
+            report_repair(path, f"the alignment runs to {last[0]:.3f} s but the data last {dur:.3f} s ({n_frames} "
+                                f"frames at {float(rate):g} Hz); it was cut at the end of the data (its last "
+                                f"interval, {last[1]!r}, ends there)")
     out, empty = [], []
     for p in phones:
         s, e, lab = float(p.start), float(p.end), str(p.label).strip()

@@ -115,7 +115,9 @@ def resample(corpus: Corpus, rate: float, *, progress=None) -> Corpus:
             end = min(p.end, dur) if p.end > dur + 0.5 / rate else p.end
             if end > p.start:
                 phones.append(replace(p, end=end))
-        utts.append(replace(u, start=pos, stop=pos + m, phones=tuple(phones)))
+        # the recording's own length, which the new frames round up to a whole frame
+        utts.append(replace(u, start=pos, stop=pos + m, phones=tuple(phones),
+                            duration_s=float(u.duration_s) or F.shape[0] / old))
         pos += m
         if progress is not None:
             progress("resample", i + 1, total)

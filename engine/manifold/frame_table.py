@@ -20,8 +20,13 @@ import numpy as np
 from engine.io.writers.tidy import NA
 
 __all__ = ["FrameTable", "frame_table", "tangent_columns", "opening_measure", "class_intervals", "utterance_tiers",
-           "write_textgrids", "CLASS_LABELS", "NA"]
+           "write_textgrids", "CLASS_LABELS", "NA", "UNKNOWN_SPEAKER", "UNLABELLED"]
 
+#: the ``speaker`` of an utterance the corpus names no speaker for (a word, not a missing value: R's read.csv and
+#: readr read a column of missing values as logical, not text)
+UNKNOWN_SPEAKER = "unknown"
+#: the ``phone`` of every frame of a corpus without phone labels (likewise)
+UNLABELLED = "unlabelled"
 #: values of the ``class`` column, ``engine.manifold.tangent.CLASS_NAMES`` in snake_case
 CLASS_LABELS = ("opening_accelerating", "opening_decelerating", "closing_accelerating", "closing_decelerating")
 
@@ -136,7 +141,10 @@ def frame_table(manifold, *, n_fx: int | None = None, source: str = "") -> Frame
     -------
     FrameTable
         Columns ``utterance, speaker, time_s, frame, phone, landmark, <opening>, class,
-        state, s, v, fx_1..fx_k, fy_1..fy_3``.
+        state, [s,] v, fx_1..fx_k, fy_1..fy_3``: ``s`` (S) only where it is not the opening
+        column itself. Text columns are never missing throughout (R reads such a column as
+        logical): an unnamed speaker is :data:`UNKNOWN_SPEAKER`, the phone of a corpus without
+        phone labels :data:`UNLABELLED`.
     """
     from engine.recordings.kinematics import LANDMARK_LABELS
 
@@ -153,14 +161,18 @@ def frame_table(manifold, *, n_fx: int | None = None, source: str = "") -> Frame
     for u in c.utterances:
         sl = slice(u.start, u.stop)
         utt[sl] = u.id
-        spk[sl] = u.speaker or None
+        spk[sl] = u.speaker or UNKNOWN_SPEAKER
         frame[sl] = np.arange(u.n_frames)
         phone[sl] = _phone_at_frames(u, rate)
+    if not any(u.phones for u in c.utterances):
+        phone[:] = UNLABELLED
     opening, name, unit, what = opening_measure(manifold)
     lm = np.full(N, None, dtype=object)
     lf, ll = landmarks(manifold, opening)
     lm[lf] = ll
     tan = tangent_columns(manifold)
+    # S is the opening measure itself where the tangent frames read the lip aperture: written once, by its name
+    s_is_opening = np.allclose(tan["s"], opening, rtol=1e-5, atol=1e-6 * max(float(np.abs(opening).max()), 1.0))
     cols = {"utterance": utt, "speaker": spk, "time_s": frame / rate, "frame": frame, "phone": phone,
             "landmark": lm, name: opening, "class": tan["class"],
             "state": np.asarray(manifold.states_.labels_, np.int64), "s": tan["s"], "v": tan["v"]}
@@ -168,19 +180,23 @@ def frame_table(manifold, *, n_fx: int | None = None, source: str = "") -> Frame
              "landmark": "", name: unit, "class": "", "state": "index",
              "s": manifold.tangent_.opening_unit_ or "shape-space units (F^x)",
              "v": f"{manifold.tangent_.opening_unit_ or 'shape-space units (F^x)'} per s"}
-    desc = {"utterance": "utterance id", "speaker": "speaker (missing when the corpus does not say)",
+    desc = {"utterance": "utterance id", "speaker": f"speaker ({UNKNOWN_SPEAKER!r} when the corpus does not say)",
             "time_s": "time of the frame from the start of its utterance",
             "frame": "frame number within the utterance, from 0",
-            "phone": "label of the phone interval holding the frame (missing outside every phone)",
+            "phone": f"label of the phone interval holding the frame (missing outside every phone; {UNLABELLED!r} "
+                     "throughout when the corpus has no phone labels)",
             "landmark": f"kinematic landmark at this frame, one of {', '.join(LANDMARK_LABELS)} (aperture maximum, "
                         "minimum, peak opening / closing velocity; missing elsewhere)",
             name: what,
             "class": f"movement class of the frame's step (from the previous to the next frame), one of "
                      f"{', '.join(CLASS_LABELS)} (missing in an utterance of one frame)",
             "state": "state of the state graph the frame belongs to",
-            "s": "S: the opening the tangent frames read (the lip aperture, or F^x_1 standing in for it)",
-            "v": "V: the opening's velocity read on the manifold, the step times the opening's local gradient "
-                 "(> 0: opening)"}
+            "s": f"S: the opening the tangent frames read ({manifold.tangent_.opening_source_ or 'F^x_1'}), "
+                 f"where it is not {name} itself",
+            "v": f"V: the velocity of the opening S ({'the ' + name + ' column' if s_is_opening else 's'}) read on "
+                 "the manifold, the step times the opening's local gradient (> 0: opening)"}
+    if s_is_opening:
+        del cols["s"], units["s"], desc["s"]
     for j in range(k):
         cols[f"fx_{j + 1}"] = np.asarray(manifold.Fx_[:, j], np.float64)
         units[f"fx_{j + 1}"] = "shape-space units (F^x)"
@@ -190,11 +206,14 @@ def frame_table(manifold, *, n_fx: int | None = None, source: str = "") -> Frame
         units[f"fy_{j + 1}"] = "embedding units (F^y)"
         desc[f"fy_{j + 1}"] = f"manifold coordinate F^y_{j + 1}"
     notes = [f"{name}: {what}"]
+    if s_is_opening:
+        notes.append(f"S, the opening the tangent frames read, is {name} itself: one column, {name}; v is its "
+                     "velocity")
     src = getattr(manifold.tangent_, "opening_source_", None)
     if src:
         notes.append(f"the movement classes take 'opening' from {src}")
     if not any(u.phones for u in c.utterances):
-        notes.append("the corpus has no phone labels: the phone column is missing throughout; the landmark "
+        notes.append(f"the corpus has no phone labels: the phone column is {UNLABELLED!r} throughout; the landmark "
                      "column marks the kinematic landmarks")
     return FrameTable(columns=cols, units=units, descriptions=desc, notes=notes, rate=rate, source=source)
 
@@ -221,8 +240,9 @@ def utterance_tiers(manifold, table: FrameTable, uid: str):
 
     Tiers: ``phones`` (the utterance's phones as read), ``class`` (the movement classes
     as intervals, :func:`class_intervals`) and ``landmarks`` (a point tier of the
-    kinematic landmarks). Times from the utterance start; ``xmax`` covers its frames and
-    its phones.
+    kinematic landmarks). Times from the utterance start; ``xmax`` is the recording's duration
+    (``Utterance.duration_s``: a resampled recording ends where it did, not at its last frame
+    rounded up), else covers its frames and its phones.
     """
     from engine.io.writers.praat import IntervalTier, PointTier
 
@@ -230,7 +250,7 @@ def utterance_tiers(manifold, table: FrameTable, uid: str):
     u = c.utterance(uid)
     rate = float(c.rate)
     sl = slice(u.start, u.stop)
-    xmax = max(u.n_frames / rate, max((p.end for p in u.phones), default=0.0))
+    xmax = float(u.duration_s) or max(u.n_frames / rate, max((p.end for p in u.phones), default=0.0))
     phones = IntervalTier("phones", [(p.start, p.end, p.label) for p in u.phones])
     classes = IntervalTier("class", class_intervals(table.columns["class"][sl], rate))
     lm = table.columns["landmark"][sl]

@@ -87,6 +87,10 @@ class Utterance:
     speaker : str
         Who spoke it ("" = unknown). Multi-speaker corpora are normalised per speaker
         before the shape space (:mod:`engine.recordings.registration`).
+    duration_s : float
+        How long the recording lasts (s) when that is known more finely than its frames: an
+        utterance resampled from n frames at r Hz lasts n / r, which its frames at the new rate
+        round up (:func:`engine.io.resample`). 0: ``n_frames / rate``.
     fields : tuple of (str, str)
         Other metadata fields, ``(name, value)`` in order (sex, emotion, text number,
         session, group ...; :mod:`engine.recordings.metadata` reads them).
@@ -102,6 +106,7 @@ class Utterance:
     audio: str | None = None
     text: str = ""
     speaker: str = ""
+    duration_s: float = 0.0
     fields: tuple[tuple[str, str], ...] = ()
     words: tuple = ()
 
@@ -480,6 +485,7 @@ class Corpus:
             "corpus_utt_audio": np.array([_relative(u.audio, base) for u in self.utterances], dtype=str),
             "corpus_utt_text": np.array([u.text for u in self.utterances], dtype=str),
             "corpus_utt_speaker": np.array([u.speaker for u in self.utterances], dtype=str),
+            "corpus_utt_duration": np.array([float(u.duration_s) for u in self.utterances], dtype=np.float64),
             "corpus_registration": np.array(self.registration),
             "corpus_history": np.array(self.history, dtype=str).reshape(-1),
             "corpus_phone_utt": np.array([p[0] for p in phones], dtype=np.int64),
@@ -546,6 +552,7 @@ class Corpus:
             names = list(d["corpus_point_names"]) if "corpus_point_names" in keys else None
             roles = list(d["corpus_point_roles"]) if "corpus_point_roles" in keys else None
             speaker = d["corpus_utt_speaker"] if "corpus_utt_speaker" in keys else [""] * len(ids)
+            duration = d["corpus_utt_duration"] if "corpus_utt_duration" in keys else np.zeros(len(ids))
             registration = str(d["corpus_registration"]) if "corpus_registration" in keys else ""
             history = [str(h) for h in d["corpus_history"]] if "corpus_history" in keys else []
             axes = str(d["corpus_axes"]) if "corpus_axes" in keys else ""
@@ -566,6 +573,7 @@ class Corpus:
                 phones = PhoneInterval._many(times[a:e], labels[a:e])
                 wav = _resolve(str(audio[k]), base, str(audio_abs[k]) if audio_abs is not None else "")
                 utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k]),
+                                      float(duration[k]),
                                       fields=fields[k] if fields is not None else (),
                                       words=words[k] if words is not None else ()))
         try:

@@ -197,33 +197,17 @@ def run_cli_window(qapp):
 
 def articulograph_manifold(*, n_speakers=2, n_utterances=2, duration_s=(2.0, 2.0), seed=11, n_states=16,
                            axes=None, name="ema"):
-    """A manifold of generated 4-sensor articulograph recordings (ema7x6: UL, LL, LC, RC kept; no phone labels)
-    as import makes them (utterance centring, 60 Hz), each utterance naming its speaker. ``axes`` (3, 3): the
-    lab's coordinates are ``axes @`` the generator's (x anterior, y left, z up)."""
+    """A manifold of generated 4-sensor articulograph recordings as import makes them
+    (:func:`engine.talker.example_corpora.articulograph_corpus`: UL, LL, LC, RC kept, no phone labels,
+    utterance centring, 60 Hz), each utterance naming its speaker."""
     import warnings
-    from dataclasses import replace
 
-    import numpy as np
-
-    from engine.io import concat, resample
-    from engine.io.readers.matrix import corpus_from_matrix
     from engine.manifold.model import Manifold
-    from engine.recordings.corpus import CorpusWarning, Utterance
-    from engine.recordings.layouts import BUILTIN
-    from engine.recordings.registration import register
-    from engine.talker.multispeaker import generate_recordings
+    from engine.recordings.corpus import CorpusWarning
+    from engine.talker.example_corpora import articulograph_corpus
 
-    parts = []
-    for r in generate_recordings(n_speakers=n_speakers, n_utterances=n_utterances, duration_s=duration_s,
-                                 seed=seed):
-        M = r.matrix
-        if axes is not None:
-            M = M.reshape(M.shape[0], -1, 6).copy()
-            M[:, :, :3] = M[:, :, :3] @ np.asarray(axes, float).T
-            M = M.reshape(M.shape[0], -1)
-        c = corpus_from_matrix(f"{r.id}.mat", M, BUILTIN["ema7x6"], rate=r.rate)
-        parts.append(replace(c, utterances=[Utterance(r.id, 0, c.n_frames, speaker=r.speaker)], name=r.id))
-    corpus = resample(register(concat(parts, name=name), method="utterance"), 60)
+    corpus = articulograph_corpus(n_speakers=n_speakers, n_utterances=n_utterances, duration_s=duration_s,
+                                  seed=seed, axes=axes, name=name)
     with warnings.catch_warnings():  # a state or two cut off by a few seconds of speech is not what tests are about
         warnings.simplefilter("ignore", CorpusWarning)
         return Manifold(n_states=n_states).fit(corpus)

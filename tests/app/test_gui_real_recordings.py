@@ -14,12 +14,12 @@ def ema_manifold(make_articulograph_manifold):
 
 
 def test_unlabelled_sparse_markers_in_the_explorer(qapp, qtbot, ema_manifold, main_window_factory):
-    from app.scene import ContourHandle
+    from app.scene import SensorsHandle
 
     m = ema_manifold
     with main_window_factory(qapp, m, size=(1100, 800)) as w:
         lv = w.lip_view
-        assert isinstance(lv.main, ContourHandle) and lv.main.labels is not None
+        assert isinstance(lv.main, SensorsHandle) and lv.main.label_texts[:4] == ["UL", "LL", "LC", "RC"]
         u = m.corpus_.utterances[1]
         s, ed = w.state, w.editor
         ed.set_source("utterance")

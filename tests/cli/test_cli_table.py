@@ -46,7 +46,7 @@ def test_the_csv_reads_in_pandas_without_options(written, small_manifold):
     assert d["time_s"].dtype.kind == "f" and d["frame"].dtype.kind == "i" and d["state"].dtype.kind == "i"
     assert d["class"].isna().sum() == 0  # every frame of an utterance longer than one frame has a step
     assert set(d["class"].dropna()) <= set(CLASS_LABELS)
-    assert d["speaker"].isna().all()  # the talker names no speakers: NA, not an empty string
+    assert set(d["speaker"]) == {"unknown"}  # the talker names no speakers: a word R reads as text, not NA
     from engine.recordings.kinematics import lip_aperture
 
     np.testing.assert_allclose(d["lip_aperture"], lip_aperture(c), rtol=1e-6, atol=1e-5)
@@ -64,7 +64,7 @@ def test_parquet_holds_the_same_columns_with_their_units(mfile, written, tmp_pat
     assert main(["table", str(mfile), "-o", str(out), "--fx", "3"]) == 0
     p, c = pd.read_parquet(out), pd.read_csv(written / "frames.csv")
     assert list(p.columns) == [n for n in c.columns if not n.startswith("fx_") or n in ("fx_1", "fx_2", "fx_3")]
-    np.testing.assert_allclose(p["s"], c["s"], rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(p["v"], c["v"], rtol=1e-6, atol=1e-6)
     assert p["class"].isna().sum() == c["class"].isna().sum()
     import pyarrow.parquet as pq
 
@@ -196,21 +196,76 @@ def test_the_readme_r_snippet_plots_aperture_by_class_in_r(written, tmp_path):
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 2000
 
 
+@pytest.fixture(scope="module")
+def unlabelled_manifold():
+    """A 4-sensor articulograph corpus (250 Hz, imported at 60 Hz) with no phone labels and no speaker names."""
+    import warnings
+    from dataclasses import replace
+
+    from engine.manifold.model import Manifold
+    from engine.talker.example_corpora import articulograph_corpus
+
+    c = articulograph_corpus(n_speakers=1, n_utterances=3, duration_s=(2.0, 2.6), seed=3)
+    c = replace(c, utterances=[replace(u, speaker="") for u in c.utterances])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a short corpus's state warnings are not what this tests
+        return Manifold(n_states=12).fit(c)
+
+
+def test_textgrids_end_where_the_recording_does(unlabelled_manifold, tmp_path):
+    """A 250 Hz recording of n samples lasts n / 250 s; at 60 Hz its frames round that up to a whole frame.
+    The TextGrid ends at the recording's end, not at the last frame's."""
+    from engine.io import read_textgrid  # noqa: F401 - the grids read back below
+    from engine.talker.multispeaker import generate_recordings
+
+    m = unlabelled_manifold
+    path = m.save(tmp_path / "m.npz")
+    assert main(["table", str(path), "--textgrid", str(tmp_path / "g")]) == 0
+    recs = generate_recordings(n_speakers=1, n_utterances=3, duration_s=(2.0, 2.6), seed=3)
+    for u, r in zip(m.corpus_.utterances, recs):
+        true = r.matrix.shape[0] / r.rate
+        assert u.duration_s == pytest.approx(true) and u.n_frames / m.corpus_.rate > true + 1e-6
+        text = (tmp_path / "g" / f"{u.id}.TextGrid").read_text()
+        assert re.search(r"^xmax = ([0-9.]+) ", text, re.M).group(1) == repr(true).rstrip("0").rstrip(".") or \
+            float(re.search(r"^xmax = ([0-9.]+) ", text, re.M).group(1)) == pytest.approx(true, abs=1e-9)
+
+
+def _r_types(path):
+    """``(read.csv's, readr's)`` lines for the frame table at ``path``: rows, columns, then the class of time_s,
+    frame, class, speaker, phone and the missing values of class (readr: "no readr" when it is not installed)."""
+    cols = "c('time_s', 'frame', 'class', 'speaker', 'phone')"
+    code = (f'd <- read.csv(f); cat(nrow(d), ncol(d), sapply(d[{cols}], function(x) class(x)[1]), '
+            'sum(is.na(d$class)), "\\n")\n'
+            'if (requireNamespace("readr", quietly = TRUE)) { e <- readr::read_csv(f, show_col_types = FALSE); '
+            f'cat(nrow(e), ncol(e), sapply(e[{cols}], function(x) class(x)[1]), sum(is.na(e$class)), "\\n") }} '
+            'else cat("no readr\\n")\n')
+    r = subprocess.run([RSCRIPT, "-e", f'f <- "{path}"', "-e", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    return r.stdout.strip().splitlines()
+
+
 @needs_r
 def test_r_reads_the_types_and_missing_values_without_options(written, tmp_path):
-    code = ('d <- read.csv(f); cat(nrow(d), ncol(d), class(d$time_s), class(d$frame), class(d$class), '
-            'sum(is.na(d$class)), all(is.na(d$speaker)), "\\n")\n'
-            'if (requireNamespace("readr", quietly = TRUE)) { e <- readr::read_csv(f, show_col_types = FALSE); '
-            'cat(nrow(e), ncol(e), sum(is.na(e$class)), all(is.na(e$speaker)), is.numeric(e$v), "\\n") } else '
-            'cat("no readr\\n")\n')
-    r = subprocess.run([RSCRIPT, "-e", f'f <- "{written / "frames.csv"}"', "-e", code], capture_output=True,
-                       text=True, timeout=120)
-    assert r.returncode == 0, r.stderr
-    base, rd = r.stdout.strip().splitlines()
+    base, rd = _r_types(written / "frames.csv")
     n, ncol = _csv_shape(written / "frames.csv")
-    assert base.split() == [str(n), str(ncol), "numeric", "integer", "character", "0", "TRUE"]
+    assert base.split() == [str(n), str(ncol), "numeric", "integer", "character", "character", "character", "0"]
     if rd != "no readr":
-        assert rd.split() == [str(n), str(ncol), "0", "TRUE", "TRUE"]
+        assert rd.split() == [str(n), str(ncol), "numeric", "numeric", "character", "character", "character", "0"]
+
+
+@needs_r
+def test_r_reads_speaker_and_phone_as_text_for_a_corpus_that_names_neither(unlabelled_manifold, tmp_path):
+    """A label-less corpus whose utterances name no speaker: both columns are text in R (never all NA)."""
+    path = unlabelled_manifold.save(tmp_path / "m.npz")
+    assert main(["table", str(path), "-o", str(tmp_path / "f.csv")]) == 0
+    base, rd = _r_types(tmp_path / "f.csv")
+    n, ncol = _csv_shape(tmp_path / "f.csv")
+    assert base.split() == [str(n), str(ncol), "numeric", "integer", "character", "character", "character", "0"]
+    if rd != "no readr":
+        assert rd.split()[4:7] == ["character", "character", "character"]
+    meta = json.loads((tmp_path / "f.csv.json").read_text())
+    assert "unknown" in meta["columns"]["speaker"]["description"]
+    assert "unlabelled" in meta["columns"]["phone"]["description"]
 
 
 def test_a_real_recording_gets_its_lip_aperture_and_its_own_phones(mocha_manifold, tmp_path):

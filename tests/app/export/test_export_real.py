@@ -65,11 +65,13 @@ def test_mp4_carries_the_recording_cut_to_the_video(mocha, tmp_path):
 
 @pytest.mark.gui
 def test_mp4_draws_sparse_lip_markers_as_the_lip_view_does(shared_data, tmp_path):
-    """Haskins sensors (UL, LL, a corner, jaw): the video shows the labelled contour tube, framed whole."""
+    """Haskins sensors (UL, LL, a corner, jaw): the video shows the sensors as the lip view does (spheres,
+    straight lines, the aperture with its value), framed whole."""
     import av
 
     from app.export.video import _Scene, render_video
-    from app.scene import pick_display_point
+    from app.models.lip_drawing import drawing_of
+    from app.scene import SensorsHandle, pick_display_point
     from engine.io import read_corpus
 
     c = read_corpus(shared_data / "haskins-ieee" / "F01_B01_S01_R01_N.mat")
@@ -78,13 +80,15 @@ def test_mp4_draws_sparse_lip_markers_as_the_lip_view_does(shared_data, tmp_path
     from engine.recordings.corpus import frame_points
 
     pts = frame_points(np.asarray(F, np.float32), c.dims)
-    s = _Scene(pts, None, None, None, None, None, (64, 48), sensors)
+    d = drawing_of(pts.mean(axis=0), dims=3, roles=c.point_roles, names=c.point_names)
+    s = _Scene(pts, None, None, None, None, None, (64, 48), d)
     try:
-        assert hasattr(s.main, "contour")  # the tube, not bare spheres
+        assert isinstance(s.main, SensorsHandle) and s.main.segments is not None  # sensors, no contour
+        assert s.main.label_texts[-1].endswith(" mm")  # the aperture's value
         s.plotter.render()
         w, h = s.plotter.window_size
-        for frame in pts:  # every frame's tube, not just its markers, inside the picture
-            for xyz in s.main.contour.transform(frame)[::7]:
+        for frame in pts:  # every frame's sensors inside the picture
+            for xyz in frame:
                 x, y = pick_display_point(s.plotter, xyz)
                 assert 0 <= x <= w and 0 <= y <= h, (x, y)
     finally:

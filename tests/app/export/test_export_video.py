@@ -38,7 +38,7 @@ def test_fast_move_draws_the_same_pictures_as_update(app_manifold):
     F = video._frames3(c.frames[300:306], c.dims, "frames")
     pictures = {}
     for how in ("fast", "update"):
-        s = video._Scene(F, F[::-1].copy(), c.faces, None, None, None, (96, 64), {"roles": None, "names": None})
+        s = video._Scene(F, F[::-1].copy(), c.faces, None, None, None, (96, 64), None)
         try:
             if how == "update":
                 s.move_main, s.move_second = s.main.update, s.second.update

@@ -1,4 +1,6 @@
 """The comparison figure at one and two journal columns: every panel, its units, text of 7 pt or more, nothing cut."""
+import contextlib
+
 import numpy as np
 import pytest
 
@@ -6,7 +8,28 @@ from app.figures.comparison import MIN_TEXT_PT, make_comparison
 from app.figures.export import save_figure
 from app.models.palette import SessionPalette
 from engine.comparison.compare import ConditionComparison
-from tests.app.figures.test_figures_journal import _recorded_texts
+
+
+@contextlib.contextmanager
+def _recorded_texts():
+    """Every text the Agg renderer draws: (string, (x0, y0), (x1, y1), size in pt, canvas width, height)."""
+    from matplotlib.backends.backend_agg import RendererAgg
+
+    rec, orig = [], RendererAgg.draw_text
+
+    def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
+        w, h, d = self.get_text_width_height_descent(s, prop, ismath)
+        a = np.radians(angle)
+        R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+        c = np.array([[0, -d], [w, -d], [w, h - d], [0, h - d]]) @ R.T + [x, self.height - y]
+        rec.append((s, c.min(axis=0), c.max(axis=0), prop.get_size_in_points(), self.width, self.height))
+        return orig(self, gc, x, y, s, prop, angle, ismath, mtext)
+
+    RendererAgg.draw_text = draw_text
+    try:
+        yield rec
+    finally:
+        RendererAgg.draw_text = orig
 
 
 @pytest.fixture(scope="module")

@@ -16,7 +16,8 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 
 import app.figures as F
-from app.figures.style import CMAP, CMAP_NEAR, RASTERIZE_ABOVE, UNREACHABLE
+from app.figures.colours import GENERATED, ORIGINAL, UNREACHABLE, density_cmap, future_cmap
+from app.figures.style import RASTERIZE_ABOVE
 
 
 @pytest.fixture(scope="module")
@@ -87,37 +88,71 @@ def test_fig1a_shows_components_as_shapes_coloured_by_displacement(figs, m):
     for pc in (1, 2):
         mean = one(fig, f"fig1a:pc{pc}:+0")
         lo, hi = one(fig, f"fig1a:pc{pc}:-2"), one(fig, f"fig1a:pc{pc}:+2")
-        # the mean shape is uniform grey; deformed shapes run from blue (still) to red-ish (moved)
+        # the mean shape is uniform grey; deformed shapes run from dark blue (still) to light yellow (moved)
         mc = mean.get_facecolors()[:, :3]
         assert np.allclose(mc[:, 0], mc[:, 1], atol=1e-6) and np.allclose(mc[:, 1], mc[:, 2], atol=1e-6)
         for coll in (lo, hi):
             fc = coll.get_facecolors()
             assert (fc[:, 2] > fc[:, 0]).any()           # some parts barely move (blue)
             assert len({tuple(np.round(c, 3)) for c in fc}) > 5
-    # PC1 moves the surface more than PC2 (its colours reach further towards red)
+    # PC1 moves the surface more than PC2 (its colours reach further towards the light end)
     red1 = one(fig, "fig1a:pc1:+2").get_facecolors()[:, 0].max()
     red2 = one(fig, "fig1a:pc2:+2").get_facecolors()[:, 0].max()
     assert red1 > red2
 
 
-def test_fig1b_residuals_blue_X_red_Y_non_increasing(figs, m):
+def test_fig1b_residuals_in_the_palettes_X_and_Y_colours_non_increasing(figs, m):
+    from app.models.palette import SessionPalette
+
     fig = figs["fig1b"]
     lx, ly = one(fig, "fig1b:X"), one(fig, "fig1b:Y")
-    assert to_rgba(lx.get_color()) == to_rgba("blue")
-    assert to_rgba(ly.get_color()) == to_rgba("red")
+    pal = SessionPalette.for_corpus(m.corpus_)
+    assert to_rgba(lx.get_color()) == to_rgba(pal.colour("space", "X"))
+    assert to_rgba(ly.get_color()) == to_rgba(pal.colour("space", "Y"))
     assert fig.axes[0].get_yscale() == "log"
     for line, ratio in ((lx, m.shape_.scree_), (ly, m.embedding_.explained_variance_ratio_)):
         y = np.asarray(line.get_ydata())
-        assert y[0] == 1.0
-        assert np.all(np.diff(y) <= 0)
+        assert y[0] == 100.0  # per cent of the total
+        drawn = y[np.isfinite(y)]
+        assert np.all(np.diff(drawn) <= 0)
         n = len(y) - 1
-        expect = np.maximum(1 - np.cumsum(ratio[:n]), F.shape.RESIDUAL_FLOOR)
-        assert np.allclose(y[1:], expect)
+        expect = 100 * (1 - np.cumsum(ratio[:n]))
+        expect[expect <= 100 * F.shape.NUMERICAL_FLOOR] = np.nan
+        assert np.allclose(y[1:], expect, equal_nan=True)
 
 
-def test_residuals_clip_for_the_log_axis():
+def test_an_axis_margin_never_implies_a_negative_aperture():
+    """A lip aperture from 0.1 to 15.5 mm starts at 0, not at -0.5 (the margin would carry it across zero); data
+    on both sides of zero keep the margin on both sides."""
+    from app.figures.style import data_limits
+
+    ax = Figure().subplots()
+    data_limits(ax, [0.1, 7.0, 15.5], [-200.0, 0.0, 180.0])
+    assert ax.get_xlim() == (0.0, pytest.approx(15.5 + 0.04 * 15.4))
+    assert ax.get_ylim() == (pytest.approx(-200 - 0.04 * 380), pytest.approx(180 + 0.04 * 380))
+    data_limits(ax, [-3.0, -0.05], [10.0, 20.0])
+    assert ax.get_xlim()[1] == 0.0 and ax.get_ylim()[0] == pytest.approx(9.6)
+
+
+def test_residuals_leave_the_numerical_floor_undrawn():
     r = F.shape.residuals([0.5, 0.5, 0.0])
-    assert r[0] == 1.0 and r[1] == 0.5 and r[2] == r[3] == F.shape.RESIDUAL_FLOOR
+    assert r[0] == 1.0 and r[1] == 0.5 and np.isnan(r[2]) and np.isnan(r[3])
+    assert np.isnan(F.shape.residuals([0.5, 0.5 - 1e-7])[2])  # 1e-7 of the total left: numerical zero, not data
+
+
+def test_fig1b_says_where_a_curve_reaches_the_numerical_floor():
+    from types import SimpleNamespace
+
+    shape = SimpleNamespace(scree_=np.r_[0.6, 0.3, 0.1 - 1e-9, 1e-9, 0.0], n_components_=5, mean_=None)
+    emb = SimpleNamespace(explained_variance_ratio_=np.r_[0.5, 0.3, 0.1, 0.05])
+    fake = SimpleNamespace(Fy_=np.zeros((3, 3)), shape_=shape, embedding_=emb, corpus_=None)
+    from app.models.palette import SessionPalette
+
+    fig = F.make_fig1b(fake, palette=SessionPalette())
+    x = one(fig, "fig1b:X").get_ydata()
+    assert np.isfinite(x[:3]).all() and np.isnan(x[3:]).all()
+    notes = [t.get_text() for t in fig.findobj(lambda a: a.get_gid() == "note")]
+    assert len(notes) == 1 and "X: numerical zero" in notes[0] and "from 3 components" in notes[0]
 
 
 # ------------------------------------------------------------------ fig 2
@@ -129,8 +164,8 @@ def test_fig2a_projections_density_arrows_plane_and_trajectory(figs, m):
         assert sc.get_offsets().shape == (N, 2)
         d = np.asarray(sc.get_array())
         assert d.min() == 0 and d.max() == 1 and np.all(np.diff(d) >= 0)   # densest drawn last
-        # the densest point's colour is the red end of the map
-        assert np.allclose(sc.get_facecolors()[-1], CMAP(1.0))
+        # the densest point's colour is the dense end of the window's density map
+        assert np.allclose(sc.get_facecolors()[-1], density_cmap()(1.0))
     assert len(by_gid(fig, "fig2a:points:3d")) == 1
     assert len(by_gid(fig, "zero-velocity-plane")) >= 2
     assert len(by_gid(fig, "fig2a:S")) == 3 and len(by_gid(fig, "fig2a:V")) == 3
@@ -138,7 +173,8 @@ def test_fig2a_projections_density_arrows_plane_and_trajectory(figs, m):
     traj = fig.lipspace["trajectory_frames"]
     q = by_gid(fig, "fig2a:trajectory")
     assert len(q) == 3
-    assert q[0].N == len(traj[::2]) - 1
+    assert np.allclose(q[0].get_xydata(), m.Fy_[traj][:, :2])
+    assert len(by_gid(fig, "fig2a:trajectory:direction")) >= 3 * 3  # its direction, in every panel
     # the trajectory stays inside one utterance
     assert len(set(m.corpus_.utterance_index[traj])) == 1
 
@@ -168,7 +204,7 @@ def test_fig2b_seed_states_and_hop_colours(figs, m):
     st = m.states_
     seeds = fig.lipspace["seeds"]
     assert list(seeds) == ["opening", "zero velocity", "closing"]
-    msv = F.manifold.state_signed_velocity(m)
+    msv = F.hops.state_signed_velocity(m)
     assert msv[seeds["opening"]] > msv[seeds["zero velocity"]] > msv[seeds["closing"]]
     assert msv[seeds["opening"]] > 0 > msv[seeds["closing"]]
     assert abs(msv[seeds["zero velocity"]]) < min(msv[seeds["opening"]], -msv[seeds["closing"]])
@@ -178,15 +214,15 @@ def test_fig2b_seed_states_and_hop_colours(figs, m):
         frames = sc.lipspace_frames
         d = np.asarray(sc.get_array())
         assert np.array_equal(d, st.future(s)[labels[frames]])
-        # the seed's own frames are at distance 0 and take the "near" (red) end of the map
+        # the seed's own frames are at distance 0 and take the "near" end of the window's future map
         own = labels[frames] == s
         assert own.any() and np.all(d[own] == 0)
-        assert np.allclose(sc.get_facecolors()[own], CMAP_NEAR(0.0))
-        assert np.allclose(CMAP_NEAR(0.0)[:3], CMAP(1.0)[:3])            # near = red
+        assert np.allclose(sc.get_facecolors()[own], future_cmap()(0.0))
         un = one(fig, f"fig2b:unreachable:{name}", PathCollection)
         assert len(un.get_offsets()) + len(frames) == len(labels)
-        if len(un.get_offsets()):
-            assert np.allclose(un.get_facecolors()[0], to_rgba(UNREACHABLE))
+        if len(un.get_offsets()):  # open grey circles: told apart from the map by their shape, in greyscale too
+            assert np.allclose(un.get_edgecolors()[0], to_rgba(UNREACHABLE))
+            assert len(un.get_facecolors()) == 0 or un.get_facecolors()[0][3] == 0
         assert 1 <= fig.lipspace["info"][name]["n_future_directions"] <= 2
 
 
@@ -219,7 +255,8 @@ def test_fig3_original_black_generated_red_circles_at_mid_points(figs, m):
     c = m.corpus_
     u = c.utterance(fig.lipspace["utterance"])
     lo, lg = one(fig, "fig3:original"), one(fig, "fig3:generated")
-    assert to_rgba(lo.get_color()) == to_rgba("black") and to_rgba(lg.get_color()) == to_rgba("red")
+    assert to_rgba(lo.get_color()) == to_rgba(ORIGINAL) and to_rgba(lg.get_color()) == to_rgba(GENERATED)
+    assert ORIGINAL == (0.0, 0.0, 0.0) and GENERATED == (1.0, 0.0, 0.0)  # the window's: black and red
     assert np.allclose(lo.get_xydata(), m.Fy_[u.start:u.stop, :2])
     assert len(lg.get_xydata()) == u.n_frames
     mk = one(fig, "fig3:midpoints")
@@ -240,6 +277,22 @@ def test_fig3_uses_the_requested_utterance(m):
 
 
 # ------------------------------------------------------------------ fig 4
+def _phone_colours(m, phones):
+    """The session palette's colours of ``phones`` for the manifold's corpus (the window's)."""
+    from app.models.palette import SessionPalette
+
+    pal = SessionPalette.for_corpus(m.corpus_)
+    return [pal.colour("phone", p) for p in phones]
+
+
+def test_fig4_takes_the_palette_it_is_given(m):
+    from app.models.palette import SessionPalette
+
+    pal = SessionPalette(ranking={"phone": ["m", "p", "b"]})
+    fig = F.make_fig4(m, palette=pal)
+    _check_clusters(fig, ("b", "p", "m"), [pal.colour("phone", p) for p in ("b", "p", "m")])
+
+
 def _mahalanobis(pts, mean, cov):
     d = np.asarray(pts) - mean
     return np.sqrt(np.einsum("ij,ij->i", d @ np.linalg.inv(cov), d))
@@ -263,7 +316,7 @@ def _check_clusters(fig, phones, colours):
 def test_fig4_bilabial_clusters_colours_ellipses_and_plane(figs, m):
     fig = figs["fig4"]
     assert fig.lipspace["missing"] == []
-    _check_clusters(fig, ("b", "p", "m"), ("red", "green", "yellow"))
+    _check_clusters(fig, ("b", "p", "m"), _phone_colours(m, ("b", "p", "m")))
     mids, labels = m.corpus_.phone_table()[:2]
     for p in ("b", "p", "m"):
         assert fig.lipspace["found"][p]["count"] == int(np.sum(labels == p))
@@ -278,7 +331,7 @@ def test_fig4_bilabial_clusters_colours_ellipses_and_plane(figs, m):
 def test_fig4_in_Y_axes_uses_the_cluster_ellipses(m):
     fig = F.make_fig4(m, axes=(0, 1))
     fig.canvas.draw()
-    _check_clusters(fig, ("b", "p", "m"), ("red", "green", "yellow"))
+    _check_clusters(fig, ("b", "p", "m"), _phone_colours(m, ("b", "p", "m")))
     pts = one(fig, "fig4:points:b").get_offsets()
     mids, labels = m.corpus_.phone_table()[:2]
     assert np.allclose(np.sort(pts[:, 0]), np.sort(m.Fy_[mids[labels == "b"], 0]))
@@ -301,7 +354,7 @@ def test_fig4_matches_arpabet_labels_and_notes_missing_phones(m):
     assert fig.lipspace["missing"] == ["zz"]
     assert "/zz/" in one(fig, "fig4:note").get_text()
     assert len(by_gid(fig, "fig4:points:zz")) == 0
-    _check_clusters(fig, ("b", "p"), ("red", "green"))
+    _check_clusters(fig, ("b", "p"), _phone_colours(m2, ("B", "P")))
 
 
 # ------------------------------------------------------------------ extras
@@ -519,7 +572,7 @@ def _drawn_texts(fig):
         for axis in ax._axis_map.values():
             for t in axis.get_major_ticks() + axis.get_minor_ticks():
                 tick_texts.update({id(t.label1), id(t.label2)})
-            if ax.name != "3d":
+            if ax.name != "3d" and ax.axison:  # an axes switched off draws no tick labels
                 for t in axis._update_ticks():
                     out += [lab for lab in (t.label1, t.label2) if lab.get_visible()]
     out += [t for t in fig.findobj(Text) if id(t) not in tick_texts and t.get_visible()]
@@ -538,7 +591,8 @@ def test_no_two_texts_of_a_figure_overlap(figs, name):
 
 
 def test_fig3_phone_labels_avoid_each_other_in_a_crowd():
-    from app.figures.style import new_figure, place_labels
+    from app.figures.labels import place_labels
+    from app.figures.style import new_figure
 
     fig = new_figure(4, 3)
     ax = fig.subplots()
@@ -554,6 +608,27 @@ def test_fig3_phone_labels_avoid_each_other_in_a_crowd():
     assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
 
 
+def test_phone_labels_are_never_struck_through_by_a_line():
+    from app.figures.labels import line_segments, place_labels
+    from app.figures.style import new_figure
+
+    fig = new_figure(4, 3)
+    ax = fig.subplots()
+    t = np.linspace(0, 6 * np.pi, 200)
+    ax.plot(np.cos(t) * t, np.sin(t) * t, "-", color="k")  # a spiral crossing the labels' neighbourhoods
+    xy = np.column_stack([np.cos(t[::20]) * t[::20], np.sin(t[::20]) * t[::20]])
+    ax.plot(xy[:, 0], xy[:, 1], "o", ls="none")
+    left_out = place_labels(ax, xy, [f"ph{k}" for k in range(len(xy))])
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    segs = line_segments(ax)
+    from app.figures.labels import _crosses
+
+    texts = [t for t in ax.texts if t.get_text().startswith("ph")]
+    assert len(texts) == len(xy) - left_out >= len(xy) // 2
+    assert not any(_crosses(t.get_window_extent(r), segs) for t in texts)
+
+
 def test_fig2a_panels_fill_their_cells(figs):
     fig = figs["fig2a"]
     r = fig.canvas.get_renderer()
@@ -561,8 +636,8 @@ def test_fig2a_panels_fill_their_cells(figs):
     assert len(flat) == 3
     # the corner layout: panels sharing Y1 have the same width, panels sharing Y3 the same height
     box = {ax.get_xlabel().split()[0] + ax.get_ylabel().split()[0]: ax.get_window_extent(r) for ax in flat}
-    assert box["$Y_1$$Y_2$"].width == pytest.approx(box["$Y_1$$Y_3$"].width, rel=0.03)
-    assert box["$Y_1$$Y_3$"].height == pytest.approx(box["$Y_2$$Y_3$"].height, rel=0.03)
+    assert box["Y1Y2"].width == pytest.approx(box["Y1Y3"].width, rel=0.03)
+    assert box["Y1Y3"].height == pytest.approx(box["Y2Y3"].height, rel=0.03)
 
 
 @pytest.mark.gui
@@ -626,3 +701,8 @@ def test_vector_export_shades_a_smooth_surface_with_the_windows_normals(can_rend
     assert vc[0, 0, :3] == pytest.approx([shade(n_vtk[0])] * 3, abs=1e-5)   # face 0's corner at point 0
     assert vc[1, 0, :3] == pytest.approx([shade(n_vtk[0])] * 3, abs=1e-5)   # face 1's corner at point 0
     assert vc[0, 2, :3] == pytest.approx([shade(n_vtk[2])] * 3, abs=1e-5)
+
+
+def test_fig4_without_any_of_its_phones_is_refused_not_drawn_empty(m):
+    with pytest.raises(ValueError, match=r"none of /zz/, /qq/ has 3 or more mid-points .*choose phones"):
+        F.make_fig4(m, phones=("zz", "qq"))

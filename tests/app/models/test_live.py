@@ -134,7 +134,7 @@ def test_video_corpus_lip_view_draws_the_facemesh_lip_surface(video_world):
     P = c.frames.reshape(c.n_frames, -1, 3)
     pl = pv.Plotter(off_screen=True)
     try:
-        h = add_lips(pl, P[0], c.faces, roles=c.point_roles, names=c.point_names)
+        h = add_lips(pl, P[0], c.faces, names=c.point_names)
         assert h.mesh.n_cells == 120 and "Normals" in h.mesh.point_data  # a shaded surface, not markers
         # front faces look at the camera (+z), as the lips do
         n = np.asarray(h.mesh.compute_normals(cell_normals=True, point_normals=False).cell_data["Normals"])
@@ -164,12 +164,12 @@ def test_live_window_draws_trail_future_and_counts(video_world, qtbot):
 
 @pytest.mark.gui
 def test_explorer_lip_view_shows_the_lip_surface_of_a_video_corpus(qapp, video_world, main_window_factory):
-    from app.scene.lips import ContourHandle
+    from app.scene.lips import LipsHandle
 
     m = video_world["manifold"]
     with main_window_factory(qapp, m, size=(1100, 800)) as w:
         lv = w.lip_view
-        assert not isinstance(lv.main, ContourHandle)  # the FaceMesh surface, not a marker contour
+        assert isinstance(lv.main, LipsHandle) and lv.main.mesh.n_cells  # the FaceMesh surface, not sensors
         assert lv.main.mesh.n_cells == 120 and "Normals" in lv.main.mesh.point_data
         w.state.select_frame(10)  # a click on frame 10
         for _ in range(5):

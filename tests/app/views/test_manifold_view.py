@@ -238,23 +238,41 @@ def test_window_reset_camera_and_export_dialog(qapp, qtbot, app_manifold, tmp_pa
         w.show()
         qapp.processEvents()
         # File > Export figure > Manifold view: no suffix typed, the SVG filter chosen -> view.svg, vector,
-        # written by a worker thread
+        # written by a worker thread; the width asked: one journal column
+        from app.views import export_dialog
+
         monkeypatch.setattr(QtWidgets.QFileDialog, "getSaveFileName",
                             staticmethod(lambda *a, **k: (str(tmp_path / "view"), "SVG (*.svg)")))
+        asked = []
+
+        def exec_(dlg):
+            asked.append((dlg.screen.isVisibleTo(dlg), dlg.dpi.isVisibleTo(dlg)))
+            dlg.one.setChecked(True)
+            dlg.dpi.setValue(200)
+            return QtWidgets.QDialog.DialogCode.Accepted
+
+        monkeypatch.setattr(export_dialog.ExportOptionsDialog, "exec", exec_)
         w.export_view_dialog("manifold")
         qtbot.waitUntil(lambda: "wrote" in w.statusBar().currentMessage(), timeout=60000)
         qtbot.waitUntil(lambda: QtWidgets.QApplication.activeModalWidget() is None, timeout=10000)
-        tags = [el.tag.rsplit("}", 1)[-1] for el in ET.parse(tmp_path / "view.svg").getroot().iter()]
+        root = ET.parse(tmp_path / "view.svg").getroot()
+        tags = [el.tag.rsplit("}", 1)[-1] for el in root.iter()]
         assert "image" not in tags and "path" in tags
-        # PNG: the DPI asked for is the DPI written
+        assert float(root.get("width").rstrip("pt")) == pytest.approx(85 / 25.4 * 72, abs=0.5)  # 85 mm wide
+        assert asked[-1] == (True, False)  # a view may be written as on screen; an SVG has no resolution
+        assert w.export_options.width_mm == 85
+        # PNG: the DPI asked for is the DPI written, at the width asked for
         monkeypatch.setattr(QtWidgets.QFileDialog, "getSaveFileName",
                             staticmethod(lambda *a, **k: (str(tmp_path / "v.PNG"), "SVG (*.svg)")))
-        monkeypatch.setattr(QtWidgets.QInputDialog, "getInt", staticmethod(lambda *a, **k: (200, True)))
+        w.statusBar().clearMessage()
         w.export_view_dialog("manifold")
+        qtbot.waitUntil(lambda: "wrote" in w.statusBar().currentMessage(), timeout=60000)
         from PIL import Image
 
         with Image.open(tmp_path / "v.PNG") as im:
             assert im.info["dpi"] == pytest.approx((200, 200), abs=0.01)
+            assert im.size[0] == pytest.approx(85 / 25.4 * 200, abs=1)
+        assert asked[-1] == (True, True)
         w.show()
         qapp.processEvents()
         view = w.manifold_view

@@ -23,7 +23,9 @@ def test_sv_coordinates_are_the_opening_and_its_velocity(small_manifold, table):
     np.testing.assert_allclose(sv[:, 0], lip_aperture(small_manifold.corpus_), rtol=1e-5)
     np.testing.assert_allclose(sv[:, 1], t.velocity_, rtol=1e-6)
     assert np.all(sv[t.opening_, 1] > 0)  # the opening class is the sign of V
-    np.testing.assert_allclose(table.columns["s"], sv[:, 0])
+    # S is the lip aperture itself: written once, as lip_aperture, and said so
+    assert "s" not in table.columns and any("lip_aperture itself" in n for n in table.notes)
+    np.testing.assert_allclose(table.columns["lip_aperture"], sv[:, 0], rtol=1e-5)
     np.testing.assert_allclose(table.columns["v"], sv[:, 1])
     o, S, V = t.sv_basis()  # the drawn frame in Y1-3
     assert abs(S @ V) < 1e-12 and np.isclose(np.linalg.norm(S), 1) and np.isclose(np.linalg.norm(V), 1)
@@ -33,13 +35,14 @@ def test_one_row_per_frame_with_snake_case_columns_and_units(small_manifold, tab
     c, m = small_manifold.corpus_, small_manifold
     assert table.n_rows == c.n_frames
     names = list(table.columns)
-    assert names[:11] == ["utterance", "speaker", "time_s", "frame", "phone", "landmark", "lip_aperture", "class",
-                          "state", "s", "v"]
-    assert names[11:] == [f"fx_{j}" for j in range(1, m.Fx_.shape[1] + 1)] + ["fy_1", "fy_2", "fy_3"]
+    assert names[:10] == ["utterance", "speaker", "time_s", "frame", "phone", "landmark", "lip_aperture", "class",
+                          "state", "v"]
+    assert names[10:] == [f"fx_{j}" for j in range(1, m.Fx_.shape[1] + 1)] + ["fy_1", "fy_2", "fy_3"]
     assert all(re.fullmatch(r"[a-z][a-z0-9_]*", n) for n in names)
     assert set(table.units) == set(names) == set(table.descriptions)
     assert table.units["time_s"] == "s" and table.units["lip_aperture"] == "mm"
-    assert table.units["s"] == "mm" and table.units["v"] == "mm per s"
+    assert table.units["v"] == "mm per s"
+    assert set(table.columns["speaker"]) == {"unknown"}  # the talker names no speaker: a word, not NA
     # the talker names its lips (the inner-contour mid-points): the aperture is theirs
     from engine.recordings.kinematics import lip_aperture
 

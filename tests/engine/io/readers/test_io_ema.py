@@ -138,6 +138,7 @@ def test_real_mocha_phones_are_clipped_and_line_up_with_frames():
     dur = c.n_frames / c.rate
     assert float(lab[-1][1]) > dur  # the .lab runs past the data (2.2 s vs 1.932 s) ...
     assert u.phones[-1].end == pytest.approx(dur) and u.phones[-1].label == lab[-1][2]  # ... and is cut at its end
+    assert any("runs to 2.200 s but the data last 1.932 s" in h for h in c.history)  # ... which the user is told
     assert len(u.phones) == len(lab) and [p.label for p in u.phones] == [r[2] for r in lab]
     raw_t = np.loadtxt(MOCHA / "fsew0_001.ema", usecols=0)
     for p, r in zip(u.phones[:-1], lab[:-1]):
