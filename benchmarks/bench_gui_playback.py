@@ -39,7 +39,7 @@ Each frame's GUI-thread CPU is also read with the hypervisor's steal on its core
 (``/proc/stat``; this is a virtual machine): a late frame can be attributed to
 ``steal``, and each *long frame* (GUI thread CPU > 40 ms between choice and swap) is
 listed with its own CPU, the steal on its core and the machine's counters. ``--probe``
-runs ``steal_probe.py`` (a fixed 0.2-ms piece of work every 10 ms, in a process of its
+runs ``tools/steal_probe.py`` (a fixed 0.2-ms piece of work every 10 ms, in a process of its
 own) beside the repeats and prints, for each long frame, how much CPU the probe's pieces
 were charged meanwhile: if a fixed piece of work elsewhere is charged many times its
 CPU at the same moment, the time was taken from the machine, not by the explorer.
@@ -159,13 +159,13 @@ def play_once(app, win, max_seconds):
 
 
 def _start_probe():
-    """``steal_probe.py`` in a process of its own, saving its pieces to a temporary file."""
+    """``tools/steal_probe.py`` in a process of its own, saving its pieces to a temporary file."""
     import subprocess
     import tempfile
 
     fd, out = tempfile.mkstemp(suffix=".npy", prefix="steal_probe_")
     os.close(fd)
-    script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "steal_probe.py")
+    script = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "tools", "steal_probe.py")
     proc = subprocess.Popen([sys.executable, script, "--seconds", "86400", "--out", out],
                             stdout=subprocess.PIPE, text=True)
     return proc, out
@@ -234,7 +234,7 @@ def main():
     ap.add_argument("--preset", default="default")
     ap.add_argument("--tree", default=None, help="run the explorer code of this checkout instead of this one")
     ap.add_argument("--probe", action="store_true",
-                    help="run steal_probe.py beside the repeats and give its pieces during each long frame")
+                    help="run tools/steal_probe.py beside the repeats and give its pieces during each long frame")
     gb.add_manifold_argument(ap)
     ap.add_argument("--rounds", type=int, default=1, help="with several --manifold: fresh processes per manifold")
     args = ap.parse_args()
