@@ -130,6 +130,17 @@ def test_harness_record_appended_to_the_history(tmp_path, monkeypatch):
     assert len(path.read_text().splitlines()) == 1
 
 
+def test_harness_children_are_cold_figures(tmp_path):
+    bench = Harness("bench_made_up", None, history=tmp_path / "h.jsonl", quiet=True)
+    child = [sys.executable, "-c", "import json; print('noise'); print(json.dumps({'wall_s': 0.5, 'max_rss_MiB': 12.0}))"]
+    rows = bench.children("child", child, repeat=2, headline=True)
+    assert rows == [{"wall_s": 0.5, "max_rss_MiB": 12.0}] * 2
+    f = bench.record()["figures"]["child"]
+    assert f["values"] == [0.5, 0.5] and f["cold"] is True and f["peak_rss_mib"] == 12.0 and "first" not in f
+    with pytest.raises(SystemExit, match="failed"):
+        bench.children("bad", [sys.executable, "-c", "raise SystemExit(3)"])
+
+
 def test_harness_refuses_a_figure_named_twice(tmp_path):
     bench = Harness("bench_made_up", None, history=tmp_path / "h.jsonl", quiet=True)
     bench.figure("x", 1.0)
