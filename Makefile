@@ -34,6 +34,7 @@ docs: $(STAMP)
 
 bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do $(BIN)/python $$b || exit 1; done
+	$(BIN)/python tools/benchmark_table.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache

@@ -8,15 +8,29 @@ from __future__ import annotations
 import os
 
 
-def blas_kernel() -> str:
-    """Every BLAS library loaded (threadpoolctl), with its kernel and threads, and the
-    OPENBLAS_CORETYPE / OPENBLAS_L2_SIZE setting that picks the kernel on these machines."""
+def blas_record() -> dict:
+    """Every BLAS library loaded (threadpoolctl) with its kernel and threads, and the OPENBLAS_*
+    variables set in the environment (OPENBLAS_CORETYPE / OPENBLAS_L2_SIZE pick the kernel on
+    these machines)."""
     from threadpoolctl import threadpool_info
 
-    libs = [f"{i.get('internal_api')} {i.get('version')} kernel={i.get('architecture')} "
-            f"threads={i.get('num_threads')}" for i in threadpool_info() if i.get("user_api") == "blas"]
-    env = {k: os.environ[k] for k in ("OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE") if k in os.environ}
-    return f"{'; '.join(libs) or 'none found'}; OPENBLAS_* env {env or 'unset'}"
+    libs = [{"api": i.get("internal_api"), "version": i.get("version"), "kernel": i.get("architecture"),
+             "threads": i.get("num_threads")} for i in threadpool_info() if i.get("user_api") == "blas"]
+    env = {k: v for k, v in sorted(os.environ.items()) if k.startswith("OPENBLAS_")}
+    return {"libraries": libs, "openblas_env": env}
+
+
+def blas_text(record: dict) -> str:
+    """One line of a :func:`blas_record`."""
+    libs = "; ".join(f"{x['api']} {x['version']} kernel={x['kernel']} threads={x['threads']}"
+                     for x in record["libraries"]) or "none found"
+    env = " ".join(f"{k}={v}" for k, v in record["openblas_env"].items()) or "unset"
+    return f"{libs}; OPENBLAS_* env {env}"
+
+
+def blas_kernel() -> str:
+    """Every BLAS library loaded, with its kernel and threads, and the OPENBLAS_* setting."""
+    return blas_text(blas_record())
 
 
 def _status_mb(field: str, pid="self") -> float:

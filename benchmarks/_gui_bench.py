@@ -6,7 +6,7 @@ Without a DISPLAY a script re-runs itself under ``xvfb-run -a -s "-screen 0 1600
 is built once into the cache (``$LIPSPACE_CACHE_DIR`` or the user cache dir) if missing.
 
 ``--manifold FILE`` (several may be given) runs a script on any built manifold instead,
-blocked corpora's included (``benchmarks/make_standins.py`` builds the 100k-1M stand-ins);
+blocked corpora's included (``tools/make_standins.py`` builds the 100k-1M stand-ins);
 ``talker`` names the default talker, so that both can be measured side by side in one run
 (:func:`manifold_specs`, :func:`load_manifold`, :func:`compare`).
 """
@@ -131,7 +131,7 @@ def manifold_specs(args) -> list[str]:
     out = []
     for spec in args.manifold:
         if spec != TALKER and not os.path.isfile(spec):
-            sys.exit(f"--manifold {spec}: no such file (build one with 'lipspace build' or make_standins.py)")
+            sys.exit(f"--manifold {spec}: no such file (build one with 'lipspace build' or tools/make_standins.py)")
         out.append(spec if spec == TALKER else os.path.abspath(spec))
     return out
 
@@ -173,9 +173,11 @@ def run_marked_child(cmd, spec: str, mark: str = "RESULT") -> dict:
     return json.loads(line[0][len(mark) + 1:])
 
 
-def compare(label: str, per_spec: dict, unit: str = "ms", scale: float = 1e3) -> None:
+def compare(label: str, per_spec: dict, unit: str = "ms", scale: float = 1e3, *, bench=None, **figure) -> None:
     """Print min / median per manifold of the values ``per_spec[spec]`` (one per run or click) and, against
-    the first manifold, the ratio of their medians and of their minima."""
+    the first manifold, the ratio of their medians and of their minima; with ``bench`` (a
+    :class:`_harness.Harness`) each manifold's values become a figure (in seconds when ``unit`` is a time),
+    ``figure`` passed to :meth:`~_harness.Harness.figure`."""
     import numpy as np
 
     specs = list(per_spec)
@@ -190,6 +192,10 @@ def compare(label: str, per_spec: dict, unit: str = "ms", scale: float = 1e3) ->
             ratio = (lambda x, y: f"{x / y:.2f}" if y else "n/a")
             line += f"; / {spec_label(base)}: median {ratio(np.median(v), np.median(b))}, min {ratio(v.min(), b.min())}"
         print(line)
+        if bench is not None:
+            secs = {"ms": 1e-3, "s": 1.0}.get(unit)  # a time is kept in seconds
+            bench.figure(f"{label} [{spec_label(spec)}]", list(v * secs) if secs else list(v), "s" if secs else unit,
+                         show=False, **figure)
 
 
 def open_window(manifold, source):

@@ -9,24 +9,9 @@ from __future__ import annotations
 
 import argparse
 import time
-import tracemalloc
 
 import numpy as np
-from _common import blas_kernel, peak_rss_mb
-
-
-def stage(name, fn, rows):
-    tracemalloc.start()
-    tracemalloc.reset_peak()
-    t = time.perf_counter()
-    out = fn()
-    dt = time.perf_counter() - t
-    _, peak = tracemalloc.get_traced_memory()
-    tracemalloc.stop()
-    rows.append((name, dt, peak / 2**20))
-    print(f"{name:<22} {dt:8.2f} s   peak traced {peak / 2**20:9.1f} MiB   process max RSS {peak_rss_mb():9.1f} MiB",
-          flush=True)
-    return out
+from _harness import Harness
 
 
 def main():
@@ -34,7 +19,14 @@ def main():
     ap.add_argument("--preset", default="paper")
     ap.add_argument("--method", default="pca")
     ap.add_argument("--landmarks", type=int, default=None)
+    Harness.add_arguments(ap)
     args = ap.parse_args()
+    bench = Harness("bench_build", args)
+
+    def stage(name, fn, rows):
+        out, m = bench.measure(name, fn, cold=True)
+        rows.append((name, m.first, m.peak_traced_mib))
+        return out
 
     from engine.graph.states import StateGraph
     from engine.manifold.dynamics import DynamicFeatures
@@ -61,12 +53,14 @@ def main():
     stage("tangent frames", lambda: TangentFrames().fit(Fy, b, lip_aperture(corpus), rate=corpus.rate), rows)
     stage("state graph", lambda: StateGraph().fit(Fy, b), rows)
     total = time.perf_counter() - t0
+    bench.figure("TOTAL build (excluding corpus generation)", total, cold=True, headline=True,
+                 peak_traced_mib=max(r[2] for r in rows[1:]))
+    bench.fact(frames=corpus.n_frames, coordinates=int(corpus.frames.shape[1]), shape_components=int(shape.n_components_))
     print(f"\nshape: {shape.n_components_} components hold {100 * shape.recovered_ratio_[shape.n_components_ - 1]:.2f}%"
           f"; Y first 3 dims hold {100 * emb.recovered_ratio_[2]:.1f}% of recovered variance; "
           f"{emb.n_passes_} passes over D")
-    print(f"TOTAL build (excluding corpus generation): {total:.2f} s; max traced peak "
-          f"{max(r[2] for r in rows[1:]):.0f} MiB; process max RSS {peak_rss_mb():.0f} MiB")
-    print(f"(numpy {np.__version__}; BLAS {blas_kernel()})")
+    print(f"(numpy {np.__version__})")
+    bench.finish()
 
 
 if __name__ == "__main__":

@@ -34,7 +34,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import blas_kernel, current_rss_mb, peak_rss_mb, run_child_json  # noqa: E402
+from _common import current_rss_mb, peak_rss_mb, run_child_json  # noqa: E402
+from _harness import Harness  # noqa: E402
 
 
 def features(n_frames: int, n_points: int, seed: int = 0):
@@ -84,14 +85,16 @@ def main(argv=None) -> int:
     ap.add_argument("--n-iter", type=int, default=0, help="power iterations (default: %(default)s)")
     ap.add_argument("--repeat", type=int, default=1, help="fresh-process fits per size (default: %(default)s)")
     ap.add_argument("--one", type=int, default=None, help=argparse.SUPPRESS)
+    Harness.add_arguments(ap)
     args = ap.parse_args(argv)
     if args.one is not None:
         print(json.dumps(one(args.one, args.points, args.n_iter)))
         return 0
     import numpy as np
 
+    bench = Harness("bench_embedding_memory", args)
     print(f"embedding memory: PCA of D, k=10, n_iter={args.n_iter}, {args.points} points per frame; "
-          f"BLAS {blas_kernel()}; {os.cpu_count()} CPUs; numpy {np.__version__}")
+          f"{os.cpu_count()} CPUs; numpy {np.__version__}")
     print(f"{'N':>8} {'2m':>3} {'passes':>6} {'wall min/med s':>15} {'peak MB':>9} {'input MB':>9} "
           f"{'peak-input MB':>13} {'growth':>7}")
     prev = None
@@ -108,6 +111,9 @@ def main(argv=None) -> int:
         prev = added
         print(f"{n:>8} {runs[0]['cols']:>3} {runs[0]['passes']:>6} {min(walls):>7.1f}/{statistics.median(walls):<7.1f} "
               f"{peak:>9.0f} {held:>9.0f} {added:>13.0f} {growth:>7}")
+        bench.figure(f"N={n}: fit wall", walls, cold=True, peak_rss_mib=peak, headline=True, held_mib=held,
+                     added_mib=added, passes=runs[0]["passes"], show=False)
+    bench.finish()
     return 0
 
 

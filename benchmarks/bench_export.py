@@ -19,7 +19,6 @@ import os
 import sys
 import tempfile
 import time
-import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -30,30 +29,7 @@ if str(ROOT) not in sys.path:
 
 
 from _common import first_phones, peak_rss_mb, run_child_json  # noqa: E402
-
-
-def timed(name, fn, *, repeat=1, per=None):
-    """One first run under tracemalloc (peak memory; its wall time includes first-use costs such
-    as shader compilation), then ``repeat`` untraced runs: min / median wall and CPU time."""
-    tracemalloc.start()
-    t = time.perf_counter()
-    fn()
-    first = time.perf_counter() - t
-    peak = tracemalloc.get_traced_memory()[1]
-    tracemalloc.stop()
-    times, cpus = [], []
-    for _ in range(repeat):
-        t, c = time.perf_counter(), time.process_time()
-        fn()
-        times.append(time.perf_counter() - t)
-        cpus.append(time.process_time() - c)
-    lo, med = min(times), float(np.median(times))
-    extra = f"   {per / lo:5.2f}x / {per / med:5.2f}x real time (min / median)" if per else ""
-    print(f"  {name:<40} min {1000 * lo:8.1f} ms   median {1000 * med:8.1f} ms (of {repeat}; CPU median "
-          f"{1000 * float(np.median(cpus)):8.1f} ms, all threads)   first run {1000 * first:8.1f} ms (traced)   "
-          f"peak traced {peak / 2**20:7.1f} MiB   max RSS {peak_rss_mb():6.0f} MiB{extra}   "
-          f"[load {os.getloadavg()[0]:.1f}]", flush=True)
-    return lo, med
+from _harness import Harness  # noqa: E402
 
 
 def _synthesize(m, seconds):
@@ -90,7 +66,7 @@ def _child(kind, manifold_path, seconds, size, out):
     print(json.dumps({"load_and_synthesize": t1 - t0, "export": t2 - t1, "rss_mib": peak_rss_mb()}))
 
 
-def _cold(kind, manifold_path, args, tmp):
+def _cold(kind, manifold_path, args, tmp, bench):
     walls, exports, rss = [], [], []
     for k in range(args.cold):
         out = Path(tmp) / f"cold{k}.{'glb' if kind == 'glb' else 'mp4'}"
@@ -103,6 +79,8 @@ def _cold(kind, manifold_path, args, tmp):
     print(f"  cold {kind:<39} process min {min(walls):6.2f} s  median {np.median(walls):6.2f} s; "
           f"export step min {1000 * min(exports):8.1f} ms  median {1000 * np.median(exports):8.1f} ms "
           f"(of {args.cold}); max RSS {max(rss):6.0f} MiB", flush=True)
+    bench.figure(f"cold {kind}: whole process", walls, cold=True, peak_rss_mib=max(rss))
+    bench.figure(f"cold {kind}: export step", exports, cold=True, headline=kind == "glb")
 
 
 def main():
@@ -116,19 +94,25 @@ def main():
     ap.add_argument("--cache-dir", default=None)
     ap.add_argument("--child", choices=("glb", "mp4"), default=None, help=argparse.SUPPRESS)
     ap.add_argument("--out", default=None, help=argparse.SUPPRESS)
+    Harness.add_arguments(ap)
     args = ap.parse_args()
     if args.child:
         return _child(args.child, args.manifold, args.seconds, args.size, args.out)
 
-    from threadpoolctl import threadpool_info
-
     from engine.manifold.model import Manifold
     from engine.talker.synthetic import load_synthetic
 
-    blas = [f"{i['internal_api']} {i.get('version')} {i.get('architecture')} x{i['num_threads']}"
-            for i in threadpool_info() if i["user_api"] == "blas"]
-    print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f} (other work on the machine slows wall times)")
-    print(f"python {sys.version.split()[0]}, numpy {np.__version__}, BLAS: {'; '.join(blas) or 'unknown'}")
+    bench = Harness("bench_export", args)
+
+    def timed(name, fn, *, repeat, per=None, headline=False):
+        """The first call (its time includes first-use costs such as shader compilation), then
+        ``repeat`` warm calls; ``per``: the video's length, printed as multiples of real time."""
+        _, m = bench.measure(name, fn, repeat=repeat, cpu=True, headline=headline)
+        if per:
+            print(f"  {per / m.min:5.2f}x / {per / m.median:5.2f}x real time (min / median)", flush=True)
+            bench.figure(f"{name}: x real time", [per / t for t in m.warm or m.values], "x", headline=headline)
+
+    print(f"{os.cpu_count()} CPUs, python {sys.version.split()[0]}, numpy {np.__version__}")
     with tempfile.TemporaryDirectory(prefix="bench-export-") as tmp:
         if args.manifold:
             m = Manifold.load(args.manifold)
@@ -150,16 +134,16 @@ def main():
         print("\nglTF (.glb) - goal < 1 s")
         glb = Path(tmp) / "speech.glb"
         timed("export_animation -> .glb (warm)", lambda: export_animation(m, traj.Fx, glb, rate=c.rate),
-              repeat=args.repeat)
+              repeat=args.repeat, headline=True)
         print(f"  file size {glb.stat().st_size / 2**20:.2f} MiB")
-        _cold("glb", mpath, args, tmp)
+        _cold("glb", mpath, args, tmp, bench)
 
         print(f"\nMP4 (H.264, {args.size[0]}x{args.size[1]} per panel, {c.rate:g} fps) - goal >= real time")
         frames = traj.frames(m)
         mp4 = Path(tmp) / "talk.mp4"
         w = max(1, args.repeat - 2)
         timed("lips only (warm)", lambda: render_video(mp4, frames, rate=c.rate, faces=c.faces, dims=c.dims,
-                                                       size=args.size), repeat=w, per=dur)
+                                                       size=args.size), repeat=w, per=dur, headline=True)
         print(f"  file size {mp4.stat().st_size / 2**20:.2f} MiB")
         from engine.evaluation.measures import trajectory_y
 
@@ -170,7 +154,7 @@ def main():
               lambda: render_video(mp4, frames, rate=c.rate, faces=c.faces, dims=c.dims, original=orig, Y=Y,
                                    Y_original=m.Fy_[u.start:u.start + n], cloud=m.Fy_, size=args.size),
               repeat=w, per=dur)
-        _cold("mp4", mpath, args, tmp)
+        _cold("mp4", mpath, args, tmp, bench)
         import vtk
 
         rw = vtk.vtkRenderWindow()
@@ -180,6 +164,8 @@ def main():
         print(f"\nVTK {vtk.vtkVersion.GetVTKVersion()}, {type(rw).__name__}: {info[0].strip() if info else '?'}; "
               f"DISPLAY={os.environ.get('DISPLAY', '(none)')}")
         rw.Finalize()
+        bench.fact(gl_renderer=info[0].strip() if info else "?")
+    bench.finish()
 
 
 if __name__ == "__main__":

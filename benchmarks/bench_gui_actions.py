@@ -35,6 +35,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _gui_bench as gb  # noqa: E402
+from _harness import Harness  # noqa: E402
 
 
 def until_drawn(app, view, log, action, timeout=120.0):
@@ -115,10 +116,12 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5, help="times each action is done in a process")
     ap.add_argument("--rounds", type=int, default=1, help="fresh processes per manifold")
+    Harness.add_arguments(ap)
     args, cap = gb.parse_bench_args(ap)
     if args.child is not None:
         print("RESULT " + json.dumps(run(args.child, args.repeats, args.preset)))
         return
+    bench = Harness("bench_gui_actions", args)
     specs = gb.manifold_specs(args)
     gb.header("ellipsoids, phone filter, trajectory editor (real window)")
     t_all = time.perf_counter()
@@ -130,8 +133,11 @@ def main():
         print(f"   run [{gb.spec_label(spec)}]: {r['n_frames']:,} frames, peak RSS {r['rss_mb']:.0f} MiB, "
               f"load {r['load']:.1f}", flush=True)
     for action in next(iter(runs.values()))[0]["times"]:
-        gb.compare(action, {sp: [t for r in rs for t in r["times"][action]] for sp, rs in runs.items()})
-    print(f"wall {time.perf_counter() - t_all:.1f} s; BLAS {gb.blas_kernel()}; load average {os.getloadavg()[0]:.1f} at end")
+        gb.compare(action, {sp: [t for r in rs for t in r["times"][action]] for sp, rs in runs.items()}, bench=bench,
+                   headline=action in ("ellipsoid on", "phone filter"),
+                   peak_rss_mib=max(r["rss_mb"] for rs in runs.values() for r in rs))
+    print(f"wall {time.perf_counter() - t_all:.1f} s")
+    bench.finish()
 
 
 if __name__ == "__main__":

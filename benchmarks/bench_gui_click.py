@@ -43,6 +43,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _gui_bench as gb  # noqa: E402
+from _harness import Harness  # noqa: E402
 
 
 def click_targets(win, n):
@@ -202,12 +203,14 @@ def main():
     ap.add_argument("--repeats", type=int, default=3, help="fresh processes per manifold (each: 1 cold click)")
     ap.add_argument("--sound", choices=("off", "on", "compare"), default="off",
                     help="the editor's waveform and spectrogram: not loaded, shown, or shown / hidden by turns")
+    Harness.add_arguments(ap)
     args, cap = gb.parse_bench_args(ap)
     if args.child is not None:  # one fresh process: print its clicks as JSON
         print("RESULT " + json.dumps(run_clicks(args.clicks, args.child, args.preset, args.sound)))
         return
     import numpy as np
 
+    bench = Harness("bench_gui_click", args)
     specs = gb.manifold_specs(args)
     gb.header("click -> hemisphere drawn (real window, real mouse clicks)")
     t_all = time.perf_counter()
@@ -231,6 +234,11 @@ def main():
         checks = [c for r in rs for c in r["checks"]]
         print(f"[{gb.spec_label(spec)}] {rs[0]['n_frames']:,} frames, {rs[0]['n_points']:,} drawn points")
         print(f"   cold (first click in a fresh process, {len(cold)} processes): {gb.stats([c[0] for c in cold])}")
+        peak = max(r["rss_mb"] for r in rs)
+        bench.figure(f"click -> hemisphere drawn, cold [{gb.spec_label(spec)}]", [c[0] for c in cold], cold=True,
+                     headline=True, show=False, peak_rss_mib=peak)
+        bench.figure(f"click -> hemisphere drawn, warm [{gb.spec_label(spec)}]", [c[0] for c in warm], cold=False,
+                     headline=True, show=False, peak_rss_mib=peak, cpu_median_s=float(np.median([c[4] for c in warm])))
         print(f"   warm ({len(warm)} clicks): {gb.stats([c[0] for c in warm])}; CPU of the process per click "
               f"{gb.stats([c[4] for c in warm])}")
         print(f"   renders per click: manifold view {sorted(set(c[1] for c in cold + warm))}, "
@@ -240,6 +248,7 @@ def main():
             print(f"   warm, {what}: {gb.stats([c[3][k] for c in warm])}")
         ok = sum(c["selected"] == c["under_cursor"] for c in checks)
         own = sum(c["selected"] == c["target"] for c in checks)
+        bench.fact(**{f"picks exact [{gb.spec_label(spec)}]": [ok, len(checks)]})
         print(f"   picking: the selected frame is the one under the cursor among all {rs[0]['n_frames']:,} frames in "
               f"{ok} of {len(checks)} clicks (the clicked target itself in {own}); frames searched per click "
               f"median {np.median([c['candidates'] for c in checks]):.0f}")
@@ -267,7 +276,8 @@ def main():
         gb.compare("cold click", {s: [r["first"][0] for r in rs] for s, rs in runs.items()})
         gb.compare("warm click", {s: [w[0] for r in rs for w in r["warm"]] for s, rs in runs.items()})
         gb.compare("warm click CPU", {s: [w[4] for r in rs for w in r["warm"]] for s, rs in runs.items()})
-    print(f"wall {time.perf_counter() - t_all:.1f} s; BLAS {gb.blas_kernel()}; load average {os.getloadavg()[0]:.1f} at end")
+    print(f"wall {time.perf_counter() - t_all:.1f} s")
+    bench.finish()
 
 
 if __name__ == "__main__":

@@ -39,7 +39,7 @@ Each frame's GUI-thread CPU is also read with the hypervisor's steal on its core
 (``/proc/stat``; this is a virtual machine): a late frame can be attributed to
 ``steal``, and each *long frame* (GUI thread CPU > 40 ms between choice and swap) is
 listed with its own CPU, the steal on its core and the machine's counters. ``--probe``
-runs ``steal_probe.py`` (a fixed 0.2-ms piece of work every 10 ms, in a process of its
+runs ``tools/steal_probe.py`` (a fixed 0.2-ms piece of work every 10 ms, in a process of its
 own) beside the repeats and prints, for each long frame, how much CPU the probe's pieces
 were charged meanwhile: if a fixed piece of work elsewhere is charged many times its
 CPU at the same moment, the time was taken from the machine, not by the explorer.
@@ -66,6 +66,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _gui_bench as gb  # noqa: E402
+from _harness import Harness  # noqa: E402
 from _playback_trace import CAUSES, LONG_FRAME_CPU_S, PlaybackTrace, frame_table, late_causes, long_frames  # noqa: E402
 
 
@@ -159,13 +160,13 @@ def play_once(app, win, max_seconds):
 
 
 def _start_probe():
-    """``steal_probe.py`` in a process of its own, saving its pieces to a temporary file."""
+    """``tools/steal_probe.py`` in a process of its own, saving its pieces to a temporary file."""
     import subprocess
     import tempfile
 
     fd, out = tempfile.mkstemp(suffix=".npy", prefix="steal_probe_")
     os.close(fd)
-    script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "steal_probe.py")
+    script = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "tools", "steal_probe.py")
     proc = subprocess.Popen([sys.executable, script, "--seconds", "86400", "--out", out],
                             stdout=subprocess.PIPE, text=True)
     return proc, out
@@ -234,9 +235,10 @@ def main():
     ap.add_argument("--preset", default="default")
     ap.add_argument("--tree", default=None, help="run the explorer code of this checkout instead of this one")
     ap.add_argument("--probe", action="store_true",
-                    help="run steal_probe.py beside the repeats and give its pieces during each long frame")
+                    help="run tools/steal_probe.py beside the repeats and give its pieces during each long frame")
     gb.add_manifold_argument(ap)
     ap.add_argument("--rounds", type=int, default=1, help="with several --manifold: fresh processes per manifold")
+    Harness.add_arguments(ap)
     args = ap.parse_args()
     gb.ensure_display()
     if args.tree:
@@ -249,6 +251,7 @@ def main():
         side_by_side(args, specs, cap)
         return
 
+    bench = Harness("bench_gui_playback", args)
     gb.header("playback in the lip view (real window, Play button)")
     import app
 
@@ -333,6 +336,11 @@ def main():
           f"load average {os.getloadavg()[0]:.1f} at end")
     if probe is not None:
         _probe_report(probe, res)
+    for key, label, unit in (("fps", "frames/s shown", "/s"), ("lag_max", "worst lag", "periods"),
+                             ("late", "share of frames > 1 period late", "1"), ("cpu_ms", "CPU per frame shown", "ms")):
+        bench.figure(label, [x[key] for x in res], unit, first_is_separate=True, cold=True, show=False,
+                     headline=key in ("fps", "lag_max"), peak_rss_mib=gb.peak_rss_mb())
+    bench.finish()
     print("SUMMARY " + json.dumps({"n_frames": int(m.Fy_.shape[0]), "rss_mb": gb.peak_rss_mb(),
                                    "repeats": [{k: float(x[k]) for k in ("fps", "lag_max", "late", "cpu_ms", "load")}
                                                for x in res]}))
@@ -341,11 +349,12 @@ def main():
 
 def side_by_side(args, specs, cap) -> None:
     """Each manifold in fresh processes, alternating; the frame rates and lags side by side."""
+    bench = Harness("bench_gui_playback", args)
     gb.header(f"playback in the lip view, side by side: {', '.join(gb.spec_label(s) for s in specs)}")
     runs = {spec: [] for spec in specs}
     for spec in gb.order_of_runs(specs, args.rounds):
         cmd = [sys.executable, os.path.abspath(__file__), "--manifold", spec, "--repeats", str(args.repeats),
-               "--max-seconds", str(args.max_seconds), "--preset", args.preset, *cap]
+               "--max-seconds", str(args.max_seconds), "--preset", args.preset, "--no-history", *cap]
         r = gb.run_marked_child(cmd, spec, "SUMMARY")
         runs[spec].append(r)
         fps = ", ".join(f"{x['fps']:.1f}" for x in r["repeats"])
@@ -355,9 +364,11 @@ def side_by_side(args, specs, cap) -> None:
     for key, label, unit, scale in (("fps", "frames/s shown", "/s", 1.0), ("lag_max", "worst lag", "periods", 1.0),
                                     ("late", "frames > 1 period late", "%", 100.0),
                                     ("cpu_ms", "CPU per frame shown", "ms", 1.0)):
-        gb.compare(label, {s: [x[key] for r in rs for x in r["repeats"]] for s, rs in runs.items()}, unit, scale)
+        gb.compare(label, {s: [x[key] for r in rs for x in r["repeats"]] for s, rs in runs.items()}, unit, scale,
+                   bench=bench, headline=key in ("fps", "lag_max"))
     loads = [x["load"] for rs in runs.values() for r in rs for x in r["repeats"]]
     print(f"   load average during repeats {min(loads):.1f}-{max(loads):.1f}")
+    bench.finish()
 
 
 if __name__ == "__main__":

@@ -36,7 +36,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import blas_kernel, run_child_json  # noqa: E402
+from _common import run_child_json  # noqa: E402
+from _harness import Harness  # noqa: E402
 
 _STAGES = r"""
 import json, sys, time
@@ -72,12 +73,13 @@ def main(argv=None):
     ap.add_argument("--manifold", help="manifold file (default: build the default talker into a temp dir)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--cache-dir", help="LIPSPACE_CACHE_DIR for the talker (default: the user cache)")
+    Harness.add_arguments(ap)
     args = ap.parse_args(argv)
+    bench = Harness("bench_inverse_cold", args)
     env = dict(os.environ)
     if args.cache_dir:
         env["LIPSPACE_CACHE_DIR"] = args.cache_dir
     lipspace = [sys.executable, "-m", "app.cli"]
-    print("BLAS:", blas_kernel(), flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         man = args.manifold
         if man is None:
@@ -93,10 +95,13 @@ def main(argv=None):
         print(f"\nstages, fresh process each ({n_simp} simplices), min / median of {args.repeat}:")
         for k, v in stages.items():
             print(f"  {k:<46} {min(v):8.3f} s  {np.median(v):8.3f} s")
+            bench.figure(k, v, cold=True, show=False, headline=k == "first query, 79 points (cold)")
         old, new = (np.array(stages[k]) for k in ("transforms, old path (scipy per simplex)",
                                                    "transforms, new path (numpy batch)"))
         ratio = old / new
         print(f"  old / new transforms, pair by pair: min {ratio.min():.1f}x  median {np.median(ratio):.1f}x")
+        bench.figure("old / new transforms, pair by pair", list(ratio), "x", show=False)
+        bench.fact(simplices=n_simp)
 
         cmd = lipspace + ["synthesize", "--manifold", man, "--text", "bob meets mum",
                           "-o", str(Path(tmp) / "t.csv"), "--quiet", "--force"]  # every run replaces t.csv
@@ -110,6 +115,9 @@ def main(argv=None):
         print(f"  all runs, min / median of {args.repeat}                  {min(walls):8.3f} s  "
               f"{np.median(walls):8.3f} s   (goal < 3 s)")
         print(f"  peak RSS of the largest child process          {_child_peak_mb():8.0f} MiB")
+        bench.figure("lipspace synthesize --text, whole process", walls, cold=True, first_is_separate=False,
+                     peak_rss_mib=_child_peak_mb(), headline=True, show=False)
+    bench.finish()
 
 
 if __name__ == "__main__":

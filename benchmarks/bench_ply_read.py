@@ -93,7 +93,7 @@ def one(path: str, impl: str | None, repeats: int) -> dict:
 
     return {"cold_s": times[0], "warm_min_s": min(times[1:]) if repeats else float("nan"),
             "warm_median_s": statistics.median(times[1:]) if repeats else float("nan"),
-            "peak_rss_mb": peak_rss_mb(), "outcome": outcome,
+            "peak_rss_mb": peak_rss_mb(), "outcome": outcome, "times": times,
             "blas": blas_kernel()}
 
 
@@ -105,6 +105,9 @@ def main() -> int:
     ap.add_argument("--timeout", type=float, default=180.0)
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--_one", nargs=2, help=argparse.SUPPRESS)
+    from _harness import Harness
+
+    Harness.add_arguments(ap)
     args = ap.parse_args()
     if args._one:
         print(json.dumps(one(args._one[0], args._one[1] or None, args.repeats)))
@@ -113,6 +116,7 @@ def main() -> int:
 
     from _common import run_child_json
 
+    bench = Harness("bench_ply_read", args)
     print(f"load average {os.getloadavg()[0]:.2f}; reader {args.impl or 'engine/io/readers/meshfile.py'}")
     with tempfile.TemporaryDirectory() as d:
         for case in args.cases.split(","):
@@ -129,7 +133,10 @@ def main() -> int:
             print(f"{case:20s} {p.stat().st_size / 2**20:6.1f} MB  cold {res['cold_s']:7.3f} s  warm min "
                   f"{res['warm_min_s']:7.3f} s  median {res['warm_median_s']:7.3f} s  peak RSS "
                   f"{res['peak_rss_mb']:7.0f} MB  {res['outcome']}")
-        print(f"BLAS: {res['blas'] if res else '-'}")
+            bench.figure(f"read {case}", res["times"], cold=True, first_is_separate=True, show=False,
+                         peak_rss_mib=res["peak_rss_mb"], headline=case == "bin-mixed",
+                         file_mb=p.stat().st_size / 2**20, outcome=res["outcome"])
+    bench.finish()
     return 0
 
 

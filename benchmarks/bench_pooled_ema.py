@@ -33,6 +33,7 @@ if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _common import blas_kernel, run_child_json  # noqa: E402
+from _harness import Harness  # noqa: E402
 
 N_FRAMES = 276_927
 RATE = 250.0
@@ -97,15 +98,18 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=1)
     ap.add_argument("--dask", default=None, help="'local' or a scheduler address (default: in-process)")
     ap.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
+    Harness.add_arguments(ap)
     args = ap.parse_args(argv)
     if args.one:
         print(json.dumps(one(args.dask)))
         return 0
-    walls = []
+    bench = Harness("bench_pooled_ema", args)
+    walls, peaks = [], []
     for r in range(args.repeats):
         cmd = [sys.executable, os.path.abspath(__file__), "--one"] + (["--dask", args.dask] if args.dask else [])
         res = run_child_json(cmd)
         walls.append(res["wall_s"])
+        peaks.append(res["rss_peak_mb"])
         st = ", ".join(f"{k} {v:.1f}" for k, v in res["stages"].items())
         wk = f"; workers' peak {', '.join(f'{w:.0f}' for w in res['worker_peak_mb'])} MB" if res["worker_peak_mb"] else ""
         print(f"repeat {r}: {res['n_frames']} frames x {res['coords']} coordinates, {res['utterances']} utterances, "
@@ -117,6 +121,9 @@ def main(argv=None) -> int:
 
     print(f"build wall over {len(walls)} cold run(s): min {min(walls):.1f} s, median {statistics.median(walls):.1f} s; "
           f"dask: {args.dask or 'no (in-process)'}\nBLAS: {res['blas']}")
+    bench.figure("build wall", walls, cold=True, peak_rss_mib=max(peaks), headline=True, show=False,
+                 dask=args.dask or "in-process", frames=res["n_frames"], stages=res["stages"])
+    bench.finish()
     return 0
 
 

@@ -51,6 +51,7 @@ if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _common import blas_kernel, current_rss_mb, peak_rss_mb, run_child_json  # noqa: E402
+from _harness import Harness  # noqa: E402
 
 
 class _StagePeaks(threading.Thread):
@@ -296,6 +297,7 @@ def main(argv=None) -> int:
     ap.add_argument("--one", help=argparse.SUPPRESS)
     ap.add_argument("--root", help=argparse.SUPPRESS)
     ap.add_argument("--generate", type=int, help=argparse.SUPPRESS)
+    Harness.add_arguments(ap)
     args = ap.parse_args(argv)
     if (args.workers or args.worker_memory) and args.dask != "local":
         ap.error("--workers and --worker-memory need --dask local")
@@ -308,6 +310,7 @@ def main(argv=None) -> int:
         print(json.dumps(one(args.one, args.dask, shape_only=args.shape_only, workers=args.workers,
                              worker_memory=args.worker_memory)))
         return 0
+    bench = Harness("bench_scale", args)
     os.makedirs(args.work, exist_ok=True)
     runs, by_tree = [], {}
     me = [sys.executable, os.path.abspath(__file__)]
@@ -334,6 +337,13 @@ def main(argv=None) -> int:
         _print_summary(by_tree)
     if len(runs) > 1:
         _print_exponents(runs)
+    for (n, label), rs in by_tree.items():
+        wk = [max(r["worker_peak_mb"]) for r in rs if r["worker_peak_mb"]]
+        bench.figure(f"{n} frames, {label}: {'shape space' if args.shape_only else 'build'} wall",
+                     [r["wall_s"] for r in rs], cold=True, peak_rss_mib=max(r["rss_peak_mb"] for r in rs),
+                     headline=label == "this tree", show=False, worker_peak_mib=max(wk) if wk else None,
+                     stages=rs[0]["stages"])
+    bench.finish()
     return 0
 
 

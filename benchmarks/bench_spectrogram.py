@@ -43,7 +43,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 import _gui_bench as gb  # noqa: E402
-from _common import blas_kernel, peak_rss_mb  # noqa: E402
+from _common import peak_rss_mb  # noqa: E402
+from _harness import Harness  # noqa: E402
 
 MOCHA_WAV = HERE.parents[1] / "shared" / "data" / "mocha-fsew0" / "fsew0_001.wav"
 
@@ -167,6 +168,7 @@ def main():
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--cold", type=int, default=3, help="fresh processes for the cold engine figure")
     ap.add_argument("--child", metavar="WAV", help=argparse.SUPPRESS)
+    Harness.add_arguments(ap)
     args = ap.parse_args()
     if args.child:  # one fresh process: the engine computation, imports included
         t = time.perf_counter()
@@ -174,6 +176,7 @@ def main():
         print(json.dumps({"s": time.perf_counter() - t}))
         return
     gb.ensure_display()
+    bench = Harness("bench_spectrogram", args)
     gb.header(f"{args.seconds:g}-s utterance: waveform and spectrogram, Load -> drawn")
     with tempfile.TemporaryDirectory(prefix="lipspace-bench-spec-") as tmp:
         wav = Path(tmp) / "long.wav"
@@ -190,6 +193,8 @@ def main():
         warm = [engine_once(wav) for _ in range(args.repeats)]
         print(f"engine, cold (fresh process, imports included, {args.cold} processes): {gb.stats(cold)}")
         print(f"engine, warm ({args.repeats} calls in one process):                    {gb.stats(warm)}")
+        bench.figure("engine, cold (fresh process)", cold, cold=True, show=False)
+        bench.figure("engine, warm", warm, cold=False, show=False)
         t = time.perf_counter()
         m = long_utterance_manifold(wav, args.seconds)
         print(f"   manifold for the window: small talker, one {args.seconds:g}-s utterance, {m.Fy_.shape[0]} frames "
@@ -203,7 +208,13 @@ def main():
     print(f"   longest GUI-thread gap during each (5-ms timer): {gb.stats(r['gaps'])}")
     print(f"window, cached (the same utterance again):         {gb.stats(r['cached'])}")
     print(f"   longest GUI-thread gap during each (the same GUI work, no worker): {gb.stats(r['cached_gaps'])}")
-    print(f"peak RSS {peak_rss_mb():.0f} MiB; BLAS {blas_kernel()}; load average {os.getloadavg()[0]:.1f} at end")
+    print(f"peak RSS {peak_rss_mb():.0f} MiB")
+    bench.figure("window, first Load", r["first"], cold=True, show=False)
+    bench.figure("window, Load -> drawn, uncached", r["uncached"], headline=True, show=False)
+    bench.figure("window, Load -> drawn, cached", r["cached"], headline=True, show=False)
+    bench.figure("window, longest GUI-thread gap, uncached", r["gaps"], show=False)
+    bench.fact(seconds=r["seconds"], bands=r["shape"][0], frames=r["shape"][1])
+    bench.finish()
 
 
 if __name__ == "__main__":

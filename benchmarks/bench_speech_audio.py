@@ -177,13 +177,17 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--no-words", action="store_true", help="skip the word method (timing and hiss check)")
     ap.add_argument("--time", nargs=2, metavar=("PRESET", "METHOD"), help=argparse.SUPPRESS)
+    from _harness import Harness
+
+    Harness.add_arguments(ap)
     args = ap.parse_args()
     if args.time:
         print(json.dumps(time_one(*args.time)))
         return
-    from _common import blas_kernel, run_child_json
+    from _common import run_child_json
 
-    print(f"preset {args.preset}; BLAS {blas_kernel()}; load average at start {os.getloadavg()}")
+    bench = Harness("bench_speech_audio", args)
+    print(f"preset {args.preset}; load average at start {os.getloadavg()}")
     _corpus(args.preset)  # generated and cached once, not timed
     methods = (["phones"] + ([] if args.no_words else ["words"])) if args.repeats > 0 else []  # 0: analysis only
     for method in methods:
@@ -198,10 +202,14 @@ def main() -> None:
               f"(load {', '.join(f'{lo:.1f}' for _, lo in runs)}); peak RSS {max(r['rss_MiB'] for r, _ in runs):.0f} MiB",
               flush=True)
         print(f"        {r0['history']}", flush=True)
+        bench.figure(f"{method}: audio for the corpus", secs, cold=True, peak_rss_mib=max(r["rss_MiB"] for r, _ in runs),
+                     headline=True, show=False, speech_s=r0["speech_s"], utterances=r0["utterances"])
     t = time.perf_counter()
     res = analyse(args.preset, not args.no_words)
     print(f"analysis ({time.perf_counter() - t:.1f} s, load {os.getloadavg()[0]:.1f}):")
     print(json.dumps(res, indent=1))
+    bench.fact(analysis=res)
+    bench.finish()
 
 
 if __name__ == "__main__":

@@ -48,19 +48,9 @@ import warnings
 
 import numpy as np
 from _common import peak_rss_mb, run_child_json
+from _harness import Harness
 
 PAPER_FRAMES = 28833
-
-
-def _timed(fn):
-    tracemalloc.start()
-    tracemalloc.reset_peak()
-    c, t = time.process_time(), time.perf_counter()
-    out = fn()
-    dt, cpu = time.perf_counter() - t, time.process_time() - c
-    peak = tracemalloc.get_traced_memory()[1] / 2**20
-    tracemalloc.stop()
-    return out, dt, peak, f"CPU {cpu:6.2f} s (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)"
 
 
 def standin(n_frames=PAPER_FRAMES, seed=0, rate=60.0):
@@ -172,9 +162,9 @@ def _stats(times, cpu=None):
     return out
 
 
-def _cold(path, query, runs):
+def _cold(path, query, runs, bench, K):
     """First query in fresh processes: right after loading, and after ``prepare_queries``
-    (what the explorer's loading worker does), alternating."""
+    (what the explorer's loading worker does), alternating; both kept as cold figures."""
     import sys
 
     load, first = {0: [], 1: []}, {0: [], 1: []}
@@ -182,6 +172,9 @@ def _cold(path, query, runs):
         for prepared in (0, 1):
             r = run_child_json([sys.executable, __file__, "--child", path, query, seed, prepared])
             load[prepared].append(r["load_s"]), first[prepared].append(r["query_s"])
+    bench.figure(f"K={K} {query}: first query after loading", first[0], cold=True)
+    bench.figure(f"K={K} {query}: first query after prepare_queries", first[1], cold=True,
+                 load_s_median=float(np.median(load[1])))
     return (f"first query right after loading {_stats(first[0])} fresh processes; after prepare_queries() "
             f"(the explorer's loader) {_stats(first[1])} (import + load of the graph: median "
             f"{np.median(load[0]):.2f} s, with prepare_queries {np.median(load[1]):.2f} s, not included); {_load_avg()}")
@@ -269,12 +262,12 @@ def main():
     ap.add_argument("--frames", type=int, default=PAPER_FRAMES, help="frames of the stand-in (default: the paper's)")
     ap.add_argument("--no-tangent", action="store_true", help="skip the TangentFrames fit")
     ap.add_argument("--reuse", default=None, help="folder keeping fitted state graphs between runs")
+    Harness.add_arguments(ap)
     args = ap.parse_args()
+    bench = Harness("bench_states", args)
 
     import tempfile
     from pathlib import Path
-
-    from _common import blas_kernel
 
     from engine.files.atomic import atomic_write
     from engine.files.persist import dump_estimator, load_estimator, read_npz
@@ -300,12 +293,12 @@ def main():
         print(f"data: STAND-IN (paraboloid sheet of speech-like opening trajectories), {len(Fy)} frames, "
               f"{len(b)} utterances (engine.talker.synthetic not used)")
         tag = f"standin_{args.frames}"
-    print(f"BLAS: {blas_kernel()}; {os.cpu_count()} cores")
+    print(f"{os.cpu_count()} cores; no query calls BLAS")
 
     if not args.no_tangent:
-        tan, dt, peak, cpu = _timed(lambda: TangentFrames().fit(Fy, b, np.asarray(Fx[:, 0], np.float64), rate=60.0))
-        print(f"TangentFrames.fit (k={tan.n_neighbors_:3d})       {dt * 1e3:9.1f} ms   {cpu}   peak traced {peak:7.1f} MiB   "
-              f"max RSS {peak_rss_mb():7.1f} MiB")
+        tan, _ = bench.measure("TangentFrames.fit", lambda: TangentFrames().fit(Fy, b, np.asarray(Fx[:, 0], np.float64),
+                                                                                rate=60.0), cpu=True)
+        print(f"  k = {tan.n_neighbors_}")
         print("  classes " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in tan.class_proportions().items()))
 
     tmp = tempfile.TemporaryDirectory()
@@ -316,22 +309,20 @@ def main():
         saved = keep / f"states_{tag}_K{K}.npz"
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", StateGraphConnectivityWarning)
+            print()
             if saved.is_file():
-                g, dt, peak, cpu = _timed(lambda: load_estimator(StateGraph, read_npz(saved), "states"))
-                what = f"StateGraph loaded ({saved.name})"
+                g, _ = bench.measure(f"StateGraph loaded K={K}", cpu=True, file=saved.name,
+                                     fn=lambda: load_estimator(StateGraph, read_npz(saved), "states"))
             else:
-                g, dt, peak, cpu = _timed(lambda: StateGraph(n_states=K).fit(Fy, b))
-                what = f"StateGraph.fit K={K:<6}"
+                g, _ = bench.measure(f"StateGraph.fit K={K}", lambda: StateGraph(n_states=K).fit(Fy, b), cpu=True)
                 with atomic_write(saved) as part:
                     np.savez(part, **dump_estimator(g, "states"))
-        print(f"\n{what:<31} {dt * 1e3:9.1f} ms   {cpu}   peak traced {peak:7.1f} MiB   "
-              f"max RSS {peak_rss_mb():7.1f} MiB")
         print("  " + g.connectivity_report().replace("\n", "\n  "))
         for w in caught:
             print(f"  warning: {w.message}")
         big = np.flatnonzero(g.scc_labels_ == g.largest_scc_)
 
-        print(f"  future+past hemispheres, cold: {_cold(saved, 'hemisphere', args.cold_runs)}")
+        print(f"  future+past hemispheres, cold: {_cold(saved, 'hemisphere', args.cold_runs, bench, K)}")
         g.hemispheres(int(big[0]))  # build the cached csr forms once
         times, cpu = [], []
         for s in rng.choice(big, size=args.repeats):
@@ -339,8 +330,9 @@ def main():
             g.hemispheres(int(s))
             times.append(time.perf_counter() - t), cpu.append(time.process_time() - c)
         print(f"  future+past hemispheres, warm: {_stats(times, cpu)} states; {_load_avg()}")
+        bench.figure(f"K={K} hemisphere, warm", times, cold=False, headline=True, cpu_median_s=float(np.median(cpu)))
 
-        print(f"  10-state path (9 min_path legs), cold: {_cold(saved, 'path', args.cold_runs)}")
+        print(f"  10-state path (9 min_path legs), cold: {_cold(saved, 'path', args.cold_runs, bench, K)}")
         times, cpu, hops, before = [], [], [], []
         for _ in range(args.repeats):
             way = rng.choice(big, size=10, replace=False)
@@ -354,6 +346,8 @@ def main():
         print(f"  10-state path (9 min_path legs), warm: {_stats(times, cpu)} paths (median {int(np.median(hops))} "
               f"hops per path); the same paths by a whole breadth-first search per leg (before), alternating: "
               f"{_stats(before)}; {_load_avg()}")
+        bench.figure(f"K={K} 10-state path, warm", times, cold=False, headline=True, cpu_median_s=float(np.median(cpu)))
+        bench.figure(f"K={K} 10-state path by whole BFS (before), warm", before, cold=False)
 
         if args.synthesis_repeats > 0:
             mg, setup = _max_product_graph(g)
@@ -361,15 +355,20 @@ def main():
             print(f"  synthesis state path (10 targets 6 frames apart, exact-length Viterbi per gap), warm: "
                   f"{_stats(now)}; the full recursion over every edge, same targets: {_stats(full)} "
                   f"(graph set-up {setup * 1e3:.0f} ms, once); {_load_avg()}")
+            bench.figure(f"K={K} synthesis state path, warm", now, cold=False)
+            bench.figure(f"K={K} synthesis state path by full recursion, warm", full, cold=False)
             now, full = _lattice_scores(mg, g, np.asarray(b), rng, args.synthesis_repeats)
             print(f"  phone lattice of synthesize --text (10 targets 6 frames apart, <= 8 candidate states each), "
                   f"warm: {_stats(now)}; the full recursion, same candidates: {_stats(full)}; {_load_avg()}")
+            bench.figure(f"K={K} phone lattice, warm", now, cold=False)
+            bench.figure(f"K={K} phone lattice by full recursion, warm", full, cold=False)
         tracemalloc.start()
         g.hemispheres(int(big[0]))
         peak = tracemalloc.get_traced_memory()[1] / 2**20
         tracemalloc.stop()
         print(f"  peak traced memory of one hemisphere query {peak:.2f} MiB; max RSS {peak_rss_mb():.1f} MiB")
     tmp.cleanup()
+    bench.finish()
 
 
 if __name__ == "__main__":

@@ -11,31 +11,10 @@ timed separately).
 from __future__ import annotations
 
 import argparse
-import time
-import tracemalloc
 
 import numpy as np
-from _common import first_phones, peak_rss_mb
-
-
-def timed(name, fn, *, repeat=1):
-    """Run ``fn`` ``repeat`` times; print the median wall time and the peak traced memory of one run."""
-    times = []
-    out = None
-    for k in range(repeat):
-        if k == 0:
-            tracemalloc.start()
-            tracemalloc.reset_peak()
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-        if k == 0:
-            _, peak = tracemalloc.get_traced_memory()
-            tracemalloc.stop()
-    med = float(np.median(times))
-    print(f"{name:<46} {1000 * med:10.1f} ms (median of {repeat})   peak traced {peak / 2**20:8.1f} MiB   "
-          f"max RSS {peak_rss_mb():8.0f} MiB", flush=True)
-    return out, med
+from _common import first_phones
+from _harness import Harness
 
 
 def main():
@@ -45,7 +24,15 @@ def main():
     ap.add_argument("--seconds", type=float, default=3.0)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--cache-dir", default=None)
+    Harness.add_arguments(ap)
     args = ap.parse_args()
+    bench = Harness("bench_synthesis", args)
+
+    def timed(name, fn, *, repeat=0, headline=False):
+        """The first call (cold in this process for the set-up steps), then ``repeat`` warm calls:
+        returns the output and the warm median (the single time when there are no repeats)."""
+        out, m = bench.measure(name, fn, repeat=repeat, cold=None if repeat else True, headline=headline)
+        return out, m.median
 
     from engine.manifold.model import Manifold
     from engine.phonetics.targets import targets_from_phones, targets_from_points
@@ -86,7 +73,7 @@ def main():
     tr, t_states = timed("viterbi (the paper's path), state targets",
                          lambda: synths["viterbi"].synthesize(tg_states), repeat=args.repeat)
     tr_p, t_phones = timed("viterbi, phone targets (lattice, M=8)",
-                           lambda: synths["viterbi"].synthesize(tg_phones), repeat=args.repeat)
+                             lambda: synths["viterbi"].synthesize(tg_phones), repeat=args.repeat, headline=True)
     for meth in ("linear", "cubic", "unitselection"):
         _, results[meth] = timed(meth, lambda meth=meth: synths[meth].synthesize(tg_phones), repeat=args.repeat)
     _, t_inv = timed("inverse map of the frames (Y -> X)", lambda: inv.transform(tr.Fy), repeat=args.repeat)
@@ -96,12 +83,13 @@ def main():
         t = synths["viterbi"].synthesize(tg_phones)
         return t.frames(m)
 
-    _, t_full = timed("TOTAL: phones -> state path -> X -> frames", full, repeat=args.repeat)
+    _, t_full = timed("TOTAL: phones -> state path -> X -> frames", full, repeat=args.repeat, headline=True)
     print(f"\nmanifold synthesis incl. inverse map: {1000 * t_states:.1f} ms (state targets), "
           f"{1000 * t_phones:.1f} ms (phone targets); with mesh frames {1000 * t_full:.1f} ms "
           f"[target: well under 100 ms]; inverse map alone {1000 * t_inv:.2f} ms, mesh {1000 * t_mesh:.2f} ms")
     print(f"missed targets: {len(tr.warnings)} (state targets), {len(tr_p.warnings)} (phone targets)")
     print(f"(numpy {np.__version__})")
+    bench.finish()
 
 
 if __name__ == "__main__":

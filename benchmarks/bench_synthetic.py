@@ -18,6 +18,7 @@ import tracemalloc
 from pathlib import Path
 
 from _common import peak_rss_mb, run_child_json
+from _harness import Harness
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -52,10 +53,12 @@ def main() -> None:
     ap.add_argument("presets", nargs="*", default=["small", "default", "paper"])
     ap.add_argument("--save", metavar="DIR", help="also time Corpus.save into DIR")
     ap.add_argument("--one", help=argparse.SUPPRESS)
+    Harness.add_arguments(ap)
     args = ap.parse_args()
     if args.one:
         print(json.dumps(one(args.one, args.save)))
         return
+    bench = Harness("bench_synthetic", args)
     print(f"{'preset':<8} {'frames':>7} {'points':>6} {'coords':>6} {'utts':>5} {'speech s':>8} "
           f"{'lexicon s':>9} {'generate s':>10} {'save s':>7} {'traced MiB':>10} {'max RSS MiB':>11}")
     with tempfile.TemporaryDirectory() as tmp:
@@ -66,6 +69,10 @@ def main() -> None:
                   f"{r['seconds']:>8.1f} {r['lexicon_s']:>9.2f} {r['generate_s']:>10.2f} "
                   f"{r.get('save_s', float('nan')):>7.2f} {r['traced_peak_MiB']:>10.1f} {r['max_rss_MiB']:>11.1f}",
                   flush=True)
+            bench.figure(f"generate {preset}", r["generate_s"], cold=True, peak_rss_mib=r["max_rss_MiB"],
+                         peak_traced_mib=r["traced_peak_MiB"], headline=True, frames=r["frames"],
+                         lexicon_s=r["lexicon_s"], **({"save_s": r["save_s"]} if "save_s" in r else {}))
+    bench.finish()
 
 
 if __name__ == "__main__":

@@ -133,12 +133,17 @@ def main() -> None:
     ap.add_argument("--live-window", action="store_true",
                     help="also play it through the live mirror window (needs a display, e.g. xvfb-run)")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
+    from _harness import Harness
+
+    Harness.add_arguments(ap)
     a = ap.parse_args()
     if a.child:
         print(json.dumps(child(*a.child)))
         return
     sys.path.insert(0, str(ROOT))
     from _common import run_child_json
+
+    bench = Harness("bench_video_import", a)
 
     folder = Path(a.keep) if a.keep else Path(tempfile.mkdtemp(prefix="bench-video-"))
     folder.mkdir(parents=True, exist_ok=True)
@@ -164,6 +169,10 @@ def main() -> None:
               f"first import median {statistics.median(peak):.0f} MiB (max {max(peak):.0f}), after both "
               f"{statistics.median(r['peak_rss_MiB'] for r in runs):.0f} MiB; landmarks kept "
               f"{runs[0]['landmarks_MiB']:.2f} MiB; {a.repeats} repeats")
+        bench.figure(f"{sec:g}-s video ({n} frames), cold", cold, cold=True, peak_rss_mib=max(peak), headline=True,
+                     show=False)
+        bench.figure(f"{sec:g}-s video ({n} frames), warm", warm, cold=False, show=False,
+                     peak_rss_mib=max(r["peak_rss_MiB"] for r in runs))
     print(f"BLAS: {runs[0]['blas']}")
     if a.live:
         live(folder / f"astronaut_{a.size}_{min(a.seconds):g}s.mp4")
@@ -173,6 +182,7 @@ def main() -> None:
         import shutil
 
         shutil.rmtree(folder, ignore_errors=True)
+    bench.finish()
 
 
 if __name__ == "__main__":

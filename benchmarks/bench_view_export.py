@@ -25,14 +25,17 @@ from pathlib import Path
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _gui_bench as gb  # noqa: E402
+from _harness import Harness  # noqa: E402
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--preset", default="default")
+    Harness.add_arguments(ap)
     args = ap.parse_args()
     gb.ensure_display()
+    bench = Harness("bench_view_export", args)
     gb.header("manifold view: vector / PNG export and hover look-up (warm, one process)")
     import numpy as np
     from PySide6 import QtWidgets
@@ -63,12 +66,15 @@ def main():
             p = save_plotter_vector(view.plotter, out / f"view{k}{suffix}")
             times.append(time.perf_counter() - t)
         print(f"{suffix} vector export: {gb.stats(times, 's', 1.0)}; {p.stat().st_size / 1e6:.1f} MB")
+        bench.figure(f"{suffix} vector export", times, first_is_separate=True, headline=suffix == ".svg", show=False,
+                     file_mb=p.stat().st_size / 1e6)
     times = []
     for k in range(args.repeats):
         t = time.perf_counter()
         p = save_plotter_image(view.plotter, out / f"view{k}.png", dpi=300)
         times.append(time.perf_counter() - t)
     print(f"PNG at 300 dpi: {gb.stats(times, 's', 1.0)}; {p.stat().st_size / 1e6:.1f} MB")
+    bench.figure("PNG at 300 dpi", times, first_is_separate=True, headline=True, show=False)
     x, y = pick_display_point(view.plotter, m.Fy_[state.frame, :3])
     cold, warm = [], []
     for _ in range(20):
@@ -81,11 +87,13 @@ def main():
         warm.append(time.perf_counter() - t)
     print(f"hover look-up, camera moved (projection of every point): {gb.stats(cold)}")
     print(f"hover look-up, camera still (projection cached):         {gb.stats(warm)}")
+    bench.figure("hover look-up, camera moved", cold, show=False)
+    bench.figure("hover look-up, camera still", warm, show=False)
     for f in out.iterdir():
         f.unlink()
     out.rmdir()
     view.close_view()
-    print(f"peak RSS {gb.peak_rss_mb():.0f} MiB; load average {os.getloadavg()[0]:.1f} at end")
+    bench.finish()
 
 
 if __name__ == "__main__":

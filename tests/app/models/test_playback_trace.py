@@ -6,8 +6,8 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))),
-                                "benchmarks"))
+_REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+sys.path[:0] = [os.path.join(_REPO, "benchmarks"), os.path.join(_REPO, "tools")]  # _playback_trace, steal_probe
 from _playback_trace import frame_table, late_causes  # noqa: E402
 
 RATE = 100.0  # 10-ms frame periods

@@ -1,7 +1,7 @@
 """The tangent classes on the real sample recordings: opening >= 95 %, accelerating >= 85 %.
 
 Each recording is read as ``lipspace import`` reads it by default and built with the
-defaults (benchmarks/real_data_report.py builds the same corpora and writes the whole
+defaults (tools/real_data_report.py builds the same corpora and writes the whole
 table to docs/REAL_DATA.md). Nothing here was tuned on these files: the neighbourhood
 and the dims of Y are chosen per corpus by held-out validation.
 """
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))),
-                                "benchmarks"))
+                                "tools"))
 
 from real_data_report import CLIPS, real_corpora  # noqa: E402
 

@@ -2,7 +2,7 @@
 
 Usage (needs a display; on a headless machine use Xvfb)::
 
-    xvfb-run -a -s "-screen 0 1600x1200x24" python benchmarks/soak_explorer.py [--minutes 10]
+    xvfb-run -a -s "-screen 0 1600x1200x24" python tools/soak_explorer.py [--minutes 10]
         [--preset default|small|paper] [--text "bob meets mum"] [--click-every 2] [--json out.json]
 
 The script is a monitor: it starts the explorer in a child process (this file with

@@ -12,7 +12,7 @@ that was measured and rejected. With ``--haskins-dir`` holding the Haskins pair 
 prints the same candidates on each cross-speaker direction, with the comparisons over the
 sentence's gaps.
 
-Run: .venv/bin/python benchmarks/one_utterance_priors.py [--draws 8] [--tests 20] [--seed 1]
+Run: .venv/bin/python tools/one_utterance_priors.py [--draws 8] [--tests 20] [--seed 1]
      [--haskins-dir DIR]
 """
 from __future__ import annotations
@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the engine, from a checkout
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _common, beside the benchmarks
 
 from _common import blas_kernel  # noqa: E402
 

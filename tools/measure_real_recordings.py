@@ -13,7 +13,7 @@ increasing (% of moving frames), the state graph's strongly connected components
 (count, share of states in the largest), the split warning's cause if any, and the
 build's wall time and peak traced memory, plus the BLAS kernel (threadpoolctl).
 
-    .venv/bin/python benchmarks/measure_real_recordings.py [--utterances 6] [--seed 0]
+    .venv/bin/python tools/measure_real_recordings.py [--utterances 6] [--seed 0]
 """
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ scree of four articulograph sensors (upper and lower lip, left corner, jaw) on t
 (engine.talker.virtual_sensors) beside the same sensors of real speakers (the Haskins IEEE pair,
 when --haskins-dir holds it).
 
-Run: .venv/bin/python benchmarks/talker_realism.py [--preset default] [--repeats 3] [--skip-heldout]
+Run: .venv/bin/python tools/talker_realism.py [--preset default] [--repeats 3] [--skip-heldout]
      [--generation-only] [--tissue] [--kinematics calibrated] [--haskins-dir DIR]
 Generation is timed cold (a fresh process per repeat, no cache) and warm (in-process).
 """
@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the engine, from a checkout
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _common, beside the benchmarks
 
 from _common import blas_kernel  # noqa: E402
 

@@ -1,6 +1,6 @@
 """Make the large manifolds the GUI benchmarks open with ``--manifold``: the synthetic talker at 100k-10M frames.
 
-Each size is built the way ``bench_scale.py`` builds it: the talker speaks N frames at
+Each size is built the way ``benchmarks/bench_scale.py`` builds it: the talker speaks N frames at
 60 Hz (156 points, ``--resolution small``), written as a corpus stored in blocks
 (8,192 frames per block) in a fresh process; a second fresh process opens that corpus
 lazily, fits ``Manifold()`` with the default size rule (2,000 landmarks above 50,000
@@ -21,8 +21,8 @@ per million frames, plus the manifold file (about 0.84 GB per million frames).
 
 Usage::
 
-    python benchmarks/make_standins.py                                  # 100k, 300k, 1M in /tmp/lipspace-standins
-    python benchmarks/make_standins.py --sizes 10000000 --dask local    # the 10M stand-in (long; ~20 GB on disk)
+    python tools/make_standins.py                                     # 100k, 300k, 1M in /tmp/lipspace-standins
+    python tools/make_standins.py --sizes 10000000 --dask local       # the 10M stand-in (long; ~20 GB on disk)
 """
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "benchmarks"))  # _common and bench_scale
 from _common import run_child_json  # noqa: E402
 
 

@@ -1,6 +1,6 @@
 """Probe: is a thread charged CPU time it did not use (hypervisor steal, or time the host took unreported)?
 
-Usage: python benchmarks/steal_probe.py [--seconds 60] [--interval 0.01] [--out FILE.npy]
+Usage: python tools/steal_probe.py [--seconds 60] [--interval 0.01] [--out FILE.npy]
 
 Runs a fixed piece of work (sorting the same 8,192 doubles four times, about 0.2 ms)
 every ``--interval`` seconds and records, per piece: the monotonic time, the thread's own
@@ -26,7 +26,7 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "benchmarks"))
 from _playback_trace import parse_proc_stat, parse_task_stat  # noqa: E402
 
 #: a piece of work is "charged" when its own CPU exceeds this many times the median
