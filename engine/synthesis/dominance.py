@@ -164,8 +164,12 @@ class DominanceModel(BaseEstimator):
         self.theta_after_ = np.exp(p[2 * K:3 * K])
         self.c_ = float(np.exp(p[3 * K]))
         self.loss_ = float(res.fun)
-        self._p = p
         return self
+
+    def _packed(self) -> np.ndarray:
+        """The log parameters (log alpha, log theta before, log theta after, log c) of the fitted model."""
+        return np.concatenate([np.log(self.alpha_), np.log(self.theta_before_), np.log(self.theta_after_),
+                               [np.log(self.c_)]])
 
     def predict(self, phones, n_frames, rate, warnings=None) -> np.ndarray:
         """X (n_frames, m) of phone intervals (seconds from 0); unknown phones get a stand-in."""
@@ -182,5 +186,5 @@ class DominanceModel(BaseEstimator):
 
         ph = tuple(replace(p, label=lab) for p, lab in zip(phones, labs))
         types, taus, mask = self._layout([ph], [int(n_frames)], rate, index)
-        w, _, _ = self._weights(self._p, types, taus, mask, K)
+        w, _, _ = self._weights(self._packed(), types, taus, mask, K)  # the fitted attributes alone: a stored model
         return np.einsum("tw,twm->tm", w, self.targets_[types])

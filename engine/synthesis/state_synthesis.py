@@ -58,9 +58,13 @@ class _StateModelSynthesizer(BaseEstimator):
         self.choice_ = ch
         c = manifold.corpus_
         phones = phone_mids(c, c.utterances) if any(u.phones for u in c.utterances) else None
+        from engine.synthesis.stored_choice import stored_states
+
+        # the states a build fitted at these settings (the manifold file's), else K-means now
         self.model_ = StateModel(state_dims=int(ch["state_dims"]), n_states=ch.get("n_states"),
                                  n_neighbors=int(ch.get("n_neighbors", 40))).fit(
-            manifold.Fy_, manifold.Fx_, manifold.Fxv_, c.bounds, phones=phones)
+            manifold.Fy_, manifold.Fx_, manifold.Fxv_, c.bounds, phones=phones,
+            centroids=stored_states(manifold, ch))
         g = manifold.states_
         lab = np.asarray(g.labels_)
         K = int(g.centroids_.shape[0])
