@@ -134,7 +134,7 @@ class LocalLinearInverse(BaseEstimator):
         if not float(self.ridge) >= 0:
             raise ValueError(f"ridge must be >= 0, got {self.ridge}")
         self.points_, self.values_ = Fy, Fx
-        self._tree = cKDTree(Fy)
+        self._tree = None  # built by the first transform: a synthesis that never maps through it does not pay it
         return self
 
     @single_blas_thread
