@@ -161,8 +161,11 @@ def main(argv=None) -> int:
     for k in rows[0][2]:
         rs = [r[2][k] for r in rows]
         fw = [r[1][k]["wall_s"] for r in rows]
+        rc = [r[0]["cpu_s"] / r[1][k]["cpu_s"] for r in rows if r[1][k].get("cpu_s")]
         print(f"{_label(k)}: wall min {min(fw):.1f} s, median {med(fw):.1f} s; build / {_label(k)} min "
-              f"{min(rs):.2f}, median {med(rs):.2f}{'' if 'build' in k else ' (goal <= 2)'}")
+              f"{min(rs):.2f}, median {med(rs):.2f}{'' if 'build' in k else ' (goal <= 2)'}"
+              + (f"; in CPU seconds (less sensitive to other work on the machine) min {min(rc):.2f}, median "
+                 f"{med(rc):.2f}" if rc else ""))
     # stage by stage: the floor's parts against the build's stages of the same work, and the stages without a floor
     own = [r[1]["own"] for r in rows if "parts" in r[1]["own"]]
     if own:
