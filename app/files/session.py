@@ -2,7 +2,8 @@
 
 A session is a small JSON file, written atomically, holding where the manifold came
 from (a manifold or corpus file, or the synthetic preset), the selection, colour and
-hemisphere modes, the visible phone ellipsoids, the current utterance and the
+hemisphere modes, the visible phone ellipsoids and their opacity, the hidden layers, the
+session palette (so each category keeps its colour), the current utterance and the
 camera of each 3-D view. Qt-free: cameras are plain lists from the views.
 
 The synthesised trajectory and the trajectory editor's key targets (as edited, e.g.
@@ -61,6 +62,9 @@ def session_dict(state, *, cameras: dict | None = None, extra: dict | None = Non
         "path_mode": bool(state.path_mode),
         "utterance": state.utterance,
         "visible_phones": sorted(state.visible_phones),
+        "ellipsoid_opacity": float(state.ellipsoid_opacity),
+        "hidden_layers": sorted(state.hidden_layers),
+        "palette": None if state.palette is None else state.palette.to_dict(),
         "component": state.component,
         "cameras": {k: [[float(x) for x in row] for row in v] for k, v in (cameras or {}).items()},
         "extra": dict(extra or {}),
@@ -248,10 +252,26 @@ def check_fields(d: dict, path) -> None:
     for key in ("text", "method", "source"):
         if editor.get(key) is not None and not isinstance(editor[key], str):
             bad(f"extra.editor.{key}", "a string", editor[key])
+    words = editor.get("words", [])
+    if not isinstance(words, list) or not all(isinstance(w, list) and len(w) == 3 and number(w[0]) and number(w[1])
+                                              and w[0] <= w[1] and isinstance(w[2], str) for w in words):
+        bad("extra.editor.words", "an array of [start s, end s, word] (the editor's word tier)", words)
     for key in ("visible_phones", "phone_filter"):
         v = d.get(key, [])
         if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
             bad(key, "an array of phone labels", v)
+    v = d.get("hidden_layers", [])
+    if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+        bad("hidden_layers", "an array of layer names", v)
+    if "ellipsoid_opacity" in d and not (number(d["ellipsoid_opacity"]) and 0 <= d["ellipsoid_opacity"] <= 1):
+        bad("ellipsoid_opacity", "a number from 0 to 1", d["ellipsoid_opacity"])
+    if d.get("palette") is not None:
+        from app.models.palette import SessionPalette
+
+        try:
+            SessionPalette.from_dict(d["palette"])
+        except ValueError as exc:
+            bad("palette", f"a palette record ({exc})", d["palette"])
     for key, what, ok in (("utterance", "an utterance id or null", lambda v: v is None or isinstance(v, str)),
                           ("component", "a component index or null",
                            lambda v: v is None or isinstance(v, int) and not isinstance(v, bool) and v >= 0),
@@ -371,7 +391,13 @@ def apply_session(state, d: dict):
             state.clear_selection()
         if sel.get("target") is not None:
             state.set_target(sel["target"])
+        if d.get("palette") is not None:  # the colours the session was seen in (older sessions: the corpus's)
+            from app.models.palette import SessionPalette
+
+            state.set_palette(SessionPalette.from_dict(d["palette"]))
         state.set_visible_phones(d.get("visible_phones", []))
+        state.set_ellipsoid_opacity(d.get("ellipsoid_opacity", state.ellipsoid_opacity))
+        state.set_hidden_layers(d.get("hidden_layers", []))
         state.set_component(d.get("component"))
         state.set_color_mode(d.get("color_mode", "density"))
         syn, targets = d.get("_synthetic"), d.get("_targets")

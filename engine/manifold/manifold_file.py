@@ -3,7 +3,7 @@
 :meth:`engine.manifold.model.Manifold.save` writes the arrays of
 :meth:`~engine.manifold.model.Manifold.fitted_arrays` beside the corpus's;
 :func:`read_fitted` reads them back: the format version, the parameters, F^x, F^x', G, F^y,
-every estimator against its schema (:data:`SCHEMA`), the relations between the parts, the
+every estimator against its class's ``_persisted_attributes``, the relations between the parts, the
 corpus (its frames whole, referenced in blocks, or reconstructed from F^x), the timings, the
 inverse map at the states and the synthesis choice a build stored.
 """
@@ -20,7 +20,7 @@ from engine.manifold.embedding import Embedding
 from engine.manifold.shape import ShapeSpace
 from engine.recordings.corpus import Corpus
 
-__all__ = ["FILE_VERSION", "SCHEMA", "read_fitted"]
+__all__ = ["FILE_VERSION", "read_fitted"]
 
 #: the manifold file's format
 FILE_VERSION = 2
@@ -56,8 +56,8 @@ def read_fitted(cls, d, path, corpus=None, *, parts):
     classes = {"shape": ShapeSpace, "dynamics": DynamicFeatures, "embedding": Embedding,
                "tangent": TangentFrames, "states": StateGraph}
     for name, attr in parts.items():
-        setattr(m, attr, load_estimator(classes[name], d, name, source=path, schema=SCHEMA[name],
-                                           dims=dims))
+        setattr(m, attr, load_estimator(classes[name], d, name, source=path,
+                                        schema=classes[name]._persisted_attributes, dims=dims))
     _check_consistency(m, dims, path)
     if corpus is not None:
         if corpus.n_frames != dims["N"]:
@@ -95,55 +95,6 @@ def _corpus_part(m, d, dims, path):
     else:
         frames = m.shape_.inverse_transform(m.Fx_)
     return Corpus.from_arrays(d, frames=frames, source=str(path), base=Path(path).resolve().parent)
-
-
-#: fitted attributes each part must hold (see engine.files.persist.load_estimator for the spec)
-_F, _I, _B = "float", "int", "bool"
-SCHEMA = {
-    "shape": {"mean_": dict(kind="array", dtype=_F, shape=("C",)),
-              "components_": dict(kind="array", dtype=_F, shape=("m", "C")),
-              "explained_variance_": dict(kind="array", dtype=_F, shape=("m",)),
-              "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("m",)),
-              "scree_": dict(kind="array", dtype=_F, shape=("M",)),
-              "recovered_ratio_": dict(kind="array", dtype=_F, shape=("M",)),
-              "n_components_": dict(kind="int", low=1)},
-    "dynamics": {"mean_": dict(kind="array", dtype=_F, shape=("m",)),
-                 "velocity_mean_": dict(kind="array", dtype=_F, shape=("m",)),
-                 "alpha_": dict(kind="float"), "beta_": dict(kind="float")},
-    "embedding": {"embedding_": dict(kind="array", dtype=_F, shape=("N", "k")),
-                  "reference_": dict(kind="array", dtype=_F, shape=("L", "2m")),
-                  "components_": dict(kind="array", dtype=_F, shape=("k", "L")),
-                  "center_": dict(kind="array", dtype=_F, shape=("L",)),
-                  "explained_variance_": dict(kind="array", dtype=_F, shape=("k",)),
-                  "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
-                  "recovered_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
-                  "landmarks_": dict(kind="array", dtype=_I, shape=("L",), low=0, high="N", none=True)},
-    "tangent": {"plane_point_": dict(kind="array", dtype=_F, shape=(3,)),
-                "plane_normal_": dict(kind="array", dtype=_F, shape=(3,)),
-                "S_": dict(kind="array", dtype=_F, shape=(3,)),
-                "shape_direction_": dict(kind="array", dtype=_F, shape=("t",)),
-                "velocity_direction_": dict(kind="array", dtype=_F, shape=("t",)),
-                "s_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "v_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "step_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "velocity_": dict(kind="array", dtype=_F, shape=("N",)),
-                "acceleration_": dict(kind="array", dtype=_F, shape=("N",)),
-                "opening_": dict(kind="array", dtype=_B, shape=("N",)),
-                "accelerating_": dict(kind="array", dtype=_B, shape=("N",)),
-                "classes_": dict(kind="array", dtype=_I, shape=("N",), low=-1, high=4),
-                "shape_coordinate_": dict(kind="array", dtype=_F, shape=("N",)),
-                "opening_source_": dict(kind="str"), "opening_unit_": dict(kind="str"),
-                "n_dims_": dict(kind="int", low=1),
-                "n_neighbors_": dict(kind="int", low=1)},
-    "states": {"centroids_": dict(kind="array", dtype=_F, shape=("K", "d")),
-               "labels_": dict(kind="array", dtype=_I, shape=("N",), low=0, high="K"),
-               "counts_": dict(kind="csr", dtype=_I, shape=("K", "K"), low=0),
-               "adjacency_": dict(kind="csr", dtype="number", shape=("K", "K")),
-               "transition_": dict(kind="csr", dtype=_F, shape=("K", "K"), low=0),
-               "n_scc_": dict(kind="int", low=1),
-               "scc_labels_": dict(kind="array", dtype=_I, shape=("K",), low=0),
-               "largest_scc_": dict(kind="int", low=0)},
-}
 
 
 def _check_consistency(m, dims, path):

@@ -9,21 +9,24 @@ import functools
 import json
 import re
 import time
+from numbers import Integral
 from pathlib import Path
 
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, StrOptions, validate_params
 from engine.files.atomic import atomic_write
 from engine.files.persist import NpzReadError, dump_estimator, read_npz, source_fingerprint
-from engine.manifold.dynamics import DynamicFeatures
+from engine.manifold.dynamics import SCALES, DynamicFeatures
 from engine.manifold.embedding import Embedding
 from engine.manifold.manifold_file import FILE_VERSION, read_fitted
 from engine.manifold.shape import ShapeSpace, small_query_blas
 from engine.progress import ProgressFn, report
 from engine.recordings.bounds import velocities
 from engine.recordings.corpus import Corpus, CorpusError
+from engine.recordings.registration import SPEAKER_MODES
 
 __all__ = ["project_x", "Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
 
@@ -168,6 +171,21 @@ class Manifold(BaseEstimator):
         :func:`engine.synthesis.stored_choice.stored_model`); empty when none.
     """
 
+    _parameter_constraints = {
+        "variance": ShapeSpace._parameter_constraints["variance"],
+        "max_components": ShapeSpace._parameter_constraints["max_components"],
+        "n_embedding": Embedding._parameter_constraints["n_components"],
+        "embedding_method": Embedding._parameter_constraints["method"],
+        "n_landmarks": Embedding._parameter_constraints["n_landmarks"],
+        "n_states": [Interval(Integral, 1, None, closed="left"), None],
+        "state_dims": [Interval(Integral, 1, None, closed="left")],
+        "n_neighbors": [Interval(Integral, 3, None, closed="left"), None],
+        "random_state": ["random_state"],
+        "speaker_normalisation": [StrOptions(SPEAKER_MODES)],
+        "landmarks_above": [Interval(Integral, 1, None, closed="left")],
+        "dynamics_scale": SCALES,
+    }
+
     def __init__(self, *, variance=0.99, max_components=100, n_embedding=16, embedding_method="pca",
                  n_landmarks=None, n_states=None, state_dims=3, n_neighbors=None, random_state=0,
                  speaker_normalisation="auto", landmarks_above=50000, dynamics_scale="max"):
@@ -196,6 +214,7 @@ class Manifold(BaseEstimator):
         from engine.manifold.buildplan import plan_build
         from engine.manifold.tangent import TangentFrames
 
+        validate_params(self)
         if not isinstance(corpus, Corpus):
             raise TypeError(f"fit expects an engine.recordings.corpus.Corpus, got {type(corpus).__name__}")
         from engine.recordings.kinematics import lip_aperture
@@ -205,7 +224,7 @@ class Manifold(BaseEstimator):
         N = corpus.n_frames
         if N < max(12, self.n_embedding + 2):
             raise ValueError(f"{corpus.name}: {N} frames are too few to build a manifold "
-                             f"(need at least {max(12, self.n_embedding + 2)})")
+                             f"(need at least {max(12, self.n_embedding + 2)}); add utterances or lower n_embedding")
         timings = {}
         bounds = corpus.bounds
 

@@ -177,13 +177,12 @@ def _estimator(name, d, path):
     from engine.files.persist import load_estimator
     from engine.files.validate import FieldError
     from engine.manifold.dynamics import DynamicFeatures
-    from engine.manifold.manifold_file import SCHEMA
     from engine.manifold.model import ManifoldFileError
     from engine.manifold.shape import ShapeSpace
 
     cls = {"shape": ShapeSpace, "dynamics": DynamicFeatures}[name]
     try:
-        return load_estimator(cls, d, name, source=path, schema=SCHEMA[name], dims={})
+        return load_estimator(cls, d, name, source=path, schema=cls._persisted_attributes, dims={})
     except FieldError as exc:
         raise ManifoldFileError(str(exc)) from None
 

@@ -30,3 +30,22 @@ def lab_folder(tmp_path_factory):
     """(folder, paths): nine recordings of three speakers, ABCFIA01.mat ... XYMNE03.mat."""
     d = tmp_path_factory.mktemp("lab") / "matfiles"
     return d, write_lab_folder(d)
+
+
+def run_cli(argv) -> tuple[int, str, str]:
+    """``lipspace ARGV`` in this process: ``(exit code, stdout, stderr)``."""
+    import contextlib
+    import io
+
+    from app.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = main(argv)
+    return rc, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """:func:`run_cli`: run a ``lipspace`` command, capturing its exit code and output."""
+    return run_cli
