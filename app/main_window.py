@@ -160,7 +160,8 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
         what = Path(path).name if path else f"the {talker_name(preset, kinematics)}"
         self.statusBar().showMessage(f"loading {what}…")
         # no modal dialog: the window stays usable; progress and Cancel sit in the status bar
-        task = plain_errors(lambda progress: load_source(path, preset, progress, kinematics=kinematics),
+        task = plain_errors(lambda progress: load_source(path, preset, progress, kinematics=kinematics,
+                                                         speech_audio="background"),
                             doing=f"open {what}", path=path)
         self._runner = run_task(task, parent=self,
                                 title=f"Loading {what}", on_done=self._on_loaded, on_error=self._on_load_error,

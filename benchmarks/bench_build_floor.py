@@ -16,12 +16,18 @@ Two floors are run in every pair:
   build / issue floor is the goal as the issue states it.
 
 Printed: every pair's walls, CPU seconds, stage times and ratios; then min and median
-over pairs of both ratios and of the walls; peak RSS of each process; the load average
-before and after; the BLAS kernel.
+over pairs of both ratios and of the walls; the build's stages against the floor's parts
+(the shape space and the embedding have a floor; the dynamic features, the tangent frames,
+the state graph and the inverse map have none, so their seconds are what the build pays
+above it); peak RSS of each process; the load average before and after; the BLAS kernel.
+
+``--choice`` also times, in the build's process after the fit, the synthesis choice that
+``lipspace build`` measures and stores (:func:`engine.synthesis.method_choice.fit_choice`);
+it is printed beside the build, never counted in the ratios (it has no GEMM floor).
 
 Usage::
 
-    python benchmarks/bench_build_floor.py [--pairs 3] [--preset paper] [--no-issue-floor]
+    python benchmarks/bench_build_floor.py [--pairs 3] [--preset paper] [--no-issue-floor] [--choice]
 """
 from __future__ import annotations
 
@@ -42,8 +48,9 @@ from _common import blas_kernel, peak_rss_mb, run_child_json  # noqa: E402
 from floor_build import ISSUE_WIDTHS, work  # noqa: E402
 
 
-def run_build(preset) -> dict:
-    """Load the corpus, then time ``Manifold().fit`` in this process; report the widths it used."""
+def run_build(preset, choice=False) -> dict:
+    """Load the corpus, then time ``Manifold().fit`` in this process (and ``fit_choice`` after it with
+    ``choice``); report the widths it used."""
     import warnings
 
     from engine.manifold.model import Manifold
@@ -56,13 +63,22 @@ def run_build(preset) -> dict:
         warnings.simplefilter("ignore")
         m = Manifold().fit(corpus)
     wall, cpu = time.perf_counter() - t, time.process_time() - c0
+    choice_s = None
+    if choice:
+        from engine.synthesis.method_choice import fit_choice
+
+        t = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fit_choice(m)
+        choice_s = time.perf_counter() - t
     sh, emb = m.shape_, m.embedding_
     N, C = corpus.frames.shape
     widths = {"r_shape": int(getattr(sh, "n_range_", min(sh.max_components, N - 1, C) + 10)),  # older trees
               "n_iter": int(getattr(sh, "n_iter_", sh.n_iter)), "m": int(sh.n_components_),
               "r_emb": int(getattr(emb, "n_range_", emb.n_components + emb.oversample)),
               "n_passes": int(emb.n_passes_), "L": int(emb.reference_.shape[0])}
-    return {"wall_s": wall, "cpu_s": cpu, "stages": m.timings_, "widths": widths, "load": load0,
+    return {"wall_s": wall, "cpu_s": cpu, "stages": m.timings_, "widths": widths, "load": load0, "choice_s": choice_s,
             "shape": list(corpus.frames.shape), "blas": blas_kernel(),
             "max_rss_mib": peak_rss_mb()}
 
@@ -71,8 +87,9 @@ def _child(args) -> dict:
     return run_child_json([sys.executable, *args], cwd=ROOT)
 
 
-def _build(preset, tree=None):
-    return _child([os.path.abspath(__file__), "--child-build", "--preset", preset, *(["--root", tree] if tree else [])])
+def _build(preset, tree=None, choice=False):
+    return _child([os.path.abspath(__file__), "--child-build", "--preset", preset, *(["--root", tree] if tree else []),
+                   *(["--choice"] if choice else [])])
 
 
 def _floor(preset, widths):
@@ -90,6 +107,8 @@ def main(argv=None) -> int:
     ap.add_argument("--no-issue-floor", action="store_true", help="run only the floor of the build's own widths")
     ap.add_argument("--vs-tree", metavar="PATH", help="also build with the engine of another checkout in every pair "
                                                       "(e.g. the previous commit) and report build / that build")
+    ap.add_argument("--choice", action="store_true", help="also time the synthesis choice lipspace build measures "
+                                                           "after the fit (printed apart, not in the ratios)")
     ap.add_argument("--child-build", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--root", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -98,7 +117,7 @@ def main(argv=None) -> int:
             sys.path.insert(0, os.path.abspath(args.root))
             for name in [n for n in sys.modules if n == "engine" or n.startswith("engine.")]:
                 del sys.modules[name]
-        print(json.dumps(run_build(args.preset)))
+        print(json.dumps(run_build(args.preset, args.choice)))
         return 0
     subprocess.run([sys.executable, "-c", f"from engine.talker.synthetic import load_synthetic; "
                     f"load_synthetic(preset={args.preset!r})"], check=True, cwd=ROOT)  # fill the cache
@@ -112,7 +131,7 @@ def main(argv=None) -> int:
         floors, b = {}, None
         for job in jobs:
             if job == "build":
-                b = _build(args.preset)
+                b = _build(args.preset, choice=args.choice)
                 widths = b["widths"]
             elif job == "vs-tree build":
                 floors[job] = _build(args.preset, args.vs_tree)
@@ -127,7 +146,8 @@ def main(argv=None) -> int:
             f"{f['work']['gb_read']:.1f} GB read" if "parts" in f else
             ", ".join(f"{s} {v:.1f}" for s, v in f["stages"].items())) + f"), ratio {ratios[k]:.2f}"
             for k, f in floors.items())
-        print(f"pair {i} ({' -> '.join(jobs)}): build {b['wall_s']:.1f} s wall / "
+        ch = f"; then the synthesis choice {b['choice_s']:.1f} s" if b.get("choice_s") is not None else ""
+        print(f"pair {i} ({' -> '.join(jobs)}): build {b['wall_s']:.1f} s wall{ch} / "
               f"{b['cpu_s']:.1f} s CPU ({st}), max RSS {b['max_rss_mib']:.0f} MiB; {fl}; load average at start "
               f"{b['load']:.1f} (build) / {floors['own']['load']:.1f} (own floor)", flush=True)
     med = statistics.median
@@ -141,8 +161,26 @@ def main(argv=None) -> int:
     for k in rows[0][2]:
         rs = [r[2][k] for r in rows]
         fw = [r[1][k]["wall_s"] for r in rows]
+        rc = [r[0]["cpu_s"] / r[1][k]["cpu_s"] for r in rows if r[1][k].get("cpu_s")]
         print(f"{_label(k)}: wall min {min(fw):.1f} s, median {med(fw):.1f} s; build / {_label(k)} min "
-              f"{min(rs):.2f}, median {med(rs):.2f}{'' if 'build' in k else ' (goal <= 2)'}")
+              f"{min(rs):.2f}, median {med(rs):.2f}{'' if 'build' in k else ' (goal <= 2)'}"
+              + (f"; in CPU seconds (less sensitive to other work on the machine) min {min(rc):.2f}, median "
+                 f"{med(rc):.2f}" if rc else ""))
+    # stage by stage: the floor's parts against the build's stages of the same work, and the stages without a floor
+    own = [r[1]["own"] for r in rows if "parts" in r[1]["own"]]
+    if own:
+        stage = {k: med([r[0]["stages"].get(k, 0.0) for r in rows]) for k in rows[0][0]["stages"]}
+        part = {k: med([f["parts"][k] for f in own]) for k in ("shape", "embedding")}
+        extra = {k: v for k, v in stage.items() if k not in part}
+        print("stage by stage (medians over pairs): " + "; ".join(
+            f"{k} {stage.get(k, 0.0):.1f} s against its floor {part[k]:.1f} s ({stage.get(k, 0.0) / part[k]:.2f})"
+            for k in part if part[k] > 0) + "; without a floor: " + ", ".join(f"{k} {v:.1f} s" for k, v in extra.items())
+              + f" (together {sum(extra.values()):.1f} s, {100 * sum(extra.values()) / max(med(builds), 1e-9):.0f} % of "
+              "the build)")
+    choices = [r[0]["choice_s"] for r in rows if r[0].get("choice_s") is not None]
+    if choices:
+        print(f"synthesis choice after the fit (lipspace build stores it; not in the ratios): min {min(choices):.1f} s, "
+              f"median {med(choices):.1f} s")
     print(f"load average (1/5/15 min) before {'/'.join(f'{x:.1f}' for x in load_before)}, after "
           f"{'/'.join(f'{x:.1f}' for x in os.getloadavg())}; {os.cpu_count()} cores\nBLAS: {b0['blas']}")
     return 0

@@ -31,7 +31,14 @@ Measured from just before the process is started:
 
 Also printed: each loading stage and when it began (cold run). Goals: window interactive
 in under 20 s cold and under 5 s warm (issue 9 item 6); the manifold of 1M frames shown
-in under 10 s warm with a peak under 4 GiB, 10M frames in under 30 s and 8 GiB (issue 29).
+in under 10 s warm with a peak under 4 GiB, 10M frames in under 30 s and 8 GiB (issue 29);
+the talker usable in 10 s cold and 2.5 s warm on a quiet machine (issue 41).
+
+**Floor.** Before every run a fresh process runs ``python -c "import PySide6.QtWidgets,
+pyvista"`` (what any window of this kind pays before it can draw) and its wall time is
+printed beside the run's; the summary gives min / median of the floor and of each run's
+"usable" divided by the floor just before it (``--no-floor`` leaves it out). The machine's
+load average and the BLAS setting are printed at start and after every run.
 """
 from __future__ import annotations
 
@@ -59,6 +66,7 @@ def child(t0: float, preset: str, path=None) -> None:
     def on_swap():
         if out["manifold"] is not None and out["shown"] is None:
             out["shown"] = time.time() - t0
+            out["cpu_shown"] = time.process_time()  # this process's CPU until usable (all threads)
 
     def tick():
         now = time.time()
@@ -113,6 +121,30 @@ def child(t0: float, preset: str, path=None) -> None:
 
     launch(path, preset=preset, restore=False)
     print("RESULT " + json.dumps(out))
+
+
+FLOOR_CODE = "import PySide6.QtWidgets, pyvista"
+
+
+def _child_cpu() -> float:
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def run_floor() -> tuple[float, float]:
+    """(wall s, CPU s) of a fresh process that only imports Qt's widgets and pyvista."""
+    t0, c0 = time.time(), _child_cpu()
+    p = subprocess.run([sys.executable, "-c", FLOOR_CODE], capture_output=True, text=True, timeout=600)
+    if p.returncode != 0:
+        sys.exit(f"floor run failed ({p.returncode}): {p.stderr[-2000:]}")
+    return time.time() - t0, _child_cpu() - c0
+
+
+def usable(r: dict) -> float:
+    """The run's "usable": the manifold drawn, or later when a modal dialog blocked the window longer."""
+    return max(r["shown"], r.get("modal_closed", 0.0))
 
 
 def run_one(preset: str, cache: str, state: str, path=None, cap=()) -> dict:
@@ -173,11 +205,41 @@ def show(kind: str, k: int, r: dict, label: str = "") -> None:
           f"peak RSS {r.get('rss_mb', 0):.0f} MiB; load average {r.get('load', float('nan')):.1f}", flush=True)
 
 
+def environment_notes(compile_first: bool) -> None:
+    """Print what else a start pays in this environment: bytecode of Lipspace's own modules, pandas."""
+    import importlib.util
+    from pathlib import Path
+
+    import app
+    import engine
+
+    roots = [Path(engine.__file__).parent, Path(app.__file__).parent]
+    if compile_first:
+        import compileall
+
+        for r in roots:
+            compileall.compile_dir(str(r), quiet=1)
+    mods = [f for r in roots for f in r.rglob("*.py")]
+    cached = sum(1 for f in mods if importlib.util.cache_from_source(str(f)) and
+                 Path(importlib.util.cache_from_source(str(f))).is_file())
+    print(f"   Lipspace from {roots[0].parent}; bytecode cached for {cached} of {len(mods)} of its modules"
+          f"{' (compiled first: --compile)' if compile_first else ''}; PYTHONDONTWRITEBYTECODE="
+          f"{os.environ.get('PYTHONDONTWRITEBYTECODE', 'unset')}")
+    has_pandas = importlib.util.find_spec("pandas") is not None
+    print(f"   pandas {'installed' if has_pandas else 'not installed'}"
+          f"{' (scikit-learn imports it, and pyarrow with it, at every start: the [test] extra)' if has_pandas else ''}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cold", type=int, default=1, help="runs with an empty cache (each builds the talker) / with "
                                                         "the manifold's files dropped from the file cache")
     ap.add_argument("--warm", type=int, default=3, help="runs with the cache filled / the files in the file cache")
+    ap.add_argument("--compile", action="store_true",
+                    help="byte-compile the checkout's engine/ and app/ first (what pip does for an installed "
+                         "package; PYTHONDONTWRITEBYTECODE otherwise leaves every start compiling them)")
+    ap.add_argument("--no-floor", dest="floor", action="store_false",
+                    help=f"leave out the floor process ({FLOOR_CODE!r}) run before every start-up")
     ap.add_argument("--child-path", default=None, help=argparse.SUPPRESS)
     args, cap = gb.parse_bench_args(ap)
     if args.child is not None:
@@ -187,6 +249,7 @@ def main():
 
     specs = gb.manifold_specs(args)
     gb.header(f"start-up of the explorer on {', '.join(gb.spec_label(s) for s in specs)} (fresh process per run)")
+    environment_notes(args.compile)
     t_all = time.perf_counter()
     runs = {spec: {"cold": [], "warm": []} for spec in specs}
     with tempfile.TemporaryDirectory(prefix="lipspace-bench-") as tmp:
@@ -194,6 +257,7 @@ def main():
         talker_cache = os.path.join(tmp, "cache0")
 
         def one(spec, kind, k):
+            floor, floor_cpu = run_floor() if args.floor else (None, None)
             if spec == gb.TALKER:
                 cache = os.path.join(tmp, f"cache{k}") if kind == "cold" else talker_cache
                 if kind == "warm" and not os.path.isdir(cache):
@@ -204,8 +268,13 @@ def main():
                 files = manifold_files(spec)
                 (drop_from_file_cache if kind == "cold" else read_into_file_cache)(files)
                 r = run_one(args.preset, talker_cache, state, path=spec, cap=cap)
+            r["floor"], r["floor_cpu"] = floor, floor_cpu
             runs[spec][kind].append(r)
             show(kind, len(runs[spec][kind]), r, gb.spec_label(spec) if len(specs) > 1 else "")
+            if floor is not None:
+                print(f"      floor just before ({FLOOR_CODE!r}): {floor:.2f} s wall, {floor_cpu:.2f} s CPU; usable / "
+                      f"floor {usable(r) / floor:.2f} (wall), {r.get('cpu_shown', float('nan')) / floor_cpu:.2f} "
+                      f"(CPU: {r.get('cpu_shown', float('nan')):.2f} s until usable)", flush=True)
             if kind == "cold" and len(runs[spec]["cold"]) == 1:
                 print("      stages (s after the load started): " + ", ".join(
                     f"{name} {t:.1f}" for name, t in r["stages"]))
@@ -226,6 +295,16 @@ def main():
             print(f"{kind} [{gb.spec_label(spec)}]: window interactive (no modal dialog) min {min(inter):.2f} s, "
                   f"median {np.median(inter):.2f} s (goal < {goal:g} s); manifold drawn (usable) min {min(shown):.2f} s, "
                   f"median {np.median(shown):.2f} s; peak RSS max {max(rss):.0f} MiB (n={len(rs)})")
+            floors = [r["floor"] for r in rs if r.get("floor")]
+            if floors:
+                ratios = [usable(r) / r["floor"] for r in rs if r.get("floor")]
+                cpu = [r["cpu_shown"] / r["floor_cpu"] for r in rs if r.get("floor_cpu") and r.get("cpu_shown")]
+                print(f"   {kind} [{gb.spec_label(spec)}]: floor ({FLOOR_CODE!r}) min {min(floors):.2f} s, median "
+                      f"{np.median(floors):.2f} s; usable / floor min {min(ratios):.2f}, median {np.median(ratios):.2f}"
+                      + (f"; CPU until usable / the floor's CPU min {min(cpu):.2f}, median {np.median(cpu):.2f}"
+                         if cpu else "") + "; "
+                      f"load average during the runs {min(r.get('load', 0) for r in rs):.1f}-"
+                      f"{max(r.get('load', 0) for r in rs):.1f}")
     if len(specs) > 1:
         print("side by side (ratios against the first):")
         for kind in ("cold", "warm"):

@@ -20,6 +20,19 @@ average before and after and the note of the choice are printed.
 
 Usage: python benchmarks/bench_method_choice.py --cold [--manifold FILE|talker ...]
        [--vs-tree DIR] [--repeats 1] [--timeout 1800]
+
+``--first`` measures the first synthesis as a user meets it: each in a fresh process, the
+manifold is loaded as the window loads it (``talker``: :func:`app.files.source_loading.load_source`,
+the shipped or cached talker; a file: ``Manifold.load``; timed apart), then one synthesis with
+``best`` through the window's own function (:func:`app.models.trajectories.synthesize_targets`:
+the choice -- stored in the file, cached, or measured -- the synthesiser's fit and the
+synthesis) from targets of each protocol: ``states`` (five states of the graph, 0.2 s
+apart), ``phones`` (the text "bob meets mum") and ``oracle`` (the longest utterance's own
+phone mid-points). Printed per run: load and first-synthesis seconds, the method, whether
+the file held the choice, peak RSS; then min / median per manifold and protocol.
+
+Usage: python benchmarks/bench_method_choice.py --first [--manifold FILE|talker ...] [--repeats 3]
+       [--protocols states phones oracle]
 """
 from __future__ import annotations
 
@@ -35,6 +48,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import numpy as np  # noqa: E402
 from _common import blas_kernel, first_phones, peak_rss_mb, run_child_json  # noqa: E402
 
 
@@ -71,6 +85,68 @@ def child(spec, preset, cache_dir):
             "K": int(syn.model_.n_states_), "state_dims": int(choice["state_dims"]),
             "frames_per_state": choice.get("frames_per_state"), "best": choice.get("best"), "note": choice.get("note"),
             "blas": blas_kernel()}
+
+
+def child_first(spec, preset, protocol):
+    """One fresh process: load ``spec`` as the window does, then the first synthesis of ``protocol`` targets."""
+    from engine.manifold.model import Manifold
+
+    t = time.perf_counter()
+    if spec == "talker":
+        from app.files.source_loading import load_source
+
+        m = load_source(None, preset, prepare_views=False)[0]
+    else:
+        m = Manifold.load(spec)
+    t_load = time.perf_counter() - t
+    from app.models.trajectories import synthesize_targets
+    from engine.phonetics import targets as T
+    from engine.synthesis.method_choice import stored_choice
+
+    if protocol == "states":
+        K = m.states_.centroids_.shape[0]
+        tg = T.targets_from_points(m, [(12 * k, int(s)) for k, s in enumerate(np.linspace(0, K - 1, 5).astype(int))],
+                                   n_frames=4 * 12 + 1)
+    elif protocol == "phones":
+        tg = T.targets_from_text(m, "bob meets mum")
+    else:
+        u = max(m.corpus_.utterances, key=lambda x: x.n_frames if x.phones else 0)
+        tg = T.targets_from_utterance(m, u.id, on_collision="merge")
+    t = time.perf_counter()
+    data, _traj = synthesize_targets(m, tg, "best")
+    t_first = time.perf_counter() - t
+    return {"frames": int(m.Fy_.shape[0]), "load_s": t_load, "first_s": t_first, "method": data.extra["method"],
+            "stored": stored_choice(m) is not None, "n_frames": int(tg.n_frames), "rss": peak_rss_mb(),
+            "blas": blas_kernel(), "load": os.getloadavg()[0]}
+
+
+def first(args):
+    print(f"BLAS (parent): {blas_kernel()}\nload average before: "
+          f"{'/'.join(f'{x:.1f}' for x in os.getloadavg())}; {os.cpu_count()} cores", flush=True)
+    here = str(Path(__file__).resolve().parents[1])
+    runs = {}
+    for r in range(args.repeats):
+        for spec in args.manifold:
+            for protocol in args.protocols:
+                cmd = [sys.executable, str(Path(__file__).resolve()), "--child-first", protocol, "--manifold", spec,
+                       "--preset", args.preset]
+                try:
+                    out = run_child_json(cmd, cwd=here, timeout=args.timeout)
+                except subprocess.TimeoutExpired:
+                    print(f"{spec} {protocol} round {r}: did not finish in {args.timeout:.0f} s", flush=True)
+                    continue
+                runs.setdefault((spec, protocol), []).append(out)
+                print(f"{spec} {protocol} round {r}: {out['frames']} frames; load {out['load_s']:.2f} s; first synthesis "
+                      f"{out['first_s']:.2f} s ({out['method']}, {out['n_frames']} frames; choice stored in the file: "
+                      f"{out['stored']}); peak RSS {out['rss']:.0f} MiB; load average {out['load']:.1f}", flush=True)
+    print("\nsummary: first synthesis with 'best' (min / median over fresh processes)")
+    for (spec, protocol), outs in runs.items():
+        v = [o["first_s"] for o in outs]
+        ld = [o["load_s"] for o in outs]
+        print(f"  {spec} {protocol}: {min(v):.2f} / {statistics.median(v):.2f} s ({outs[0]['method']}); load "
+              f"{min(ld):.2f} / {statistics.median(ld):.2f} s; n={len(v)}")
+    print(f"BLAS (child): {next(iter(runs.values()))[0]['blas'] if runs else '-'}")
+    print(f"load average after: {'/'.join(f'{x:.1f}' for x in os.getloadavg())}")
 
 
 def cold(args):
@@ -121,11 +197,25 @@ def main():
     ap.add_argument("--vs-tree", default=None, metavar="DIR", help="also run the engine of this checkout (--cold)")
     ap.add_argument("--repeats", type=int, default=1)
     ap.add_argument("--timeout", type=float, default=1800.0, help="seconds before a child is ended (--cold)")
+    ap.add_argument("--first", action="store_true", help="the first synthesis with 'best', fresh processes "
+                                                          "(see the module docstring)")
+    ap.add_argument("--protocols", nargs="+", default=["states", "phones", "oracle"],
+                    choices=("states", "phones", "oracle"), help="targets of the first synthesis (--first)")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--child-first", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--root", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.repeats < 1:
         ap.error(f"--repeats must be >= 1, got {args.repeats}")
+    if args.child_first:
+        import warnings
+
+        warnings.simplefilter("ignore")
+        print(json.dumps(child_first(args.manifold[0], args.preset, args.child_first)))
+        return
+    if args.first:
+        first(args)
+        return
     if args.child:
         if args.root:
             sys.path.insert(0, args.root)

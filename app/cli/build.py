@@ -46,6 +46,10 @@ def add_arguments(p):
                    help="scale of each block of the dynamic features G: the largest entry (the paper's) or the "
                         "Q-th percentile of absolute values, e.g. p99, robust to outlying frames (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--no-method-choice", dest="method_choice", action="store_false",
+                   help="leave out measuring which synthesis method is best on the corpus's own validation split "
+                        "(by default the build measures it and stores it in the file, so the first synthesis "
+                        "starts at once; without it the first synthesis measures it)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -84,6 +88,11 @@ def run(args) -> int:
             finally:
                 if executor is not None:
                     executor.close()
+            if args.method_choice:
+                # the synthesis methods measured on the corpus's validation split, stored in the file
+                from engine.synthesis.method_choice import fit_choice
+
+                fit_choice(manifold, progress=progress)
         except ValueError as exc:
             raise CliError(str(exc)) from None
     manifold.save(out)
@@ -91,6 +100,11 @@ def run(args) -> int:
     print(f"wrote {out}: {s['frames']} frames, {s['shape_components']} shape components, "
           f"Y {s['embedding_dims']}-D (first 3 hold {100 * s['Y_first3_recovered']:.1f}% of recovered variance), "
           f"K={s['n_states']} states, {time.perf_counter() - t0:.1f} s", file=sys.stdout)
+    if manifold.synthesis_choice_ is not None:
+        best = manifold.synthesis_choice_.get("best") or {}
+        print("synthesis: best on validation " + (", ".join(f"{p} {m}" for p, m in best.items()) or
+                                                  f"not measured ({manifold.synthesis_choice_.get('note')})"),
+              file=sys.stdout)
     return 0
 
 

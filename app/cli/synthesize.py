@@ -107,17 +107,19 @@ def add_synthesis_options(p):
     p.add_argument("--tier", default=None, help="TextGrid tier holding the phones (default: found by name)")
     p.add_argument("--tempo", type=float, default=1.0, help="--text: speaking-rate factor (default: %(default)s)")
 
+
 def _manifold(args):
     from app.cli import CliError
-    from app.cli._common import load_corpus_arg, load_manifold_arg, progress_bar
-    from engine.manifold.model import Manifold
+    from app.cli._common import load_manifold_arg, progress_bar
 
     if args.manifold:
         return load_manifold_arg(args.manifold)
+    from app.files.source_loading import load_source
+
+    # the talker the window opens: its cached (or shipped) manifold, fitted and cached when there is none
     with progress_bar(disable=True if args.quiet else None) as progress:
-        corpus = load_corpus_arg(None, synthetic_preset=args.preset, progress=progress)
         try:
-            return Manifold().fit(corpus, progress=progress)
+            return load_source(None, args.preset, progress, prepare_views=False)[0]
         except ValueError as exc:
             raise CliError(str(exc)) from None
 

@@ -4,9 +4,15 @@ The window (:mod:`app.main_window`, in a worker thread) and the command line
 (``lipspace explore``, ``lipspace figures``) both load through :func:`load_source`,
 and check a file the user names with :func:`source_kind` before opening anything.
 
-The synthetic talker's manifold is cached in the user cache directory
-(``platformdirs.user_cache_dir("lipspace")`` or ``$LIPSPACE_CACHE_DIR``), keyed by
-preset, generator, fitting code and manifold file version, so the second start is quick.
+The default synthetic talker's manifold is shipped fitted (:mod:`engine.talker.prebuilt`): its
+corpus is generated (then cached) and the shipped fit put back on it, so even the first start
+builds nothing. Any other talker's manifold (another preset or kinematics, or the default one
+when the shipped file was made by other code) is fitted once and cached in the user cache
+directory (``platformdirs.user_cache_dir("lipspace")`` or ``$LIPSPACE_CACHE_DIR``), keyed by
+preset, generator, fitting code and manifold file version, so the second start is quick. The
+talker's speech audio can be made in the background (``speech_audio="background"``, what the
+window asks for): its utterances name their sound files at once and play silent until the
+files are written.
 The talker comes in two kinematics (:data:`engine.talker.lipmodel.KINEMATICS`): ``"classic"``
 and the opt-in ``"calibrated"`` (lips that move as real articulograph sensors do); each
 has its own cache entries (``synthetic-<preset>-...``, ``synthetic-<preset>_calibrated-...``),
@@ -20,7 +26,7 @@ from app.files.cache import CACHE_DIR_ENV, cache_dir
 
 __all__ = ["PRESETS", "KINEMATICS_CHOICES", "KINEMATICS_LABELS", "CACHE_DIR_ENV", "cache_dir", "cached_manifold_path",
            "check_kinematics", "talker_name", "prune_talker_cache", "source_kind", "load_source", "read_corpus_file",
-           "read_recording", "ANALYSIS_RATE"]
+           "read_recording", "ANALYSIS_RATE", "wait_for_background"]
 
 #: synthetic talker presets (engine.talker.synthetic)
 PRESETS = ("small", "default", "paper")
@@ -106,7 +112,7 @@ def source_kind(path) -> str:
 
 
 def load_source(path=None, preset: str = "default", progress=None, *, kinematics: str = "classic",
-                use_cache: bool = True, prepare_views: bool = True):
+                use_cache: bool = True, prepare_views: bool = True, speech_audio: str = "now"):
     """Load or build the manifold the explorer shows (Qt-free; runs in the worker thread).
 
     Parameters
@@ -127,6 +133,13 @@ def load_source(path=None, preset: str = "default", progress=None, *, kinematics
         Also compute what the views derive from the manifold (density, phone of every
         frame, phone clusters: :func:`app.models.state.prepare_derived`), here in the worker, so
         that showing the manifold costs the window's thread little.
+    speech_audio : {"now", "background"}, default="now"
+        When the synthetic talker's speech audio is made (espeak-ng; only with ``path`` None):
+        before returning, or in a background thread started just before returning (the
+        utterances name their files at once; each plays once written; a talker fitted anew
+        is cached once its audio is named). With ``"background"`` a corpus generated here is
+        also written to the cache after returning, in a thread the interpreter waits for at
+        exit. :func:`wait_for_background` waits for both.
 
     Returns
     -------
@@ -138,15 +151,65 @@ def load_source(path=None, preset: str = "default", progress=None, *, kinematics
     if path is not None and kinematics != "classic":
         raise ValueError(f"kinematics {kinematics!r} chooses the synthetic talker's; it does nothing with a file "
                          f"({path}): leave it out, or open the synthetic talker (no file)")
-    m, src = _load_manifold(path, preset, progress, use_cache, kinematics)
+    if speech_audio not in ("now", "background"):
+        raise ValueError(f"speech_audio must be 'now' or 'background', got {speech_audio!r}")
+    later = _Later() if speech_audio == "background" else None
+    m, src = _load_manifold(path, preset, progress, use_cache, kinematics, later)
     if prepare_views:
         from app.models.state import prepare_derived
 
         prepare_derived(m, progress)
+    if later is not None:
+        later.start()
     return m, src
 
 
-def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
+_BACKGROUND: list = []
+
+
+class _Later:
+    """What the talker's load leaves for after it: ``cache`` (the corpus written to the cache, old entries
+    pruned), run in a thread the interpreter waits for at exit, so that a window closed at once still leaves
+    a whole cache; then ``audio`` (the speech audio, and a talker fitted anew cached once its audio is
+    named), in a daemon thread: an unfinished file is made again next time."""
+
+    def __init__(self):
+        self.cache, self.audio = [], []
+
+    def start(self) -> None:
+        for jobs, daemon in ((self.cache, False), (self.audio, True)):
+            if jobs:
+                _start_background(jobs, daemon=daemon)
+
+
+def _start_background(jobs, *, daemon: bool) -> None:
+    """Run ``jobs`` one after the other in a thread."""
+    import threading
+
+    def run():
+        for job in jobs:
+            try:
+                job()
+            except Exception:  # noqa: BLE001 - a failure here costs sound or a cache entry, never the window
+                pass
+
+    t = threading.Thread(target=run, name="lipspace-talker-" + ("audio" if daemon else "cache"), daemon=daemon)
+    _BACKGROUND[:] = [b for b in _BACKGROUND if b.is_alive()] + [t]
+    t.start()
+
+
+def wait_for_background(timeout: float | None = None) -> bool:
+    """Wait for the work :func:`load_source` left running (the talker's cache file and speech audio); True when
+    none is left."""
+    import time
+
+    end = None if timeout is None else time.monotonic() + timeout
+    for t in list(_BACKGROUND):
+        t.join(None if end is None else max(0.0, end - time.monotonic()))
+    return not any(t.is_alive() for t in _BACKGROUND)
+
+
+def _load_manifold(path, preset, progress, use_cache, kinematics="classic", later=None):
     from engine.manifold.model import Manifold, ManifoldFileError
     from engine.progress import report
 
@@ -172,16 +235,75 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic"):
             pass  # stale or damaged cache: rebuild below
     from engine.talker.synthetic import load_synthetic
 
-    # speech audio when espeak-ng is installed
-    corpus = load_synthetic(preset=preset, progress=progress, audio=True, kinematics=kinematics)
+    # speech audio when espeak-ng is installed: now, or (later given) named now and made in the background
+    corpus = load_synthetic(preset=preset, progress=progress, audio=later is None, kinematics=kinematics,
+                            save_later=None if later is None else later.cache)  # with later: written after returning
+    if later is not None:
+        corpus, audio = _audio_later(corpus, preset, kinematics)
+        later.audio.append(audio)
+    m = _shipped(corpus, preset, kinematics, progress) if use_cache else None
+    if m is not None:  # the shipped fit on the regenerated corpus: nothing to cache but the corpus
+        if later is None:
+            prune_talker_cache(preset, kinematics)
+        else:  # once the corpus is written
+            later.cache.append(lambda: prune_talker_cache(preset, kinematics))
+        return m, src
     m = Manifold().fit(corpus, progress=progress)
     if use_cache:
-        try:
-            m.save(cached)
-        except OSError:
-            pass  # a read-only cache only costs a rebuild next time
-        prune_talker_cache(preset, kinematics, keep=[cached])
+        def cache():
+            try:
+                m.save(cached)
+            except OSError:
+                pass  # a read-only cache only costs a rebuild next time
+            prune_talker_cache(preset, kinematics, keep=[cached])
+
+        if later is None:
+            cache()
+        else:  # once the audio is made, so that the cached corpus part says which
+            later.audio.append(cache)
     return m, src
+
+
+def _shipped(corpus, preset, kinematics, progress):
+    """The shipped fit of the default talker on ``corpus`` (:mod:`engine.talker.prebuilt`), or None."""
+    from engine.manifold.model import ManifoldFileError
+    from engine.talker.prebuilt import PRESET, load_prebuilt
+
+    if preset != PRESET or kinematics != "classic":
+        return None
+    try:
+        return load_prebuilt(corpus, progress=progress)[0]
+    except ManifoldFileError:
+        return None  # a damaged shipped file: the talker is fitted as before
+
+
+def _audio_later(corpus, preset, kinematics):
+    """``(corpus whose utterances name their speech audio files, job that writes them)``.
+
+    Without espeak-ng the corpus comes back as it was, with a history line saying why, and the job
+    does nothing.
+    """
+    import subprocess
+
+    from engine.phonetics.speech_audio import SpeechAudioUnavailable, add_speech_audio, planned_speech_audio
+    from engine.talker.synthetic import audio_folder, cache_path
+
+    folder = audio_folder(cache_path(preset, kinematics=kinematics))
+    try:
+        planned = planned_speech_audio(corpus, folder)
+    except SpeechAudioUnavailable as exc:
+        corpus.history.append(f"speech audio: none; {exc}")
+        return corpus, lambda: None
+
+    def job():
+        try:
+            made = add_speech_audio(planned, folder)
+        except (OSError, ValueError, subprocess.SubprocessError, SpeechAudioUnavailable) as exc:
+            planned.history.append(f"speech audio: none; generating it failed ({exc})")
+        else:
+            planned.history.append(made.history[-1])
+
+    return planned, job
 
 
 #: the method's analysis rate in Hz (the paper's 60 Hz), to which 'lipspace import' and :func:`read_recording`

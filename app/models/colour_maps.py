@@ -17,7 +17,6 @@ from __future__ import annotations
 import functools
 import json
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -45,16 +44,23 @@ RESERVED_COLOURS = {
     "axes": (0.35, 0.35, 0.35),
 }
 
-_TABLE_FILE = Path(__file__).resolve().parent / "colour_tables.json"
+_TABLE_FILE = "colour_tables.json"  # package data of app.models
+
+
+@functools.lru_cache(maxsize=1)
+def _tables() -> dict:
+    from importlib import resources
+
+    return json.loads(resources.files("app.models").joinpath(_TABLE_FILE).read_text(encoding="utf-8"))
 
 
 @functools.lru_cache(maxsize=None)
 def colour_table(name: str) -> np.ndarray:
     """RGB entries (n, 3) float64 of colour map ``name``, read from the shipped ``colour_tables.json``
     (written by :mod:`app.figures.colour_tables`; no matplotlib import here)."""
-    tables = json.loads(_TABLE_FILE.read_text())
+    tables = _tables()
     if name not in tables:
-        raise KeyError(f"no colour table {name!r} in {_TABLE_FILE}; it has {', '.join(sorted(tables))}")
+        raise KeyError(f"no colour table {name!r} in app/models/{_TABLE_FILE}; it has {', '.join(sorted(tables))}")
     table = np.asarray(tables[name], dtype=np.float64)
     table.setflags(write=False)
     return table

@@ -21,8 +21,6 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
-from sklearn.cluster import KMeans, MiniBatchKMeans
-from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
@@ -30,6 +28,7 @@ from engine.graph.hop_paths import fewest_hop_path, hop_distances
 from engine.progress import ProgressFn, report
 from engine.recordings.bounds import check_bounds
 from engine.recordings.corpus import CorpusWarning
+from engine.threads import one_blas_thread
 
 __all__ = ["StateGraph", "UnreachableError", "StateGraphConnectivityWarning", "default_n_states",
            "assign_and_count"]
@@ -197,7 +196,7 @@ class StateGraph(BaseEstimator):
         return int(state)
 
     # -------------------------------------------------------------------- fit
-    def fit(self, Fy, bounds, *, progress: ProgressFn = None, executor=None):
+    def fit(self, Fy, bounds, *, progress: ProgressFn = None, executor=None, centroids=None):
         """Cluster F^y into states and build the transition graph.
 
         Parameters
@@ -211,6 +210,11 @@ class StateGraph(BaseEstimator):
             block of frames per task (:meth:`engine.scale.executor.DaskExecutor.map_row_blocks`);
             None: in-process. K-means itself is fitted here (mini-batch above
             20,000 frames: it touches a few batches, not every frame). Same result.
+        centroids : ndarray of shape (K, n_dims), optional
+            State centres fitted before (a manifold file stores the synthesiser's): K-means
+            is skipped and every frame is assigned to its nearest centre, so the graph is
+            the one the fit that made them gave. K is ``len(centroids)``; ``n_states``
+            is not used.
 
         Returns
         -------
@@ -226,14 +230,23 @@ class StateGraph(BaseEstimator):
         Y = self._check_Y(Fy, "F^y")
         N = Y.shape[0]
         b = check_bounds(bounds, N)
-        K = default_n_states(N) if self.n_states is None else self.n_states
+        if centroids is not None:
+            centroids = np.asarray(centroids, dtype=np.float64)
+            if centroids.ndim != 2 or centroids.shape[1] != self.n_dims or not 1 <= len(centroids) <= N \
+                    or not np.isfinite(centroids).all():
+                raise ValueError(f"centroids must be a finite (K, n_dims={self.n_dims}) array with 1 <= K <= N = {N}, "
+                                 f"got shape {centroids.shape}; leave it out to fit K-means")
+            K = len(centroids)
+        else:
+            K = default_n_states(N) if self.n_states is None else self.n_states
         if K > N:
             raise ValueError(f"n_states must be an integer in 1..N = 1..{N} (one state per frame at most), "
                              f"got {self.n_states!r}; use fewer states or None for the default")
         stage = "state graph"
         report(progress, stage, 0, 3)
 
-        centroids = self._kmeans(Y, int(K)).astype(np.float64)
+        if centroids is None:
+            centroids = self._kmeans(Y, int(K)).astype(np.float64)
         has_next = np.ones(N, bool)
         has_next[b[:, 1] - 1] = False
         if executor is None:
@@ -286,6 +299,10 @@ class StateGraph(BaseEstimator):
         return self
 
     def _kmeans(self, Y, K):
+        # imported here: scikit-learn's clustering package costs a loaded manifold's start-up 0.3-0.8 s
+        from sklearn.cluster import KMeans, MiniBatchKMeans
+        from sklearn.exceptions import ConvergenceWarning
+
         N = len(Y)
         with warnings.catch_warnings():
             # duplicate frames can leave fewer distinct clusters than K; empty ones are dropped below
@@ -300,7 +317,11 @@ class StateGraph(BaseEstimator):
                                      reassignment_ratio=0.01, compute_labels=False)
             else:
                 km = KMeans(n_clusters=K, n_init=1, random_state=self.random_state)
-            km.fit(Y.astype(np.float64))  # scikit-learn's float32 distance path upcasts chunk by chunk: slower
+            # scikit-learn's float32 distance path upcasts chunk by chunk: slower. The k-means++ seeding's
+            # K small products (a few candidates against every frame) on one BLAS thread: the same centres,
+            # 1.5-4x sooner on two shared cores (docs/DECISIONS.md, C3)
+            with one_blas_thread():
+                km.fit(Y.astype(np.float64))
         return km.cluster_centers_
 
     # ---------------------------------------------------------- graph helpers

@@ -142,7 +142,7 @@ class LocalLinearInverse(BaseEstimator):
             raise ValueError(f"n_neighbors must be in {d + 2}..{Fy.shape[0]} (n_dims + 2 .. training frames), "
                              f"got {self.n_neighbors}; choose k in that range")
         self.points_, self.values_ = Fy, Fx
-        self._tree = cKDTree(Fy)
+        self._tree = None  # built by the first transform: a synthesis that never maps through it does not pay it
         return self
 
     @single_blas_thread

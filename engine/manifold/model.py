@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import json
+import re
 import time
 from numbers import Integral
 from pathlib import Path
@@ -17,9 +18,10 @@ from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, StrOptions, validate_params
 from engine.files.atomic import atomic_write
-from engine.files.persist import NpzReadError, dump_estimator, load_estimator, read_npz, source_fingerprint
+from engine.files.persist import NpzReadError, dump_estimator, read_npz, source_fingerprint
 from engine.manifold.dynamics import SCALES, DynamicFeatures
 from engine.manifold.embedding import Embedding
+from engine.manifold.manifold_file import FILE_VERSION, read_fitted
 from engine.manifold.shape import ShapeSpace, small_query_blas
 from engine.progress import ProgressFn, report
 from engine.recordings.bounds import velocities
@@ -28,9 +30,26 @@ from engine.recordings.registration import SPEAKER_MODES
 
 __all__ = ["project_x", "Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
 
-FILE_VERSION = 2
 #: corpora whose frames exceed this are saved without F (reconstructed from F^x on load)
 MAX_SAVED_FRAME_BYTES = 512 * 2**20
+
+
+#: an import statement of an engine module: ``import engine.x[ as y][, ...]`` or ``from engine.x import a, b``
+#: (its names in parentheses over several lines too)
+_IMPORT = re.compile(r"^[ \t]*(?:from[ \t]+(engine(?:\.\w+)*)[ \t]+import[ \t]+(\([^)]*\)|[^\n]*)"
+                     r"|import[ \t]+(engine[^\n]*))", re.M)
+
+
+def _engine_imports(text: str) -> list[str]:
+    """The engine names the source ``text`` imports (modules, and ``module.name`` for each name taken from one)."""
+    out = []
+    for m in _IMPORT.finditer(text):
+        if m.group(1):
+            names = re.sub(r"#[^\n]*", "", m.group(2)).strip().strip("()")
+            out += [m.group(1)] + [f"{m.group(1)}.{n.split()[0]}" for n in names.split(",") if n.strip()]
+        else:
+            out += [p.split()[0] for p in re.sub(r"#.*", "", m.group(3)).split(",") if p.strip()]
+    return [n for n in out if n.split(".")[0] == "engine"]
 
 
 @functools.lru_cache(maxsize=1)
@@ -38,9 +57,8 @@ def fit_modules() -> tuple[str, ...]:
     """The engine modules whose code determines a fitted manifold: this module and every engine
     module it imports, directly or through others, at module level or inside functions, with the
     packages holding them (read from their sources, so a module a new import brings in is covered
-    without being listed)."""
-    import ast
-
+    without being listed). The import statements are found by a pattern, not by parsing each
+    module (every start of the explorer computes this key: 20 ms instead of 0.2-0.5 s)."""
     seen, todo = {}, [__name__]
     while todo:
         name = todo.pop()
@@ -52,13 +70,7 @@ def fit_modules() -> tuple[str, ...]:
         parts = name.split(".")
         todo += [".".join(parts[:k]) for k in range(2, len(parts))]  # its packages' __init__ run first
         with open(path, encoding="utf-8") as fh:
-            tree = ast.parse(fh.read())
-        for node in ast.walk(tree):
-            if isinstance(node, ast.Import):
-                todo += [a.name for a in node.names if a.name.split(".")[0] == "engine"]
-            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module \
-                    and node.module.split(".")[0] == "engine":
-                todo += [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            todo += _engine_imports(fh.read())
     return tuple(sorted(n for n, p in seen.items() if p is not None))
 
 
@@ -145,6 +157,18 @@ class Manifold(BaseEstimator):
         the file predates it).
     timings_ : dict of str to float
         Seconds per stage of the last fit.
+    synthesis_choice_ : dict or None
+        The synthesis methods' settings and the method measured best per protocol on the
+        corpus's own validation split (:func:`engine.synthesis.method_choice.fit_choice`, which
+        ``lipspace build`` runs after :meth:`fit`), stored in the file; None until measured
+        (:meth:`fit` resets it). JSON-able.
+    synthesis_states_ : ndarray of shape (K, d) or None
+        The synthesiser's state centres at those settings, fitted on every frame, so that the
+        first synthesis assigns frames to them instead of running K-means.
+    synthesis_models_ : dict of str to ndarray
+        The phone models measured best, fitted on every utterance, as the arrays
+        :func:`engine.files.persist.dump_estimator` makes (read back by
+        :func:`engine.synthesis.stored_choice.stored_model`); empty when none.
     """
 
     _parameter_constraints = {
@@ -249,6 +273,8 @@ class Manifold(BaseEstimator):
         self.tangent_, self.states_ = tangent, states
         self.Fx_, self.Fxv_, self.G_, self.Fy_ = Fx, Fxv, G, Fy
         self._inverse = None
+        self.synthesis_choice_ = self.synthesis_states_ = None  # measured on this fit by fit_choice
+        self.synthesis_models_ = {}
         t = time.perf_counter()
         report(progress, "inverse map", 0, 1)
         # exact-sized builds tetrahedralise every frame (the inverse map synthesis uses anyway); above
@@ -354,20 +380,32 @@ class Manifold(BaseEstimator):
             reference, include_frames = frames_reference(self.corpus_.frames, path), False
         if include_frames is None:
             include_frames = self.corpus_.frames.nbytes <= MAX_SAVED_FRAME_BYTES
+        d = self.fitted_arrays()
+        d.update(self.corpus_.to_arrays(include_frames=include_frames, base=path.resolve().parent))
+        d.update(reference)
+        with atomic_write(path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **d)
+        return path
+
+    def fitted_arrays(self) -> dict:
+        """What the fit made, as the flat dict of arrays :meth:`save` writes beside the corpus's arrays
+        (:meth:`from_arrays` reads it back)."""
+        check_is_fitted(self, "Fy_")
         d = {"manifold_version": np.array(FILE_VERSION),
              "manifold_params": np.array(json.dumps(self.get_params())),
              "manifold_timings": np.array(json.dumps(self.timings_)),
              "Fx": self.Fx_, "Fxv": self.Fxv_, "G": self.G_, "Fy": self.Fy_}
         if getattr(self, "state_x_", None) is not None:
             d["state_x"] = self.state_x_
-        d.update(self.corpus_.to_arrays(include_frames=include_frames, base=path.resolve().parent))
-        d.update(reference)
+        if getattr(self, "synthesis_choice_", None) is not None:
+            d["synthesis_choice"] = np.array(json.dumps(self.synthesis_choice_))
+            if getattr(self, "synthesis_states_", None) is not None:
+                d["synthesis_states"] = np.asarray(self.synthesis_states_, dtype=np.float64)
+            d.update({f"synthesis_models/{k}": v for k, v in (getattr(self, "synthesis_models_", None) or {}).items()})
         for name, attr in self._PARTS.items():
             d.update(dump_estimator(getattr(self, attr), name))
-        with atomic_write(path) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez(fh, **d)
-        return path
+        return d
 
     @classmethod
     def load(cls, path, *, memory_map: bool | None = None) -> "Manifold":
@@ -386,8 +424,6 @@ class Manifold(BaseEstimator):
         estimator's own parameters (unknown keys refused). Any fault raises
         :class:`ManifoldFileError` naming the file and the field.
         """
-        from engine.files.validate import FieldError
-
         path = Path(path)
         try:
             d = read_npz(path, memory_map=memory_map)
@@ -395,101 +431,34 @@ class Manifold(BaseEstimator):
             raise ManifoldFileError(f"{path}: no such manifold file") from None
         except NpzReadError as exc:
             raise ManifoldFileError(f"{path}: not a readable .npz manifold file ({exc.reason})") from None
+        return cls.from_arrays(d, source=path)
+
+    @classmethod
+    def from_arrays(cls, d, *, source, corpus=None) -> "Manifold":
+        """A manifold from the arrays :meth:`save` writes (``d``: name -> ndarray), every one checked.
+
+        ``corpus``: the corpus the manifold was fitted to, when ``d`` holds only what the fit made
+        (:meth:`fitted_arrays`, the per-frame arrays the fit derives from the corpus included); its
+        frame count must be the manifold's. ``source`` names the file in messages.
+
+        Raises
+        ------
+        ManifoldFileError
+            Any fault, naming ``source`` and the field.
+        """
+        from engine.files.validate import FieldError
+
+        path = Path(source)
         if "manifold_version" not in d:
             hint = " (it is a corpus file: build it with 'lipspace build')" if "corpus_version" in d else ""
             raise ManifoldFileError(f"{path}: not a Lipspace manifold file{hint}")
         try:
-            return cls._from_arrays(d, path)
+            return read_fitted(cls, d, path, corpus, parts=cls._PARTS)
         except FieldError as exc:
             raise ManifoldFileError(str(exc)) from None
         except CorpusError as exc:
             msg = str(exc)
             raise ManifoldFileError(msg if msg.startswith(str(path)) else f"{path}: corpus part: {msg}") from None
-
-    @classmethod
-    def _from_arrays(cls, d, path) -> "Manifold":
-        from engine.files.validate import FieldError, check_array, check_scalar, parse_params
-        from engine.graph.states import StateGraph
-        from engine.manifold.tangent import TangentFrames
-
-        version = check_scalar(d, "manifold_version", source=path, kind="int")
-        if version == 1:
-            raise FieldError(path, "manifold_version", "format 1 was written by an older Lipspace whose tangent "
-                                                       "frames and classes were read in Y1-3 only; rebuild it "
-                                                       "from its corpus with 'lipspace build'")
-        if version > FILE_VERSION or version < 1:
-            raise FieldError(path, "manifold_version", f"format {version} is not one this Lipspace reads "
-                                                       f"({FILE_VERSION}); upgrade Lipspace")
-        self = parse_params(cls, check_scalar(d, "manifold_params", source=path, kind="str"),
-                            source=path, field="manifold_params")
-        dims = {}
-        self.Fx_ = check_array(d, "Fx", source=path, shape=("N", "m"), dims=dims)
-        self.Fxv_ = check_array(d, "Fxv", source=path, shape=("N", "m"), dims=dims)
-        self.G_ = check_array(d, "G", source=path, shape=("N", "2m"), dims=dims)
-        self.Fy_ = check_array(d, "Fy", source=path, shape=("N", "k"), dims=dims)
-        classes = {"shape": ShapeSpace, "dynamics": DynamicFeatures, "embedding": Embedding,
-                   "tangent": TangentFrames, "states": StateGraph}
-        for name, attr in cls._PARTS.items():
-            setattr(self, attr, load_estimator(classes[name], d, name, source=path,
-                                               schema=classes[name]._persisted_attributes, dims=dims))
-        _check_consistency(self, dims, path)
-        frames = None
-        if "corpus_frames" in d:
-            check_array(d, "corpus_frames", source=path, shape=("N", "C"), dims=dims, finite=False)  # see Corpus
-        elif "corpus_blocks_source" in d:  # the frames stay in the blocked corpus the manifold was built from
-            from engine.recordings.corpus_blocks import frames_from_reference
-
-            check_scalar(d, "corpus_blocks_source", source=path, kind="str")
-            frames = frames_from_reference(d, path, n_frames=dims["N"], n_columns=self.shape_.mean_.shape[0])
-        else:
-            frames = self.shape_.inverse_transform(self.Fx_)
-        self.corpus_ = Corpus.from_arrays(d, frames=frames, source=str(path), base=Path(path).resolve().parent)
-        self.timings_ = _parse_timings(check_scalar(d, "manifold_timings", source=path, kind="str"), path)
-        self._inverse = None
-        self.state_x_ = None  # files written before it was stored: synthesis maps the states itself
-        if "state_x" in d:
-            dims.setdefault("K", self.states_.centroids_.shape[0])
-            self.state_x_ = check_array(d, "state_x", source=path, shape=("K", "m"), dims=dims)
-        return self
-
-
-def _check_consistency(m, dims, path):
-    """Relations between parts that shapes alone do not express."""
-    from engine.files.validate import FieldError
-
-    if m.shape_.n_components_ != dims["m"]:
-        raise FieldError(path, "shape/n_components_", f"{m.shape_.n_components_} but F^x has {dims['m']} columns")
-    if m.n_embedding != dims["k"]:
-        raise FieldError(path, "manifold_params.n_embedding", f"{m.n_embedding} but F^y has {dims['k']} columns")
-    if m.embedding_method != m.embedding_.method or m.embedding_.method not in ("pca", "mds"):
-        raise FieldError(path, "embedding/__params__.method",
-                         f"{m.embedding_.method!r} (manifold says {m.embedding_method!r}); expected 'pca' or 'mds'")
-    if dims["L"] < 1 or dims["K"] < 1 or dims["N"] < 2:
-        raise FieldError(path, "Fy", f"{dims['N']} frames, {dims['L']} reference points, {dims['K']} states: "
-                                     "too few to be a fitted manifold")
-    if dims["t"] > dims["k"] or dims["d"] > dims["k"] or m.tangent_.n_dims_ != dims["t"]:
-        raise FieldError(path, "tangent/s_", f"{dims['t']}-D tangent frames (n_dims_={m.tangent_.n_dims_}) / "
-                                             f"{dims['d']}-D states in a {dims['k']}-D embedding")
-    st = m.states_
-    if st.scc_labels_.size and st.scc_labels_.max() >= st.n_scc_:
-        raise FieldError(path, "states/scc_labels_", f"value {st.scc_labels_.max()} is out of range "
-                                                     f"(n_scc_={st.n_scc_})")
-    if st.largest_scc_ >= st.n_scc_:
-        raise FieldError(path, "states/largest_scc_", f"{st.largest_scc_} is out of range (n_scc_={st.n_scc_})")
-
-
-def _parse_timings(text, path) -> dict:
-    from engine.files.validate import FieldError
-
-    try:
-        t = json.loads(text)
-    except ValueError as exc:
-        raise FieldError(path, "manifold_timings", f"not valid JSON ({exc})") from None
-    if not isinstance(t, dict) or not all(isinstance(k, str) and isinstance(v, (int, float))
-                                          and not isinstance(v, bool) and np.isfinite(v) for k, v in t.items()):
-        raise FieldError(path, "manifold_timings", "expected a JSON object of stage name -> seconds")
-    return {k: float(v) for k, v in t.items()}
-
 
 def project_x(manifold, Fx) -> np.ndarray:
     """Out-of-sample F^y of one utterance-long trajectory given in X.

@@ -49,7 +49,8 @@ from engine.phonetics.time_warp import time_stretch, time_warp
 from engine.progress import report
 
 __all__ = ["SpeechAudioUnavailable", "AUDIO_VERSION", "espeak_path", "audio_method", "word_spans",
-           "phone_mnemonics", "time_stretch", "time_warp", "utterance_audio", "add_speech_audio", "read_wav",
+           "phone_mnemonics", "time_stretch", "time_warp", "utterance_audio", "add_speech_audio",
+           "planned_speech_audio", "read_wav",
            "SAMPLE_RATE"]
 
 SAMPLE_RATE = 22050
@@ -413,6 +414,22 @@ def _trim(x):
     env = _envelope(x, int(0.01 * SAMPLE_RATE))
     idx = np.flatnonzero(env > 0.03 * env.max()) if len(x) and env.max() > 0 else np.array([0, len(x) - 1])
     return int(idx[0]), int(idx[-1]) + 1
+
+
+def planned_speech_audio(corpus, folder):
+    """``corpus`` with each utterance's ``audio`` naming ``<folder>/<utterance id>.wav``, whether or not the
+    file exists yet: :func:`add_speech_audio` with the same folder writes them there (a player finds
+    each one once it is written).
+
+    Raises
+    ------
+    SpeechAudioUnavailable
+        When espeak-ng is not installed (nothing would ever be written).
+    """
+    audio_method()
+    folder = Path(folder).resolve()
+    new = [dataclasses.replace(u, audio=str(folder / f"{u.id}.wav")) for u in corpus.utterances]
+    return dataclasses.replace(corpus, utterances=new, history=list(corpus.history))
 
 
 def add_speech_audio(corpus, folder, *, progress=None, workers: int = 2):

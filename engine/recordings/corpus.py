@@ -219,15 +219,18 @@ class Corpus:
             raise CorpusError(f"{self.name}: need at least 2 frames, got {F.shape[0]}")
         if not np.isfinite(self.rate) or self.rate <= 0:
             raise CorpusError(f"{self.name}: rate must be a positive number of Hz, got {self.rate}")
-        # frames stored in blocks are checked where they are read (the shape stage), not gathered here
-        bad = np.zeros((0, 0), bool) if isinstance(F, BlockFrames) else ~np.isfinite(F)
+        # frames stored in blocks are checked where they are read (the shape stage), not gathered here;
+        # the extremes first (NaN and inf show in them), so that finite frames cost two passes, no copy
+        blocked = isinstance(F, BlockFrames)
+        lo, hi = (0.0, 0.0) if blocked or not F.size else (float(F.min()), float(F.max()))
+        bad = ~np.isfinite(F) if not (np.isfinite(lo) and np.isfinite(hi)) else np.zeros((0, 0), bool)
         if bad.any():
             i, j = np.argwhere(bad)[0]
             raise CorpusError(
                 f"{self.name}: frame {i} column {j} is {F[i, j]} (NaN/inf); "
                 f"{int(bad.any(axis=1).sum())} frames are not finite. Interpolate or drop them before building."
             )
-        if not isinstance(F, BlockFrames) and F.size and float(np.abs(F).max()) > MAX_COORDINATE:
+        if not blocked and F.size and max(-lo, hi) > MAX_COORDINATE:
             i, j = np.argwhere(np.abs(F) > MAX_COORDINATE)[0]
             raise CorpusError(
                 f"{self.name}: frame {i} column {j} is {F[i, j]:g}; coordinates beyond {MAX_COORDINATE:g} (in any "

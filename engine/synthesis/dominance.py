@@ -128,8 +128,10 @@ class DominanceModel(BaseEstimator):
         R = X - Xh
         N = X.shape[0]
         loss = (float((R ** 2).sum()) + penalty) / N  # the targets' own objective: its optimum profiles them out
-        # dE/dw_tj (w normalised): -2 R_t . (T_j - Xh_t); through the normalisation, dE/dlogD_tj = w_tj (g_tj - sum_k w_tk g_tk)
-        g = -2.0 * np.einsum("tm,twm->tw", R, T[types] - Xh[:, None, :]) / N
+        # dE/dw_tj (w normalised): -2 R_t . (T_j - Xh_t); through the normalisation, dE/dlogD_tj = w_tj (g_tj - sum_k w_tk g_tk).
+        # R_t . T_j is (R T^T)[t, type j]: (N, K) instead of the (N, W, m) of T[types] (1.8 GB at a million frames)
+        RT = R @ T.T
+        g = -2.0 * (np.take_along_axis(RT, types, axis=1) - np.einsum("tm,tm->t", R, Xh)[:, None]) / N
         gl = w * g  # dE/dlogD (the normalisation's term vanishes: sum_j w (T_j - Xh) = 0)
         gl = np.where(mask, gl, 0.0)
         grad = np.zeros_like(p)
@@ -172,8 +174,12 @@ class DominanceModel(BaseEstimator):
         self.theta_after_ = np.exp(p[2 * K:3 * K])
         self.c_ = float(np.exp(p[3 * K]))
         self.loss_ = float(res.fun)
-        self._p = p
         return self
+
+    def _packed(self) -> np.ndarray:
+        """The log parameters (log alpha, log theta before, log theta after, log c) of the fitted model."""
+        return np.concatenate([np.log(self.alpha_), np.log(self.theta_before_), np.log(self.theta_after_),
+                               [np.log(self.c_)]])
 
     def predict(self, phones, n_frames, rate, warnings=None) -> np.ndarray:
         """X (n_frames, m) of phone intervals (seconds from 0); unknown phones get a stand-in."""
@@ -190,5 +196,5 @@ class DominanceModel(BaseEstimator):
 
         ph = tuple(replace(p, label=lab) for p, lab in zip(phones, labs))
         types, taus, mask = self._layout([ph], [int(n_frames)], rate, index)
-        w, _, _ = self._weights(self._p, types, taus, mask, K)
+        w, _, _ = self._weights(self._packed(), types, taus, mask, K)  # the fitted attributes alone: a stored model
         return np.einsum("tw,twm->tm", w, self.targets_[types])

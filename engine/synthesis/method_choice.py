@@ -4,9 +4,18 @@
 (every utterance of its corpus counts as training: a fifth of them is the validation
 split, the rest fits the states, the learnt paths and the phone models). The result --
 the validated settings, every method's validation RMSE X and LVE per protocol, and the
-best method per protocol -- is written as JSON into the cache folder under a key made
-from the manifold's data and the code that measured it (:func:`choice_path`), so the
-explorer and ``lipspace synthesize`` measure a corpus once.
+best method per protocol -- is kept in two places:
+
+* in the manifold file: :func:`fit_choice` (``lipspace build`` runs it after the fit) stores
+  it as ``Manifold.synthesis_choice_`` with the synthesiser's state centres on every frame
+  (``synthesis_states_``) and the phone models measured best, fitted on every utterance
+  (``synthesis_models_``: the dominance functions take minutes to fit on a large corpus), so
+  the first synthesis from a built file runs no validation, no K-means and no model fit;
+  all of it is used while the code that measured it (:func:`choice_code`) is the code
+  running;
+* in the cache folder, as JSON under a key made from the manifold's data and that code
+  (:func:`choice_path`): a manifold without a stored choice (a file written before builds
+  stored it, a corpus fitted in the window) is measured once, at its first synthesis.
 
 Which protocol a synthesis is in follows from its targets (:func:`target_protocol`): the
 true X and a state at every target (a corpus utterance's own targets) is ``oracle``;
@@ -22,15 +31,22 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["BEST", "choose_methods", "load_choice", "choice_path", "manifold_fingerprint", "target_protocol",
+from engine.synthesis.stored_choice import (
+    CHOICE_MODULES,
+    STORED_MODELS,
+    choice_code,
+    phone_model,
+    stored_choice,
+    stored_model,
+    stored_states,
+)
+
+__all__ = ["BEST", "choose_methods", "fit_choice", "stored_choice", "stored_states", "stored_model", "phone_model",
+           "STORED_MODELS", "choice_code", "load_choice", "choice_path", "manifold_fingerprint", "target_protocol",
            "best_method", "describe", "CHOICE_MODULES"]
 
 #: the method name that asks for the method measured best on validation
 BEST = "best"
-#: modules whose code decides the choice (part of the cache key)
-CHOICE_MODULES = ("engine.synthesis.validation", "engine.synthesis.protocol_methods", "engine.synthesis.learnt_paths", "engine.synthesis.statepaths",
-                  "engine.synthesis.dominance", "engine.synthesis.sliding_window", "engine.synthesis.unitselection", "engine.graph.states",
-                  "engine.synthesis.viterbi", "engine.manifold.inverse_local", "engine.synthesis.method_choice")
 #: settings kept in the cache (the rest of select_settings' answer is diagnostics)
 _KEPT = ("state_dims", "frames_per_state", "n_states", "n_neighbors", "sigma", "blend", "sliding_window",
          "protocols", "method_validation", "best", "val_ids", "note")
@@ -52,13 +68,11 @@ def manifold_fingerprint(manifold) -> str:
 
 def choice_path(manifold, cache_dir=None) -> Path:
     """Where the choice for ``manifold`` is cached: ``<cache>/method-choice/<data key>-<code key>.json``."""
-    from engine.files.persist import source_fingerprint
-
     if cache_dir is None:
         from engine.files.userdirs import user_dir
 
         cache_dir = user_dir("cache", "LIPSPACE_CACHE_DIR")
-    return Path(cache_dir) / "method-choice" / f"{manifold_fingerprint(manifold)}-{source_fingerprint(CHOICE_MODULES)}.json"
+    return Path(cache_dir) / "method-choice" / f"{manifold_fingerprint(manifold)}-{choice_code()}.json"
 
 
 def _jsonable(x):
@@ -83,8 +97,70 @@ def load_choice(manifold, cache_dir=None) -> dict | None:
     return d if isinstance(d, dict) and "best" in d and "blend" in d else None
 
 
+def _measure(manifold, progress):
+    from engine.synthesis.validation import select_settings
+
+    s = select_settings(manifold, progress=progress)
+    out = _jsonable({k: s[k] for k in _KEPT if k in s})
+    out["code"] = choice_code()
+    return out
+
+
+def fit_choice(manifold, *, progress=None) -> dict:
+    """Measure the choice on ``manifold``'s corpus and keep it on the manifold, for its file.
+
+    Sets ``manifold.synthesis_choice_`` (what :func:`choose_methods` returns) and
+    ``manifold.synthesis_states_``: the centres of the state model the synthesisers fit at the
+    chosen settings (``state_dims``, ``n_states``) on every frame, the K-means of the
+    synthesis step done once here. :meth:`engine.manifold.model.Manifold.save` stores both.
+
+    Parameters
+    ----------
+    manifold : engine.manifold.model.Manifold
+        Fitted.
+    progress : callable(stage, done, total), optional
+        Sees the validation's stages, then ``"synthesis states"``; may raise
+        :class:`engine.progress.Cancelled` (the manifold is left without a choice).
+
+    Returns
+    -------
+    dict
+        The choice (JSON-able).
+    """
+    import warnings
+
+    from engine.graph.states import StateGraph
+    from engine.progress import report
+
+    choice = _measure(manifold, progress)
+    report(progress, "synthesis states", 0, 1)
+    with warnings.catch_warnings(record=True):  # as the synthesiser's state model: its connectivity is kept there
+        warnings.simplefilter("always")
+        graph = StateGraph(n_states=choice.get("n_states"), n_dims=int(choice["state_dims"])).fit(
+            manifold.Fy_, manifold.corpus_.bounds)
+    report(progress, "synthesis states", 1, 1)
+    from engine.files.persist import dump_estimator
+    from engine.synthesis.trajectory import phone_sequences
+
+    models = {}
+    best = sorted({m for m in (choice.get("best") or {}).values() if m in STORED_MODELS})
+    for k, method in enumerate(best):  # as make_synthesizer fits it: on every utterance with phones
+        report(progress, "synthesis models", k, len(best))
+        c = manifold.corpus_
+        models.update(dump_estimator(phone_model(method, choice).fit(phone_sequences(c.utterances, manifold.Fx_),
+                                                                     c.rate), method))
+    report(progress, "synthesis models", len(best), len(best))
+    manifold.synthesis_choice_, manifold.synthesis_states_ = choice, graph.centroids_
+    manifold.synthesis_models_ = models
+    return choice
+
+
 def choose_methods(manifold, *, cache_dir=None, use_cache=True, progress=None) -> dict:
-    """The validated settings and the best method per protocol of ``manifold``'s corpus (cached).
+    """The validated settings and the best method per protocol of ``manifold``'s corpus.
+
+    The one the manifold's file stores (:func:`stored_choice`), else the cached one, else
+    measured now (:func:`engine.synthesis.validation.select_settings`) and cached.
+    ``use_cache=False`` measures it in any case.
 
     Returns
     -------
@@ -93,14 +169,12 @@ def choose_methods(manifold, *, cache_dir=None, use_cache=True, progress=None) -
         ``method_validation``, ``blend``, ``state_dims``, ...), JSON-able.
     """
     if use_cache:
-        hit = load_choice(manifold, cache_dir)
+        hit = stored_choice(manifold) or load_choice(manifold, cache_dir)
         if hit is not None:
             return hit
     from engine.files.atomic import atomic_write
-    from engine.synthesis.validation import select_settings
 
-    s = select_settings(manifold, progress=progress)
-    out = _jsonable({k: s[k] for k in _KEPT if k in s})
+    out = _measure(manifold, progress)
     p = choice_path(manifold, cache_dir)
     try:
         p.parent.mkdir(parents=True, exist_ok=True)

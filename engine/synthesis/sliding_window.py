@@ -90,7 +90,7 @@ class SlidingWindowRegressor(BaseEstimator):
         V = len(self.vocabulary_)
         j = np.arange(n)[:, None] + offs[None, :]
         ok = (j >= 0) & (j < n)
-        L = np.where(ok, lab[np.clip(j, 0, n - 1)], self._boundary)
+        L = np.where(ok, lab[np.clip(j, 0, n - 1)], len(self.vocabulary_) - 1)  # the boundary label comes last
         cols = (np.arange(offs.size)[None, :] * V + L).ravel()
         rows = np.repeat(np.arange(n), offs.size)
         return sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, offs.size * V))
@@ -114,7 +114,6 @@ class SlidingWindowRegressor(BaseEstimator):
         self.labels_ = [lab for lab, _ in counts.most_common()]
         self.vocabulary_ = self.labels_ + [_BOUNDARY]
         index = {lab: i for i, lab in enumerate(self.vocabulary_)}
-        self._boundary = index[_BOUNDARY]
         feats, outs = [], []
         for X, ph in seqs:
             lab = self._frame_labels(ph, X.shape[0], rate, index)

@@ -26,7 +26,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import validate_params
 from engine.synthesis.learnt_paths import prior_blend
-from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, phone_mids, target_frames
+from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, target_frames
 from engine.threads import single_blas_thread
 
 __all__ = ["LearntPathSynthesizer", "StateHermiteSynthesizer"]
@@ -60,10 +60,16 @@ class _StateModelSynthesizer(BaseEstimator):
             ch = choose_methods(manifold, progress=progress)
         self.choice_ = ch
         c = manifold.corpus_
-        phones = phone_mids(c, c.utterances) if any(u.phones for u in c.utterances) else None
+        # every phone's mid-point frame and label: the corpus's phone table (built once, at once; a loop over the
+        # phones took 6 s at a million frames), which is phone_mids of all its utterances
+        phones = c.phone_table()[:2] if any(u.phones for u in c.utterances) else None
+        from engine.synthesis.stored_choice import stored_states
+
+        # the states a build fitted at these settings (the manifold file's), else K-means now
         self.model_ = StateModel(state_dims=int(ch["state_dims"]), n_states=ch.get("n_states"),
                                  n_neighbors=int(ch.get("n_neighbors", 40))).fit(
-            manifold.Fy_, manifold.Fx_, manifold.Fxv_, c.bounds, phones=phones)
+            manifold.Fy_, manifold.Fx_, manifold.Fxv_, c.bounds, phones=phones,
+            centroids=stored_states(manifold, ch))
         g = manifold.states_
         lab = np.asarray(g.labels_)
         K = int(g.centroids_.shape[0])

@@ -110,7 +110,9 @@ class StateModel:
         self.n_pool = n_pool
         self.duration_tolerance = duration_tolerance
 
-    def fit(self, Fy, Fx, Fxv, bounds, phones=None):
+    def fit(self, Fy, Fx, Fxv, bounds, phones=None, *, centroids=None):
+        """Fit on the frames given; ``centroids`` (K, state_dims): state centres fitted before (a manifold
+        file's :attr:`engine.manifold.model.Manifold.synthesis_states_`), so no K-means runs."""
         from engine.graph.states import StateGraph, default_n_states
         from engine.synthesis.viterbi import MaxProductGraph, log_transitions, observed_transitions
 
@@ -121,7 +123,8 @@ class StateModel:
         K = default_n_states(Fy.shape[0]) if self.n_states is None else int(self.n_states)
         with _warnings.catch_warnings(record=True) as caught:
             _warnings.simplefilter("always")
-            self.graph_ = StateGraph(n_states=K, n_dims=d, random_state=self.random_state).fit(Fy, bounds)
+            self.graph_ = StateGraph(n_states=K, n_dims=d, random_state=self.random_state).fit(
+                Fy, bounds, centroids=centroids)
         self.connectivity_warnings_ = [str(w.message) for w in caught]
         lab = self.graph_.labels_
         K = self.graph_.centroids_.shape[0]

@@ -169,10 +169,15 @@ class PhoneModelSynthesizer(BaseEstimator):
         self.method = method
 
     def fit(self, manifold):
+        from engine.synthesis.stored_choice import stored_model
+
         validate_params(self)
         check_fitted_manifold(manifold)
         c = manifold.corpus_
-        self.model_ = clone(self.model).fit(phone_sequences(c.utterances, manifold.Fx_), c.rate)
+        # the model a build fitted with these settings (stored in the manifold file), else fitted now
+        stored = stored_model(manifold, self.method, self.model)
+        self.model_ = stored if stored is not None else clone(self.model).fit(
+            phone_sequences(c.utterances, manifold.Fx_), c.rate)
         return self
 
     def synthesize(self, targets) -> Trajectory:

@@ -36,7 +36,6 @@ from numbers import Integral, Real
 from pathlib import Path
 
 import numpy as np
-from scipy.signal import lfilter
 from sklearn.base import BaseEstimator
 
 from engine.constraints import Condition, Interval, StrOptions, validate_params
@@ -48,7 +47,7 @@ from engine.talker.lipmodel import CONTROL_NAMES, KINEMATICS, RESOLUTIONS, SIGNE
 from engine.threads import one_blas_thread
 
 __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker", "load_synthetic", "cache_folder",
-           "cache_token",
+           "cache_token", "talker_key", "cache_path", "audio_folder",
            "phone_gestures", "gesture_phases", "lip_roles", "speaker_anatomy"]
 
 #: the lip model's coordinates (engine.talker.lipmodel): x the talker's left, y up, z forward, in mm
@@ -478,6 +477,8 @@ class SyntheticTalker(BaseEstimator):
             u[:, col[_O]] += _POSTURE_ROLL_SD * rng.standard_normal()
             u[:, col[_M]] += abs(_POSTURE_MENTALIS_SD * rng.standard_normal())
         u[:, col[_X]] += lateral * u[:, col[_J]]                               # this speaker's jaw path
+        from scipy.signal import lfilter  # imported on use: a cached talker's start-up does not need it
+
         p = np.exp(-omega / fs)
         out = np.zeros((len(u), _NC))
         for i, k in enumerate(act):
@@ -623,6 +624,8 @@ _LOW = np.array([-1.0 if n in SIGNED_CONTROLS else 0.0 for n in CONTROL_NAMES])
 def _slow_process(rng, n, k, pole):
     """(n, k) independent first-order (AR(1)) processes of unit variance with ``pole``,
     stationary from the first sample (its state drawn from the stationary distribution)."""
+    from scipy.signal import lfilter
+
     e = rng.standard_normal((n, k)) * math.sqrt(1 - pole * pole)
     return lfilter([1.0], [1.0, -pole], e, axis=0, zi=rng.standard_normal(k)[None, :] * pole)[0]
 
@@ -698,6 +701,28 @@ def _cache_key(params: dict) -> str:
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 
+def cache_path(preset="default", *, cache_dir=None, **params) -> Path:
+    """Where :func:`load_synthetic` caches the corpus of ``preset`` with ``params``; its speech audio
+    goes in the folder of the same name ending ``-audio`` (:func:`audio_folder`)."""
+    return cache_folder(cache_dir) / f"synthetic-{cache_token(preset, **params)}-{talker_key(preset, **params)}.npz"
+
+
+def audio_folder(corpus_path) -> Path:
+    """The folder of a cached corpus's speech audio: its file name without ``.npz``, ending ``-audio``."""
+    corpus_path = Path(corpus_path)
+    return corpus_path.with_name(corpus_path.stem + "-audio")
+
+
+def talker_key(preset="default", **params) -> str:
+    """The key of the corpus :class:`SyntheticTalker` ``(preset=preset, **params)`` generates: a hash of its
+    parameters, :data:`GENERATOR_VERSION` and the generator's code (:func:`generator_fingerprint`).
+    ValueError for parameters the talker refuses."""
+    talker = SyntheticTalker(preset=preset, **params)
+    talker._validate()
+    key = {k: v for k, v in talker.get_params().items() if not (k in _VARIANT_DEFAULTS and v == _VARIANT_DEFAULTS[k])}
+    return _cache_key(key)
+
+
 def cache_token(preset="default", **params) -> str:
     """The preset part of a cached talker's file name: the preset, and the opt-in variants
     (``_calibrated``, ``_tissue``) so that the cache keeps one entry of each apart."""
@@ -709,7 +734,8 @@ def cache_token(preset="default", **params) -> str:
     return out
 
 
-def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=False, **params) -> Corpus:
+def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=False, save_later=None,
+                   **params) -> Corpus:
     """The synthetic corpus for ``preset``, generated once and cached.
 
     Parameters
@@ -722,6 +748,10 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=Fal
         Give every utterance speech audio (:mod:`engine.phonetics.speech_audio`, espeak-ng),
         written once beside the cached corpus (``<cache file>-audio/``). Without
         espeak-ng the corpus has no audio and its ``history`` says why.
+    save_later : list or None
+        A list: a corpus generated here is not written to the cache here; a job writing it
+        (no arguments, never raising) is appended for the caller to run (the explorer runs it
+        in the background, after its window shows the talker).
     **params
         Further :class:`SyntheticTalker` parameters (``seed``, ``n_sentences``, ...).
 
@@ -730,14 +760,15 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=Fal
     Corpus
     """
     talker = SyntheticTalker(preset=preset, **params)
-    talker._validate()
-    folder = cache_folder(cache_dir)
-    key = {k: v for k, v in talker.get_params().items() if not (k in _VARIANT_DEFAULTS and v == _VARIANT_DEFAULTS[k])}
-    path = folder / f"synthetic-{cache_token(preset, **params)}-{_cache_key(key)}.npz"
+    path = cache_path(preset, cache_dir=cache_dir, **params)
     if path.is_file():
         report(progress, "loading cache", 0, 1)
         try:
-            corpus = Corpus.load(path)
+            from engine.files.persist import read_npz
+
+            # the frames mapped from the file, read-only: pages come in as they are used (the explorer's
+            # start reads them once, to check them and to project them)
+            corpus = Corpus.from_arrays(read_npz(path, memory_map=None), source=str(path), base=path.resolve().parent)
             # the lip model's unit and axes (cache files written before corpora named them)
             corpus.units, corpus.axes = "mm", LIP_MODEL_AXES
             report(progress, "loading cache", 1, 1)
@@ -745,12 +776,19 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=Fal
         except (CorpusError, OSError, ValueError):
             pass  # damaged cache file: regenerate it
     corpus = talker.generate(progress=progress)
-    try:
+
+    def save():
+        try:
+            corpus.save(path)
+        except OSError:
+            pass  # a read-only cache folder only costs regeneration next time
+
+    if save_later is not None:
+        save_later.append(save)
+    else:
         report(progress, "saving cache", 0, 1)
-        corpus.save(path)
+        save()
         report(progress, "saving cache", 1, 1)
-    except OSError:
-        pass  # a read-only cache folder only costs regeneration next time
     return _with_audio(corpus, path, progress) if audio else corpus
 
 
@@ -761,7 +799,7 @@ def _with_audio(corpus, path, progress):
     from engine.phonetics.speech_audio import SpeechAudioUnavailable, add_speech_audio
 
     try:
-        return add_speech_audio(corpus, path.with_name(path.stem + "-audio"), progress=progress)
+        return add_speech_audio(corpus, audio_folder(path), progress=progress)
     except SpeechAudioUnavailable as exc:
         corpus.history.append(f"speech audio: none; {exc}")
     except (OSError, ValueError, subprocess.SubprocessError) as exc:

@@ -161,6 +161,21 @@ def test_predict_reproduces_labels(graph, small_manifold):
     assert graph.labels_.dtype == np.int32
 
 
+def test_given_centroids_give_the_fitted_graph_without_k_means(graph, small_manifold, monkeypatch):
+    """A graph fitted before (a manifold file's centres) is rebuilt by assigning the frames to its centres."""
+    def never(*a, **k):
+        raise AssertionError("K-means ran")
+
+    monkeypatch.setattr(StateGraph, "_kmeans", never)
+    again = StateGraph(n_dims=graph.n_dims).fit(small_manifold.Fy_, small_manifold.corpus_.bounds,
+                                                  centroids=graph.centroids_)
+    np.testing.assert_array_equal(again.labels_, graph.labels_)
+    assert (again.counts_ != graph.counts_).nnz == 0 and again.n_scc_ == graph.n_scc_
+    with pytest.raises(ValueError, match="centroids must be a finite"):
+        StateGraph(n_dims=graph.n_dims).fit(small_manifold.Fy_, small_manifold.corpus_.bounds,
+                                             centroids=graph.centroids_[:, :2])
+
+
 def test_connectivity_report_names_the_numbers(graph):
     rep = graph.connectivity_report()
     K = graph.centroids_.shape[0]

@@ -29,16 +29,18 @@ def test_plan_reports_minibatch_kmeans_above_its_size(monkeypatch):
 
 
 def test_states_use_minibatch_kmeans_above_the_size(monkeypatch, small_manifold):
+    import sklearn.cluster
+
     import engine.graph.states
 
     used = []
-    real = engine.graph.states.MiniBatchKMeans
+    real = sklearn.cluster.MiniBatchKMeans
 
     def spy(**kw):
         used.append(kw["n_clusters"])
         return real(**kw)
 
-    monkeypatch.setattr(engine.graph.states, "MiniBatchKMeans", spy)
+    monkeypatch.setattr(sklearn.cluster, "MiniBatchKMeans", spy)  # imported by the fit, when it runs
     Fy, bounds = small_manifold.Fy_, small_manifold.corpus_.bounds
     engine.graph.states.StateGraph(n_states=50).fit(Fy, bounds)
     assert used == []

@@ -88,3 +88,118 @@ def test_state_model_synthesisers_resolve_every_kind_of_target(small_manifold):
     np.testing.assert_allclose(lp.synthesize(tg).Fx, tr.Fx, atol=1e-5)
     with pytest.raises(ValueError, match="out of range"):
         sh.synthesize(_seq([Target(0, "", 10 ** 6), Target(5, "", 1)]))
+
+
+def _fake_choice(m, best):
+    from engine.synthesis.learnt_paths import prior_blend
+
+    return {"best": best, "state_dims": 3, "n_states": 40, "n_neighbors": 20, "frames_per_state": 30,
+            "sigma": {"states/viterbi": 2.0}, "sliding_window": [4, 3, 1.0], "protocols": ["states", "oracle", "phones"],
+            "blend": {p: prior_blend(m.Fx_.shape[1]) for p in ("states", "oracle", "phones")}, "method_validation": {},
+            "val_ids": [], "note": "a test's choice"}
+
+
+def test_a_build_stores_its_choice_states_and_phone_model_and_synthesis_uses_them(small_manifold, tmp_path,
+                                                                                  monkeypatch):
+    """fit_choice keeps the choice, the synthesiser's state centres and the best phone model on the manifold; its file
+    gives them back, and the first synthesis then runs no validation, no K-means and no phone-model fit."""
+    import engine.synthesis.validation
+    from engine.graph.states import StateGraph
+    from engine.manifold.model import Manifold
+    from engine.synthesis.methods import make_synthesizer
+    from engine.synthesis.sliding_window import SlidingWindowRegressor
+
+    m = copy.copy(small_manifold)
+    best = {"states": "manifold", "oracle": "sv-hermite", "phones": "sliding-window"}
+    monkeypatch.setattr(engine.synthesis.validation, "select_settings", lambda manifold, **kw: _fake_choice(m, best))
+    choice = mc.fit_choice(m)
+    assert choice["code"] == mc.choice_code() and m.synthesis_states_.shape[1] == 3
+    assert set(k.split("/")[0] for k in m.synthesis_models_) == {"sliding-window"}
+    back = Manifold.load(m.save(tmp_path / "m.npz"))
+    assert back.synthesis_choice_ == choice and mc.stored_choice(back) == choice
+    np.testing.assert_array_equal(back.synthesis_states_, m.synthesis_states_)
+
+    def never(*a, **k):
+        raise AssertionError("measured or fitted again")
+
+    monkeypatch.setattr(engine.synthesis.validation, "select_settings", never)
+    monkeypatch.setattr(StateGraph, "_kmeans", never)
+    assert mc.choose_methods(back, cache_dir=tmp_path) == choice  # from the file, not measured
+    syn = make_synthesizer("manifold", back, choice=choice)
+    np.testing.assert_array_equal(syn.model_.graph_.centroids_, m.synthesis_states_)
+    ctx, ow, alpha = choice["sliding_window"]
+    sw = make_synthesizer("sliding-window", back, context=ctx, output_window=ow, alpha=alpha)
+    monkeypatch.undo()
+    fresh = SlidingWindowRegressor(context=ctx, output_window=ow, alpha=alpha)
+    from engine.synthesis.trajectory import phone_sequences
+
+    fresh.fit(phone_sequences(m.corpus_.utterances, m.Fx_), m.corpus_.rate)
+    u = m.corpus_.utterances[0]
+    np.testing.assert_allclose(sw.model_.predict(u.phones, u.n_frames, m.corpus_.rate),
+                               fresh.predict(u.phones, u.n_frames, m.corpus_.rate), rtol=1e-10, atol=1e-10)
+    other = make_synthesizer("sliding-window", back, context=ctx + 2, output_window=ow, alpha=alpha)
+    assert other.model_.context == ctx + 2  # other settings than the stored model's: fitted now
+
+
+def test_a_choice_by_other_code_or_a_file_without_one_is_measured_at_the_first_synthesis(small_manifold, tmp_path,
+                                                                                        monkeypatch):
+    import engine.synthesis.stored_choice
+    import engine.synthesis.validation
+    from engine.manifold.model import Manifold
+
+    old = Manifold.load(small_manifold.save(tmp_path / "old.npz"))  # a file as builds wrote them before
+    assert old.synthesis_choice_ is None and old.synthesis_states_ is None and old.synthesis_models_ == {}
+    calls = []
+
+    def fake(manifold, **kw):
+        calls.append(1)
+        return _fake_choice(manifold, {"states": "manifold"})
+
+    monkeypatch.setattr(engine.synthesis.validation, "select_settings", fake)
+    mc.choose_methods(old, cache_dir=tmp_path)
+    assert calls == [1]
+    m = copy.copy(small_manifold)
+    mc.fit_choice(m)
+    assert mc.stored_choice(m) is not None and len(calls) == 2
+    monkeypatch.setattr(engine.synthesis.stored_choice, "choice_code", lambda: "edited since")
+    assert mc.stored_choice(m) is None and mc.stored_states(m, m.synthesis_choice_) is None
+    mc.choose_methods(m, cache_dir=tmp_path / "other")
+    assert len(calls) == 3  # the stored choice of other code is not used
+
+
+def test_a_damaged_stored_choice_is_refused_naming_the_field(small_manifold, tmp_path, monkeypatch):
+    import engine.synthesis.validation
+    from engine.manifold.model import Manifold, ManifoldFileError
+
+    m = copy.copy(small_manifold)
+    monkeypatch.setattr(engine.synthesis.validation, "select_settings",
+                        lambda manifold, **kw: _fake_choice(m, {"states": "manifold"}))
+    mc.fit_choice(m)
+    d = dict(np.load(m.save(tmp_path / "m.npz")))
+    for key, value, field in (("synthesis_choice", np.array("{not json"), "synthesis_choice"),
+                              ("synthesis_choice", np.array('{"best": 3}'), "synthesis_choice"),
+                              ("synthesis_states", np.zeros((5, 7)), "synthesis_states"),
+                              ("synthesis_states", np.full((5, 3), np.nan), "synthesis_states")):
+        bad = {**d, key: value}
+        with open(tmp_path / "bad.npz", "wb") as fh:
+            np.savez(fh, **bad)
+        with pytest.raises(ManifoldFileError, match=field):
+            Manifold.load(tmp_path / "bad.npz")
+
+
+def test_a_stored_dominance_model_predicts_as_the_one_fitted(small_manifold):
+    from engine.files.persist import dump_estimator
+    from engine.synthesis.dominance import DominanceModel
+    from engine.synthesis.stored_choice import stored_model
+    from engine.synthesis.trajectory import phone_sequences
+
+    m = copy.copy(small_manifold)
+    c = m.corpus_
+    model = DominanceModel(max_iter=5).fit(phone_sequences(c.utterances[:6], m.Fx_), c.rate)
+    m.synthesis_choice_ = {"best": {"phones": "dominance"}, "blend": {}, "code": mc.choice_code()}
+    m.synthesis_models_ = dump_estimator(model, "dominance")
+    back = stored_model(m, "dominance", DominanceModel(max_iter=5))
+    u = c.utterances[7]
+    np.testing.assert_allclose(back.predict(u.phones, u.n_frames, c.rate), model.predict(u.phones, u.n_frames, c.rate),
+                               rtol=1e-9, atol=1e-9)
+    assert stored_model(m, "dominance", DominanceModel()) is None  # fitted with other parameters
