@@ -106,6 +106,9 @@ def choose_methods(manifold, *, cache_dir=None, use_cache=True, progress=None) -
         p.parent.mkdir(parents=True, exist_ok=True)
         with atomic_write(p) as tmp:
             Path(tmp).write_text(json.dumps(out, indent=1), encoding="utf-8")
+        from engine.files.ownership import mark
+
+        mark(p, p.parent.parent)  # Lipspace's own: 'lipspace cache --clear' may delete it
     except OSError:
         pass  # a read-only cache: the choice is recomputed next time, nothing else is lost
     return out

@@ -750,6 +750,9 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=Fal
     try:
         report(progress, "saving cache", 0, 1)
         corpus.save(path)
+        from engine.files.ownership import mark
+
+        mark(path, folder)  # Lipspace's own: pruning and 'lipspace cache --clear' may delete it
         report(progress, "saving cache", 1, 1)
     except OSError:
         pass  # a read-only cache folder only costs regeneration next time
@@ -762,8 +765,15 @@ def _with_audio(corpus, path, progress):
 
     from engine.phonetics.speech_audio import SpeechAudioUnavailable, add_speech_audio
 
+    from engine.files.ownership import mark, owned
+
+    folder = path.with_name(path.stem + "-audio")
+    made = not folder.exists() or owned(path, path.parent)  # Lipspace's corpus: its audio folder is too
     try:
-        return add_speech_audio(corpus, path.with_name(path.stem + "-audio"), progress=progress)
+        with_audio = add_speech_audio(corpus, folder, progress=progress)
+        if made:
+            mark(folder, path.parent)
+        return with_audio
     except SpeechAudioUnavailable as exc:
         corpus.history.append(f"speech audio: none; {exc}")
     except (OSError, ValueError, subprocess.SubprocessError) as exc:
