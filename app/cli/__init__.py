@@ -234,7 +234,8 @@ def _main(argv, caught) -> int:
             return 2
         except MemoryError as exc:
             size = _memory_size(exc)
-            print(f"lipspace {args.command}: error: out of memory{size}. "
+            where = f" {exc}" if str(exc).startswith("while reading ") else ""  # the input that did not fit
+            print(f"lipspace {args.command}: error: out of memory{where}{size}. "
                   f"{MEMORY_HINTS.get(args.command, MEMORY_HINTS['build'])}", file=sys.stderr)
             return 2
         except BrokenPipeError:  # the reader went away (lipspace info | head): not an error
@@ -249,7 +250,8 @@ def _main(argv, caught) -> int:
 MEMORY_HINTS = {
     "build": "Use a landmark embedding (--landmarks 2000) or a corpus imported at a lower rate "
              "('lipspace import --resample 30').",
-    "import": "Import fewer files at once, or at a lower --resample rate.",
+    "import": "Split a long recording into several files, import fewer files at once, or use a lower "
+              "--resample rate.",
     "figures": "Use a lower --dpi or fewer figures (--only).",
     "synthesize": "Use fewer inverse-map dimensions (--inverse-dims 3) or shorter input.",
 }

@@ -43,17 +43,18 @@ def utterance_audio(manifold, uid, near=None) -> tuple[Path | None, str]:
     p = resolve_audio_path(u.audio, near)
     if p is None:
         return None, f"utterance {uid}: audio file {u.audio} not found"
-    base = Path(near).resolve().parent if near else Path.cwd()
-    for root in (base, cache_dir()):
+    base = Path(near).resolve().parent if near else None  # without a file the path was not read from one
+    for root in (base, cache_dir()) if base is not None else ():
         try:
-            p = check_inside(str(p), root, source=near or "the corpus", field="audio")
+            p = check_inside(str(p), root, source=near, field="audio")
             break
         except FieldError:
             continue
     else:
-        return None, (f"utterance {uid}: its audio {u.audio} is outside the folder of "
-                      f"{Path(near).name if near else 'the corpus'} ({base}); a path stored in a file is followed "
-                      "only inside its folder, so it was not used (name the sound file yourself to use it: --audio)")
+        if base is not None:
+            return None, (f"utterance {uid}: its audio {u.audio} is outside the folder of {Path(near).name} "
+                          f"({base}); a path stored in a file is followed only inside its folder, so it was not used "
+                          "(name the sound file yourself to use it: --audio)")
     if p.suffix.lower() == ".wav":
         try:
             wav_info(p)

@@ -115,6 +115,8 @@ def record(fields: dict, *, null=False, what="an object"):
             sub = f"{field}.{name}" if field else name
             if name in v:
                 out[name] = kind(v[name], sub)
+            elif default is dict:  # a missing object: an empty one, its own fields defaulted
+                out[name] = kind({}, sub)
             elif default is not _REQUIRED:
                 out[name] = default() if callable(default) else default
             else:

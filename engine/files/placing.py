@@ -139,7 +139,8 @@ def process_gone(name: str, mtime: float) -> bool:
 def recover_stale(folder, names=()) -> list[str]:
     """Clear what dead processes left in ``folder`` for the outputs ``names`` (stems or folder names).
 
-    Removes ``.<name>.part-<pid>-*`` files and folders whose process is gone (older temporary
+    Removes ``.<name>.part-<pid>-*`` files and folders whose process is gone (also the atomic
+    writer's temporary file of such a name, ``..<name>.part-*``; older temporary
     names without a pid: once unmodified for :data:`STALE_SECONDS`), and empties the backup
     folders (:data:`BACKUP_PREFIX`) of dead commits: each old file goes back to its name when
     nothing took it, else it is removed (the new file landed). Returns what was put back,
@@ -151,7 +152,8 @@ def recover_stale(folder, names=()) -> list[str]:
         entries = list(os.scandir(folder))
     except OSError:
         return restored
-    wanted = tuple(f".{n}.part-" for n in names if n)
+    # a staged name, and the atomic writer's temporary file of a staged name ('..<name>.part-<pid>-...')
+    wanted = tuple(p for n in names if n for p in (f".{n}.part-", f"..{n}.part-"))
     for e in entries:
         try:
             if e.name.startswith(BACKUP_PREFIX) and e.is_dir(follow_symlinks=False):

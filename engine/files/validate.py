@@ -13,7 +13,6 @@ session files.
 """
 from __future__ import annotations
 
-import json
 import math
 import os
 import stat
@@ -24,12 +23,13 @@ import numpy as np
 from engine.files.mapped import release_pages
 
 __all__ = ["FieldError", "check_array", "check_scalar", "check_csr", "parse_params",
-           "check_regular_file", "check_source_path", "check_inside", "wav_info", "DATA_SUFFIXES"]
+           "check_regular_file", "check_source_path", "check_inside", "wav_info", "json_field", "DATA_SUFFIXES"]
 
 #: suffixes of the data files a session may name as its source
 DATA_SUFFIXES = (".npz", ".mat", ".ema", ".c3d", ".csv", ".tsv", ".txt", ".npy", ".pos")
 
-_KINDS = {"float": "fc", "int": "iu", "bool": "b", "str": "U", "number": "fiub"}
+#: dtype kinds per expected family; complex values are never a coordinate (a complex embedding is refused)
+_KINDS = {"float": "f", "int": "iu", "bool": "b", "str": "U", "number": "fiub"}
 
 
 class FieldError(ValueError):
@@ -161,6 +161,19 @@ def check_csr(d, prefix, *, source, shape, dims, kind="number", low=None):
     return data, ind, ptr, (n_rows, n_cols)
 
 
+def json_field(text, *, source, field):
+    """The JSON a file's field ``field`` holds; :class:`FieldError` for anything that is not JSON, also
+    nesting deep enough to exhaust Python's recursion (``[[[[...`` 100,000 deep)."""
+    from engine.files.bounded import parse_json
+
+    if not isinstance(text, (str, bytes)):
+        raise FieldError(source, field, f"expected JSON text, got {type(text).__name__}")
+    try:
+        return parse_json(text, source=source)
+    except ValueError as exc:
+        raise FieldError(source, field, str(exc).removeprefix(f"{source}: ")) from None
+
+
 def _param_ok(value, default) -> bool:
     if value is None:
         return True  # every estimator parameter with a None meaning defaults to None or accepts it
@@ -185,10 +198,7 @@ def parse_params(cls, text, *, source, field):
     is an int, a number for a float, a string for a string; None is always allowed).
     Missing keys take the default.
     """
-    try:
-        params = json.loads(text)
-    except (json.JSONDecodeError, TypeError, ValueError) as exc:
-        raise FieldError(source, field, f"not valid JSON ({exc})") from None
+    params = json_field(text, source=source, field=field)
     if not isinstance(params, dict):
         raise FieldError(source, field, f"expected a JSON object of {cls.__name__} parameters, "
                                         f"got a {type(params).__name__}")

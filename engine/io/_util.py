@@ -282,8 +282,9 @@ def check_rate(path, native: float, rate) -> float:
 
 
 def sidecar_audio(path) -> str | None:
-    """``<stem>.wav`` beside ``path`` when it is a WAV file (its header checked); linked or not, said
-    (:func:`engine.io.repairs.report_repair`: the corpus history and ``lipspace import``)."""
+    """``<stem>.wav`` beside ``path`` when it is a WAV file (its header checked). One that is not is
+    left unlinked and said (:func:`engine.io.repairs.report_repair`: the corpus history, a warning);
+    one that is linked is named in the history by :func:`one_utterance_corpus`."""
     from engine.files.validate import wav_info
     from engine.io.repairs import report_repair
 
@@ -296,9 +297,7 @@ def sidecar_audio(path) -> str | None:
                 report_repair(path, f"{cand.name} beside it was not linked as its audio: "
                               f"{str(exc).removeprefix(f'{cand}: ')}")
                 return None
-            report_repair(path, f"audio: {cand.name} beside it ({w['channels']} channel{'s' * (w['channels'] > 1)}, "
-                          f"{w['rate']} Hz, {w['seconds']:.2f} s)")
-            return str(cand)
+            return str(cand)  # said in the corpus history (one_utterance_corpus)
     return None
 
 
@@ -320,8 +319,9 @@ def one_utterance_corpus(path, frames, rate, *, dims, uid=None, phones=(), point
     try:
         utt = Utterance(uid, 0, frames.shape[0], fit_phones(phones, frames.shape[0], rate, path=path), audio,
                       text)
+        said = [f"{Path(path).name}: audio {Path(audio).name} linked"] if audio else []  # never linked unsaid
         return Corpus(frames=frames, rate=rate, utterances=[utt], dims=dims, faces=faces,
-                      point_names=point_names, name=name or uid, units=units)
+                      point_names=point_names, name=name or uid, units=units, history=said)
     except CorpusError as exc:
         raise ImportFormatError(path, str(exc)) from None
 

@@ -75,9 +75,11 @@ def _jsonable(x):
 
 def load_choice(manifold, cache_dir=None) -> dict | None:
     """The cached choice for ``manifold``, or None (not measured yet by this code, or unreadable)."""
+    from engine.files.bounded import parse_json, read_bounded
+
     p = choice_path(manifold, cache_dir)
-    try:
-        d = json.loads(p.read_text(encoding="utf-8"))
+    try:  # a regular file of a few kB: a FIFO or a huge file at its name is not a choice
+        d = parse_json(read_bounded(p, limit=16 * 2**20), source=p)
     except (OSError, ValueError):
         return None
     return d if isinstance(d, dict) and "best" in d and "blend" in d else None

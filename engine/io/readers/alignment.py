@@ -28,7 +28,7 @@ def _parse_textgrid(path):
     Text TextGrids (long, short; UTF-8 or UTF-16) are read value by value
     (:func:`engine.io.readers.textgrid_text.parse_textgrid_text`: labels spanning lines, double
     quotes, repeated tier names); binary ones by ``praat-textgrids``."""
-    from engine.io.readers.textgrid_text import TextGridData, TierData, parse_textgrid_text
+    from engine.io.readers.textgrid_text import Interval, Point, TextGridData, TierData, parse_textgrid_text
 
     data = read_bytes(path)
     if not data.startswith(b"ooBinaryFile"):
@@ -41,14 +41,15 @@ def _parse_textgrid(path):
     except Exception as exc:  # the library raises TypeError, IndexError, ValueError, struct.error, ...
         raise ImportFormatError(path, f"not a valid binary TextGrid ({exc or 'damaged'}); expected Praat's long, "
                                 "short or binary TextGrid format") from None
-    tiers = [TierData(t.tier_type, name, float(grid.xmin), float(grid.xmax),
-                      [(p.xpos, p.text) for p in t] if t.is_point_tier else [(i.xmin, i.xmax, i.text) for i in t])
+    tiers = [TierData("TextTier" if t.is_point_tier else "IntervalTier", name, float(grid.xmin), float(grid.xmax),
+                      [Point(p.xpos, p.text) for p in t] if t.is_point_tier else
+                      [Interval(i.xmin, i.xmax, i.text) for i in t])
              for name, t in grid.items()]
     return TextGridData(float(grid.xmin), float(grid.xmax), tiers)
 
 
 def textgrid_tiers(path) -> dict[str, str]:
-    """Tier names of a TextGrid and their kind (``"IntervalTier"`` / ``"TextTier"``)."""
+    """Tier names of a TextGrid and their kind (``"IntervalTier"`` / ``"PointTier"``)."""
     return {t.name: t.tier_type for t in _parse_textgrid(path).tiers}
 
 
@@ -224,6 +225,14 @@ def read_lab(path, *, units: str = "auto", sample_rate: float | None = None) -> 
     return out
 
 
+def _same(a: Path, b: Path) -> bool:
+    """Whether two names are one file (``x.TextGrid`` and ``x.textgrid`` on a case-insensitive disk)."""
+    try:
+        return a.samefile(b)
+    except OSError:
+        return False
+
+
 # ---------------------------------------------------------------------------- dispatch
 def read_alignment(path, *, tier: str | None = None, units: str = "auto",
                    sample_rate: float | None = None) -> list[PhoneInterval]:
@@ -267,11 +276,19 @@ def resolve_alignment(data_path, alignment, *, tier: str | None = None) -> tuple
         return [], None
     if alignment is None:
         p = Path(data_path)
+        found = []
         for suf in SIDECAR_SUFFIXES:
             cand = p.with_suffix(suf)
-            if cand.is_file() and cand != p:
-                return read_alignment(cand, tier=tier), str(cand)
-        return [], None
+            if cand.is_file() and cand != p and not any(_same(cand, f) for f in found):
+                found.append(cand)
+        if not found:
+            return [], None
+        if len(found) > 1:  # one is used, and which is said
+            from engine.io.repairs import report_repair
+
+            report_repair(p, f"{' and '.join(f.name for f in found)} are beside it: the phones are read from "
+                          f"{found[0].name} (give the other with --alignment)")
+        return read_alignment(found[0], tier=tier), str(found[0])
     if isinstance(alignment, (str, Path)):
         return read_alignment(alignment, tier=tier), str(alignment)
     return [p if isinstance(p, PhoneInterval) else PhoneInterval(float(p[0]), float(p[1]), str(p[2]))

@@ -15,20 +15,30 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from engine.io.errors import ImportFormatError
 
-__all__ = ["TextGridData", "TierData", "parse_textgrid_text"]
+__all__ = ["TextGridData", "TierData", "Interval", "Point", "parse_textgrid_text"]
+
+
+class Interval(NamedTuple):
+    xmin: float
+    xmax: float
+    text: str
+
+
+class Point(NamedTuple):
+    xpos: float
+    text: str
 
 
 @dataclass
 class TierData:
-    """One tier: its class (``"IntervalTier"`` or ``"TextTier"``), name, span and items.
+    """One tier: its Praat class (``"IntervalTier"`` or ``"TextTier"``), name, span and items
+    (:class:`Interval` or :class:`Point`, in file order; iterating the tier gives them)."""
 
-    ``items``: ``(xmin, xmax, text)`` for an interval tier, ``(time, mark)`` for a point tier.
-    """
-
-    tier_type: str
+    kind: str
     name: str
     xmin: float
     xmax: float
@@ -37,12 +47,24 @@ class TierData:
 
     @property
     def is_point_tier(self) -> bool:
-        return self.tier_type != "IntervalTier"
+        return self.kind != "IntervalTier"
+
+    @property
+    def tier_type(self) -> str:
+        """``"IntervalTier"`` or ``"PointTier"`` (how the rest of Lipspace names the kinds)."""
+        return "PointTier" if self.is_point_tier else "IntervalTier"
+
+    def __iter__(self):
+        return iter(self.items)
+
+    def __len__(self):
+        return len(self.items)
 
 
 @dataclass
 class TextGridData:
-    """A TextGrid's span and its tiers, in file order (names may repeat)."""
+    """A TextGrid's span and its tiers, in file order (names may repeat). Indexing by a name gives
+    the tier of that name (KeyError when none, ValueError when two share it)."""
 
     xmin: float
     xmax: float
@@ -50,6 +72,14 @@ class TextGridData:
 
     def names(self) -> list[str]:
         return [t.name for t in self.tiers]
+
+    def __getitem__(self, name) -> TierData:
+        found = [t for t in self.tiers if t.name == name]
+        if not found:
+            raise KeyError(name)
+        if len(found) > 1:
+            raise ValueError(f"{len(found)} tiers are named {name!r}")
+        return found[0]
 
 
 _TOKEN = re.compile(r'''
@@ -172,7 +202,7 @@ def parse_textgrid_text(text: str, path) -> TextGridData:
             if kind == "TextTier":
                 time, _ = r.number(f"{where}: 'number = <seconds>'")
                 mark, _ = r.string(f"{where}: 'mark = \"...\"'")
-                tier.items.append((time, mark))
+                tier.items.append(Point(time, mark))
             else:
                 a, line_a = r.number(f"{where}: 'xmin = <seconds>'")
                 b, _ = r.number(f"{where}: 'xmax = <seconds>'")
@@ -180,7 +210,7 @@ def parse_textgrid_text(text: str, path) -> TextGridData:
                 if b < a:  # never dropped quietly
                     raise ImportFormatError(path, f"not a valid TextGrid: {where} ({a:g}-{b:g} s) has xmin > xmax; "
                                             "expected an interval that ends after it starts", line=line_a)
-                tier.items.append((a, b, label))
+                tier.items.append(Interval(a, b, label))
         tiers.append(tier)
     left = r.rest()
     if left is not None:
