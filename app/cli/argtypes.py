@@ -96,8 +96,9 @@ def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
     return parse
 
 
-def name_list(*, keywords=(), what: str = "name"):
-    """A type for a comma (or space) separated list: no empty item, no item twice; returned as given.
+def name_list(*, keywords=(), what: str = "name", unique: bool = True, fold_case: bool = False):
+    """A type for a comma (or space) separated list: no empty item and (``unique``) no item twice
+    (``fold_case``: ``UL`` and ``ul`` are one name); returned as given.
 
     ``keywords`` (e.g. ``all``, ``lips``) are accepted alone."""
 
@@ -114,10 +115,11 @@ def name_list(*, keywords=(), what: str = "name"):
             raise argparse.ArgumentTypeError(f"{value}: holds an empty {what} (two commas in a row, or one at an "
                                              "end)")
         seen = set()
-        for t in items:
-            if t in seen:
+        for t in items if unique else ():
+            key = t.lower() if fold_case else t
+            if key in seen:
                 raise argparse.ArgumentTypeError(f"{value}: names {t} twice; give each {what} once")
-            seen.add(t)
+            seen.add(key)
         return value
 
     parse.__name__ = "list"
@@ -156,11 +158,11 @@ BOUNDS = {
 
 #: (command or "*", option dest) -> the type of a list-valued text option
 LISTS = {
-    ("import", "points"): name_list(keywords=("all", "lips"), what="point"),
+    ("import", "points"): name_list(keywords=("all", "lips"), what="point", fold_case=True),
     ("evaluate", "test_ids"): name_list(what="utterance id"),
     ("clusters", "phones"): name_list(what="phone"),
     ("synthesize", "key_frames"): name_list(keywords=("kinematic",), what="frame"),
-    ("synthesize", "states"): name_list(what="state"),
+    ("synthesize", "states"): name_list(what="state", unique=False),  # a path may come back to a state
     ("figures", "only"): name_list(what="figure"),
 }
 

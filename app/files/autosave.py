@@ -211,6 +211,7 @@ class Autosaver:
         when the directory cannot be written (the caller runs without autosave then).
         """
         self.directory.mkdir(parents=True, exist_ok=True)
+        self._clear_dead_temporaries()
         found = []
         for marker in self.directory.glob(_MARKER.format(run="*")):
             if marker == self.marker:
@@ -232,6 +233,18 @@ class Autosaver:
         write_text_atomic(self.marker, json.dumps({"pid": self.pid, "started": time.time(),
                                                    "start_ticks": _start_ticks(self.pid)}) + "\n")
         return max(found, key=lambda r: r.saved, default=None)
+
+    def _clear_dead_temporaries(self) -> None:
+        """Remove the temporary files of autosaves and markers whose writing process was killed
+        (each run's names differ, so no later save of the same name would find them)."""
+        from engine.files.placing import process_gone
+
+        for p in self.directory.glob(".*"):
+            if not p.name.lstrip(".").startswith(("autosave-", "running-")) or ".p" not in p.name:
+                continue
+            with contextlib.suppress(OSError):
+                if p.is_file() and not p.is_symlink() and process_gone(p.name, p.stat().st_mtime):
+                    p.unlink()
 
     @staticmethod
     def _read_marker(path: Path) -> tuple[dict | None, str | None]:

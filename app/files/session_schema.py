@@ -21,6 +21,8 @@ __all__ = ["SessionError", "check_session", "json_type", "MAX_ITEMS", "MAX_TEXT"
 MAX_ITEMS = 1_000_000
 #: the longest string a session field may hold (editor text, labels, paths)
 MAX_TEXT = 100_000
+#: the most frames a session's targets may span (an hour at 2 kHz)
+MAX_FRAMES = 7_200_000
 
 
 class SessionError(ValueError):
@@ -76,13 +78,14 @@ def whole(lo=0, hi=None, *, null=False, what=None):
     return check
 
 
-def number(lo=None, *, above=False, null=False, what=None):
-    desc = what or ("a finite number" + (f" {'above' if above else '>='} {lo:g}" if lo is not None else ""))
+def number(lo=None, hi=None, *, above=False, null=False, what=None):
+    desc = what or ("a finite number" + (f" {'above' if above else '>='} {lo:g}" if lo is not None else "") +
+                    (f" and at most {hi:g}" if hi is not None else ""))
 
     def check(v, field):
         if v is None and null:
             return None
-        if not _number(v) or (lo is not None and (v <= lo if above else v < lo)):
+        if not _number(v) or (lo is not None and (v <= lo if above else v < lo)) or (hi is not None and v > hi):
             raise _Bad(field, desc + (" or null" if null else ""), v)
         return v
     return check
@@ -153,9 +156,10 @@ def phone(v, field):
 
 def _session_schema():
     from app.files.source_loading import PRESETS
-    from app.models.state import COLOR_MODES, HEMISPHERES
+    from app.models.state import COLOR_MODES, HEMISPHERES, HORIZON_MAX_MS
 
     index = whole(0, null=True, what="a non-negative integer")
+    rate = number(0, 100_000, above=True, what="a frame rate in Hz (above 0, at most 100000)")
     labels = array(text(), what="an array of phone labels")
     return record({
         "source": (record({"path": (text(null=True, what="a file name"), None),
@@ -165,7 +169,8 @@ def _session_schema():
         "selection": (record({"frame": (index, None), "state": (index, None), "target": (index, None)}), dict),
         "color_mode": (text(choices=COLOR_MODES, what=f"a colour mode ({', '.join(COLOR_MODES)})"), "density"),
         "hemisphere": (text(choices=HEMISPHERES, what=f"a hemisphere ({', '.join(HEMISPHERES)})"), "future"),
-        "horizon_ms": (number(0, null=True, what="a number of milliseconds"), None),
+        "horizon_ms": (number(0, HORIZON_MAX_MS, null=True, what=f"a number of milliseconds up to {HORIZON_MAX_MS:g}"),
+                       None),
         "phone_filter": (labels, list),
         "path_mode": (boolean, False),
         "utterance": (text(null=True, what="an utterance id"), None),
@@ -175,12 +180,12 @@ def _session_schema():
         "extra": (record({"editor": (record({"text": (text(null=True), None), "method": (text(null=True), None),
                                              "source": (text(null=True), None), "oracle": (boolean, True),
                                              "sound": (boolean, True)}), dict)}), dict),
-        "synthetic": (record({"label": (text(), ""), "rate": (number(0, above=True), _REQUIRED),
+        "synthetic": (record({"label": (text(), ""), "rate": (rate, _REQUIRED),
                               "method": (text(null=True), None),
                               "warnings": (array(text(), what="an array of strings"), list)}, null=True), None),
         "targets": (record({"labels": (array(text(), what="an array of target labels"), _REQUIRED),
                             "phones": (array(phone, what="an array of [start, end, label]"), list),
-                            "n_frames": (whole(0), _REQUIRED), "rate": (number(0, above=True), _REQUIRED),
+                            "n_frames": (whole(0, MAX_FRAMES), _REQUIRED), "rate": (rate, _REQUIRED),
                             "source": (text(), ""), "utterance": (text(null=True), None)}, null=True), None),
         "arrays": (record({"file": (text(what="a plain .npz file name beside the session"), _REQUIRED),
                            "sha256": (text(pattern=r"[0-9a-f]{64}", what="a SHA-256 in hexadecimal"), _REQUIRED)},
