@@ -179,7 +179,8 @@ exit $rc
 
 def _gui(script, sig=""):
     return ("command -v xvfb-run >/dev/null && command -v xdotool >/dev/null || exit 97\n"
-            f'exec xvfb-run -a -s "-screen 0 1280x800x24" sh "{script}" {sig}')
+            # a display number of its own (concurrent 'xvfb-run -a' runs can pick the same one)
+            f'exec xvfb-run -a -n $(( $$ % 400 + 200 )) -s "-screen 0 1280x800x24" sh "{script}" {sig}')
 
 
 def _autosave(state, body, pid=None, started=None):

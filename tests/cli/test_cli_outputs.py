@@ -20,13 +20,8 @@ PHONES = "p 0.1 aa 0.1"
 
 
 @pytest.fixture(scope="module")
-def mfile(small_corpus, tmp_path_factory):
-    from engine.manifold.model import Manifold
-
-    tiny = small_corpus.subset([u.id for u in small_corpus.utterances[:3]])
-    d = tmp_path_factory.mktemp("outputs")
-    tiny.save(d / "corpus.npz")
-    return Manifold(n_states=20).fit(tiny).save(d / "m.npz")
+def mfile(tiny_manifold_file):
+    return tiny_manifold_file
 
 
 def _mine(p, text=b"a user's own file\n"):
