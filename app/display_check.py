@@ -69,9 +69,9 @@ def x_server_answers(display: str) -> str | None:
         if conn:
             xcb.xcb_disconnect(conn)
     if err:
-        why = {1: "it refused or dropped the connection: not authorised (check XAUTHORITY, or 'xhost') or not "
-                  "accepting clients", 5: "the name cannot be parsed", 6: "it has no such screen"}.get(err, f"xcb error "
-                                                                                                          f"{err}")
+        reasons = {1: "it refused or dropped the connection: not authorised (check XAUTHORITY, or 'xhost') or not "
+                      "accepting clients", 5: "the name cannot be parsed", 6: "it has no such screen"}
+        why = reasons.get(err, f"xcb error {err}")
         return f"DISPLAY is {display!r} but the X server there cannot be used ({why})"
     return None
 

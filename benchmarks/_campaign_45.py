@@ -334,7 +334,8 @@ def cases_45(d: Path):
     two_builds = ("import subprocess, sys\nout = {out!r}\nargv = [sys.executable, '-m', 'app.cli', 'build', {c!r}, "
                   "'-o', out, '-q']\nps = [subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, "
                   "text=True) for _ in range(2)]\nres = [p.communicate() for p in ps]\n"
-                  "wrote = [o for o, e in res if 'wrote' in o]\nrefused = [e for o, e in res if 'appeared while' in e]\n"
+                  "wrote = [o for o, e in res if 'wrote' in o]\n"
+                  "refused = [e for o, e in res if 'appeared while' in e]\n"
                   "print('ok: one wrote, one refused' if len(wrote) == 1 and refused else "
                   "'@@VERDICT LOST both said wrote' if len(wrote) == 2 else 'unexpected', [e[-120:] for o, e in res])")
 

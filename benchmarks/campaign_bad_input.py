@@ -303,8 +303,8 @@ def main() -> int:
     for g in dict.fromkeys(r["group"] for r in rows if r["group"]):
         mine = [r for r in rows if r["group"] == g]
         bad = [r for r in mine if r["verdict"] not in ("ok", "n/a")]
-        print(f"  {g}: {len(mine) - len(bad)} of {len(mine)} held" + (f" ({', '.join(sorted({r['verdict'] for r in bad}))})"
-                                                                       if bad else ""))
+        which = f" ({', '.join(sorted({r['verdict'] for r in bad}))})" if bad else ""
+        print(f"  {g}: {len(mine) - len(bad)} of {len(mine)} held{which}")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
     return 0

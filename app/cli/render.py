@@ -168,7 +168,8 @@ def run(args) -> int:
 
     with progress_bar(disable=True if args.quiet else None) as progress, command_outputs(args) as outputs:
         try:
-            render_video(outputs.file(out, option="-o"), frames, rate=c.rate, faces=c.faces, dims=c.dims, roles=c.point_roles or None,
+            render_video(outputs.file(out, option="-o"), frames, rate=c.rate, faces=c.faces, dims=c.dims,
+                         roles=c.point_roles or None,
                          orientation=anatomical_frame(c, manifold.shape_.mean_),
                          names=c.point_names or None, original=original, Y=Y,
                          Y_original=Y_original, cloud=manifold.Fy_[:, :3] if Y is not None else None, audio=audio,

@@ -73,6 +73,15 @@ class TextGridData:
     def names(self) -> list[str]:
         return [t.name for t in self.tiers]
 
+    def __iter__(self):
+        return iter(self.names())
+
+    def keys(self) -> list[str]:
+        return self.names()
+
+    def items(self) -> list[tuple[str, TierData]]:
+        return [(t.name, t) for t in self.tiers]
+
     def __getitem__(self, name) -> TierData:
         found = [t for t in self.tiers if t.name == name]
         if not found:
