@@ -255,8 +255,7 @@ def cases_45(d: Path):
     timings = _changed(m, d / "timings.npz", manifold_timings=np.array(deep))
     cax = _changed(c, d / "caxes.npz", corpus_axes=np.array("x=up,y=up"))
     fy = arrays["Fy"]
-    cplx = _changed(m, d / "complex.npz", Fy=fy.astype(np.complex64),  # complex, imaginary parts 0: was accepted
-                    **{"embedding/embedding_": arrays["embedding/embedding_"].astype(np.complex64)})
+    cplx = _changed(m, d / "complex.npz", Fy=fy.astype(np.complex64))  # complex, imaginary parts 0: was accepted
     names = np.load(c, allow_pickle=False)["corpus_point_names"].copy()
     names[1] = names[0]
     dupc = _changed(c, d / "dupnames.npz", corpus_point_names=names)
