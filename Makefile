@@ -1,17 +1,18 @@
 # Two commands on a fresh machine (each makes .venv by itself):
 #   make run    open the explorer on the embedded synthetic talker
 #   make test   run the whole test suite (GUI tests under a virtual X server when one is installed)
+#   make docs   build the guide and the API reference into docs/_build/html
 PY      ?= python3
 VENV    := .venv
 BIN     := $(VENV)/bin
 STAMP   := $(VENV)/.installed
 
-.PHONY: run test venv bench clean
+.PHONY: run test docs venv bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test,scale,video,parquet]'
+	$(BIN)/python -m pip install --quiet -e '.[test,docs,scale,video,parquet]'
 	touch $(STAMP)
 
 venv: $(STAMP)
@@ -25,6 +26,11 @@ test: $(STAMP)
 	else \
 		$(BIN)/python -m pytest -q $(PYTEST_ARGS); \
 	fi
+
+docs: $(STAMP)
+	rm -rf docs/generated
+	$(BIN)/python -m sphinx -b html -q --keep-going docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"
 
 bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do $(BIN)/python $$b || exit 1; done

@@ -8,20 +8,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from app.files.sound import resolve_audio_path
+
 __all__ = ["AudioPlayer", "resolve_audio_path"]
-
-
-def resolve_audio_path(audio, corpus_source=None) -> Path | None:
-    """The audio file of an utterance, or None when it has none or it is missing.
-
-    Relative paths are taken relative to the corpus file's folder (``corpus_source``).
-    """
-    if not audio:
-        return None
-    p = Path(audio)
-    if not p.is_absolute() and corpus_source:
-        p = Path(corpus_source).resolve().parent / p
-    return p if p.is_file() else None
 
 
 class AudioPlayer:

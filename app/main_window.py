@@ -1,35 +1,31 @@
 """The explorer's main window: the manifold view in the centre, the other views docked around it.
 
-Every view observes one :class:`app.models.state.AppState`; the window only wires menus,
-loading (in a worker thread with a progress dialog), sessions and exports.
+Every view observes one :class:`app.models.state.AppState`; the window only wires its docks,
+loading (in a worker thread, progress in the status bar) and layout here; its menus
+(:mod:`app.window.menus`), sessions (:mod:`app.window.sessions`) and File › Export dialogs
+(:mod:`app.window.exports`) are parts of it; :func:`launch` starts it, and stops it on a
+signal (:mod:`app.window.signals`).
 """
 from __future__ import annotations
 
 import contextlib
 import signal
 import sys
-import threading
 from pathlib import Path
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.models.state import AppState
+from app.window.exports import ANIMATION_FILTERS, FIGURE_FILTERS, TRAJECTORY_FILTERS, ExportActions
+from app.window.menus import MenuActions
+from app.window.sessions import SessionActions
+from app.window.signals import STOP_SIGNALS, stop_on_signals
 
-__all__ = ["MainWindow", "launch", "stop_on_signals"]
-
-#: File > Export dialogs' filters; the suffixes each writes are read from them (app.figures.export.filter_suffixes)
-TRAJECTORY_FILTERS = "CSV table (*.csv);;NumPy array (*.npy);;OBJ mesh sequence (*.obj);;PLY mesh sequence (*.ply)"
-ANIMATION_FILTERS = "glTF binary (*.glb);;glTF (*.gltf);;MP4 video (*.mp4)"
-FIGURE_FILTERS = "PNG image (*.png);;SVG (*.svg);;PDF (*.pdf)"
-
-#: signals that stop the explorer from its terminal or the desktop session (Ctrl-C, kill, logout)
-STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
-#: how often the event loop hands control to Python so that a stop signal's handler runs (ms)
-SIGNAL_POLL_MS = 200
+__all__ = ["MainWindow", "launch", "stop_on_signals", "ask_restore", "STOP_SIGNALS", "TRAJECTORY_FILTERS",
+           "ANIMATION_FILTERS", "FIGURE_FILTERS"]
 
 
-# ============================================================================ the window
-class MainWindow(QtWidgets.QMainWindow):
+class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWindow):
     """Docked views over one :class:`AppState`.
 
     Parameters
@@ -79,6 +75,9 @@ class MainWindow(QtWidgets.QMainWindow):
             dock.setWidget(widget)
             self.addDockWidget(area, dock)
             self.docks[key] = dock
+        # the editor's title on its side: on a laptop's screen every pixel of height goes to the 3-D view
+        ed = self.docks["editor"]
+        ed.setFeatures(ed.features() | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetVerticalTitleBar)
         self.tabifyDockWidget(self.docks["clusters"], self.docks["scree"])
         self.docks["clusters"].raise_()
         self._size_docks()
@@ -87,6 +86,10 @@ class MainWindow(QtWidgets.QMainWindow):
 
         self.summary_label = QtWidgets.QLabel("no manifold loaded")
         self.statusBar().addPermanentWidget(self.summary_label)
+        from app.window.undo import SettingsRecorder
+
+        self.view_undo_stack = QtGui.QUndoStack(self)  # the view's settings (the editor keeps its own edits)
+        self.settings_recorder = SettingsRecorder(self.state, self.view_undo_stack)
         self._make_menus()
         self.state.events.manifold.connect(self._on_manifold)
         self.autosaver = autosave
@@ -95,141 +98,32 @@ class MainWindow(QtWidgets.QMainWindow):
         if autosave is not None:
             self._autosave_timer.start(1000)
         self.layout_restored = self.settings.restore_layout(self)
+        # the editor's dock is as tall as what the editor shows: no room kept for a sound that is off or absent,
+        # neither now nor from a layout saved while a sound was shown
+        self.editor.heightWanted.connect(self._fit_editor_dock)
+        self._fit_editor_dock()
+        # why there is no sound, said once each in the status bar (no device or library, no espeak-ng)
+        self._said: set = set()
+        self.editor.notice.connect(self.say_once)
+        self.state.events.playing.connect(self._check_sound)
         if manifold is not None:
             self.set_manifold(manifold, source=source)
 
     #: smallest useful size of each view: below it the window stops shrinking instead of
     #: collapsing a dock to nothing (the Lips dock vanished at 1179 x 407 before)
     VIEW_MINIMUM = {"manifold": (360, 260), "lips": (240, 170), "clusters": (240, 150), "scree": (240, 150),
-                    "editor": (560, 190)}
+                    "editor": (560, 120)}
 
     def _set_minimum_sizes(self) -> None:
         views = {"manifold": self.manifold_view, **{k: d.widget() for k, d in self.docks.items()}}
         for key, view in views.items():
             hint = view.minimumSizeHint()  # never below what the view's own layout needs
+            if key == "editor":  # its height follows its width (its controls wrap): it keeps it itself
+                view.setMinimumWidth(max(self.VIEW_MINIMUM[key][0], hint.width()))
+                continue
             view.setMinimumSize(max(self.VIEW_MINIMUM[key][0], hint.width()),
                                 max(self.VIEW_MINIMUM[key][1], hint.height()))
         self.setMinimumSize(self.minimumSizeHint())
-
-    # ------------------------------------------------------------------ menus
-    #: File > Open synthetic talker: (preset, kinematics) in menu order. The calibrated talker
-    #: (lips that move as real articulograph sensors do) at the quick and the default size; the
-    #: paper preset reproduces the paper's resolution with the classic talker only.
-    SYNTHETIC_TALKERS = (("small", "classic"), ("default", "classic"), ("paper", "classic"),
-                         ("small", "calibrated"), ("default", "calibrated"))
-
-    @staticmethod
-    def _talker_menu_text(preset: str, kinematics: str) -> str:
-        from app.files.source_loading import KINEMATICS_LABELS
-
-        return preset if kinematics == "classic" else f"{preset}, {KINEMATICS_LABELS[kinematics]}"
-
-    @staticmethod
-    def _talker_tooltip(preset: str, kinematics: str) -> str:
-        size = {"small": "75 s, 156 points: quick", "default": "8 minutes, 600 points",
-                "paper": "28,833 frames, 4,260 points: the paper's resolution"}[preset]
-        if kinematics == "classic":
-            return f"The synthetic talker ({size})."
-        return (f"The synthetic talker ({size}) whose jaw, upper lip and corners move as real speakers' "
-                "articulograph sensors do (opt-in); compare it with the classic talker above.")
-
-    def _make_menus(self):
-        mb = self.menuBar()
-        f = mb.addMenu("&File")
-        self._act(f, "&Open corpus or manifold…", self.open_dialog, QtGui.QKeySequence.StandardKey.Open)
-        self.recent_menu = f.addMenu("Open &Recent")
-        self.recent_menu.aboutToShow.connect(self._fill_recent_menu)
-        self._fill_recent_menu()
-        syn = f.addMenu("Open synthetic talker")
-        syn.setToolTipsVisible(True)
-        self.synthetic_actions = {}
-        previous = self.SYNTHETIC_TALKERS[0][1]
-        for preset, kinematics in self.SYNTHETIC_TALKERS:
-            if kinematics != previous:
-                syn.addSeparator()  # the calibrated talkers below the classic ones
-            previous = kinematics
-            a = self._act(syn, self._talker_menu_text(preset, kinematics),
-                          lambda _=False, p=preset, k=kinematics: self.open_source(None, preset=p, kinematics=k))
-            a.setToolTip(self._talker_tooltip(preset, kinematics))
-            self.synthetic_actions[preset, kinematics] = a
-        f.addSeparator()
-        self._act(f, "&Save session…", self.save_session_dialog, QtGui.QKeySequence.StandardKey.Save)
-        self._act(f, "Open s&ession…", self.open_session_dialog)
-        f.addSeparator()
-        exp = f.addMenu("Export &figure")
-        self._act(exp, "Manifold view (PNG, SVG, PDF)…", lambda: self.export_view_dialog("manifold"))
-        self._act(exp, "Lip view (PNG, SVG, PDF)…", lambda: self.export_view_dialog("lips"))
-        exp.addSeparator()
-        try:
-            from app.figures import DESCRIPTIONS, FIGURES
-        except ImportError:
-            FIGURES, DESCRIPTIONS = {}, {}
-        for name in FIGURES:
-            a = self._act(exp, f"{name}: {DESCRIPTIONS.get(name, '')[:60]}…",
-                          lambda _=False, n=name: self.export_figure_dialog(n))
-            a.setToolTip(DESCRIPTIONS.get(name, ""))
-        self._act(f, "Export &trajectory (CSV, NPY, OBJ, PLY)…", self.export_trajectory_dialog)
-        self._act(f, "Export &animation (glTF, MP4)…", self.export_animation_dialog)
-        self._act(f, "Export &cluster table (CSV)…", self.export_clusters_dialog)
-        self._act(f, "Export frame ta&ble (CSV, Parquet)…", self.export_frame_table_dialog)
-        self._act(f, "Export Te&xtGrids (one per utterance)…", self.export_textgrids_dialog)
-        f.addSeparator()
-        self._act(f, "&Quit", self.close, QtGui.QKeySequence.StandardKey.Quit)
-        e = mb.addMenu("&Edit")
-        stack = self.editor.undo_stack
-        self.undo_action = stack.createUndoAction(self, "&Undo")
-        self.undo_action.setShortcut(QtGui.QKeySequence.StandardKey.Undo)
-        self.redo_action = stack.createRedoAction(self, "&Redo")
-        self.redo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Shift+Z"), QtGui.QKeySequence("Ctrl+Y")])
-        e.addAction(self.undo_action)
-        e.addAction(self.redo_action)
-        v = mb.addMenu("&View")
-        for key, dock in self.docks.items():
-            v.addAction(dock.toggleViewAction())
-        v.addSeparator()
-        self._act(v, "Reset 3-D cameras", self.reset_cameras)
-        self._act(v, "Reset &layout", self.reset_layout)
-        h = mb.addMenu("&Help")
-        self._act(h, "&User guide", self.show_user_guide, QtGui.QKeySequence.StandardKey.HelpContents)
-        self._act(h, "&Keyboard shortcuts", self.show_shortcuts)
-        self._act(h, "&About Lipspace", self._about)
-
-    def _act(self, menu, text, slot, shortcut=None):
-        a = QtGui.QAction(text, self)
-        if shortcut is not None:
-            a.setShortcut(shortcut)
-        a.triggered.connect(slot)
-        menu.addAction(a)
-        return a
-
-    def _fill_recent_menu(self):
-        menu = self.recent_menu
-        menu.clear()
-        files = self.settings.recent_files()
-        for i, path in enumerate(files):
-            a = menu.addAction(f"&{i + 1} {Path(path).name}" if i < 9 else Path(path).name)
-            a.setToolTip(path)
-            a.setData(path)
-            a.triggered.connect(lambda _=False, p=path: self.open_recent(p))
-        if files:
-            menu.addSeparator()
-            menu.addAction("Clear list", self._clear_recent)
-        else:
-            menu.addAction("(no recent files)").setEnabled(False)
-
-    def _clear_recent(self):
-        self.settings.clear_recent()
-        self._fill_recent_menu()
-
-    def open_recent(self, path):
-        """Open a file of File > Open Recent; a file since moved or deleted is taken off the list."""
-        if not Path(path).is_file():
-            self.settings.remove_recent(path)
-            self._fill_recent_menu()
-            self.show_error(f"{Path(path).name} is no longer there ({path}); it was taken off the recent files.")
-            return None
-        self.last_dir = str(Path(path).parent)
-        return self.open_source(path)
 
     # ------------------------------------------------------------------ data
     def set_manifold(self, manifold, *, source: dict | None = None) -> None:
@@ -313,71 +207,6 @@ class MainWindow(QtWidgets.QMainWindow):
             self.last_dir = str(Path(path).parent)
             self.open_source(path)
 
-    # ------------------------------------------------------------------ sessions
-    def cameras(self) -> dict:
-        return {"manifold": self.manifold_view.camera(), "lips": self.lip_view.camera()}
-
-    def save_session(self, path) -> Path:
-        from app.files.session import save_session
-
-        return save_session(self.state, path, cameras=self.cameras(), extra={"editor": self.editor.settings()},
-                            targets=self.editor.targets)
-
-    def _autosave_tick(self):
-        """Timer slot: save the session once it has been unchanged for the autosave delay."""
-        from app.files.autosave import session_fingerprint
-
-        a = self.autosaver
-        if a is None or self._pending_session is not None or self.state.manifold is None:
-            return
-        fp = session_fingerprint(self.state, cameras=self.cameras(), extra={"editor": self.editor.settings()},
-                                 targets=self.editor.targets)
-        if not a.tick(fp, self.save_session) and a.last_error:
-            self.statusBar().showMessage(a.last_error, 10000)
-
-    def apply_session(self, d: dict) -> None:
-        """Restore selection, modes, phones, editor settings and cameras from a loaded session."""
-        from app.files.session import apply_session
-
-        targets = apply_session(self.state, d)
-        self.editor.apply_settings(d.get("extra", {}).get("editor", {}))
-        if targets is not None:  # the editor's (edited) key targets
-            self.editor.restore_targets(targets)
-        cams = d.get("cameras", {})
-        if "manifold" in cams:
-            self.manifold_view.set_camera(cams["manifold"])
-        if "lips" in cams:
-            self.lip_view.set_camera(cams["lips"])
-
-    def open_session(self, path):
-        """Open a session file: reload its source if it differs from what is shown, then restore it."""
-        from app.files.session import load_session, source_kinematics
-
-        d = load_session(path)
-        src, cur = d.get("source", {}), self.state.source
-        same = self.state.manifold is not None and src.get("path") == cur.get("path") and (
-            src.get("path") is not None or (src.get("preset") == cur.get("preset") and
-                                            src.get("kinematics", "classic") == cur.get("kinematics", "classic")))
-        if same:
-            self.apply_session(d)
-            return None
-        return self.open_source(src.get("path"), preset=src.get("preset", "default"),
-                                kinematics=source_kinematics(d), session=d)
-
-    def save_session_dialog(self):
-        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Save session", self.last_dir,
-                                                        "Lipspace session (*.lipspace.json *.json)")
-        if path:
-            if not path.endswith(".json"):
-                path += ".lipspace.json"
-            self._report(lambda: self.save_session(path), f"session saved to {path}", "save the session")
-
-    def open_session_dialog(self):
-        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Open session", self.last_dir,
-                                                        "Lipspace session (*.json);;All files (*)")
-        if path:
-            self._report(lambda: self.open_session(path), f"session {Path(path).name} opened", "open the session")
-
     def _report(self, fn, ok_message, doing="finish that"):
         from app.user_messages import user_message
 
@@ -389,174 +218,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.statusBar().showMessage(ok_message, 5000)
         return True
 
-    # ------------------------------------------------------------------ exports
-    def _view_plotter(self, which: str):
-        """The plotter of the ``"manifold"`` or ``"lips"`` view."""
-        return {"manifold": self.manifold_view.plotter, "lips": self.lip_view.plotter}[which]
-
-    def export_view(self, which: str, path, *, dpi=None) -> Path:
-        """Save the manifold or lip view as PNG (at ``dpi``) or SVG/PDF (vector, from the scene's data)."""
-        from app.figures import save_plotter_image, save_plotter_vector
-
-        plotter = self._view_plotter(which)
-        if Path(path).suffix.lower() == ".png":
-            return save_plotter_image(plotter, path, dpi=dpi)
-        return save_plotter_vector(plotter, path)
-
-    def _save_path(self, title: str, filters: str, start: str | None = None) -> Path | None:
-        """Ask where to save (None: cancelled). A name typed without one of the suffixes ``filters``
-        names takes the chosen filter's, so every File > Export dialog reads a typed name alike."""
-        from app.figures.export import filter_suffixes, suffix_from_filter
-
-        path, chosen = QtWidgets.QFileDialog.getSaveFileName(self, title, self.last_dir if start is None else start,
-                                                             filters)
-        return suffix_from_filter(path, chosen, filter_suffixes(filters)) if path else None
-
-    def export_view_dialog(self, which):
-        path = self._save_path(f"Export {which} view", FIGURE_FILTERS)
-        if path:
-            dpi = None
-            if path.suffix.lower() == ".png":
-                dpi, ok = QtWidgets.QInputDialog.getInt(self, "PNG resolution", "Dots per inch (96 = as on screen):",
-                                                        150, 30, 1200, 10)
-                if not ok:
-                    return
-                self._report(lambda: self.export_view(which, path, dpi=dpi), f"wrote {path}",
-                             f"export the {which} view")
-                return
-            # vector: the scene is read here (VTK, GUI thread); writing the file, most of the time, runs in a worker
-            from app.figures.export import save_vector_figure
-            from app.figures.view_vector import scene_figure
-            from app.user_messages import plain_errors
-            from app.workers import run_task
-
-            fig = scene_figure(self._view_plotter(which))
-            run_task(plain_errors(lambda progress: save_vector_figure(fig, path), doing=f"export the {which} view"),
-                     parent=self, title=f"Writing {path.name}", dialog=False,
-                     on_done=lambda p: self.statusBar().showMessage(f"wrote {p}", 5000))
-            self.statusBar().showMessage(f"writing {path.name}…")
-
-    def export_figure_dialog(self, name):
-        if self.state.manifold is None:
-            return
-        path = self._save_path(f"Export figure {name}", FIGURE_FILTERS, str(Path(self.last_dir) / f"{name}.png"))
-        if not path:
-            return
-        from app.figures import UTTERANCE_FIGURES, export_figure
-        from app.user_messages import plain_errors
-        from app.workers import run_task
-
-        m = self.state.manifold
-        opts = {"utterance": self.state.utterance} if (name in UTTERANCE_FIGURES and self.state.utterance) else {}
-        run_task(plain_errors(lambda progress: export_figure(name, m, path, **opts), doing=f"write figure {name}"),
-                 parent=self, title=f"Rendering {name}",
-                 on_done=lambda p: self.statusBar().showMessage(f"wrote {p}", 5000))
-
-    def current_trajectory(self):
-        """The trajectory File > Export writes: the synthetic one if any, else the original."""
-        return self.state.synthetic if self.state.synthetic is not None else self.state.original
-
-    def export_trajectory_dialog(self):
-        traj = self.current_trajectory()
-        if traj is None:
-            QtWidgets.QMessageBox.information(self, "Lipspace", "No trajectory to export: choose an utterance or "
-                                                               "synthesise one in the trajectory editor.")
-            return
-        path = self._save_path(f"Export trajectory ({traj.label})", TRAJECTORY_FILTERS)
-        if path:
-            from app.models.trajectories import export_trajectory
-
-            path = str(path)
-            self._report(lambda: export_trajectory(self.state.manifold, traj, path), f"wrote {path}",
-                         "export the trajectory")
-
-    def export_animation(self, path, progress=None) -> list[Path]:
-        """The current trajectory as a glTF morph animation (.glb/.gltf, WAV beside) or an MP4."""
-        from app.export.current import export_current_animation
-
-        return export_current_animation(self.state, path, progress=progress)
-
-    def export_animation_dialog(self):
-        path = self._save_path("Export animation", ANIMATION_FILTERS)
-        if not path:
-            return
-        path = str(path)
-        from engine.progress import Cancelled
-
-        dlg = QtWidgets.QProgressDialog("Rendering the video…", "Cancel", 0, 100, self)
-        dlg.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
-
-        def progress(_stage, done, total):  # off-screen VTK stays in the GUI thread
-            dlg.setMaximum(total)
-            dlg.setValue(done)
-            QtWidgets.QApplication.processEvents()
-            if dlg.wasCanceled():
-                raise Cancelled("export cancelled")
-
-        try:
-            self._report(lambda: self.export_animation(path, progress), f"wrote {path}", "export the animation")
-        except Cancelled:
-            self.statusBar().showMessage("export cancelled; nothing was written", 5000)
-        finally:
-            dlg.close()
-
-    def export_clusters(self, path) -> Path:
-        from engine.io.writers.export import write_table_csv
-
-        return write_table_csv(path, self.clusters.table_rows())
-
-    def export_clusters_dialog(self):
-        if self.state.manifold is None:
-            return
-        path = self._save_path("Export cluster table", "CSV table (*.csv)")
-        if path:
-            path = str(path)
-            self._report(lambda: self.export_clusters(path), f"wrote {path}", "export the cluster table")
-
-    def _source_name(self) -> str:
-        return str(self.state.source.get("path") or f"synthetic talker ({self.state.source.get('preset')})")
-
-    def export_frame_table_dialog(self):
-        """One row per frame, as ``lipspace table -o`` writes it (units in a .json beside it), in a worker."""
-        if self.state.manifold is None:
-            return
-        from app.export.tables import export_frame_table, table_filters
-
-        path = self._save_path("Export frame table", table_filters(), str(Path(self.last_dir) / "frames.csv"))
-        if not path:
-            return
-        from app.user_messages import plain_errors
-        from app.workers import run_task
-
-        m, src = self.state.manifold, self._source_name()
-        run_task(plain_errors(lambda progress: export_frame_table(m, path, source=src, progress=progress),
-                              doing="export the frame table"), parent=self, title=f"Writing {path.name}",
-                 on_done=lambda paths: self.statusBar().showMessage(
-                     f"wrote {paths[0]} (units in {paths[1].name})", 8000))
-
-    def export_textgrids_dialog(self):
-        """One TextGrid per utterance into a folder, as ``lipspace table --textgrid`` writes them, in a worker."""
-        m = self.state.manifold
-        if m is None:
-            return
-        from app.export.tables import existing_textgrids, export_textgrids
-
-        folder = QtWidgets.QFileDialog.getExistingDirectory(self, "Export TextGrids into folder", self.last_dir)
-        if not folder:
-            return
-        there = existing_textgrids(m, folder)
-        if there and QtWidgets.QMessageBox.question(
-                self, "Lipspace", f"{len(there)} of the TextGrids exist already in {folder} (e.g. {there[0].name}). "
-                                  "Replace them?") != QtWidgets.QMessageBox.StandardButton.Yes:
-            return
-        from app.user_messages import plain_errors
-        from app.workers import run_task
-
-        src = self._source_name()
-        run_task(plain_errors(lambda progress: export_textgrids(m, folder, source=src, progress=progress),
-                              doing="export the TextGrids"), parent=self, title="Writing TextGrids",
-                 on_done=lambda files: self.statusBar().showMessage(f"wrote {len(files)} TextGrids to {folder}", 8000))
-
     # ------------------------------------------------------------------ misc
     def reset_cameras(self):
         self.manifold_view.standard_view("default")  # both halves of the manifold, the plane slightly from above
@@ -566,13 +227,47 @@ class MainWindow(QtWidgets.QMainWindow):
 
     #: the docks' first sizes (pixels), given at construction and again by View > Reset layout:
     #: (docks, their sizes, the direction measured)
+    #: (the editor's dock is fitted to what the editor shows instead: _fit_editor_dock)
     DOCK_SIZES = ((("lips",), (480,), QtCore.Qt.Orientation.Horizontal),
-                  (("lips", "clusters"), (420, 380), QtCore.Qt.Orientation.Vertical),
-                  (("editor",), (230,), QtCore.Qt.Orientation.Vertical))
+                  (("lips", "clusters"), (380, 420), QtCore.Qt.Orientation.Vertical))
+    #: below this window height the editor's tiers and sound are drawn lower (a laptop's screen)
+    COMPACT_BELOW = 900
+
+    def resizeEvent(self, event):
+        super().resizeEvent(event)
+        self.editor.set_compact(self.height() < self.COMPACT_BELOW)
 
     def _size_docks(self) -> None:
         for keys, sizes, direction in self.DOCK_SIZES:
             self.resizeDocks([self.docks[k] for k in keys], list(sizes), direction)
+
+    def say_once(self, message: str, ms: int = 15000) -> bool:
+        """Show ``message`` in the status bar, unless it was said already in this window (returns whether it was shown)."""
+        if message in self._said:
+            return False
+        self._said.add(message)
+        self.statusBar().showMessage(message, ms)
+        return True
+
+    def _check_sound(self, playing: bool) -> None:
+        """Playback with a sound the machine cannot play: why, once."""
+        from app.files.sound import playback_audio
+
+        audio = self.lip_view.audio
+        if playing and not audio.available and playback_audio(self.state) is not None:
+            self.say_once(f"no sound: {audio.reason}; the lips play silent")
+
+    def _fit_editor_dock(self, height: int | None = None) -> None:
+        """Give the editor's dock the height its contents need (``height``: the editor's size hint)."""
+        dock = self.docks["editor"]
+        if dock.isFloating() or not dock.isVisible() and self.isVisible():
+            return
+        want = height if height is not None else self.editor.needed_height()
+        title = 0  # the title bar stands on the dock's side (DockWidgetVerticalTitleBar): no height
+        if not dock.features() & QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetVerticalTitleBar:
+            title = max(dock.height() - dock.widget().height(), dock.fontMetrics().height() + 6)
+        self.resizeDocks([dock], [max(int(want), self.editor.minimumHeight()) + title],
+                         QtCore.Qt.Orientation.Vertical)
 
     def reset_layout(self) -> None:
         """View > Reset layout: every dock back where it started, shown, at its first size."""
@@ -581,37 +276,7 @@ class MainWindow(QtWidgets.QMainWindow):
             dock.show()
         self.restoreState(self._default_layout)
         self._size_docks()
-
-    def _show_help(self, title, page):
-        from app.help.browser import HelpBrowser
-
-        if self._help is None:
-            self._help = HelpBrowser(title, page, self)
-        self._help.setWindowTitle(title)
-        self._help.set_page(page)
-        self._help.show()
-        self._help.raise_()
-        return self._help
-
-    def show_user_guide(self):
-        """Help > User guide: the guide shipped with the program, in a help window."""
-        from app.help import user_guide_html
-
-        return self._show_help("Lipspace user guide", user_guide_html())
-
-    def show_shortcuts(self):
-        from app.help import shortcut_sheet_html
-
-        return self._show_help("Lipspace keyboard shortcuts", shortcut_sheet_html())
-
-    def about_text(self) -> str:
-        from app.help import about_html
-        from engine import __version__
-
-        return about_html(__version__)
-
-    def _about(self):
-        QtWidgets.QMessageBox.about(self, "About Lipspace", self.about_text())
+        self._fit_editor_dock()
 
     def closeEvent(self, event):
         from app.workers import cancel_all
@@ -709,58 +374,3 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
     if autosaver is not None:
         autosaver.finish()  # a clean exit: nothing to offer next time
     return code
-
-
-@contextlib.contextmanager
-def stop_on_signals(app, win):
-    """Ctrl-C in the terminal, SIGTERM or SIGHUP close ``win`` as File > Quit does and end the loop.
-
-    Python runs a signal handler only between its own bytecodes, and the Qt event loop
-    runs none while it waits: a timer hands control to Python every ``SIGNAL_POLL_MS``.
-    The handler only notes the signal; the timer's slot saves the session to the
-    autosave (when there is one and something is loaded), closes the window and quits,
-    from the event loop, never from inside whatever slot the signal interrupted.
-    Without this the command-line handler's ``KeyboardInterrupt`` was raised inside a
-    Qt slot, printed as a traceback and swallowed: the window could not be stopped.
-
-    Yields the list of signal names received (empty unless one stopped the window).
-    Only in the main thread; the previous handlers are restored on exit.
-    """
-    stopped: list = []
-    if threading.current_thread() is not threading.main_thread():
-        yield stopped
-        return
-
-    def handler(signum, _frame):
-        stopped.append(signal.Signals(signum).name)
-
-    def poll():
-        if not stopped or poll.done:
-            return
-        poll.done = True
-        modal = QtWidgets.QApplication.activeModalWidget()
-        if isinstance(modal, QtWidgets.QDialog):  # the restore question (or any dialog): answered "not now"
-            modal.reject()
-        a = win.autosaver
-        if a is not None and win.state.manifold is not None:
-            with contextlib.suppress(OSError, ValueError, RuntimeError):
-                a.save(win.save_session)
-        win.close()
-        app.quit()
-
-    poll.done = False
-    old = {}
-    for name in STOP_SIGNALS:
-        sig = getattr(signal, name, None)
-        if sig is not None:
-            old[sig] = signal.signal(sig, handler)
-    timer = QtCore.QTimer()
-    timer.setInterval(SIGNAL_POLL_MS)
-    timer.timeout.connect(poll)
-    timer.start()
-    try:
-        yield stopped
-    finally:
-        timer.stop()
-        for sig, h in old.items():
-            signal.signal(sig, h)

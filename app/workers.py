@@ -193,6 +193,9 @@ class TaskRunner(QtCore.QObject):
         self.worker.warned.connect(self._on_warned)
         self.dialog = None
         self._progress = (title, 0, 0)  # the latest (stage, done, total), shown once the dialog opens
+        from app.models.task_status import ProgressEstimate
+
+        self.estimate = ProgressEstimate()  # the time left, said in the dialog
         if dialog:
             self.dialog = QtWidgets.QProgressDialog(title, "Cancel", 0, 0, parent if isinstance(
                 parent, QtWidgets.QWidget) else None)
@@ -207,6 +210,9 @@ class TaskRunner(QtCore.QObject):
             self._show_timer.setSingleShot(True)
             self._show_timer.setInterval(DIALOG_DELAY_MS)
             self._show_timer.timeout.connect(self._show_dialog)
+            self._tick = QtCore.QTimer(self)  # the dialog's label lives between reports: seconds, time left
+            self._tick.setInterval(1000)
+            self._tick.timeout.connect(lambda: self._on_progress(*self._progress))
 
     def start(self) -> "TaskRunner":
         WARNINGS.install()
@@ -225,18 +231,23 @@ class TaskRunner(QtCore.QObject):
         ``setValue`` processes events (a repaint of the whole window, ~20 ms in software GL), so a
         task done within :data:`DIALOG_DELAY_MS` never touches it."""
         self._progress = (stage, done, total)
+        self.estimate.report(stage, done, total)
         d = self.dialog
         if d is None or self.worker.cancel_requested or not d.isVisible():
             return
-        d.setMaximum(max(total, 1))
-        d.setValue(min(done, max(total, 1)))
-        d.setLabelText(f"{stage}: {done}/{total}" if total > 1 else stage)
+        if total > 0 and done < total:
+            d.setMaximum(total)
+            d.setValue(done)
+        else:  # no total, or the count complete while the stage works on: busy, not frozen at 100 %
+            d.setMaximum(0)
+        d.setLabelText(self.estimate.text())
 
     def _show_dialog(self) -> None:
         """The task has run :data:`DIALOG_DELAY_MS`: open the progress dialog at its latest progress."""
         if self.state != "running" or self.dialog is None or self.worker.cancel_requested:
             return
         self.dialog.show()
+        self._tick.start()
         self._on_progress(*self._progress)
 
     def _on_warned(self, message):
@@ -249,6 +260,7 @@ class TaskRunner(QtCore.QObject):
         self.thread.wait()
         if self.dialog is not None:
             self._show_timer.stop()
+            self._tick.stop()
             # reset() also stops the dialog's own show-after-minimumDuration timer (started by a
             # setValue): a task done sooner would otherwise get its dialog shown after this close
             self.dialog.reset()

@@ -96,3 +96,95 @@ def dask_cluster():
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0")
     yield cluster
     cluster.close()
+
+
+@pytest.fixture(scope="session")
+def conditions():
+    """``(ConditionCorpus, Manifold)``: three conditions of the small synthetic talker, each of 10 sentences said
+    twice (paired by text) -- ``a`` as spoken, ``b`` with wider bilabial releases, ``c`` with slower closing
+    (:mod:`engine.talker.conditions`) -- and the one manifold fitted on all of them."""
+    from engine.manifold.model import Manifold
+    from engine.talker.conditions import condition_corpus
+
+    cc = condition_corpus(conditions={"a": "none", "b": "bilabial_release", "c": "slow_closing"}, n_texts=10,
+                          repetitions=2, preset="small", seed=0)
+    return cc, Manifold().fit(cc.corpus)
+
+
+#: the lab folder's speakers (code, sex) and emotions, as a lab names its files (XYZFNE01.pos ...)
+LAB_SPEAKERS = (("XYZ", "F"), ("ABCD", "M"), ("EF", "F"))
+LAB_EMOTIONS = ("NE", "AN", "SA")
+
+
+@pytest.fixture(scope="session")
+def ag501_lab(tmp_path_factory):
+    """A lab's AG501 folder (engine.talker.lab_files): 3 speakers x 3 emotions x 2 texts as ``<spk><sex><emo><nn>.pos``
+    sweeps with real headers and rms columns, speaker XYZ's upper-lip coil bad, the lab's layout file, a metadata
+    table (``;``, BOM) missing one recording and naming one that is not there, and a notes file.
+
+    Returns ``(folder, sweeps, pos paths)``."""
+    from engine.talker.lab_files import BadSensor, lab_sweeps, write_ag501_folder
+
+    folder = tmp_path_factory.mktemp("ag501") / "session1"
+    sweeps = lab_sweeps(speakers=LAB_SPEAKERS, emotions=LAB_EMOTIONS, texts=2, duration_s=(0.8, 1.0),
+                        bad=BadSensor("XYZ"), seed=11)
+    paths = write_ag501_folder(folder, sweeps, leave_out=("EFFSA02",), extra=("QRSMNE01",))
+    return folder, sweeps, paths
+
+
+def haskins_file(path, *, seconds=2.0, words=("sp", "BOB", "MEETS", "MUM", "sp"), seed=0, audio=True):
+    """An MVIEW ``.mat`` made as the Haskins IEEE files are: one struct array named after the file, entry 1
+    ``AUDIO`` (44.1 kHz, a voiced sound with syllable-rate loudness) holding ``SENTENCE``, ``WORDS`` and
+    ``PHONES`` (``LABEL`` and ``OFFS`` [start end] s, ARPAbet, ``sp`` pauses), then the sensors
+    TR TB TT UL LL ML JAW JAWL, each ``SIGNAL`` (n, 6) at 100 Hz: x anterior, y lateral, z vertical in mm."""
+    import numpy as np
+    import scipy.io
+
+    rng = np.random.default_rng(seed)
+    rate, sr = 100.0, 44100.0
+    n = int(seconds * rate)
+    t = np.arange(n) / rate
+    opening = 6 + 5 * np.sin(2 * np.pi * 3.7 * t) + 0.2 * rng.standard_normal(n)
+    edges = np.linspace(0.0, seconds, len(words) + 1)
+    pron = {"BOB": ("B", "AA1", "B"), "MEETS": ("M", "IY1", "T", "S"), "MUM": ("M", "AH1", "M")}
+    word_rows, phone_rows = [], []
+    for w, a, b in zip(words, edges[:-1], edges[1:]):
+        word_rows.append((w, np.array([[a, b]])))
+        ph = pron.get(w, ("sp",))
+        cuts = np.linspace(a, b, len(ph) + 1)
+        phone_rows += [(p, np.array([[c0, c1]])) for p, c0, c1 in zip(ph, cuts[:-1], cuts[1:])]
+
+    def struct(rows):
+        s = np.zeros((1, len(rows)), dtype=[("LABEL", "O"), ("OFFS", "O")])
+        for k, (lab, offs) in enumerate(rows):
+            s[0, k] = (lab, offs)
+        return s
+
+    dt = [("NAME", "O"), ("SRATE", "O"), ("SIGNAL", "O"), ("SOURCE", "O"), ("SENTENCE", "O"), ("WORDS", "O"),
+          ("PHONES", "O"), ("LABELS", "O")]
+    names = ("TR", "TB", "TT", "UL", "LL", "ML", "JAW", "JAWL")
+    s = np.zeros((1, (1 if audio else 0) + len(names)), dtype=dt)
+    k0 = 0
+    sentence = " ".join(w for w in words if w != "sp").capitalize() + "."
+    if audio:
+        ts = np.arange(int(seconds * sr)) / sr
+        snd = np.sin(2 * np.pi * 120 * ts) * (0.5 + 0.5 * np.sin(2 * np.pi * 3.7 * ts)) * 0.3
+        s[0, 0] = ("AUDIO", sr, snd.astype(np.float32)[:, None], "", sentence, struct(word_rows), struct(phone_rows),
+                   np.zeros((0, 0)))
+        k0 = 1
+    for k, name in enumerate(names):
+        sig = 0.1 * rng.standard_normal((n, 6))
+        sig[:, 0] += 60 + 10 * (k % 3)
+        sig[:, 2] += {"UL": opening / 2, "LL": -opening / 2, "JAW": -opening, "JAWL": -opening}.get(name, 0.0) + k
+        first = k == 0 and not audio
+        s[0, k0 + k] = (name, rate, sig.astype(np.float32), "", sentence if first else "",
+                        struct(word_rows) if first else np.zeros((0, 0)),
+                        struct(phone_rows) if first else np.zeros((0, 0)), np.zeros((0, 0)))
+    scipy.io.savemat(path, {path.stem: s})
+    return path
+
+
+@pytest.fixture(scope="session")
+def make_haskins_file():
+    """:func:`haskins_file`: ``make_haskins_file(tmp_path / "F01_B01_S01_R01_N.mat", seconds=2.0)``."""
+    return haskins_file

@@ -36,6 +36,7 @@ SUBCOMMANDS = {
     "import": ("app.cli.importer", "convert a foreign corpus format to the native corpus file"),
     "render": ("app.cli.render", "render a synthesised utterance as an MP4 video with its audio"),
     "cache": ("app.cli.cache", "show the cache folder and its size; --clear empties it"),
+    "compare": ("app.cli.compare", "compare levels of a field (speakers, emotions, groups) on one manifold"),
 }
 
 
@@ -75,7 +76,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 #: arguments naming files a command writes / directories it writes into
-OUTPUT_FILE_ARGS = ("output", "csv", "markdown", "praat")
+OUTPUT_FILE_ARGS = ("output", "csv", "markdown", "praat", "figure")
 OUTPUT_DIR_ARGS = ("outdir", "mesh_dir", "audio_dir", "textgrid_dir")
 
 

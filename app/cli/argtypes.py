@@ -211,4 +211,5 @@ def plain_words(message: str, options=PARAMETER_OPTIONS) -> str:
         message = pattern.sub(repl, message)
     for name, opt in options.items():
         message = re.sub(rf"\b{re.escape(name)}\b(?:=)?", opt + " ", message).replace(opt + "  ", opt + " ")
+    message = re.sub(r"\b[A-Z][A-Za-z]+: (?=--)", "", message)  # the estimator's class name, before its option
     return re.sub(r" +([,;.)])", r"\1", message)

@@ -73,6 +73,10 @@ def add_arguments(p):
                    help="also write the table as CSV (protocols: protocol, method, utterance, rmse_x, rmse_y, "
                         "lve; one row per utterance and an ALL row per method)")
     p.add_argument("--markdown", metavar="OUT.md", default=None, help="protocols: also write the tables as Markdown")
+    p.add_argument("--by", metavar="FIELD", default=None,
+                   help="also report the errors per level of a metadata field of the utterances (speaker, sex, "
+                        "emotion ...: lipspace info lists them); --csv then has a column FIELD and a "
+                        "per-level table goes to FIELD-levels beside it")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -265,6 +269,7 @@ def _run_protocols(args) -> int:
     test_ids = [s.strip() for s in args.test_ids.split(",") if s.strip()] if args.test_ids else None
     with progress_bar(disable=True if args.quiet else None) as progress:
         corpus = _corpus(args, progress)
+        levels = _levels(args, corpus)  # --by: the field must exist before the work
         notes = []
         if args.haskins:
             corpus = name_haskins_speakers(corpus)
@@ -322,6 +327,7 @@ def _run_protocols(args) -> int:
             warnings.warn(CorpusWarning(f"{result.missed_gaps} gap(s) could not reach their target state in time "
                                         f"(they end at the nearest reachable state); {cause}"), stacklevel=2)
     print(result.format())
+    level_rows = _print_levels(args, result, levels)
     from app.cli._common import command_outputs
 
     with command_outputs(args) as outputs:  # both tables or neither
@@ -329,9 +335,19 @@ def _run_protocols(args) -> int:
             from engine.evaluation.protocol_report import CSV_COLUMNS
             from engine.io.writers.export import write_table_csv
 
-            write_table_csv(outputs.file(args.csv, option="--csv"), result.csv_rows(), columns=CSV_COLUMNS)
+            rows, cols = result.csv_rows(), list(CSV_COLUMNS)
+            if levels is not None:  # the utterance's level beside it (ALL rows: none)
+                rows = [{**r, args.by: levels.get(r["utterance"], "")} for r in rows]
+                cols.insert(cols.index("utterance") + 1, args.by)
+                from engine.evaluation.levels import LEVEL_COLUMNS
+
+                write_table_csv(outputs.file(_levels_csv(args.csv), option="--csv"), level_rows,
+                                columns=LEVEL_COLUMNS)
+            write_table_csv(outputs.file(args.csv, option="--csv"), rows, columns=cols)
         if args.markdown:
             outputs.file(args.markdown, option="--markdown").write_text(result.markdown() + "\n", encoding="utf-8")
+    if args.csv and levels is not None:
+        print(f"wrote {_levels_csv(args.csv)}")
     for written in (args.csv, args.markdown):
         if written:
             print(f"wrote {written}")
@@ -342,3 +358,35 @@ def _run_protocols(args) -> int:
               "protocol", file=sys.stderr)
         return 1
     return 0
+
+
+def _levels(args, corpus):
+    """``{utterance id: level}`` of ``--by FIELD`` (None without it); CliError naming the fields the corpus has."""
+    if not args.by:
+        return None
+    from app.cli import CliError
+    from engine.recordings.metadata import MetadataError, field_values, require_field
+
+    try:
+        require_field(corpus, args.by)
+    except MetadataError as exc:
+        raise CliError(f"--by {args.by}: {exc}") from None
+    return dict(zip((u.id for u in corpus.utterances), field_values(corpus, args.by).tolist()))
+
+
+def _print_levels(args, result, levels):
+    """Print the per-level table of ``--by``; its rows (None without ``--by``)."""
+    if levels is None:
+        return None
+    from engine.evaluation.levels import format_levels, per_level
+
+    rows = per_level(result, levels, field=args.by)
+    print()
+    print(format_levels(rows, field=args.by))
+    return rows
+
+
+def _levels_csv(path) -> Path:
+    """Where ``--csv OUT.csv`` puts the per-level table: ``OUT-levels.csv``."""
+    p = Path(path)
+    return p.with_name(f"{p.stem}-levels{p.suffix or '.csv'}")

@@ -7,6 +7,13 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from app.cli.import_lab import (
+    add_lab_arguments,
+    apply_quality_policy,
+    check_fields,
+    expand_folder_inputs,
+    quality_policy,
+)
 from app.files.source_loading import ANALYSIS_RATE
 
 #: which reader option ``--points`` sets, per format
@@ -22,8 +29,9 @@ def add_arguments(p):
     from engine.io.dispatch import FORMAT_ALIASES, FORMATS
 
     p.add_argument("inputs", nargs="+", metavar="INPUT",
-                   help="data file(s): .ema .mat .c3d .csv .npy .npz, a directory or glob of .obj/.ply frames; "
-                        "several files become one utterance each")
+                   help="data file(s) or folder(s): .ema .mat .c3d .csv .npy .npz .pos ...; a folder's recordings "
+                        "are read in natural order, one utterance each (a folder or glob of .obj/.ply frames is one "
+                        "utterance, a folder of videos one clip each)")
     p.add_argument("-o", "--output", required=True, help="native corpus file to write (.npz)")
     p.add_argument("--format", choices=sorted(FORMATS) + sorted(FORMAT_ALIASES), default=None,
                    help="input format (default: from the extension or the file's first bytes)")
@@ -66,10 +74,12 @@ def add_arguments(p):
                           "'prefix' its file name up to the first '_', or 're:PATTERN' the one group of a regular "
                           "expression searched in the file name, e.g. 're:^(spk[0-9]+)' or 're:^([A-Z]{3})'; "
                           "corpus files (.npz) joined keep their own speakers")
+    add_lab_arguments(p)  # --recursive, --fields-from, --metadata, --quality ... (app.cli.import_lab)
     p.add_argument("--template", default=None, metavar="MESH", help="template OBJ/PLY giving faces for .npy input")
     p.add_argument("--audio-dir", default=None, metavar="DIR",
-                   help="MVIEW .mat input: write each file's AUDIO to DIR/<stem>.wav and link it; video input: "
-                        "where each utterance's audio track goes (default: <output stem>_audio/ beside the output)")
+                   help="MVIEW .mat input: where each file's AUDIO goes as <stem>.wav, linked to its utterance; "
+                        "video input: where each utterance's audio track goes (default for both: <output "
+                        "stem>_audio/ beside the output)")
     p.add_argument("--interocular-mm", type=float, default=None, metavar="MM",
                    help="video input: assumed distance between the eye centres, which sets the mm scale "
                         "(default: 63, the mean adult interpupillary distance)")
@@ -154,7 +164,8 @@ def run(args) -> int:
     if args.block_frames is not None and args.block_frames < 256:
         raise CliError(f"--block-frames {args.block_frames}: must be at least 256 frames per block")
     _check_numbers(args)
-    inputs = args.inputs
+    inputs, folders = expand_folder_inputs(args)
+    args.inputs = inputs
     rate_out = None
     video = _is_video(args)
     if args.resample is None:  # every input, video too, goes to the paper's 60 Hz (docs/DECISIONS.md)
@@ -188,14 +199,18 @@ def run(args) -> int:
         kw = _options(args, fmt)
         if fmt == "video" and rate_out is not None:  # each video (of a folder too) at that rate before joining
             kw["resample"] = rate_out
-        groups = [inputs] if fmt == "mesh" and len(inputs) > 1 else [[p] for p in inputs]
-        _check_speakers(groups, args, fmt)
+        sequences = fmt == "mesh" and len(inputs) > 1 and not all(Path(p).is_dir() for p in inputs)
+        groups = [inputs] if sequences else [[p] for p in inputs]  # frame files: one sequence; folders: one each
+        warned = _check_speakers(groups, args, fmt)
+        fields = check_fields(groups, args, fmt, folders, quiet_hint=warned)
+        policy = quality_policy(args)
     except (ImportFormatError, CorpusError, FileNotFoundError, ValueError, TypeError) as exc:
         raise CliError(str(exc)) from None
     from app.cli._common import command_outputs
 
     with command_outputs(args) as outputs:  # the corpus, its blocks and its audio: all or none
         staged = outputs.file(out, option="-o")
+        report = outputs.file(args.quality_report, option="--quality-report") if args.quality_report else None
         blocks = None
         if args.block_frames is not None:
             from engine.recordings.corpus_blocks import blocks_folder
@@ -204,7 +219,7 @@ def run(args) -> int:
         audio_dir, audio_stage = _stage_audio(args, fmt, kw, outputs)
         job = {"format": fmt, "rate": args.rate, "alignment": alignment, "options": kw,
                "audio_dir": None if audio_stage is None else str(audio_stage), "speaker": args.speaker,
-               "speaker_from": args.speaker_from,
+               "speaker_from": args.speaker_from, "fields": fields, "ids": folders.ids,
                # corpus files joined: each one's unnamed utterances are its own speaker, named after the file
                "name_corpora": fmt == "npz" and len(groups) > 1 and not (args.speaker or args.speaker_from)}
         try:
@@ -217,8 +232,10 @@ def run(args) -> int:
                 parts = [_read_group(groups[0], job)]
             else:
                 parts = _read_many(groups, job, args)
+            parts, quality_notes, quality_rows = apply_quality_policy(parts, policy)
             parts = _one_rate(parts, rate_out)
             corpus = parts[0] if len(parts) == 1 else concat(parts)
+            corpus.history = list(corpus.history) + [n for n in quality_notes if n not in corpus.history]
             if audio_stage is not None:  # the audio goes where the corpus says it is once moved in
                 corpus = _moved_audio(corpus, audio_stage, audio_dir)
             if args.roles is not None:
@@ -240,6 +257,11 @@ def run(args) -> int:
                 corpus = replace(corpus, name=args.name)
         except (ImportFormatError, CorpusError, FileNotFoundError, ValueError, TypeError) as exc:
             raise CliError(str(exc)) from None
+        if report is not None:
+            from engine.io.writers.export import write_table_csv
+            from engine.recordings.signals.quality import QUALITY_COLUMNS
+
+            write_table_csv(report, quality_rows, columns=QUALITY_COLUMNS)
         if blocks is None:
             corpus.save(staged)
         else:
@@ -290,11 +312,12 @@ def _check_numbers(args) -> None:
 def _stage_audio(args, fmt, kw, outputs):
     """(the audio folder the corpus will name, the staging folder the readers write to) or (None, None).
 
-    MVIEW .mat input writes each file's AUDIO with ``--audio-dir``; video input writes each
-    utterance's audio track (default ``<output stem>_audio/``). A WAV already there is
-    refused unless ``--force`` (before anything is read when the names are known)."""
-    if fmt == "mview" and args.audio_dir:
-        final = Path(args.audio_dir)
+    MVIEW .mat input writes each file's AUDIO, video input each utterance's audio track, into
+    ``--audio-dir`` (default ``<output stem>_audio/``). A WAV already there is refused unless
+    ``--force`` (before anything is read when the names are known)."""
+    if fmt == "mview" and (args.audio_dir or any(_has_audio(p) for p in args.inputs if Path(p).is_file())):
+        out = Path(args.output)
+        final = Path(args.audio_dir or out.with_name(out.stem + "_audio"))
         names = [Path(p).stem + ".wav" for p in args.inputs]
     elif fmt == "video":
         final, names = Path(kw["audio_dir"]), None
@@ -375,6 +398,17 @@ def _input_errors():
     return (ImportFormatError, CorpusError, OSError, ValueError, TypeError)
 
 
+def _has_audio(src) -> bool:
+    """Whether an MVIEW file holds an ``AUDIO`` entry (a file without one imports silent, as it is)."""
+    from engine.io import ImportFormatError, read_mview_audio
+
+    try:
+        read_mview_audio(src)
+    except ImportFormatError as exc:
+        return "has no AUDIO entry" not in str(exc)  # a damaged AUDIO entry is still said, by write_audio
+    return True
+
+
 def _read_group(g, job):
     """The corpus of one input (a file, or the frame files of one mesh sequence)."""
     from engine.io import read_corpus, write_audio
@@ -385,11 +419,19 @@ def _read_group(g, job):
         c = read_corpus(src, format=job["format"], rate=job["rate"], alignment=job["alignment"], **job["options"])
     except MemoryError as exc:  # which input did not fit is said (lipspace import: out of memory reading ...)
         raise _InputMemoryError(g[0], exc) from exc
-    if job["audio_dir"] and job["format"] == "mview":
+    if job["audio_dir"] and job["format"] == "mview" and _has_audio(src):
         with collecting_repairs() as notes:  # e.g. non-finite samples written as silence
             wav = write_audio(src, Path(job["audio_dir"]) / (Path(src).stem + ".wav"))
         c = replace(c, utterances=[replace(u, audio=str(wav)) for u in c.utterances],
                     history=c.history + [n for n in notes if n not in c.history])
+    uid = (job.get("ids") or {}).get(str(g[0]))
+    if uid and len(c.utterances) == 1:  # same stem in two subfolders: the id keeps its folder
+        c = replace(c, utterances=[replace(c.utterances[0], id=uid)])
+    own = (job.get("fields") or {}).get(str(g[0]))
+    if own:
+        from engine.recordings.metadata import with_fields
+
+        c = replace(c, utterances=[with_fields(u, own) for u in c.utterances])
     speaker = job["speaker"] or _speaker_of(g[0], job["speaker_from"])
     if speaker:
         c = replace(c, utterances=[replace(u, speaker=speaker) for u in c.utterances])
@@ -529,7 +571,7 @@ def _speaker_of(path, how) -> str:
     return SpeakerRule(how)(path)
 
 
-def _check_speakers(groups, args, fmt) -> None:
+def _check_speakers(groups, args, fmt) -> bool:
     """Refuse a speaker rule that does not apply to every input, before any is read; warn when the
     speakers it gives (or the lack of one) do not fit the file names (:func:`engine.recordings.speakers.check_assignment`)."""
     import warnings
@@ -538,13 +580,16 @@ def _check_speakers(groups, args, fmt) -> None:
     from engine.recordings.speakers import SpeakerRule, SpeakerRuleError, SpeakerWarning, check_assignment
 
     if fmt == "npz" and not args.speaker_from:
-        return  # corpus files carry their own speakers
+        return False  # corpus files carry their own speakers
     try:
         rule = SpeakerRule(args.speaker_from) if args.speaker_from else None
         speakers = [rule(g[0]) if rule else (args.speaker or "") for g in groups]
     except SpeakerRuleError as exc:
         raise CliError(str(exc)) from None
-    if args.speaker:
-        return
-    for msg in check_assignment([g[0] for g in groups], speakers, rule=args.speaker_from):
+    if args.speaker or args.fields_from or args.metadata:
+        return False  # told, or the fields name the speaker (checked with them)
+    msgs = check_assignment([g[0] for g in groups], speakers, rule=args.speaker_from)
+    for msg in msgs:
         warnings.warn(SpeakerWarning(msg), stacklevel=2)
+    return bool(msgs)
+

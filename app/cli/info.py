@@ -26,7 +26,7 @@ def _corpus_lines(c):
            f" (the method's analysis rate is {ANALYSIS_RATE:g} Hz: 'lipspace import --resample {ANALYSIS_RATE:g}')"),
         f"points      {c.n_points} ({c.dims}-D){', mesh with %d faces' % len(c.faces) if c.faces is not None else ''}",
         f"phones      {len(labels)} intervals, {len(uniq)} labels" + (f"; most frequent: {top}" if top else ""),
-        f"latent      {', '.join(sorted(c.latent)) or '-'}",
+        f"latent      {', '.join(sorted(k for k in c.latent if not k.startswith('quality_'))) or '-'}",
     ] + _recording_lines(c)
 
 
@@ -42,6 +42,15 @@ def _recording_lines(c):
                                              "--states or --utterance ID --key-frames F,F,..."))
     if spk:
         lines.append(f"speakers    {len(spk)}: {', '.join(spk[:12])}{' ...' if len(spk) > 12 else ''}")
+    from engine.recordings.metadata import describe_fields
+
+    lines += [f"{'fields' if i == 0 else '':<11} {text}" for i, text in enumerate(describe_fields(c))]
+    quality = [h[len("quality: "):] for h in c.history if h.startswith("quality: ")]
+    from engine.recordings.signals.quality import sensor_quality
+
+    if quality or sensor_quality(c) is not None:
+        quality = quality or ["sensor quality values kept; not reported on import (a corpus made before the report)"]
+        lines += [f"{'quality' if i == 0 else '':<11} {text}" for i, text in enumerate(quality)]
     if c.point_roles is not None:
         from app.cli._common import roles_text
 
@@ -50,7 +59,7 @@ def _recording_lines(c):
 
     lines.append(f"orientation {anatomical_frame(c).describe()}")
     lines.append(f"registration {c.registration or 'none'}")
-    lines += [f"history     {h}" for h in c.history if not h.startswith(("read ", "registration:"))]
+    lines += [f"history     {h}" for h in c.history if not h.startswith(("read ", "registration:", "quality: "))]
     return lines
 
 

@@ -3,7 +3,8 @@
 The lips are rendered off-screen frame by frame at the corpus rate with the explorer's
 own scene builders, optionally beside the original utterance (``--side-by-side``) and
 with a manifold panel showing the trajectory through F^y (``--trajectory``), and muxed
-with the audio (the utterance's own with ``--utterance``, or ``--audio FILE``) by PyAV.
+with the audio (the utterance's own with ``--utterance``, typed ``--text`` spoken by espeak-ng
+on the synthesis's phone times, or ``--audio FILE``) by PyAV.
 Targets come from the same sources as ``lipspace synthesize``. No display is needed
 (VTK renders through EGL when there is no X server); the file is written atomically,
 so Ctrl-C leaves no half video.
@@ -89,6 +90,7 @@ def _trajectory(args, manifold):
         return c.frames[u.start:u.stop], manifold.Fy_[u.start:u.stop, :3] if args.trajectory else None, u.id
     try:
         targets = _targets(args, manifold)
+        args.rendered_targets = targets  # typed text is spoken on these times (_audio)
         traj = _synthesizer(args, manifold, targets).synthesize(targets)
     except (ValueError, FileNotFoundError) as exc:
         raise CliError(str(exc)) from None
@@ -119,6 +121,14 @@ def _audio(args, manifold):
         if not Path(args.audio).is_file():
             raise CliError(f"--audio {args.audio}: no such file")
         return Path(args.audio)
+    if getattr(args, "text", None) and getattr(args, "rendered_targets", None) is not None:
+        from app.files.sound import SoundNote, speech_for_targets
+
+        try:  # typed text speaks when espeak-ng is installed
+            return speech_for_targets(args.rendered_targets, args.text)
+        except SoundNote as exc:
+            print(f"lipspace render: note: {exc}; the video is silent", file=sys.stderr)
+            return None
     if args.utterance is None:
         return None
     path, why = utterance_audio(manifold, args.utterance, args.manifold)

@@ -55,9 +55,10 @@ def add_arguments(p):
     src.add_argument("--utterance", metavar="ID", help="a corpus utterance: its own phone mid-points as targets "
                                                        "(kinematic landmarks when it has no phones)")
     src.add_argument("--states", metavar="S,S,...", help="state indices of the manifold's state graph as targets")
-    p.add_argument("--key-frames", metavar="F,F,...|kinematic", default=None,
-                   help="with --utterance: target frames (0-based within the utterance), or 'kinematic' for its "
-                        "aperture maxima / minima and peak velocities")
+    p.add_argument("--key-frames", metavar="F,F,...|kinematic|gestures[:GONS+MAXC+GOFFS]", default=None,
+                   help="with --utterance: target frames (0-based within the utterance), 'kinematic' for its "
+                        "aperture maxima / minima and peak velocities, or 'gestures' for the gestural landmarks of "
+                        "its lip aperture (default GONS+MAXC+GOFFS; any of GONS PVEL NONS MAXC NOFFS PVEL2 GOFFS)")
     p.add_argument("--spacing", type=float, default=0.2, metavar="SECONDS",
                    help="with --states: time between successive targets (default: %(default)s)")
     p.add_argument("--manifold", metavar="FILE", help="manifold file from 'lipspace build' (default: fit the "
@@ -159,10 +160,21 @@ def _key_frames(args, manifold):
                              "points for kinematic landmarks; give --key-frames F,F,... (frames within the "
                              "utterance)")
         return kinematic_key_frames(c, args.utterance)
+    if spec.split(":")[0] == "gestures":  # gestural landmarks of the lip aperture (engine.recordings.signals.gestures)
+        from engine.recordings.signals.gestures import find_gestures, gesture_key_frames
+
+        marks = [m for m in spec.partition(":")[2].split("+") if m] or ["GONS", "MAXC", "GOFFS"]
+        c = manifold.corpus_
+        kf = gesture_key_frames(find_gestures(c, "lip_aperture"), args.utterance, c.bounds, landmarks=marks)
+        if not kf.size:
+            raise ValueError(f"utterance {args.utterance!r}: no gestures of the lip aperture found; give --key-frames "
+                             "F,F,... or 'kinematic'")
+        return kf
     try:
         return [int(x) for x in spec.replace(" ", ",").split(",") if x.strip()]
     except ValueError:
-        raise ValueError(f"--key-frames {spec!r}: expected comma-separated frame indices or 'kinematic'") from None
+        raise ValueError(f"--key-frames {spec!r}: expected comma-separated frame indices, 'kinematic' or "
+                         "'gestures[:LANDMARK+...]'") from None
 
 
 def _synthesizer(args, manifold, targets=None):

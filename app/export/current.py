@@ -3,7 +3,8 @@
 The trajectory exported is the one File › Export trajectory writes: the synthetic one
 if there is one, else the selected utterance's original. The utterance's audio goes
 with it when the trajectory runs on the utterance's own timeline (the original, or a
-re-synthesis of the same length); an MP4 of a synthetic trajectory shows the original
+re-synthesis of the same length), and a synthesis of typed text carries the text spoken
+(``extra["audio"]``, :mod:`app.files.sound`); an MP4 of a synthetic trajectory shows the original
 beside it and the manifold panel with both paths, as the lip view and manifold view do.
 """
 from __future__ import annotations
@@ -57,6 +58,10 @@ def export_current_animation(state, path, *, size=(640, 480), progress=None) -> 
     audio = None
     if state.utterance is not None and state.original is not None and len(traj) == len(state.original):
         audio, _why = utterance_audio(m, state.utterance, state.source.get("path"))
+    elif traj is state.synthetic and (traj.extra or {}).get("audio"):  # typed text, spoken
+        from app.files.sound import resolve_audio_path
+
+        audio = resolve_audio_path(traj.extra["audio"])
     if suffix in (".glb", ".gltf"):
         return export_animation(m, _fx(m, traj), path, rate=traj.rate, audio=audio, source=traj.label)
     from app.export.video import render_video

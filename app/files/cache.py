@@ -2,9 +2,11 @@
 
 The cache holds the synthetic talker's generated corpora (``synthetic-<preset>-<key>.npz``,
 with their speech audio in ``synthetic-<preset>-<key>-audio/``), the manifolds
-fitted to them (``manifolds/synthetic-<preset>-...npz``) and each corpus's measured
+fitted to them (``manifolds/synthetic-<preset>-...npz``), each corpus's measured
 choice of synthesis method (``method-choice/<data key>-<code key>.json``,
-:mod:`engine.synthesis.method_choice`). Every entry's name carries a
+:mod:`engine.synthesis.method_choice`) and the explorer's sound (``sound/recording-<key>/``,
+a recording's extracted audio; ``sound/speech-<key>.wav``, synthesised text spoken:
+:mod:`app.files.sound`). Every entry's name carries a
 key made from the code and parameters that produced it (generator, fitting
 algorithms, file format), so an entry made by other code is never used; it is only
 left behind. :func:`prune` deletes those left-behind entries of a preset once a
@@ -34,6 +36,8 @@ _ENTRY = re.compile(r"^(?:synthetic-(?P<preset>[A-Za-z0-9_]+)-.+?(?:\.npz|-audio
                     r"\.synthetic-.+\.p(?P<pid>\d+)-[a-z0-9_]{8}\.part\.npz)$")
 #: a corpus's measured choice of synthesis method (engine.synthesis.method_choice.choice_path)
 _CHOICE = re.compile(r"^[0-9a-f]{16}-[0-9a-f]{16}\.json$")
+#: the explorer's sound (app.files.sound): a recording's extracted audio, synthesised speech
+_SOUND = re.compile(r"^(?:recording-[0-9a-f]{16}|speech-[0-9a-f]{16}\.wav)$")
 
 #: environment variable that moves the cache folder
 CACHE_DIR_ENV = "LIPSPACE_CACHE_DIR"
@@ -92,6 +96,10 @@ def entries(folder=None) -> list[CacheEntry]:
     if sub.is_dir():
         out += [CacheEntry(p, "method choice", "", _size(p), _owned(p, "method choice", root)) for p in sub.iterdir()
                 if _CHOICE.match(p.name) and p.is_file() and not p.is_symlink()]
+    sub = root / "sound"
+    if sub.is_dir():
+        out += [CacheEntry(p, "sound", "", _size(p), _owned(p, "sound", root)) for p in sub.iterdir()
+                if _SOUND.match(p.name) and not p.is_symlink()]
     for sub, kind in ((root, "corpus"), (root / "manifolds", "manifold")):
         if not sub.is_dir():
             continue
@@ -183,7 +191,7 @@ def clear(folder=None) -> list[CacheEntry]:
         _remove(e.path, root)
         if not e.path.exists():
             gone.append(e)
-    for name in ("manifolds", "method-choice", MARKS):
+    for name in ("manifolds", "method-choice", "sound", MARKS):
         sub = root / name
         if sub.is_dir() and not any(sub.iterdir()):
             sub.rmdir()

@@ -2,7 +2,8 @@
 
 A session is a small JSON file, written atomically, holding where the manifold came
 from (a manifold or corpus file, or the synthetic preset), the selection, colour and
-hemisphere modes, the visible phone ellipsoids, the current utterance and the
+hemisphere modes, the visible phone ellipsoids and their opacity, the hidden layers, the
+session palette (so each category keeps its colour), the current utterance and the
 camera of each 3-D view. Qt-free: cameras are plain lists from the views.
 
 The synthesised trajectory and the trajectory editor's key targets (as edited, e.g.
@@ -62,6 +63,9 @@ def session_dict(state, *, cameras: dict | None = None, extra: dict | None = Non
         "path_mode": bool(state.path_mode),
         "utterance": state.utterance,
         "visible_phones": sorted(state.visible_phones),
+        "ellipsoid_opacity": float(state.ellipsoid_opacity),
+        "hidden_layers": sorted(state.hidden_layers),
+        "palette": None if state.palette is None else state.palette.to_dict(),
         "component": state.component,
         "cameras": {k: [[float(x) for x in row] for row in v] for k, v in (cameras or {}).items()},
         "extra": dict(extra or {}),
@@ -315,7 +319,13 @@ def apply_session(state, d: dict):
             state.clear_selection()
         if sel.get("target") is not None:
             state.set_target(sel["target"])
+        if d.get("palette") is not None:  # the colours the session was seen in (older sessions: the corpus's)
+            from app.models.palette import SessionPalette
+
+            state.set_palette(SessionPalette.from_dict(d["palette"]))
         state.set_visible_phones(d.get("visible_phones", []))
+        state.set_ellipsoid_opacity(d.get("ellipsoid_opacity", state.ellipsoid_opacity))
+        state.set_hidden_layers(d.get("hidden_layers", []))
         state.set_component(d.get("component"))
         state.set_color_mode(d.get("color_mode", "density"))
         syn, targets = d.get("_synthetic"), d.get("_targets")

@@ -118,6 +118,8 @@ def record(fields: dict, *, null=False, what="an object"):
             sub = f"{field}.{name}" if field else name
             if name in v:
                 out[name] = kind(v[name], sub)
+            elif default is _ABSENT:  # left missing: the window keeps what it shows
+                continue
             elif default is dict:  # a missing object: an empty one, its own fields defaulted
                 out[name] = kind({}, sub)
             elif default is not _REQUIRED:
@@ -129,6 +131,7 @@ def record(fields: dict, *, null=False, what="an object"):
 
 
 _REQUIRED = object()
+_ABSENT = object()
 
 
 def camera(v, field):
@@ -154,6 +157,26 @@ def phone(v, field):
     return v
 
 
+def word(v, field):
+    if not (isinstance(v, list) and len(v) == 3 and _number(v[0]) and _number(v[1]) and isinstance(v[2], str)
+            and v[0] <= v[1]):
+        raise _Bad(field, "[start s, end s, word] with start <= end (the editor's word tier)", v)
+    return v
+
+
+def palette(v, field):
+    """The session palette's record (``{"ranking": {kind: [levels]}}``), or null."""
+    if v is None:
+        return None
+    from app.models.palette import SessionPalette
+
+    try:
+        SessionPalette.from_dict(v)
+    except ValueError as exc:
+        raise _Bad(field, f"a palette record ({exc})", v) from None
+    return v
+
+
 def _session_schema():
     from app.files.source_loading import PRESETS
     from app.models.state import COLOR_MODES, HEMISPHERES, HORIZON_MAX_MS
@@ -176,9 +199,14 @@ def _session_schema():
         "utterance": (text(null=True, what="an utterance id"), None),
         "visible_phones": (labels, list),
         "component": (whole(0, null=True, what="a component index"), None),
+        "hidden_layers": (array(text(), what="an array of layer names"), list),
+        "ellipsoid_opacity": (number(0, 1, what="a number from 0 to 1"), _ABSENT),
+        "palette": (palette, None),
         "cameras": (cameras, dict),
         "extra": (record({"editor": (record({"text": (text(null=True), None), "method": (text(null=True), None),
                                              "source": (text(null=True), None), "oracle": (boolean, True),
+                                             "words": (array(word, what="an array of [start s, end s, word] (the "
+                                                             "editor's word tier)"), list),
                                              "sound": (boolean, True)}), dict)}), dict),
         "synthetic": (record({"label": (text(), ""), "rate": (rate, _REQUIRED),
                               "method": (text(null=True), None),

@@ -224,6 +224,8 @@ def read_recording(path):
     import`` makes it with its defaults, so that opening the file itself in the window (or in
     ``lipspace explore FILE``) fits the same corpus as ``import`` then ``build``.
 
+    The file's sound is kept as import keeps it (a video's audio track, a Haskins ``.mat``
+    file's ``AUDIO``: :func:`app.files.sound.read_with_sound`).
     The defaults applied: registration ``"auto"`` (rigid with 3 or more reference sensors,
     else centring when there are several utterances; :func:`engine.recordings.registration.register`),
     then resampling to :data:`ANALYSIS_RATE` (:func:`engine.io.resample`), video included.
@@ -244,13 +246,14 @@ def read_recording(path):
     """
     import warnings
 
-    from engine.io import read_corpus, resample
+    from app.files.sound import read_with_sound
+    from engine.io import resample
     from engine.io.errors import ImportDataWarning
     from engine.io.repairs import collecting_repairs
     from engine.recordings.registration import register
 
     with collecting_repairs() as repairs:
-        corpus = register(read_corpus(path), method="auto")
+        corpus = register(read_with_sound(path), method="auto")
     for note in repairs:  # in the history too; said now, since no import step printed it
         warnings.warn(ImportDataWarning(note), stacklevel=2)
     if abs(corpus.rate - ANALYSIS_RATE) > 1e-9 * ANALYSIS_RATE:

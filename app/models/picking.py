@@ -77,7 +77,7 @@ def frame_under_cursor(xy, depth, mouse, *, dot_radius: float, radius: float):
     ----------
     xy : ndarray of shape (n, 2)
         Display positions (pixels, origin bottom left), from
-        :func:`app.scene.projection.project`.
+        :func:`app.models.projection.project`.
     depth : ndarray of shape (n,)
         Normalised device depths (larger = farther; outside [-1, 1]: not in view).
     mouse : (x, y)
@@ -132,7 +132,7 @@ class CloudLocator:
         self.n_candidates = 0  # frames projected for the last query (for benchmarks)
 
     def _project_points(self, M, size):
-        from app.scene.projection import project
+        from app.models.projection import project
 
         key = (np.asarray(M).tobytes(), tuple(size))
         if self._key != key:
@@ -157,7 +157,7 @@ class CloudLocator:
     def locate(self, mouse, M, size, *, radius: float | None = None):
         """The frame a click at display position ``mouse`` selects, or None (see :func:`frame_under_cursor`);
         ``radius`` overrides the pick tolerance."""
-        from app.scene.projection import project
+        from app.models.projection import project
 
         radius = self.radius if radius is None else float(radius)
         frames = self.candidates(mouse, M, size, radius=radius)

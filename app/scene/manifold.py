@@ -8,21 +8,23 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 
+from app.models.colour_maps import RESERVED_COLOURS as _R
 from app.scene.handles import Handle
 
 __all__ = ["PointsHandle", "LocalFrameHandle", "PolylineHandle", "add_manifold_points", "add_zero_velocity_plane",
            "add_global_axes", "label_zoom", "add_local_frame", "add_point_markers", "add_trajectory", "add_state_path",
-           "add_cluster_ellipsoids",
+           "add_cluster_ellipsoids", "EllipsoidHandle", "outline_colour", "direction_arrows", "DIRECTION_ARROWS",
            "add_marker", "MarkerHandle", "scene_scale", "overlay_renderer", "move_to_overlay", "to_rgb8", "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR",
            "S_COLOUR", "V_COLOUR", "NORMAL_COLOUR", "PLANE_COLOUR"]
 
-ORIGINAL_COLOUR = (0.0, 0.0, 0.0)
-SYNTHETIC_COLOUR = (1.0, 0.0, 0.0)
-PATH_COLOUR = (1.0, 0.5, 0.0)
-S_COLOUR = (0.0, 0.39, 0.0)        # dark green, as in the figure set
-V_COLOUR = (0.545, 0.0, 0.545)     # dark magenta
-NORMAL_COLOUR = (0.1, 0.45, 0.85)
-PLANE_COLOUR = (0.55, 0.55, 0.6)
+# each glyph's colour is declared once (app.models.colour_maps.RESERVED_COLOURS), where the legend reads it
+ORIGINAL_COLOUR = _R["original trajectory"]   # black, as the paper's original trajectories
+SYNTHETIC_COLOUR = _R["synthetic trajectory"]  # red, as the paper's generated ones
+PATH_COLOUR = _R["state path"]
+S_COLOUR = _R["S"]                             # dark green, as in the figure set
+V_COLOUR = _R["V"]                             # dark magenta
+NORMAL_COLOUR = _R["normal"]
+PLANE_COLOUR = _R["plane"]
 
 
 def _xyz(a, what, n=None):
@@ -230,7 +232,7 @@ class LocalFrameHandle:
     matrix (position, direction, length), so no geometry is rebuilt or re-uploaded.
     """
 
-    COLOURS = {"s": (0.2, 0.75, 0.2), "v": (0.85, 0.2, 0.85), "normal": NORMAL_COLOUR}
+    COLOURS = {"s": _R["local s"], "v": _R["local v"], "normal": NORMAL_COLOUR}
 
     def __init__(self, plotter, length: float):
         from vtkmodules.vtkCommonMath import vtkMatrix4x4
@@ -290,21 +292,60 @@ def add_local_frame(plotter, point=None, s=None, v=None, normal=None, *, length:
 
 
 class PolylineHandle(Handle):
-    """A polyline (trajectory or state path); :meth:`update` redraws it in place."""
+    """A polyline (trajectory or state path); :meth:`update` redraws it in place.
 
-    def __init__(self, plotter, mesh, actor, *, node_radius: float = 0.0):
+    With ``arrow_size`` > 0 cones along the line point the way it runs (its first point to its
+    last): :data:`DIRECTION_ARROWS` of them, evenly spaced along its length, the last at its end.
+    """
+
+    def __init__(self, plotter, mesh, actor, *, node_radius: float = 0.0, arrow_size: float = 0.0):
         super().__init__(plotter, mesh, actor)
         self.node_radius = float(node_radius)
+        self.arrow_size = float(arrow_size)
         self.points = np.zeros((0, 3))
+        self.arrows = (np.zeros((0, 3)), np.zeros((0, 3)))  # (positions, unit directions) of the cones drawn
 
     def update(self, Y) -> None:
         Y = _xyz(Y, "polyline points") if Y is not None and len(Y) else np.zeros((0, 3))
         self.points = Y
-        self.replace_geometry(_polyline(Y, self.node_radius))
+        self.arrows = direction_arrows(Y) if self.arrow_size > 0 else (np.zeros((0, 3)), np.zeros((0, 3)))
+        self.replace_geometry(_polyline(Y, self.node_radius, self.arrows, self.arrow_size))
         self.set_visible(len(Y) > 0)
 
 
-def _polyline(Y, node_radius=0.0):
+#: cones drawn along a trajectory or path to show its direction
+DIRECTION_ARROWS = 5
+
+
+def direction_arrows(Y, count: int = DIRECTION_ARROWS) -> tuple[np.ndarray, np.ndarray]:
+    """Where the direction cones of a polyline ``Y`` (n, 3) stand and which way they point.
+
+    ``count`` positions evenly spaced along the line's length, the last at its end (the
+    first a full spacing in); each points along the line's segment there, first point to
+    last. A line of fewer than two distinct points has none.
+
+    Returns
+    -------
+    positions, directions : ndarray of shape (k, 3)
+    """
+    Y = np.asarray(Y, dtype=np.float64)
+    if len(Y) < 2:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    seg = np.diff(Y, axis=0)
+    length = np.linalg.norm(seg, axis=1)
+    keep = length > 0
+    if not keep.any():
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    seg, length, start = seg[keep], length[keep], Y[:-1][keep]
+    cum = np.r_[0.0, np.cumsum(length)]
+    at = cum[-1] * np.arange(1, count + 1) / count
+    k = np.clip(np.searchsorted(cum, at, side="left") - 1, 0, len(seg) - 1)
+    u = seg[k] / length[k, None]
+    pos = start[k] + (at - cum[k])[:, None] * u
+    return pos, u
+
+
+def _polyline(Y, node_radius=0.0, arrows=None, arrow_size=0.0):
     if len(Y) == 0:
         return pv.PolyData(np.zeros((1, 3), np.float32))
     line = pv.lines_from_points(Y) if len(Y) > 1 else pv.PolyData(Y)
@@ -312,21 +353,29 @@ def _polyline(Y, node_radius=0.0):
         nodes = pv.PolyData(Y).glyph(geom=pv.Sphere(radius=node_radius, theta_resolution=10, phi_resolution=10),
                                      scale=False, orient=False)
         line = line.merge(nodes).extract_surface(algorithm=None) if len(Y) > 1 else nodes
+    if arrows is not None and len(arrows[0]) and arrow_size > 0:
+        tips = pv.PolyData(np.asarray(arrows[0], np.float64))
+        tips["direction"] = np.asarray(arrows[1], np.float64)
+        # the cone's tip stands at the position: centred half a height back along the direction
+        cone = pv.Cone(center=(-0.5 * arrow_size, 0.0, 0.0), direction=(1.0, 0.0, 0.0), height=arrow_size,
+                       radius=0.4 * arrow_size, resolution=14)
+        line = line.merge(tips.glyph(orient="direction", scale=False, geom=cone))
     return line
 
 
 def add_trajectory(plotter, Y, color=ORIGINAL_COLOUR, *, line_width: float = 5.0, name: str = "trajectory",
-                   markers=None, marker_radius: float = 0.0) -> PolylineHandle:
+                   markers=None, marker_radius: float = 0.0, arrow_size: float = 0.0) -> PolylineHandle:
     """A trajectory through ``Y`` (n, >=3) as a tube-rendered polyline.
 
     The paper draws the original trajectory black and the generated one red
     (:data:`ORIGINAL_COLOUR`, :data:`SYNTHETIC_COLOUR`). ``markers`` (indices into
-    ``Y``, e.g. phone mid-points) are drawn as spheres of ``marker_radius``.
+    ``Y``, e.g. phone mid-points) are drawn as spheres of ``marker_radius``; with
+    ``arrow_size`` > 0 cones show which way it runs (:func:`direction_arrows`).
     """
     mesh = pv.PolyData(np.zeros((1, 3), np.float32))
     actor = plotter.add_mesh(mesh, color=color, line_width=line_width, render_lines_as_tubes=True, name=name,
                              pickable=False, reset_camera=False, render=False)
-    h = PolylineHandle(plotter, mesh, actor)
+    h = PolylineHandle(plotter, mesh, actor, arrow_size=arrow_size)
     h.update(Y)
     if markers is not None and marker_radius > 0 and len(h.points):
         idx = np.asarray(markers, dtype=int)
@@ -338,7 +387,7 @@ def add_trajectory(plotter, Y, color=ORIGINAL_COLOUR, *, line_width: float = 5.0
 
 
 def add_state_path(plotter, centroids, path=None, *, color=PATH_COLOUR, node_radius: float = 0.0,
-                   line_width: float = 5.0, name: str = "state_path") -> PolylineHandle:
+                   line_width: float = 5.0, name: str = "state_path", arrow_size: float = 0.0) -> PolylineHandle:
     """The minimum-distance state path as a polyline over state centroids.
 
     Parameters
@@ -346,19 +395,65 @@ def add_state_path(plotter, centroids, path=None, *, color=PATH_COLOUR, node_rad
     centroids : ndarray of shape (K, >=3)
     path : sequence of int or None
         States along the path (None: hidden until ``handle.update(centroids[path])``).
+    arrow_size : float
+        Cones of this length show its direction (from the selected state to the target).
     """
     C = _xyz(centroids, "centroids")
     mesh = pv.PolyData(np.zeros((1, 3), np.float32))
     actor = plotter.add_mesh(mesh, color=color, line_width=line_width, render_lines_as_tubes=True, name=name,
                              pickable=False, reset_camera=False, render=False)
-    h = PolylineHandle(plotter, mesh, actor, node_radius=node_radius)
+    h = PolylineHandle(plotter, mesh, actor, node_radius=node_radius, arrow_size=arrow_size)
     h.update(C[np.asarray(path, dtype=int)] if path is not None else None)
     return h
 
 
-def add_cluster_ellipsoids(plotter, vertices, faces, color, *, opacity: float = 0.35,
-                           name: str = "ellipsoid") -> Handle:
-    """A phone cluster's 2-s.d. ellipsoid from ``(vertices (M, 3), faces (F, 3))``."""
+class EllipsoidHandle(Handle):
+    """A cluster's ellipsoid: a translucent fill (``actor``) and an opaque outline (``outline``, its
+    silhouette from the current camera, redrawn by VTK as the camera moves)."""
+
+    def __init__(self, plotter, mesh, actor, outline):
+        super().__init__(plotter, mesh, actor)
+        self.outline = outline
+
+    def set_visible(self, visible: bool) -> None:
+        self.actor.SetVisibility(bool(visible))
+        if self.outline is not None:
+            self.outline.SetVisibility(bool(visible))
+
+    def set_opacity(self, opacity: float) -> None:
+        """The fill's opacity (0: the outline alone)."""
+        self.actor.prop.opacity = float(opacity)
+        self.actor.SetVisibility(self.visible_outline and opacity > 0)
+
+    @property
+    def visible_outline(self) -> bool:
+        return self.outline is None or bool(self.outline.GetVisibility())
+
+    @property
+    def visible(self) -> bool:
+        return bool(self.actor.GetVisibility()) or (self.outline is not None and bool(self.outline.GetVisibility()))
+
+    def set_color(self, color) -> None:
+        self.actor.prop.color = color
+        if self.outline is not None:
+            self.outline.prop.color = outline_colour(color)
+
+    def remove(self) -> None:
+        super().remove()
+        if self.outline is not None:
+            self.plotter.remove_actor(self.outline, render=False)
+
+
+def outline_colour(color) -> tuple:
+    """The outline of a filled shape of ``color``: the same hue, darker (reads on white and on the fill)."""
+    return tuple(0.6 * float(c) for c in pv.Color(color).float_rgb)
+
+
+def add_cluster_ellipsoids(plotter, vertices, faces, color, *, opacity: float = 0.3, outline_width: float = 2.5,
+                           name: str = "ellipsoid") -> EllipsoidHandle:
+    """A phone cluster's 2-s.d. ellipsoid from ``(vertices (M, 3), faces (F, 3))``: a translucent fill of
+    ``opacity`` and an opaque outline of the same hue, darker (:func:`outline_colour`), so a cluster
+    reads at a glance whatever the fill's opacity (``outline_width`` 0: none)."""
     V = _xyz(vertices, "ellipsoid vertices", 4)
     Fc = np.asarray(faces, dtype=np.int64)
     if Fc.ndim != 2 or Fc.shape[1] != 3 or (Fc.size and (Fc.min() < 0 or Fc.max() >= len(V))):
@@ -368,7 +463,24 @@ def add_cluster_ellipsoids(plotter, vertices, faces, color, *, opacity: float = 
     # (the explorer renders translucency without order-independent transparency, see make_plotter)
     actor = plotter.add_mesh(mesh, color=color, opacity=opacity, smooth_shading=True, name=name, pickable=False,
                              reset_camera=False, render=False, culling="back")
-    return Handle(plotter, mesh, actor)
+    outline = None
+    if outline_width > 0:  # vtkPolyDataSilhouette follows the camera: the outline as seen, at every render
+        from vtkmodules.vtkFiltersHybrid import vtkPolyDataSilhouette
+
+        alg = vtkPolyDataSilhouette()
+        alg.SetInputData(mesh)
+        alg.SetCamera(plotter.renderer.GetActiveCamera())
+        alg.SetEnableFeatureAngle(False)
+        mapper = pv.DataSetMapper()
+        mapper.SetInputConnection(alg.GetOutputPort())
+        outline, prop = plotter.add_actor(mapper, reset_camera=False, name=f"{name}_outline", pickable=False,
+                                          render=False)
+        prop.color = outline_colour(color)
+        prop.line_width = float(outline_width)
+        outline._lipspace_silhouette = alg  # kept alive with the actor
+    h = EllipsoidHandle(plotter, mesh, actor, outline)
+    h.actor.SetVisibility(opacity > 0)
+    return h
 
 
 class MarkerHandle(Handle):

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from contextlib import contextmanager
 
-__all__ = ["blocked", "reserve_lines", "set_readout", "make_plotter", "camera_of", "set_camera", "close_plotter",
+__all__ = ["blocked", "elided_label", "make_plotter", "camera_of", "set_camera", "close_plotter",
            "connect_all", "disconnect_all",
            "RenderScheduler", "Throttle", "READOUT_INTERVAL_S", "drawing_frame"]
 
@@ -26,23 +26,47 @@ def blocked(*widgets):
             w.blockSignals(o)
 
 
-def reserve_lines(label, lines: int) -> None:
-    """Give a word-wrapped readout the height of ``lines`` lines from the start (see :func:`set_readout`)."""
-    m = label.contentsMargins()
-    label.setMinimumHeight(lines * label.fontMetrics().lineSpacing() + m.top() + m.bottom())
+def elided_label(text: str = ""):
+    """A one-line QLabel that elides its text at the right ("…") when narrow, the whole text in its tooltip.
 
-
-def set_readout(label, text: str) -> None:
-    """Show ``text`` in a word-wrapped readout next to a 3-D view, whose height never shrinks.
-
-    A readout that wrapped onto one line more or less than before resized the 3-D view beside it:
-    the view jumped under the pointer and rendered again (its whole cloud: 35 ms at 1M frames in
-    software GL) on every click and hover. The label keeps the tallest height it has needed.
+    Never wraps onto a second line under a dock's tab bar, never widens its dock, never cuts a
+    word to a fragment without saying so.
     """
-    label.setText(text)
-    need = label.heightForWidth(label.width()) if label.width() > 0 else label.sizeHint().height()
-    if need > label.minimumHeight():
-        label.setMinimumHeight(need)
+    from PySide6 import QtCore, QtWidgets
+
+    class _Elided(QtWidgets.QLabel):
+        def __init__(self, text):
+            super().__init__()
+            self._full = ""
+            self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Fixed)
+            self.setText(text)
+
+        def setText(self, text):  # noqa: N802 - Qt override
+            self._full = str(text)
+            self.setToolTip(self._full)
+            self._elide()
+            self.updateGeometry()  # a layout that gives it its size hint asks again
+
+        def text(self):  # the whole text, as set
+            return self._full
+
+        def resizeEvent(self, event):  # noqa: N802 - Qt override
+            super().resizeEvent(event)
+            self._elide()
+
+        def minimumSizeHint(self):  # noqa: N802 - Qt override
+            return QtCore.QSize(max(self.minimumWidth(), 0), super().minimumSizeHint().height())
+
+        def sizeHint(self):  # noqa: N802 - Qt override: the whole text's width, within the label's limits
+            want = self.fontMetrics().horizontalAdvance(self._full) + 8
+            return QtCore.QSize(min(max(want, self.minimumWidth()), self.maximumWidth()),
+                                super().sizeHint().height())
+
+        def _elide(self):
+            shown = self.fontMetrics().elidedText(self._full, QtCore.Qt.TextElideMode.ElideRight, max(self.width(), 1))
+            QtWidgets.QLabel.setText(self, shown)
+
+    return _Elided(text)
 
 
 def make_plotter(parent):

@@ -2,16 +2,19 @@
 
 Numbers come from :class:`engine.manifold.clusters.PhoneClusters` (built once per manifold
 and cached on the state); ticking a phone shows its 2-s.d. ellipsoid in the
-manifold view, in the phone's colour. A corpus without phone labels shows the
-clusters of its four kinematic landmarks (aperture maxima, minima, peak opening and
-closing velocities), named as landmarks: the first column is "Landmark".
+manifold view. Each row's swatch is its label's colour in the session palette
+(``state.palette``): the colour of its ellipsoid, of its points in phone colouring, of its
+legend row and of its box in the timeline. "Fill" sets how opaque the ellipsoids' fill is
+(their outline stays). A corpus without phone labels shows the clusters of its four
+kinematic landmarks (aperture maxima, minima, peak opening and closing velocities), named
+as landmarks: the first column is "Landmark".
 """
 from __future__ import annotations
 
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.views._common import blocked, connect_all, disconnect_all
+from app.views._common import blocked, connect_all, disconnect_all, elided_label
 
 __all__ = ["ClustersPanel", "COLUMNS"]
 
@@ -45,20 +48,31 @@ class ClustersPanel(QtWidgets.QWidget):
         self.state = state
         self.rows: list[dict] = []
         self.kind = "phones"  # or "kinematic": what the rows are clusters of
+        self._palette: dict = {}
         self.table = QtWidgets.QTableWidget(0, len(COLUMNS))
         self.table.setHorizontalHeaderLabels([h for _k, h, _t in COLUMNS])
         for j, (_k, _h, tip) in enumerate(COLUMNS):
             self.table.horizontalHeaderItem(j).setToolTip(tip)
         self.table.verticalHeader().setVisible(False)
+        # rows as tall as their text needs: a laptop's screen shows five of them and more
+        self.table.verticalHeader().setDefaultSectionSize(self.table.fontMetrics().height() + 6)
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectionBehavior.SelectRows)
         self.table.setSortingEnabled(True)
         self.table.horizontalHeader().setSectionResizeMode(QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
-        self.note = QtWidgets.QLabel("")
-        self.note.setWordWrap(True)
+        # one line, elided, never wrapped under the dock's tab bar: the whole explanation is its tooltip
+        self.note = elided_label("")
         self.none_btn = QtWidgets.QPushButton("Hide all")
+        self.none_btn.setToolTip("Hide every ellipsoid")
+        self.opacity_slider = QtWidgets.QSlider(QtCore.Qt.Orientation.Horizontal)
+        self.opacity_slider.setRange(0, 100)
+        self.opacity_slider.setMaximumWidth(110)
+        self.opacity_slider.setToolTip("How opaque the ellipsoids' fill is (0: outline only); undo with Ctrl+Z")
         row = QtWidgets.QHBoxLayout()
+        row.setContentsMargins(0, 0, 0, 0)
         row.addWidget(self.note, 1)
+        row.addWidget(QtWidgets.QLabel("Fill"))
+        row.addWidget(self.opacity_slider)
         row.addWidget(self.none_btn)
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(2, 2, 2, 2)
@@ -66,9 +80,12 @@ class ClustersPanel(QtWidgets.QWidget):
         lay.addLayout(row)
         self.table.itemChanged.connect(self._on_item)
         self.none_btn.clicked.connect(lambda: state.set_visible_phones(()))
+        self.opacity_slider.valueChanged.connect(lambda v: state.set_ellipsoid_opacity(v / 100.0))
         ev = state.events
-        self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.visible_phones, self._sync_checks)]
+        self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.visible_phones, self._sync_checks),
+                             (ev.palette, lambda _p: self.rebuild()), (ev.ellipsoid_opacity, self._sync_opacity)]
         connect_all(self._connections)
+        self._sync_opacity(state.ellipsoid_opacity)
         self.rebuild()
 
     def table_rows(self) -> list[dict]:
@@ -90,11 +107,13 @@ class ClustersPanel(QtWidgets.QWidget):
                 self.rows = self.state.cluster_rows()
                 self.kind = self.state.cluster_kind
                 noun = self.NAMES[self.kind][1]
-                what = ("No phone labels: clusters of the kinematic landmarks of the lip aperture (open = maxima, "
+                what = ("No phone labels: kinematic landmarks of the lip aperture (open = maxima, "
                         "closed = minima, opening / closing = peak velocities). " if self.kind == "kinematic" else "")
-                self.note.setText(f"{what}Tick a {noun} to show its 2-s.d. ellipsoid in the manifold view. "
-                                  "Separations are Bhattacharyya distances (0 = identical clusters) in Y (with "
-                                  f"dynamics) and X (shape only), from the {noun}'s nearest neighbour in Y.")
+                self.note.setText(f"{what}Tick a {noun} to show its 2-s.d. ellipsoid in the manifold view, in "
+                                  f"the {noun}'s colour (the swatch); View › Frame selection (F) brings the ticked "
+                                  "ellipsoids into view. Separations are Bhattacharyya distances (0 = identical "
+                                  "clusters) in Y (with dynamics) and X (shape only), from the "
+                                  f"{noun}'s nearest neighbour in Y.")
             except (ImportError, ValueError) as exc:
                 self.note.setText(f"phone clusters unavailable: {exc}")
         header = self.NAMES[self.kind][0]
@@ -102,9 +121,8 @@ class ClustersPanel(QtWidgets.QWidget):
         item.setText(header)
         item.setToolTip(COLUMNS[0][2] if self.kind == "phones" else
                         "kinematic landmark of the lip aperture: open, closed, opening, closing")
-        from app.models.colouring import phone_palette
-
-        palette = phone_palette(self.state) if m is not None else {}
+        pal, kind = self.state.palette, ("landmark" if self.kind == "kinematic" else "phone")
+        palette = pal.colours(kind, [r["phone"] for r in self.rows]) if (m is not None and pal is not None) else {}
         self._palette = palette
         with blocked(self.table):
             self.table.setSortingEnabled(False)
@@ -134,19 +152,22 @@ class ClustersPanel(QtWidgets.QWidget):
         self.state.set_phone_visible(item.text(), item.checkState() == QtCore.Qt.CheckState.Checked)
 
     def _sync_checks(self, visible):
-        """Tick the visible phones; their swatch shows the ellipsoid colour, the others the phone colour."""
-        from app.models.colouring import ellipsoid_colors
-
-        ell = ellipsoid_colors(visible)
+        """Tick the visible phones (each swatch keeps its label's one colour, ticked or not)."""
         with blocked(self.table):
             for i in range(self.table.rowCount()):
                 it = self.table.item(i, 0)
                 if it is not None:
-                    on = it.text() in visible
-                    check = QtCore.Qt.CheckState.Checked if on else QtCore.Qt.CheckState.Unchecked
+                    check = QtCore.Qt.CheckState.Checked if it.text() in visible else QtCore.Qt.CheckState.Unchecked
                     if it.checkState() != check:
                         it.setCheckState(check)
-                    self._set_swatch(it, ell[it.text()] if on else getattr(self, "_palette", {}).get(it.text()))
+
+    def _sync_opacity(self, opacity):
+        with blocked(self.opacity_slider):
+            self.opacity_slider.setValue(int(round(100 * float(opacity))))
+
+    def swatch(self, label):
+        """The colour (r, g, b) the row of ``label`` shows (None: no such row)."""
+        return self._palette.get(label)
 
     @staticmethod
     def _set_swatch(item, rgb) -> None:

@@ -14,11 +14,22 @@ __all__ = ["FlowLayout"]
 class FlowLayout(QtWidgets.QLayout):
     """Rows of widgets, left to right, wrapping at the layout's width (height for width)."""
 
-    def __init__(self, parent=None, *, spacing: int = 4, margins=(4, 2, 4, 2)):
+    def __init__(self, parent=None, *, spacing: int = 4, margins=(4, 2, 4, 2), row_spacing: int | None = None):
         super().__init__(parent)
         self._items: list = []
         self.setSpacing(spacing)
+        self.row_spacing = spacing if row_spacing is None else int(row_spacing)  # between rows
         self.setContentsMargins(*margins)
+
+    def add_group(self, widgets) -> None:
+        """Add ``widgets`` side by side as one item: a group that wraps as a whole, never split."""
+        box = QtWidgets.QWidget()
+        row = QtWidgets.QHBoxLayout(box)
+        row.setContentsMargins(0, 0, 0, 0)
+        row.setSpacing(4)
+        for w in widgets:
+            row.addWidget(w)
+        self.addWidget(box)
 
     # QLayout's item interface
     def addItem(self, item):  # noqa: N802 (Qt)
@@ -67,7 +78,7 @@ class FlowLayout(QtWidgets.QLayout):
                 continue
             hint = item.sizeHint()
             if x > area.x() and x + hint.width() > area.right() + 1:
-                x, y, row_h = area.x(), y + row_h + gap, 0
+                x, y, row_h = area.x(), y + row_h + self.row_spacing, 0
             if move:
                 item.setGeometry(QtCore.QRect(QtCore.QPoint(x, y), hint))
             x += hint.width() + gap

@@ -28,7 +28,7 @@ import numpy as np
 from PySide6 import QtCore, QtWidgets
 
 from app import scene
-from app.audio import AudioPlayer, resolve_audio_path
+from app.audio import AudioPlayer
 from app.models.playback import PlaybackClock
 from app.models.trajectories import lip_frames
 from app.views._common import (
@@ -292,14 +292,12 @@ class LipView(QtWidgets.QWidget):
         return max(0.0, self.clock_source() - t)
 
     def _start_audio(self):
-        s = self.state
-        if s.original is None or s.utterance is None:
-            return
-        c = s.manifold.corpus_
-        u = c.utterance(s.utterance)
-        path = resolve_audio_path(u.audio, s.source.get("path"))
-        if path is not None:
-            self.audio.play(path, start_s=(s.playback or 0) / c.rate, rate=self.speed)
+        from app.files.sound import playback_audio
+
+        found = playback_audio(self.state)  # the utterance's sound, or the synthesised text spoken
+        if found is not None:
+            path, rate = found
+            self.audio.play(path, start_s=(self.state.playback or 0) / rate, rate=self.speed)
 
     def _tick(self):
         """Show the frame due now (dropping those whose time has passed), then wait for the next one.

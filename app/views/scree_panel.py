@@ -7,7 +7,7 @@ from matplotlib.figure import Figure
 from PySide6 import QtWidgets
 
 from app.models.scree import scree_series
-from app.views._common import blocked, connect_all, disconnect_all
+from app.views._common import blocked, connect_all, disconnect_all, elided_label
 
 __all__ = ["ScreePanel"]
 
@@ -28,7 +28,7 @@ class ScreePanel(QtWidgets.QWidget):
         self.show_box.setToolTip("Show the component as the mean lip shape −2 s.d. and +2 s.d. in the lip view")
         self.spin = QtWidgets.QSpinBox()
         self.spin.setMinimum(1)
-        self.readout = QtWidgets.QLabel("")
+        self.readout = elided_label("")  # one line, never squeezing the box and the spin beside it
         row = QtWidgets.QHBoxLayout()
         row.addWidget(self.show_box)
         row.addWidget(self.spin)

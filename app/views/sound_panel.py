@@ -1,6 +1,8 @@
 """The sound under the trajectory editor's timeline: waveform and a Praat-style wide-band spectrogram.
 
-Drawing only. The arrays come from :mod:`engine.phonetics.spectrogram` (computed in a worker
+Drawing, and the timeline's time input: a click sets the cursor, a drag selects a stretch,
+Praat's keys work here as in the timeline (:class:`app.views.phone_timeline.TimeKeys`).
+The arrays come from :mod:`engine.phonetics.spectrogram` (computed in a worker
 thread by the editor, :mod:`app.views.trajectory_editor`); this widget maps time to
 pixels exactly as :class:`app.views.phone_timeline.PhoneTimeline` maps frames (same
 margin, same width: the editor sizes both), so phone boundaries, targets and the
@@ -16,12 +18,12 @@ import time
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.views.phone_timeline import PhoneTimeline
+from app.views.phone_timeline import PhoneTimeline, TimeKeys
 
 __all__ = ["SoundPanel"]
 
 
-class SoundPanel(QtWidgets.QWidget):
+class SoundPanel(TimeKeys, QtWidgets.QWidget):
     """Waveform over spectrogram, time-aligned with a :class:`PhoneTimeline` of the same width.
 
     Attributes
@@ -33,11 +35,19 @@ class SoundPanel(QtWidgets.QWidget):
         benchmarks.
     """
 
+    pressed = QtCore.Signal(float, float)
+    dragged = QtCore.Signal(float, float)
+    released = QtCore.Signal(float, float)
+    keyCommand = QtCore.Signal(str)
+    playToggled = QtCore.Signal()
+
     MARGIN = PhoneTimeline.MARGIN
     WAVE_HEIGHT = 44
     SPEC_HEIGHT = 112
     GAP = 2
     HEIGHT = WAVE_HEIGHT + GAP + SPEC_HEIGHT
+    #: waveform and spectrogram heights on a small screen (:meth:`set_compact`)
+    COMPACT = (24, 60)
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -45,6 +55,8 @@ class SoundPanel(QtWidgets.QWidget):
         self.message = ""
         self.n_frames, self.rate, self.phones = 1, 60.0, ()
         self.cursor = None
+        self.time_selection = None  # (first, last) frame of the selected stretch, or None
+        self._pressing = False
         self.shown_at = None
         self._image = None
         self._grey = None
@@ -52,6 +64,7 @@ class SoundPanel(QtWidgets.QWidget):
         self.setFixedHeight(self.HEIGHT)
         self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Fixed, QtWidgets.QSizePolicy.Policy.Fixed)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_OpaquePaintEvent)
+        self.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
 
     # ------------------------------------------------------------------ data
     def set_span(self, n_frames: int, rate: float, phones=()) -> None:
@@ -90,6 +103,44 @@ class SoundPanel(QtWidgets.QWidget):
             if f is not None:
                 x = self.frame_x(f)
                 self.update(QtCore.QRect(int(math.floor(x)) - 2, 0, 5, self.height()))
+
+    def set_compact(self, on: bool) -> None:
+        """A lower waveform and spectrogram (a laptop's screen), or the full ones."""
+        self.WAVE_HEIGHT, self.SPEC_HEIGHT = self.COMPACT if on else (SoundPanel.WAVE_HEIGHT, SoundPanel.SPEC_HEIGHT)
+        self.HEIGHT = self.WAVE_HEIGHT + self.GAP + self.SPEC_HEIGHT
+        self.setFixedHeight(self.HEIGHT)
+        self.update()
+
+    def set_time_selection(self, span) -> None:
+        """Shade the selected stretch ``(first, last)`` frame (None: none)."""
+        self.time_selection = None if span is None else (min(span), max(span))
+        self.update()
+
+    # ------------------------------------------------------------------ input
+    def frame_at(self, x: float) -> float:
+        return self.x_time(x) * self.rate
+
+    def mousePressEvent(self, ev):
+        self.setFocus(QtCore.Qt.FocusReason.MouseFocusReason)
+        if ev.button() == QtCore.Qt.MouseButton.LeftButton:
+            self._pressing = True
+            self.pressed.emit(self.frame_at(ev.position().x()), ev.position().x())
+
+    def mouseMoveEvent(self, ev):
+        if self._pressing:
+            self.dragged.emit(self.frame_at(ev.position().x()), ev.position().x())
+
+    def mouseReleaseEvent(self, ev):
+        if self._pressing:
+            self._pressing = False
+            self.released.emit(self.frame_at(ev.position().x()), ev.position().x())
+
+    def keyPressEvent(self, ev):
+        if ev.key() == QtCore.Qt.Key.Key_Space:
+            self.playToggled.emit()
+            ev.accept()
+            return
+        super().keyPressEvent(ev)
 
     # ------------------------------------------------------------------ geometry
     def frame_x(self, frame: float) -> float:
@@ -135,6 +186,10 @@ class SoundPanel(QtWidgets.QWidget):
             top = self.WAVE_HEIGHT + self.GAP
             qp.drawText(QtCore.QPointF(self.MARGIN + 2, top + 10), f"{d.spectrogram.max_frequency:.0f} Hz")
             qp.drawText(QtCore.QPointF(self.MARGIN + 2, self.height() - 3), "0 Hz")
+        if self.time_selection is not None:
+            a, b = self.time_selection
+            qp.fillRect(QtCore.QRectF(self.frame_x(a), 0, max(self.frame_x(b) - self.frame_x(a), 1.0), self.height()),
+                        QtGui.QColor(255, 150, 170, 70))
         if self.cursor is not None:
             qp.setPen(QtGui.QPen(QtGui.QColor("black"), 2))
             x = self.frame_x(self.cursor)

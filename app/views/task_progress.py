@@ -1,11 +1,13 @@
-"""Progress of a background task in the status bar: stage, count, elapsed time, Cancel.
+"""Progress of a background task in the status bar: stage, count, elapsed time, time left, Cancel.
 
 Loading a corpus or the synthetic talker runs in a worker thread
 (:mod:`app.workers`); this widget shows its progress without a modal dialog, so the
 window stays usable (menus, File › Open, the views) while it runs. Stages that
 report no total (``total <= 0``), and stages whose count has reached its total while
 the work goes on, show a busy bar rather than a bar frozen at 100 %; the label
-always shows the seconds spent in the current stage, so a long stage visibly lives.
+shows the seconds spent in the current stage, refreshed twice a second so a long stage
+visibly lives, and the time left (:class:`app.models.task_status.ProgressEstimate`: the
+stage's own pace, and over the known stages of opening a talker or a recording).
 """
 from __future__ import annotations
 
@@ -13,7 +15,7 @@ import time
 
 from PySide6 import QtCore, QtWidgets
 
-from app.models.task_status import stage_text
+from app.models.task_status import ProgressEstimate
 
 __all__ = ["TaskProgress", "attach_status_progress"]
 
@@ -58,6 +60,8 @@ class TaskProgress(QtWidgets.QWidget):
         self.runner = runner
         self.stages = [(title or "starting", time.perf_counter())]
         self._last = (title or "starting", 0, 0)
+        self.estimate = ProgressEstimate()
+        self.estimate.report(title or "starting", 0, 0)
         runner.worker.progress.connect(self._on_progress)
         for sig in (runner.finished, runner.failed, runner.cancelled):
             sig.connect(self._on_end)
@@ -78,6 +82,7 @@ class TaskProgress(QtWidgets.QWidget):
         if stage != self.stages[-1][0]:
             self.stages.append((stage, time.perf_counter()))
         self._last = (stage, int(done), int(total))
+        self.estimate.report(stage, done, total)
         self._refresh()
 
     def _refresh(self) -> None:
@@ -89,7 +94,7 @@ class TaskProgress(QtWidgets.QWidget):
             self.bar.setValue(done)
         else:  # no total, or the count is complete while the stage still works: busy, not 100 %
             self.bar.setRange(0, 0)
-        self.label.setText(stage_text(stage, done, total, time.perf_counter() - self.stages[-1][1]))
+        self.label.setText(self.estimate.text())
 
     def _on_end(self, *_args) -> None:
         self._disconnect()

@@ -8,11 +8,14 @@ the playback cursor, or after the last target. Dragging a target marker moves it
 frame, inside its phone interval (:mod:`app.models.target_editing`); "Remove target" (Delete)
 and "Reset targets" (back to the targets as loaded) complete the edits, each one a
 command on :attr:`TrajectoryEditor.undo_stack` (the window's Edit > Undo / Redo).
-The timeline zooms (wheel, + / -, Fit), shows time in ms, and with the keyboard focus
-plays (Space) and steps (Left / Right) through :class:`app.models.state.AppState`'s playback.
-Under it, where the utterance has audio, its waveform and wide-band spectrogram
+The timeline works as Praat's editors do (:mod:`app.views.editor.timeline_control`): a click
+sets the cursor and selects the state under it, a drag selects, Tab plays the selection,
+Shift+Tab from the cursor, Space plays or pauses, Ctrl+I / O / N / A zoom; phone and word
+boundaries drag, each edit undoable, and "Save TextGrid…" writes the tiers. Under the tiers,
+where the utterance has audio, its waveform and wide-band spectrogram
 (:mod:`app.views.sound_panel`, computed in a worker by :mod:`app.views.sound_track`)
-scroll and zoom with it and carry the same playback cursor; "Sound" hides them.
+scroll and zoom with it and carry the same cursor; "Sound" hides them, and the editor gives
+their room back.
 The synthetic trajectory is drawn red in the manifold view and played beside the
 original in the lip view; for an utterance the error against the captured original
 is shown, and every synthesis warning is listed under the timeline.
@@ -23,42 +26,49 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.models.target_editing import remove_target
 from app.models.trajectories import METHOD_LABELS, synthesize_targets, trajectory_error
-from app.views._common import READOUT_INTERVAL_S, Throttle, connect_all, disconnect_all
-from app.views.phone_timeline import PhoneTimeline
-from app.views.sound_panel import SoundPanel
-from app.views.sound_track import SoundTrack
+from app.views._common import READOUT_INTERVAL_S, Throttle, connect_all, disconnect_all, elided_label
+from app.views.editor.commands import TargetsEdit
+from app.views.editor.timeline_control import ZOOM_RANGE, TimelineControl
+from app.views.flow_layout import FlowLayout
 
 __all__ = ["TrajectoryEditor", "TargetsEdit", "ZOOM_RANGE", "ADD_STATE_SHORTCUT", "REMOVE_SHORTCUT"]
 
 SOURCES = (("utterance", "Utterance"), ("text", "Text"), ("phones", "Phones + durations"), ("textgrid", "TextGrid"))
 ADD_STATE_SHORTCUT = "Ctrl+T"
 REMOVE_SHORTCUT = "Delete"
-#: timeline zoom: times the width that shows the whole trajectory
-ZOOM_RANGE = (1.0, 64.0)
 
 
-class TargetsEdit(QtGui.QUndoCommand):
-    """One edit of the key targets (move, add, remove, reset) on the editor's undo stack."""
-
-    def __init__(self, editor, before, after, text: str):
-        super().__init__(text)
-        self.editor, self.before, self.after = editor, before, after
-
-    def redo(self):
-        self.editor._apply_targets(self.after, f"{self.text()}: press Synthesise")
-
-    def undo(self):
-        self.editor._apply_targets(self.before, f"undone: {self.text()}")
+def _words_up_to(text: str, n: int) -> str:
+    """``text``'s whole words up to ``n`` characters, "…" where it goes on (never a word cut)."""
+    text = " ".join(str(text).split())
+    if len(text) <= n:
+        return text
+    cut = text[:n + 1].rsplit(" ", 1)[0] if " " in text[:n + 1] else text[:n]
+    return cut.rstrip(" ,.;:") + "…"
 
 
 # ============================================================================ the editor
-class TrajectoryEditor(QtWidgets.QWidget):
-    """Build targets, synthesise, play and compare; bound to an :class:`app.models.state.AppState`."""
+class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
+    """Build targets, synthesise, play and compare; bound to an :class:`app.models.state.AppState`.
+
+    Signals
+    -------
+    heightWanted(int)
+        The height the editor needs changed (the sound shown or hidden): the window sizes its dock.
+    notice(str)
+        Something the window says once in its status bar (why a synthesis of text is silent).
+    """
+
+    heightWanted = QtCore.Signal(int)
+    #: a note for the window's status bar (a synthesis that stays silent, and why)
+    notice = QtCore.Signal(str)
 
     def __init__(self, state, parent=None):
         super().__init__(parent)
         self.state = state
         self.targets = None
+        self.words = ()  # the word tier shown over the phones (() where the input has none)
+        self.loaded_words = ()  # the word tier as loaded: what Reset targets goes back to
         self.loaded_targets = None  # as loaded: what Reset targets goes back to
         self.undo_stack = QtGui.QUndoStack(self)
         self.zoom = 1.0
@@ -70,7 +80,9 @@ class TrajectoryEditor(QtWidgets.QWidget):
         for key, label in SOURCES:
             self.source_box.addItem(label, key)
         self.utt_box = QtWidgets.QComboBox()
-        self.utt_box.setMinimumContentsLength(10)
+        # whole names ("s0001 — Ranch ..."), not "s0001 — Ranc": as wide as the longest, up to 48 characters
+        self.utt_box.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToContents)
+        self.utt_box.setMinimumContentsLength(16)
         self.text_edit = QtWidgets.QLineEdit()
         self.text_edit.setPlaceholderText("type English text, e.g. 'Herb's birthday'")
         self.browse_btn = QtWidgets.QPushButton("Open…")
@@ -99,56 +111,46 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.fit_btn.setText("Fit")
         self.fit_btn.setToolTip("Show the whole trajectory")
         self.method_box = QtWidgets.QComboBox()
+        self.method_box.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToContents)
         self.synth_btn = QtWidgets.QPushButton("Synthesise")
         self.play_btn = QtWidgets.QPushButton("Play")
-        self.readout = QtWidgets.QLabel("")
-        self.readout.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
-        self.readout.setWordWrap(True)
-        # the phone tiers and the sound under them share one scrolled strip: one width, one scroll bar
-        self.tracks = QtWidgets.QWidget()
-        self.timeline = PhoneTimeline(self.tracks)
-        self.sound = SoundPanel(self.tracks)
-        self.sound.move(0, PhoneTimeline.HEIGHT)
-        self.sound.hide()
-        self.sound_track = SoundTrack(self.sound, state, parent=self)
-        self.sound_box = QtWidgets.QCheckBox("Sound")
-        self.sound_box.setChecked(True)
-        self.sound_box.setToolTip("Show the utterance's waveform and wide-band spectrogram under the phones "
-                                  "(where it has audio)")
-        self._min_height_without_sound = None
-        self.scroll = QtWidgets.QScrollArea()
-        self.scroll.setWidget(self.tracks)
-        self.scroll.setWidgetResizable(False)
-        self.scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)
-        self.scroll.setVerticalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
-        self._layout_tracks()
-        self.scroll.setMinimumWidth(200)
-        self.scroll.viewport().installEventFilter(self)
+        self.save_tiers_btn = QtWidgets.QPushButton("Save TextGrid…")
+        self.save_tiers_btn.setToolTip("Write the tiers as they are now (phones, words, the targets) as a Praat "
+                                       "TextGrid")
+        # buttons never take the keyboard focus by a click: Space after Synthesise plays, never synthesises again
+        for b in (self.browse_btn, self.load_btn, self.add_state_btn, self.remove_btn, self.reset_btn,
+                  self.synth_btn, self.play_btn, self.save_tiers_btn, self.zoom_in_btn, self.zoom_out_btn,
+                  self.fit_btn):
+            b.setFocusPolicy(QtCore.Qt.FocusPolicy.TabFocus)
+        # one line, elided (the whole text in its tooltip): a long message never grows the editor
+        self.readout = elided_label("")
+        self.readout.setMinimumWidth(200)
+        self.readout.setMaximumWidth(560)
+        self.readout.setSizePolicy(QtWidgets.QSizePolicy.Policy.Preferred, QtWidgets.QSizePolicy.Policy.Fixed)
+        # the tiers and the sound under them share one scrolled strip: one width, one scroll bar
+        self._make_tracks(state)
         self.warnings_list = QtWidgets.QListWidget()
         self.warnings_list.setToolTip("Every warning of the last synthesis")
         self.warnings_list.setMaximumHeight(72)
         self.warnings_list.setVisible(False)
 
-        row1 = QtWidgets.QHBoxLayout()
-        for w in (QtWidgets.QLabel("Input:"), self.source_box, self.utt_box, self.text_edit, self.browse_btn,
-                  self.oracle_box, self.load_btn, self.add_state_btn):
-            row1.addWidget(w)
-        row1.setStretchFactor(self.text_edit, 1)
-        row1.addStretch(0)
-        row2 = QtWidgets.QHBoxLayout()
-        for w in (QtWidgets.QLabel("Method:"), self.method_box, self.synth_btn, self.play_btn, self.remove_btn,
-                  self.reset_btn, QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn, self.fit_btn,
-                  self.sound_box):
-            row2.addWidget(w)
-        row2.addWidget(self.readout, 1)
+        self.text_edit.setMinimumWidth(260)
+        # the controls in groups that wrap to a new row (never clipped): two rows at 1280 px
+        bar = FlowLayout(spacing=10, margins=(0, 0, 0, 0), row_spacing=3)
+        for group in ((QtWidgets.QLabel("Input:"), self.source_box, self.utt_box, self.text_edit, self.browse_btn,
+                       self.oracle_box, self.load_btn, self.add_state_btn),
+                      (QtWidgets.QLabel("Method:"), self.method_box, self.synth_btn, self.play_btn),
+                      (self.remove_btn, self.reset_btn, self.save_tiers_btn),
+                      (QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn, self.fit_btn, self.sound_box),
+                      (self.readout,)):
+            bar.add_group(group)
         lay = QtWidgets.QVBoxLayout(self)
-        lay.setContentsMargins(4, 4, 4, 4)
-        lay.setSpacing(3)
-        lay.addLayout(row1)
+        lay.setContentsMargins(4, 2, 4, 2)
+        lay.setSpacing(2)
+        lay.addLayout(bar)
         lay.addWidget(self.scroll)
         lay.addWidget(self.warnings_list)
-        lay.addLayout(row2)
-        lay.addStretch(1)
+        self._layout_tracks()
 
         self.source_box.currentIndexChanged.connect(lambda _i: self._sync_inputs())
         self.utt_box.activated.connect(lambda _i: self.load())
@@ -161,24 +163,23 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.play_btn.clicked.connect(lambda: self.state.set_playing(True))
         self.remove_btn.clicked.connect(self.remove_selected)
         self.reset_btn.clicked.connect(self.reset_targets)
+        self.save_tiers_btn.clicked.connect(self.save_textgrid_dialog)
         self.zoom_in_btn.clicked.connect(lambda: self.zoom_by(1.25))
         self.zoom_out_btn.clicked.connect(lambda: self.zoom_by(0.8))
         self.fit_btn.clicked.connect(lambda: self.set_zoom(1.0))
         self.timeline.targetsChanged.connect(self._on_dragged)
         self.timeline.selectionChanged.connect(lambda _i: self._sync_buttons())
         self.timeline.deleteRequested.connect(self.remove_selected)
-        self.timeline.playToggled.connect(self.toggle_playing)
         self.timeline.stepRequested.connect(self.step)
         self.timeline.zoomRequested.connect(lambda f, x: self.zoom_by(f, x))
-        self.sound_box.toggled.connect(lambda _on: self._layout_tracks())
-        self.sound_track.changed.connect(lambda _has: self._layout_tracks())
         ev = state.events
         # the cursor follows playback a few times a second (each repaint composes the whole window)
         self._cursor_readout = Throttle(self._set_cursor, READOUT_INTERVAL_S, parent=self)
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.playback, self._cursor_readout),
                              (ev.utterance, self._on_utterance),
                              (ev.trajectory, lambda _o, syn: self._show_warnings(syn)),
-                             (ev.state, lambda st: self.add_state_btn.setEnabled(st is not None))]
+                             (ev.state, lambda st: self.add_state_btn.setEnabled(st is not None)),
+                             (ev.palette, lambda _p: self.timeline.update())]
         connect_all(self._connections)
         self.rebuild()  # fills the methods once a manifold is there
 
@@ -189,7 +190,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
             from engine.synthesis.methods import METHODS
         except ImportError as exc:  # synthesis unavailable: say so, keep the rest working
             BEST, METHODS = None, ()
-            self.readout.setText(f"synthesis unavailable: {exc}")
+            self.say(f"synthesis unavailable: {exc}")
         for m in ((BEST,) if BEST else ()) + tuple(METHODS):
             self.method_box.addItem(METHOD_LABELS.get(m, m), m)
         if BEST:
@@ -237,14 +238,18 @@ class TrajectoryEditor(QtWidgets.QWidget):
         self.targets = None
         self.loaded_targets = None
         self.undo_stack.clear()
-        self.timeline.set_targets(None)
+        self.words, self.loaded_words = (), ()
+        self.timeline.set_targets(None, ())
+        self.set_time_selection(None)
         self.sound_track.clear_cache()
         self._sync_buttons()
         self.utt_box.blockSignals(True)
         self.utt_box.clear()
         if m is not None:
             for u in m.corpus_.utterances:
-                self.utt_box.addItem(f"{u.id}" + (f" — {u.text[:40]}" if u.text else ""), u.id)
+                self.utt_box.addItem(f"{u.id}" + (f" — {_words_up_to(u.text, 30)}" if u.text else ""), u.id)
+                self.utt_box.setItemData(self.utt_box.count() - 1, f"{u.id}: {u.text}",
+                                         QtCore.Qt.ItemDataRole.ToolTipRole)
         self.utt_box.blockSignals(False)
         self.add_state_btn.setEnabled(m is not None and self.state.state is not None)
         self._sync_inputs()
@@ -275,11 +280,13 @@ class TrajectoryEditor(QtWidgets.QWidget):
             return False
         s, text = self.source, self.text_edit.text().strip()
         try:
+            words = ()
             if s == "utterance":
                 uid = self.utt_box.currentData()
                 if uid is None:
                     raise ValueError("the corpus has no utterances")
                 tg = T.targets_from_utterance(m, uid, on_collision="merge")
+                words = tuple(m.corpus_.utterance(uid).words)
                 if not self.oracle_box.isChecked():
                     tg = tg.phones_only()
                 if self.state.utterance != uid:
@@ -287,7 +294,10 @@ class TrajectoryEditor(QtWidgets.QWidget):
                 else:
                     self.state.set_trajectories(synthetic=None)
             elif s == "text":
+                from app.models.tier_editing import text_words
+
                 tg = T.targets_from_text(m, text, on_collision="merge")
+                words = text_words(text, tg.phones)
             elif s == "phones":
                 tg = T.targets_from_phones(m, text, on_collision="merge")
             else:
@@ -299,7 +309,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
         except (ValueError, KeyError, OSError) as exc:
             return self._show_error(exc)
         return self._set_targets(tg, f"{len(tg.targets)} targets over {tg.n_frames} frames "
-                                     f"({tg.n_frames / tg.rate:.2f} s) from {tg.source}")
+                                     f"({tg.n_frames / tg.rate:.2f} s) from {tg.source}", words=words)
 
     def set_text(self, text: str, source: str = "text") -> bool:
         """Type ``text`` into the chosen input kind and load it (used by tests and scripts)."""
@@ -315,39 +325,47 @@ class TrajectoryEditor(QtWidgets.QWidget):
         except ValueError as exc:
             return self._show_error(exc)
         self.edit_targets(tg, f"add state {self.state.state}")
-        self.readout.setText(f"state {self.state.state} added as a target: {len(tg.targets)} targets over "
+        self.say(f"state {self.state.state} added as a target: {len(tg.targets)} targets over "
                              f"{tg.n_frames} frames; press Synthesise")
         return True
 
-    def _show_error(self, exc) -> bool:
-        import html
+    def say(self, text: str, *, error: bool = False) -> None:
+        """Show ``text`` in the readout line (in red for an error; elided, whole in its tooltip)."""
+        self.readout.setStyleSheet("color: #b00" if error else "")
+        self.readout.setText(text)
 
+    def _show_error(self, exc) -> bool:
         from app.user_messages import user_message
 
         text = user_message(exc, doing="make targets") if isinstance(exc, BaseException) else str(exc)
-        self.readout.setText(f"<span style='color:#b00'>{html.escape(text)}</span>")
+        self.say(text, error=True)
         return False
 
-    def _set_targets(self, targets, message: str) -> bool:
+    def _set_targets(self, targets, message: str, words=()) -> bool:
         """New targets from an input (Load): the baseline of Reset; the undo history starts again."""
         self.undo_stack.clear()
         self.loaded_targets = targets
+        self.loaded_words = tuple(words)
         self.timeline.select(None)  # a chosen target of other targets means nothing here
-        self._apply_targets(targets, message)
+        self.set_time_selection(None)
+        self._apply_targets(targets, message, words=tuple(words))
         return True
 
-    def restore_targets(self, targets, message: str = "targets restored from the session") -> None:
+    def restore_targets(self, targets, message: str = "targets restored from the session", words=()) -> None:
         """Targets from a session file (as edited then): shown, with a fresh undo history."""
-        self._set_targets(targets, message)
+        self._set_targets(targets, message, words=words)
 
-    def _apply_targets(self, targets, message: str) -> None:
+    def _apply_targets(self, targets, message: str, words=None) -> None:
+        """Show ``targets`` (and the word tier ``words``; None keeps the one shown)."""
         self.targets = targets
-        self.timeline.set_targets(targets)
+        if words is not None:
+            self.words = tuple(words)
+        self.timeline.set_targets(targets, self.words)
         if targets is not None:
             self.sound.set_span(targets.n_frames, targets.rate, targets.phones)
         self.sound_track.show(None if targets is None else targets.utterance)
         self._layout_tracks()
-        self.readout.setText(message)
+        self.say(message)
         self._sync_buttons()
 
     def edit_targets(self, targets, text: str) -> None:
@@ -357,7 +375,9 @@ class TrajectoryEditor(QtWidgets.QWidget):
     def _sync_buttons(self) -> None:
         t = self.targets
         self.remove_btn.setEnabled(t is not None and self.timeline.selected is not None and len(t.targets) > 1)
-        self.reset_btn.setEnabled(self.loaded_targets is not None and t != self.loaded_targets)
+        self.reset_btn.setEnabled(self.loaded_targets is not None and (
+            t != self.loaded_targets or self.words != self.loaded_words))
+        self.save_tiers_btn.setEnabled(t is not None)
 
     def _on_dragged(self, before, after):
         i = self.timeline.selected
@@ -379,80 +399,13 @@ class TrajectoryEditor(QtWidgets.QWidget):
         return True
 
     def reset_targets(self) -> bool:
-        """Back to the targets as loaded (an undoable edit)."""
-        if self.loaded_targets is None or self.targets == self.loaded_targets:
+        """Back to the targets and tiers as loaded (an undoable edit)."""
+        loaded_words = self.loaded_words
+        if self.loaded_targets is None or (self.targets == self.loaded_targets and self.words == loaded_words):
             return False
-        self.edit_targets(self.loaded_targets, "reset targets")
+        self.undo_stack.push(TargetsEdit(self, self.targets, self.loaded_targets, "reset targets", self.words,
+                                         loaded_words))
         return True
-
-    # ------------------------------------------------------------------ timeline zoom and keys
-    def set_zoom(self, zoom: float, anchor_x: float | None = None) -> float:
-        """Show the timeline ``zoom`` times as wide as the view (clamped to :data:`ZOOM_RANGE`).
-
-        ``anchor_x`` (a pixel of the timeline) stays under the same time.
-        """
-        lo, hi = ZOOM_RANGE
-        tl, bar = self.timeline, self.scroll.horizontalScrollBar()
-        anchor = None
-        if anchor_x is not None:
-            anchor = (tl.frame_at(anchor_x), anchor_x - bar.value())  # (time, pixel on screen)
-        self.zoom = float(min(max(zoom, lo), hi))
-        view_w = self.scroll.viewport().width()
-        width = max(int(round(view_w * self.zoom)), 1)
-        tl.resize(width, PhoneTimeline.HEIGHT)
-        self.sound.resize(width, SoundPanel.HEIGHT)
-        self.tracks.resize(width, self._tracks_height())
-        if anchor is not None and tl.targets is not None:
-            bar.setValue(int(round(tl._x(anchor[0]) - anchor[1])))
-        return self.zoom
-
-    def _tracks_height(self) -> int:
-        return PhoneTimeline.HEIGHT + (SoundPanel.HEIGHT if self.sound.isVisibleTo(self.tracks) else 0)
-
-    def _layout_tracks(self) -> None:
-        """Show the sound under the phones when asked for and the utterance has audio; size the strip."""
-        show = self.sound_box.isChecked() and self.sound_track.wanted is not None
-        self.sound.setVisible(show)
-        h = self._tracks_height()
-        self.tracks.resize(self.timeline.width(), h)
-        self.scroll.setFixedHeight(h + self.scroll.horizontalScrollBar().sizeHint().height() + 4)
-        # the dock grows by the sound's height while it shows (an explicit minimum height, as the
-        # window sets one, would otherwise clip it), and gives it back after
-        if show and self._min_height_without_sound is None:
-            self._min_height_without_sound = self.minimumHeight()
-        if self._min_height_without_sound is not None:
-            need = self.layout().totalMinimumSize().height() if show else 0
-            self.setMinimumHeight(max(self._min_height_without_sound, need))
-            if not show:
-                self._min_height_without_sound = None
-
-    def _set_cursor(self, frame) -> None:
-        self.timeline.set_cursor(frame)
-        self.sound.set_cursor(frame)
-
-    def zoom_by(self, factor: float, anchor_x: float | None = None) -> float:
-        if anchor_x is None:
-            bar = self.scroll.horizontalScrollBar()
-            anchor_x = bar.value() + self.scroll.viewport().width() / 2
-        return self.set_zoom(self.zoom * factor, anchor_x)
-
-    def eventFilter(self, obj, ev):
-        if obj is self.scroll.viewport() and ev.type() == QtCore.QEvent.Type.Resize:
-            self.set_zoom(self.zoom)
-        return super().eventFilter(obj, ev)
-
-    def toggle_playing(self) -> None:
-        """Space in the timeline: play or pause (through the state, as the Play buttons do)."""
-        self.state.set_playing(not self.state.playing)
-
-    def step(self, delta: int) -> None:
-        """Left / Right in the timeline: pause and show the previous / next frame."""
-        s = self.state
-        if s.n_playback == 0:
-            return
-        s.set_playing(False)
-        k = 0 if s.playback is None else s.playback + int(delta)
-        s.set_playback(min(max(k, 0), s.n_playback - 1))
 
     # ------------------------------------------------------------------ synthesis
     def synthesize(self):
@@ -466,16 +419,26 @@ class TrajectoryEditor(QtWidgets.QWidget):
             return None
         m, tg, method = self.state.manifold, self.targets, self.method
         if method is None:
-            self.readout.setText("no synthesis method available")
+            self.say("no synthesis method available")
             return None
         orig = self.state.original if (self.source == "utterance" and self.state.original is not None
                                        and len(self.state.original) == tg.n_frames) else None
+        spoken = self.text_edit.text().strip() if self.source == "text" else ""
 
         def task(progress):
             progress("synthesising", 0, 1)
             data, _traj = synthesize_targets(m, tg, method, self.synthesizers, progress=progress)
             err = trajectory_error(m, data, orig) if orig is not None else None
             progress("synthesising", 1, 1)
+            if spoken:  # typed text speaks (espeak-ng), on the synthesis's phone times
+                from app.files.sound import SoundNote, speech_for_targets
+
+                progress("speaking the text", 0, 1)
+                try:
+                    data.extra["audio"] = str(speech_for_targets(tg, spoken))
+                except SoundNote as exc:
+                    data.extra["sound_note"] = str(exc)
+                progress("speaking the text", 1, 1)
             return data, err
 
         self._runner = run_task(plain_errors(task, doing=f"synthesise with {method}"), parent=self,
@@ -489,7 +452,7 @@ class TrajectoryEditor(QtWidgets.QWidget):
     def _show_busy(self, runner, method: str) -> None:
         if runner is self._runner and runner.state == "running":
             self.synth_btn.setEnabled(False)
-            self.readout.setText(f"synthesising with {method}…")
+            self.say(f"synthesising with {method}…")
 
     def _on_synth(self, result):
         data, err = result
@@ -503,8 +466,13 @@ class TrajectoryEditor(QtWidgets.QWidget):
         warns = data.extra.get("warnings") or []
         if warns:
             text += f"; {len(warns)} warning{'s' * (len(warns) != 1)}, listed above"
+        if data.extra.get("audio"):
+            text += "; with the text spoken (Play)"
+        elif data.extra.get("sound_note"):
+            text += f"; {data.extra['sound_note']}"
+            self.notice.emit(data.extra["sound_note"])
         self.last_error = err
-        self.readout.setText(text)
+        self.say(text)
 
     def _show_warnings(self, synthetic) -> None:
         """List every warning of the synthetic trajectory shown (none: the list hides)."""
@@ -516,14 +484,13 @@ class TrajectoryEditor(QtWidgets.QWidget):
 
     def _on_synth_error(self, message, _tb=""):
         self.synth_btn.setEnabled(True)
-        import html
-
-        self.readout.setText(f"<span style='color:#b00'>synthesis failed: {html.escape(message)}</span>")
+        self.say(f"synthesis failed: {message}", error=True)
 
     def settings(self) -> dict:
         """Editor settings for session files."""
         return {"source": self.source, "text": self.text_edit.text(), "method": self.method,
-                "oracle": self.oracle_box.isChecked(), "sound": self.sound_box.isChecked()}
+                "oracle": self.oracle_box.isChecked(), "sound": self.sound_box.isChecked(),
+                "words": [[float(w.start), float(w.end), str(w.label)] for w in self.words]}
 
     def apply_settings(self, d: dict) -> None:
         if d.get("source"):

@@ -195,9 +195,12 @@ def parse_params(cls, text, *, source, field):
 
     Must be a JSON object whose keys are parameters of ``cls`` (unknown keys refused)
     and whose values are plain scalars of the default's type (int where the default
-    is an int, a number for a float, a string for a string; None is always allowed).
-    Missing keys take the default.
+    is an int, a number for a float, a string for a string; None is always allowed)
+    that the class's declared constraints accept (``_parameter_constraints``, see
+    :mod:`engine.constraints`). Missing keys take the default.
     """
+    from engine.constraints import InvalidParameterError, validate_params
+
     params = json_field(text, source=source, field=field)
     if not isinstance(params, dict):
         raise FieldError(source, field, f"expected a JSON object of {cls.__name__} parameters, "
@@ -211,7 +214,12 @@ def parse_params(cls, text, *, source, field):
         if not _param_ok(v, defaults[k]):
             want = type(defaults[k]).__name__ if defaults[k] is not None else "an int or null"
             raise FieldError(source, f"{field}.{k}", f"expected {want}, got {v!r}")
-    return cls(**params)
+    obj = cls(**params)
+    try:
+        validate_params(obj)
+    except InvalidParameterError as exc:
+        raise FieldError(source, f"{field}.{exc.parameter}", exc.describe(fix=False)) from None
+    return obj
 
 
 def check_regular_file(path, what: str = "file") -> Path:

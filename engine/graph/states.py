@@ -14,6 +14,7 @@ Unreachable is ``inf``. There is no transition across an utterance boundary.
 from __future__ import annotations
 
 import warnings
+from numbers import Integral
 
 import numpy as np
 import scipy.sparse as sp
@@ -24,6 +25,7 @@ from sklearn.cluster import KMeans, MiniBatchKMeans
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, validate_params
 from engine.graph.hop_paths import fewest_hop_path, hop_distances
 from engine.progress import ProgressFn, report
 from engine.recordings.bounds import check_bounds
@@ -143,6 +145,27 @@ class StateGraph(BaseEstimator):
         Label of the largest one.
     """
 
+    _parameter_constraints = {
+        "n_states": [Interval(Integral, 1, None, closed="left"), None],
+        "n_dims": [Interval(Integral, 1, None, closed="left")],
+        "random_state": ["random_state"],
+        "batch_size": [Interval(Integral, 1, None, closed="left")],
+    }
+
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: N frames,
+    #: K states, d dims of the centroids)
+    _persisted_attributes = {
+        "centroids_": dict(kind="array", dtype="float", shape=("K", "d")),
+        "labels_": dict(kind="array", dtype="int", shape=("N",), low=0, high="K"),
+        "counts_": dict(kind="csr", dtype="int", shape=("K", "K"), low=0),
+        "adjacency_": dict(kind="csr", dtype="number", shape=("K", "K")),
+        "transition_": dict(kind="csr", dtype="float", shape=("K", "K"), low=0),
+        "n_scc_": dict(kind="int", low=1),
+        "scc_labels_": dict(kind="array", dtype="int", shape=("K",), low=0),
+        "largest_scc_": dict(kind="int", low=0),
+    }
+
     def __init__(self, *, n_states=None, n_dims=3, random_state=0, batch_size=4096):
         self.n_states = n_states
         self.n_dims = n_dims
@@ -165,6 +188,7 @@ class StateGraph(BaseEstimator):
         return np.ascontiguousarray(Y, dtype=np.float32)
 
     def _check_state(self, state, name="state") -> int:
+        check_is_fitted(self, "centroids_")
         K = self.centroids_.shape[0]
         if not isinstance(state, (int, np.integer)) or isinstance(state, bool):
             raise TypeError(f"{name} must be an integer state index, got {state!r}")
@@ -198,17 +222,14 @@ class StateGraph(BaseEstimator):
             When the graph is not strongly connected (some states cannot be reached
             from, or cannot reach, the others).
         """
-        if not isinstance(self.n_dims, (int, np.integer)) or self.n_dims < 1:
-            raise ValueError(f"n_dims must be a positive integer, got {self.n_dims!r}")
+        validate_params(self)
         Y = self._check_Y(Fy, "F^y")
         N = Y.shape[0]
         b = check_bounds(bounds, N)
         K = default_n_states(N) if self.n_states is None else self.n_states
-        if not isinstance(K, (int, np.integer)) or isinstance(K, bool) or not 1 <= K <= N:
+        if K > N:
             raise ValueError(f"n_states must be an integer in 1..N = 1..{N} (one state per frame at most), "
                              f"got {self.n_states!r}; use fewer states or None for the default")
-        if not isinstance(self.batch_size, (int, np.integer)) or self.batch_size < 1:
-            raise ValueError(f"batch_size must be a positive integer, got {self.batch_size!r}")
         stage = "state graph"
         report(progress, stage, 0, 3)
 

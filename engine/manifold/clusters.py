@@ -26,12 +26,13 @@ clusters keeps singular covariances (fewer members than dimensions) finite.
 """
 from __future__ import annotations
 
-import numbers
+from numbers import Integral
 
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, validate_params
 from engine.phonetics import phonesets
 from engine.recordings.corpus import label_codes
 
@@ -158,6 +159,13 @@ class PhoneClusters(BaseEstimator):
         Pause instances left out.
     """
 
+    _parameter_constraints = {
+        "n_dims": [Interval(Integral, 1, None, closed="left")],
+        "min_count": [Interval(Integral, 2, None, closed="left")],  # a covariance needs two members
+        "exclude_pauses": ["boolean"],
+        "normalize_labels": ["boolean"],
+    }
+
     def __init__(self, *, n_dims=3, min_count=3, exclude_pauses=True, normalize_labels=False):
         self.n_dims = n_dims
         self.min_count = min_count
@@ -189,6 +197,7 @@ class PhoneClusters(BaseEstimator):
         -------
         self
         """
+        validate_params(self)
         if Fx is None and mid_frames is None and labels is None and hasattr(Fy, "Fy_") and hasattr(Fy, "corpus_"):
             m = Fy
             mids, labs = m.corpus_.phone_table()[:2]
@@ -198,7 +207,6 @@ class PhoneClusters(BaseEstimator):
         if Fx is None or mid_frames is None or labels is None:
             raise TypeError("fit(manifold) or fit(Fy, Fx, mid_frames, labels, signed_velocity=None): "
                             "give a fitted Manifold alone, or all four arrays")
-        self._check_params()
         Fy, Fx, mids, labels, sv = self._check_inputs(Fy, Fx, mid_frames, labels, signed_velocity)
         d, dx = self.n_dims, min(self.n_dims, Fx.shape[1])
 
@@ -259,13 +267,6 @@ class PhoneClusters(BaseEstimator):
         self.excluded_counts_ = np.array([counts[i] for i in dropped], dtype=np.int64)
         self.n_pauses_ = int((~keep).sum())
         return self
-
-    def _check_params(self):
-        for name, lo in (("n_dims", 1), ("min_count", 2)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < lo:
-                raise ValueError(f"{name}={v!r}: must be an integer >= {lo}"
-                                 + (" (a covariance needs two members)" if name == "min_count" else ""))
 
     def _check_inputs(self, Fy, Fx, mid_frames, labels, sv):
         Fy, Fx = np.asarray(Fy), np.asarray(Fx)

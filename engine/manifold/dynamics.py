@@ -22,10 +22,11 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Condition, StrOptions, validate_params
 from engine.recordings.bounds import velocities
 from engine.recordings.corpus import CorpusWarning
 
-__all__ = ["DynamicFeatures", "DynamicScaleWarning", "OUTLIER_RATIO"]
+__all__ = ["DynamicFeatures", "DynamicScaleWarning", "OUTLIER_RATIO", "SCALES"]
 
 #: a block whose max |entry| exceeds its 99th percentile by more than this warns
 OUTLIER_RATIO = 4.0
@@ -35,14 +36,22 @@ class DynamicScaleWarning(CorpusWarning):
     """A few extreme frames dominate the scale of a block of G (shape or velocity)."""
 
 
+def _percentile(scale) -> float | None:
+    """Q of a scale ``"pQ"`` (None when ``scale`` is not one)."""
+    m = re.fullmatch(r"p(\d+(?:\.\d+)?)", scale) if isinstance(scale, str) else None
+    return None if m is None else float(m.group(1))
+
+
+#: the constraint of a block scale (:class:`DynamicFeatures` ``scale``, :class:`engine.manifold.model.Manifold`
+#: ``dynamics_scale``): "max" or a percentile "pQ" with 50 <= Q <= 100
+SCALES = [StrOptions({"max"}),
+          Condition(lambda s: 50 <= _percentile(s) <= 100, "a percentile 'pQ' with 50 <= Q <= 100 (e.g. 'p99')",
+                    bad=["p200", "p10", "q99"])]
+
+
 def _scale_quantile(scale) -> float | None:
-    """None for "max", else the percentile (0, 100] of ``"pQ"``; ValueError otherwise."""
-    if scale == "max":
-        return None
-    m = re.fullmatch(r"p(\d+(?:\.\d+)?)", str(scale))
-    if m is None or not 50 <= float(m.group(1)) <= 100:
-        raise ValueError(f"scale must be 'max' or a percentile 'pQ' with 50 <= Q <= 100 (e.g. 'p99'), got {scale!r}")
-    return float(m.group(1))
+    """None for "max", else the percentile (0, 100] of ``"pQ"`` (a scale :data:`SCALES` accepts)."""
+    return None if scale == "max" else _percentile(scale)
 
 
 class DynamicFeatures(BaseEstimator):
@@ -68,14 +77,27 @@ class DynamicFeatures(BaseEstimator):
         Per block: max |entry| / the 99th percentile of the column that holds it.
     """
 
+    _parameter_constraints = {"scale": SCALES}
+
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: m shape
+    #: components)
+    _persisted_attributes = {
+        "mean_": dict(kind="array", dtype="float", shape=("m",)),
+        "velocity_mean_": dict(kind="array", dtype="float", shape=("m",)),
+        "alpha_": dict(kind="float"),
+        "beta_": dict(kind="float"),
+    }
+
     def __init__(self, *, scale="max"):
         self.scale = scale
 
     def fit(self, Fx, bounds):
         """Fit mu, mu', alpha, beta from F^x (N, m) and utterance bounds (U, 2)."""
+        validate_params(self)
         Fx = np.asarray(Fx, dtype=np.float32)
         if Fx.ndim != 2 or Fx.shape[0] < 2:
-            raise ValueError(f"F^x must be (N >= 2, m), got shape {Fx.shape}")
+            raise ValueError(f"F^x must be (N >= 2, m), got shape {Fx.shape}; pass at least 2 frames")
         V = velocities(Fx, bounds)
         self.mean_ = Fx.mean(axis=0, dtype=np.float64).astype(np.float32)
         self.velocity_mean_ = V.mean(axis=0, dtype=np.float64).astype(np.float32)
@@ -125,4 +147,5 @@ class DynamicFeatures(BaseEstimator):
 
     def transform(self, Fx, bounds) -> np.ndarray:
         """G for frames F^x (N, m) with utterance bounds (U, 2) -> (N, 2m)."""
+        check_is_fitted(self, "alpha_")
         return self.transform_pair(Fx, velocities(Fx, bounds))

@@ -18,11 +18,13 @@ from __future__ import annotations
 import os
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
+from numbers import Integral
 
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, StrOptions, validate_params
 from engine.manifold.shape import orthonormal_basis, thin_svd
 from engine.progress import ProgressFn, report
 from engine.threads import one_blas_thread
@@ -212,6 +214,29 @@ class Embedding(BaseEstimator):
     #: builds the products with D; engine.scale.executor swaps in a Dask one for a single fit
     _operator_factory = _DistanceOperator
 
+    _parameter_constraints = {
+        "n_components": [Interval(Integral, 1, None, closed="left")],
+        "method": [StrOptions(("pca", "mds"))],
+        "n_landmarks": [Interval(Integral, 2, None, closed="left"), None],
+        "n_iter": [Interval(Integral, 0, None, closed="left")],
+        "oversample": [Interval(Integral, 0, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: N frames,
+    #: m shape components, k embedding dims, L reference points)
+    _persisted_attributes = {
+        "embedding_": dict(kind="array", dtype="float", shape=("N", "k")),
+        "reference_": dict(kind="array", dtype="float", shape=("L", "2m")),
+        "components_": dict(kind="array", dtype="float", shape=("k", "L")),
+        "center_": dict(kind="array", dtype="float", shape=("L",)),
+        "explained_variance_": dict(kind="array", dtype="float", shape=("k",)),
+        "explained_variance_ratio_": dict(kind="array", dtype="float", shape=("k",)),
+        "recovered_ratio_": dict(kind="array", dtype="float", shape=("k",)),
+        "landmarks_": dict(kind="array", dtype="int", shape=("L",), low=0, high="N", none=True),
+    }
+
     def __init__(self, *, n_components=10, method="pca", n_landmarks=None, n_iter=2, oversample=10,
                  random_state=0):
         self.n_components = n_components
@@ -222,21 +247,19 @@ class Embedding(BaseEstimator):
         self.random_state = random_state
 
     def _check(self, G):
+        validate_params(self)
         G = np.asarray(G, dtype=np.float32)
         if G.ndim != 2:
-            raise ValueError(f"G must be 2-D (N, 2m), got shape {G.shape}")
-        if self.method not in ("pca", "mds"):
-            raise ValueError(f"method must be 'pca' or 'mds', got {self.method!r}")
-        k = int(self.n_components)
-        if k < 1 or k >= G.shape[0]:
-            raise ValueError(f"n_components={k} must be in 1..{G.shape[0] - 1} (N - 1); lower it")
-        if self.n_landmarks is not None and not (k < int(self.n_landmarks) <= G.shape[0]):
-            raise ValueError(
-                f"n_landmarks={self.n_landmarks} must be in {k + 1}..{G.shape[0]} (N); "
-                "use None for the full N x N method"
-            )
+            raise ValueError(f"G must be 2-D (N, 2m), got shape {G.shape}; pass one row per frame")
+        k, N = int(self.n_components), G.shape[0]
+        if k >= N:
+            raise ValueError(f"n_components={k} must be at most {N - 1} (N - 1, with N = {N} frames); lower it")
+        if self.n_landmarks is not None and not k < int(self.n_landmarks) <= N:
+            raise ValueError(f"n_landmarks={self.n_landmarks} must be in {k + 1}..{N} (above n_components={k}, "
+                             f"at most N = {N} frames); use None for the full N x N method")
         if not np.isfinite(G).all():
-            raise ValueError(f"G holds NaN/inf at frame {int(np.argwhere(~np.isfinite(G))[0, 0])}")
+            raise ValueError(f"G holds NaN/inf at frame {int(np.argwhere(~np.isfinite(G))[0, 0])}; "
+                             "clean the frames before embedding")
         return G
 
     def fit(self, G, *, progress: ProgressFn = None):

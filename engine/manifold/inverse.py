@@ -34,11 +34,14 @@ Details the paper leaves open, fixed here:
 """
 from __future__ import annotations
 
+from numbers import Integral
+
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, validate_params
 from engine.threads import single_blas_thread
 
 __all__ = ["InverseMap", "barycentric_transforms", "delaunay_at"]
@@ -142,6 +145,8 @@ class InverseMap(BaseEstimator):
         Distance below which a query counts as a fitted point or as inside the hull.
     """
 
+    _parameter_constraints = {"n_dims": [Interval(Integral, 1, None, closed="left")]}
+
     def __init__(self, *, n_dims=3):
         self.n_dims = n_dims
 
@@ -160,9 +165,8 @@ class InverseMap(BaseEstimator):
         -------
         self
         """
+        validate_params(self)
         d = int(self.n_dims)
-        if d < 1:
-            raise ValueError(f"n_dims must be >= 1, got {self.n_dims}")
         Y = self._check_Y(Fy, d, what="Fy")
         V = np.asarray(Fx)
         if V.ndim == 1:

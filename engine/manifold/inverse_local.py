@@ -18,11 +18,14 @@ A Delaunay triangulation above 3-D is impractical (minutes to build at 26k point
 """
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, validate_params
 from engine.threads import single_blas_thread
 
 __all__ = ["StateMeanInverse", "LocalLinearInverse", "select_neighbors", "NEIGHBOR_CANDIDATES"]
@@ -61,6 +64,8 @@ class StateMeanInverse(BaseEstimator):
         Training frames per state (0 for a state without frames: its mean is the
         overall mean).
     """
+
+    _parameter_constraints: dict = {}  # no parameters
 
     def fit(self, labels, Fx, Fxv=None, *, n_states=None):
         """Average ``Fx`` (N, m) and ``Fxv`` (N, m) over the state ``labels`` (N,) in 0..K-1."""
@@ -114,6 +119,12 @@ class LocalLinearInverse(BaseEstimator):
     values_ : ndarray of shape (N, m)
     """
 
+    _parameter_constraints = {
+        "n_neighbors": [Interval(Integral, 3, None, closed="left")],  # n_dims + 2 at least, checked by fit
+        "n_dims": [Interval(Integral, 1, None, closed="left")],
+        "ridge": [Interval(Real, 0, None, closed="left")],
+    }
+
     def __init__(self, *, n_neighbors=40, n_dims=5, ridge=1e-3):
         self.n_neighbors = n_neighbors
         self.n_dims = n_dims
@@ -121,18 +132,15 @@ class LocalLinearInverse(BaseEstimator):
 
     def fit(self, Fy, Fx):
         """Store the training pairs: F^y (N, >= n_dims) and F^x (N, m)."""
+        validate_params(self)
         d, k = int(self.n_dims), int(self.n_neighbors)
-        if d < 1:
-            raise ValueError(f"n_dims must be >= 1, got {self.n_dims}")
         Fy = _check_2d(Fy, "F^y", d)[:, :d]
         Fx = _check_2d(Fx, "F^x")
         if Fy.shape[0] != Fx.shape[0]:
             raise ValueError(f"F^y has {Fy.shape[0]} rows but F^x has {Fx.shape[0]}; give one F^x per frame")
         if not d + 2 <= k <= Fy.shape[0]:
             raise ValueError(f"n_neighbors must be in {d + 2}..{Fy.shape[0]} (n_dims + 2 .. training frames), "
-                             f"got {self.n_neighbors}")
-        if not float(self.ridge) >= 0:
-            raise ValueError(f"ridge must be >= 0, got {self.ridge}")
+                             f"got {self.n_neighbors}; choose k in that range")
         self.points_, self.values_ = Fy, Fx
         self._tree = cKDTree(Fy)
         return self

@@ -8,20 +8,23 @@ from __future__ import annotations
 import functools
 import json
 import time
+from numbers import Integral
 from pathlib import Path
 
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, StrOptions, validate_params
 from engine.files.atomic import atomic_write
 from engine.files.persist import NpzReadError, dump_estimator, load_estimator, read_npz, source_fingerprint
-from engine.manifold.dynamics import DynamicFeatures
+from engine.manifold.dynamics import SCALES, DynamicFeatures
 from engine.manifold.embedding import Embedding
 from engine.manifold.shape import ShapeSpace, small_query_blas
 from engine.progress import ProgressFn, report
 from engine.recordings.bounds import velocities
 from engine.recordings.corpus import Corpus, CorpusError
+from engine.recordings.registration import SPEAKER_MODES
 
 __all__ = ["project_x", "Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
 
@@ -144,6 +147,21 @@ class Manifold(BaseEstimator):
         Seconds per stage of the last fit.
     """
 
+    _parameter_constraints = {
+        "variance": ShapeSpace._parameter_constraints["variance"],
+        "max_components": ShapeSpace._parameter_constraints["max_components"],
+        "n_embedding": Embedding._parameter_constraints["n_components"],
+        "embedding_method": Embedding._parameter_constraints["method"],
+        "n_landmarks": Embedding._parameter_constraints["n_landmarks"],
+        "n_states": [Interval(Integral, 1, None, closed="left"), None],
+        "state_dims": [Interval(Integral, 1, None, closed="left")],
+        "n_neighbors": [Interval(Integral, 3, None, closed="left"), None],
+        "random_state": ["random_state"],
+        "speaker_normalisation": [StrOptions(SPEAKER_MODES)],
+        "landmarks_above": [Interval(Integral, 1, None, closed="left")],
+        "dynamics_scale": SCALES,
+    }
+
     def __init__(self, *, variance=0.99, max_components=100, n_embedding=16, embedding_method="pca",
                  n_landmarks=None, n_states=None, state_dims=3, n_neighbors=None, random_state=0,
                  speaker_normalisation="auto", landmarks_above=50000, dynamics_scale="max"):
@@ -172,6 +190,7 @@ class Manifold(BaseEstimator):
         from engine.manifold.buildplan import plan_build
         from engine.manifold.tangent import TangentFrames
 
+        validate_params(self)
         if not isinstance(corpus, Corpus):
             raise TypeError(f"fit expects an engine.recordings.corpus.Corpus, got {type(corpus).__name__}")
         from engine.recordings.kinematics import lip_aperture
@@ -181,7 +200,7 @@ class Manifold(BaseEstimator):
         N = corpus.n_frames
         if N < max(12, self.n_embedding + 2):
             raise ValueError(f"{corpus.name}: {N} frames are too few to build a manifold "
-                             f"(need at least {max(12, self.n_embedding + 2)})")
+                             f"(need at least {max(12, self.n_embedding + 2)}); add utterances or lower n_embedding")
         timings = {}
         bounds = corpus.bounds
 
@@ -411,8 +430,8 @@ class Manifold(BaseEstimator):
         classes = {"shape": ShapeSpace, "dynamics": DynamicFeatures, "embedding": Embedding,
                    "tangent": TangentFrames, "states": StateGraph}
         for name, attr in cls._PARTS.items():
-            setattr(self, attr, load_estimator(classes[name], d, name, source=path, schema=_SCHEMA[name],
-                                               dims=dims))
+            setattr(self, attr, load_estimator(classes[name], d, name, source=path,
+                                               schema=classes[name]._persisted_attributes, dims=dims))
         _check_consistency(self, dims, path)
         frames = None
         if "corpus_frames" in d:
@@ -432,55 +451,6 @@ class Manifold(BaseEstimator):
             dims.setdefault("K", self.states_.centroids_.shape[0])
             self.state_x_ = check_array(d, "state_x", source=path, shape=("K", "m"), dims=dims)
         return self
-
-
-#: fitted attributes each part must hold (see engine.files.persist.load_estimator for the spec)
-_F, _I, _B = "float", "int", "bool"
-_SCHEMA = {
-    "shape": {"mean_": dict(kind="array", dtype=_F, shape=("C",)),
-              "components_": dict(kind="array", dtype=_F, shape=("m", "C")),
-              "explained_variance_": dict(kind="array", dtype=_F, shape=("m",)),
-              "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("m",)),
-              "scree_": dict(kind="array", dtype=_F, shape=("M",)),
-              "recovered_ratio_": dict(kind="array", dtype=_F, shape=("M",)),
-              "n_components_": dict(kind="int", low=1)},
-    "dynamics": {"mean_": dict(kind="array", dtype=_F, shape=("m",)),
-                 "velocity_mean_": dict(kind="array", dtype=_F, shape=("m",)),
-                 "alpha_": dict(kind="float"), "beta_": dict(kind="float")},
-    "embedding": {"embedding_": dict(kind="array", dtype=_F, shape=("N", "k")),
-                  "reference_": dict(kind="array", dtype=_F, shape=("L", "2m")),
-                  "components_": dict(kind="array", dtype=_F, shape=("k", "L")),
-                  "center_": dict(kind="array", dtype=_F, shape=("L",)),
-                  "explained_variance_": dict(kind="array", dtype=_F, shape=("k",)),
-                  "explained_variance_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
-                  "recovered_ratio_": dict(kind="array", dtype=_F, shape=("k",)),
-                  "landmarks_": dict(kind="array", dtype=_I, shape=("L",), low=0, high="N", none=True)},
-    "tangent": {"plane_point_": dict(kind="array", dtype=_F, shape=(3,)),
-                "plane_normal_": dict(kind="array", dtype=_F, shape=(3,)),
-                "S_": dict(kind="array", dtype=_F, shape=(3,)),
-                "shape_direction_": dict(kind="array", dtype=_F, shape=("t",)),
-                "velocity_direction_": dict(kind="array", dtype=_F, shape=("t",)),
-                "s_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "v_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "step_": dict(kind="array", dtype=_F, shape=("N", "t")),
-                "velocity_": dict(kind="array", dtype=_F, shape=("N",)),
-                "acceleration_": dict(kind="array", dtype=_F, shape=("N",)),
-                "opening_": dict(kind="array", dtype=_B, shape=("N",)),
-                "accelerating_": dict(kind="array", dtype=_B, shape=("N",)),
-                "classes_": dict(kind="array", dtype=_I, shape=("N",), low=-1, high=4),
-                "shape_coordinate_": dict(kind="array", dtype=_F, shape=("N",)),
-                "opening_source_": dict(kind="str"), "opening_unit_": dict(kind="str"),
-                "n_dims_": dict(kind="int", low=1),
-                "n_neighbors_": dict(kind="int", low=1)},
-    "states": {"centroids_": dict(kind="array", dtype=_F, shape=("K", "d")),
-               "labels_": dict(kind="array", dtype=_I, shape=("N",), low=0, high="K"),
-               "counts_": dict(kind="csr", dtype=_I, shape=("K", "K"), low=0),
-               "adjacency_": dict(kind="csr", dtype="number", shape=("K", "K")),
-               "transition_": dict(kind="csr", dtype=_F, shape=("K", "K"), low=0),
-               "n_scc_": dict(kind="int", low=1),
-               "scc_labels_": dict(kind="array", dtype=_I, shape=("K",), low=0),
-               "largest_scc_": dict(kind="int", low=0)},
-}
 
 
 def _check_consistency(m, dims, path):

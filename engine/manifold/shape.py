@@ -13,11 +13,13 @@ workers and runs the same algorithm.
 from __future__ import annotations
 
 from contextlib import nullcontext
+from numbers import Integral, Real
 
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, validate_params
 from engine.progress import ProgressFn, report
 from engine.recordings.frame_blocks import BlockFrames
 from engine.threads import one_blas_thread
@@ -206,6 +208,28 @@ class ShapeSpace(BaseEstimator):
         every product with F is an (N, C) x (C, n_range_) GEMM.
     """
 
+    _parameter_constraints = {
+        "max_components": [Interval(Integral, 1, None, closed="left")],
+        "variance": [Interval(Real, 0, 1, closed="right")],
+        "n_iter": [Interval(Integral, 0, None, closed="left")],
+        "tol": [Interval(Real, 0, None, closed="left"), None],
+        "block_size": [Interval(Integral, 1, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: N frames,
+    #: C coordinates per frame, m kept components, M computed components)
+    _persisted_attributes = {
+        "mean_": dict(kind="array", dtype="float", shape=("C",)),
+        "components_": dict(kind="array", dtype="float", shape=("m", "C")),
+        "explained_variance_": dict(kind="array", dtype="float", shape=("m",)),
+        "explained_variance_ratio_": dict(kind="array", dtype="float", shape=("m",)),
+        "scree_": dict(kind="array", dtype="float", shape=("M",)),
+        "recovered_ratio_": dict(kind="array", dtype="float", shape=("M",)),
+        "n_components_": dict(kind="int", low=1),
+    }
+
     def __init__(self, *, max_components=100, variance=0.99, n_iter=3, tol=0.05, block_size=4096,
                  random_state=0):
         self.max_components = max_components
@@ -221,20 +245,14 @@ class ShapeSpace(BaseEstimator):
         F stored in blocks (``engine.recordings.frame_blocks.BlockFrames``) is read a
         window at a time, never gathered. Returns F (an ndarray unless stored in blocks).
         """
+        validate_params(self)
         F = F if isinstance(F, BlockFrames) else np.asarray(F)
         if F.ndim != 2:
-            raise ValueError(f"frames must be 2-D (n_frames, n_coordinates), got shape {F.shape}")
+            raise ValueError(f"frames must be 2-D (n_frames, n_coordinates), got shape {F.shape}; "
+                             "pass one row per frame")
         if F.shape[0] < 3:
-            raise ValueError(f"need at least 3 frames to fit a shape space, got {F.shape[0]}")
-        if not (0 < float(self.variance) <= 1):
-            raise ValueError(f"variance must be in (0, 1], got {self.variance}; e.g. 0.99 keeps 99%")
-        if int(self.n_iter) < 0:
-            raise ValueError(f"n_iter must be >= 0, got {self.n_iter}; e.g. 3")
-        if self.tol is not None and not float(self.tol) >= 0:
-            raise ValueError(f"tol must be >= 0 degrees or None, got {self.tol}; e.g. 0.05")
-        if int(self.max_components) < 1:
-            raise ValueError(f"max_components must be >= 1, got {self.max_components}")
-        for sl in _row_blocks(F.shape[0], max(1, int(self.block_size))) if finite else ():  # no N x C bool copy
+            raise ValueError(f"need at least 3 frames to fit a shape space, got {F.shape[0]}; pass a longer corpus")
+        for sl in _row_blocks(F.shape[0], int(self.block_size)) if finite else ():  # no N x C bool copy
             ok = np.isfinite(F[sl]).all(axis=1)
             if not ok.all():
                 bad = sl.start + int(np.flatnonzero(~ok)[0])
@@ -268,6 +286,7 @@ class ShapeSpace(BaseEstimator):
             ``centred_sumsq(mean32)``, as :class:`FrameProducts`.
         progress : callable, optional
         """
+        validate_params(self)
         N, C = products.shape
         rng = np.random.default_rng(self.random_state)
         k = int(min(self.max_components, N - 1, C))

@@ -32,10 +32,13 @@ as its normal; they are drawn, not used to classify.
 """
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, validate_params
 from engine.manifold.local_gradients import central_difference, local_gradients, neighbor_candidates, select_neighbors
 from engine.recordings.bounds import check_bounds
 
@@ -126,6 +129,37 @@ class TangentFrames(BaseEstimator):
 
     CLASS_NAMES = CLASS_NAMES
 
+    _parameter_constraints = {
+        "n_neighbors": [Interval(Integral, 3, None, closed="left"), None],
+        "n_dims": [Interval(Integral, 1, None, closed="left"), None],
+        "zero_velocity_quantile": [Interval(Real, 0, 1, closed="neither")],
+        "random_state": ["random_state"],
+    }
+
+    #: fitted attributes a manifold file stores and checks on load, as
+    #: :func:`engine.files.persist.load_estimator` specs (shape symbols shared across the file: N frames,
+    #: t dims of the frames)
+    _persisted_attributes = {
+        "plane_point_": dict(kind="array", dtype="float", shape=(3,)),
+        "plane_normal_": dict(kind="array", dtype="float", shape=(3,)),
+        "S_": dict(kind="array", dtype="float", shape=(3,)),
+        "shape_direction_": dict(kind="array", dtype="float", shape=("t",)),
+        "velocity_direction_": dict(kind="array", dtype="float", shape=("t",)),
+        "s_": dict(kind="array", dtype="float", shape=("N", "t")),
+        "v_": dict(kind="array", dtype="float", shape=("N", "t")),
+        "step_": dict(kind="array", dtype="float", shape=("N", "t")),
+        "velocity_": dict(kind="array", dtype="float", shape=("N",)),
+        "acceleration_": dict(kind="array", dtype="float", shape=("N",)),
+        "opening_": dict(kind="array", dtype="bool", shape=("N",)),
+        "accelerating_": dict(kind="array", dtype="bool", shape=("N",)),
+        "classes_": dict(kind="array", dtype="int", shape=("N",), low=NO_STEP, high=len(CLASS_NAMES)),
+        "shape_coordinate_": dict(kind="array", dtype="float", shape=("N",)),
+        "opening_source_": dict(kind="str"),
+        "opening_unit_": dict(kind="str"),
+        "n_dims_": dict(kind="int", low=1),
+        "n_neighbors_": dict(kind="int", low=1),
+    }
+
     def __init__(self, *, n_neighbors=None, n_dims=None, zero_velocity_quantile=0.1, random_state=0):
         self.n_neighbors = n_neighbors
         self.n_dims = n_dims
@@ -134,17 +168,9 @@ class TangentFrames(BaseEstimator):
 
     # ------------------------------------------------------------------ input
     def _check_params(self, n_cols):
-        if self.n_dims is not None and not (isinstance(self.n_dims, (int, np.integer)) and 1 <= self.n_dims):
-            raise ValueError(f"n_dims must be a positive integer or None (all of F^y), got {self.n_dims!r}")
+        validate_params(self)
         if self.n_dims is not None and self.n_dims > n_cols:
             raise ValueError(f"n_dims={self.n_dims} but F^y has {n_cols} columns; lower n_dims or pass None")
-        if self.n_neighbors is not None and (not isinstance(self.n_neighbors, (int, np.integer))
-                                             or isinstance(self.n_neighbors, bool) or self.n_neighbors < 3):
-            raise ValueError(f"n_neighbors must be an integer >= 3 or None (chosen for the corpus), "
-                             f"got {self.n_neighbors!r}")
-        q = self.zero_velocity_quantile
-        if not (isinstance(q, (int, float, np.floating)) and 0 < q < 1):
-            raise ValueError(f"zero_velocity_quantile must be in (0, 1), got {q!r}; the default is 0.1")
 
     def _as_y(self, Y, name="Y") -> np.ndarray:
         Y = np.asarray(Y)

@@ -87,6 +87,12 @@ class Utterance:
     speaker : str
         Who spoke it ("" = unknown). Multi-speaker corpora are normalised per speaker
         before the shape space (:mod:`engine.recordings.registration`).
+    fields : tuple of (str, str)
+        Other metadata fields, ``(name, value)`` in order (sex, emotion, text number,
+        session, group ...; :mod:`engine.recordings.metadata` reads them).
+    words : tuple of PhoneInterval
+        The word tier where the source has one (a Haskins file's ``WORDS``), seconds from
+        the utterance start, labels as given; () when the source has none.
     """
 
     id: str
@@ -96,6 +102,8 @@ class Utterance:
     audio: str | None = None
     text: str = ""
     speaker: str = ""
+    fields: tuple[tuple[str, str], ...] = ()
+    words: tuple = ()
 
     @property
     def n_frames(self) -> int:
@@ -493,6 +501,11 @@ class Corpus:
             "corpus_phone_times": np.array([[p[1], p[2]] for p in phones], dtype=np.float64).reshape(-1, 2),
             "corpus_phone_labels": np.array([p[3] for p in phones], dtype=str),
         }
+        words = [(k, w.start, w.end, w.label) for k, u in enumerate(self.utterances) for w in u.words]
+        if words:  # the word tiers, where the source had them (files without them read as before)
+            d["corpus_word_utt"] = np.array([w[0] for w in words], dtype=np.int64)
+            d["corpus_word_times"] = np.array([[w[1], w[2]] for w in words], dtype=np.float64).reshape(-1, 2)
+            d["corpus_word_labels"] = np.array([w[3] for w in words], dtype=str)
         if include_frames:
             d["corpus_frames"] = self.frames
         if self.faces is not None:
@@ -504,6 +517,9 @@ class Corpus:
         if self.axes:
             d["corpus_axes"] = np.array(self.axes)
         d["corpus_units"] = np.array(self.units)
+        from engine.recordings.field_arrays import fields_to_arrays
+
+        d.update(fields_to_arrays(self.utterances))
         if base is not None:
             d["corpus_utt_audio_abs"] = np.array([_absolute(u.audio) for u in self.utterances], dtype=str)
         for k, v in self.latent.items():
@@ -519,9 +535,11 @@ class Corpus:
         exists, that one. Absolute paths (files written before) are kept.
         """
         from engine.files.validate import FieldError, check_corpus_arrays
+        from engine.recordings.field_arrays import fields_from_arrays
 
         try:  # dtypes, shapes and index ranges checked before anything is built from them
             check_corpus_arrays(d, source=source, frames_given=frames is not None)
+            fields = fields_from_arrays(d, len(d["corpus_utt_ids"]), source=source)
         except FieldError as exc:
             raise CorpusError(str(exc)) from None
         try:
@@ -548,6 +566,7 @@ class Corpus:
             axes = str(d["corpus_axes"]) if "corpus_axes" in keys else ""
             units = str(d["corpus_units"]) if "corpus_units" in keys else ""  # older files did not say
             audio_abs = d["corpus_utt_audio_abs"] if "corpus_utt_audio_abs" in keys else None
+            words = _words_of(d, len(ids)) if "corpus_word_utt" in keys else None
             rate, dims, name = float(d["corpus_rate"]), int(d["corpus_dims"]), str(d["corpus_name"])
         except KeyError as exc:
             raise CorpusError(f"{source}: not a Lipspace corpus file (missing {exc.args[0]!r})") from None
@@ -561,7 +580,9 @@ class Corpus:
                 a, e = int(cuts[k]), int(cuts[k + 1])
                 phones = PhoneInterval._many(times[a:e], labels[a:e])
                 wav = _resolve(str(audio[k]), base, str(audio_abs[k]) if audio_abs is not None else "")
-                utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k])))
+                utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k]),
+                                      fields=fields[k] if fields is not None else (),
+                                      words=words[k] if words is not None else ()))
         try:
             return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
                        latent=latent, name=name, point_roles=roles, registration=registration, history=history,
@@ -619,6 +640,20 @@ def _as_list(a, chunk: int = 1 << 16) -> list:
     for s in range(0, len(a), chunk):
         out.extend(a[s:s + chunk].tolist())
     return out
+
+
+def _words_of(d, n_utterances: int) -> list[tuple]:
+    """Each utterance's word tier from a file's ``corpus_word_*`` arrays."""
+    utt = np.asarray(d["corpus_word_utt"], dtype=np.int64).reshape(-1)
+    times = np.asarray(d["corpus_word_times"], dtype=np.float64).reshape(-1, 2)
+    labels = np.asarray(d["corpus_word_labels"]).reshape(-1)
+    if not (len(utt) == len(times) == len(labels)) or (len(utt) and (utt.min() < 0 or utt.max() >= n_utterances)):
+        raise CorpusError(f"word tiers: {len(utt)} utterance indices, {len(times)} times, {len(labels)} labels "
+                          f"for {n_utterances} utterances; expected one of each per word, indices in range")
+    out: list[list] = [[] for _ in range(n_utterances)]
+    for k, (t0, t1), lab in zip(utt.tolist(), times.tolist(), labels.tolist()):
+        out[k].append(PhoneInterval(float(t0), float(t1), str(lab)))
+    return [tuple(w) for w in out]
 
 
 def label_codes(labels) -> tuple[np.ndarray, np.ndarray]:

@@ -17,8 +17,13 @@ the current template, average, repeat), then put in a canonical frame and scaled
 """
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
+
+from engine.constraints import Condition, Interval, validate_params
 
 __all__ = ["similarity_fit", "HeadPose", "DEFAULT_INTEROCULAR_MM", "check_interocular"]
 
@@ -103,6 +108,16 @@ class HeadPose(BaseEstimator):
     n_frames_ : int
     """
 
+    _parameter_constraints = {
+        "interocular_mm": [Interval(Real, 10, 200, closed="both")],
+        "eye_points": [Condition(lambda e: len(e) == 2 and all(len(p) == 2 for p in e)
+                                 and all(isinstance(i, Integral) and not isinstance(i, bool) and i >= 0
+                                         for p in e for i in p),
+                                 "two pairs of point positions (integers >= 0)", bad=[(13, 14), ((13, 14),)])],
+        "up_point": [Interval(Integral, 0, None, closed="left")],
+        "n_iter": [Interval(Integral, 1, None, closed="left")],
+    }
+
     def __init__(self, *, interocular_mm: float = DEFAULT_INTEROCULAR_MM, eye_points=((13, 14), (16, 15)),
                  up_point: int = 0, n_iter: int = 5):
         self.interocular_mm = interocular_mm
@@ -137,9 +152,7 @@ class HeadPose(BaseEstimator):
         -------
         self
         """
-        check_interocular(self.interocular_mm)
-        if not isinstance(self.n_iter, (int, np.integer)) or self.n_iter < 1:
-            raise ValueError(f"n_iter={self.n_iter!r}; expected an integer >= 1")
+        validate_params(self)
         ref = np.asarray(ref, dtype=np.float64)
         if ref.ndim != 3 or ref.shape[0] < 1 or ref.shape[2] != 3 or ref.shape[1] < 3:
             raise ValueError(f"reference landmarks of shape {ref.shape}; expected (frames >= 1, points >= 3, 3)")
@@ -170,8 +183,7 @@ class HeadPose(BaseEstimator):
         -------
         ndarray of shape (N, P, 3), float64, mm in the template's canonical frame
         """
-        if not hasattr(self, "template_"):
-            raise RuntimeError("HeadPose is not fitted; call fit(ref) first")
+        check_is_fitted(self, "template_")
         ref = np.asarray(ref, dtype=np.float64)
         points = np.asarray(points, dtype=np.float64)
         if ref.ndim != 3 or ref.shape[1:] != self.template_.shape:

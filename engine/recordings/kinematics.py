@@ -21,8 +21,8 @@ from dataclasses import replace
 import numpy as np
 
 __all__ = ["lip_aperture", "aperture_definition", "aperture_velocity", "kinematic_landmarks",
-           "with_kinematic_labels", "kinematic_key_frames", "kinematic_if_unlabelled", "has_kinematic_labels",
-           "LANDMARK_LABELS"]
+           "with_kinematic_labels", "with_landmark_labels", "kinematic_key_frames", "kinematic_if_unlabelled",
+           "has_kinematic_labels", "LANDMARK_LABELS"]
 
 #: landmark label per kind
 LANDMARK_LABELS = ("open", "closed", "opening", "closing")
@@ -170,6 +170,21 @@ def with_kinematic_labels(corpus, **landmark_params):
     Corpus
     """
     frames, labels = kinematic_landmarks(corpus, **landmark_params)
+    return with_landmark_labels(corpus, frames, labels, note=f"{_LANDMARK_NOTE} {len(frames)} kinematic landmarks "
+                                                             f"({', '.join(LANDMARK_LABELS)})")
+
+
+def with_landmark_labels(corpus, frames, labels, *, note: str):
+    """The corpus with its phones replaced by intervals labelled ``labels`` centred on corpus ``frames``.
+
+    Each interval reaches half-way to its neighbours at most (and 0.1 s), so its mid-point
+    is its frame; ``note`` is appended to the history. Used for kinematic and gestural
+    landmarks (:mod:`engine.recordings.signals.gestures`).
+    """
+    frames = np.asarray(frames, np.int64)
+    labels = np.asarray(labels, dtype=str)
+    order = np.argsort(frames, kind="stable")
+    frames, labels = frames[order], labels[order]
     rate = corpus.rate
     utts = []
     for u in corpus.utterances:
@@ -189,9 +204,7 @@ def with_kinematic_labels(corpus, **landmark_params):
             s, e = (t - h, t + h) if h > 0 else (0.0, 0.5 / rate)
             ph.append((s, e, str(li)))
         utts.append(replace(u, phones=tuple(ph)))
-    out = replace(corpus, utterances=utts, history=list(corpus.history) + [
-        f"{_LANDMARK_NOTE} {len(frames)} kinematic landmarks ({', '.join(LANDMARK_LABELS)})"])
-    return out
+    return replace(corpus, utterances=utts, history=list(corpus.history) + [note])
 
 
 #: how :func:`with_kinematic_labels` starts its history line

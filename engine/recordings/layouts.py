@@ -34,6 +34,8 @@ User layout file (plain text, ``#`` starts a comment)::
     values: 7            # numbers per sensor (default: the base's, else 6)
     xyz: 0 1 2           # 0-based positions of x, y, z inside a sensor's values
     rate: 250            # Hz, for inputs that carry no timing (optional)
+    quality: 5           # 0-based position of each sensor's quality value (the rms of
+                         # its position fit), or none (default: the base's, else none)
     sensor UL upper_lip  # one line per sensor, in column (channel) order
     sensor LL lower_lip
     sensor REF reference
@@ -81,6 +83,9 @@ class Layout:
     format : {"matrix", "pos", "wave"}
         ``matrix``: any plain matrix; ``pos``: AG500/AG501 binary; ``wave``: NDI Wave TSV.
     description : str
+    quality : int or None
+        0-based position inside a sensor's ``values`` of its quality value (the rms
+        residual of the position fit: AG500 / AG501 and the 6-value exports), or None.
     """
 
     name: str
@@ -91,6 +96,7 @@ class Layout:
     rate: float | None = None
     format: str = "matrix"
     description: str = ""
+    quality: int | None = None
 
     def __post_init__(self):
         if len(self.sensors) != len(self.roles):
@@ -108,6 +114,9 @@ class Layout:
                               f"0..{self.values - 1}")
         if self.format not in FORMATS:
             raise LayoutError(f"layout {self.name!r}: format {self.format!r}; expected one of {FORMATS}")
+        if self.quality is not None and not (0 <= self.quality < self.values and self.quality not in self.xyz):
+            raise LayoutError(f"layout {self.name!r}: quality={self.quality}; expected a position in "
+                              f"0..{self.values - 1} other than x, y, z ({list(self.xyz)}), or none")
 
     @property
     def n_columns(self) -> int:
@@ -156,7 +165,8 @@ class Layout:
 
     def describe(self) -> str:
         sens = ", ".join(f"{s}={r}" if r else s for s, r in zip(self.sensors, self.roles))
-        return (f"{self.name}: {len(self.sensors)} sensors x {self.values} values (x, y, z at {list(self.xyz)})"
+        q = f", quality (rms) at {self.quality}" if self.quality is not None else ""
+        return (f"{self.name}: {len(self.sensors)} sensors x {self.values} values (x, y, z at {list(self.xyz)}{q})"
                 f"{f', {self.rate:g} Hz' if self.rate else ''}, {self.format}; {sens}")
 
 
@@ -165,13 +175,14 @@ _EMA7_ROLES = ("upper_lip", "lower_lip", "left_corner", "right_corner", "tongue"
 
 BUILTIN = {
     "ema7x6": Layout("ema7x6", _EMA7, _EMA7_ROLES, 6, (0, 1, 2), None, "matrix",
-                     "7 sensors (upper lip, lower lip, left and right corner, 3 tongue) x x y z phi theta rms"),
+                     "7 sensors (upper lip, lower lip, left and right corner, 3 tongue) x x y z phi theta rms", 5),
     "ema7x7": Layout("ema7x7", _EMA7, _EMA7_ROLES, 7, (0, 1, 2), None, "matrix",
-                     "as ema7x6 with a 7th value per sensor (x y z phi theta rms extra)"),
+                     "as ema7x6 with a 7th value per sensor (x y z phi theta rms extra)", 5),
     "ag500": Layout("ag500", tuple(f"ch{i + 1}" for i in range(12)), ("",) * 12, 7, (0, 1, 2), 200.0, "pos",
-                    "Carstens AG500 .pos binary: 12 channels x 7 float32 (x y z phi theta rms extra), 200 Hz"),
+                    "Carstens AG500 .pos binary: 12 channels x 7 float32 (x y z phi theta rms extra), 200 Hz", 5),
     "ag501": Layout("ag501", tuple(f"ch{i + 1}" for i in range(16)), ("",) * 16, 7, (0, 1, 2), 250.0, "pos",
-                    "Carstens AG501 .pos binary: AG50xDATA header (channels, rate), 7 float32 per channel"),
+                    "Carstens AG501 .pos binary: AG50xDATA header (channels, rate), 7 float32 per channel "
+                    "(x y z phi theta rms extra)", 5),
     "wave": Layout("wave", ("ch1",), ("",), 3, (0, 1, 2), None, "wave",
                    "NDI Wave TSV export: Time, then per sensor Id, Status, Tx Ty Tz (and quaternion)"),
 }
@@ -255,8 +266,9 @@ def read_layout(path) -> Layout:
                               "or 'sensor NAME [ROLE]'")
         key, val = (x.strip() for x in line.split(":", 1))
         key = key.lower()
-        if key not in ("name", "base", "values", "xyz", "rate"):
-            raise LayoutError(f"{where}: unknown key {key!r}; expected name, base, values, xyz, rate or sensor lines")
+        if key not in ("name", "base", "values", "xyz", "rate", "quality"):
+            raise LayoutError(f"{where}: unknown key {key!r}; expected name, base, values, xyz, rate, quality or "
+                              "sensor lines")
         fields[key] = (val, where)
     base = None
     if "base" in fields:
@@ -290,9 +302,20 @@ def read_layout(path) -> Layout:
             raise LayoutError(f"{path}: no 'sensor NAME ROLE' lines; name the sensors in column order")
         sensors, roles = list(base.sensors), list(base.roles)
     name = fields["name"][0] if "name" in fields else path.stem
+    quality = base.quality if base and values == base.values else None
+    if "quality" in fields:
+        val, where = fields["quality"]
+        if val.lower() in ("none", "-", ""):
+            quality = None
+        else:
+            try:
+                quality = int(val)
+            except ValueError:
+                raise LayoutError(f"{where}: quality {val!r}; expected the 0-based position of the rms value "
+                                  "(e.g. 5) or none") from None
     try:
         return Layout(name, tuple(sensors), tuple(roles), values, tuple(xyz), rate,
-                      base.format if base else "matrix", f"user layout {path.name}")
+                      base.format if base else "matrix", f"user layout {path.name}", quality)
     except LayoutError as exc:
         raise LayoutError(f"{path}: {exc}") from None
 

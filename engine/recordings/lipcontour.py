@@ -12,9 +12,13 @@ by moving vertices.
 """
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
+
+from engine.constraints import Interval, validate_params
 
 __all__ = ["LipContour", "mesh_geometry", "MIN_POINTS", "MAX_POINTS"]
 
@@ -62,6 +66,12 @@ class LipContour(BaseEstimator):
         Triangles of the tube.
     """
 
+    _parameter_constraints = {
+        "n_samples": [Interval(Integral, 8, None, closed="left")],
+        "n_sides": [Interval(Integral, 3, None, closed="left")],
+        "radius": [Interval(Real, 0, None, closed="neither"), None],
+    }
+
     def __init__(self, *, n_samples=48, n_sides=8, radius=None):
         self.n_samples = n_samples
         self.n_sides = n_sides
@@ -86,8 +96,7 @@ class LipContour(BaseEstimator):
         ValueError
             Fewer than 3 or more than 20 lip points (a mesh should be drawn as a mesh).
         """
-        if int(self.n_samples) < 8 or int(self.n_sides) < 3:
-            raise ValueError(f"n_samples must be >= 8 and n_sides >= 3, got {self.n_samples}, {self.n_sides}")
+        validate_params(self)
         P = _as_points(points)
         if P.ndim != 2:
             raise ValueError(f"fit takes one reference frame (V, 3), got shape {P.shape}")

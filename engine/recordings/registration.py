@@ -115,9 +115,12 @@ def register(corpus: Corpus, *, method: str = "auto", drop_reference: bool = Tru
         desc = (f"rigid (Procrustes) to reference sensors {', '.join(names[i] for i in ref)}, "
                 f"residual {rms:.3g} {corpus.unit_label} rms{', reference sensors dropped' if drop_reference else ''}")
         roles = [corpus.point_roles[i] for i in keep] if corpus.point_roles is not None else None
+        from engine.recordings.signals.quality import with_points
+
         return replace(corpus, frames=Q[:, keep].reshape(corpus.n_frames, -1).astype(np.float32),
                        point_names=[names[i] for i in keep] if corpus.point_names is not None else None,
                        point_roles=roles, faces=None if len(keep) < corpus.n_points else corpus.faces,
+                       latent=with_points(corpus.latent, keep, corpus.n_points),
                        registration=desc, history=list(corpus.history) + [f"registration: {desc}"])
     F = corpus.frames.astype(np.float64).reshape(corpus.n_frames, -1, corpus.dims)
     from engine.recordings.layouts import LIP_ROLES

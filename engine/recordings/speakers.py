@@ -11,10 +11,13 @@ A corpus of many recordings names its speakers in the file names or the folders
                 e.g. ``re:^(spk[0-9]+)`` or ``re:^([A-Z]{3})`` for ``ABCFIA01.mat``.
 
 A rule that does not fit the names gives a corpus whose speaker normalisation is wrong
-without any error: every file its own speaker (each utterance normalised on its own), or
-one speaker for recordings whose names say they are several people.
-:func:`check_assignment` finds both and says what to do; ``lipspace import`` prints
-its sentences as warnings.
+without any error: every file its own speaker (each utterance normalised on its own), one
+speaker for recordings whose names say they are several people, or a speaker code fused
+with a condition code (``XYZFIA``: speaker, sex and emotion). :func:`check_assignment`
+finds all three from the names' scheme (:mod:`engine.recordings.file_names`) and says
+what to do and what the pattern it proposes would give; ``lipspace import`` prints its
+sentences as warnings. :func:`suggest_fields` is the note that proposes a
+``--fields-from`` pattern keeping every part of the names as a field.
 """
 from __future__ import annotations
 
@@ -24,7 +27,8 @@ from pathlib import Path
 
 from engine.recordings.corpus import CorpusWarning
 
-__all__ = ["SpeakerRule", "SpeakerRuleError", "SpeakerWarning", "check_assignment", "name_groups", "leading_letters"]
+__all__ = ["SpeakerRule", "SpeakerRuleError", "SpeakerWarning", "check_assignment", "name_groups", "leading_letters",
+           "structure_hint", "suggest_fields"]
 
 
 class SpeakerRuleError(ValueError):
@@ -113,7 +117,9 @@ def name_groups(paths) -> dict[str, int]:
 
 
 def _grouping_hint(paths) -> tuple[dict, str]:
-    """(groups, hint): the leading-letter groups when they look like speakers, else ({}, "")."""
+    """(groups, hint): the leading-letter groups when they look like speakers, else ({}, "").
+
+    Used for names that share no scheme :func:`engine.recordings.file_names.name_structure` can read."""
     groups = name_groups(paths)
     n = len(paths)
     if not 2 <= len(groups) <= max(2, n // 2):
@@ -122,6 +128,22 @@ def _grouping_hint(paths) -> tuple[dict, str]:
     more = " ..." if len(groups) > 6 else ""
     return groups, (f"their names start with {len(groups)} different letter codes ({shown}{more} files); if these "
                     "are the speakers, name them with --speaker-from 're:^([A-Za-z]+)'")
+
+
+def structure_hint(structure) -> str:
+    """What the names' scheme says about speakers, with the option that names them and what it would give ("" when
+    the scheme has no plausible speakers)."""
+    if structure is None or not structure.plausible_speakers():
+        return ""
+    spk = structure.speakers
+    if all(leading_letters(s) == v for s, v in zip(structure.stems, dict(structure.fields)["speaker"])):
+        shown = ", ".join(f"{k} {v}" for k, v in list(spk.items())[:6]) + (" ..." if len(spk) > 6 else "")
+        return (f"their names start with {len(spk)} different letter codes ({shown} files); if these are the "
+                f"speakers, name them with --speaker-from 're:^([A-Za-z]+)', or keep every part of the name as a "
+                f"field with --fields-from 're:{structure.pattern}', which would give {structure.describe()}")
+    others = [name for name, _ in structure.fields[1:]]
+    shape = " x ".join([f"{len(spk)} speakers"] + [f"{len(structure.levels(o))} {o} levels" for o in others])
+    return (f"their names look like {shape}: --fields-from 're:{structure.pattern}' would give {structure.describe()}")
 
 
 def check_assignment(paths, speakers, *, rule: str | None) -> list[str]:
@@ -139,21 +161,28 @@ def check_assignment(paths, speakers, *, rule: str | None) -> list[str]:
     Returns
     -------
     list of str
-        Empty when nothing looks wrong. Two cases are reported: with a rule, three or more
-        inputs each becoming its own speaker (the build would normalise every recording on
-        its own); with a rule or none (not an explicit single name), every input getting the
-        same speaker (or none) while the file names start with 2 or more letter codes, as many as half the files
-        at most (recordings of several people pooled as one).
+        Empty when nothing looks wrong. The names' scheme
+        (:func:`engine.recordings.file_names.name_structure`) decides what is plausible; three
+        cases are reported: with a rule, three or more inputs each becoming its own speaker
+        (the build would normalise every recording on its own); every input getting the
+        same speaker (or none; not an explicit single name) while the scheme names two or
+        more speakers, at most half as many as files (recordings of several people pooled as
+        one); a rule giving more speakers than the scheme, each of its speakers inside one
+        of the scheme's (a speaker code fused with a condition crossed with it). Every
+        suggestion says what it would give on these names.
     """
+    from engine.recordings.file_names import name_structure
+
     paths = [str(p) for p in paths]
     speakers = [str(s) for s in speakers]
     n = len(paths)
     if n != len(speakers):
         raise ValueError(f"{n} paths but {len(speakers)} speakers; expected one speaker per input")
+    structure = name_structure(paths)
+    hint = structure_hint(structure) if structure is not None else _grouping_hint(paths)[1]
     out = []
     distinct = list(dict.fromkeys(speakers))
     if rule is not None and n >= 3 and len(distinct) == n:
-        _, hint = _grouping_hint(paths)
         why = " (the names have no '_')" if rule == "prefix" and not any("_" in Path(p).stem for p in paths) else ""
         out.append(f"--speaker-from {rule} made each of the {n} inputs its own speaker{why}: "
                    f"{', '.join(distinct[:4])}{' ...' if n > 4 else ''}; the build would normalise every recording "
@@ -162,9 +191,34 @@ def check_assignment(paths, speakers, *, rule: str | None) -> list[str]:
                       "Give a rule that names the speakers, e.g. --speaker-from 're:^([A-Za-z]+)' or "
                       "--speaker-from dir"))
     elif n >= 2 and len(distinct) == 1 and (rule is not None or not distinct[0]):  # --speaker NAME: as told
-        groups, hint = _grouping_hint(paths)
-        if groups:
+        if hint:
             who = (f"speaker {distinct[0]!r} (--speaker-from {rule})" if distinct[0] else
                    "one unnamed speaker (no --speaker or --speaker-from)")
             out.append(f"all {n} inputs are {who}, but {hint}, or give --speaker NAME if they are one person")
+    elif rule is not None and structure is not None and structure.plausible_speakers():
+        spk = dict(structure.fields)["speaker"]
+        theirs = {}
+        for mine, s in zip(speakers, spk):
+            theirs.setdefault(mine, set()).add(s)
+        if len(distinct) > len(set(spk)) and all(len(v) == 1 for v in theirs.values()):
+            out.append(f"--speaker-from {rule} gave {len(distinct)} speakers ({', '.join(distinct[:6])}"
+                       f"{' ...' if len(distinct) > 6 else ''}), but {hint}; each of those {len(distinct)} "
+                       "'speakers' is one speaker in one condition, and the build would normalise every "
+                       "condition away with the speaker")
     return out
+
+
+def suggest_fields(paths) -> str:
+    """A note for an import that names no fields: the names' scheme and the ``--fields-from`` pattern that would
+    keep its parts, with what it would give ("" when the names share no scheme, or none of its parts other than
+    the speaker repeats like a condition)."""
+    from engine.recordings.file_names import name_structure
+
+    st = name_structure(paths)
+    n = len(paths)
+    # only a scheme with a condition-like part (2 or more levels, each of 2 or more files on average) is worth
+    # keeping as fields; a number unique to each file is an id, not a condition
+    if st is None or not any(2 <= len(st.levels(k)) <= n // 2 for k, _ in st.fields[1:]):
+        return ""
+    return (f"the file names follow one scheme; --fields-from 're:{st.pattern}' would keep its parts as fields: "
+            f"{st.describe()} (rename the groups as you like; lipspace info, table and evaluate --by use them)")

@@ -19,11 +19,14 @@ synthesiser interface (method ``"dominance"``).
 """
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, validate_params
 from engine.threads import single_blas_thread
 
 __all__ = ["DominanceModel"]
@@ -60,6 +63,12 @@ class DominanceModel(BaseEstimator):
     loss_ : float
         Mean squared error per frame on the training frames.
     """
+
+    _parameter_constraints = {
+        "window": [Interval(Integral, 0, None, closed="left")],
+        "ridge": [Interval(Real, 0, None, closed="left")],
+        "max_iter": [Interval(Integral, 1, None, closed="left")],
+    }
 
     def __init__(self, *, window=4, ridge=1e-3, max_iter=200):
         self.window = window
@@ -138,12 +147,11 @@ class DominanceModel(BaseEstimator):
         """Fit targets and dominance on ``sequences``: list of (X (n, m), phones), at ``rate`` Hz."""
         from scipy.optimize import minimize
 
+        validate_params(self)
         seqs = [(np.asarray(X, np.float64), tuple(ph)) for X, ph in sequences if len(ph)]
         if not seqs:
             raise ValueError("the dominance model needs phone-aligned utterances; none of the training "
-                             "utterances has phones")
-        if int(self.window) < 0:
-            raise ValueError(f"window must be >= 0 phones, got {self.window}")
+                             "utterances has phones (import the corpus with an alignment)")
         from collections import Counter
 
         counts = Counter(p.label for _, ph in seqs for p in ph)

@@ -32,10 +32,14 @@ Without validation data the base is the calibrated spline (:func:`prior_blend`).
 """
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
+
+from engine.constraints import Interval, validate_params
 
 __all__ = ["prior_blend", "LearntPaths", "NEIGHBOR_STEPS", "BASES", "PRIOR_BASE", "blend", "fit_blend",
            "BlendAccumulator"]
@@ -72,12 +76,19 @@ class LearntPaths(BaseEstimator):
         s2, the mean squared distance of a training frame from its state's centroid.
     """
 
+    _parameter_constraints = {
+        "n_pool": [Interval(Integral, 1, None, closed="left")],
+        "duration_tolerance": [Interval(Real, 0, None, closed="neither")],
+        "max_neighbors": [Interval(Integral, 1, None, closed="left")],
+    }
+
     def __init__(self, *, n_pool=128, duration_tolerance=0.35, max_neighbors=256):
         self.n_pool = n_pool
         self.duration_tolerance = duration_tolerance
         self.max_neighbors = max_neighbors
 
     def fit(self, Fy, Fx, bounds, labels, centroids):
+        validate_params(self)
         C = np.asarray(centroids, dtype=np.float64)
         d = C.shape[1]
         Fy = np.asarray(Fy, dtype=np.float64)
@@ -86,10 +97,6 @@ class LearntPaths(BaseEstimator):
         Fx = np.asarray(Fx, dtype=np.float64)
         if Fx.shape[0] != Fy.shape[0]:
             raise ValueError(f"F^y has {Fy.shape[0]} rows but F^x has {Fx.shape[0]}; give one F^x per frame")
-        if int(self.n_pool) < 1 or int(self.max_neighbors) < 1:
-            raise ValueError(f"n_pool and max_neighbors must be >= 1, got {self.n_pool} and {self.max_neighbors}")
-        if not float(self.duration_tolerance) > 0:
-            raise ValueError(f"duration_tolerance must be > 0, got {self.duration_tolerance}")
         lab = np.asarray(labels, dtype=np.int64)
         self._Y = np.ascontiguousarray(Fy[:, :d])
         self._X = Fx
@@ -183,6 +190,7 @@ class LearntPaths(BaseEstimator):
         interpolated linearly over the gap). A gap no training segment fits takes
         ``fallback`` (n_frames, m) there. The first target is held before it, the last after it.
         """
+        check_is_fitted(self, "scale_")
         f = np.asarray(frames, dtype=np.int64)
         P = np.asarray(points, dtype=np.float64)
         m = self._X.shape[1]

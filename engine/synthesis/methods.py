@@ -52,5 +52,5 @@ def make_synthesizer(method: str, manifold, **params):
         from engine.synthesis.trajectory import PhoneModelSynthesizer
 
         model = (DominanceModel if method == "dominance" else SlidingWindowRegressor)(**params)
-        return PhoneModelSynthesizer(model, method=method).fit(manifold)
+        return PhoneModelSynthesizer(model=model, method=method).fit(manifold)
     raise ValueError(f"unknown synthesis method {method!r}; choose one of {', '.join(METHODS)}")

@@ -13,10 +13,14 @@ the window and the penalty are chosen on validation data.
 """
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 import scipy.sparse as sp
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
+
+from engine.constraints import Condition, Interval, StrOptions, validate_params
 
 __all__ = ["SlidingWindowRegressor", "REGRESSORS"]
 
@@ -45,6 +49,17 @@ class SlidingWindowRegressor(BaseEstimator):
     Use ``fit(sequences, rate)`` with ``sequences`` a list of (X (n, m), phones), then
     ``predict(phones, n_frames, rate)``.
     """
+
+    _parameter_constraints = {
+        "context": [Interval(Integral, 0, None, closed="left")],
+        "step": [Interval(Integral, 1, None, closed="left")],
+        "output_window": [Condition(lambda n: Interval(Integral, 1, None, closed="left").is_satisfied_by(n)
+                                    and n % 2 == 1, "an odd integer >= 1", bad=[0, 4, 2.5])],
+        "regressor": [StrOptions(REGRESSORS)],
+        "alpha": [Interval(Real, 0, None, closed="left")],
+        "hidden": [Interval(Integral, 1, None, closed="left")],
+        "random_state": ["random_state"],
+    }
 
     def __init__(self, *, context=12, step=2, output_window=5, regressor="ridge", alpha=1.0, hidden=256,
                  random_state=0):
@@ -90,16 +105,11 @@ class SlidingWindowRegressor(BaseEstimator):
     def fit(self, sequences, rate):
         from collections import Counter
 
+        validate_params(self)
         seqs = [(np.asarray(X, np.float64), tuple(ph)) for X, ph in sequences if len(ph)]
         if not seqs:
             raise ValueError("sliding-window regression needs phone-aligned utterances; none of the training "
-                             "utterances has phones")
-        if self.regressor not in REGRESSORS:
-            raise ValueError(f"regressor must be one of {', '.join(REGRESSORS)}, got {self.regressor!r}")
-        if int(self.output_window) < 1 or int(self.output_window) % 2 == 0:
-            raise ValueError(f"output_window must be an odd number of frames >= 1, got {self.output_window}")
-        if int(self.step) < 1 or int(self.context) < 0:
-            raise ValueError(f"step must be >= 1 and context >= 0 frames, got {self.step} and {self.context}")
+                             "utterances has phones (import the corpus with an alignment)")
         counts = Counter(p.label for _, ph in seqs for p in ph)
         self.labels_ = [lab for lab, _ in counts.most_common()]
         self.vocabulary_ = self.labels_ + [_BOUNDARY]

@@ -24,6 +24,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import validate_params
 from engine.synthesis.learnt_paths import prior_blend
 from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, phone_mids, target_frames
 from engine.threads import single_blas_thread
@@ -42,6 +43,7 @@ class _StateModelSynthesizer(BaseEstimator):
     """
 
     method = ""
+    _parameter_constraints = {"choice": [dict, None]}
 
     def __init__(self, *, choice=None):
         self.choice = choice
@@ -49,6 +51,7 @@ class _StateModelSynthesizer(BaseEstimator):
     def fit(self, manifold, progress=None):
         from engine.synthesis.statepaths import StateModel
 
+        validate_params(self)
         check_fitted_manifold(manifold)
         ch = self.choice
         if ch is None:

@@ -15,6 +15,9 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 from sklearn.base import BaseEstimator, clone
+from sklearn.utils.validation import check_is_fitted
+
+from engine.constraints import HasMethods, validate_params
 
 __all__ = ["phone_mids", "Trajectory", "Synthesizer", "check_fitted_manifold", "target_frames", "smooth", "phone_sequences",
            "PhoneModelSynthesizer", "interpolate_targets", "INTERPOLATIONS"]
@@ -159,19 +162,21 @@ class PhoneModelSynthesizer(BaseEstimator):
     F^x); ``synthesize(targets)`` uses only ``targets.phones`` and the frame count.
     """
 
-    def __init__(self, model, *, method):
+    _parameter_constraints = {"model": [HasMethods(("fit", "predict"))], "method": [str]}
+
+    def __init__(self, *, model, method):
         self.model = model
         self.method = method
 
     def fit(self, manifold):
+        validate_params(self)
         check_fitted_manifold(manifold)
         c = manifold.corpus_
         self.model_ = clone(self.model).fit(phone_sequences(c.utterances, manifold.Fx_), c.rate)
         return self
 
     def synthesize(self, targets) -> Trajectory:
-        if not hasattr(self, "model_"):
-            raise ValueError(f"the {self.method} synthesiser is not fitted; call fit(manifold) first")
+        check_is_fitted(self, "model_")
         warnings = []
         X = self.model_.predict(targets.phones, targets.n_frames, targets.rate, warnings)
         f = target_frames(targets) if targets.targets else np.zeros(0, dtype=np.int64)

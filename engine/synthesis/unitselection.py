@@ -30,9 +30,13 @@ Concatenation
 """
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Condition, Interval, Options, validate_params
 from engine.phonetics.targets import TargetSequence
 from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, target_frames
 from engine.threads import single_blas_thread
@@ -100,6 +104,15 @@ class UnitSelectionSynthesizer(BaseEstimator):
     """
 
     method = "unitselection"
+    _parameter_constraints = {
+        "context": [Options(Integral, (3, 5))],
+        "max_candidates": [Interval(Integral, 1, None, closed="left")],
+        "join_weight": [Interval(Real, 0, None, closed="left")],
+        "exclude_utterances": [Condition(lambda v: isinstance(v, (list, tuple, set, frozenset))
+                                         and all(isinstance(u, str) for u in v),
+                                         "a list or tuple of utterance ids (str)", bad=["s0001", [1]]), None],
+        "smoothing": [Interval(Real, 0, 0.5, closed="left")],
+    }
 
     def __init__(self, *, context=3, max_candidates=30, join_weight=1.0, exclude_utterances=(), smoothing=0.05):
         self.context = context
@@ -111,13 +124,8 @@ class UnitSelectionSynthesizer(BaseEstimator):
     # ------------------------------------------------------------------ fitting
     def fit(self, manifold):
         """Index the phone instances of the manifold's training corpus."""
+        validate_params(self)
         check_fitted_manifold(manifold)
-        if self.context not in (3, 5):
-            raise ValueError(f"context must be 3 or 5 (the N of N-phone units), got {self.context}")
-        if int(self.max_candidates) < 1:
-            raise ValueError(f"max_candidates must be >= 1, got {self.max_candidates}")
-        if not 0 <= float(self.smoothing) < 0.5:
-            raise ValueError(f"smoothing must be a fraction in [0, 0.5), got {self.smoothing}; the paper uses 0.05")
         c = manifold.corpus_
         excl = set(self.exclude_utterances or ())
         lab, utt, pos, st, en = [], [], [], [], []
@@ -125,7 +133,8 @@ class UnitSelectionSynthesizer(BaseEstimator):
             for j, p in enumerate(u.phones):
                 lab.append(p.label), utt.append(k), pos.append(j), st.append(p.start), en.append(p.end)
         if not lab:
-            raise ValueError(f"{c.name} has no phone alignments; unit selection needs phone-aligned utterances")
+            raise ValueError(f"{c.name} has no phone alignments; unit selection needs phone-aligned utterances "
+                             "(import the corpus with an alignment)")
         lab = np.array(lab, dtype=str)
         utt = np.array(utt, dtype=np.int64)
         pos = np.array(pos, dtype=np.int64)
@@ -255,8 +264,7 @@ class UnitSelectionSynthesizer(BaseEstimator):
     @single_blas_thread
     def synthesize(self, targets: TargetSequence) -> Trajectory:
         """Select units for ``targets.phones`` and concatenate them over ``targets.n_frames`` frames."""
-        if not hasattr(self, "labels_"):
-            raise ValueError("UnitSelectionSynthesizer is not fitted; call fit(manifold) first")
+        check_is_fitted(self, "labels_")
         phones = list(targets.phones)
         if not phones:
             raise ValueError("unit selection needs the phone intervals of the utterance (targets.phones is empty)")

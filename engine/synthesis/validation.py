@@ -235,6 +235,7 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
     if len(ids) < MIN_VALIDATION_UTTERANCES:
         return _defaults(manifold, cand, n_states, ids, phones)
     rng = np.random.default_rng(random_state)
+    report(progress, "validation split", 0, 1)
     splits, bounded = _splits(c, val_fraction, rng, budget)
     folds = [_Fold(manifold, fit, val, phones) for fit, val in splits]
     Ks = [_k_candidates(len(f.Fy), len(manifold.Fy_), n_states, frames_per_state, bounded is not None)
@@ -279,7 +280,7 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
             models.append(PhoneModels.fit(manifold, f.fit, sliding=sw, exclude=[i for i in ids if i not in fit_ids]))
     settings["blend"] = fitted
     report(progress, "validation", steps - 1, steps)
-    settings["method_validation"] = _method_validation(sms, settings, folds, acc, models, protos, lattice)
+    settings["method_validation"] = _method_validation(sms, settings, folds, acc, models, protos, lattice, progress)
     settings["best"] = {p: min(r, key=lambda name: r[name]["rmse_x"]) for p, r in settings["method_validation"].items()}
     fps = t["frames_per_state"]
     K = n_states if fps is None else max(2, int(round(len(manifold.Fy_) / fps)))
@@ -404,11 +405,12 @@ def _choose_sliding_window(manifold, folds, candidates):
     return (int(ctx), int(ow), float(alpha)), err
 
 
-def _method_validation(sms, settings, folds, acc, models, protos, lattice):
+def _method_validation(sms, settings, folds, acc, models, protos, lattice, progress=None):
     """Validation RMSE X and LVE of every method at the chosen settings; the manifold's cross-fitted.
 
     Each validation utterance's manifold trajectory takes the blend weights fitted on the
-    utterances of the other folds (one split: of the other half of its utterances).
+    utterances of the other folds (one split: of the other half of its utterances). Reports
+    stage ``"validating every method"``, one count per validation utterance.
     """
     owner = [j for j, f in enumerate(folds) for _ in f.V.utts]
     n = len(owner)
@@ -421,6 +423,7 @@ def _method_validation(sms, settings, folds, acc, models, protos, lattice):
     sums = {}
     mean_x = np.asarray(folds[0].V.m.Fx_, np.float64).mean(axis=0)
     for flat, (j, i, sm, V, tg, lo, hi, Xv, st) in enumerate(_utterances(sms, folds)):
+        report(progress, "validating every method", flat, n)
         trajs, _ = trajectories(sm, settings, tg, st, mean_x, phone_models=None if models is None else models[j],
                                 protocols=protos, lattice_states=None if lattice is None else lattice[j][i])
         for p in protos:

@@ -27,10 +27,14 @@ Baselines behind the same :class:`Synthesizer` interface: :class:`InterpolationS
 """
 from __future__ import annotations
 
+from numbers import Integral, Real
+
 import numpy as np
 import scipy.sparse as sp
 from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
 
+from engine.constraints import Interval, StrOptions, validate_params
 from engine.graph.bridges import bridge, forward_to
 from engine.phonetics.targets import TargetSequence
 from engine.phonetics.targets import resolve_phone as _resolve_phone
@@ -387,6 +391,15 @@ class ManifoldSynthesizer(BaseEstimator):
     """
 
     method = "viterbi"
+    _parameter_constraints = {
+        "n_candidates": [Interval(Integral, 1, None, closed="left")],
+        "cluster_weight": [Interval(Real, 0, None, closed="left")],
+        "strict": ["boolean"],
+        "inverse_dims": [Interval(Integral, 1, None, closed="left"), None],
+        "inverse": [StrOptions(INVERSES)],
+        "smoothing": [Interval(Real, 0, None, closed="left")],
+        "n_neighbors": [Interval(Integral, 3, None, closed="left")],
+    }
 
     def __init__(self, *, n_candidates=8, cluster_weight=1.0, strict=True, inverse_dims=None, inverse="delaunay",
                  smoothing=0.0, n_neighbors=40):
@@ -400,13 +413,8 @@ class ManifoldSynthesizer(BaseEstimator):
 
     def fit(self, manifold):
         """Prepare the transition graph and phone candidate tables of a fitted manifold."""
+        validate_params(self)
         _check_fitted_manifold(manifold)
-        if int(self.n_candidates) < 1:
-            raise ValueError(f"n_candidates must be >= 1, got {self.n_candidates}")
-        if self.inverse not in INVERSES:
-            raise ValueError(f"inverse must be one of {', '.join(INVERSES)}, got {self.inverse!r}")
-        if not float(self.smoothing) >= 0:
-            raise ValueError(f"smoothing must be >= 0 frames, got {self.smoothing!r}")
         self._manifold = manifold
         self._graph = MaxProductGraph(log_transitions(observed_transitions(manifold.states_)))
         self._table = None
@@ -419,7 +427,7 @@ class ManifoldSynthesizer(BaseEstimator):
             d = int(self.inverse_dims)
             if not 1 <= d <= manifold.Fy_.shape[1]:
                 raise ValueError(f"inverse_dims must be in 1..{manifold.Fy_.shape[1]} (the dims of F^y), got "
-                                 f"{self.inverse_dims}")
+                                 f"{self.inverse_dims}; lower it or pass None for the manifold's own map")
             lab = np.asarray(manifold.states_.labels_)
             n = np.maximum(np.bincount(lab, minlength=K), 1)
             Fy = np.asarray(manifold.Fy_, dtype=np.float64)
@@ -490,8 +498,7 @@ class ManifoldSynthesizer(BaseEstimator):
     @single_blas_thread
     def synthesize(self, targets: TargetSequence) -> Trajectory:
         """Trajectory through ``targets`` (states / F^y points, or phone labels)."""
-        if not hasattr(self, "_graph"):
-            raise ValueError("ManifoldSynthesizer is not fitted; call fit(manifold) first")
+        check_is_fitted(self, "centroids_")
         f = _target_frames(targets)
         states = self._target_states(targets)
         warnings = []
@@ -611,6 +618,8 @@ class InterpolationSynthesizer(BaseEstimator):
         ``"cubic"`` uses :class:`scipy.interpolate.CubicSpline` (not-a-knot ends).
     """
 
+    _parameter_constraints = {"kind": [StrOptions(("linear", "cubic"))]}
+
     def __init__(self, *, kind="linear"):
         self.kind = kind
 
@@ -620,8 +629,7 @@ class InterpolationSynthesizer(BaseEstimator):
 
     def fit(self, manifold):
         """Store the per-phone mean F^x of a fitted manifold's corpus."""
-        if self.kind not in ("linear", "cubic"):
-            raise ValueError(f"kind must be 'linear' or 'cubic', got {self.kind!r}")
+        validate_params(self)
         _check_fitted_manifold(manifold)
         mids, labels, *_ = manifold.corpus_.phone_table()
         labs, counts = np.unique(labels, return_counts=True)
@@ -635,6 +643,7 @@ class InterpolationSynthesizer(BaseEstimator):
 
     def target_x(self, targets: TargetSequence, warnings=None) -> np.ndarray:
         """X of every target, ndarray of shape (T, m); phones the corpus lacks get a stand-in's mean."""
+        check_is_fitted(self, "phone_means_")
         index = {lab: i for i, lab in enumerate(self.phone_labels_)}
         rows = []
         for t in targets.targets:
@@ -650,8 +659,7 @@ class InterpolationSynthesizer(BaseEstimator):
 
     @single_blas_thread
     def synthesize(self, targets: TargetSequence) -> Trajectory:
-        if not hasattr(self, "phone_means_"):
-            raise ValueError("InterpolationSynthesizer is not fitted; call fit(manifold) first")
+        check_is_fitted(self, "phone_means_")
         f = _target_frames(targets)
         warnings = []
         X = self.target_x(targets, warnings)

@@ -31,19 +31,20 @@ import functools
 import hashlib
 import json
 import math
-import numbers
 from dataclasses import dataclass
+from numbers import Integral, Real
 from pathlib import Path
 
 import numpy as np
 from scipy.signal import lfilter
 from sklearn.base import BaseEstimator
 
+from engine.constraints import Condition, Interval, StrOptions, validate_params
 from engine.files.assets import asset_path
 from engine.phonetics.phones import EXTRA_VOWELS, PAUSE, VOWELS, DurationModel, pronounce
 from engine.progress import report
 from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
-from engine.talker.lipmodel import CONTROL_NAMES, KINEMATICS, SIGNED_CONTROLS, Anatomy, LipModel
+from engine.talker.lipmodel import CONTROL_NAMES, KINEMATICS, RESOLUTIONS, SIGNED_CONTROLS, Anatomy, LipModel
 from engine.threads import one_blas_thread
 
 __all__ = ["GENERATOR_VERSION", "PRESETS", "HELD_OUT_TALKER", "SyntheticTalker", "load_synthetic", "cache_folder",
@@ -301,6 +302,28 @@ class SyntheticTalker(BaseEstimator):
         frames are those of the classic lip model, bit for bit.
     """
 
+    _parameter_constraints = {
+        "preset": [StrOptions(PRESETS)],
+        "n_sentences": [Interval(Integral, 1, None, closed="left"), None],
+        "duration": [Interval(Real, 3, None, closed="left"), None],  # seconds of speech
+        "resolution": [StrOptions(RESOLUTIONS),
+                       Condition(lambda r: len(r) == 2 and all(isinstance(v, Integral) and not isinstance(v, bool)
+                                                               for v in r) and r[0] >= 3 and r[1] >= 5,
+                                 "(rows, cols) with rows >= 3 and cols >= 5", bad=[(2, 5), (3,)]), None],
+        "rate": [Interval(Real, 10, 1000, closed="both")],
+        "seed": [Interval(Integral, 0, None, closed="left")],
+        "noise": [Interval(Real, 0, None, closed="left")],
+        "jitter": [Interval(Real, 0, 0.5, closed="both")],
+        "tempo": [Interval(Real, 0, None, closed="neither")],
+        "timing_sd": [Interval(Real, 0, 0.5, closed="both")],  # a fraction of the phone
+        "dynamics_scale": [Interval(Real, 0.25, 4, closed="both")],  # a factor
+        "coarticulation": [Interval(Real, 0.25, 4, closed="both")],
+        "speakers": [Interval(Integral, 1, 100, closed="both"), None],
+        "registration": [Interval(Real, 0, 5, closed="both")],  # mm and degrees
+        "tissue": ["boolean"],
+        "kinematics": [StrOptions(KINEMATICS)],
+    }
+
     def __init__(self, *, preset="default", n_sentences=None, duration=None, resolution=None, rate=60.0,
                  seed=0, noise=0.2, jitter=0.04, tempo=1.0, timing_sd=_TIMING_SD, dynamics_scale=1.0,
                  coarticulation=1.0, speakers=None, registration=0.3, tissue=False, kinematics="classic"):
@@ -323,33 +346,8 @@ class SyntheticTalker(BaseEstimator):
 
     # -------------------------------------------------------------- validation
     def _validate(self):
-        if self.preset not in PRESETS:
-            raise ValueError(f"unknown preset {self.preset!r}; use one of {sorted(PRESETS)}")
-        if not (isinstance(self.rate, numbers.Real) and 10 <= self.rate <= 1000):
-            raise ValueError(f"rate must be a frame rate in Hz between 10 and 1000, got {self.rate!r}")
-        if self.n_sentences is not None and (int(self.n_sentences) != self.n_sentences or self.n_sentences < 1):
-            raise ValueError(f"n_sentences must be a positive integer or None, got {self.n_sentences!r}")
+        validate_params(self)
         dur = PRESETS[self.preset]["duration"] if self.duration is None else float(self.duration)
-        if not (np.isfinite(dur) and dur >= 3.0):
-            raise ValueError(f"duration must be at least 3 s of speech, got {dur!r}")
-        if not (np.isfinite(self.noise) and self.noise >= 0):
-            raise ValueError(f"noise must be >= 0 mm, got {self.noise!r}")
-        if not (np.isfinite(self.jitter) and 0 <= self.jitter <= 0.5):
-            raise ValueError(f"jitter must be in [0, 0.5], got {self.jitter!r}")
-        if not (np.isfinite(self.timing_sd) and 0 <= self.timing_sd <= 0.5):
-            raise ValueError(f"timing_sd must be in [0, 0.5] (fraction of a phone), got {self.timing_sd!r}")
-        for name in ("dynamics_scale", "coarticulation"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and 0.25 <= v <= 4.0):
-                raise ValueError(f"{name} must be a factor in [0.25, 4], got {v!r}")
-        if self.speakers is not None and (int(self.speakers) != self.speakers or not 1 <= self.speakers <= 100):
-            raise ValueError(f"speakers must be an integer in 1..100 or None, got {self.speakers!r}")
-        if not (np.isfinite(self.registration) and 0 <= self.registration <= 5):
-            raise ValueError(f"registration must be in [0, 5] (mm and degrees), got {self.registration!r}")
-        if not isinstance(self.tissue, (bool, np.bool_)):
-            raise ValueError(f"tissue must be True or False, got {self.tissue!r}")
-        if self.kinematics not in KINEMATICS:
-            raise ValueError(f"kinematics must be one of {sorted(KINEMATICS)}, got {self.kinematics!r}")
         res = PRESETS[self.preset]["resolution"] if self.resolution is None else self.resolution
         return dur, res
 

@@ -90,7 +90,10 @@ def test_click_selects_frame_colours_hemisphere_and_links_lips(win, qtbot, app_m
     assert np.array_equal(np.isnan(values), ~np.isfinite(future))
     np.testing.assert_allclose(values[~np.isnan(values)], future[np.isfinite(future)])
     rgb = view.handles["points"].rgb
-    assert np.all(rgb[mine][:, 0] > 100) and np.all(rgb[mine][:, 2] < 40)  # hop 0 = red
+    from app.models.colouring import FUTURE_CMAP, colormap_rgb
+
+    hop0 = np.rint(255 * colormap_rgb(FUTURE_CMAP, 0.0)).astype(int)
+    assert np.all(np.abs(rgb[mine].astype(int) - hop0) <= 1)  # hop 0: the future map's darkest colour
     # linked lip view shows the captured frame
     np.testing.assert_allclose(win.lip_view.main.points, _points(m, m.corpus_.frames[s.frame]), atol=1e-5)
     assert not np.allclose(win.lip_view.main.points, before)
@@ -186,9 +189,8 @@ def test_a_render_request_joins_the_window_paint_of_its_pass(win, qapp):
 
 def test_the_readouts_under_the_3d_view_never_resize_it(win, qapp, app_manifold):
     """A readout re-wrapping onto more or fewer lines resized the 3-D view above it: the cloud
-    jumped under the pointer and was rendered again on a click or a hover."""
-    from app.views._common import set_readout
-
+    jumped under the pointer and was rendered again on a click or a hover. They share one line,
+    each elided, the whole text in its tooltip."""
     view, s = win.manifold_view, win.state
     for _ in range(5):
         qapp.processEvents()
@@ -198,17 +200,14 @@ def test_the_readouts_under_the_3d_view_never_resize_it(win, qapp, app_manifold)
     for _ in range(5):
         qapp.processEvents()
     assert view.info.text().startswith("frame") and view.hover_label.text().startswith("under the pointer")
-    assert view.plotter.interactor.size() == size  # two lines are reserved for each readout
-    label = view.info
-    set_readout(label, "a long readout " * 60)  # more lines than reserved: the label grows once ...
+    assert view.info.y() == view.hover_label.y() and view.plotter.interactor.size() == size
+    long = "a long readout " * 60
+    view.info.setText(long)
     for _ in range(5):
         qapp.processEvents()
-    tall, grown = label.minimumHeight(), view.plotter.interactor.size()
-    assert tall > 2 * label.fontMetrics().lineSpacing() and grown.height() < size.height()
-    set_readout(label, "short")  # ... and keeps that height
-    for _ in range(5):
-        qapp.processEvents()
-    assert label.minimumHeight() == tall and view.plotter.interactor.size() == grown
+    assert view.plotter.interactor.size() == size and view.info.text() == long == view.info.toolTip()
+    shown = super(type(view.info), view.info).text()                # what is drawn: elided at its end
+    assert shown.endswith("…") and view.info.fontMetrics().horizontalAdvance(shown) <= view.info.width()
 
 
 def test_playback_shows_the_frame_due_by_the_clock_and_leaves_the_cloud_alone(win, qapp, app_manifold):
@@ -286,12 +285,15 @@ def test_synthesise_typed_text_draws_red_trajectory(win, qtbot, app_manifold):
     ed.synthesize()
     qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)
     syn = view.handles["synthetic"]
-    assert syn.visible and syn.mesh.n_points == len(s.synthetic) == ed.targets.n_frames
+    assert syn.visible and len(syn.points) == len(s.synthetic) == ed.targets.n_frames
+    assert len(syn.arrows[0]) == 5                            # cones show which way it runs
     hidden = [view.handles[k] for k in ("points", "plane", "marker")]
     try:
         for h in hidden:
             h.set_visible(False)
         view._bar.SetVisibility(False)  # the colour bar's red end
+        for box in view.legends.values():  # and the legend's row naming the red trajectory
+            box.SetVisibility(False)
         assert _red_pixels(view.plotter) > 30  # the synthetic trajectory is red
         syn.set_visible(False)
         assert _red_pixels(view.plotter) == 0  # and nothing else is
@@ -299,6 +301,9 @@ def test_synthesise_typed_text_draws_red_trajectory(win, qtbot, app_manifold):
         for h in hidden:
             h.set_visible(True)
         view._bar.SetVisibility(True)
+        view._update_legends()
+        for key, box in view.legends.items():
+            box.SetVisibility(bool(view.legend_rows[key]))
         syn.set_visible(True)
     # playback without an original shows the synthetic lips alone
     s.set_playback(5)
@@ -573,13 +578,12 @@ def test_clusters_panel_shows_ellipsoids_and_exports_table(win, tmp_path, app_ma
     assert [int(r["count"]) for r in back] == counts
 
 
-def test_ticking_a_phone_redraws_only_the_swatches_that_change(win, monkeypatch):
-    """Each new icon makes the table re-measure its columns (~3 ms a row): a toggle that
-    set every row's icon cost 120 ms, more than the ellipsoid's render."""
+def test_ticking_a_phone_redraws_no_swatch_and_each_shows_the_session_colour(win, monkeypatch):
+    """Each new icon makes the table re-measure its columns (~3 ms a row): a toggle that set every row's
+    icon cost 120 ms. A swatch is its label's one palette colour, ticked or not, so a toggle sets none."""
     from PySide6 import QtCore
 
     import app.views.clusters_panel as cp
-    from app.models.colouring import ellipsoid_colors, phone_palette
 
     panel, s = win.clusters, win.state
     made = []
@@ -588,18 +592,12 @@ def test_ticking_a_phone_redraws_only_the_swatches_that_change(win, monkeypatch)
     items = {panel.table.item(i, 0).text(): panel.table.item(i, 0) for i in range(panel.table.rowCount())}
     a, b = [r["phone"] for r in panel.rows[:2]]
     items[a].setCheckState(QtCore.Qt.CheckState.Checked)
-    assert s.visible_phones == {a} and made == [tuple(ellipsoid_colors({a})[a])]
-    made.clear()
     items[b].setCheckState(QtCore.Qt.CheckState.Checked)
-    ell = ellipsoid_colors({a, b})
-    assert s.visible_phones == {a, b}
-    assert set(made) <= {tuple(ell[a]), tuple(ell[b])} and tuple(ell[b]) in made and len(made) <= 2
-    made.clear()
+    assert s.visible_phones == {a, b} and made == []
     panel.none_btn.click()
-    palette = phone_palette(s)
-    assert sorted(made) == sorted([tuple(palette[a]), tuple(palette[b])])  # back to the phone colours
-    shown = {ph: it.data(cp._SWATCH_ROLE) for ph, it in items.items() if ph in palette}
-    assert shown == {ph: cp.QtGui.QColor.fromRgbF(*map(float, palette[ph])).name() for ph in shown}
+    assert made == []
+    shown = {ph: it.data(cp._SWATCH_ROLE) for ph, it in items.items()}
+    assert shown == {ph: cp.QtGui.QColor.fromRgbF(*s.palette.colour("phone", ph)).name() for ph in shown}
     assert all(it.checkState() == QtCore.Qt.CheckState.Unchecked for it in items.values())
 
 
@@ -661,6 +659,8 @@ def test_open_runs_in_a_worker_with_status_bar_progress_and_cancel(win, qtbot, t
         assert prog.bar.maximum() == 0
         runner.worker.progress.emit("shape space", 2, 9)
         assert (prog.bar.maximum(), prog.bar.value()) == (9, 2) and "shape space 2/9" in prog.label.text()
+        runner.worker.progress.emit("shape space", 3, 9)                 # a count made: the time left is said
+        assert "shape space 3/9" in prog.label.text() and " left" in prog.label.text()
         prog.cancel_btn.click()
         qtbot.waitUntil(lambda: runner.state != "running", timeout=30000)
     finally:

@@ -208,7 +208,42 @@ def test_a_slow_task_opens_its_dialog_at_the_latest_progress(qapp, qtbot):
         if time.perf_counter() - t0 < 0.8 * DIALOG_DELAY_MS / 1000:
             assert not r.dialog.isVisible()  # not before the delay
         qtbot.waitUntil(r.dialog.isVisible, timeout=DIALOG_DELAY_MS + 5000)
-        assert r.dialog.value() == 3 and r.dialog.maximum() == 10 and r.dialog.labelText() == "reading: 3/10"
+        assert r.dialog.value() == 3 and r.dialog.maximum() == 10 and r.dialog.labelText().startswith("reading 3/10 · ")
     finally:
         release.set()
     assert r.wait(10000) and r.state == "done" and not r.dialog.isVisible()
+
+
+def test_a_progress_dialog_moves_between_reports_and_says_the_time_left(qapp, qtbot):
+    """A long stage reported seldom (the first "Best on validation" sat at 0 % for 52 s): the dialog's label
+    counts the seconds between reports and, once a count is made, says the time left."""
+    import threading
+
+    from PySide6 import QtWidgets
+
+    from app.workers import run_task
+
+    go = threading.Event()
+
+    def task(progress):
+        progress("validation", 0, 4)
+        go.wait(10)
+        progress("validation", 1, 4)
+        go.clear()
+        go.wait(10)
+        return 1
+
+    parent = QtWidgets.QWidget()
+    runner = run_task(task, parent=parent, title="Synthesising")
+    try:
+        qtbot.waitUntil(lambda: runner.dialog.isVisible(), timeout=5000)
+        first = runner.dialog.labelText()
+        qtbot.waitUntil(lambda: runner.dialog.labelText() != first, timeout=3000)  # it lives between reports
+        assert runner.dialog.labelText().startswith("validation") and runner.dialog.maximum() == 4
+        go.set()
+        qtbot.waitUntil(lambda: "left" in runner.dialog.labelText() and "estimating" not in runner.dialog.labelText(),
+                        timeout=5000)
+    finally:
+        go.set()
+        runner.wait(10000)
+        parent.deleteLater()

@@ -41,3 +41,22 @@ def tiny_manifold_file(small_corpus, tmp_path_factory):
     d = tmp_path_factory.mktemp("tiny")
     tiny.save(d / "corpus.npz")
     return Manifold(n_states=20).fit(tiny).save(d / "m.npz")
+
+
+def run_cli(argv) -> tuple[int, str, str]:
+    """``lipspace ARGV`` in this process: ``(exit code, stdout, stderr)``."""
+    import contextlib
+    import io
+
+    from app.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = main(argv)
+    return rc, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """:func:`run_cli`: run a ``lipspace`` command, capturing its exit code and output."""
+    return run_cli

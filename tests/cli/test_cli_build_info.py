@@ -266,7 +266,7 @@ def test_dynamics_scale_option_is_validated(tmp_path, small_corpus, capsys):
     out = tmp_path / "m.npz"
     assert main(["build", str(c), "-o", str(out), "-q", "--dynamics-scale", "p200"]) == 2
     err = capsys.readouterr().err
-    assert "error: scale must be 'max' or a percentile 'pQ'" in err and "got 'p200'" in err
+    assert "error: --dynamics-scale must be 'max' or a percentile 'pQ'" in err and "got 'p200'" in err
     assert not out.exists()
 
 

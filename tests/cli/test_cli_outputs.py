@@ -222,3 +222,17 @@ def test_an_ascii_terminal_gets_escapes_not_a_traceback(mfile, tmp_path):
                        text=True, env=env)
     assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
     assert "caf\\xe9 \\u2013 \\xfc" in r.stdout
+
+
+@pytest.mark.skipif(__import__("shutil").which("espeak-ng") is None, reason="espeak-ng is not installed")
+def test_render_of_typed_text_carries_the_text_spoken(mfile, tmp_path, capsys):
+    """`lipspace render --text`: the MP4 has an audio stream, the text said on the synthesis's phone times."""
+    import av
+
+    out = tmp_path / "bob.mp4"
+    assert main(["render", "--manifold", str(mfile), "--text", "bob meets mum", "--method", "linear", "-o", str(out),
+                 "--size", "64x48", "-q"]) == 0
+    assert "with audio" in capsys.readouterr().out
+    with av.open(str(out)) as f:
+        streams = [s.type for s in f.streams]
+        assert streams.count("audio") == 1 and streams.count("video") == 1

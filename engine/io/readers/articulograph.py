@@ -9,11 +9,14 @@ frame (x, y, z, phi, theta, rms, extra). AG501 files start with a text header::
     SamplingFrequencyHz=250
     ...
 
-AG500 files have no header (12 channels at 200 Hz, or the layout's). NDI Wave TSV
-exports have a header row: a ``Time`` column (seconds, or milliseconds when the step
-is at least half a unit) and per sensor a ``Sensor N Id`` column, optionally a
-``Status`` column (rows not ``OK`` are dropouts) and ``Tx Ty Tz`` (then the
-quaternion ``Q0 Qx Qy Qz``, ignored).
+AG500 files have no header (12 channels at 200 Hz, or the layout's). The 6th value of
+each channel, ``rms``, is the residual of the position fit: kept as the sensor's quality
+(:mod:`engine.recordings.signals.quality`; 0 in unused channels). NDI Wave TSV exports
+have a header row: a ``Time`` (or ``Wav Time``) column (seconds, or milliseconds when
+the step is at least half a unit) and per sensor a ``Sensor N Id`` column, optionally
+a ``Status`` or ``State`` column (rows not ``OK`` are dropouts), ``Tx Ty Tz`` (then the
+quaternion ``Q0 Qx Qy Qz``, ignored) and a numeric ``Error``, ``RMS`` or ``Quality``
+column (the sensor's fit residual, kept as its quality).
 
 Both return a 3-D corpus through a layout (:mod:`engine.recordings.layouts`) that names the
 channels and gives their roles; the built-in ``ag500`` / ``ag501`` / ``wave`` layouts
@@ -151,7 +154,8 @@ def read_wave(path, *, layout=None, rate: float | None = None, points=None, alig
         raise ImportFormatError(path, "is empty; expected an NDI Wave TSV export")
     head = [h.strip() for h in lines[hdr_no].split("\t")]
     low = [h.lower() for h in head]
-    t_col = next((i for i, h in enumerate(low) if h in ("time", "time (s)", "time(s)", "time [s]")), None)
+    t_col = next((i for i, h in enumerate(low) if h in ("time", "time (s)", "time(s)", "time [s]", "wav time")),
+                 None)
     starts = [i for i, h in enumerate(head) if _SENSOR.fullmatch(h.strip())]
     if t_col is None or not starts:
         raise ImportFormatError(path, f"header {head[:8]} has no 'Time' column or no 'Sensor N Id' columns; "
@@ -165,8 +169,11 @@ def read_wave(path, *, layout=None, rate: float | None = None, points=None, alig
         except StopIteration:
             raise ImportFormatError(path, f"sensor block {head[s]!r} has no Tx, Ty, Tz columns",
                                     line=hdr_no + 1) from None
-        status = next((j for h, j in cols.items() if "status" in h), None)
-        blocks.append((xyz, status))
+        status = next((j for h, j in cols.items() if "status" in h or h.rstrip() == "state"
+                       or h.endswith(" state")), None)
+        err = next((j for h, j in cols.items() if h.rstrip() in ("error", "rms", "rms error", "quality")
+                    or h.endswith((" error", " rms", " quality"))), None)
+        blocks.append((xyz, status, err))
     n_s = len(blocks)
     try:
         lay = lay.with_channels(n_s) if lay.format == "wave" and lay.name == "wave" else lay
@@ -175,7 +182,8 @@ def read_wave(path, *, layout=None, rate: float | None = None, points=None, alig
     if len(lay.sensors) != n_s:
         raise ImportFormatError(path, f"has {n_s} sensors but layout {lay.name!r} names {len(lay.sensors)}; "
                                 "give one 'sensor' line per Wave sensor, in the file's order")
-    times, rows, bad = [], [], []
+    has_q = any(e is not None for _, _, e in blocks)
+    times, rows, bad, quality = [], [], [], []
     for ln in range(hdr_no + 1, len(lines)):
         raw = lines[ln]
         if not raw.strip():
@@ -187,19 +195,22 @@ def read_wave(path, *, layout=None, rate: float | None = None, points=None, alig
             times.append(float(tok[t_col]))
         except ValueError:
             raise ImportFormatError(path, f"Time is {tok[t_col][:30]!r}; expected a number", line=ln + 1) from None
-        vals, miss = [], []
-        for xyz, st in blocks:
+        vals, miss, q = [], [], []
+        for xyz, st, err in blocks:
             ok = st is None or tok[st].strip().upper() in ("OK", "0", "")
-            for j in xyz:
+            for j in xyz + ([err] if err is not None else []):
                 t = tok[j].strip()
                 try:
-                    vals.append(float(t) if t and t.lower() != "nan" else np.nan)
+                    (q if j == err else vals).append(float(t) if t and t.lower() != "nan" else np.nan)
                 except ValueError:
                     raise ImportFormatError(path, f"column {j + 1} ({head[j]}) is {t[:30]!r}; expected a number",
                                             line=ln + 1) from None
+            if has_q and err is None:
+                q.append(0.0)  # this sensor has no error column: not measured
             miss.append(not ok)
         rows.append(vals)
         bad.append(miss)
+        quality.append(q)
     if len(rows) < 2:
         raise ImportFormatError(path, f"holds {len(rows)} data rows; expected at least 2")
     t = np.array(times)
@@ -211,7 +222,8 @@ def read_wave(path, *, layout=None, rate: float | None = None, points=None, alig
                                 "given (--rate); leave the rate out, or resample (lipspace import --resample)")
     from dataclasses import replace
 
-    lay3 = replace(lay, values=3, xyz=(0, 1, 2))
+    lay3 = replace(lay, values=3, xyz=(0, 1, 2), quality=None)
     return corpus_from_matrix(path, np.array(rows), lay3, rate=native, points=points, fill_gaps=fill_gaps,
-                              alignment=alignment, tier=tier, missing=np.array(bad, bool), flagged="status not OK")
+                              alignment=alignment, tier=tier, missing=np.array(bad, bool), flagged="status not OK",
+                              quality=np.array(quality, np.float64) if has_q else None, quality_measure="error")
 

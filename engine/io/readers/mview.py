@@ -6,13 +6,14 @@ Entry ``AUDIO`` is the sound (44.1 kHz); each sensor entry (``TR TB TT UL LL ML 
 JAWL``) has ``SIGNAL`` of shape (n, 6) at 100 Hz whose first three columns are x
 (anterior +), y (lateral), z (vertical) in mm. The first entry also holds ``SENTENCE``
 and ``PHONES`` (``LABEL``, ``OFFS`` = [start, end] in seconds; ARPAbet with stress digits,
-``sp`` = pause), kept as given.
+``sp`` = pause), kept as given, and ``WORDS`` (the same form), the utterance's word tier.
 
 The file is parsed by :mod:`engine.io.readers.matfile` (bounds-checked), not ``scipy.io.loadmat``,
 which can crash the interpreter on a damaged file.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -107,27 +108,29 @@ class _Entries(dict):
         return super().__getitem__(name)
 
 
-def _phones(entry0, path) -> tuple[list[PhoneInterval], str]:
+def _phones(entry0, path, field: str = "PHONES") -> tuple[list[PhoneInterval], str]:
+    """The intervals of ``field`` (``PHONES`` or ``WORDS``: ``LABEL`` and ``OFFS`` = [start end] s) and the sentence."""
     text = _text(entry0.get("SENTENCE", "")).strip()
-    ph = entry0.get("PHONES")
+    ph = entry0.get(field)
+    what = "phone" if field == "PHONES" else "word"
     if not isinstance(ph, MatStruct) or not len(ph):
         return [], text
     if not {"LABEL", "OFFS"} <= set(ph.fields):
-        raise ImportFormatError(path, "PHONES has no LABEL / OFFS fields; expected MVIEW phone labels")
+        raise ImportFormatError(path, f"{field} has no LABEL / OFFS fields; expected MVIEW {what} labels")
     out = []
     for k, p in enumerate(ph):
         offs = p["OFFS"]
         lab = _text(p["LABEL"]).strip()
         if not isinstance(offs, np.ndarray) or offs.size != 2 or not np.issubdtype(offs.dtype, np.number):
-            raise ImportFormatError(path, f"PHONES({k + 1}) {lab!r}: OFFS is {offs!r}; expected [start end] in "
+            raise ImportFormatError(path, f"{field}({k + 1}) {lab!r}: OFFS is {offs!r}; expected [start end] in "
                                     "seconds")
         s, e = (float(np.real(x)) for x in offs.ravel())
         if not (np.isfinite(s) and np.isfinite(e)) or e < s:
-            raise ImportFormatError(path, f"PHONES({k + 1}) {lab!r} has times {s!r}-{e!r}; expected finite "
+            raise ImportFormatError(path, f"{field}({k + 1}) {lab!r} has times {s!r}-{e!r}; expected finite "
                                     "start <= end in seconds")
         if out and s < out[-1].end - 1e-6:
-            raise ImportFormatError(path, f"PHONES({k + 1}) {lab!r} starts at {s:g} s before the previous phone "
-                                    f"ends at {out[-1].end:g} s; expected phones in time order")
+            raise ImportFormatError(path, f"{field}({k + 1}) {lab!r} starts at {s:g} s before the previous {what} "
+                                    f"ends at {out[-1].end:g} s; expected {what}s in time order")
         out.append(PhoneInterval(s, e, lab))
     return out, text
 
@@ -203,6 +206,11 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
         phones, _ = resolve_alignment(path, alignment, tier=tier)
     c = one_utterance_corpus(path, frames, native, dims=3, phones=phones, point_names=want,
                              audio=sidecar_audio(path), text=text)
+    words, _ = _phones(s[0], path, "WORDS")
+    if words:  # the word tier, inside the recording
+        end = c.n_frames / native
+        words = tuple(PhoneInterval(w.start, min(w.end, end), w.label) for w in words if w.start < end)
+        c = replace(c, utterances=[replace(u, words=words) for u in c.utterances])
     c.history.extend(f"{path.name}: {d}" for d in damage)  # what a damaged file still gave
     return c
 

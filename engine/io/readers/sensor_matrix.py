@@ -18,7 +18,8 @@ __all__ = ["corpus_from_matrix"]
 
 
 def corpus_from_matrix(path, M, layout, *, rate: float, points=None, fill_gaps: bool = True, alignment=None,
-                       tier=None, missing=None, flagged: str = "flagged invalid"):
+                       tier=None, missing=None, flagged: str = "flagged invalid", quality=None,
+                       quality_measure: str = "rms"):
     """A one-utterance 3-D corpus from a matrix (n_frames, n_sensors * values) read through ``layout``.
 
     Parameters
@@ -35,6 +36,12 @@ def corpus_from_matrix(path, M, layout, *, rate: float, points=None, fill_gaps: 
         Samples flagged invalid by the file (besides NaN).
     flagged : str
         How the repair report names the samples ``missing`` flags (e.g. "status not OK").
+    quality : ndarray of shape (n_frames, n_sensors), optional
+        Each sensor's quality value per frame (default: the layout's ``quality`` value of
+        each sensor, when it names one); kept as ``latent["quality_<quality_measure>"]``
+        (:mod:`engine.recordings.signals.quality`), out-of-range values reported.
+    quality_measure : str
+        What the quality values are (``"rms"``, ``"error"``).
 
     Returns
     -------
@@ -69,10 +76,35 @@ def corpus_from_matrix(path, M, layout, *, rate: float, points=None, fill_gaps: 
         miss |= np.repeat(np.asarray(missing, bool)[:, keep], 3, axis=1)
     names = [layout.sensors[i] for i in keep]
     cols = [f"{s}_{a}" for s in names for a in "xyz"]
+    with np.errstate(invalid="ignore"):
+        invalid = (miss | ~np.isfinite(X)).reshape(n, len(keep), 3).any(axis=2)  # no position: no quality
     frames = _fill_gaps(X, miss, path=path, names=cols, fill=fill_gaps, flagged=flagged)
     phones, _ = resolve_alignment(path, alignment, tier=tier)
     c = one_utterance_corpus(path, frames, rate, dims=3, phones=phones, point_names=names,
                              audio=sidecar_audio(path))
     roles = [layout.roles[i] for i in keep]
     c.point_roles = roles if any(roles) else None
+    if quality is None and layout.quality is not None:
+        quality = block[:, :, layout.quality]
+    if quality is not None:
+        c.latent[f"quality_{quality_measure}"] = checked_quality(path, np.asarray(quality)[:, keep], names,
+                                                                 quality_measure, invalid)
     return c
+
+
+def checked_quality(path, Q, names, measure: str, missing) -> np.ndarray:
+    """Quality values ``Q`` (n_frames, n_sensors) as stored (float32; 0 = not measured), the out-of-range ones
+    (negative, NaN or infinite where the position is valid) reported naming the sensor and frames and stored as
+    not measured."""
+    from engine.io.repairs import frame_runs, report_repair
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        Q = np.asarray(Q, dtype=np.float64)
+    bad = (~np.isfinite(Q) | (Q < 0)) & ~np.asarray(missing, bool)
+    for j in np.flatnonzero(bad.any(axis=0)):
+        rows = np.flatnonzero(bad[:, j])
+        report_repair(path, f"{names[j]} {measure} is out of range ({Q[rows[0], j]:g} in "
+                      f"{frame_runs(rows)}; expected a number >= 0); those {rows.size} quality values are taken as "
+                      "not measured (the positions are kept)")
+    Q = np.where(bad | ~np.isfinite(Q) | np.asarray(missing, bool), 0.0, Q)
+    return Q.astype(np.float32)

@@ -38,6 +38,27 @@ def test_session_round_trip(app_manifold, tmp_path):
     assert (t.path == s.path).all()
 
 
+def test_a_session_keeps_its_colours_ellipsoid_fill_and_hidden_layers(app_manifold, tmp_path):
+    """Each category keeps the colour it was seen in: the palette goes into the session (a phone first
+    coloured by hand keeps its colour too), with the ellipsoids' fill and the layers hidden."""
+    s = AppState(app_manifold)
+    s.palette.colour("phone", "zz-new")                      # a level given a colour during the session
+    s.set_ellipsoid_opacity(0.65)
+    s.set_layer_visible("plane", False)
+    d = load_session(save_session(s, tmp_path / "c.lipspace.json"))
+    t = AppState(app_manifold)
+    assert t.palette.levels("phone") != s.palette.levels("phone")
+    apply_session(t, d)
+    assert t.palette.levels("phone") == s.palette.levels("phone")
+    assert t.palette.colour("phone", "zz-new") == s.palette.colour("phone", "zz-new")
+    assert t.ellipsoid_opacity == pytest.approx(0.65) and t.hidden_layers == {"plane"}
+    bad = json.loads((tmp_path / "c.lipspace.json").read_text())
+    bad["ellipsoid_opacity"] = 3
+    (tmp_path / "bad.lipspace.json").write_text(json.dumps(bad))
+    with pytest.raises(SessionError, match="ellipsoid_opacity"):
+        load_session(tmp_path / "bad.lipspace.json")
+
+
 @pytest.mark.parametrize("content, match", [
     ("not json", "not a readable"),
     ('{"a": 1}', "not a Lipspace session"),

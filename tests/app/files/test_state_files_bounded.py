@@ -42,7 +42,8 @@ def test_every_field_is_checked_against_the_schema(tmp_path, fields, field, what
 def test_missing_fields_get_their_defaults(tmp_path):
     d = load_session(_session(tmp_path))
     assert d["selection"] == {"frame": None, "state": None, "target": None} and d["cameras"] == {}
-    assert d["extra"] == {"editor": {"text": None, "method": None, "source": None, "oracle": True, "sound": True}}
+    assert d["extra"] == {"editor": {"text": None, "method": None, "source": None, "oracle": True, "sound": True,
+                                    "words": []}}
 
 
 def test_files_that_are_not_small_regular_files_are_refused_without_reading(tmp_path):

@@ -4,17 +4,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from app.models.colour_maps import lightness
 from app.models.colouring import (
-    ELLIPSOID_COLOURS,
+    DENSITY_CMAP,
+    FUTURE_CMAP,
     OUTSIDE_RGB,
-    RESERVED_COLOURS,
+    PAST_CMAP,
     UNREACHABLE_RGB,
-    categorical_palette,
-    delta_e,
-    ellipsoid_colors,
+    colormap_rgb,
     hemisphere_coloring,
     hop_table,
-    phone_palette,
     point_colors,
 )
 from app.models.state import COLOR_MODES, AppState
@@ -23,12 +22,14 @@ from app.models.state import COLOR_MODES, AppState
 def test_hop_table_is_one_band_per_whole_hop():
     t, lo, hi = hop_table(4, "future")
     assert (lo, hi) == (-0.5, 4.5) and t.shape == (5, 3)   # 0..4: each hop in the middle of its band
-    assert t[0][0] > 0.4 and t[0][2] < 0.2                  # 0 hops (the state itself): dark red
-    assert t[-1].mean() > t[0].mean()                       # far = lighter, same warm family
+    assert lightness(t[0]) < 20                             # 0 hops (the state itself): the darkest
+    assert np.all(np.diff(lightness(t)) > 0)                # far = lighter, same family
+    assert t[-1][0] > t[-1][2]                              # warm
     tb, lo, hi = hop_table(3, "both")
     assert (lo, hi) == (-3.5, 3.5) and tb.shape == (7, 3)
     assert np.all(tb[:3, 2] > tb[:3, 0])                    # the past side is a cool family (blue > red)
-    assert np.all(tb[4:, 0] > tb[4:, 2])                    # the future side is warm
+    assert (tb[4:, 0] - tb[4:, 2]).mean() > (tb[:3, 0] - tb[:3, 2]).mean() + 0.3   # the future side warmer
+    assert lightness(tb[:3]).min() > lightness(tb[3:]).max()  # and darker: apart in greyscale
 
 
 def test_hemisphere_coloring_dims_outside_the_horizon_and_reads_out_the_fraction(app_manifold):
@@ -77,9 +78,10 @@ def test_point_colors_every_mode(app_manifold):
     u = m.corpus_.utterances[0]
     assert np.all(utt.rgb[u.start:u.stop] == 0)  # the current utterance in black
     ph = point_colors("phone", m, s)
-    pal = phone_palette(s)
     f = int(np.flatnonzero(s.phones != "")[0])
-    np.testing.assert_allclose(ph.rgb[f], pal[s.phones[f]], atol=1e-6)
+    np.testing.assert_allclose(ph.rgb[f], s.palette.colour("phone", s.phones[f]), atol=1e-6)  # the session's colour
+    spk = point_colors("speaker", m, s)
+    assert [n for n, _ in spk.legend] == [sp or "(speaker not named)" for sp in m.corpus_.speakers]
     dens = point_colors("density", m, s)
     assert dens.values.shape == (N,) and np.isfinite(dens.values).all()
     with pytest.raises(ValueError):
@@ -95,7 +97,9 @@ def test_phone_filter_colours_only_the_chosen_phones(app_manifold):
     chosen = np.isin(s.phones, ["p", "b", "m"])
     np.testing.assert_allclose(c.rgb[chosen], all_c.rgb[chosen])
     np.testing.assert_allclose(c.rgb[~chosen], np.broadcast_to(OUTSIDE_RGB, ((~chosen).sum(), 3)), atol=1e-6)
-    assert [n for n, _ in c.legend] == ["b", "m", "p"]
+    assert [n for n, _ in c.legend] == ["b", "m", "p", "other phones (dimmed)"]
+    assert dict(c.legend)["p"] == all_c.legend[[n for n, _ in all_c.legend].index("p")][1] \
+        if "p" in dict(all_c.legend) else True              # one colour per phone, filtered or not
 
 
 def test_points_dim_while_ellipsoids_are_shown(app_manifold):
@@ -108,20 +112,19 @@ def test_points_dim_while_ellipsoids_are_shown(app_manifold):
     assert np.ptp(dimmed, axis=1).mean() < 0.5 * np.ptp(bright, axis=1).mean()
 
 
-def test_ellipsoid_colours_never_reuse_a_scene_colour():
-    E = np.asarray(ELLIPSOID_COLOURS)
-    R = np.asarray(list(RESERVED_COLOURS.values()) + [UNREACHABLE_RGB, OUTSIDE_RGB])
-    assert delta_e(E[:, None], R[None]).min() >= 25      # CIELAB units: clearly different colours
-    d = delta_e(E[:, None], E[None])
-    np.fill_diagonal(d, np.inf)
-    assert d.min() >= 25
-    assert list(ellipsoid_colors({"p", "b", "m"})) == ["b", "m", "p"]
-
-
-def test_categorical_palette_has_no_greys():
-    p = categorical_palette(54)
-    assert len(np.unique(p, axis=0)) == 54
-    assert np.ptp(p, axis=1).min() > 0.05
+def test_maps_are_perceptually_ordered_and_the_hemispheres_part_in_greyscale():
+    """No rainbow: every continuous map rises in lightness; future, past and beyond-horizon (and
+    unreachable) frames keep apart in greyscale (CIELAB L*), not by hue alone."""
+    t = np.linspace(0, 1, 64)
+    for name in (DENSITY_CMAP, FUTURE_CMAP, PAST_CMAP):
+        L = lightness(colormap_rgb(name, t))
+        assert np.all(np.diff(L) > 0), name                   # jet's lightness goes up and down
+    fut, past = lightness(colormap_rgb(FUTURE_CMAP, t)), lightness(colormap_rgb(PAST_CMAP, t))
+    beyond, unreachable = float(lightness(OUTSIDE_RGB)), float(lightness(UNREACHABLE_RGB))
+    assert fut.max() + 8 < past.min() and past.max() + 6 < unreachable < beyond - 6
+    # the old maps (YlOrRd_r, PuBu_r, pale ends): a 6-hop future and past were both at L* ~ 85
+    t6 = np.linspace(0, 1, 7)[-1]
+    assert abs(float(lightness(colormap_rgb(FUTURE_CMAP, t6))) - float(lightness(colormap_rgb(PAST_CMAP, t6)))) > 20
 
 
 def test_shipped_colour_tables_are_matplotlibs_entry_by_entry():
@@ -132,14 +135,14 @@ def test_shipped_colour_tables_are_matplotlibs_entry_by_entry():
     import numpy as np
     from matplotlib import colormaps
 
-    from app.figures.colour_tables import TABLE_FILE, TABLES, colour_tables
-    from app.models.colouring import colormap_rgb
+    from app.figures.colour_tables import OWN, TABLE_FILE, TABLES, colormap, colour_tables
 
     shipped = json.loads(TABLE_FILE.read_text())
     fresh = colour_tables()
-    assert sorted(shipped) == sorted(TABLES)
-    for name in TABLES:
+    assert sorted(shipped) == sorted([*TABLES, *OWN])
+    for name in shipped:
         np.testing.assert_allclose(shipped[name], fresh[name], atol=1e-7, err_msg=name)
     t = np.r_[0.0, 1.0, np.random.default_rng(0).random(500), 0.5 - 1e-9, 255 / 256]
-    for name in ("jet", "YlOrRd_r", "PuBu_r"):
-        np.testing.assert_allclose(colormap_rgb(name, t), colormaps[name](t)[:, :3], atol=1e-7, err_msg=name)
+    for name in (DENSITY_CMAP, FUTURE_CMAP, PAST_CMAP):  # a figure's colour map is the explorer's
+        np.testing.assert_allclose(colormap_rgb(name, t), colormap(name)(t)[:, :3], atol=1e-7, err_msg=name)
+    np.testing.assert_allclose(colormap_rgb("viridis", t), colormaps["viridis"](t)[:, :3], atol=1e-7)

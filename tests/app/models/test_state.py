@@ -382,7 +382,7 @@ def test_every_field_is_declared_once_with_its_default_and_event(app_manifold):
     assert len(names) == len(set(names))
     fresh = AppState()
     for f in FIELDS:
-        assert getattr(fresh, f.name) == f.default  # a new state holds every default
+        assert getattr(fresh, f.name) == f.default  # a new state holds every default (no manifold: no palette)
         assert hasattr(fresh.events, f.event_name)
     # the events are the fields' events and ``changed``, nothing declared beside the table
     assert set(fresh.events.NAMES) == {f.event_name for f in FIELDS}
@@ -396,8 +396,9 @@ def test_every_field_is_declared_once_with_its_default_and_event(app_manifold):
     changes = _changes(s)
     s.set_manifold(app_manifold)
     for f in FIELDS:
-        if f.name != "manifold":
+        if f.name not in ("manifold", "palette"):
             assert getattr(s, f.name) == f.default or getattr(s, f.name) is f.default, f.name
+    assert s.palette.levels("phone")[:3] == AppState(app_manifold).palette.levels("phone")[:3]  # the corpus's own
     assert len(changes) == 1
     assert {"manifold", "frame", "state", "color_mode", "horizon_ms", "utterance", "trajectory",
             "playback"} <= changes[0]
@@ -440,3 +441,45 @@ def test_a_field_check_runs_on_every_path_that_sets_it(app_manifold):
         s.set_playback(0)
     s.set_playing(True)  # nothing to play: refused quietly
     assert s.playing is False
+
+
+# ----------------------------------------------------------------------------- view settings
+def test_settings_are_announced_once_per_chosen_change_and_never_for_a_click(app_manifold):
+    s = AppState(app_manifold)
+    seen = []
+    s.events.settings.connect(lambda before, after: seen.append((before, after)))
+    s.set_color_mode("phone")
+    assert seen == [({"color_mode": "density"}, {"color_mode": "phone"})]
+    with s.batch():                                     # one action: one announcement, with every setting moved
+        s.set_horizon(50)
+        s.set_visible_phones(["p"])
+        s.set_horizon(100)                              # and back: no change of the horizon
+    assert seen[-1] == ({"visible_phones": frozenset()}, {"visible_phones": frozenset({"p"})})
+    s.select_frame(40)                                  # a click colours by hop distance: the click's, not a choice
+    assert s.color_mode == "distance" and len(seen) == 2
+    s.reset_settings()                                  # the view's reset: one action
+    assert seen[-1][1]["color_mode"] == "density" and s.frame == 40   # the selection stays
+    s.apply_settings(seen[-1][0])                       # what undo does
+    assert s.color_mode == "distance" and s.visible_phones == {"p"}
+    with pytest.raises(KeyError, match="not view settings: frame"):
+        s.apply_settings({"frame": 3})
+    with pytest.raises(ValueError, match="outside 0..1"):
+        s.set_ellipsoid_opacity(1.5)
+    with pytest.raises(ValueError, match="unknown layer"):
+        s.set_layer_visible("floor", False)
+
+
+def test_play_a_range_stops_at_its_end(app_manifold):
+    """Praat's Tab: a selection plays and stops; a frame past its end (a dropped frame) shows its last."""
+    s = AppState(app_manifold)
+    assert not s.play(0, 10)                            # nothing to play yet
+    s.set_utterance(app_manifold.corpus_.utterances[0].id)
+    n = s.n_playback
+    assert s.play(5, 12) and s.playing and s.playback == 5 and s.play_stop == 12
+    s.set_playback(9)
+    assert s.playing and s.playback == 9
+    s.set_playback(14)                                  # the clock skipped past the end
+    assert not s.playing and s.playback == 11 and s.play_stop is None
+    assert s.play(n - 3) and s.play_stop is None        # from the cursor to the end
+    s.set_playing(False)
+    assert s.play(3, 10**6) and s.play_stop is None     # a stop past the end is the end

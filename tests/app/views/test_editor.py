@@ -2,6 +2,7 @@
 the full warning list and keyboard playback (needs a display: Xvfb is started if absent)."""
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from app.models.target_editing import move_target, phone_frames, remove_target, target_bounds, time_ticks
@@ -281,3 +282,171 @@ def test_default_method_is_the_one_best_on_this_corpus_validation_and_is_named(e
         syn = editor_window.state.synthetic
         assert syn.extra["method"] == best
         assert f"method: {best}, best on validation ({protocol} protocol" in ed.readout.text()
+
+
+# ------------------------------------------------------------------ a timeline that behaves like Praat's
+def _at(tl, frame):
+    """A point on the phone row of the timeline at ``frame``, clear of boundaries."""
+    from PySide6 import QtCore
+
+    top, h = tl._rows()["phones"]
+    return QtCore.QPoint(int(round(tl._x(frame))), int(top + h // 2))
+
+
+def _utterance(ed, k=0):
+    ed.set_source("utterance")
+    ed.utt_box.setCurrentIndex(k)
+    assert ed.load()
+    ed.set_zoom(1.0)
+
+
+@pytest.mark.gui
+def test_a_click_sets_the_cursor_and_selects_the_state_under_it(ed, qtbot, editor_window):
+    from PySide6 import QtCore
+
+    s = editor_window.state
+    _utterance(ed)
+    tl = ed.timeline
+    k = 20
+    qtbot.mouseClick(tl, QtCore.Qt.MouseButton.LeftButton, pos=_at(tl, k))
+    assert abs(tl.cursor - k) <= 1 and s.playback == tl.cursor and not s.playing
+    assert s.frame == int(s.original.frames[tl.cursor]) and s.state == int(s.manifold.states_.labels_[s.frame])
+    assert tl.time_selection is None
+
+
+@pytest.mark.gui
+def test_a_drag_selects_and_tab_plays_the_selection_or_the_visible_part_and_stops(ed, qtbot, editor_window):
+    from PySide6 import QtCore
+
+    s = editor_window.state
+    _utterance(ed)
+    tl = ed.timeline
+    qtbot.mousePress(tl, QtCore.Qt.MouseButton.LeftButton, pos=_at(tl, 10))
+    qtbot.mouseMove(tl, _at(tl, 20))
+    qtbot.mouseMove(tl, _at(tl, 30))
+    qtbot.mouseRelease(tl, QtCore.Qt.MouseButton.LeftButton, pos=_at(tl, 30))
+    a, b = tl.time_selection
+    assert abs(a - 10) < 1 and abs(b - 30) < 1 and ed.sound.time_selection == tl.time_selection
+    tl.setFocus()
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_Tab)                       # Tab: the selection, and stop at its end
+    assert s.playing and s.playback == int(np.floor(a)) and s.play_stop == int(np.ceil(b)) + 1
+    assert editor_window.focusWidget() is tl                         # Tab did not move the focus
+    s.set_playback(s.play_stop + 5)                                  # the clock ran past the end
+    assert not s.playing and s.playback == int(np.ceil(b))
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_Tab)
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_Tab)                        # Tab while playing stops
+    assert not s.playing
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_Escape)                     # no selection: the visible part plays
+    assert tl.time_selection is None
+    ed.set_zoom(4.0)
+    lo, hi = ed.visible_frames()
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_Tab)
+    assert s.playing and s.playback == int(np.floor(lo)) and s.play_stop == int(np.ceil(hi)) + 1
+    s.set_playing(False)
+    ed.set_cursor_frame(12)
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_Tab, QtCore.Qt.KeyboardModifier.ShiftModifier)  # Shift+Tab: from the cursor
+    assert s.playing and s.playback == 12 and s.play_stop is None
+    s.set_playing(False)
+    ed.set_zoom(1.0)
+
+
+@pytest.mark.gui
+def test_praats_zoom_keys_and_ctrl_o_opens_no_file(ed, qtbot, editor_window, monkeypatch):
+    from PySide6 import QtCore, QtWidgets
+
+    opened = []
+    monkeypatch.setattr(QtWidgets.QFileDialog, "getOpenFileName", lambda *a, **k: opened.append(a) or ("", ""))
+    _utterance(ed)
+    tl = ed.timeline
+    tl.setFocus()
+    ctrl = QtCore.Qt.KeyboardModifier.ControlModifier
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_I, ctrl)
+    assert ed.zoom == pytest.approx(2.0)
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_O, ctrl)
+    assert ed.zoom == pytest.approx(1.0) and opened == []            # zoom out, not File › Open
+    ed.set_time_selection((30.0, 45.0))
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_N, ctrl)                    # to the selection
+    lo, hi = ed.visible_frames()
+    assert abs(lo - 30) < 1.5 and abs(hi - 45) < 1.5
+    qtbot.keyClick(tl, QtCore.Qt.Key.Key_A, ctrl)                    # all
+    assert ed.zoom == pytest.approx(1.0)
+    ed.set_time_selection(None)
+
+
+@pytest.mark.gui
+def test_space_after_synthesise_plays_and_never_synthesises_again(ed, qtbot, editor_window):
+    from PySide6 import QtCore
+
+    s = editor_window.state
+    ed.set_method("linear")
+    qtbot.mouseClick(ed.synth_btn, QtCore.Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: s.synthetic is not None, timeout=30000)
+    runner = ed._runner
+    assert not ed.synth_btn.hasFocus()
+    editor_window.activateWindow()
+    ed.timeline.setFocus()
+    qtbot.keyClick(ed.timeline, QtCore.Qt.Key.Key_Space)
+    assert s.playing and ed._runner is runner                        # it plays, no second synthesis
+    s.set_playing(False)
+    ed.method_box.setFocus()                                         # Space elsewhere in the editor plays too
+    ed.key_shortcuts["Space"].activated.emit()
+    assert s.playing and ed._runner is runner
+    s.set_playing(False)
+
+
+@pytest.mark.gui
+def test_a_phone_boundary_drags_undoes_and_writes_a_textgrid(ed, qtbot, editor_window, tmp_path):
+    from PySide6 import QtCore
+
+    from app.models.tier_editing import boundary_limits
+
+    tl = ed.timeline
+    before = ed.targets
+    x = tl.boundary_x("phones", 1)
+    top, h = tl._rows()["phones"]
+    start = QtCore.QPoint(int(round(x)), int(top + h // 2))
+    assert tl.boundary_at(QtCore.QPointF(start)) == ("phones", 1)
+    qtbot.mousePress(tl, QtCore.Qt.MouseButton.LeftButton, pos=start)
+    qtbot.mouseMove(tl, start + QtCore.QPoint(25, 0))
+    qtbot.mouseRelease(tl, QtCore.Qt.MouseButton.LeftButton, pos=start + QtCore.QPoint(25, 0))
+    moved = ed.targets.phones
+    assert moved[0].end > before.phones[0].end and moved[1].start == moved[0].end
+    lo, hi = boundary_limits(before, (), "phones", 1)
+    assert lo <= moved[0].end <= hi                                  # the /aa/ target stays in /aa/
+    assert all(t.frame == u.frame for t, u in zip(ed.targets.targets, before.targets))
+    editor_window.undo_action.trigger()
+    assert ed.targets.phones == before.phones and tl.targets.phones == before.phones
+    editor_window.redo_action.trigger()
+    assert ed.targets.phones == moved
+    path = ed.save_textgrid(tmp_path / "edited.TextGrid")
+    text = path.read_text(encoding="utf-8")
+    assert 'name = "phones"' in text and 'name = "targets"' in text and repr(float(moved[0].end)) in text
+
+
+@pytest.mark.gui
+def test_labels_are_elided_with_a_tooltip_and_never_struck_through(ed, qtbot, editor_window):
+    assert ed.set_text("a breath of air", source="text")
+    tl = ed.timeline
+    assert [w.label for w in tl.words] == ["a", "breath", "of", "air"]
+    assert tl.tiers_height() == tl.HEIGHT + tl.WORD_H
+    k = [w.label for w in tl.words].index("breath")
+    ed.scroll.viewport().resize(140, ed.scroll.viewport().height())  # a narrow timeline
+    ed.set_zoom(1.0)
+    shown = tl.label_shown("words", k)
+    assert shown == "" or (shown.endswith("…") and "breath".startswith(shown[:-1]))   # "bre…", never "reat"
+    assert "'breath'" in tl._tooltip(tl.interval_rect("words", k).center().toPoint())
+    ed.scroll.viewport().resize(1200, ed.scroll.viewport().height())
+    ed.set_zoom(1.0)
+    img = tl.grab().toImage()
+    for tier, ivs in (("words", tl.words), ("phones", tl.targets.phones)):
+        for i in range(len(ivs)):
+            text = tl.label_shown(tier, i)
+            if not text:
+                continue
+            r = tl.interval_rect(tier, i)
+            w = tl.fontMetrics().horizontalAdvance(text)
+            ratio = img.devicePixelRatio()
+            for x in range(int(r.center().x() - w / 2), int(r.center().x() + w / 2)):
+                for y in range(int(r.top() + 6), int(r.bottom() - 2)):
+                    c = img.pixelColor(int(x * ratio), int(y * ratio))
+                    assert not (c.red() > 170 and c.green() < 60 and c.blue() < 60), (tier, ivs[i].label, x, y)

@@ -133,9 +133,8 @@ def test_phone_colouring_has_a_legend_and_a_filter(fresh, qtbot, app_manifold):
     finally:
         v.plotter.render_window.RemoveObserver(obs)
     assert s.phone_filter == {"p", "b", "m"}
-    assert v.legend is not legend and v.legend.GetNumberOfEntries() == 3
-    assert sorted(v.legend.GetEntryString(i) for i in range(3)) == ["b", "m", "p"]
-    assert legend not in list(v.plotter.actors.values())  # the old box is gone
+    assert v.legend.GetNumberOfEntries() == 4              # the same box, its rows changed in place
+    assert [v.legend.GetEntryString(i) for i in range(4)] == ["b", "m", "p", "other phones (dimmed)"]
     s.set_visible_phones(["p"])                                          # ellipsoid shown: points dimmed
     from app.models.colouring import OUTSIDE_RGB
 
@@ -143,20 +142,31 @@ def test_phone_colouring_has_a_legend_and_a_filter(fresh, qtbot, app_manifold):
     assert np.abs(rgb - np.asarray(OUTSIDE_RGB)).max(axis=1).mean() < 0.2
 
 
-def test_esc_resets_colour_bar_and_readouts(fresh, qtbot, app_manifold):
+def test_esc_clears_the_selection_and_nothing_else(fresh, qtbot, app_manifold):
     from PySide6 import QtCore, QtGui
 
+    from app.models.colouring import DENSITY_TITLE
+
     v, s = fresh, fresh.state
+    s.set_horizon(50)
+    s.set_phone_filter(["p"])
+    s.set_visible_phones(["p", "m"])
+    s.set_ellipsoid_opacity(0.6)
+    s.set_layer_visible("plane", False)
     s.select_frame(_front_state_frame(v, app_manifold))
-    s.set_component(0)
     assert s.color_mode == "distance" and "hops" in v._bar.GetTitle()
+    settings = s.settings_values()
     assert v.esc_shortcut.key().matches(QtGui.QKeySequence(QtCore.Qt.Key.Key_Escape)) == \
         QtGui.QKeySequence.SequenceMatch.ExactMatch
     v.esc_shortcut.activated.emit()  # Esc (no window manager under Xvfb gives the test window the focus)
-    assert s.color_mode == "density" and s.state is None and s.component is None
-    assert v._bar.GetTitle() == "log density" and not v._bar.GetUseCustomLabels()
-    assert v.color_box.currentData() == "density"
+    assert s.frame is None and s.state is None and s.target is None and s.path is None
+    assert s.settings_values() == settings                 # colouring, horizon, filter, ellipsoids, layers stay
+    assert set(v.ellipsoids) >= {"p", "m"} and v.ellipsoids["p"].visible and not v.handles["plane"].visible
     assert "Click a point" in v.info.text()
+    s.reset_settings()                                      # the view's reset is its own command
+    assert s.color_mode == "density" and s.visible_phones == frozenset() and s.horizon_ms == 100
+    assert v._bar.GetTitle() == DENSITY_TITLE and not v._bar.GetUseCustomLabels()
+    assert v.color_box.currentData() == "density" and v.handles["plane"].visible and v.plane_box.isChecked()
 
 
 def test_leaving_the_component_panel_returns_the_lips_to_the_selection(qapp, app_manifold):
@@ -271,10 +281,10 @@ def test_a_level_of_detail_cloud_is_coloured_from_every_frame_and_clicks_find_un
     from app.views.manifold_view import ManifoldView
 
     m = app_manifold
-    import app.models.state
+    import app.models.state.derived
 
     monkeypatch.setattr(app.models.lod, "DEFAULT_MAX_POINTS", 800)
-    monkeypatch.setattr(app.models.state, "_PREPARED", type(app.models.state._PREPARED)())  # not another test's cloud
+    monkeypatch.setattr(app.models.state.derived, "PREPARED", type(app.models.state.derived.PREPARED)())  # not another test's cloud
     s = AppState(m)
     v = ManifoldView(s)
     try:
@@ -306,3 +316,124 @@ def test_a_level_of_detail_cloud_is_coloured_from_every_frame_and_clicks_find_un
     finally:
         v.close_view()
         v.close()
+
+
+# ------------------------------------------------------------------ a view that explains itself
+def test_axes_are_named_with_their_share_of_variance_and_hidden_with_the_axes_layer(fresh, app_manifold):
+    v, s = fresh, fresh.state
+    ev = app_manifold.embedding_.explained_variance_ratio_
+    labels = v.handles["yaxes"]["labels"]
+    texts = v.handles["yaxes"]["names"]
+    assert texts == [f"Y{j + 1} · {100 * ev[j]:.0f}% of variance" for j in range(3)]
+    assert labels.GetVisibility() and v.handles["yaxes"]["lines"].visible
+    s.set_layer_visible("axes", False)
+    assert not labels.GetVisibility() and not v.handles["axes"]["S"].visible and not v.axes_box.isChecked()
+    rows = [r[0] for r in v.legend_rows["glyphs"]]
+    assert not any(r.startswith("S:") for r in rows)
+
+
+def test_every_glyph_drawn_has_a_row_in_the_legend(fresh, app_manifold):
+    v, s, m = fresh, fresh.state, app_manifold
+    rows = lambda: [r[0] for r in v.legend_rows["glyphs"]]  # noqa: E731
+    assert "S: global shape direction" in rows() and "zero-velocity plane (V = 0)" in rows()
+    s.select_frame(_front_state_frame(v, m))
+    far = int(np.flatnonzero(np.isfinite(m.states_.future(s.state)))[-1])
+    s.set_target(far)
+    s.set_utterance(m.corpus_.utterances[0].id)
+    s.set_visible_phones(["p"])
+    want = {"selected frame", "target state", f"original trajectory ({m.corpus_.utterances[0].id})",
+            "s_i: local shape direction", "v_i: local velocity direction", "n_i: normal of the local plane",
+            "p: 2-s.d. ellipsoid"}
+    assert want <= set(rows()) and any(r.startswith("fewest-hop path") for r in rows())
+    box = v.legends["glyphs"]
+    assert box.GetVisibility() and box.GetNumberOfEntries() == len(rows())
+    # the ellipsoid's row is in its palette colour, and a ring
+    row = next(r for r in v.legend_rows["glyphs"] if r[0] == "p: 2-s.d. ellipsoid")
+    assert row[1] == pytest.approx(s.palette.colour("phone", "p")) and row[2] == "ring"
+    # in distance mode the point legend names the greys of "beyond the horizon" and "unreachable"
+    assert [r[0] for r in v.legend_rows["points"]] == ["beyond the horizon", "unreachable"]
+    s.set_layer_visible("legend", False)
+    assert not v.legends["glyphs"].GetVisibility() and not v.legends["points"].GetVisibility()
+    s.set_layer_visible("legend", True)
+    s.set_utterance(None)
+
+
+def test_trajectories_and_paths_show_their_direction(fresh, app_manifold):
+    v, s, m = fresh, fresh.state, app_manifold
+    s.select_frame(_front_state_frame(v, m))
+    far = int(np.flatnonzero(np.isfinite(m.states_.future(s.state)))[-1])
+    s.set_target(far)
+    path = v.handles["path"]
+    pos, u = path.arrows
+    assert len(pos) == 5
+    C = m.states_.centroids_[np.asarray(s.path), :3]
+    np.testing.assert_allclose(pos[-1], C[-1], atol=1e-6)           # the last cone at the target
+    assert np.all(np.einsum("ij,ij->i", u, np.diff(C, axis=0)[np.minimum(
+        np.searchsorted(np.r_[0, np.cumsum(np.linalg.norm(np.diff(C, axis=0), axis=1))], np.linalg.norm(
+            np.diff(C, axis=0), axis=1).sum() * np.arange(1, 6) / 5) - 1, len(C) - 2)]) > 0)  # pointing forward
+    s.set_utterance(m.corpus_.utterances[0].id)
+    assert len(v.handles["original"].arrows[0]) == 5
+    s.set_utterance(None)
+
+
+def test_the_hover_readout_goes_with_the_file(fresh, app_manifold):
+    v, s = fresh, fresh.state
+    s.set_hover(_front_state_frame(v, app_manifold))
+    assert "under the pointer" in v.hover_label.text()
+    s.set_manifold(app_manifold)                                       # another file opened
+    assert v.hover_label.text() == ""
+
+
+def test_an_ellipsoid_reads_at_a_glance_outline_and_adjustable_fill(fresh, app_manifold):
+    """A ticked cluster draws an opaque outline in its colour's darker shade around a fill whose opacity
+    the user sets; the outline shows even with no fill."""
+    from app.scene.manifold import outline_colour
+
+    v, s = fresh, fresh.state
+    s.set_layer_visible("points", False)
+    s.set_layer_visible("plane", False)
+    s.set_layer_visible("axes", False)
+    s.set_layer_visible("legend", False)
+    s.set_visible_phones(["p"])
+    v.frame_selection()
+    e = v.ellipsoids["p"]
+    colour = s.palette.colour("phone", "p")
+    np.testing.assert_allclose(e.actor.prop.color.float_rgb, colour, atol=1e-6)
+    assert e.actor.prop.opacity == pytest.approx(0.3)
+
+    def outline_pixels():
+        v.renderer.flush(sync=True)
+        v.plotter.render_window.Render()
+        img = v.plotter.screenshot().astype(int)
+        want = np.rint(255 * np.asarray(outline_colour(colour))).astype(int)
+        return int((np.abs(img - want).max(axis=-1) <= 40).sum())
+
+    ring = outline_pixels()
+    assert ring > 200                                                  # the outline is drawn
+    s.set_ellipsoid_opacity(0.0)
+    assert not e.actor.GetVisibility() and e.outline.GetVisibility() and outline_pixels() > 200
+    s.set_ellipsoid_opacity(0.8)
+    assert e.actor.prop.opacity == pytest.approx(0.8)
+    s.set_visible_phones([])
+    assert not e.visible
+
+
+def test_frame_the_selection_brings_the_ticked_clusters_into_view(fresh, app_manifold):
+    from app.scene.projection import project, view_transform
+
+    v, s = fresh, fresh.state
+    s.set_visible_phones(["p", "b"])
+    cam = v.plotter.renderer.GetActiveCamera()
+    cam.Zoom(0.05)                                                     # zoomed far out: the clusters a few pixels
+    cam.Azimuth(30)
+    direction = np.subtract(cam.GetFocalPoint(), cam.GetPosition()) / cam.GetDistance()
+    assert v.frame_selection()
+    d2 = np.subtract(cam.GetFocalPoint(), cam.GetPosition()) / cam.GetDistance()
+    np.testing.assert_allclose(d2, direction, atol=1e-6)             # the direction of view is kept
+    verts = np.vstack([np.asarray(s.clusters.ellipsoid(p)[0])[:, :3] for p in ("p", "b")])
+    M, size = view_transform(v.plotter)
+    xy, _ = project(verts, M, size)
+    assert np.all((xy >= 0) & (xy <= np.asarray(size)))               # every ellipsoid whole on screen
+    span = (xy.max(0) - xy.min(0)) / np.asarray(size)
+    assert span.max() > 0.4                                           # and filling the view
+    s.set_visible_phones([])

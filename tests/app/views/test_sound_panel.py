@@ -168,3 +168,103 @@ def test_the_sound_box_hides_and_shows_it_and_is_kept_in_the_session(window, qtb
     assert ed.settings()["sound"] is False
     ed.apply_settings({**ed.settings(), "sound": True})
     assert ed.sound.isVisibleTo(ed) and ed.scroll.height() == h
+
+
+def test_a_click_on_the_spectrogram_sets_the_cursor_and_a_drag_selects(window, qtbot, sound_manifold):
+    from PySide6 import QtCore
+
+    ed, s = window.editor, window.state
+    u = sound_manifold.corpus_.utterances[0]
+    _load(ed, qtbot, u.id)
+    _shown(ed, qtbot)
+    rate = sound_manifold.corpus_.rate
+    y = ed.sound.WAVE_HEIGHT + ed.sound.GAP + 30                     # on the spectrogram
+    at = lambda f: QtCore.QPoint(int(round(ed.sound.frame_x(f))), y)  # noqa: E731
+    qtbot.mouseClick(ed.sound, QtCore.Qt.MouseButton.LeftButton, pos=at(25))
+    assert abs(ed.timeline.cursor - 25) <= 1 and s.playback == ed.timeline.cursor
+    assert s.frame == u.start + ed.timeline.cursor                    # and the manifold view selects its state
+    qtbot.mousePress(ed.sound, QtCore.Qt.MouseButton.LeftButton, pos=at(10))
+    qtbot.mouseMove(ed.sound, at(40))
+    qtbot.mouseRelease(ed.sound, QtCore.Qt.MouseButton.LeftButton, pos=at(40))
+    a, b = ed.timeline.time_selection
+    assert abs(a - 10) <= 1 and abs(b - 40) <= 1 and ed.sound.time_selection == (a, b)
+    assert rate > 0
+    ed.set_time_selection(None)
+
+
+def test_the_editor_keeps_no_room_for_a_sound_that_is_off_or_absent(window, qtbot, sound_manifold):
+    """With the sound off (or none), the editor's dock shrinks to what it shows; the layout saved
+    while a sound showed does not bring the empty room back."""
+    ed = window.editor
+    dock = window.docks["editor"]
+    _load(ed, qtbot, sound_manifold.corpus_.utterances[0].id)
+    _shown(ed, qtbot)
+    qtbot.waitUntil(lambda: abs(ed.height() - ed.needed_height()) <= 4, timeout=3000)  # as tall as it needs
+    tall = dock.height()
+    ed.sound_box.setChecked(False)
+    qtbot.waitUntil(lambda: dock.height() <= tall - ed.sound.height() + 12, timeout=3000)
+    assert ed.height() - ed.needed_height() <= 4                       # no dead space under the controls
+    ed.sound_box.setChecked(True)
+    qtbot.waitUntil(lambda: dock.height() >= tall - 12, timeout=3000)
+    _load(ed, qtbot, sound_manifold.corpus_.utterances[2].id)          # no audio: the room goes
+    qtbot.waitUntil(lambda: dock.height() <= tall - ed.sound.height() + 12, timeout=3000)
+    _load(ed, qtbot, sound_manifold.corpus_.utterances[0].id)
+    _shown(ed, qtbot)
+    window.settings.save_layout(window)                                # closed while the sound showed
+    from app.main_window import MainWindow
+
+    w2 = MainWindow(sound_manifold, source={"path": None, "preset": "small"}, settings=window.settings)
+    try:
+        w2.resize(window.size())
+        w2.show()
+        qtbot.waitUntil(lambda: w2.editor.height() > 0, timeout=3000)
+        qtbot.waitUntil(lambda: w2.editor.height() - w2.editor.needed_height() <= 4, timeout=3000)  # no room
+    finally:
+        w2.close()
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (1600, 1000)])
+def test_a_laptops_screen_keeps_the_3d_view_tall_and_clips_nothing(window, qtbot, qapp, sound_manifold, size):
+    """1280 x 720 with an utterance's sound shown (the tallest editor): the manifold view keeps half the
+    window's height, the clusters table five rows, the lips a usable view; no button, box or combo is cut,
+    every combo shows its whole text, the clusters' note clear of the tab bar, no empty room in the editor."""
+    from PySide6 import QtWidgets
+
+    w, ed = window, window.editor
+    w.resize(*size)
+    _load(ed, qtbot, sound_manifold.corpus_.utterances[0].id)
+    _shown(ed, qtbot)
+    w.docks["clusters"].raise_()
+    for _ in range(10):
+        qapp.processEvents()
+    qtbot.waitUntil(lambda: abs(ed.height() - ed.needed_height()) <= 4, timeout=3000)   # no dead space
+    assert w.size().toTuple() == size
+    assert w.manifold_view.plotter.interactor.height() >= size[1] / 2
+    table = w.clusters.table
+    assert table.viewport().height() >= 5 * table.rowHeight(0)
+    assert w.lip_view.plotter.interactor.height() >= 120
+    def nothing_cut():
+        for x in w.findChildren(QtWidgets.QAbstractButton) + w.findChildren(QtWidgets.QComboBox):
+            if x.window() is not w or not x.isVisible() or x.visibleRegion().isEmpty() or x.objectName().startswith("qt_"):
+                continue  # (what a dock's other tab hides; Qt's own dock title buttons place themselves)
+            if not isinstance(x.parentWidget(), QtWidgets.QTabBar):
+                assert x.width() >= x.minimumSizeHint().width(), (type(x).__name__, x.text() if hasattr(x, "text") else "")
+                r = x.mapTo(w, x.rect().topLeft())
+                assert 0 <= r.x() and r.x() + x.width() <= w.width() and r.y() + x.height() <= w.height(), x
+            if isinstance(x, QtWidgets.QComboBox):
+                assert x.fontMetrics().horizontalAdvance(x.currentText()) <= x.width() - 20, x.currentText()
+
+    nothing_cut()
+    w.docks["scree"].raise_()                                                # the other tab of the pair
+    for _ in range(5):
+        qapp.processEvents()
+    nothing_cut()
+    w.docks["clusters"].raise_()
+    for _ in range(5):
+        qapp.processEvents()
+    note, tabs = w.clusters.note, w.findChildren(QtWidgets.QTabBar)
+    box = note.geometry().translated(note.parentWidget().mapTo(w, note.parentWidget().rect().topLeft()))
+    for t in tabs:
+        if t.isVisible():
+            assert not box.intersects(t.geometry().translated(t.parentWidget().mapTo(w, t.parentWidget().rect().topLeft())))
+    w.resize(1300, 850)

@@ -243,7 +243,7 @@ def test_input_validation(clouds):
     args = (c["Fy"], c["Fx"], c["mids"], c["labels"])
     with pytest.raises(ValueError, match="n_dims=6 but F\\^y has 5"):
         PhoneClusters(n_dims=6).fit(*args)
-    with pytest.raises(ValueError, match="min_count=1"):
+    with pytest.raises(ValueError, match="min_count must be an integer >= 2, got 1"):
         PhoneClusters(min_count=1).fit(*args)
     with pytest.raises(ValueError, match="outside the"):
         PhoneClusters().fit(c["Fy"], c["Fx"], np.r_[c["mids"][:-1], len(c["Fy"])], c["labels"])

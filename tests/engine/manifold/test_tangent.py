@@ -250,7 +250,7 @@ def test_bad_input_is_rejected_with_the_fix(talker):
         TangentFrames(n_neighbors=20).fit(Fy[:15], [[0, 15]], ap[:15], rate=RATE)
     for params, msg in (({"n_neighbors": 2}, "n_neighbors must be an integer >= 3 or None"),
                         ({"n_dims": 99}, "n_dims=99 but F\\^y has"),
-                        ({"n_dims": 0}, "n_dims must be a positive integer"),
+                        ({"n_dims": 0}, "n_dims must be an integer >= 1 or None"),
                         ({"zero_velocity_quantile": 1.5}, r"zero_velocity_quantile must be in \(0, 1\)")):
         with pytest.raises(ValueError, match=msg):
             TangentFrames(**params).fit(Fy, bounds, ap, rate=RATE)

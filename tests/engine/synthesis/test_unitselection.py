@@ -91,9 +91,9 @@ def test_hard_joins_are_smoothed(small_manifold, usel):
 
 
 def test_parameters_and_bad_input(small_manifold, usel):
-    with pytest.raises(ValueError, match="context must be 3 or 5"):
+    with pytest.raises(ValueError, match="context must be one of 3, 5"):
         UnitSelectionSynthesizer(context=4).fit(small_manifold)
-    with pytest.raises(ValueError, match="smoothing must be a fraction"):
+    with pytest.raises(ValueError, match=r"smoothing must be in \[0, 0.5\)"):
         UnitSelectionSynthesizer(smoothing=0.7).fit(small_manifold)
     u = small_manifold.corpus_.utterances[0]
     all_ids = [x.id for x in small_manifold.corpus_.utterances]

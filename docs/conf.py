@@ -1,0 +1,62 @@
+"""Sphinx configuration: the user guide, method and results pages (Markdown, through MyST) and the
+API reference generated from the code's numpydoc docstrings (autosummary). ``make docs`` builds it
+with warnings as errors."""
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")  # the app's modules import Qt; nothing is shown
+
+import engine  # noqa: E402
+
+project = "Lipspace"
+author = "The Lipspace developers"
+copyright = "The Lipspace developers"  # noqa: A001
+release = version = engine.__version__
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "numpydoc",
+    "myst_parser",
+]
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+root_doc = "index"
+exclude_patterns = ["_build", "screenshots/*.py", "gltf_web_check", "**/README.md"]
+templates_path = ["_templates"]
+
+# API reference: one page per public name and per module, generated at build time
+autosummary_generate = True
+autosummary_imported_members = False
+autodoc_default_options = {"members": True, "show-inheritance": False}
+autodoc_typehints = "none"           # numpydoc's Parameters sections give the types
+numpydoc_show_class_members = False  # autosummary lists members
+numpydoc_class_members_toctree = False
+numpydoc_xref_param_type = False
+
+myst_heading_anchors = 3
+myst_enable_extensions = ["colon_fence"]
+suppress_warnings = ["myst.header"]  # the Markdown pages start at level 2 under their title in places
+
+html_theme = "pydata_sphinx_theme"
+html_title = f"Lipspace {release}"
+html_theme_options = {"navigation_depth": 2, "show_toc_level": 2}
+html_static_path: list[str] = []
+
+#: what scikit-learn's BaseEstimator gives every estimator: documented there, not on each page
+_INHERITED = {"get_params", "set_params", "get_metadata_routing"}
+
+
+def _skip_estimator_plumbing(app, what, name, obj, skip, options):
+    if name in _INHERITED or (name.startswith("set_") and name.endswith("_request")):
+        return True
+    return None
+
+
+def setup(app):
+    app.connect("autodoc-skip-member", _skip_estimator_plumbing)

@@ -1,0 +1,1 @@
+"""Comparing conditions on one manifold: speakers, emotions or groups, and where they move differently."""

@@ -1,0 +1,1 @@
+"""Signals derived from a corpus's sensors: quality, low-pass filtering, tracks and gestural landmarks."""
