@@ -67,3 +67,52 @@ def test_a_stop_signal_during_the_restore_question_ends_the_explorer(crashed_run
     assert err.strip().endswith(f"lipspace explore: stopped by {signame}; the window was closed (nothing was "
                                 "autosaved yet)."), err
     assert list((tmp_path / "state" / "autosave").glob("autosave-*-5.lipspace.json"))  # still offered next time
+
+
+BUSY = textwrap.dedent("""
+    import sys, time
+    import app.main_window as mw
+    import app.workers as workers
+    from app.cli import main
+
+    workers_cancel_all = workers.cancel_all
+    workers.cancel_all = lambda timeout_ms=5000: workers_cancel_all(timeout_ms=300)  # a long step outlasts the wait
+
+    def busy(progress):
+        progress(0.0, "fitting")
+        time.sleep(30)  # one engine step without a progress call (a large eigendecomposition)
+        progress(1.0, "done")
+
+    def open_source(self, *args, **kwargs):
+        workers.run_task(busy, parent=self, dialog=False)
+        print("busy", flush=True)
+
+    mw.MainWindow.open_source = open_source
+    sys.exit(main(["explore", sys.argv[1]]))
+""")
+
+
+def test_a_stop_signal_while_a_task_is_inside_an_engine_step_exits_with_its_code(tmp_path, app_manifold):
+    """Closing the window cancels the loading task, but one inside a long engine step cannot stop at once:
+    the process must still end with 128 + signal (before: Qt aborted it, 'QThread: Destroyed while thread
+    is still running', a core dump)."""
+    m = app_manifold.save(tmp_path / "m.npz")
+    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
+    env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"))
+    proc = subprocess.Popen([sys.executable, "-c", BUSY, str(m)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env)
+    try:
+        assert proc.stdout.readline().strip() == "busy"
+        time.sleep(1.0)
+        proc.send_signal(signal.SIGTERM)
+        sent = time.monotonic()
+        _, err = proc.communicate(timeout=60)
+        took = time.monotonic() - sent
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert took < 20 and "QThread: Destroyed" not in err and "Traceback" not in err, err
+    assert err.strip().endswith("lipspace explore: stopped by SIGTERM; the window was closed (nothing was "
+                                "autosaved yet)."), err
