@@ -137,14 +137,18 @@ def _script(d, name, text):
     return str(p)
 
 
-#: under a virtual X server: start the window, wait for the restore question (two windows named Lipspace), send
-#: the signal $1, and report a process still alive 15 s later as a hang
-RESTORE_SIGNAL = r'''
+#: wait until the virtual X server answers (exit 97, 'n/a', when it never does: this machine's fault)
+WAIT_FOR_X = r'''
 n=0
 until xdotool getdisplaygeometry >/dev/null 2>&1; do  # the virtual X server answers (else: this machine's fault)
   n=$((n+1)); [ $n -gt 100 ] && exit 97
   sleep 0.2
 done
+'''
+
+#: under a virtual X server: start the window, wait for the restore question (two windows named Lipspace), send
+#: the signal $1, and report a process still alive 15 s later as a hang
+RESTORE_SIGNAL = WAIT_FOR_X + r'''
 $LIPSPACE explore "$M" > "$D/gui.out" 2> "$D/gui.err" &
 pid=$!
 n=0
@@ -166,12 +170,7 @@ exit $rc
 '''
 
 #: under a virtual X server: 'explore --restore' past a damaged autosave, stopped once it was set aside
-RESTORE_DAMAGED = r'''
-n=0
-until xdotool getdisplaygeometry >/dev/null 2>&1; do  # the virtual X server answers (else: this machine's fault)
-  n=$((n+1)); [ $n -gt 100 ] && exit 97
-  sleep 0.2
-done
+RESTORE_DAMAGED = WAIT_FOR_X + r'''
 $LIPSPACE explore --restore > "$D/gui.out" 2> "$D/gui.err" &
 pid=$!
 n=0
