@@ -154,6 +154,9 @@ BOUNDS = {
     ("*", "fx"): whole(0),
     ("*", "rate"): number(0, lo_open=True, unit="Hz"),
     ("*", "interocular_mm"): number(0, lo_open=True, unit="mm"),
+    ("*", "quality_threshold"): number(0, lo_open=True, what="in the units of the file's quality values, e.g. the "
+                                                            "AG501's rms"),
+    ("*", "quality_max_gap"): number(0, 1000, unit="ms", what="the longest run of suspect samples interpolated"),
 }
 
 #: (command or "*", option dest) -> the type of a list-valued text option

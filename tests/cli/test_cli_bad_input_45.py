@@ -126,6 +126,11 @@ def test_a_6_gb_input_is_refused_naming_the_file(tmp_path, capsys):
     (["synthesize", "--manifold", "{m}", "--phones", PHONES, "--candidates", "1e3"], "--candidates '1e3': expected a "
                                                                                        "whole number"),
     (["figures", "{m}", "-o", "{tmp}/f", "--dpi", "abc"], "--dpi 'abc': expected a number"),
+    (["import", "{m}", "-o", "{tmp}/c.npz", "--quality-max-gap", "-1"], "--quality-max-gap -1: must be from 0 to "
+                                                                         "1000 ms"),
+    (["import", "{m}", "-o", "{tmp}/c.npz", "--quality-threshold", "0"], "--quality-threshold 0: must be above 0"),
+    (["build", "-o", "{tmp}/m.npz", "--dynamics-scale", "p200"], "error: --dynamics-scale must be 'max' or a "
+                                                                  "percentile"),
 ])
 def test_every_option_is_checked_as_parsed_and_named(mfile, tmp_path, capsys, argv, says):
     argv = [a.format(m=mfile, tmp=tmp_path) for a in argv]
