@@ -76,7 +76,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 #: arguments naming files a command writes / directories it writes into
-OUTPUT_FILE_ARGS = ("output", "csv", "markdown", "praat", "figure")
+OUTPUT_FILE_ARGS = ("output", "csv", "markdown", "praat", "figure", "quality_report")
 OUTPUT_DIR_ARGS = ("outdir", "mesh_dir", "audio_dir", "textgrid_dir")
 
 

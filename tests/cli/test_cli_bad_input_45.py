@@ -59,6 +59,20 @@ def test_two_output_options_naming_one_file_are_refused(mfile, tmp_path, capsys)
     assert "--csv and --markdown both name" in _one_line(capsys) and not r.exists()
 
 
+def test_an_existing_quality_report_is_refused_as_an_output_not_as_an_input(tmp_path, capsys):
+    lips = tmp_path / "lips.csv"
+    lips.write_text("time,UL_x,UL_y,LL_x,LL_y\n" + "".join(f"{k / 100:.2f},1,2,{k % 5},-3\n" for k in range(60)))
+    report = tmp_path / "r.csv"
+    report.write_text("the user's own table\n")
+    argv = ["import", str(lips), "-o", str(tmp_path / "c.npz"), "-q", "--quality-report", str(report)]
+    assert main(argv) == 2
+    err = _one_line(capsys)
+    assert f"--quality-report {report}: already exists" in err and "--force" in err, err
+    assert report.read_text() == "the user's own table\n" and not (tmp_path / "c.npz").exists()
+    assert main(argv + ["--force"]) == 0
+    assert report.read_text().startswith("utterance,sensor,measure") and (tmp_path / "c.npz").is_file()
+
+
 def test_a_fifo_a_device_and_a_dangling_link_are_never_replaced(mfile, tmp_path, capsys):
     fifo = tmp_path / "f.csv"
     os.mkfifo(fifo)
