@@ -397,6 +397,9 @@ def cases_45(d: Path):
                                                 "--method", "linear", "-q"], 2, "already exists",
              prepare=lambda d: (o / "dl.csv").symlink_to(o / "gone" / "x.csv"),
              after=_is("link", o / "dl.csv", "LOST: the link was replaced"), loses_input=True, group=G1),
+        Case("import --quality-report over the user's file", imp + [str(lips), "-o", f"{o}/c.npz", "--quality-report",
+                                                             f"{o}/qr.csv", "-q"], 2, "already exists",
+             [f"{o}/c.npz"], keep=[(o / "qr.csv", USER)], group=G1),
         Case("cache --clear: the user's look-alikes", ["cache", "--clear"], 0, None,
              keep=[(d / "ucache" / "synthetic-default-notes.npz", USER), (d / "ucache" / "manifolds" /
                                                                            "synthetic-small-mine.npz", USER),
@@ -531,6 +534,8 @@ def cases_45(d: Path):
              group=G8),
         Case("build --neighbors 2", ["build", c, "-o", f"{o}/m.npz", "--neighbors", "2", "-q"], 2, "--neighbors",
              never="n_neighbors", group=G8),
+        Case("import --quality-max-gap -1", imp + [str(lips), "-o", f"{o}/c.npz", "--quality-max-gap", "-1"], 2,
+             "--quality-max-gap", [f"{o}/c.npz"], never="-0.001 s", group=G8),
         Case("evaluate --states 0", ["evaluate", c, "--states", "0", "-q"], 2, "--states", group=G8),
         Case("import --points ''", imp + [str(lips), "-o", f"{o}/c.npz", "--points", ""], 2, "--points",
              never="concatenate", group=G8),
