@@ -8,6 +8,7 @@ signal (:mod:`app.window.signals`).
 """
 from __future__ import annotations
 
+import contextlib
 import signal
 import sys
 from pathlib import Path
@@ -332,6 +333,8 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
         print(f"lipspace explore: warning: autosave is off ({autosaver.directory}: {exc})", file=sys.stderr)
         autosaver, recovery = None, None
     win = MainWindow(autosave=autosaver)
+    signals = contextlib.ExitStack()  # from here on (the restore question too) a stop signal closes the window
+    stopped = signals.enter_context(stop_on_signals(app, win))
     win.show()
     said = list(notes)
     for note in (autosaver.set_aside if autosaver is not None else []) + win.settings.set_aside:
@@ -355,9 +358,11 @@ def launch(path=None, preset: str = "default", session: dict | None = None, rest
     elif session is not None and path is None:
         preset = session.get("source", {}).get("preset", preset)
         kinematics = source_kinematics(session)
-    win.open_source(path, preset=preset, kinematics=kinematics, session=session)
-    with stop_on_signals(app, win) as stopped:
+    code = 0
+    if not stopped:  # else a signal came during the restore question: the window is closed already
+        win.open_source(path, preset=preset, kinematics=kinematics, session=session)
         code = int(app.exec())
+    signals.close()
     if stopped:
         # not a chosen Quit: no finish(), so a saved session (or a restored one not yet saved
         # again) stays and the next start offers it back; a marker without one is pruned then

@@ -28,13 +28,42 @@ MAX_RECENT = 10
 LAYOUT_VERSION = 1
 
 
-def open_settings() -> QtCore.QSettings:
-    """The user's Lipspace settings (``$LIPSPACE_CONFIG_DIR/lipspace.ini`` or Qt's user location)."""
+#: the largest settings file read (one is a few kB: two saved layouts and ten file names)
+MAX_SETTINGS_BYTES = 4 * 2**20
+
+
+def settings_file() -> Path:
+    """Where the settings live: ``$LIPSPACE_CONFIG_DIR/lipspace.ini``, else Qt's per-user INI location for
+    organisation "Lipspace", application "lipspace" (found without opening that file)."""
     env = os.environ.get(CONFIG_DIR_ENV)
     if env:
-        return QtCore.QSettings(str(Path(env) / "lipspace.ini"), QtCore.QSettings.Format.IniFormat)
-    return QtCore.QSettings(QtCore.QSettings.Format.IniFormat, QtCore.QSettings.Scope.UserScope, "Lipspace",
-                            "lipspace")
+        return Path(env) / "lipspace.ini"
+    probe = QtCore.QSettings(QtCore.QSettings.Format.IniFormat, QtCore.QSettings.Scope.UserScope, "Lipspace",
+                             "lipspace-location")  # never written: only its folder is used
+    return Path(probe.fileName()).with_name("lipspace.ini")
+
+
+def open_settings() -> QtCore.QSettings:
+    """The user's Lipspace settings (``$LIPSPACE_CONFIG_DIR/lipspace.ini`` or Qt's user location)."""
+    return QtCore.QSettings(str(settings_file()), QtCore.QSettings.Format.IniFormat)
+
+
+def _not_readable(path: Path) -> str | None:
+    """Why ``path`` cannot be the settings file, without opening it: a pipe (Qt would block reading it),
+    a device, a folder or a huge file. None when it is fine or absent."""
+    from engine.files.bounded import InputTooLargeError, NotRegularFileError, check_bounded
+
+    try:
+        check_bounded(path, limit=MAX_SETTINGS_BYTES, what="settings file")
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    except NotRegularFileError as exc:
+        return f"it is {exc.kind}, not a settings file"
+    except InputTooLargeError as exc:
+        return f"it holds {exc.size} bytes, far more than window settings take"
+    except OSError as exc:
+        return exc.strerror or str(exc)
+    return None
 
 
 class WindowSettings:
@@ -47,9 +76,19 @@ class WindowSettings:
     """
 
     def __init__(self, settings: QtCore.QSettings | None = None):
-        self.qsettings = settings if settings is not None else open_settings()
         #: what was wrong with a damaged settings file set aside at start (one sentence each)
         self.set_aside: list[str] = []
+        if settings is None:  # checked before Qt opens it: QSettings blocks for good on a pipe
+            path = settings_file()
+            why = _not_readable(path)
+            if why is not None:
+                self._move_aside(why, path)
+                if _not_readable(path) is not None:  # could not be moved: this run keeps its settings elsewhere
+                    import tempfile
+
+                    path = Path(tempfile.mkdtemp(prefix="lipspace-settings-")) / "lipspace.ini"
+            settings = QtCore.QSettings(str(path), QtCore.QSettings.Format.IniFormat)
+        self.qsettings = settings
         why = self.damage()
         if why is not None:
             self._move_aside(why)
@@ -57,11 +96,16 @@ class WindowSettings:
     # ------------------------------------------------------------------ damaged files
     def damage(self) -> str | None:
         """What is wrong with the settings file (None: nothing, or no file yet)."""
+        from engine.files.bounded import read_bounded
+
         s = self.qsettings
         path = Path(s.fileName())
+        why = _not_readable(path)
+        if why is not None:
+            return why
         try:
-            raw = path.read_bytes()
-        except OSError:
+            raw = read_bounded(path, limit=MAX_SETTINGS_BYTES, what="settings file")
+        except (OSError, ValueError):
             return None  # not written yet (or not a file: Qt's native formats)
         if b"\0" in raw:
             return "it holds binary data, not INI text"
@@ -87,11 +131,12 @@ class WindowSettings:
             return f"recent/files is {str(v)[:30]!r}, not a list of files"
         return None
 
-    def _move_aside(self, why: str) -> None:
+    def _move_aside(self, why: str, path: Path | None = None) -> None:
         """Move the damaged file to ``<name>.damaged-<time>`` and start from empty settings."""
         import time
 
-        path = Path(self.qsettings.fileName())
+        before = path is not None  # found before Qt opened it: nothing to clear or reopen
+        path = Path(self.qsettings.fileName()) if path is None else path
         dest = path.with_name(f"{path.name}.damaged-{time.strftime('%Y%m%d-%H%M%S')}")
         try:
             os.replace(path, dest)
@@ -100,9 +145,11 @@ class WindowSettings:
         except OSError as exc:
             self.set_aside.append(f"the window settings {path} are damaged ({why}) and could not be moved aside "
                                   f"({exc.strerror or exc}); they are ignored")
-            self.qsettings.clear()  # none of its values is used
+            if not before:
+                self.qsettings.clear()  # none of its values is used
             return
-        self.qsettings = QtCore.QSettings(str(path), QtCore.QSettings.Format.IniFormat)
+        if not before:
+            self.qsettings = QtCore.QSettings(str(path), QtCore.QSettings.Format.IniFormat)
 
     # ------------------------------------------------------------------ layout
     def save_layout(self, window) -> None:

@@ -24,7 +24,7 @@ from app.user_messages import UserError
 from engine.progress import Cancelled
 from engine.recordings.corpus import CorpusWarning
 
-__all__ = ["Worker", "TaskRunner", "run_task", "run_blocking", "cancel_all", "WarningRouter", "WARNINGS"]
+__all__ = ["Worker", "TaskRunner", "run_task", "run_blocking", "cancel_all", "running", "WarningRouter", "WARNINGS"]
 
 
 class WarningRouter:
@@ -319,6 +319,11 @@ def run_task(task, *, parent=None, title: str = "Working", on_done=None, on_erro
 
 
 _RUNNING: set = set()
+
+
+def running() -> bool:
+    """Whether a task's thread still runs (cancelled or not: a task stops at its next progress call)."""
+    return any(r.thread.isRunning() for r in list(_RUNNING))
 
 
 def cancel_all(timeout_ms: int = 5000) -> None:

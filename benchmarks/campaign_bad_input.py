@@ -1,8 +1,8 @@
-"""The bad-input campaigns of issues 16 and 30 as a checklist: every case the issues list,
+"""The bad-input campaigns of issues 16, 30 and 45 as a checklist: every case the issues list,
 and more of each class, run as a real ``lipspace`` process under a memory cap and a
-timeout, one line per case.
+timeout, one line per case, grouped by the class of issue 45 they test.
 
-Usage: python benchmarks/campaign_bad_input.py [--root TREE] [--cap-gb 3] [--timeout 60]
+Usage: python benchmarks/campaign_bad_input.py [--root TREE] [--cap-gb 3] [--timeout 60] [--only TEXT]
 
 ``--root`` runs the cases against another checkout of the project (e.g. an older commit
 extracted with ``git archive REV | tar -x -C DIR``) to compare before and after; the
@@ -10,32 +10,35 @@ manifold and corpus inputs are made by that tree's own code, the damaged recordi
 this script. Each line: the verdict, exit status, wall time, peak resident memory of the
 case's process, the case and the first line it printed:
 
-* ``ok``          exit 0 or 2 as expected, one clean line, nothing left behind, the
-                  expected refusal or warning said
+* ``ok``          exit as expected, one clean line, nothing left behind, the expected
+                  refusal or warning said
 * ``TRACEBACK``   a Python traceback reached the user
-* ``CRASH``       killed by a signal (segfault, OOM kill) or the memory cap
-* ``HANG``        still running at the timeout
-* ``SILENT``      exit 0 where the input should have been refused, or repaired without
-                  the repair said (and kept in the corpus history for ``info``)
-* ``LOST``        a user file that existed before was changed or removed, or a run that
-                  lost an input exited 0 without ``--skip-bad``
-* ``LEFT``        a failed or stopped command left a file (or ``.part`` file) behind, or
-                  its message says nothing was written while something was
-* ``MISREPORT``   refused, but without saying what the issue asks it to say, or naming a
-                  temporary file, a Python identifier or an engine module
-* ``n/a``         the case needs what this machine lacks (``unshare`` for a full disk)
+* ``CRASH``       killed by a signal (segfault, abort, OOM kill) or the memory cap
+* ``HANG``        still running at the timeout (or alive after a stop signal)
+* ``SILENT``      exit 0 where the input should have been refused, or repaired or
+                  reinterpreted without saying so (and kept in the corpus history for ``info``)
+* ``LOST``        a user file that existed before (or appeared while the command ran) was
+                  changed or removed, or a run that lost an input exited 0 without ``--skip-bad``
+* ``LEFT``        partial output: a failed or stopped command left a file (or ``.part`` file)
+                  behind, or its message says nothing was written while something was
+* ``MISREPORT``   misleading: refused, but without saying what the issue asks it to say, or
+                  naming a temporary file, a Python identifier or an engine module
+* ``n/a``         the case needs what this machine lacks (``unshare`` for a full disk, Xvfb,
+                  the video extra)
 
 Full and read-only disks are real: the case runs in a private mount namespace
 (``unshare -rm``, no root needed) with a tiny or read-only tmpfs where it writes.
 
-A summary counts each verdict; ``--json`` writes the rows.
+The cases live in ``_campaign_16_30.py`` (the first two campaigns) and ``_campaign_45.py``
+(the third, grouped by its nine classes). A summary counts each verdict and gives the
+tally of issue 45 (lost, crash, hang, traceback, partial, silent, misleading); ``--json``
+writes the rows.
 """
 from __future__ import annotations
 
 import argparse
 import hashlib
 import json
-import math
 import os
 import re
 import resource
@@ -45,11 +48,16 @@ import subprocess
 import sys
 import tempfile
 import time
-import zlib
-from dataclasses import dataclass, field
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _campaign_16_30 import cases, cases_30  # noqa: E402
+from _campaign_45 import cases_45  # noqa: E402
+from _campaign_case import ROOT, Case, _old  # noqa: E402
+
+#: issue 45's names for the verdicts it counts
+TALLY = (("LOST", "lost"), ("CRASH", "crash"), ("HANG", "hang"), ("TRACEBACK", "traceback"), ("LEFT", "partial"),
+         ("SILENT", "silent"), ("MISREPORT", "misleading"))
 
 SETUP = r'''
 import json, sys
@@ -63,457 +71,6 @@ tiny.save(d + "/corpus.npz")
 c.save(d + "/small.npz")
 Manifold(n_states=20).fit(tiny).save(d + "/manifold.npz")
 '''
-
-def _changed_npz(src, dst, **changes) -> Path:
-    """A copy of the .npz ``src`` at ``dst`` with the arrays ``changes`` replaced (a damaged or renamed corpus)."""
-    import numpy as np
-
-    arrays = {**dict(np.load(src, allow_pickle=False)), **changes}
-    with open(dst, "wb") as fh:
-        np.savez(fh, **arrays)
-    return Path(dst)
-
-
-#: what a refusal must say, per case (substring of stderr); None: any clean refusal
-def cases(d: Path):
-    """(name, argv or python snippet, expected exit, what stderr must contain, files that must not exist)."""
-    import numpy as np
-
-    m, c = str(d / "manifold.npz"), str(d / "corpus.npz")
-    out = d / "out"
-    arrays = dict(np.load(m, allow_pickle=False))
-
-    def damaged(name, **changes):
-        a = dict(arrays)
-        for k, v in changes.items():
-            if v is None:
-                a.pop(k, None)
-            else:
-                a[k] = v
-        p = d / f"{name}.npz"
-        with open(p, "wb") as fh:
-            np.savez(fh, **a)
-        return str(p)
-
-    key = next(k for k in arrays if k.endswith("transition_.indices"))
-    bad_csr = damaged("bad-csr", **{key: arrays[key] + 10**6})
-    params = "manifold_params"
-    bad_json = damaged("bad-json", **{params: np.array("{not json")})
-    as_list = damaged("as-list", **{params: np.array("[1, 2]")})
-    unknown = damaged("unknown-key", **{params: np.array(json.dumps({**json.loads(str(arrays[params])),
-                                                                       "bogus": 1}))})
-    version = damaged("bad-version", manifold_version=np.array("one"))
-    lab = next((k for k in arrays if k.endswith("states/labels_")), None)
-    labels = damaged("bad-labels", **{lab: arrays[lab] + 1000}) if lab else bad_csr
-
-    est = d / "huge.ema"
-    est.write_bytes(b"EST_File Track\nDataType binary\nByteOrder 01\nNumFrames 1\nNumChannels 2000000000\n"
-                    b"BreaksPresent true\nEST_Header_End\n" + bytes(36_000))
-    co = zlib.compressobj(9)
-    payload = b"".join([co.compress(bytes(2**20)) for _ in range(2000)] + [co.flush()])
-    mat = d / "bomb.mat"
-    mat.write_bytes(b"MATLAB 5.0 MAT-file, hostile".ljust(116, b" ") + bytes(8) + b"\x00\x01IM"
-                    + np.array([15, len(payload)], "<u4").tobytes() + payload)
-    import zipfile
-    npz = d / "bomb.npz"
-    with zipfile.ZipFile(npz, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        with zf.open("corpus_frames.npy", "w", force_zip64=True) as f:
-            np.lib.format.write_array_header_1_0(f, {"descr": "<f4", "fortran_order": False,
-                                                     "shape": (2000 * 2**18,)})
-            for _ in range(2000):
-                f.write(bytes(2**20))
-    ply_dir = d / "ply"
-    ply_dir.mkdir(exist_ok=True)
-    n = 10 * 2**20
-    for k in range(2):  # 10 MB of empty face lists after one triangle (the campaign: 90 s, 1.7 GB)
-        (ply_dir / f"f{k}.ply").write_bytes(
-            (f"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-             f"property float z\nelement face {n}\nproperty list uchar int vertex_indices\nend_header\n").encode()
-            + bytes(36) + b"\x03" + np.array([0, 1, 2], "<i4").tobytes() + bytes(n - 1))
-    fifo = d / "fifo.npz"
-    if not fifo.exists():
-        os.mkfifo(fifo)
-    csv = d / "timed.csv"
-    csv.write_text("time,a_x,a_y\n" + "".join(f"{k / 100:.2f},{k},0\n" for k in range(100)))
-    gaps = d / "gaps.csv"
-    gaps.write_text("frame,point,x,y\n" + "".join(f"{f},m,{f},0\n" for f in range(60) if f not in (7, 8)))
-    lab25 = d / "long.lab"
-    lab25.write_text("0 0.5 p\n0.5 25 aa\n")
-    times = np.load(c, allow_pickle=False)["corpus_phone_times"]
-    ph = _changed_npz(c, d / "phones-out.npz", corpus_phone_times=times + 1000.0)
-    esc = _changed_npz(c, d / "escape.npz", corpus_name=np.array("\x1b[31mRED\x1b]0;owned\x07"))
-    shared = ROOT.parent / "shared" / "data"
-    (d / "adir").mkdir(exist_ok=True)
-    (d / "afile").write_text("x")
-
-    def session(name, body):
-        p = d / f"{name}.lipspace.json"
-        p.write_text(body if isinstance(body, str) else json.dumps(body))
-        return str(p)
-
-    s_passwd = session("passwd", {"lipspace_session": 1, "source": {"path": "/etc/passwd"}})
-    s_rel = session("relpasswd", {"lipspace_session": 1, "source": {"path": "../../../../../../etc/passwd"}})
-    s_type = session("wrongtype", {"lipspace_session": 1, "source": {"path": 5}})
-    s_deep = session("deep", '{"lipspace_session": 1, "x": ' + "[" * 100000 + "]" * 100000 + "}")
-    s_range = session("range", {"lipspace_session": 1, "source": {"path": m}, "selection": {"frame": 10**9}})
-    s_fifo = session("fifo", {"lipspace_session": 1, "source": {"path": str(fifo)}})
-    load = ("from app.files.session import load_session, SessionError\ntry:\n    d = load_session({!r})\n"
-            "except SessionError as exc:\n    print('refused:', exc)\nelse:\n    print('loaded', d['source'])")
-    apply = ("from app.files.session import load_session, apply_session, SessionError\nfrom app.models.state import AppState\n"
-             "from engine.manifold.model import Manifold\nd = load_session({!r})\n"
-             "st = AppState(Manifold.load(d['source']['path']))\ntry:\n    apply_session(st, d)\n"
-             "except SessionError as exc:\n    print('refused:', exc)\nelse:\n    print('applied')")
-    o = str(out)
-    S = "synthesize"
-    return [
-        ("info: out-of-range CSR indices (segfault)", ["info", bad_csr], 2, None, []),
-        ("build corpus -o corpus (destroyed the corpus)", ["build", c, "-o", c, "-q"], 2, "input", []),
-        ("info: bad JSON in parameters", ["info", bad_json], 2, None, []),
-        ("clusters: parameters a list", ["clusters", as_list], 2, None, []),
-        ("synthesize: unknown parameter key", [S, "--manifold", unknown, "--phones", "p 0.1 aa 0.1", "-o",
-                                               o + "/t.csv"], 2, None, [o + "/t.csv"]),
-        ("info: non-integer version", ["info", version], 2, None, []),
-        ("synthesize: labels >= K", [S, "--manifold", labels, "--phones", "p 0.1 aa 0.1", "-o", o + "/t.csv"], 2,
-         None, [o + "/t.csv"]),
-        ("build -o a directory", ["build", c, "-o", str(d / "adir"), "-q"], 2, None, []),
-        ("synthesize --mesh-dir a file", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "--mesh-dir",
-                                          str(d / "afile")], 2, None, []),
-        ("figures --dpi 100000", ["figures", m, "-o", o + "/figs", "--dpi", "100000", "--only", "scree", "-q"], 2,
-         None, [o + "/figs"]),
-        ("import --resample 1e9", ["import", str(csv), "-o", o + "/c.npz", "--resample", "1e9"], 2, None,
-         [o + "/c.npz"]),
-        ("SIGTERM during build", ["build", str(d / "small.npz"), "-o", o + "/sig.npz", "-q", "@SIGTERM 4"], None,
-         None, [o + "/sig.npz"]),
-        ("EST header claiming 2e9 channels", ["import", str(est), "-o", o + "/c.npz", "--rate", "60"], 2, None,
-         [o + "/c.npz"]),
-        ("MAT zlib bomb (2 GB inflated)", ["import", str(mat), "-o", o + "/c.npz"], 2, None, [o + "/c.npz"]),
-        ("npz zip bomb (2 GB inflated): info", ["info", str(npz)], 2, None, []),
-        ("npz zip bomb: build", ["build", str(npz), "-o", o + "/m.npz", "-q"], 2, None, [o + "/m.npz"]),
-        ("PLY: 10 MB of empty face lists", ["import", str(ply_dir), "-o", o + "/c.npz", "--rate", "60"], 2, None,
-         [o + "/c.npz"]),
-        ("synthesize a 1e6 s phone", [S, "--manifold", m, "--phones", "p 1e6 aa 0.1", "-o", o + "/t.csv"], 2,
-         None, [o + "/t.csv"]),
-        ("synthesize --tempo 1e-6", [S, "--manifold", m, "--text", "bob", "--tempo", "1e-6", "-o",
-                                     o + "/t.csv"], 2, None, [o + "/t.csv"]),
-        ("synthesize --inverse-dims 10", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "--inverse-dims", "10",
-                                          "-o", o + "/t.csv"], 2, None, [o + "/t.csv"]),
-        ("a FIFO as input", ["info", str(fifo)], 2, None, []),
-        ("session source /etc/passwd", ["@py", load.format(s_passwd)], 1, "refused:", []),
-        ("session source ../../etc/passwd", ["@py", load.format(s_rel)], 1, "refused:", []),
-        ("session source of the wrong type", ["@py", load.format(s_type)], 1, "refused:", []),
-        ("session nested 100000 deep", ["@py", load.format(s_deep)], 1, "refused:", []),
-        ("session frame out of range", ["@py", apply.format(s_range)], 1, "refused:", []),
-        ("session source a FIFO", ["@py", load.format(s_fifo)], 1, "refused:", []),
-        ("CSV time column + different --rate", ["import", str(csv), "-o", o + "/c.npz", "--rate", "60"], 2,
-         "100 Hz", [o + "/c.npz"]),
-        ("long table with frame gaps", ["import", str(gaps), "-o", o + "/g.npz", "--rate", "60"], 0, "7, 8", []),
-        ("alignment 25x longer than the data", ["import", str(csv), "--alignment", str(lab25), "-o",
-                                                o + "/a.npz"], 2, "25", [o + "/a.npz"]),
-        ("npz phones outside the utterance", ["import", str(ph), "-o", o + "/p.npz"], 2, "phone", [o + "/p.npz"]),
-        ("empty text", [S, "--manifold", m, "--text", "", "-o", o + "/t.csv"], 2, None, [o + "/t.csv"]),
-        ("text of punctuation only", [S, "--manifold", m, "--text", "...", "-o", o + "/t.csv"], 2, None,
-         [o + "/t.csv"]),
-        ("'café' (unknown word)", [S, "--manifold", m, "--text", "café", "-o", o + "/t.csv"], 2, "'café'",
-         [o + "/t.csv"]),
-        ("info on a Haskins .mat", ["info", str(shared / "haskins-ieee" / "F01_B01_S01_R01_N.mat")], 2,
-         "lipspace import", []),
-        ("info on a MOCHA .ema", ["info", str(shared / "mocha-fsew0" / "fsew0_001.ema")], 2, "lipspace import", []),
-        ("corpus name with escape codes", ["info", str(esc)], 0, "!ESC", []),
-        ("cache keyed on the fitting code", ["@py", "from app.files.source_loading import cached_manifold_path as p; "
-                                             "from engine.manifold.model import algorithm_fingerprint as a; "
-                                             "assert a() in p('small').name; print('keyed')"], 0, None, []),
-    ]
-
-
-@dataclass
-class Case:
-    """One run: ``argv`` of ``lipspace`` (or ``["@py", code]``), the exit expected (0, 1 = a Python
-    snippet printing its verdict, 2, None = stopped by a signal or finished), what stderr must say."""
-
-    name: str
-    argv: list
-    expect: int | None
-    says: str | None = None
-    gone: list = field(default_factory=list)  # files that must not exist after a failure or a stop
-    keep: list = field(default_factory=list)  # user files that must be byte for byte as before
-    mount: str | None = None  # "tmpfs:SIZE" (a full disk) or "ro" at d/"tiny" for the run
-    env: dict = field(default_factory=dict)
-    never: str | None = None  # text stderr must not hold (a misleading hint)
-    after: object = None  # callable(d) -> problem or None, run after the case (e.g. info keeps the repair)
-    stop_after: float | None = None  # seconds until SIGTERM (with stop_when: at most)
-    stop_when: str | None = None  # SIGTERM as soon as a file matching this glob (below the case folder) exists
-    lines: int = 1  # most lines a refusal may print (the unreadable inputs are listed one per line)
-    loses_input: bool = False  # exit 0 would mean an input was lost (LOST, not SILENT)
-
-
-def _old(p, text=b"a user's own file\n"):
-    p = Path(p)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    p.write_bytes(text)
-    return str(p)
-
-
-def _pos(path, M, rate="250", n_ch=2):
-    import numpy as np
-
-    hdr = f"AG50xDATA_V002\n00000000\nNumberOfChannels={n_ch}\nSamplingFrequencyHz={rate}\n".encode()
-    hdr = hdr.replace(b"00000000", f"{len(hdr):08d}".encode())
-    path.write_bytes(hdr + np.asarray(M, "<f4").tobytes())
-    return str(path)
-
-
-def _mview(path, sig, *, srate=100.0, audio=None, names=("UL", "LL")):
-    import numpy as np
-    import scipy.io
-
-    dt = [("NAME", "O"), ("SRATE", "O"), ("SIGNAL", "O"), ("SENTENCE", "O"), ("PHONES", "O")]
-    s = np.zeros((1, 1 + len(names)), dtype=dt)
-    snd = np.random.default_rng(2).normal(size=(4410, 1)) * 0.1 if audio is None else audio
-    s[0, 0] = ("AUDIO", 44100.0, snd.astype(np.float32), "", np.zeros((0, 0)))
-    for k, n in enumerate(names):
-        s[0, 1 + k] = (n, srate, sig.astype(np.float32) + k, "", np.zeros((0, 0)))
-    scipy.io.savemat(path, {Path(path).stem: s})
-    return str(path)
-
-
-def _info_says(corpus, text):
-    """An ``after`` check: ``lipspace info CORPUS`` lists ``text`` in the history."""
-    def check(d, root):
-        r = subprocess.run([sys.executable, "-m", "app.cli", "info", str(corpus)], cwd=d, capture_output=True,
-                           text=True, env=dict(os.environ, PYTHONPATH=str(root)))
-        return None if text in r.stdout else f"info does not keep {text!r} in the history"
-    return check
-
-
-def cases_30(d: Path):
-    """Issue 30's classes: data defects repaired and said or refused, no overwritten file, lost inputs,
-    stops and failures at any moment, damaged window state files, messages that mislead."""
-    import warnings
-
-    import c3d
-    import numpy as np
-
-    rng = np.random.default_rng(30)
-    o, m, c = d / "out", str(d / "manifold.npz"), str(d / "corpus.npz")
-    r = d / "rec"
-    r.mkdir(exist_ok=True)
-    S = "synthesize"
-    haskins = ROOT.parent / "shared" / "data" / "haskins-ieee" / "F01_B01_S01_R01_N.mat"
-
-    # ---- recordings with the defects of item 1
-    rows = ["time,UL_x,UL_y,LL_x,LL_y"]
-    for k in range(60):
-        v = [f"{math.sin(k / 5):.4f}", "2", "3", "4"]
-        v[0] = "" if k in (10, 11) else v[0]
-        v[1] = "nan" if k == 20 else v[1]
-        v[2] = "inf" if k == 30 else v[2]
-        rows.append(",".join([f"{k / 100:.2f}", *v]))
-    holes = r / "holes.csv"
-    holes.write_text("\n".join(rows) + "\n")
-    dup = r / "dup.csv"
-    dup.write_text("time,UL_x,UL_y,UL_x,LL_y\n" + "".join(f"{k / 100},1,2,3,4\n" for k in range(30)))
-    nolx = r / "nolx.csv"
-    nolx.write_text("time,UL_x,UL_y,LL_y\n" + "".join(f"{k / 100},1,2,4\n" for k in range(30)))
-    huge_cell = r / "huge.csv"
-    huge_cell.write_text("time,a_x,a_y\n" + "".join(f"{k / 100},{1e12 if k == 7 else k},0\n" for k in range(30)))
-    from engine.io import write_est_track
-
-    valid = np.ones(100, bool)
-    valid[40:43] = False
-    ema = write_est_track(r / "breaks.ema", np.arange(100) / 500, rng.normal(size=(100, 4)) * 100,
-                          ["ul_x", "ul_y", "ll_x", "ll_y"], valid=valid)
-    w = c3d.Writer(point_rate=120.0)
-    w.set_point_labels(["UL", "LL"])
-    for i in range(40):
-        pts = np.zeros((2, 5), np.float32)
-        pts[:, :3] = rng.normal(size=(2, 3))
-        pts[1, 3] = -1 if i in (5, 6) else 0
-        w.add_frames([(pts, np.zeros((0, 0)))])
-    c3dp = r / "invalid.c3d"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        with open(c3dp, "wb") as fh:
-            w.write(fh)
-    sig = rng.normal(size=(60, 6))
-    sig[[3, 4], 0] = np.nan
-    mat_nan = _mview(r / "hnan.mat", sig)
-    mat_rate = _mview(r / "hrate.mat", rng.normal(size=(60, 6)), srate=1e300)
-    mat_inf = _mview(r / "hinf.mat", rng.normal(size=(60, 6)), audio=np.full((4410, 1), np.inf))
-    M = rng.normal(size=(100, 14))
-    M[:60] = np.nan
-    pos60 = _pos(r / "nan60.pos", M)
-    pos = {v: _pos(r / f"rate-{k}.pos", rng.normal(size=(100, 14)), rate=v)
-           for k, v in enumerate(("0", "1e300", "NaN", "abc"))}
-    wave = r / "w.tsv"
-    wave.write_text("Time\tSensor 1 Id\tSensor 1 Status\tSensor 1 Tx\tSensor 1 Ty\tSensor 1 Tz\n" + "".join(
-        f"{k / 100:.2f}\t1\t{'Missing' if k == 7 else 'OK'}\t{k}\t1\t2\n" for k in range(40)))
-    tg = r / "size2.TextGrid"
-    lines = ['File type = "ooTextFile"', 'Object class = "TextGrid"', "", "xmin = 0", "xmax = 0.6",
-             "tiers? <exists>", "size = 1", "item []:", "    item [1]:", '        class = "IntervalTier"',
-             '        name = "phones"', "        xmin = 0", "        xmax = 0.6", "        intervals: size = 2"]
-    for k in range(5):
-        lines += [f"        intervals [{k + 1}]:", f"            xmin = {k * 0.12:g}",
-                  f"            xmax = {(k + 1) * 0.12:g}", f'            text = "p{k}"']
-    tg.write_text("\n".join(lines) + "\n")
-    plyd = r / "ply"
-    plyd.mkdir(exist_ok=True)
-    from engine.io import write_ply
-
-    for k in range(3):
-        p = write_ply(plyd / f"f{k}.ply", np.eye(3) + k, [[0, 1, 2]])
-        p.write_bytes(p.read_bytes() + (b"0 0 1\n" if k == 1 else b""))
-    one = d / "one-frame.npz"
-    from engine.recordings.corpus import Corpus, Utterance
-
-    Corpus(frames=rng.normal(size=(40, 6)), rate=60, utterances=[Utterance(f"u{k}", k, k + 1) for k in range(40)],
-           name="one-frame").save(one)
-    frames = np.load(c, allow_pickle=False)["corpus_frames"].copy()
-    frames[10, 3] = 1e30
-    hugec = _changed_npz(c, d / "huge-coord.npz", corpus_frames=frames)
-    accentc = _changed_npz(c, d / "accent.npz", corpus_name=np.array("café – ü"))
-    many = d / "many"
-    many.mkdir(exist_ok=True)
-    for k in range(24):
-        q = many / f"F01_R{k:02d}.mat"
-        if haskins.is_file() and not q.exists():
-            os.symlink(haskins, q)
-    three = [str(ema), str(r / "notema.ema"), str(write_est_track(r / "b2.ema", np.arange(80) / 500,
-                                                                     rng.normal(size=(80, 4)) * 100,
-                                                                     ["ul_x", "ul_y", "ll_x", "ll_y"]))]
-    (r / "notema.ema").write_text("this is not an EST track\n")
-    uid = None
-    try:
-        from engine.manifold.model import Manifold
-
-        uid = Manifold.load(m).corpus_.utterances[0].id
-    except Exception:  # another tree's manifold format: the key-frame case names an unknown id then
-        uid = "s0001"
-
-    # ---- window state files (item 5), through their loaders (the window opens in tests/app)
-    state = d / "state30"
-    marker = ("import json, pathlib, sys\nfrom app.files.autosave import Autosaver\nd = pathlib.Path({!r})\n"
-              "d.mkdir(parents=True, exist_ok=True)\n(d / 'running-4242-1.json').write_text({!r})\n"
-              "(d / 'autosave-4242-1.lipspace.json').write_text('{{}}')\na = Autosaver(d)\nrec = a.begin()\n"
-              "print('refused:', getattr(a, 'set_aside', None), rec)\na.finish()")
-    session = ("from app.files.session import load_session, SessionError\nimport pathlib\np = pathlib.Path({!r})\n"
-               "p.write_text({!r})\ntry:\n    d = load_session(p)\nexcept SessionError as exc:\n"
-               "    print('refused:', exc)\nelse:\n    print('loaded', d.get('extra'), d.get('cameras'))")
-    settings = ("import pathlib\nfrom PySide6 import QtCore\nfrom app.window_settings import WindowSettings\n"
-                "p = pathlib.Path({!r})\np.parent.mkdir(parents=True, exist_ok=True)\np.write_text({!r})\n"
-                "w = WindowSettings(QtCore.QSettings(str(p), QtCore.QSettings.Format.IniFormat))\n"
-                "w.recent_files(); w.restore_layout\n"
-                "print('refused:' if getattr(w, 'set_aside', None) else 'accepted', getattr(w, 'set_aside', None))")
-    s_json = '{{"lipspace_session": 2, "source": {{"path": null, "preset": "small"}}, {}}}'
-
-    imp = ["import"]
-    return [
-        # 1. data defects: repaired and said (and kept for info), or refused naming file, field, frame
-        Case("CSV NaN, Inf and empty cells", imp + [str(holes), "-o", f"{o}/c.npz"], 0, "missing samples",
-             after=_info_says(f"{o}/c.npz", "3 empty or NaN, 1 infinite")),
-        Case("CSV cell of 1e12 (implausible)", imp + [str(huge_cell), "-o", f"{o}/c.npz"], 0, "implausibly large"),
-        Case("EMA break flags", imp + [str(ema), "-o", f"{o}/c.npz", "--points", "UL,LL"], 0, "break flag 0",
-             after=_info_says(f"{o}/c.npz", "frames 40-42")),
-        Case("C3D invalid markers", imp + [str(c3dp), "-o", f"{o}/c.npz"], 0, "marked invalid"),
-        Case("NaN in a Haskins signal", imp + [mat_nan, "-o", f"{o}/c.npz", "--points", "UL,LL"], 0, "4 NaN"),
-        Case("NDI Wave status not OK", imp + [str(wave), "-o", f"{o}/c.npz", "--format", "wave"], 0,
-             "status not OK"),
-        Case(".pos 60 % NaN", imp + [pos60, "-o", f"{o}/c.npz"], 2, "60 of 100 frames", [f"{o}/c.npz"]),
-        *[Case(f".pos SamplingFrequencyHz={v}", imp + [p, "-o", f"{o}/c.npz"], 2, "SamplingFrequencyHz",
-               [f"{o}/c.npz"]) for v, p in pos.items()],
-        Case("MVIEW SRATE 1e300", imp + [mat_rate, "-o", f"{o}/c.npz", "--points", "UL,LL"], 2, "SRATE is 1e+300", [f"{o}/c.npz"]),
-        Case("CSV UL_x twice, no LL_x", imp + [str(dup), "-o", f"{o}/c.npz"], 2, "name the same coordinate",
-             [f"{o}/c.npz"]),
-        Case("CSV LL_y without LL_x", imp + [str(nolx), "-o", f"{o}/c.npz"], 2, "no LL_x column", [f"{o}/c.npz"]),
-        Case("TextGrid size = 2 before 5 intervals", imp + [str(holes), "--alignment", str(tg), "-o", f"{o}/c.npz"],
-             2, "count", [f"{o}/c.npz"]),
-        Case("PLY with more rows than its header", imp + [str(plyd), "--rate", "30", "-o", f"{o}/c.npz"], 2,
-             "follow the rows", [f"{o}/c.npz"]),
-        Case("all-Inf audio channel", imp + [mat_inf, "-o", f"{o}/c.npz", "--audio-dir", f"{o}/aud", "--points",
-                                             "UL,LL"], 2,
-             "no finite sample", [f"{o}/c.npz", f"{o}/aud/hinf.wav"]),
-        Case("--no-fill with a dropout", imp + [str(ema), "-o", f"{o}/c.npz", "--no-fill", "--points", "UL,LL"],
-             2, "--no-fill", [f"{o}/c.npz"], never="fill_gaps"),
-        Case("import --rate 0", imp + [str(plyd), "--rate", "0", "-o", f"{o}/c.npz"], 2, "--rate", [f"{o}/c.npz"]),
-        # 2. no existing user file overwritten without --force; the refusal names it
-        Case("--audio-dir over a user's WAV", imp + [str(haskins), "-o", f"{o}/h.npz", "--audio-dir", f"{o}/aud"], 2,
-             "F01_B01_S01_R01_N.wav", [f"{o}/h.npz"],
-             keep=[_old(o / "aud" / "F01_B01_S01_R01_N.wav")]),
-        Case("--mesh-dir over frame files", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "--mesh-dir",
-                                             f"{o}/mesh"], 2, "frame_00000.obj", keep=[_old(o / "mesh" /
-                                                                                          "frame_00000.obj")]),
-        Case("figures over a figure", ["figures", m, "-o", f"{o}/figs", "--only", "scree", "-q"], 2, "scree.png",
-             keep=[_old(o / "figs" / "scree.png")]),
-        Case("clusters --csv over a table", ["clusters", m, "--csv", f"{o}/t.csv", "-q"], 2, "t.csv",
-             keep=[_old(o / "t.csv")]),
-        Case("synthesize -o over a trajectory", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o", f"{o}/t.csv"],
-             2, "t.csv", keep=[_old(o / "t.csv")]),
-        Case("build -o over a manifold", ["build", c, "-o", f"{o}/m.npz", "-q"], 2, "m.npz",
-             keep=[_old(o / "m.npz")]),
-        Case("render -o over a video", ["render", "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o", f"{o}/v.mp4"],
-             2, "v.mp4", keep=[_old(o / "v.mp4")]),
-        Case("evaluate --markdown over a report", ["evaluate", c, "--markdown", f"{o}/r.md", "-q"], 2, "r.md",
-             keep=[_old(o / "r.md")]),
-        Case(".glb over the WAV beside it", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o", f"{o}/a.glb",
-                                             "--audio", str(ROOT.parent / "shared" / "data" / "mocha-fsew0" /
-                                                            "fsew0_001.wav")], 2, "a.wav", [f"{o}/a.glb"],
-             keep=[_old(o / "a.wav")]),
-        Case("--force replaces", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o", f"{o}/t.csv", "--force"], 0,
-             None, after=lambda d, root: None if (d / "out" / "t.csv").read_bytes().startswith(b"time,")
-             else "--force did not replace t.csv"),
-        # 3. a run that loses an input exits non-zero unless --skip-bad, which says how many
-        Case("one unreadable input of three", imp + three + ["-o", f"{o}/c.npz", "--points", "UL,LL", "-q"], 2,
-             "--skip-bad", [f"{o}/c.npz"], lines=2, loses_input=True),
-        Case("one unreadable input, --skip-bad", imp + three + ["-o", f"{o}/c.npz", "--points", "UL,LL", "-q",
-                                                               "--skip-bad"], 0, "skipped 1"),
-        Case("full disk: 24-file --audio-dir import", imp + [str(p) for p in sorted(many.iterdir())] +
-             ["-o", f"{d}/tiny/h.npz", "--audio-dir", f"{d}/tiny/aud", "-q"], 2, "No space left",
-             mount="tmpfs:1M", loses_input=True),
-        Case("full disk: figures", ["figures", m, "-o", f"{d}/tiny/figs", "-q"], 2, "No space left",
-             mount="tmpfs:200k"),
-        Case("full disk: build", ["build", c, "-o", f"{d}/tiny/m.npz", "-q"], 2, "No space left", mount="tmpfs:100k"),
-        Case("read-only disk: synthesize -o and --mesh-dir", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "-o",
-                                                               f"{d}/tiny/t.csv", "--mesh-dir", f"{d}/tiny/mesh"], 2,
-             "tiny/t.csv: Read-only", mount="ro"),
-        # 4. stopped or failed at any moment: the complete old outputs or none
-        Case("SIGTERM: synthesize --mesh-dir -o t.csv", [S, "--manifold", m, "--phones", "sil 4 aa 4 sil 4",
-                                                         "--mesh-dir", f"{o}/mesh", "-o", f"{o}/t.csv", "-q"], None,
-             None, [f"{o}/t.csv", f"{o}/mesh"], stop_after=30, stop_when="out/**/frame_0001*"),
-        Case("SIGTERM: --audio-dir import of 24 files", imp + [str(p) for p in sorted(many.iterdir())] +
-             ["-o", f"{o}/h.npz", "--audio-dir", f"{o}/aud", "-q"], None, None, [f"{o}/h.npz", f"{o}/aud"],
-             stop_after=30, stop_when="out/**/F01_R03.wav"),
-        Case("SIGTERM: figures", ["figures", m, "-o", f"{o}/figs", "-q"], None, None, [f"{o}/figs"], stop_after=30,
-             stop_when="out/**/fig2b.png"),
-        Case("SIGTERM: --force import keeps the old", imp + [str(p) for p in sorted(many.iterdir())] +
-             ["-o", f"{o}/h.npz", "-q", "--force"], None, None, keep=[_old(o / "h.npz")], stop_after=4),
-        # 5. damaged window state files: set aside, named, no traceback
-        Case("autosave marker 'started': 'abc'", ["@py", marker.format(str(state / "a"), json.dumps(
-            {"pid": 4242, "started": "abc"}))], 1, "refused:", never="Traceback"),
-        Case("autosave marker not JSON", ["@py", marker.format(str(state / "b"), "{pid")], 1, "refused:"),
-        Case("session 'extra' a list", ["@py", session.format(str(state / "s1.lipspace.json"),
-                                                              s_json.format('"extra": [1, 2]'))], 1, "refused:"),
-        Case("session NaN camera", ["@py", session.format(str(state / "s2.lipspace.json"), s_json.format(
-            '"cameras": {"manifold": [[NaN, 0, 1], [0, 0, 0], [0, 1, 0]]}'))], 1, "refused:"),
-        Case("settings file with damaged values", ["@py", settings.format(
-            str(state / "cfg" / "lipspace.ini"), "[window]\ngeometry=@ByteArray(abc\nlayout_version=zz\n")], 1,
-             "refused:"),
-        # 6. messages: the user's file, the option typed, the real cause
-        Case("--smoothing 1e9", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "--smoothing", "1e9", "-o",
-                                 f"{o}/t.csv"], 2, "--smoothing", [f"{o}/t.csv"], never="--inverse-dims"),
-        Case("--smoothing inf", [S, "--manifold", m, "--phones", "p 0.1 aa 0.1", "--smoothing", "inf"], 2,
-             "--smoothing"),
-        Case("render --smoothing inf", ["render", "--manifold", m, "--phones", "p 0.1 aa 0.1", "--smoothing", "inf",
-                                        "-o", f"{o}/v.mp4"], 2, "--smoothing", [f"{o}/v.mp4"]),
-        Case("--key-frames 0,10^30", [S, "--manifold", m, "--utterance", uid, "--key-frames", "0," + "1" + "0" * 30,
-                                      "-o", f"{o}/t.csv"], 2, "key frames", [f"{o}/t.csv"]),
-        Case("ASCII terminal: info of a non-ASCII name", ["info", str(accentc)], 0, None,
-             env={"PYTHONIOENCODING": "ascii"}),
-        Case("ASCII terminal: import note", imp + [str(holes), "-o", f"{o}/café.npz", "--name", "café"], 0,
-             "missing samples", env={"PYTHONIOENCODING": "ascii"}),
-        Case("one-frame utterances", ["build", str(one), "-o", f"{o}/m.npz", "-q"], 2, "single frame",
-             [f"{o}/m.npz"], never="never move"),
-        Case("a coordinate of 1e30", ["build", str(hugec), "-o", f"{o}/m.npz", "-q"], 2, "1e+30", [f"{o}/m.npz"],
-             never="shape.py"),
-    ]
 
 
 #: runs the case as a child and reports its peak resident memory (MiB x 1024) and exit status on stderr
@@ -537,19 +94,36 @@ def can_mount() -> bool:
     return r.stdout.strip() == "ok"
 
 
+def _command(case, cwd):
+    """The process a case runs: ``lipspace ARGV``, a Python snippet (``@py``) or a shell script (``@sh``, with
+    ``$PY`` the interpreter and ``$LIPSPACE`` the command)."""
+    argv = list(case.argv)
+    if argv[-1].startswith("@SIGTERM"):
+        argv = argv[:-1]
+    if argv[0] == "@py":
+        return [sys.executable, "-c", argv[1]]
+    if argv[0] == "@sh":
+        return ["sh", "-c", argv[1]]
+    return [sys.executable, "-m", "app.cli", *argv]
+
+
 def run_case(case, cwd, cap, timeout, root):
     env = dict(os.environ, PYTHONPATH=str(root), LIPSPACE_CACHE_DIR=str(cwd / "cache"),
-               LIPSPACE_STATE_DIR=str(cwd / "state"), **case.env)
+               LIPSPACE_STATE_DIR=str(cwd / "state"), LIPSPACE_CONFIG_DIR=str(cwd / "config"),
+               PY=sys.executable, LIPSPACE=f"{sys.executable} -m app.cli")
     env.pop("DISPLAY", None)
-    argv, sig = list(case.argv), case.stop_after
-    if argv[-1].startswith("@SIGTERM"):
-        sig, argv = float(argv[-1].split()[1]), argv[:-1]
-    cmd = [sys.executable, "-c", argv[1]] if argv[0] == "@py" else [sys.executable, "-m", "app.cli", *argv]
+    env.pop("WAYLAND_DISPLAY", None)
+    env.update(case.env)
+    sig = case.stop_after
+    if case.argv[-1].startswith("@SIGTERM"):
+        sig = float(case.argv[-1].split()[1])
+    cmd = _command(case, cwd)
     if case.mount:
         tiny = str(cwd / "tiny")
         opts = "ro,size=64k" if case.mount == "ro" else f"size={case.mount.split(':')[1]}"
         cmd = ["unshare", "-rm", "sh", "-c", _MOUNTED, tiny, tiny, opts, *cmd]
     cmd = [sys.executable, "-c", _PEAK, *cmd]  # the case's own peak memory, not this script's children's
+    timeout = case.timeout or timeout
 
     def limit():
         resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
@@ -558,12 +132,17 @@ def run_case(case, cwd, cap, timeout, root):
     p = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          preexec_fn=limit, start_new_session=True)
     try:
-        if sig is not None and case.stop_when:  # mid-way: once the command has begun writing what it writes
-            deadline = time.monotonic() + sig
-            while p.poll() is None and time.monotonic() < deadline and not any(cwd.glob(case.stop_when)):
+        if sig is not None and case.stop_when or case.during is not None:
+            # mid-way: once the command has begun writing what it writes (or after stop_after s)
+            deadline = time.monotonic() + (sig if sig is not None else timeout)
+            while p.poll() is None and time.monotonic() < deadline and not (
+                    case.stop_when and any(cwd.glob(case.stop_when))):
                 time.sleep(0.02)
             if p.poll() is None:
-                os.killpg(p.pid, signal.SIGTERM)
+                if case.during is not None:
+                    case.during(cwd)
+                else:
+                    os.killpg(p.pid, signal.SIGTERM)
         elif sig is not None:
             try:
                 p.wait(sig)
@@ -600,17 +179,29 @@ def _digest(p) -> str | None:
     return hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else None
 
 
+_WORDS = ("ok", "n/a", "HANG", "TRACEBACK", "CRASH", "LOST", "LEFT", "SILENT", "MISREPORT")
+
+
+def _said_verdict(text):
+    """The verdict a snippet printed (``@@VERDICT WORD``), or None."""
+    m = re.search(r"@@VERDICT (\S+)", text)
+    return m.group(1) if m and m.group(1) in _WORDS else None
+
+
 def verdict(case, code, out, err, d, root, before, tiny_files=0):
     expect, says, must_not_exist = case.expect, case.says, case.gone
     parts = list(d.rglob(".*.part*"))
     if code == "hang":
         return "HANG"
-    if "Traceback" in err:
+    if "Traceback" in err + out:
         return "TRACEBACK"
     if code == 97:
         return "n/a"
     if isinstance(code, int) and code < 0 or code in (137, 139, 134):
         return "CRASH"
+    own = _said_verdict(out)
+    if own is not None and own != "ok":
+        return own
     if any(_digest(k) != h for k, h in before.items()) and not (expect is None and code == 0):  # --force, done
         return "LOST"
     if expect == 2 and code == 0:
@@ -625,13 +216,18 @@ def verdict(case, code, out, err, d, root, before, tiny_files=0):
         return "MISREPORT"
     if _UNPLAIN.search(err):
         return "MISREPORT"
-    if case.after is not None and code == 0:
+    if case.after is not None and (code == 0 or case.expect not in (0, 1)):
         problem = case.after(d, root)
         if problem:
-            return "SILENT"
+            word = problem.split(":", 1)[0]
+            return word if word in _WORDS else "SILENT"
     if expect == 1:  # a python snippet that must print the refusal (and never a file's content)
         return "ok" if code == 0 and says in out and "root:" not in err + out else \
             "SILENT" if code == 0 else "MISREPORT"
+    if expect not in (None, 0, 2):  # a script's own exit status (130 after SIGINT, ...)
+        if says and says not in err + out:
+            return "MISREPORT"
+        return "ok" if code == expect else "MISREPORT"
     if expect is None:  # a signal: stopped with 128+15, or finished before it
         return "ok" if code in (0, 143) else "MISREPORT"
     if says == "!ESC":
@@ -651,6 +247,8 @@ def main() -> int:
     ap.add_argument("--cap-gb", type=float, default=3.0, help="address-space cap per process (GB)")
     ap.add_argument("--timeout", type=float, default=60.0, help="seconds before a case counts as a hang")
     ap.add_argument("--only", default=None, help="run the cases whose name contains this text")
+    ap.add_argument("--group", default=None, help="run the cases of the classes whose name starts with this (e.g. "
+                                                  "'3', or '' for all of issue 45's)")
     ap.add_argument("--json", default=None, help="write the rows here")
     args = ap.parse_args()
     root = Path(args.root).resolve()
@@ -668,23 +266,31 @@ def main() -> int:
             return 1
         (d / "out").mkdir(exist_ok=True)
         sys.path.insert(0, str(ROOT))  # the damaged recordings are written with this tree's writers
-        all_cases = [Case(*t) for t in cases(d)] + cases_30(d)
+        all_cases = [Case(*t) for t in cases(d)] + cases_30(d) + cases_45(d)
+        group = None
         for case in all_cases:
-            if args.only and args.only not in case.name:
+            if args.only and args.only not in case.name or args.group is not None and not (
+                    case.group and case.group.startswith(args.group)):
                 continue
+            if case.group != group:
+                group = case.group
+                print(f"--- {group or 'the checklist of issues 16 and 30'}", flush=True)
             if (d / "out").exists():
                 shutil.rmtree(d / "out")
             (d / "out").mkdir()
             for k in case.keep:  # the user's own files, present before the run
-                _old(k)
-            before = {k: _digest(k) for k in case.keep}
+                _old(*k) if isinstance(k, tuple) else _old(k)
+            if case.prepare is not None:
+                case.prepare(d)
+            before = {str(k[0] if isinstance(k, tuple) else k): None for k in case.keep}
+            before = {k: _digest(k) for k in before}
             if case.mount and not mountable:
                 code, wall, peak, out, err, left = 97, 0.0, float("nan"), "", "", 0
             else:
                 code, wall, peak, out, err, left = run_case(case, d, cap, args.timeout, root)
             v = verdict(case, code, out, err, d, root, before, left)
             first = (err.strip().splitlines() or out.strip().splitlines() or [""])[-1 if "Traceback" in err else 0]
-            rows.append({"case": case.name, "exit": code, "wall_s": round(wall, 2),
+            rows.append({"case": case.name, "group": case.group, "exit": code, "wall_s": round(wall, 2),
                          "peak_mb": None if peak != peak else round(peak), "verdict": v, "said": first[:160]})
             mem = "     - " if peak != peak else f"{peak:6.0f} MB"  # a case killed at the timeout reports none
             print(f"{v:10s} {str(code):>5s} {wall:6.1f} s {mem}  {case.name:42s} {first[:100]!r}", flush=True)
@@ -692,6 +298,13 @@ def main() -> int:
     for row in rows:
         counts[row["verdict"]] = counts.get(row["verdict"], 0) + 1
     print("summary: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())) + f" of {len(rows)} cases")
+    print("tally: " + ", ".join(f"{counts.get(k, 0)} {word}" for k, word in TALLY) +
+          f" ({counts.get('ok', 0)} ok, {counts.get('n/a', 0)} n/a)")
+    for g in dict.fromkeys(r["group"] for r in rows if r["group"]):
+        mine = [r for r in rows if r["group"] == g]
+        bad = [r for r in mine if r["verdict"] not in ("ok", "n/a")]
+        which = f" ({', '.join(sorted({r['verdict'] for r in bad}))})" if bad else ""
+        print(f"  {g}: {len(mine) - len(bad)} of {len(mine)} held{which}")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
     return 0
@@ -699,3 +312,4 @@ def main() -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+

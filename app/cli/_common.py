@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
 from pathlib import Path
 
@@ -116,11 +117,23 @@ def load_manifold_arg(path):
 def command_outputs(args):
     """The outputs of one command as one transaction (:class:`engine.files.staging.Outputs`): existing
     files refused unless ``--force``, everything moved into place at the end with stop signals
-    deferred meanwhile, nothing left behind by an error or a signal."""
-    from app.cli import signals_deferred
+    deferred meanwhile, nothing left behind by an error or a signal.
+
+    Every path-valued argument that exists and is not an output is given as an input, named
+    by its option as typed: whatever file the command reserves (also one it derives, as the
+    WAV beside a ``.glb``) is refused when it is one of them or another output."""
+    from app.cli import OUTPUT_DIR_ARGS, OUTPUT_FILE_ARGS, signals_deferred
     from engine.files.staging import Outputs
 
-    return Outputs(force=bool(getattr(args, "force", False)), guard=signals_deferred)
+    typed = getattr(args, "_typed", {}) or {}
+    inputs = []
+    for name, value in vars(args).items():
+        if name.startswith("_") or name in OUTPUT_FILE_ARGS + OUTPUT_DIR_ARGS or value is None:
+            continue
+        for v in value if isinstance(value, list) else [value]:
+            if isinstance(v, str) and v and "\x00" not in v and os.path.lexists(v):
+                inputs.append((typed.get(name, "--" + name.replace("_", "-")), v))
+    return Outputs(force=bool(getattr(args, "force", False)), guard=signals_deferred, inputs=inputs)
 
 
 #: longest synthesis the command line runs, in seconds of speech

@@ -54,12 +54,23 @@ def add_arguments(p):
 
 
 def run(args) -> int:
+    from app.cli._common import command_outputs
+
+    with command_outputs(args) as outputs:  # reserved now; at the end no file that appeared meanwhile is replaced
+        said = _fit_and_save(args, outputs)
+    print(said, file=sys.stdout)
+    return 0
+
+
+def _fit_and_save(args, outputs) -> str:
+    """Fit the manifold and save it to its staged output; returns the line to print once it is in place."""
     from app.cli import CliError
     from engine.manifold.model import Manifold
 
     out = Path(args.output)
     if out.suffix != ".npz":
         raise CliError(f"{out}: the manifold file must end in .npz")
+    staged = outputs.file(out, option="-o")
     t0 = time.perf_counter()
     with progress_bar(disable=True if args.quiet else None) as progress:
         if args.corpus is not None and args.kinematics != "classic":
@@ -72,6 +83,7 @@ def run(args) -> int:
             print(f"lipspace build: warning: {corpus.name} is at {corpus.rate:g} Hz; the method's analysis rate is "
                   "60 Hz (the paper's): velocities, classes and states differ at other rates. Resample with "
                   "'lipspace import CORPUS --resample 60 -o OUT.npz'", file=sys.stderr)
+        _check_sizes(args, corpus)
         try:
             from engine.manifold.buildplan import plan_build
 
@@ -94,18 +106,34 @@ def run(args) -> int:
 
                 fit_choice(manifold, progress=progress)
         except ValueError as exc:
-            raise CliError(str(exc)) from None
-    manifold.save(out)
+            from app.cli.argtypes import plain_words
+
+            raise CliError(plain_words(str(exc))) from None
+    manifold.save(staged)
     s = manifold.summary()
-    print(f"wrote {out}: {s['frames']} frames, {s['shape_components']} shape components, "
-          f"Y {s['embedding_dims']}-D (first 3 hold {100 * s['Y_first3_recovered']:.1f}% of recovered variance), "
-          f"K={s['n_states']} states, {time.perf_counter() - t0:.1f} s", file=sys.stdout)
+    said = (f"wrote {out}: {s['frames']} frames, {s['shape_components']} shape components, "
+            f"Y {s['embedding_dims']}-D (first 3 hold {100 * s['Y_first3_recovered']:.1f}% of recovered variance), "
+            f"K={s['n_states']} states, {time.perf_counter() - t0:.1f} s")
     if manifold.synthesis_choice_ is not None:
         best = manifold.synthesis_choice_.get("best") or {}
-        print("synthesis: best on validation " + (", ".join(f"{p} {m}" for p, m in best.items()) or
-                                                  f"not measured ({manifold.synthesis_choice_.get('note')})"),
-              file=sys.stdout)
-    return 0
+        said += "\nsynthesis: best on validation " + (", ".join(f"{p} {m}" for p, m in best.items()) or
+                                                       f"not measured ({manifold.synthesis_choice_.get('note')})")
+    return said
+
+
+def _check_sizes(args, corpus) -> None:
+    """Refuse options the corpus is too small for, naming the option (not the corpus) as the cause."""
+    from app.cli import CliError
+
+    n = corpus.n_frames
+    if args.states is not None and args.states > n:
+        raise CliError(f"--states {args.states}: more states than {corpus.name} has frames ({n}); give at most {n}, "
+                       "or leave the option out (about one state per 30 frames)")
+    if args.embedding_dims + 2 > n >= 12:
+        raise CliError(f"--embedding-dims {args.embedding_dims}: {corpus.name} has {n} frames, enough for at most "
+                       f"{n - 2} dimensions; give fewer (the paper uses 16)")
+    if args.landmarks is not None and args.landmarks > n:
+        raise CliError(f"--landmarks {args.landmarks}: more landmarks than {corpus.name} has frames ({n})")
 
 
 def _dask_executor(args):

@@ -21,11 +21,13 @@ def run(args) -> int:
     root = cache_dir()
     if args.clear:
         gone = clear(root)
-        left = entries(root)
+        after = entries(root)
+        left = [e for e in after if e.owned]
         print(f"removed {len(gone)} entr{'y' if len(gone) == 1 else 'ies'} ({_mb(sum(e.size for e in gone))}) "
               f"from {root}" + (f"; {len(left)} could not be removed (in use or read-only)" if left else ""))
+        _not_ours(after)
         return 0 if not left else 1
-    found = entries(root)
+    found = [e for e in entries(root) if e.owned]
     print(f"cache folder {root}" + ("" if root.is_dir() else " (not created yet)")
           + "  (set LIPSPACE_CACHE_DIR to use another folder)")
     for kind, label in _KINDS:
@@ -36,4 +38,18 @@ def run(args) -> int:
                   + (f"  ({', '.join(presets)})" if presets else ""))
     print(f"total {_mb(sum(e.size for e in found))}; 'lipspace cache --clear' deletes it (rebuilt when next "
           "needed)")
+    _not_ours(entries(root))
     return 0
+
+
+def _not_ours(found) -> None:
+    """Say which files look like cache entries but were not written by this cache (they are never deleted)."""
+    import sys
+
+    others = [e for e in found if not e.owned]
+    if others:
+        names = ", ".join(e.path.name for e in others[:3]) + (" ..." if len(others) > 3 else "")
+        print(f"lipspace cache: note: {len(others)} file{'s' * (len(others) != 1)} named like cache entries "
+              f"({names}; {_mb(sum(e.size for e in others))}) {'were' if len(others) != 1 else 'was'} not written "
+              "by this cache (none has Lipspace's marker) and stay; delete them yourself if they are yours to "
+              "remove", file=sys.stderr)

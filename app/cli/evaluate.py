@@ -313,7 +313,9 @@ def _run_protocols(args) -> int:
                 random_state=args.seed, progress=progress,
                 settings_factory=lambda m: _settings(args, m, progress))
         except ValueError as exc:
-            raise CliError(str(exc)) from None
+            from app.cli.argtypes import plain_words
+
+            raise CliError(plain_words(str(exc))) from None
         result.notes.extend(notes)
         if result.missed_gaps:
             import warnings

@@ -1,13 +1,17 @@
 """``lipspace explore``: open the explorer GUI (the default command).
 
 Without a display (no DISPLAY / WAYLAND_DISPLAY on Linux) it explains how to run
-under a virtual X server and which batch commands work without one, and exits 3.
+under a virtual X server and which batch commands work without one, and exits 3; with
+one that does not answer (no X server at DISPLAY, no compositor at WAYLAND_DISPLAY:
+:func:`app.display_check.display_problem`) it says which and exits 2, where Qt would
+abort the process.
 Qt is imported only when the window is really opened. What is shown is loaded by
 :mod:`app.files.source_loading` (Qt-free, shared with the window).
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 
@@ -68,14 +72,9 @@ def has_display(environ=None, platform: str | None = None) -> bool:
 
 
 def run(args) -> int:
-    if not has_display():
-        print(NO_DISPLAY_MESSAGE, file=sys.stderr, end="")
-        return EXIT_NO_DISPLAY
     from app.cli import CliError
 
-    if args.camera is not None:  # the live mirror (app.models.live)
-        return run_live(args.manifold or args.file, args.camera, interocular_mm=args.interocular_mm)
-    if args.file is not None:
+    if args.file is not None and args.camera is None:  # a wrong file is said before anything about the display
         if args.kinematics != "classic":
             raise CliError("--kinematics chooses the synthetic talker's; it does nothing with a file "
                            f"({args.file}): leave it out")
@@ -83,6 +82,18 @@ def run(args) -> int:
             source_kind(args.file)
         except ValueError as exc:
             raise CliError(str(exc)) from None
+    if not has_display():
+        print(NO_DISPLAY_MESSAGE, file=sys.stderr, end="")
+        return EXIT_NO_DISPLAY
+    from app.display_check import display_problem
+
+    problem = display_problem()
+    if problem is not None:  # Qt would abort the process with a core dump
+        raise CliError(f"cannot open the window: {problem}. Start the display (or fix DISPLAY / WAYLAND_DISPLAY), "
+                       "run under a virtual X server (xvfb-run -a lipspace explore), or use the batch commands "
+                       "(lipspace --help)")
+    if args.camera is not None:  # the live mirror (app.models.live)
+        return run_live(args.manifold or args.file, args.camera, interocular_mm=args.interocular_mm)
     session, notes = None, []
     if args.session is not None:
         from app.files.session import SessionError, load_session
@@ -94,8 +105,26 @@ def run(args) -> int:
             print(f"lipspace explore: warning: {notes[-1]}", file=sys.stderr)
     from app.main_window import launch
 
-    return launch(args.file, preset=args.preset, session=session, restore=args.restore, kinematics=args.kinematics,
+    code = launch(args.file, preset=args.preset, session=session, restore=args.restore, kinematics=args.kinematics,
                   notes=notes)
+    if code >= 128:  # stopped by a signal
+        _leave_if_a_task_still_runs(code)
+    return code
+
+
+def _leave_if_a_task_still_runs(code: int) -> None:
+    """End the process now, with ``code``, when a loading task is still inside an engine step after a
+    stop signal closed the window (while the talker was being built): it was cancelled and would stop
+    at its next progress call, but Qt aborts the process (a core dump, "QThread: Destroyed while
+    thread is still running") when the interpreter exits first. Everything the window keeps is
+    written by then (the autosave, the settings)."""
+    from app.workers import running
+
+    if running():
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(OSError, ValueError, AttributeError):
+                stream.flush()
+        os._exit(code)
 
 
 def run_live(manifold_path, source, *, interocular_mm: float = 63.0) -> int:

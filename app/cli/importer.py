@@ -122,6 +122,8 @@ def _options(args, fmt):
             kw["interocular_mm"] = args.interocular_mm
         out = Path(args.output)
         kw["audio_dir"] = args.audio_dir or str(out.with_name(out.stem + "_audio"))
+        if args.skip_bad:  # a folder's damaged video is left out and said, as an unreadable input is
+            kw["skip_bad"] = True
     elif args.interocular_mm is not None:
         from app.cli import CliError
 
@@ -413,7 +415,10 @@ def _read_group(g, job):
     from engine.io.repairs import collecting_repairs
 
     src = g if len(g) > 1 else g[0]
-    c = read_corpus(src, format=job["format"], rate=job["rate"], alignment=job["alignment"], **job["options"])
+    try:
+        c = read_corpus(src, format=job["format"], rate=job["rate"], alignment=job["alignment"], **job["options"])
+    except MemoryError as exc:  # which input did not fit is said (lipspace import: out of memory reading ...)
+        raise _InputMemoryError(g[0], exc) from exc
     if job["audio_dir"] and job["format"] == "mview" and _has_audio(src):
         with collecting_repairs() as notes:  # e.g. non-finite samples written as silence
             wav = write_audio(src, Path(job["audio_dir"]) / (Path(src).stem + ".wav"))
@@ -436,6 +441,14 @@ def _read_group(g, job):
                     history=list(c.history) + [f"speaker {stem!r} given to the {sum(not u.speaker for u in c.utterances)} "
                                                f"utterance(s) of {Path(str(src)).name} that named none (its file name)"])
     return c
+
+
+class _InputMemoryError(MemoryError):
+    """Memory ran out while one input was read: the message names it."""
+
+    def __init__(self, path, exc):
+        super().__init__(f"while reading {path}")
+        self._total_size = getattr(exc, "_total_size", None)
 
 
 #: errors writing an output (not the input's fault): they stop the whole import

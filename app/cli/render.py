@@ -174,10 +174,13 @@ def run(args) -> int:
     t0 = time.perf_counter()
     from engine.recordings.orientation import anatomical_frame
 
-    with progress_bar(disable=True if args.quiet else None) as progress:
+    from app.cli._common import command_outputs
+
+    with progress_bar(disable=True if args.quiet else None) as progress, command_outputs(args) as outputs:
         try:
-            render_video(out, frames, rate=c.rate, faces=c.faces, dims=c.dims, roles=c.point_roles or None,
-                         orientation=anatomical_frame(c, manifold.shape_.mean_), unit=c.unit_label,
+            render_video(outputs.file(out, option="-o"), frames, rate=c.rate, faces=c.faces, dims=c.dims,
+                         roles=c.point_roles or None, orientation=anatomical_frame(c, manifold.shape_.mean_),
+                         unit=c.unit_label,
                          names=c.point_names or None, original=original, Y=Y,
                          Y_original=Y_original, cloud=manifold.Fy_[:, :3] if Y is not None else None, audio=audio,
                          size=args.size, crf=args.crf, title=title, progress=progress)

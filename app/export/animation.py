@@ -23,7 +23,10 @@ def utterance_audio(manifold, uid, near=None) -> tuple[Path | None, str]:
     """The audio file of corpus utterance ``uid``, or None and why not.
 
     A relative path in the corpus is taken relative to the folder of ``near`` (the
-    corpus or manifold file the user opened), else to the working directory.
+    corpus or manifold file the user opened), else to the working directory. A path stored
+    in a file is followed only inside that folder (or Lipspace's cache, where the synthetic
+    talker's speech is): ``../private/secret.txt`` in a manifold someone sent is never
+    copied beside an export. A ``.wav`` must be a WAV file (its header is checked).
 
     Returns
     -------
@@ -31,6 +34,8 @@ def utterance_audio(manifold, uid, near=None) -> tuple[Path | None, str]:
         The file, and '' or the reason there is none (for a warning).
     """
     from app.audio import resolve_audio_path
+    from app.files.cache import cache_dir
+    from engine.files.validate import FieldError, check_inside, wav_info
 
     u = manifold.corpus_.utterance(uid)
     if not u.audio:
@@ -38,6 +43,23 @@ def utterance_audio(manifold, uid, near=None) -> tuple[Path | None, str]:
     p = resolve_audio_path(u.audio, near)
     if p is None:
         return None, f"utterance {uid}: audio file {u.audio} not found"
+    base = Path(near).resolve().parent if near else None  # without a file the path was not read from one
+    for root in (base, cache_dir()) if base is not None else ():
+        try:
+            p = check_inside(str(p), root, source=near, field="audio")
+            break
+        except FieldError:
+            continue
+    else:
+        if base is not None:
+            return None, (f"utterance {uid}: its audio {u.audio} is outside the folder of {Path(near).name} "
+                          f"({base}); a path stored in a file is followed only inside its folder, so it was not used "
+                          "(name the sound file yourself to use it: --audio)")
+    if p.suffix.lower() == ".wav":
+        try:
+            wav_info(p)
+        except (OSError, ValueError) as exc:
+            return None, f"utterance {uid}: {exc}"
     return p, ""
 
 
@@ -58,6 +80,9 @@ def write_audio_beside(audio, path) -> Path:
     if src.resolve() == dst.resolve():
         return dst
     if src.suffix.lower() == ".wav":
+        from engine.files.validate import wav_info
+
+        wav_info(src)  # ValueError for anything but sound (a text file named .wav is never copied)
         with atomic_write(dst) as tmp:
             shutil.copyfile(src, tmp)
         return dst

@@ -41,6 +41,8 @@ STATE_DIR_ENV = "LIPSPACE_STATE_DIR"
 DEFAULT_DELAY_S = 3.0
 DEFAULT_MAX_DELAY_S = 30.0
 _MARKER = "running-{run}.json"
+#: the largest marker read (one is under 100 bytes)
+MAX_MARKER_BYTES = 64 * 1024
 _SESSION = "autosave-{run}.lipspace.json"
 
 
@@ -60,8 +62,35 @@ def _start_ticks(pid: int) -> int | None:
         return None
 
 
-def pid_alive(pid: int, start_ticks: int | None = None) -> bool:
-    """Whether process ``pid`` runs (and, when known, is the one that started at ``start_ticks``)."""
+def _started_at(pid: int) -> float | None:
+    """When process ``pid`` started, in seconds since the epoch (Linux), else None."""
+    ticks = _start_ticks(pid)
+    if ticks is None:
+        return None
+    try:
+        with open("/proc/stat", encoding="ascii") as fh:
+            boot = next(int(line.split()[1]) for line in fh if line.startswith("btime "))
+        return boot + ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, StopIteration, ValueError, IndexError):
+        return None
+
+
+#: a run writes its marker this soon after its process started (Python, Qt and the window's imports)
+MARKER_WITHIN_S = 120.0
+
+
+def _mtime(p: Path) -> float | None:
+    try:
+        return p.stat().st_mtime
+    except OSError:
+        return None
+
+
+def pid_alive(pid: int, start_ticks: int | None = None, started: float | None = None) -> bool:
+    """Whether process ``pid`` runs and is the one a marker names: the one that started at
+    ``start_ticks`` when the marker says; else, when the marker says when its run ``started``
+    (seconds since the epoch), one that started at most :data:`MARKER_WITHIN_S` before that
+    (pid 1, started at boot, is not a crashed explorer that wrote its marker an hour later)."""
     if pid <= 0:
         return False
     if sys.platform.startswith("win"):
@@ -85,6 +114,10 @@ def pid_alive(pid: int, start_ticks: int | None = None) -> bool:
         now = _start_ticks(pid)
         if now is not None and now != start_ticks:
             return False  # the pid was reused by another process
+    elif started is not None:
+        at = _started_at(pid)
+        if at is not None and not started - MARKER_WITHIN_S <= at <= started + 5.0:
+            return False  # a process that started long before (or after) the run that wrote the marker
     return True
 
 
@@ -178,6 +211,7 @@ class Autosaver:
         when the directory cannot be written (the caller runs without autosave then).
         """
         self.directory.mkdir(parents=True, exist_ok=True)
+        self._clear_dead_temporaries()
         found = []
         for marker in self.directory.glob(_MARKER.format(run="*")):
             if marker == self.marker:
@@ -187,7 +221,8 @@ class Autosaver:
                 self.set_aside.append(self.move_aside(marker, why))
                 continue
             pid = info.get("pid")
-            if isinstance(pid, int) and pid != self.pid and pid_alive(pid, info.get("start_ticks")):
+            started = info.get("started") or _mtime(marker)  # a marker without it: when it was written
+            if isinstance(pid, int) and pid != self.pid and pid_alive(pid, info.get("start_ticks"), started):
                 continue  # another explorer that is still running
             session = self.directory / _SESSION.format(run=marker.stem[len("running-"):])
             if isinstance(pid, int) and session.is_file():
@@ -199,17 +234,31 @@ class Autosaver:
                                                    "start_ticks": _start_ticks(self.pid)}) + "\n")
         return max(found, key=lambda r: r.saved, default=None)
 
+    def _clear_dead_temporaries(self) -> None:
+        """Remove the temporary files of autosaves and markers whose writing process was killed
+        (each run's names differ, so no later save of the same name would find them)."""
+        from engine.files.placing import process_gone
+
+        for p in self.directory.glob(".*"):
+            if not p.name.lstrip(".").startswith(("autosave-", "running-")) or ".p" not in p.name:
+                continue
+            with contextlib.suppress(OSError):
+                if p.is_file() and not p.is_symlink() and process_gone(p.name, p.stat().st_mtime):
+                    p.unlink()
+
     @staticmethod
     def _read_marker(path: Path) -> tuple[dict | None, str | None]:
         """(the marker's fields, None) or (None, what is wrong with it)."""
         import math
 
-        try:
-            d = json.loads(path.read_text(encoding="utf-8"))
+        from engine.files.bounded import parse_json, read_bounded
+
+        try:  # a regular file of a few bytes: never a FIFO, a device or a huge file
+            d = parse_json(read_bounded(path, limit=MAX_MARKER_BYTES, what="autosave marker"), source=path)
         except FileNotFoundError:  # another explorer finished meanwhile
             return {}, None
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
-            return None, f"not readable JSON ({exc})"
+        except (OSError, ValueError) as exc:
+            return None, f"not readable JSON ({str(exc).removeprefix(f'{path}: ')})"
         if not isinstance(d, dict):
             return None, "not a JSON object"
         pid, started, ticks = d.get("pid"), d.get("started", 0.0), d.get("start_ticks")

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from app.files.session_schema import SessionError, check_session
 from engine.files.atomic import atomic_write, write_text_atomic
 
 __all__ = ["SESSION_VERSION", "SessionError", "session_dict", "session_arrays", "arrays_path", "save_session",
@@ -31,8 +32,8 @@ __all__ = ["SESSION_VERSION", "SessionError", "session_dict", "session_arrays", 
 SESSION_VERSION = 2
 
 
-class SessionError(ValueError):
-    """A session file cannot be read or does not fit the loaded manifold."""
+#: the largest session JSON read (a session of a 10-minute synthesis with edited targets is < 1 MB)
+MAX_SESSION_BYTES = 64 * 2**20
 
 
 def session_dict(state, *, cameras: dict | None = None, extra: dict | None = None, targets=None) -> dict:
@@ -161,35 +162,35 @@ def save_session(state, path, *, cameras: dict | None = None, extra: dict | None
 
 
 def load_session(path) -> dict:
-    """Read and check a session file; returns the dict :func:`session_dict` wrote."""
-    from app.models.state import COLOR_MODES, HEMISPHERES
+    """Read and check a session file; returns the dict :func:`session_dict` wrote.
+
+    The file is read only when it is a regular file of at most :data:`MAX_SESSION_BYTES`
+    (a FIFO, ``/dev/zero`` behind a link or a huge file is refused before reading), and
+    every field is checked against :func:`app.files.session_schema.check_session` before
+    anything uses it. Raises :class:`SessionError` naming the file and the field.
+    """
+    from engine.files.bounded import parse_json, read_bounded
 
     path = Path(path)
     try:
-        d = json.loads(path.read_text(encoding="utf-8"))
+        raw = read_bounded(path, limit=MAX_SESSION_BYTES, what="session file")
+        d = parse_json(raw, source=path, what="a Lipspace session (JSON)")
     except FileNotFoundError:
         raise SessionError(f"{path}: no such session file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:  # RecursionError: deep nesting
-        why = "nested too deeply" if isinstance(exc, RecursionError) else exc
+    except (OSError, ValueError) as exc:
+        why = str(exc).removeprefix(f"{path}: ")
         raise SessionError(f"{path}: not a readable Lipspace session (JSON) file: {why}") from None
     if not isinstance(d, dict) or "lipspace_session" not in d:
         raise SessionError(f"{path}: not a Lipspace session file (no 'lipspace_session' key)")
-    if not isinstance(d["lipspace_session"], int) or d["lipspace_session"] > SESSION_VERSION:
-        raise SessionError(f"{path}: session format {d['lipspace_session']!r} is newer than this Lipspace "
-                           f"({SESSION_VERSION}); upgrade Lipspace")
-    if d.get("color_mode", "density") not in COLOR_MODES:
-        raise SessionError(f"{path}: colour mode {d.get('color_mode')!r} is not one of {COLOR_MODES}")
-    if d.get("hemisphere", "future") not in HEMISPHERES:
-        raise SessionError(f"{path}: hemisphere {d.get('hemisphere')!r} is not one of {HEMISPHERES}")
-    sel = d.get("selection", {})
-    for k in ("frame", "state", "target"):
-        v = sel.get(k)
-        if v is not None and (not isinstance(v, int) or isinstance(v, bool) or v < 0):
-            raise SessionError(f"{path}: selection {k} must be a non-negative integer or null, got {v!r}")
-    d.setdefault("source", {"path": None, "preset": "default"})
+    version = d["lipspace_session"]
+    if not isinstance(version, int) or isinstance(version, bool) or version < 1:
+        raise SessionError(f"{path}: field 'lipspace_session' must be a format number (1 or more), got "
+                           f"{json.dumps(version)[:40]}; the session file is damaged")
+    if version > SESSION_VERSION:
+        raise SessionError(f"{path}: session format {version!r} is newer than this Lipspace ({SESSION_VERSION}); "
+                           "upgrade Lipspace")
+    d = check_session(d, path)
     src = d["source"]
-    if not isinstance(src, dict):
-        raise SessionError(f"{path}: field 'source' must be an object, got {json.dumps(src)[:40]}")
     if "kinematics" in src:  # the synthetic talker's (absent from sessions written before it had a choice)
         from app.files.source_loading import check_kinematics
 
@@ -204,86 +205,9 @@ def load_session(path) -> dict:
             src["path"] = str(check_source_path(src["path"], source=path))
         except FieldError as exc:
             raise SessionError(str(exc)) from None
-    d.setdefault("cameras", {})
-    d.setdefault("extra", {})
-    d.setdefault("visible_phones", [])
-    check_fields(d, path)
     d["_file"] = str(path)
     d["_synthetic"], d["_targets"] = _read_arrays(path, d)
     return d
-
-
-def _json_type(v) -> str:
-    """How JSON names the type of ``v`` (for messages about a session file)."""
-    return {dict: "an object", list: "an array", str: "a string", bool: "true/false", type(None): "null"}.get(
-        type(v), "a number")
-
-
-def check_fields(d: dict, path) -> None:
-    """Refuse a session whose view fields have the wrong type or values, naming the field.
-
-    The campaign's damaged sessions: ``extra`` a list (the window failed half-way), a NaN
-    camera (a blank view), strings where numbers belong. Checked here so that a session
-    is opened whole or refused with one message, never half-applied.
-    """
-    import math
-
-    def bad(field, what, v):
-        raise SessionError(f"{path}: field {field!r} must be {what}, got {json.dumps(v)[:60]} "
-                           f"({_json_type(v)}); the session file is damaged")
-
-    def number(v):
-        return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-    if not isinstance(d["cameras"], dict):
-        bad("cameras", "an object of views", d["cameras"])
-    for view, cam in d["cameras"].items():
-        rows = cam if isinstance(cam, list) and len(cam) == 3 else None
-        if rows is None or not all(isinstance(r, list) and len(r) == 3 and all(number(x) for x in r) for r in rows):
-            bad(f"cameras.{view}", "3 rows of 3 finite numbers (position, focal point, view up)", cam)
-        if rows[0] == rows[1] or not any(rows[2]):
-            bad(f"cameras.{view}", "a camera whose position differs from its focal point and whose view up is "
-                "not zero", cam)
-    if not isinstance(d["extra"], dict):
-        bad("extra", "an object", d["extra"])
-    editor = d["extra"].get("editor", {})
-    if not isinstance(editor, dict):
-        bad("extra.editor", "an object", editor)
-    for key in ("text", "method", "source"):
-        if editor.get(key) is not None and not isinstance(editor[key], str):
-            bad(f"extra.editor.{key}", "a string", editor[key])
-    words = editor.get("words", [])
-    if not isinstance(words, list) or not all(isinstance(w, list) and len(w) == 3 and number(w[0]) and number(w[1])
-                                              and w[0] <= w[1] and isinstance(w[2], str) for w in words):
-        bad("extra.editor.words", "an array of [start s, end s, word] (the editor's word tier)", words)
-    for key in ("visible_phones", "phone_filter"):
-        v = d.get(key, [])
-        if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
-            bad(key, "an array of phone labels", v)
-    v = d.get("hidden_layers", [])
-    if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
-        bad("hidden_layers", "an array of layer names", v)
-    if "ellipsoid_opacity" in d and not (number(d["ellipsoid_opacity"]) and 0 <= d["ellipsoid_opacity"] <= 1):
-        bad("ellipsoid_opacity", "a number from 0 to 1", d["ellipsoid_opacity"])
-    if d.get("palette") is not None:
-        from app.models.palette import SessionPalette
-
-        try:
-            SessionPalette.from_dict(d["palette"])
-        except ValueError as exc:
-            bad("palette", f"a palette record ({exc})", d["palette"])
-    for key, what, ok in (("utterance", "an utterance id or null", lambda v: v is None or isinstance(v, str)),
-                          ("component", "a component index or null",
-                           lambda v: v is None or isinstance(v, int) and not isinstance(v, bool) and v >= 0),
-                          ("horizon_ms", "a number of milliseconds or null", lambda v: v is None or number(v) and v >= 0),
-                          ("path_mode", "true or false", lambda v: isinstance(v, bool))):
-        if key in d and not ok(d[key]):
-            bad(key, what, d[key])
-    for key in ("synthetic", "targets", "arrays"):
-        if d.get(key) is not None and not isinstance(d[key], dict):
-            bad(key, "an object or null", d[key])
-    if d["source"].get("preset") is not None and not isinstance(d["source"]["preset"], str):
-        bad("source.preset", "a preset name", d["source"]["preset"])
 
 
 def source_kinematics(d: dict) -> str:
@@ -306,11 +230,15 @@ def _read_arrays(path: Path, d: dict):
     if not isinstance(name, str) or Path(name).name != name or not name.endswith(".npz"):
         raise SessionError(f"{path}: arrays file must be a plain .npz file name beside the session, got {name!r}")
     npz = path.with_name(name)
-    try:
-        data = npz.read_bytes()
-    except OSError as exc:
-        raise SessionError(f"{path}: its arrays file {npz} cannot be read ({exc.strerror or exc}); keep the "
-                           ".npz beside the session file") from None
+    from engine.files.bounded import BINARY_EXPANSION, input_limit, read_bounded
+
+    try:  # a regular file that fits in memory: never a FIFO (it would hang) or /dev/zero (it never ends)
+        data = read_bounded(npz, limit=input_limit(BINARY_EXPANSION)[0], what="session arrays file")
+    except (OSError, ValueError) as exc:
+        why = str(exc).removeprefix(f"{npz}: ") if str(exc).startswith(str(npz)) else (
+            getattr(exc, "strerror", None) or str(exc))
+        raise SessionError(f"{path}: its arrays file {npz} cannot be read ({why}); keep the .npz beside the "
+                           "session file") from None
     if hashlib.sha256(data).hexdigest() != ref.get("sha256"):
         raise SessionError(f"{path}: its arrays file {npz} does not match the session (SHA-256 differs): it was "
                            "overwritten by another save or damaged")

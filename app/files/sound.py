@@ -60,6 +60,14 @@ def sound_dir() -> Path:
     return cache_dir() / "sound"
 
 
+def _mark(entry: Path) -> None:
+    """Record ``entry`` as Lipspace's own (:mod:`engine.files.ownership`): 'lipspace cache --clear' may delete it."""
+    from app.files.cache import cache_dir
+    from engine.files.ownership import mark
+
+    mark(entry, cache_dir())
+
+
 def recording_key(path) -> str:
     """16 hex digits naming a recording's extracted sound: its resolved path, size and modification time."""
     p = Path(path).resolve()
@@ -83,7 +91,9 @@ def read_with_sound(path):
     folder = sound_dir() / f"recording-{recording_key(path)}"
     if fmt == "video":
         folder.mkdir(parents=True, exist_ok=True)
-        return read_corpus(path, audio_dir=folder)
+        corpus = read_corpus(path, audio_dir=folder)
+        _mark(folder)
+        return corpus
     corpus = read_corpus(path)
     if any(u.audio for u in corpus.utterances):
         return corpus  # a <stem>.wav beside it, as the reader found it
@@ -96,6 +106,7 @@ def read_with_sound(path):
             write_audio(path, wav)
         except ImportFormatError:  # no AUDIO entry (or no finite sample): silent, as the file is
             return corpus
+        _mark(folder)
     return replace(corpus, utterances=[replace(u, audio=str(wav)) for u in corpus.utterances])
 
 
@@ -147,4 +158,5 @@ def speech_for_targets(targets, text: str) -> Path:
         raise SoundNote(f"the synthesis is silent: espeak-ng could not say {text[:40]!r} ({exc})") from None
     wav.parent.mkdir(parents=True, exist_ok=True)
     write_wav_atomic(wav, np.asarray(samples, np.float64), SAMPLE_RATE)
+    _mark(wav)
     return wav

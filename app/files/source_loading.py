@@ -253,6 +253,9 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic", late
         def cache():
             try:
                 m.save(cached)
+                from engine.files.ownership import mark
+
+                mark(cached, cache_dir())  # Lipspace's own: pruning and 'lipspace cache --clear' may delete it
             except OSError:
                 pass  # a read-only cache only costs a rebuild next time
             prune_talker_cache(preset, kinematics, keep=[cached])

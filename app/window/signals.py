@@ -5,7 +5,7 @@ import contextlib
 import signal
 import threading
 
-from PySide6 import QtCore
+from PySide6 import QtCore, QtWidgets
 
 __all__ = ["stop_on_signals", "STOP_SIGNALS", "SIGNAL_POLL_MS"]
 
@@ -42,6 +42,9 @@ def stop_on_signals(app, win):
         if not stopped or poll.done:
             return
         poll.done = True
+        modal = QtWidgets.QApplication.activeModalWidget()
+        if isinstance(modal, QtWidgets.QDialog):  # the restore question (or any dialog): answered "not now"
+            modal.reject()
         a = win.autosaver
         if a is not None and win.state.manifold is not None:
             with contextlib.suppress(OSError, ValueError, RuntimeError):

@@ -6,6 +6,9 @@ import os
 import tempfile
 from pathlib import Path
 
+from engine.files.placing import STALE_SECONDS as STALE_PART_SECONDS
+from engine.files.placing import process_gone
+
 __all__ = ["atomic_write", "write_text_atomic", "write_wav_atomic"]
 
 
@@ -26,7 +29,8 @@ def atomic_write(path):
     path.parent.mkdir(parents=True, exist_ok=True)
     _remove_stale_parts(path)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".part" + path.suffix, dir=path.parent)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.p{os.getpid()}-", suffix=".part" + path.suffix,
+                                   dir=path.parent)
     except OSError as exc:  # a read-only or full folder: name the user's file, not the temporary one
         raise _naming(exc, path) from None
     os.close(fd)
@@ -52,23 +56,17 @@ def _naming(exc: OSError, path) -> OSError:
     return type(exc)(exc.errno, exc.strerror or str(exc), str(path)) if exc.errno else exc
 
 
-#: a temporary file of a write to the same path untouched this long was left by a killed process
-STALE_PART_SECONDS = 3600.0
-
-
 def _remove_stale_parts(path: Path) -> None:
     """Remove ``.<stem>.*.part<suffix>`` files beside ``path`` left by a killed process.
 
     SIGKILL (or a power cut) cannot be caught, so its temporary file stays; the next
-    write to the same path removes it once it has not been modified for an hour (a
-    write in progress in another process touches its file continually).
+    write to the same path removes it once the process named in it has ended (a name
+    without a process id, from an older Lipspace: once it has not been modified for an
+    hour, :data:`STALE_PART_SECONDS`).
     """
-    import time
-
-    now = time.time()
     for q in path.parent.glob(f".{_glob_escape(path.stem)}.*.part{_glob_escape(path.suffix)}"):
         with contextlib.suppress(OSError):
-            if q.is_file() and now - q.stat().st_mtime > STALE_PART_SECONDS:
+            if q.is_file() and process_gone(q.name, q.stat().st_mtime):
                 q.unlink()
 
 

@@ -211,7 +211,7 @@ def load_estimator(cls, d, prefix: str, *, source="<arrays>", schema=None, dims=
     engine.files.validate.FieldError
         A missing or malformed field, naming the file and the field.
     """
-    from engine.files.validate import FieldError, check_array, check_csr, check_scalar, parse_params
+    from engine.files.validate import FieldError, check_array, check_csr, check_scalar, json_field, parse_params
 
     dims = {} if dims is None else dims
     schema = schema or {}
@@ -220,10 +220,7 @@ def load_estimator(cls, d, prefix: str, *, source="<arrays>", schema=None, dims=
     params = check_scalar(d, f"{prefix}/__params__", source=source, kind="str")
     obj = parse_params(cls, params, source=source, field=f"{prefix}/__params__")
     kinds_text = check_scalar(d, f"{prefix}/__kinds__", source=source, kind="str")
-    try:
-        kinds = json.loads(kinds_text)
-    except ValueError as exc:
-        raise FieldError(source, f"{prefix}/__kinds__", f"not valid JSON ({exc})") from None
+    kinds = json_field(kinds_text, source=source, field=f"{prefix}/__kinds__")
     if not isinstance(kinds, dict) or not all(isinstance(v, str) for v in kinds.values()):
         raise FieldError(source, f"{prefix}/__kinds__", "expected a JSON object of attribute kinds")
     missing = sorted(set(schema) - set(kinds))

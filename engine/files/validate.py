@@ -13,7 +13,6 @@ session files.
 """
 from __future__ import annotations
 
-import json
 import math
 import os
 import stat
@@ -24,12 +23,13 @@ import numpy as np
 from engine.files.mapped import release_pages
 
 __all__ = ["FieldError", "check_array", "check_scalar", "check_csr", "parse_params",
-           "check_regular_file", "check_source_path", "DATA_SUFFIXES"]
+           "check_regular_file", "check_source_path", "check_inside", "wav_info", "json_field", "DATA_SUFFIXES"]
 
 #: suffixes of the data files a session may name as its source
 DATA_SUFFIXES = (".npz", ".mat", ".ema", ".c3d", ".csv", ".tsv", ".txt", ".npy", ".pos")
 
-_KINDS = {"float": "fc", "int": "iu", "bool": "b", "str": "U", "number": "fiub"}
+#: dtype kinds per expected family; complex values are never a coordinate (a complex embedding is refused)
+_KINDS = {"float": "f", "int": "iu", "bool": "b", "str": "U", "number": "fiub"}
 
 
 class FieldError(ValueError):
@@ -161,6 +161,19 @@ def check_csr(d, prefix, *, source, shape, dims, kind="number", low=None):
     return data, ind, ptr, (n_rows, n_cols)
 
 
+def json_field(text, *, source, field):
+    """The JSON a file's field ``field`` holds; :class:`FieldError` for anything that is not JSON, also
+    nesting deep enough to exhaust Python's recursion (``[[[[...`` 100,000 deep)."""
+    from engine.files.bounded import parse_json
+
+    if not isinstance(text, (str, bytes)):
+        raise FieldError(source, field, f"expected JSON text, got {type(text).__name__}")
+    try:
+        return parse_json(text, source=source)
+    except ValueError as exc:
+        raise FieldError(source, field, str(exc).removeprefix(f"{source}: ")) from None
+
+
 def _param_ok(value, default) -> bool:
     if value is None:
         return True  # every estimator parameter with a None meaning defaults to None or accepts it
@@ -188,10 +201,7 @@ def parse_params(cls, text, *, source, field):
     """
     from engine.constraints import InvalidParameterError, validate_params
 
-    try:
-        params = json.loads(text)
-    except (json.JSONDecodeError, TypeError, ValueError) as exc:
-        raise FieldError(source, field, f"not valid JSON ({exc})") from None
+    params = json_field(text, source=source, field=field)
     if not isinstance(params, dict):
         raise FieldError(source, field, f"expected a JSON object of {cls.__name__} parameters, "
                                         f"got a {type(params).__name__}")
@@ -295,3 +305,59 @@ def check_corpus_arrays(d, *, source, frames_given: bool = False) -> None:
             a = check_array(d, key, source=source, kind="number")
             if a.ndim not in (1, 2):
                 raise FieldError(source, key, f"expected one value (or row) per frame, got shape {a.shape}")
+
+
+def check_inside(value, base, *, source, field) -> Path:
+    """A path stored in the file ``source`` (relative to the folder ``base``, or absolute), checked to stay
+    inside ``base``: ``../private/secret.txt`` or ``/etc/passwd`` stored in a corpus never leads Lipspace
+    out of the corpus's folder (symbolic links resolved). Raises :class:`FieldError` naming the path."""
+    if not isinstance(value, str) or not value or "\x00" in value:
+        raise FieldError(source, field, f"expected a file name, got {value!r}"[:200])
+    base = Path(os.path.realpath(base))
+    p = Path(value)
+    real = Path(os.path.realpath(p if p.is_absolute() else base / p))
+    if real != base and base not in real.parents:
+        raise FieldError(source, field, f"{value} is outside the folder of {Path(source).name} ({base}); a path "
+                                        "stored in a file is followed only inside its own folder")
+    return real
+
+
+#: WAV format tags: PCM, IEEE float, extensible
+_WAV_FORMATS = {1: "PCM", 3: "float", 0xFFFE: "extensible"}
+
+
+def wav_info(path) -> dict:
+    """The header of the WAV file ``path`` (``rate``, ``channels``, ``bits``, ``seconds``), checked.
+
+    Only the first 64 kB are read. ``ValueError`` naming the file when it is not a RIFF/WAVE file
+    with a sound format (PCM or float), a plausible rate and a data chunk: a text file named
+    ``.wav`` is never copied as the recording's sound.
+    """
+    import struct
+
+    from engine.files.bounded import check_bounded
+
+    path = Path(path)
+    size = check_bounded(path, what="audio file")
+    with open(path, "rb") as fh:
+        head = fh.read(65536)
+    if len(head) < 12 or head[:4] not in (b"RIFF", b"RF64") or head[8:12] != b"WAVE":
+        raise ValueError(f"{path}: not a WAV file (it starts with {head[:12]!r}); expected a RIFF/WAVE sound file")
+    pos, fmt, data = 12, None, None
+    while pos + 8 <= len(head) and (fmt is None or data is None):
+        cid, n = head[pos:pos + 4], struct.unpack("<I", head[pos + 4:pos + 8])[0]
+        if cid == b"fmt " and n >= 16 and pos + 24 <= len(head):
+            fmt = struct.unpack("<HHIIHH", head[pos + 8:pos + 24])
+        elif cid == b"data":
+            data = min(n, max(size - pos - 8, 0))
+        pos += 8 + n + (n & 1)
+    if fmt is None or data is None:
+        raise ValueError(f"{path}: a RIFF/WAVE file without {'a format' if fmt is None else 'a data'} chunk; "
+                         "expected sound")
+    tag, channels, rate, _, block, bits = fmt
+    if tag not in _WAV_FORMATS or not 1 <= channels <= 64 or not 1 <= rate <= 10**6 or \
+            bits not in (8, 16, 24, 32, 64) or block == 0:
+        raise ValueError(f"{path}: WAV format {tag}, {channels} channels, {rate} Hz, {bits} bits is not sound "
+                         "Lipspace can use; expected PCM or float samples")
+    return {"rate": rate, "channels": channels, "bits": bits, "format": _WAV_FORMATS[tag],
+            "seconds": data / block / rate}

@@ -15,16 +15,26 @@ __all__ = [
     "natural_key", "check_rate", "plausible_rate", "sidecar_audio", "one_utterance_corpus", "uniform_rate",
 ]
 
-def read_bytes(path) -> bytes:
-    """All bytes of ``path``; FileNotFoundError when it does not exist."""
+def read_bytes(path, *, expansion: int | None = None) -> bytes:
+    """All bytes of ``path``; FileNotFoundError when it does not exist.
+
+    Only a regular file is read (a FIFO or device would block or never end), and only when
+    ``expansion`` times its size fits in the memory this process may use
+    (:func:`engine.files.bounded.input_limit`; default: a text table's expansion): a 6 GB
+    file is refused naming its size and the limit before a byte is read.
+    """
+    from engine.files.bounded import TEXT_EXPANSION, InputTooLargeError, NotRegularFileError, input_limit, \
+        read_bounded
+
     path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"{path}: no such file")
-    if path.is_dir():
-        raise ImportFormatError(path, "is a directory; expected a file")
-    if not path.is_file():  # a FIFO or device would block or never end
-        raise ImportFormatError(path, "is not a regular file (a pipe, socket or device); expected a file on disk")
-    return path.read_bytes()
+    limit, why = input_limit(TEXT_EXPANSION if expansion is None else expansion)
+    try:
+        return read_bounded(path, limit=limit, why=why)
+    except NotRegularFileError as exc:
+        raise ImportFormatError(path, f"is {exc.kind}, not a regular file; expected a file on disk") from None
+    except InputTooLargeError as exc:
+        raise ImportFormatError(path, f"{str(exc).removeprefix(f'{path}: ')}. Split the recording into several "
+                                "files") from None
 
 
 def decode_text(data: bytes, path) -> str:
@@ -282,11 +292,22 @@ def check_rate(path, native: float, rate) -> float:
 
 
 def sidecar_audio(path) -> str | None:
-    """``<stem>.wav`` beside ``path`` if it exists."""
+    """``<stem>.wav`` beside ``path`` when it is a WAV file (its header checked). One that is not is
+    left unlinked and said (:func:`engine.io.repairs.report_repair`: the corpus history, a warning);
+    one that is linked is named in the history by :func:`one_utterance_corpus`."""
+    from engine.files.validate import wav_info
+    from engine.io.repairs import report_repair
+
     for suf in (".wav", ".WAV"):
         cand = Path(path).with_suffix(suf)
         if cand.is_file():
-            return str(cand)
+            try:
+                w = wav_info(cand)
+            except (OSError, ValueError) as exc:
+                report_repair(path, f"{cand.name} beside it was not linked as its audio: "
+                              f"{str(exc).removeprefix(f'{cand}: ')}")
+                return None
+            return str(cand)  # said in the corpus history (one_utterance_corpus)
     return None
 
 
@@ -308,8 +329,9 @@ def one_utterance_corpus(path, frames, rate, *, dims, uid=None, phones=(), point
     try:
         utt = Utterance(uid, 0, frames.shape[0], fit_phones(phones, frames.shape[0], rate, path=path), audio,
                       text)
+        said = [f"{Path(path).name}: audio {Path(audio).name} linked"] if audio else []  # never linked unsaid
         return Corpus(frames=frames, rate=rate, utterances=[utt], dims=dims, faces=faces,
-                      point_names=point_names, name=name or uid, units=units)
+                      point_names=point_names, name=name or uid, units=units, history=said)
     except CorpusError as exc:
         raise ImportFormatError(path, str(exc)) from None
 

@@ -168,6 +168,7 @@ def read_corpus(path, *, format: str | None = None, rate: float | None = None, a
         from engine.io.video.clips import read_videos
 
         return read_videos(videos, rate=rate, alignment=alignment, **kw)
+    kw.pop("skip_bad", None)  # a folder's option (of its videos); a file is read or refused whole
     if isinstance(path, (list, tuple)) and fmt != "mesh":  # several files: one utterance each
         from engine.io.combine import concat
 

@@ -147,12 +147,9 @@ def _synthesis_part(d, path, dims):
 
 
 def _parse_timings(text, path) -> dict:
-    from engine.files.validate import FieldError
+    from engine.files.validate import FieldError, json_field
 
-    try:
-        t = json.loads(text)
-    except ValueError as exc:
-        raise FieldError(path, "manifold_timings", f"not valid JSON ({exc})") from None
+    t = json_field(text, source=path, field="manifold_timings")
     if not isinstance(t, dict) or not all(isinstance(k, str) and isinstance(v, (int, float))
                                           and not isinstance(v, bool) and np.isfinite(v) for k, v in t.items()):
         raise FieldError(path, "manifold_timings", "expected a JSON object of stage name -> seconds")

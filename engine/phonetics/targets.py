@@ -196,6 +196,10 @@ def resolve_phone(label, known, warnings, what):
     else a ValueError listing the known; ``what`` names what the phone lacks ("instances", ...)."""
     if label in known:
         return label
+    if not str(label).strip():  # a target given as a state (or clicked) has no phone to look up
+        raise ValueError("a target without a phone label (given as a state) cannot be synthesised by a method "
+                         "that works from phone labels; use a method that works from states (manifold, viterbi, "
+                         "sv-hermite)")
     sub = stand_in_phone(label, known)
     if sub is None:
         raise ValueError(f"phone {label!r} has no {what} in the training corpus and no phone of its class stands "

@@ -269,6 +269,21 @@ class Corpus:
             raise CorpusError(
                 f"{self.name}: {len(self.point_names)} point names for {self.n_points} points"
             )
+        if self.point_names is not None and len(set(self.point_names)) != len(self.point_names):
+            first = {}
+            for k, n in enumerate(self.point_names):  # which point is which cannot be told: refused, not guessed
+                if n in first:
+                    raise CorpusError(f"{self.name}: points {first[n] + 1} and {k + 1} are both named {n!r}; "
+                                      "expected one name per point")
+                first[n] = k
+        if self.axes:
+            from engine.recordings.orientation import AxesError, parse_axes
+
+            try:
+                parse_axes(self.axes, self.dims)
+            except AxesError as exc:
+                raise CorpusError(f"{self.name}: its axes {self.axes!r} are damaged: "
+                                  f"{str(exc).split(': ', 1)[-1]}") from None
         if self.point_roles is not None:
             if len(self.point_roles) != self.n_points:
                 raise CorpusError(f"{self.name}: {len(self.point_roles)} point roles for {self.n_points} points")

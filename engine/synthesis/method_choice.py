@@ -89,9 +89,11 @@ def _jsonable(x):
 
 def load_choice(manifold, cache_dir=None) -> dict | None:
     """The cached choice for ``manifold``, or None (not measured yet by this code, or unreadable)."""
+    from engine.files.bounded import parse_json, read_bounded
+
     p = choice_path(manifold, cache_dir)
-    try:
-        d = json.loads(p.read_text(encoding="utf-8"))
+    try:  # a regular file of a few kB: a FIFO or a huge file at its name is not a choice
+        d = parse_json(read_bounded(p, limit=16 * 2**20), source=p)
     except (OSError, ValueError):
         return None
     return d if isinstance(d, dict) and "best" in d and "blend" in d else None
@@ -180,6 +182,9 @@ def choose_methods(manifold, *, cache_dir=None, use_cache=True, progress=None) -
         p.parent.mkdir(parents=True, exist_ok=True)
         with atomic_write(p) as tmp:
             Path(tmp).write_text(json.dumps(out, indent=1), encoding="utf-8")
+        from engine.files.ownership import mark
+
+        mark(p, p.parent.parent)  # Lipspace's own: 'lipspace cache --clear' may delete it
     except OSError:
         pass  # a read-only cache: the choice is recomputed next time, nothing else is lost
     return out

@@ -32,8 +32,10 @@ def input_timeline(path, *, tier: str | None = None) -> Timeline:
     from engine.io import read_alignment
     from engine.io.readers.alignment import _parse_textgrid, _pick_tier
 
-    phones = tuple(read_alignment(path, tier=tier))
-    data = Path(path).read_bytes()[:64].lstrip(b"\xef\xbb\xbf").replace(b"\x00", b"")
+    from engine.files.bounded import input_limit, read_bounded
+
+    phones = tuple(read_alignment(path, tier=tier))  # a regular file of bounded size, or refused
+    data = read_bounded(path, limit=input_limit()[0])[:64].lstrip(b"\xef\xbb\xbf").replace(b"\x00", b"")
     if data.startswith(b"ooBinaryFile") or b"ooTextFile" in data or Path(path).suffix.lower() == ".textgrid":
         grid = _parse_textgrid(path)
         return Timeline(float(grid.xmin), float(grid.xmax), _pick_tier(grid, path, tier), phones)

@@ -778,8 +778,11 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=Fal
     corpus = talker.generate(progress=progress)
 
     def save():
+        from engine.files.ownership import mark
+
         try:
             corpus.save(path)
+            mark(path, path.parent)  # Lipspace's own: pruning and 'lipspace cache --clear' may delete it
         except OSError:
             pass  # a read-only cache folder only costs regeneration next time
 
@@ -796,10 +799,16 @@ def _with_audio(corpus, path, progress):
     """The corpus with speech audio in ``<path stem>-audio/``, or without it and a note why."""
     import subprocess
 
+    from engine.files.ownership import mark, owned
     from engine.phonetics.speech_audio import SpeechAudioUnavailable, add_speech_audio
 
+    folder = audio_folder(path)
+    made = not folder.exists() or owned(path, path.parent)  # Lipspace's corpus: its audio folder is too
     try:
-        return add_speech_audio(corpus, audio_folder(path), progress=progress)
+        with_audio = add_speech_audio(corpus, folder, progress=progress)
+        if made:
+            mark(folder, path.parent)
+        return with_audio
     except SpeechAudioUnavailable as exc:
         corpus.history.append(f"speech audio: none; {exc}")
     except (OSError, ValueError, subprocess.SubprocessError) as exc:

@@ -89,6 +89,10 @@ def test_opening_one_talker_prunes_only_its_own_old_entries(small_manifold, monk
     stale_cal_manifold = _touch(tmp_path / "manifolds" / "synthetic-small_calibrated-g1-0000-m1-0000-0.0.1.npz",
                                 age_s=3600)
     stale_cal_corpus = _touch(tmp_path / "synthetic-small_calibrated-old.npz", age_s=3600)
+    from engine.files.ownership import mark
+
+    for p in (classic_manifold, classic_corpus, classic_audio, stale_cal_manifold, stale_cal_corpus):
+        mark(p, tmp_path)  # each written by the cache (of this or older code)
 
     stages = []
     m, src = load_source(None, "small", lambda st, d, t: stages.append(st), kinematics="calibrated",

@@ -32,6 +32,17 @@ def lab_folder(tmp_path_factory):
     return d, write_lab_folder(d)
 
 
+@pytest.fixture(scope="session")
+def tiny_manifold_file(small_corpus, tmp_path_factory):
+    """A manifold of the talker's first three utterances (20 states), its corpus.npz beside it."""
+    from engine.manifold.model import Manifold
+
+    tiny = small_corpus.subset([u.id for u in small_corpus.utterances[:3]])
+    d = tmp_path_factory.mktemp("tiny")
+    tiny.save(d / "corpus.npz")
+    return Manifold(n_states=20).fit(tiny).save(d / "m.npz")
+
+
 def run_cli(argv) -> tuple[int, str, str]:
     """``lipspace ARGV`` in this process: ``(exit code, stdout, stderr)``."""
     import contextlib

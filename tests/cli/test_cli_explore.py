@@ -25,7 +25,14 @@ def no_display(monkeypatch):
     monkeypatch.setattr("sys.platform", "linux")
 
 
-@pytest.mark.parametrize("argv", [[], ["--preset", "small"], ["m.npz", "--session", "s.json"]])
+@pytest.fixture
+def fake_display(monkeypatch):
+    """A DISPLAY whose server the display check takes as answering (the window itself is never opened)."""
+    monkeypatch.setenv("DISPLAY", ":0")
+    monkeypatch.setattr("app.display_check.display_problem", lambda *a, **k: None)
+
+
+@pytest.mark.parametrize("argv", [[], ["--preset", "small"], ["--session", "s.json"]])
 def test_no_display_explains_and_exits_3(no_display, capsys, argv):
     assert run_explore(argv) == EXIT_NO_DISPLAY
     err = capsys.readouterr().err
@@ -42,8 +49,7 @@ def test_has_display():
     assert has_display({}, "win32") and has_display({}, "darwin")
 
 
-def test_bad_file_is_a_user_error(monkeypatch, tmp_path):
-    monkeypatch.setenv("DISPLAY", ":0")  # inputs are checked before any window is opened
+def test_bad_file_is_a_user_error(monkeypatch, tmp_path, fake_display):
     with pytest.raises(CliError, match="no such file"):
         run_explore([str(tmp_path / "missing.npz")])
     junk = tmp_path / "junk.npz"
@@ -121,6 +127,7 @@ def test_kinematics_argument_reaches_the_window_and_is_refused_with_a_file(monke
         p.parse_args(["--kinematics", "realistic"])
     assert exc.value.code == 2
     monkeypatch.setenv("DISPLAY", ":0")  # inputs are checked before any window is opened
+    monkeypatch.setattr("app.display_check.display_problem", lambda *a, **k: None)
     opened = []
     monkeypatch.setattr(app.main_window, "launch", lambda *a, **k: opened.append((a, k)) or 0)
     assert run_explore(["--preset", "small", "--kinematics", "calibrated"]) == 0
@@ -140,3 +147,8 @@ def test_explore_refusal_through_the_command_line(monkeypatch, tmp_path, capsys,
     mfile = small_manifold.save(tmp_path / "m.npz")
     assert main(["explore", str(mfile), "--kinematics", "calibrated"]) == 2
     assert "--kinematics chooses the synthetic talker's" in capsys.readouterr().err
+
+
+def test_a_missing_file_is_said_before_the_missing_display(no_display):
+    with pytest.raises(CliError, match="m.npz: no such file"):
+        run_explore(["m.npz", "--session", "s.json"])

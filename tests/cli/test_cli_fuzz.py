@@ -151,7 +151,7 @@ def _check(argv, outdir: Path, code):
     ("Zoë's naïve", "the word \"Zoë's\" is not in"),
     ("...", "no words in the text '...'"),          # was synthesised as silence with exit 0
     ("[]", "no words in the text '[]'"),
-    ("   ", "no words in the text"),
+    ("   ", "--text '   ': expected a value, not an empty string"),
 ])
 def test_text_that_says_nothing_is_refused_naming_the_whole_word(files, tmp_path, capsys, text, expected):
     out = tmp_path / "t.csv"

@@ -20,13 +20,8 @@ PHONES = "p 0.1 aa 0.1"
 
 
 @pytest.fixture(scope="module")
-def mfile(small_corpus, tmp_path_factory):
-    from engine.manifold.model import Manifold
-
-    tiny = small_corpus.subset([u.id for u in small_corpus.utterances[:3]])
-    d = tmp_path_factory.mktemp("outputs")
-    tiny.save(d / "corpus.npz")
-    return Manifold(n_states=20).fit(tiny).save(d / "m.npz")
+def mfile(tiny_manifold_file):
+    return tiny_manifold_file
 
 
 def _mine(p, text=b"a user's own file\n"):
@@ -107,7 +102,9 @@ def test_force_replaces_a_frame_sequence_whole(mfile, tmp_path, capsys):
 def test_a_signal_while_outputs_move_in_lets_them_all_land(mfile, tmp_path, capsys, monkeypatch):
     """SIGTERM arriving while the finished outputs are moved into place: all of them land, exit 0, and the
     message says the signal came too late, instead of 'nothing was written' over files that exist."""
-    real = os.replace
+    import engine.files.staging as staging
+
+    real = staging.move_noreplace
     sent = []
 
     def replace(src, dst):
@@ -116,7 +113,7 @@ def test_a_signal_while_outputs_move_in_lets_them_all_land(mfile, tmp_path, caps
             os.kill(os.getpid(), signal.SIGTERM)
         return real(src, dst)
 
-    monkeypatch.setattr(os, "replace", replace)
+    monkeypatch.setattr(staging, "move_noreplace", replace)
     out = tmp_path / "t.csv"
     assert main(["synthesize", "--manifold", str(mfile), "--phones", PHONES, "--mesh-dir", str(tmp_path / "mesh"),
                  "-o", str(out)]) == 0
@@ -183,8 +180,8 @@ def test_a_read_only_folder_names_the_users_file(mfile, tmp_path, capsys, monkey
 
 # ------------------------------------------------------------------ item 6: the option typed, the real cause
 @pytest.mark.parametrize("argv, says", [
-    (["--smoothing", "inf"], "--smoothing inf: must be from 0 to 3600 frames"),
-    (["--smoothing", "1e9"], "--smoothing 1e+09: must be from 0"),
+    (["--smoothing", "inf"], "--smoothing inf: must be a finite number from 0 to 3600 frames"),
+    (["--smoothing", "1e9"], "--smoothing 1e9: must be from 0"),
     (["--smoothing", "nan"], "--smoothing nan"),
     (["--candidates", "0"], "--candidates 0: must be from 1 to 1000"),
     (["--gltf-scale", "inf"], "--gltf-scale inf"),

@@ -21,187 +21,74 @@ PHONE_TIER_NAMES = ("phones", "phone", "segments", "phonemes", "phoneme", "segme
 #: largest integer time still read as seconds by ``units="auto"``; larger integers are HTK 100 ns units
 HTK_AUTO_THRESHOLD = 1000
 
-_TEXT_HEADER = ['File type = "ooTextFile"', 'Object class = "TextGrid"', ""]
-
-
 # ---------------------------------------------------------------------------- TextGrid
-def _textgrid_bytes(path) -> tuple[bytes, list[str] | None]:
-    """Bytes in the form ``textgrids`` parses (UTF-8, modern header) and the stripped lines."""
-    data = read_bytes(path)
-    if data.startswith(b"ooBinaryFile"):
-        return data, None
-    text = decode_text(data, path)
-    lines = [s.strip() for s in text.split("\n")]
-    # Praat's old short format header: 'File type = "ooTextFile short"' then '"TextGrid"'
-    if len(lines) >= 2 and lines[0] == 'File type = "ooTextFile short"' and lines[1] == '"TextGrid"':
-        lines = _TEXT_HEADER[:2] + lines[2:]
-        if len(lines) < 3 or lines[2] != "":
-            lines.insert(2, "")
-    if lines[:3] != _TEXT_HEADER:
-        got = next((s for s in lines[:3] if s), "")
-        raise ImportFormatError(
-            path, f"not a Praat TextGrid: the file starts with {got[:60]!r}; expected the header lines "
-            "'File type = \"ooTextFile\"' and 'Object class = \"TextGrid\"'", line=1)
-    return "\n".join(lines).encode("utf-8"), lines
-
-
-def _locate_textgrid_fault(lines: list[str]) -> tuple[int, str] | None:
-    """Walk the text the way ``textgrids`` does and name the first line it cannot use.
-
-    Returns (1-based line number, what was expected) or None if the walk finds no fault.
-    """
-    body = lines[3:]
-    off = 4  # body[i] is line i + off
-
-    def get(i):
-        return body[i] if i < len(body) else None
-
-    def need(i, ok, what):
-        s = get(i)
-        if s is None:
-            return (i + off, f"the file ends; expected {what}")
-        if not ok(s):
-            return (i + off, f"found {s[:60]!r}; expected {what}")
-        return None
-
-    def is_num(v):
-        try:
-            float(v)
-            return True
-        except ValueError:
-            return False
-
-    def is_int(v):
-        try:
-            return int(v) >= 0
-        except ValueError:
-            return False
-
-    def val(s):
-        parts = s.split(" = ")
-        return parts[1] if len(parts) > 1 else None
-
-    def kv(check):
-        return lambda s: val(s) is not None and check(val(s))
-
-    def quoted(v):
-        return len(v) >= 2 and v[0] == '"' and v[-1] == '"'
-
-    if not body or not body[0]:
-        return (off, "the file ends or the line is empty; expected the TextGrid's xmin")
-    short = body[0][0] in "-0123456789"
-    if not short:
-        for i, what in ((0, "'xmin = <seconds>'"), (1, "'xmax = <seconds>'")):
-            if (f := need(i, kv(is_num), what)):
-                return f
-        if get(2) != "tiers? <exists>":
-            return None
-        if (f := need(3, kv(is_int), "'size = <number of tiers>'")):
-            return f
-        n_tiers, p = int(val(body[3])), 6
-        for t in range(n_tiers):
-            if (f := need(p, kv(quoted), f"tier {t + 1}: 'class = \"IntervalTier\"'")) or \
-               (f := need(p + 1, kv(quoted), f"tier {t + 1}: 'name = \"...\"'")):
-                return f
-            point = val(body[p]).strip('"') != "IntervalTier"
-            p += 2
-            for i, what in ((p, "'xmin = <seconds>'"), (p + 1, "'xmax = <seconds>'"),
-                            (p + 2, "'intervals: size = <count>'")):
-                if (f := need(i, kv(is_num if i < p + 2 else is_int), f"tier {t + 1}: {what}")):
-                    return f
-            n, p = int(val(body[p + 2])), p + 4
-            for k in range(n):
-                fields = (("'number = <seconds>'", is_num), ("'mark = \"...\"'", quoted)) if point else \
-                    (("'xmin = <seconds>'", is_num), ("'xmax = <seconds>'", is_num), ("'text = \"...\"'", quoted))
-                for j, (what, chk) in enumerate(fields):
-                    if (f := need(p + j, kv(chk), f"tier {t + 1} {'point' if point else 'interval'} {k + 1}: {what}")):
-                        return f
-                p += 3 if point else 4
-        return _trailing(body, p - 1 if n_tiers else 4, off)
-    for i, what in ((0, "the TextGrid's xmin (seconds)"), (1, "its xmax (seconds)")):
-        if (f := need(i, is_num, what)):
-            return f
-    if get(2) != "<exists>":
-        return None
-    if (f := need(3, is_int, "the number of tiers")):
-        return f
-    n_tiers, p = int(body[3]), 4
-    for t in range(n_tiers):
-        for i, (what, chk) in enumerate((("the tier class in quotes", quoted), ("the tier name in quotes", quoted),
-                                         ("tier xmin", is_num), ("tier xmax", is_num),
-                                         ("the number of intervals", is_int))):
-            if (f := need(p + i, chk, f"tier {t + 1}: {what}")):
-                return f
-        point = body[p].strip('"') == "PointTier"
-        n, p = int(body[p + 4]), p + 5
-        for k in range(n):
-            fields = (("time", is_num), ("mark in quotes", quoted)) if point else \
-                (("xmin", is_num), ("xmax", is_num), ("text in quotes", quoted))
-            for j, (what, chk) in enumerate(fields):
-                if (f := need(p + j, chk, f"tier {t + 1} item {k + 1}: {what}")):
-                    return f
-            p += len(fields)
-    return _trailing(body, p, off)
-
-
-def _trailing(body: list[str], p: int, off: int) -> tuple[int, str] | None:
-    """A fault when text follows the last item the counts declare (a count smaller than the items)."""
-    rest = [i for i in range(max(p, 0), len(body)) if body[i]]
-    if not rest:
-        return None
-    return (rest[0] + off, f"found {body[rest[0]][:60]!r} after the last item the counts declare; expected the end "
-            "of the file (a tier or interval count, 'size = N', smaller than what the file holds?)")
-
-
 def _parse_textgrid(path):
+    """The TextGrid ``path`` as :class:`engine.io.readers.textgrid_text.TextGridData` (every tier, in order).
+
+    Text TextGrids (long, short; UTF-8 or UTF-16) are read value by value
+    (:func:`engine.io.readers.textgrid_text.parse_textgrid_text`: labels spanning lines, double
+    quotes, repeated tier names); binary ones by ``praat-textgrids``."""
+    from engine.io.readers.textgrid_text import Interval, Point, TextGridData, TierData, parse_textgrid_text
+
+    data = read_bytes(path)
+    if not data.startswith(b"ooBinaryFile"):
+        return parse_textgrid_text(decode_text(data, path), path)
     import textgrids  # praat-textgrids
 
-    data, lines = _textgrid_bytes(path)
     grid = textgrids.TextGrid()
     try:
         grid.parse(data)
     except Exception as exc:  # the library raises TypeError, IndexError, ValueError, struct.error, ...
-        fault = _locate_textgrid_fault(lines) if lines is not None else None
-        if fault is not None:
-            raise ImportFormatError(path, f"not a valid TextGrid: {fault[1]}", line=fault[0]) from None
-        kind = "binary" if lines is None else "text"
-        raise ImportFormatError(path, f"not a valid {kind} TextGrid ({exc or 'damaged'}); "
-                                "expected Praat's long, short or binary TextGrid format") from None
-    # the library reads as many items as the counts say and ignores the rest: check the counts
-    fault = _locate_textgrid_fault(lines) if lines is not None else None
-    if fault is not None:
-        raise ImportFormatError(path, f"not a valid TextGrid: {fault[1]}", line=fault[0])
-    return grid
+        raise ImportFormatError(path, f"not a valid binary TextGrid ({exc or 'damaged'}); expected Praat's long, "
+                                "short or binary TextGrid format") from None
+    tiers = [TierData("TextTier" if t.is_point_tier else "IntervalTier", name, float(grid.xmin), float(grid.xmax),
+                      [Point(p.xpos, p.text) for p in t] if t.is_point_tier else
+                      [Interval(i.xmin, i.xmax, i.text) for i in t])
+             for name, t in grid.items()]
+    return TextGridData(float(grid.xmin), float(grid.xmax), tiers)
 
 
 def textgrid_tiers(path) -> dict[str, str]:
     """Tier names of a TextGrid and their kind (``"IntervalTier"`` / ``"PointTier"``)."""
-    return {name: tier.tier_type for name, tier in _parse_textgrid(path).items()}
+    return {t.name: t.tier_type for t in _parse_textgrid(path).tiers}
 
 
 def _pick_tier(grid, path, tier):
-    names = list(grid.keys())
+    """The name of the phone tier of ``grid`` (``tier`` if given); a name two tiers share is refused."""
+    names = grid.names()
     if not names:
         raise ImportFormatError(path, "holds no tiers; expected 'tiers? <exists>' and at least one interval tier")
-    kinds = ", ".join(f"{n!r} ({grid[n].tier_type})" for n in names)
+    kinds = ", ".join(f"{t.name!r} ({t.tier_type})" for t in grid.tiers)
+    chosen = None
     if tier is not None:
-        if tier in grid:
-            return tier
-        low = {n.lower(): n for n in names}
-        if str(tier).lower() in low:
-            return low[str(tier).lower()]
-        raise ImportFormatError(path, f"has no tier named {tier!r}; its tiers are {kinds}")
-    interval = [n for n in names if not grid[n].is_point_tier]
-    for want in PHONE_TIER_NAMES:
-        for n in interval:
-            # Montreal Forced Aligner names tiers 'speaker - phones'
-            if n.strip().lower() == want or n.strip().lower().endswith(" - " + want):
-                return n
-    if len(interval) == 1:
-        return interval[0]
-    raise ImportFormatError(
-        path, f"cannot tell which tier holds the phones; its tiers are {kinds}. Name one with tier=..., "
-        f"or call it one of {', '.join(PHONE_TIER_NAMES)}")
+        if tier in names:
+            chosen = tier
+        else:
+            low = {n.lower(): n for n in names}
+            if str(tier).lower() not in low:
+                raise ImportFormatError(path, f"has no tier named {tier!r}; its tiers are {kinds}")
+            chosen = low[str(tier).lower()]
+    else:
+        interval = [t.name for t in grid.tiers if not t.is_point_tier]
+        for want in PHONE_TIER_NAMES:
+            for n in interval:
+                # Montreal Forced Aligner names tiers 'speaker - phones'
+                if n.strip().lower() == want or n.strip().lower().endswith(" - " + want):
+                    chosen = n
+                    break
+            if chosen is not None:
+                break
+        if chosen is None and len(interval) == 1:
+            chosen = interval[0]
+        if chosen is None:
+            raise ImportFormatError(
+                path, f"cannot tell which tier holds the phones; its tiers are {kinds}. Name one with tier=..., "
+                f"or call it one of {', '.join(PHONE_TIER_NAMES)}")
+    same = [k + 1 for k, n in enumerate(names) if n == chosen]
+    if len(same) > 1:
+        raise ImportFormatError(path, f"tiers {' and '.join(map(str, same))} are both named {chosen!r}: which holds "
+                                "the phones cannot be told; rename one in Praat (Tier > Rename tier)")
+    return chosen
 
 
 def read_textgrid(path, *, tier: str | None = None) -> list[PhoneInterval]:
@@ -222,21 +109,24 @@ def read_textgrid(path, *, tier: str | None = None) -> list[PhoneInterval]:
     """
     grid = _parse_textgrid(path)
     name = _pick_tier(grid, path, tier)
-    t = grid[name]
+    t = next(x for x in grid.tiers if x.name == name)
     if t.is_point_tier:
         raise ImportFormatError(path, f"tier {name!r} is a point tier; expected an interval tier of phones")
     out, prev_end = [], -math.inf
-    for k, iv in enumerate(t, start=1):
-        where = f"tier {name!r} interval {k} ({iv.xmin!r}-{iv.xmax!r})"
-        if not (math.isfinite(iv.xmin) and math.isfinite(iv.xmax)):
+    for k, (a, b, text) in enumerate(t.items, start=1):
+        where = f"tier {name!r} interval {k} ({a!r}-{b!r})"
+        if not (math.isfinite(a) and math.isfinite(b)):
             raise ImportFormatError(path, f"{where}: times must be finite numbers of seconds")
-        if iv.xmin < prev_end - 1e-9:
+        if a < prev_end - 1e-9:
             raise ImportFormatError(path, f"{where}: starts before the previous interval ends at {prev_end:g} s; "
                                     "expected intervals in time order")
-        prev_end = iv.xmax
-        label = str(iv.text).strip().replace('""', '"')
-        if label and iv.xmax > iv.xmin:
-            out.append(PhoneInterval(float(iv.xmin), float(iv.xmax), label))
+        prev_end = b
+        label = " ".join(str(text).split())  # a label spanning lines (valid in Praat) becomes one line
+        if label and b > a:
+            if a < -1e-6:  # cut at 0 it would lose part of the phone, and its times would not be the data's
+                raise ImportFormatError(path, f"{where}: {label!r} starts at {a:g} s, before the recording starts "
+                                        "(0 s); expected a tier starting at 0 (Praat: Modify times > Shift times to)")
+            out.append(PhoneInterval(float(a), float(b), label))
     return out
 
 
@@ -335,6 +225,14 @@ def read_lab(path, *, units: str = "auto", sample_rate: float | None = None) -> 
     return out
 
 
+def _same(a: Path, b: Path) -> bool:
+    """Whether two names are one file (``x.TextGrid`` and ``x.textgrid`` on a case-insensitive disk)."""
+    try:
+        return a.samefile(b)
+    except OSError:
+        return False
+
+
 # ---------------------------------------------------------------------------- dispatch
 def read_alignment(path, *, tier: str | None = None, units: str = "auto",
                    sample_rate: float | None = None) -> list[PhoneInterval]:
@@ -378,11 +276,19 @@ def resolve_alignment(data_path, alignment, *, tier: str | None = None) -> tuple
         return [], None
     if alignment is None:
         p = Path(data_path)
+        found = []
         for suf in SIDECAR_SUFFIXES:
             cand = p.with_suffix(suf)
-            if cand.is_file() and cand != p:
-                return read_alignment(cand, tier=tier), str(cand)
-        return [], None
+            if cand.is_file() and cand != p and not any(_same(cand, f) for f in found):
+                found.append(cand)
+        if not found:
+            return [], None
+        if len(found) > 1:  # one is used, and which is said
+            from engine.io.repairs import report_repair
+
+            report_repair(p, f"{' and '.join(f.name for f in found)} are beside it: the phones are read from "
+                          f"{found[0].name} (give the other with --alignment)")
+        return read_alignment(found[0], tier=tier), str(found[0])
     if isinstance(alignment, (str, Path)):
         return read_alignment(alignment, tier=tier), str(alignment)
     return [p if isinstance(p, PhoneInterval) else PhoneInterval(float(p[0]), float(p[1]), str(p[2]))

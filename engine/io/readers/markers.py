@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.files.bounded import BINARY_EXPANSION
 from engine.io._util import check_rate, one_utterance_corpus, plausible_rate, read_bytes, sidecar_audio
 from engine.io._util import fill_gaps as _fill_gaps
 from engine.io.errors import ImportFormatError
@@ -64,7 +65,7 @@ def read_c3d(path, *, markers=None, rate: float | None = None, alignment=None, t
     import c3d
 
     path = Path(path)
-    data = read_bytes(path)
+    data = read_bytes(path, expansion=BINARY_EXPANSION)
     if len(data) < 512 or data[1] != 0x50:
         raise ImportFormatError(path, f"byte 2 is {data[1:2]!r}, file size {len(data)}; expected a C3D file "
                                 "(a 512-byte header whose second byte is 0x50)")

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.files.bounded import BINARY_EXPANSION
 from engine.io._util import read_bytes
 from engine.io.errors import ImportFormatError
 
@@ -251,7 +252,7 @@ def read_mat(path, *, notes: list | None = None) -> dict:
     variable missing data bytes says how many were recovered.
     """
     path = Path(path)
-    data = read_bytes(path)
+    data = read_bytes(path, expansion=BINARY_EXPANSION)
     if len(data) < 128 or not data.startswith(b"MATLAB 5.0 MAT-file"):
         raise ImportFormatError(path, f"starts with {data[:20]!r}; expected a MATLAB 5 MAT-file "
                                 "(v7.3/HDF5 files: re-save with save -v7)")

@@ -32,11 +32,20 @@ __all__ = ["read_mview", "read_mview_audio", "write_audio", "MVIEW_LIP_SENSORS"]
 MVIEW_LIP_SENSORS = ("UL", "LL", "ML", "JAW", "JAWL")
 
 
+def _is_mview(v) -> bool:
+    return isinstance(v, MatStruct) and {"NAME", "SRATE", "SIGNAL"} <= set(v.fields)
+
+
 def _load_struct(path, notes=None) -> MatStruct:
     m = read_mat(path, notes=notes)
     names = [k for k in m if not k.startswith("__")]
     want = Path(path).stem
-    key = want if want in names else (names[0] if len(names) == 1 else None)
+    structs = [k for k in names if _is_mview(m[k])]
+    if len(structs) > 1:  # which recording the file holds cannot be told: never one picked without a word
+        raise ImportFormatError(path, f"holds {len(structs)} MVIEW struct arrays ({', '.join(map(repr, structs[:8]))}"
+                                f"); expected one, named after the file ({want!r}): save each recording in its own "
+                                "file")
+    key = want if want in names else (names[0] if len(names) == 1 else structs[0] if structs else None)
     if key is None:
         raise ImportFormatError(path, f"holds variables {names[:8]}; expected one MVIEW struct array named {want!r}")
     s = m[key]
@@ -63,9 +72,13 @@ def _text(v) -> str:
 
 
 def _number(v) -> float | None:
-    if not isinstance(v, np.ndarray) or v.size == 0 or not np.issubdtype(v.dtype, np.number):
+    """The one real number ``v`` holds; None for anything else (several values, a complex or empty one)."""
+    if not isinstance(v, np.ndarray) or v.size != 1 or not np.issubdtype(v.dtype, np.number):
         return None
-    return float(np.real(v.ravel()[0]))
+    x = v.ravel()[0]
+    if np.iscomplexobj(v) and np.imag(x) != 0:
+        return None
+    return float(np.real(x))
 
 
 def _entries(path, notes=None):
@@ -172,8 +185,10 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
                                     f"{getattr(sig, 'dtype', '')}; "
                                     "expected numbers of shape (n_frames, >=3) holding x, y, z")
         if r is None:
-            raise ImportFormatError(path, f"entry {i + 1} ({n}) SRATE is {e['SRATE']!r}"[:200] + "; expected a "
-                                    "rate in Hz")
+            got = e["SRATE"]
+            shown = np.array2string(got, threshold=6) if isinstance(got, np.ndarray) else repr(got)
+            raise ImportFormatError(path, f"entry {i + 1} ({n}) SRATE is {shown[:120]}; expected one rate in Hz "
+                                    "(a single real number)")
         r = plausible_rate(path, r, f"entry {i + 1} ({n}) SRATE")
         sigs.append(sig[:, :3].astype(np.float64))
         rates.append(r)

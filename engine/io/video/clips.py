@@ -292,7 +292,7 @@ def head_pose_model(interocular_mm: float = 63.0):
 
 def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: float = 63.0,
                 bridge_s: float = DEFAULT_BRIDGE_S, audio_dir=None, audio_rate: int = AUDIO_RATE, progress=None,
-                resample: float | None = None):
+                resample: float | None = None, skip_bad: bool = False):
     """Several videos of one speaker (e.g. a folder), one utterance each, with one pooled template.
 
     Every video is tracked first (only its landmarks are kept); the speaker template is then
@@ -301,7 +301,9 @@ def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: 
     (each video's own ``<stem>.TextGrid`` / ``.lab``), False, or one path / phone list per
     video. ``resample``: the frame rate (Hz) each video is resampled to before they are
     joined (videos at different rates can be joined only so); None keeps their rate, which
-    must then be the same for all. Other parameters as :func:`read_video`.
+    must then be the same for all. ``skip_bad``: a video that cannot be read (damaged, no face) is
+    left out and said in the corpus history (``lipspace import --skip-bad``), instead of stopping
+    the import. Other parameters as :func:`read_video`.
 
     Returns
     -------
@@ -323,6 +325,21 @@ def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: 
                          "<stem>.TextGrid / .lab beside it")
     else:
         aligns = [alignment] * len(paths)
+    skipped = []  # (path, why): left out with skip_bad
+
+    def readable(p, read):
+        try:
+            return read()
+        except ImportFormatError as exc:
+            if not skip_bad:
+                raise
+            skipped.append((p, exc.detail))
+            return None
+
+    if skip_bad:  # the unreadable ones are found while tracking, said once all are read
+        infos = [readable(p, lambda p=p: video_info(p)) for p in paths]
+        keep = [k for k, i in enumerate(infos) if i is not None]
+        paths, aligns = [paths[k] for k in keep], [aligns[k] for k in keep]
     if resample is None:  # refuse before minutes of tracking
         rates = [video_info(p)[0] for p in paths]
         if len({round(r, 6) for r in rates}) > 1:
@@ -331,17 +348,25 @@ def read_videos(paths, *, rate=None, alignment=None, tier=None, interocular_mm: 
                                     "joined only at one rate: resample them to one while reading (lipspace import "
                                     "--resample 60, the analysis rate, or another rate)")
     # a fresh tracker per video (video mode tracks from the previous frame: never across two files)
-    tracked = [track_video(p, progress=progress) for p in paths]
+    tracked = [readable(p, lambda p=p: track_video(p, progress=progress)) for p in paths]
     n_lip = len(LIP_POINTS)
-    refs = [lm[found, n_lip:] for lm, found in tracked if found.any()]
+    refs = [t[0][t[1], n_lip:] for t in tracked if t is not None and t[1].any()]
     if not refs:
-        raise ImportFormatError(paths[0].parent, f"no face found in any frame of its {len(paths)} videos; expected "
-                                "videos of one face seen from the front")
+        raise ImportFormatError(paths[0].parent if paths else "the folder",
+                                f"no face found in any frame of its {len(tracked)} readable videos; expected videos "
+                                "of one face seen from the front")
     pose = head_pose_model(interocular_mm).fit(np.concatenate(refs))
-    parts = [read_video(p, rate=rate, alignment=a, tier=tier, interocular_mm=interocular_mm, bridge_s=bridge_s,
-                        audio_dir=audio_dir, audio_rate=audio_rate, landmarks=t, pose=pose, resample=resample)
-             for p, a, t in zip(paths, aligns, tracked)]
-    return concat(parts)
+    parts = [readable(p, lambda p=p, a=a, t=t: read_video(
+        p, rate=rate, alignment=a, tier=tier, interocular_mm=interocular_mm, bridge_s=bridge_s, audio_dir=audio_dir,
+        audio_rate=audio_rate, landmarks=t, pose=pose, resample=resample))
+        for p, a, t in zip(paths, aligns, tracked) if t is not None]
+    parts = [c for c in parts if c is not None]
+    if not parts:
+        raise ImportFormatError(paths[0].parent, f"none of its {len(paths) + len(skipped)} videos could be read")
+    corpus = concat(parts)
+    for p, why in skipped:  # in the history, printed by lipspace import
+        corpus.history.append(f"{p}: skipped (--skip-bad): {why}")
+    return corpus
 
 
 def read_video(path, *, rate=None, alignment=None, tier=None, interocular_mm: float = 63.0,

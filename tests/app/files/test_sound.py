@@ -1,6 +1,8 @@
 """A recording opened directly keeps its sound, kept in the cache (Qt-free)."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 
@@ -17,8 +19,12 @@ def test_a_haskins_files_audio_is_extracted_once_into_the_cache_and_cleared_with
     again = read_recording(path)                                                 # made once
     assert again.utterances[0].audio == wav
     assert [e.kind for e in entries(tmp_path / "cache")] == ["sound"]
+    mine = tmp_path / "cache" / "sound" / "speech-0123456789abcdef.wav"  # the user's, named like an entry
+    mine.write_bytes(b"the user's own file")
     clear(tmp_path / "cache")
-    assert not (tmp_path / "cache" / "sound").exists()
+    assert not Path(wav).parent.exists()                                         # Lipspace's own went
+    assert [p.name for p in (tmp_path / "cache" / "sound").iterdir()] == [mine.name]  # the user's stayed
+    assert mine.read_bytes() == b"the user's own file"
     silent = make_haskins_file(tmp_path / "F02.mat", seconds=1.0, audio=False)    # no AUDIO entry: silent, no error
     assert read_recording(silent).utterances[0].audio is None
 

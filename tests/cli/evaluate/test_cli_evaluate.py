@@ -22,7 +22,7 @@ def test_evaluate_prints_both_protocols(small_corpus, tmp_path, capsys):
     assert all(float(r["lve"]) > 0 for r in rows)
     assert "Protocol `states`" in md_out.read_text()
     assert main(["evaluate", str(path), "--smoothing", "-1", "-q"]) == 2
-    assert "--smoothing must be >= 0" in capsys.readouterr().err
+    assert "--smoothing -1: must be from 0 to 3600 frames" in capsys.readouterr().err
     assert main(["evaluate", str(path), "--speaker-norm", "-q"]) == 2
     assert "names no speaker" in capsys.readouterr().err
 

@@ -56,5 +56,5 @@ def test_glb_errors_are_one_line_and_write_nothing(mfile, tmp_path, capsys):
     assert "no such file" in capsys.readouterr().err
     assert main(["synthesize", "--manifold", str(mfile), "--phones", PHONES, "--gltf-scale", "0",
                  "-o", str(glb)]) == 2
-    assert "--gltf-scale 0: must be a positive number" in capsys.readouterr().err
+    assert "--gltf-scale 0: must be above 0" in capsys.readouterr().err
     assert not list(tmp_path.iterdir())

@@ -121,7 +121,7 @@ def test_real_sigint_mid_render_leaves_no_half_video(mfile, tmp_path):
                              "sil 10 aa 10 sil 10", "--size", SIZE, "-o", str(out), "--force"],  # 30 s: still rendering
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
     deadline = time.monotonic() + 60
-    while not list(tmp_path.glob(".talk.*.part.mp4")) and proc.poll() is None and time.monotonic() < deadline:
+    while not list(tmp_path.glob(".*talk*.part*.mp4")) and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
     assert proc.poll() is None, proc.communicate()
     proc.send_signal(signal.SIGINT)

@@ -32,7 +32,7 @@ def test_the_textgrid_and_csv_line_up_with_the_input(mfile, tmp_path, capsys):
                  "--praat", str(out)]) == 0
     assert "as the input" in capsys.readouterr().out
     g = _parse_textgrid(out)
-    assert (g.xmin, g.xmax) == (0.0, 1.5) and list(g) == ["phones", "targets", "landmarks"]
+    assert (g.xmin, g.xmax) == (0.0, 1.5) and g.names() == ["phones", "targets", "landmarks"]
     assert read_textgrid(out, tier="phones") == read_textgrid(src)  # the phone tier as read, same times
     d = pd.read_csv(tmp_path / "out.csv")
     assert list(d.columns) == ["time_s", "frame", "phone", "target", "lip_aperture", "state"]

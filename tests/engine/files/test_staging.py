@@ -64,7 +64,9 @@ def test_an_exclusive_folder_holds_exactly_the_new_sequence(tmp_path):
 def test_a_commit_that_fails_part_way_is_rolled_back(tmp_path, monkeypatch):
     a, b = tmp_path / "a.csv", tmp_path / "sub" / "b.csv"
     a.write_text("old a")
-    real, calls = os.replace, []
+    import engine.files.staging as staging
+
+    real, calls = staging.move_noreplace, []
 
     def flaky(src, dst):
         calls.append(dst)
@@ -72,12 +74,12 @@ def test_a_commit_that_fails_part_way_is_rolled_back(tmp_path, monkeypatch):
             raise OSError(errno.ENOSPC, "No space left on device")
         return real(src, dst)
 
-    monkeypatch.setattr(os, "replace", flaky)
+    monkeypatch.setattr(staging, "move_noreplace", flaky)
     with pytest.raises(OSError, match="No space left") as e:
         with Outputs(force=True) as out:
             out.file(a).write_text("new a")
             out.file(b).write_text("new b")
-    monkeypatch.setattr(os, "replace", real)
+    monkeypatch.setattr(staging, "move_noreplace", real)
     assert e.value.filename == str(b)
     assert a.read_text() == "old a" and not b.exists() and not _leftovers(tmp_path)
 

@@ -263,3 +263,22 @@ def test_missing_extra_gives_one_install_line(videos, tmp_path):
     lines = [s for s in r.stderr.splitlines() if s.strip()]
     assert len(lines) == 1 and "pip install -e '.[video]'" in lines[0] and lines[0].startswith("lipspace import: error:")
     assert not (tmp_path / "x.npz").exists()
+
+
+def test_a_folder_import_with_skip_bad_leaves_out_one_damaged_video(videos, tmp_path, capsys):
+    """`import vids/ --skip-bad` stopped on the first damaged video (issue 45): it is left out and said."""
+    from app.cli import main
+    from engine.recordings.corpus import Corpus
+
+    folder = tmp_path / "vids"
+    folder.mkdir()
+    (folder / "a.mp4").write_bytes((videos["dir"] / "still.mp4").read_bytes())
+    (folder / "b.mp4").write_bytes((videos["dir"] / "still.mp4").read_bytes()[:600])  # cut short: damaged
+    out = tmp_path / "c.npz"
+    assert main(["import", str(folder), "-o", str(out), "-q"]) == 2  # an input lost: refused without the option
+    assert "b.mp4" in capsys.readouterr().err and not out.exists()
+    assert main(["import", str(folder), "-o", str(out), "-q", "--skip-bad"]) == 0
+    err = capsys.readouterr().err
+    assert f"{folder / 'b.mp4'}: skipped (--skip-bad): cannot be read as a video" in err, err
+    c = Corpus.load(out)
+    assert [u.id for u in c.utterances] == ["a"] and any("skipped (--skip-bad)" in h for h in c.history)
