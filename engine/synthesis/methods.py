@@ -4,7 +4,7 @@
                       between the states, with the corpus's validated settings);
 ``"viterbi"``         :class:`engine.synthesis.viterbi.ManifoldSynthesizer` (the paper's path);
 ``"sv-hermite"``      :class:`engine.synthesis.state_synthesis.StateHermiteSynthesizer`;
-``"linear"``, ``"cubic"``  :class:`engine.synthesis.viterbi.InterpolationSynthesizer`;
+``"linear"``, ``"cubic"``  :class:`engine.synthesis.interpolation.InterpolationSynthesizer`;
 ``"unitselection"``   :class:`engine.synthesis.unitselection.UnitSelectionSynthesizer`;
 ``"dominance"``       :class:`engine.synthesis.dominance.DominanceModel`,
 ``"sliding-window"``  :class:`engine.synthesis.sliding_window.SlidingWindowRegressor`, each behind
@@ -39,7 +39,7 @@ def make_synthesizer(method: str, manifold, **params):
 
         return ManifoldSynthesizer(**params).fit(manifold)
     if method in ("linear", "cubic"):
-        from engine.synthesis.viterbi import InterpolationSynthesizer
+        from engine.synthesis.interpolation import InterpolationSynthesizer
 
         return InterpolationSynthesizer(kind=method, **params).fit(manifold)
     if method == "unitselection":

@@ -112,7 +112,7 @@ class StateModel:
 
     def fit(self, Fy, Fx, Fxv, bounds, phones=None):
         from engine.graph.states import StateGraph, default_n_states
-        from engine.synthesis.viterbi import MaxProductGraph, log_transitions, observed_transitions
+        from engine.graph.max_product import MaxProductGraph, log_transitions, observed_transitions
 
         Fy = np.asarray(Fy)
         d = int(self.state_dims)

@@ -3,9 +3,9 @@
 frames, the Gaussian smoothing of a path along its frames and the direct
 interpolation of target X (:func:`interpolate_targets`).
 
-:mod:`engine.synthesis.viterbi` (the manifold method and the interpolation baselines),
-:mod:`engine.synthesis.unitselection` (the unit-selection baseline) and :mod:`engine.synthesis.statepaths`
-all import from here, so none of them imports another for these helpers.
+:mod:`engine.synthesis.viterbi` (the paper's method), :mod:`engine.synthesis.interpolation` (the
+interpolation baselines), :mod:`engine.synthesis.unitselection` (the unit-selection baseline) and
+:mod:`engine.synthesis.statepaths` all import from here, so none of them imports another for these helpers.
 """
 from __future__ import annotations
 
