@@ -10,6 +10,8 @@ from engine.evaluation.protocols import (
 )
 from engine.graph.hemispheres import (
     Hemisphere as Hemisphere,
+)
+from engine.graph.hemispheres import (
     hemisphere as hemisphere,
 )
 from engine.graph.states import (
@@ -17,39 +19,71 @@ from engine.graph.states import (
 )
 from engine.io import (
     read_alignment as read_alignment,
+)
+from engine.io import (
     read_corpus as read_corpus,
+)
+from engine.io import (
     resample as resample,
 )
 from engine.manifold.clusters import (
     PhoneClusters as PhoneClusters,
+)
+from engine.manifold.clusters import (
     clusters_of as clusters_of,
 )
 from engine.manifold.model import (
     Manifold as Manifold,
+)
+from engine.manifold.model import (
     ManifoldFileError as ManifoldFileError,
 )
 from engine.phonetics.targets import (
     Target as Target,
+)
+from engine.phonetics.targets import (
     TargetSequence as TargetSequence,
+)
+from engine.phonetics.targets import (
     targets_from_phones as targets_from_phones,
+)
+from engine.phonetics.targets import (
     targets_from_points as targets_from_points,
+)
+from engine.phonetics.targets import (
     targets_from_text as targets_from_text,
+)
+from engine.phonetics.targets import (
     targets_from_textgrid as targets_from_textgrid,
+)
+from engine.phonetics.targets import (
     targets_from_utterance as targets_from_utterance,
 )
 from engine.recordings.corpus import (
     Corpus as Corpus,
+)
+from engine.recordings.corpus import (
     CorpusError as CorpusError,
+)
+from engine.recordings.corpus import (
     CorpusWarning as CorpusWarning,
+)
+from engine.recordings.corpus import (
     PhoneInterval as PhoneInterval,
+)
+from engine.recordings.corpus import (
     Utterance as Utterance,
 )
 from engine.recordings.corpus_blocks import (
     load_blocked as load_blocked,
+)
+from engine.recordings.corpus_blocks import (
     save_blocked as save_blocked,
 )
 from engine.synthesis.methods import (
     METHODS as METHODS,
+)
+from engine.synthesis.methods import (
     make_synthesizer as make_synthesizer,
 )
 from engine.synthesis.trajectory import (
@@ -57,6 +91,8 @@ from engine.synthesis.trajectory import (
 )
 from engine.talker.synthetic import (
     SyntheticTalker as SyntheticTalker,
+)
+from engine.talker.synthetic import (
     load_synthetic as load_synthetic,
 )
 

@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["NoPathError", "MaxProductGraph", "log_transitions", "observed_transitions", "viterbi_path", "no_path_message"]
+__all__ = ["NoPathError", "MaxProductGraph", "log_transitions", "observed_transitions", "viterbi_path",
+           "no_path_message"]
 
 
 class NoPathError(ValueError):
@@ -207,7 +208,7 @@ def viterbi_path(log_transition, a, b, n) -> np.ndarray:
 
 
 def no_path_message(g, a, b, n) -> str:
-    """Why no path of exactly ``n`` frames joins states ``a`` and ``b`` of ``g`` (the message of :class:`NoPathError`)."""
+    """Why no path of exactly ``n`` frames joins states ``a`` and ``b`` of ``g`` (for :class:`NoPathError`)."""
     h = g.hops(a)[int(b)]
     if not np.isfinite(h):
         why = f"state {b} cannot be reached from state {a} at all"

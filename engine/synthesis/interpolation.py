@@ -77,7 +77,7 @@ class InterpolationSynthesizer(BaseEstimator):
     def synthesize(self, targets: TargetSequence) -> Trajectory:
         check_is_fitted(self, "phone_means_")
         f = _target_frames(targets)
-        warnings = []
+        warnings: list[str] = []
         X = self.target_x(targets, warnings)
         t = np.arange(targets.n_frames, dtype=np.float64)
         out = interpolate_targets(self.kind, f, X, targets.n_frames)

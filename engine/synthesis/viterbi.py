@@ -306,7 +306,7 @@ class ManifoldSynthesizer(BaseEstimator):
         check_is_fitted(self, "centroids_")
         f = _target_frames(targets)
         states = self._target_states(targets)
-        warnings = []
+        warnings: list[str] = []
         if any(s is None for s in states):
             states = self._choose_phone_states(targets, f, states, warnings)
         path = self._join(targets, f, states, warnings)
