@@ -1,7 +1,7 @@
 # Two commands on a fresh machine (each makes .venv by itself):
 #   make run    open the explorer on the embedded synthetic talker
 #   make test   type-check the engine (mypy), then run the whole test suite (GUI tests under a virtual X server)
-#   make docs   build the guide and the API reference into docs/_build/html
+#   make docs   build the guide and the API reference into docs/_build/html (warnings are errors)
 PY      ?= python3
 VENV    := .venv
 BIN     := $(VENV)/bin
@@ -30,7 +30,7 @@ test: $(STAMP)
 
 docs: $(STAMP)
 	rm -rf docs/generated
-	$(BIN)/python -m sphinx -b html -q --keep-going docs docs/_build/html
+	$(BIN)/python -m sphinx -b html -q -W --keep-going docs docs/_build/html
 	@echo "docs: docs/_build/html/index.html"
 
 bench: $(STAMP)

@@ -36,7 +36,7 @@ GENERATED = "red"
 #: global / local shape and velocity directions
 S_COLOUR = "#006400"   # dark green
 V_COLOUR = "#8b008b"   # dark magenta
-#: the four tangent classes (engine.manifold.tangent.TangentFrames.classes_ 0..3)
+#: the four tangent classes (``engine.manifold.tangent.TangentFrames.classes_`` 0..3)
 CLASS_COLOURS = ("#d62728", "#ff9896", "#1f4fb4", "#8fb8ff")
 
 #: above this many points, large scatters are rasterised inside SVG/PDF
