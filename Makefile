@@ -1,7 +1,7 @@
 # Two commands on a fresh machine (each makes .venv by itself):
 #   make run    open the explorer on the embedded synthetic talker
-#   make test   run the whole test suite (GUI tests under a virtual X server when one is installed)
-#   make docs   build the guide and the API reference into docs/_build/html
+#   make test   type-check the engine (mypy), then run the whole test suite (GUI tests under a virtual X server)
+#   make docs   build the guide and the API reference into docs/_build/html (warnings are errors)
 PY      ?= python3
 VENV    := .venv
 BIN     := $(VENV)/bin
@@ -21,6 +21,7 @@ run: $(STAMP)
 	$(BIN)/lipspace explore
 
 test: $(STAMP)
+	$(BIN)/python -m mypy
 	@if [ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null 2>&1; then \
 		xvfb-run -a -s "-screen 0 1600x1200x24" $(BIN)/python -m pytest -q $(PYTEST_ARGS); \
 	else \
@@ -29,7 +30,7 @@ test: $(STAMP)
 
 docs: $(STAMP)
 	rm -rf docs/generated
-	$(BIN)/python -m sphinx -b html -q --keep-going docs docs/_build/html
+	$(BIN)/python -m sphinx -b html -q -W --keep-going docs docs/_build/html
 	@echo "docs: docs/_build/html/index.html"
 
 bench: $(STAMP)
@@ -37,4 +38,4 @@ bench: $(STAMP)
 	$(BIN)/python tools/benchmark_table.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) .pytest_cache .mypy_cache

@@ -43,6 +43,7 @@ import inspect
 import math
 import numbers
 from numbers import Integral, Real
+from typing import Any
 
 import numpy as np
 
@@ -376,7 +377,7 @@ def invalid_values(constraints) -> list:
     """
     made = [_make(c) for c in constraints]
     candidates = [v for c in made for v in c.bad_values()] + [True, "invalid", [1], _Unusable()]
-    out = []
+    out: list[Any] = []
     for v in candidates:
         if not any(c.is_satisfied_by(v) for c in made) and not any(v is w or _same(v, w) for w in out):
             out.append(v)

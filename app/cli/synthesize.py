@@ -3,13 +3,15 @@
 The manifold comes from ``--manifold FILE`` (written by ``lipspace build``) or is
 fitted on the synthetic talker (``--preset``). Targets:
 
+================================  ==================================================================================
 ``--phones "p 0.08 ax 0.1 ..."``  labels and durations (s); any phone set the corpus's labels normalise to
-``--textgrid FILE``              a Praat TextGrid (or HTK/MOCHA .lab) phone tier
-``--text "..."``                 English text through the pronouncing dictionary and the duration model
-``--utterance ID``               a corpus utterance's own phone mid-points (oracle targets, as the paper's Fig. 3);
-                                 with ``--key-frames F,F,...`` or ``--key-frames kinematic`` its frames at those
-                                 indices / at its kinematic landmarks (the default when it has no phones)
-``--states S,S,...``             manifold states (e.g. clicked in the explorer), ``--spacing`` seconds apart
+``--textgrid FILE``               a Praat TextGrid (or HTK/MOCHA .lab) phone tier
+``--text "..."``                  English text through the pronouncing dictionary and the duration model
+``--utterance ID``                a corpus utterance's own phone mid-points (oracle targets, as the paper's Fig. 3);
+                                  with ``--key-frames F,F,...`` or ``--key-frames kinematic`` its frames at those
+                                  indices / at its kinematic landmarks (the default when it has no phones)
+``--states S,S,...``              manifold states (e.g. clicked in the explorer), ``--spacing`` seconds apart
+================================  ==================================================================================
 
 ``--method best`` (the default) takes the method measured best on the corpus's own
 validation split for the kind of targets given (:mod:`engine.synthesis.method_choice`: measured

@@ -1,12 +1,15 @@
 """``lipspace table``: a manifold's per-frame results as a tidy table and as Praat TextGrids.
 
-``lipspace table MANIFOLD -o frames.csv``      one row per frame (:mod:`engine.manifold.frame_table`), units in
-                                                ``frames.csv.json``; ``-o frames.parquet`` with pyarrow
-``lipspace table MANIFOLD --textgrid DIR``     one TextGrid per utterance: phones, movement classes,
-                                                kinematic landmarks (and a tier per --gestures track)
-``--tracks lip_protrusion,speed_UL``            derived tracks as columns (low-passed at --lowpass Hz)
-``--gestures lip_aperture --gesture-table G.csv``  one row per gesture: landmark times, durations, peak
-                                                velocities, the state at each landmark
+``lipspace table MANIFOLD -o frames.csv``
+    one row per frame (:mod:`engine.manifold.frame_table`), units in ``frames.csv.json``;
+    ``-o frames.parquet`` with pyarrow
+``lipspace table MANIFOLD --textgrid DIR``
+    one TextGrid per utterance: phones, movement classes, kinematic landmarks (and a tier per
+    --gestures track)
+``--tracks lip_protrusion,speed_UL``
+    derived tracks as columns (low-passed at --lowpass Hz)
+``--gestures lip_aperture --gesture-table G.csv``
+    one row per gesture: landmark times, durations, peak velocities, the state at each landmark
 
 Metadata fields of the utterances (speaker, sex, emotion ...) are columns after ``speaker``.
 

@@ -2,13 +2,13 @@
 
 Four panels, from one fitted :class:`engine.comparison.compare.ConditionComparison`:
 
-(a) the difference view: every frame in the (S, V) plane -- the lip opening and its velocity
-    read on the manifold -- coloured by its state's enrichment (log2 occupancy ratio, level b
-    over level a) on a diverging, colour-blind-safe scale (:mod:`app.models.comparison`);
-    states whose q-value does not pass are faded;
-(b, c) the cluster centre shifts in X (mm per point) and in Y (pooled s.d.s), the clusters with
-    the smallest p first, with their bootstrap intervals;
-(d) the dynamics, each as the ratio of level b's value to level a's on a log scale.
+- (a) the difference view: every frame in the (S, V) plane -- the lip opening and its velocity
+  read on the manifold -- coloured by its state's enrichment (log2 occupancy ratio, level b
+  over level a) on a diverging, colour-blind-safe scale (:mod:`app.models.comparison`);
+  states whose q-value does not pass are faded;
+- (b, c) the cluster centre shifts in X (mm per point) and in Y (pooled s.d.s), the clusters with
+  the smallest p first, with their bootstrap intervals;
+- (d) the dynamics, each as the ratio of level b's value to level a's on a log scale.
 
 Filled markers pass the family's q < alpha; open ones do not. The level names carry their
 session-palette colours (kind ``"field:NAME"``). A design that cannot be tested gets no

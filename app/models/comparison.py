@@ -96,7 +96,7 @@ def difference_colours(log2_ratio, q, labels, *, level_a: str = "a", level_b: st
     labels : ndarray of shape (N,)
         The state of each frame.
     limit : float or None
-        Half-range of the scale; None: the largest |log2 ratio| of a significant state, or of any
+        Half-range of the scale; None: the largest ``|log2 ratio|`` of a significant state, or of any
         state when none is, at least 0.5 and at most 5.
     """
     lr = np.asarray(log2_ratio, np.float64)

@@ -65,8 +65,8 @@ def _tint(rgb, amount: float) -> QtGui.QColor:
 class PhoneTimeline(TimeKeys, QtWidgets.QWidget):
     """Word and phone intervals as boxes, targets as draggable triangles, ms ticks, a cursor and a selection.
 
-    Signals
-    -------
+    .. rubric:: Signals
+
     targetsChanged(before, after)
         A drag ended with a target on another frame (both TargetSequences).
     tiersChanged(before, after, words_before, words_after, text)

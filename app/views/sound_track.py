@@ -23,8 +23,8 @@ CACHE_SIZE = 8
 class SoundTrack(QtCore.QObject):
     """Feeds a :class:`SoundPanel` the sound of the utterance the editor shows.
 
-    Signals
-    -------
+    .. rubric:: Signals
+
     changed(bool)
         Emitted when the panel gets a sound (True) or loses it (False).
     """

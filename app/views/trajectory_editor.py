@@ -51,8 +51,8 @@ def _words_up_to(text: str, n: int) -> str:
 class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
     """Build targets, synthesise, play and compare; bound to an :class:`app.models.state.AppState`.
 
-    Signals
-    -------
+    .. rubric:: Signals
+
     heightWanted(int)
         The height the editor needs changed (the sound shown or hidden): the window sizes its dock.
     notice(str)

@@ -131,7 +131,7 @@ def utterance_dynamics(manifold, *, horizon_s: float = 0.1, unit_index=None, pro
 
 
 def dynamics_family(dyn: UtteranceDynamics, utterances) -> Family:
-    """The family comparing the levels' values: estimate = value_b / value_a, test = |log| of it.
+    """The family comparing the levels' values: estimate = value_b / value_a, test = ``|log|`` of it.
 
     ``utterances``: the design's utterances (indices into the corpus's). The statistic returns
     (n, 3M): ``[ratio, value_a, value_b]`` as estimates (only the ratio is tested).

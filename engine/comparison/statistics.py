@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -147,7 +148,7 @@ def run_families(design, families: list[Family], *, n_permutations: int = 4999, 
 
     lows, highs = [n.copy() for n in nan], [n.copy() for n in nan]
     if design.can_bootstrap and n_bootstrap > 0:
-        draws = [[] for _ in families]
+        draws: list[list[Any]] = [[] for _ in families]
         done = 0
         report(progress, "bootstrap", 0, n_bootstrap)
         for ba, bb in bootstrap_draws(design, n_bootstrap, rng):

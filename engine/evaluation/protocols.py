@@ -28,6 +28,9 @@ explorer and ``lipspace synthesize`` use by default (:mod:`engine.synthesis.meth
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from engine.progress import ProgressFn, report
@@ -51,12 +54,18 @@ from engine.synthesis.validation import (
     select_settings,
 )
 
+if TYPE_CHECKING:
+    from engine.evaluation.protocol_report import ProtocolResult
+    from engine.manifold.model import Manifold
+    from engine.recordings.corpus import Corpus
+
 __all__ = ["PROTOCOLS", "PROTOCOL_METHODS", "STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES",
            "SMOOTHING_CANDIDATES", "Y_DIMS", "MIN_VALIDATION_UTTERANCES",
            "select_settings", "evaluate_protocols", "split_utterances", "fit_on_training_split"]
 
 
-def split_utterances(corpus, *, test_fraction=0.1, test_ids=None, random_state=0):
+def split_utterances(corpus: Corpus, *, test_fraction: float = 0.1, test_ids: Sequence[str] | None = None,
+                     random_state: int | None = 0) -> tuple[list[str], list[str]]:
     """Split a corpus's utterances into training and held-out ones.
 
     Parameters
@@ -91,14 +100,16 @@ def split_utterances(corpus, *, test_fraction=0.1, test_ids=None, random_state=0
             raise ValueError(f"test_fraction must be in (0, 1), got {test_fraction}")
         k = min(len(ids) - 1, max(1, int(round(float(test_fraction) * len(ids)))))
         rng = np.random.default_rng(random_state)
-        test = sorted(rng.choice(len(ids), size=k, replace=False).tolist())
-        test = [ids[i] for i in test]
+        picked = sorted(rng.choice(len(ids), size=k, replace=False).tolist())
+        test = [ids[i] for i in picked]
     ts = set(test)
     return [i for i in ids if i not in ts], test
 
 
-def fit_on_training_split(corpus, *, test_fraction=0.1, test_ids=None, random_state=0, manifold_factory=None,
-                          progress=None):
+def fit_on_training_split(corpus: Corpus, *, test_fraction: float = 0.1, test_ids: Sequence[str] | None = None,
+                          random_state: int | None = 0,
+                          manifold_factory: Callable[[Corpus], Manifold] | None = None,
+                          progress: ProgressFn = None) -> tuple[list[str], list[str], Corpus, Manifold]:
     """Split ``corpus`` by whole utterances (:func:`split_utterances`) and fit a manifold on the training part only.
 
     Returns
@@ -121,9 +132,12 @@ def fit_on_training_split(corpus, *, test_fraction=0.1, test_ids=None, random_st
     return train_ids, test, train, manifold
 
 
-def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state=0, manifold_factory=None,
-                       settings=None, settings_factory=None, n_boot=2000, inverse_table=True, phones=None,
-                       progress: ProgressFn = None):
+def evaluate_protocols(corpus: Corpus, *, test_fraction: float = 0.1, test_ids: Sequence[str] | None = None,
+                       random_state: int | None = 0, manifold_factory: Callable[[Corpus], Manifold] | None = None,
+                       settings: dict[str, Any] | None = None,
+                       settings_factory: Callable[[Manifold], dict[str, Any]] | None = None, n_boot: int = 2000,
+                       inverse_table: bool = True, phones: bool | None = None,
+                       progress: ProgressFn = None) -> ProtocolResult:
     """Hold out utterances, fit on the rest, run every protocol; see the module docstring.
 
     Parameters
@@ -167,6 +181,7 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
     if "phones" in protos:
         models = PhoneModels.fit(manifold, c.utterances, sliding=tuple(settings["sliding_window"]))
     mean_x = np.asarray(manifold.Fx_, dtype=np.float64).mean(axis=0)
+    inv: dict[str, Any]
     per, failures, missed, inv = [], [], 0, {}
     for j, uid in enumerate(test):
         report(progress, "protocols", j, len(test))
@@ -196,7 +211,7 @@ def evaluate_protocols(corpus, *, test_fraction=0.1, test_ids=None, random_state
                                 manifold=manifold)
 
 
-def _inverse_errors(acc, manifold, sm, F, Y):
+def _inverse_errors(acc: dict[str, Any], manifold: Manifold, sm: StateModel, F: np.ndarray, Y: np.ndarray) -> None:
     """Accumulate squared X error and LVE of each inverse map on one held-out utterance's own F^y."""
     from engine.manifold.inverse_local import LocalLinearInverse
 

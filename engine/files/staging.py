@@ -43,7 +43,7 @@ _STAND_IN: dict[str, str] = {}
 _COMMITTED: list[str] = []
 
 
-def user_path(name) -> str:
+def user_path(name: object) -> str | None:
     """The user's path behind a temporary path (or a file inside a temporary folder); ``name`` otherwise."""
     if name is None:
         return name
@@ -198,11 +198,11 @@ class Outputs:
             raise _naming(exc, target) from None
         os.close(fd)
         os.unlink(tmp)  # writers create it (some refuse to write over an existing file)
-        tmp = Path(tmp)
-        _STAND_IN[str(tmp)] = str(target)
-        self._files.append((target, tmp, option, force))
+        staged = Path(tmp)
+        _STAND_IN[str(staged)] = str(target)
+        self._files.append((target, staged, option, force))
         self._reserved.append(("file", _real(target), "", None, option, target))
-        return tmp
+        return staged
 
     def folder(self, path, *, pattern: str = "*", names=None, exclusive: bool = False,
                option: str | None = None) -> Path:

@@ -2,7 +2,7 @@
 
 Synthesis (paper 4.1) bridges each gap between two targets with the most probable
 state path of exactly the gap's ``n`` frames: a Viterbi recursion of ``n - 1`` max-plus
-steps over the transition graph (:class:`engine.synthesis.viterbi.MaxProductGraph`). Each full
+steps over the transition graph (:class:`engine.graph.max_product.MaxProductGraph`). Each full
 step touches every edge: at K = 20,000 states (about 545,000 edges with the self-transitions) a
 gap of 7 frames costs six passes over all of them, though a path of 7 frames from
 ``a`` to ``b`` can only visit states within ``t`` hops of ``a`` at its frame ``t`` and
@@ -116,7 +116,7 @@ def bridge(g, a: int, b: int, n: int):
 
     Parameters
     ----------
-    g : engine.synthesis.viterbi.MaxProductGraph
+    g : engine.graph.max_product.MaxProductGraph
     a, b : int
         First and last state.
     n : int >= 1
@@ -147,7 +147,7 @@ def forward_to(g, sources, n: int, targets) -> np.ndarray:
 
     Parameters
     ----------
-    g : engine.synthesis.viterbi.MaxProductGraph
+    g : engine.graph.max_product.MaxProductGraph
     sources : ndarray of shape (M,) int
     n : int >= 1
     targets : ndarray of shape (T,) int

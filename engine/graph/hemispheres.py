@@ -13,14 +13,17 @@ Pure numpy; the explorer colours its points from these numbers.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["DIRECTIONS", "horizon_hops", "horizon_seconds", "directed_hops", "Hemisphere", "hemisphere"]
 
 DIRECTIONS = ("future", "past", "both")
 
 
-def horizon_hops(horizon_s, rate) -> int:
+def horizon_hops(horizon_s: float, rate: float) -> int:
     """Largest number of hops that fit in ``horizon_s`` seconds at ``rate`` frames per second.
 
     One hop joins the states of two consecutive frames, so it takes at least one frame
@@ -46,7 +49,7 @@ def horizon_hops(horizon_s, rate) -> int:
     return int(np.floor(horizon_s * rate + 1e-9))
 
 
-def horizon_seconds(hops, rate) -> float:
+def horizon_seconds(hops: int, rate: float) -> float:
     """The shortest time in which ``hops`` hops can be made at ``rate`` frames per second."""
     hops, rate = int(hops), float(rate)
     if hops < 0:
@@ -56,7 +59,7 @@ def horizon_seconds(hops, rate) -> float:
     return hops / rate
 
 
-def directed_hops(graph, state, direction: str) -> np.ndarray:
+def directed_hops(graph: Any, state: int, direction: str) -> np.ndarray:
     """Directed hop distance of every state from ``state`` (future) or to it (past).
 
     Parameters
@@ -103,7 +106,8 @@ class Hemisphere:
         ``n_inside`` count frames.
     """
 
-    def __init__(self, hops, inside, reachable, max_hops, direction, reach, weights=None):
+    def __init__(self, hops: np.ndarray, inside: np.ndarray, reachable: np.ndarray, max_hops: int | None,
+                 direction: str, reach: int, weights: np.ndarray | None = None) -> None:
         self.hops = hops
         self.inside = inside
         self.reachable = reachable
@@ -119,7 +123,8 @@ class Hemisphere:
         return int(self.inside.sum() if self.weights is None else np.sum(self.weights[self.inside]))
 
 
-def hemisphere(graph, state, labels, *, direction: str = "future", max_hops=None, weights=None) -> Hemisphere:
+def hemisphere(graph: Any, state: int, labels: ArrayLike, *, direction: str = "future", max_hops: int | None = None,
+               weights: ArrayLike | None = None) -> Hemisphere:
     """Frames whose state lies within ``max_hops`` hops after (and/or before) ``state``.
 
     Parameters
@@ -151,10 +156,13 @@ def hemisphere(graph, state, labels, *, direction: str = "future", max_hops=None
     fut = directed_hops(graph, state, "future") if direction in ("future", "both") else None
     past = directed_hops(graph, state, "past") if direction in ("past", "both") else None
     if direction == "future":
+        assert fut is not None
         signed = fut.copy()
     elif direction == "past":
+        assert past is not None
         signed = -past
     else:
+        assert fut is not None and past is not None
         signed = np.where(past < fut, -past, fut)  # the nearer side; a tie (and the state itself) is future
     dist = np.abs(signed)
     finite = np.isfinite(dist)

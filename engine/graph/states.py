@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import warnings
 from numbers import Integral
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
@@ -65,7 +67,8 @@ def default_n_states(n_frames: int) -> int:
     return int(min(n_frames, np.clip(round(n_frames / FRAMES_PER_STATE), MIN_DEFAULT_STATES, MAX_DEFAULT_STATES)))
 
 
-def assign_and_count(start, stop, centroids, Y, has_next, *, workers=1):
+def assign_and_count(start: int, stop: int, centroids: np.ndarray, Y: np.ndarray, has_next: np.ndarray, *,
+                     workers: int = 1) -> tuple[np.ndarray, Any]:
     """States of frames ``start:stop`` and the transitions they start.
 
     Parameters
@@ -165,14 +168,15 @@ class StateGraph(BaseEstimator):
         "largest_scc_": dict(kind="int", low=0),
     }
 
-    def __init__(self, *, n_states=None, n_dims=3, random_state=0, batch_size=4096):
+    def __init__(self, *, n_states: int | None = None, n_dims: int = 3, random_state: int | None = 0,
+                 batch_size: int = 4096) -> None:
         self.n_states = n_states
         self.n_dims = n_dims
         self.random_state = random_state
         self.batch_size = batch_size
 
     # ------------------------------------------------------------------ input
-    def _check_Y(self, Y, name="Y") -> np.ndarray:
+    def _check_Y(self, Y: ArrayLike, name: str = "Y") -> np.ndarray:
         Y = np.asarray(Y)
         if Y.ndim == 1:
             Y = Y[None, :]
@@ -186,7 +190,7 @@ class StateGraph(BaseEstimator):
                              f"remove or repair those frames")
         return np.ascontiguousarray(Y, dtype=np.float32)
 
-    def _check_state(self, state, name="state") -> int:
+    def _check_state(self, state: int, name: str = "state") -> int:
         check_is_fitted(self, "centroids_")
         K = self.centroids_.shape[0]
         if not isinstance(state, (int, np.integer)) or isinstance(state, bool):
@@ -196,7 +200,8 @@ class StateGraph(BaseEstimator):
         return int(state)
 
     # -------------------------------------------------------------------- fit
-    def fit(self, Fy, bounds, *, progress: ProgressFn = None, executor=None, centroids=None):
+    def fit(self, Fy: ArrayLike, bounds: ArrayLike, *, progress: ProgressFn = None, executor: Any = None,
+            centroids: ArrayLike | None = None) -> StateGraph:
         """Cluster F^y into states and build the transition graph.
 
         Parameters
@@ -298,7 +303,7 @@ class StateGraph(BaseEstimator):
                 StateGraphConnectivityWarning, stacklevel=2)
         return self
 
-    def _kmeans(self, Y, K):
+    def _kmeans(self, Y: np.ndarray, K: int) -> np.ndarray:
         # imported here: scikit-learn's clustering package costs a loaded manifold's start-up 0.3-0.8 s
         from sklearn.cluster import KMeans, MiniBatchKMeans
         from sklearn.exceptions import ConvergenceWarning
@@ -325,10 +330,10 @@ class StateGraph(BaseEstimator):
         return km.cluster_centers_
 
     # ---------------------------------------------------------- graph helpers
-    def _reset_cache(self):
-        self._cache = {}
+    def _reset_cache(self) -> None:
+        self._cache: dict[str, Any] = {}
 
-    def _graph(self, transpose: bool):
+    def _graph(self, transpose: bool) -> Any:
         """A (or A^T) as float64 csr with sorted indices, built once and cached."""
         check_is_fitted(self, "adjacency_")
         cache = self.__dict__.setdefault("_cache", {})
@@ -339,7 +344,7 @@ class StateGraph(BaseEstimator):
             cache[key] = G
         return cache[key]
 
-    def _reach(self) -> dict:
+    def _reach(self) -> dict[str, int]:
         K = self.centroids_.shape[0]
         rep = int(np.flatnonzero(self.scc_labels_ == self.largest_scc_)[0])
         fut, past = self.hemispheres(rep)
@@ -348,7 +353,7 @@ class StateGraph(BaseEstimator):
                 "K": K}
 
     # ------------------------------------------------------------------ query
-    def prepare_queries(self):
+    def prepare_queries(self) -> StateGraph:
         """Build now what the first hemisphere or path query would build: A and A^T as csr.
 
         Both are cached on the object (not saved). At K = 20,000 states (525k edges) they
@@ -358,7 +363,7 @@ class StateGraph(BaseEstimator):
         self._graph(False), self._graph(True)
         return self
 
-    def predict(self, Y) -> np.ndarray:
+    def predict(self, Y: ArrayLike) -> np.ndarray:
         """Nearest state of each point.
 
         Parameters
@@ -376,7 +381,7 @@ class StateGraph(BaseEstimator):
             cache["tree"] = cKDTree(self.centroids_)
         return cache["tree"].query(Y)[1].astype(np.int32)
 
-    def future(self, state) -> np.ndarray:
+    def future(self, state: int) -> np.ndarray:
         """Hop distance from ``state`` to every state over A (its future hemisphere).
 
         Returns
@@ -387,7 +392,7 @@ class StateGraph(BaseEstimator):
         s = self._check_state(state)
         return hop_distances(self._graph(False), s)
 
-    def past(self, state) -> np.ndarray:
+    def past(self, state: int) -> np.ndarray:
         """Hop distance from every state to ``state`` (Dijkstra over A^T: its past hemisphere).
 
         Returns
@@ -398,11 +403,11 @@ class StateGraph(BaseEstimator):
         s = self._check_state(state)
         return hop_distances(self._graph(True), s)
 
-    def hemispheres(self, state) -> tuple[np.ndarray, np.ndarray]:
+    def hemispheres(self, state: int) -> tuple[np.ndarray, np.ndarray]:
         """``(future(state), past(state))``."""
         return self.future(state), self.past(state)
 
-    def min_path(self, a, b) -> np.ndarray:
+    def min_path(self, a: int, b: int) -> np.ndarray:
         """A minimum-distance (fewest hops) state path from ``a`` to ``b``.
 
         Its length equals ``future(a)[b]``. Among several paths of fewest hops, the one

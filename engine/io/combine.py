@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -36,7 +37,7 @@ def concat(corpora, *, name: str | None = None) -> Corpus:
     if not corpora:
         raise CorpusError("concat: no corpora given; expected at least one")
     a = corpora[0]
-    seen = {}
+    seen: dict[str, Any] = {}
     for k, c in enumerate(corpora):
         if not isinstance(c, Corpus):
             raise CorpusError(f"concat: item {k} is a {type(c).__name__}, not a Corpus")

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 
@@ -91,6 +92,7 @@ def resample(corpus: Corpus, rate: float, *, progress=None) -> Corpus:
                       latent={k: v.copy() for k, v in corpus.latent.items()}, name=corpus.name,
                       point_roles=corpus.point_roles, registration=corpus.registration,
                       history=list(corpus.history), axes=corpus.axes, units=corpus.units)
+    lat: dict[str, list[Any]]
     blocks, utts, lat = [], [], {k: [] for k in corpus.latent}
     pos = 0
     total = len(corpus.utterances)

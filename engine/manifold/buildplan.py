@@ -3,7 +3,7 @@
 One ``lipspace build`` serves every corpus size. The exact embedding (PCA of the full
 N x N distance matrix, block-wise) costs O(N^2) distance evaluations per pass; its CPU
 time grows with N^1.8-1.9 and at 100,000 frames it is about 155 s against 5-6 CPU-s
-for L = 2,000 landmarks, whose F^y correlates with the exact one at |r| >= 0.9989.
+for L = 2,000 landmarks, whose F^y correlates with the exact one at ``|r| >= 0.9989``.
 So the exact path is taken while ``N <= landmarks_above`` (default 50,000 frames) and
 the landmark (Nystrom / landmark-MDS) path above it, with :data:`DEFAULT_LANDMARKS`
 landmarks; an explicit ``n_landmarks`` always wins. K-means for the states switches

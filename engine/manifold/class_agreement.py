@@ -8,7 +8,7 @@ speed grows. This module measures those statements against the aperture itself:
   (a[i+1] - a[i-1]) / 2, over the frames where it changes by more than
   :data:`MOVING_PER_FRAME` (0.05 mm per frame) -- the frames that move;
 * **accelerating**: the class against the sign of the change of the aperture's speed
-  |d a / dt| (central differences of the central differences), over the frames whose
+  ``|da/dt|`` (central differences of the central differences), over the frames whose
   speed change is above the corpus's :data:`SPEED_QUANTILE` quantile.
 
 Beside them it reports the **trivial rule**, the same two signs read off the measured

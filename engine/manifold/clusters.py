@@ -5,7 +5,7 @@ the clusters hold the count (the paper's Table 1), the mean and covariance of th
 members in F^y (the first ``n_dims`` dimensions of Y, with dynamics) and in F^x (the
 first ``n_dims`` shape components, shape only), the 2-s.d. ellipse in any pair of axes
 and the ellipsoid in 3D (Fig. 4), and the fraction of members that are opening (their
-opening velocity read on the manifold, TangentFrames.velocity_, is > 0).
+opening velocity read on the manifold, ``TangentFrames.velocity_``, is > 0).
 
 **Separation** between two phones is the Bhattacharyya distance between Gaussian fits
 of their clusters,
@@ -26,15 +26,21 @@ clusters keeps singular covariances (fewer members than dimensions) finite.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from numbers import Integral
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
 from engine.phonetics import phonesets
 from engine.recordings.corpus import label_codes
+
+if TYPE_CHECKING:
+    from engine.manifold.model import Manifold
 
 __all__ = ["PhoneClusters", "bhattacharyya", "dprime", "MEASURES", "clusters_of", "LABEL_KINDS"]
 
@@ -46,7 +52,7 @@ _RIDGE = 1e-9
 
 
 # ------------------------------------------------------------------ Gaussian distances
-def bhattacharyya(mean_a, cov_a, mean_b, cov_b) -> np.ndarray:
+def bhattacharyya(mean_a: ArrayLike, cov_a: ArrayLike, mean_b: ArrayLike, cov_b: ArrayLike) -> np.ndarray:
     """Bhattacharyya distance between Gaussians (batched over leading axes).
 
     Parameters
@@ -69,7 +75,7 @@ def bhattacharyya(mean_a, cov_a, mean_b, cov_b) -> np.ndarray:
     return maha / 8.0 + 0.5 * (ld - 0.5 * (lda + ldb))
 
 
-def dprime(mean_a, cov_a, mean_b, cov_b) -> np.ndarray:
+def dprime(mean_a: ArrayLike, cov_a: ArrayLike, mean_b: ArrayLike, cov_b: ArrayLike) -> np.ndarray:
     """d' along the mean difference: ``|μa − μb| / sqrt(½ (wᵀΣa w + wᵀΣb w))``, w the unit difference.
 
     Shapes as :func:`bhattacharyya`; 0 where the means coincide.
@@ -82,7 +88,7 @@ def dprime(mean_a, cov_a, mean_b, cov_b) -> np.ndarray:
     return np.where(norm > 0, norm / np.sqrt(np.maximum(var, np.finfo(float).tiny)), 0.0)
 
 
-def _whitener(cov) -> np.ndarray:
+def _whitener(cov: np.ndarray) -> np.ndarray:
     """L with L Lᵀ = cov and det L ≥ 0 (so meshes keep their orientation)."""
     lam, V = np.linalg.eigh(cov)
     if np.linalg.det(V) < 0:
@@ -91,7 +97,7 @@ def _whitener(cov) -> np.ndarray:
     return V * np.sqrt(np.clip(lam, 0.0, None))
 
 
-def _sphere(resolution: int):
+def _sphere(resolution: int) -> tuple[np.ndarray, np.ndarray]:
     """Unit UV sphere: vertices (n, 3), outward-oriented triangles (m, 3)."""
     n_lon, n_lat = max(int(resolution), 3), max(int(resolution) // 2, 2)
     phi = np.linspace(0.0, np.pi, n_lat + 1)[1:-1]
@@ -154,7 +160,7 @@ class PhoneClusters(BaseEstimator):
         Phone set detected from the labels (used for classes and normalisation).
     excluded_phones_ : list of str
         Labels with fewer than ``min_count`` members (pauses are not listed).
-    excluded_counts_ : ndarray of shape (len(excluded_phones_),), int64
+    excluded_counts_ : ndarray of shape (len(``excluded_phones_``),), int64
     n_pauses_ : int
         Pause instances left out.
     """
@@ -166,7 +172,8 @@ class PhoneClusters(BaseEstimator):
         "normalize_labels": ["boolean"],
     }
 
-    def __init__(self, *, n_dims=3, min_count=3, exclude_pauses=True, normalize_labels=False):
+    def __init__(self, *, n_dims: int = 3, min_count: int = 3, exclude_pauses: bool = True,
+                 normalize_labels: bool = False) -> None:
         self.n_dims = n_dims
         self.min_count = min_count
         self.exclude_pauses = exclude_pauses
@@ -174,12 +181,13 @@ class PhoneClusters(BaseEstimator):
 
     # ------------------------------------------------------------------ fitting
     @classmethod
-    def from_manifold(cls, manifold, **params) -> "PhoneClusters":
+    def from_manifold(cls, manifold: Manifold, **params: Any) -> PhoneClusters:
         """Fit on a fitted :class:`engine.manifold.model.Manifold` (its corpus's phone table,
         ``Fy_``, ``Fx_`` and the tangent frames' opening velocity per frame)."""
         return cls(**params).fit(manifold)
 
-    def fit(self, Fy, Fx=None, mid_frames=None, labels=None, signed_velocity=None):
+    def fit(self, Fy: Any, Fx: Any = None, mid_frames: Any = None, labels: Any = None,
+            signed_velocity: Any = None) -> PhoneClusters:
         """Fit from a manifold, ``fit(manifold)``, or from arrays.
 
         Parameters
@@ -268,7 +276,7 @@ class PhoneClusters(BaseEstimator):
         self.n_pauses_ = int((~keep).sum())
         return self
 
-    def _check_inputs(self, Fy, Fx, mid_frames, labels, sv):
+    def _check_inputs(self, Fy: Any, Fx: Any, mid_frames: Any, labels: Any, sv: Any) -> tuple[Any, ...]:
         Fy, Fx = np.asarray(Fy), np.asarray(Fx)
         for name, a in (("Fy", Fy), ("Fx", Fx)):
             if a.ndim != 2 or not np.issubdtype(a.dtype, np.number):
@@ -304,7 +312,7 @@ class PhoneClusters(BaseEstimator):
         return Fy, Fx, mids, labels, sv
 
     # ------------------------------------------------------------------ lookup
-    def index(self, phone) -> int:
+    def index(self, phone: str) -> int:
         """Row of ``phone`` in ``phones_`` (exact label first, then by phone-set normalisation)."""
         check_is_fitted(self, "phones_")
         if phone in self.phones_:
@@ -321,12 +329,12 @@ class PhoneClusters(BaseEstimator):
             why = f" (it has {n} mid-points, fewer than min_count={self.min_count})"
         raise ValueError(f"no cluster for phone {phone!r}{why}; phones with clusters: {' '.join(self.phones_)}")
 
-    def members(self, phone) -> np.ndarray:
+    def members(self, phone: str) -> np.ndarray:
         """Mid-point frame indices of ``phone``, shape (count,)."""
         i = self.index(phone)
         return self.members_[self.member_offsets_[i]:self.member_offsets_[i + 1]]
 
-    def _space(self, space):
+    def _space(self, space: str) -> tuple[np.ndarray, np.ndarray]:
         s = str(space).lower()
         if s == "y":
             return self.means_, self.covariances_
@@ -334,7 +342,7 @@ class PhoneClusters(BaseEstimator):
             return self.means_x_, self.covariances_x_
         raise ValueError(f"space={space!r}: use 'y' (F^y, with dynamics) or 'x' (F^x, shape only)")
 
-    def _axes(self, axes, n, dim):
+    def _axes(self, axes: Sequence[int], n: int, dim: int) -> list[int]:
         axes = tuple(int(a) for a in axes)
         if len(axes) != n or len(set(axes)) != n or min(axes) < 0 or max(axes) >= dim:
             raise ValueError(f"axes={axes}: need {n} distinct axes in [0, {dim}); fit with a larger n_dims "
@@ -342,7 +350,8 @@ class PhoneClusters(BaseEstimator):
         return list(axes)
 
     # ------------------------------------------------------------------ geometry
-    def ellipse(self, phone, axes=(0, 1), n_sd=2.0, n_points=100, *, space="y") -> np.ndarray:
+    def ellipse(self, phone: str, axes: Sequence[int] = (0, 1), n_sd: float = 2.0, n_points: int = 100, *,
+                space: str = "y") -> np.ndarray:
         """Outline of the ``n_sd``-s.d. ellipse of ``phone`` in the plane of two axes.
 
         The ellipse of the cluster's marginal Gaussian in those axes: every point has
@@ -360,7 +369,8 @@ class PhoneClusters(BaseEstimator):
         L = _whitener(covs[i][np.ix_(ax, ax)])
         return means[i, ax] + float(n_sd) * np.column_stack([np.cos(t), np.sin(t)]) @ L.T
 
-    def ellipsoid(self, phone, n_sd=2.0, resolution=20, *, axes=(0, 1, 2), space="y"):
+    def ellipsoid(self, phone: str, n_sd: float = 2.0, resolution: int = 20, *, axes: Sequence[int] = (0, 1, 2),
+                  space: str = "y") -> tuple[np.ndarray, np.ndarray]:
         """Triangle mesh of the ``n_sd``-s.d. ellipsoid of ``phone`` in three axes.
 
         Every vertex has Mahalanobis distance ``n_sd`` from the mean; triangles are
@@ -379,12 +389,12 @@ class PhoneClusters(BaseEstimator):
         return means[i, ax] + float(n_sd) * unit @ L.T, faces
 
     # ------------------------------------------------------------------ separation
-    def _regularised(self, covs):
+    def _regularised(self, covs: np.ndarray) -> np.ndarray:
         d = covs.shape[-1]
         scale = float(np.mean(np.trace(covs, axis1=1, axis2=2))) / d if covs.size else 1.0
         return covs + _RIDGE * (scale if scale > 0 else 1.0) * np.eye(d)
 
-    def separation(self, a, b, space="y", *, measure="bhattacharyya") -> float:
+    def separation(self, a: str, b: str, space: str = "y", *, measure: str = "bhattacharyya") -> float:
         """Separation of the clusters of phones ``a`` and ``b`` in Y (``"y"``) or X (``"x"``).
 
         ``measure="bhattacharyya"`` (default, see the module docstring) or ``"dprime"``.
@@ -392,7 +402,8 @@ class PhoneClusters(BaseEstimator):
         i, j = self.index(a), self.index(b)
         return float(self.separation_matrix(space, measure=measure, phones=[self.phones_[i], self.phones_[j]])[0, 1])
 
-    def separation_matrix(self, space="y", *, measure="bhattacharyya", phones=None) -> np.ndarray:
+    def separation_matrix(self, space: str = "y", *, measure: str = "bhattacharyya",
+                          phones: Sequence[str] | None = None) -> np.ndarray:
         """Pairwise separations, shape (P, P) in ``phones_`` order (or of ``phones``); zero diagonal."""
         check_is_fitted(self, "phones_")
         if measure not in MEASURES:
@@ -407,7 +418,7 @@ class PhoneClusters(BaseEstimator):
         return np.maximum(out, 0.0)
 
     # ------------------------------------------------------------------ table
-    def table(self, phones=None, *, measure="bhattacharyya") -> list[dict]:
+    def table(self, phones: Sequence[str] | None = None, *, measure: str = "bhattacharyya") -> list[dict[str, Any]]:
         """One row per phone (all of ``phones_``, or ``phones``), for printing and CSV.
 
         Keys: ``phone``, ``count``, ``y1..yd`` (mean in F^y), ``opening_fraction``,
@@ -443,7 +454,8 @@ class PhoneClusters(BaseEstimator):
         return rows
 
 
-def clusters_of(manifold, *, labels: str = "auto", **params):
+def clusters_of(manifold: Manifold, *, labels: str = "auto",
+                **params: Any) -> tuple[PhoneClusters, str, str | None]:
     """Clusters of a fitted manifold's phone mid-points, or of its kinematic landmarks when it has no phones.
 
     Parameters

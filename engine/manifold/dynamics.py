@@ -28,7 +28,7 @@ from engine.recordings.corpus import CorpusWarning
 
 __all__ = ["DynamicFeatures", "DynamicScaleWarning", "OUTLIER_RATIO", "SCALES"]
 
-#: a block whose max |entry| exceeds its 99th percentile by more than this warns
+#: a block whose largest absolute entry exceeds its 99th percentile by more than this warns
 OUTLIER_RATIO = 4.0
 
 
@@ -45,7 +45,8 @@ def _percentile(scale) -> float | None:
 #: the constraint of a block scale (:class:`DynamicFeatures` ``scale``, :class:`engine.manifold.model.Manifold`
 #: ``dynamics_scale``): "max" or a percentile "pQ" with 50 <= Q <= 100
 SCALES = [StrOptions({"max"}),
-          Condition(lambda s: 50 <= _percentile(s) <= 100, "a percentile 'pQ' with 50 <= Q <= 100 (e.g. 'p99')",
+          Condition(lambda s: 50 <= _percentile(s) <= 100,  # type: ignore[operator]  # None raises: refused
+                    "a percentile 'pQ' with 50 <= Q <= 100 (e.g. 'p99')",
                     bad=["p200", "p10", "q99"])]
 
 
@@ -74,7 +75,7 @@ class DynamicFeatures(BaseEstimator):
         Scalars making ``max |alpha (F^x - mu)| = 1`` and ``max |beta (F^x' - mu')| = 1``
         (with ``scale="pQ"``: the Q-th percentiles equal 1).
     shape_outlier_ratio_, velocity_outlier_ratio_ : float
-        Per block: max |entry| / the 99th percentile of the column that holds it.
+        Per block: the largest absolute entry / the 99th percentile of the column that holds it.
     """
 
     _parameter_constraints = {"scale": SCALES}

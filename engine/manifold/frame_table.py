@@ -226,7 +226,7 @@ def class_intervals(labels, rate: float) -> list[tuple[float, float, str]]:
     consecutive frames of one class make one interval.
     """
     out = []
-    prev, start = None, None
+    prev, start = None, 0
     for i, lab in enumerate(list(labels) + [None]):
         if lab != prev:
             if prev is not None:

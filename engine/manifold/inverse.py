@@ -122,18 +122,18 @@ class InverseMap(BaseEstimator):
     ----------
     origin_ : ndarray of shape (n_dims,)
         Centre of the fitted points.
-    basis_ : ndarray of shape (n_dims, rank_)
+    basis_ : ndarray of shape (n_dims, ``rank_``)
         Orthonormal basis of the affine subspace the points span (identity when they
         span all ``n_dims`` dimensions).
     rank_ : int
         Affine dimension of the fitted points (``n_dims`` unless degenerate).
-    points_ : ndarray of shape (n_unique, rank_), float64
+    points_ : ndarray of shape (n_unique, ``rank_``), float64
         Distinct fitted points in subspace coordinates.
     values_ : ndarray of shape (n_unique, m)
         Value (F^x or F) at each distinct point.
     point_index_ : ndarray of shape (n_samples,)
         Row of ``points_`` of every fitted sample.
-    simplices_ : ndarray of shape (n_simplices, rank_ + 1), int32
+    simplices_ : ndarray of shape (n_simplices, ``rank_`` + 1), int32
         Vertex indices (rows of ``points_``) of the triangulation (empty when ``rank_ < 2``).
     n_duplicates_ : int
         Samples that shared their point with an earlier sample.

@@ -197,4 +197,4 @@ def select_neighbors(Fy_fit, Fx_fit, Fy_val, Fx_val, *, n_dims, candidates=NEIGH
         errors[int(k)] = float(np.sqrt((e ** 2).mean()))
     if not errors:
         raise ValueError(f"no candidate k in {list(candidates)} fits {len(Fy_fit)} frames in {n_dims} dims")
-    return min(errors, key=errors.get), errors
+    return min(errors, key=errors.__getitem__), errors

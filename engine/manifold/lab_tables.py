@@ -129,13 +129,13 @@ def gesture_table(manifold, gesture_sets, *, source: str = "") -> FrameTable:
                 rows[f"state_{x.lower()}"].append(float(labels[f]) if f >= 0 else np.nan)
         units[gs.track] = gs.unit
     cols = {}
-    for k, v in rows.items():
-        if k in ("utterance", "speaker", "track", "target", *fields):
-            cols[k] = np.array(v, dtype=object)
-        elif k == "gesture":
-            cols[k] = np.array(v, dtype=np.int64)
+    for col, v in rows.items():
+        if col in ("utterance", "speaker", "track", "target", *fields):
+            cols[col] = np.array(v, dtype=object)
+        elif col == "gesture":
+            cols[col] = np.array(v, dtype=np.int64)
         else:
-            cols[k] = np.array(v, dtype=np.float64)
+            cols[col] = np.array(v, dtype=np.float64)
     unit = "; ".join(f"{k}: {u}" for k, u in units.items() if u) or "the track's unit"
     meta_units = {**{c_: "s" for c_ in LANDMARK_COLUMNS}, "gesture_s": "s", "toward_s": "s", "nucleus_s": "s",
                   "away_s": "s", "pvel_toward": f"per s ({unit})", "pvel_away": f"per s ({unit})",

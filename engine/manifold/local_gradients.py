@@ -3,7 +3,7 @@
 A quantity f measured per frame (the lip aperture, its velocity) is a function on the
 manifold. Its local gradient g_i at frame i is what the tangent frames need: the step
 z_i of the trajectory through frame i changes f by about z_i . g_i. The gradient is
-fitted to the **steps** of the frames near y_i, not to the values of f there:
+fitted to the **steps** of the frames near y_i, not to the values of f there::
 
     g_i = argmin_g  sum_j w_ij (z_j . g - df_j)^2 + ridge |g|^2,   j in the k nearest
     frames of y_i in F^y (i itself included),

@@ -7,10 +7,13 @@ from __future__ import annotations
 
 import functools
 import json
+import os
 import re
 import time
+from collections.abc import Mapping
 from numbers import Integral
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from sklearn.base import BaseEstimator
@@ -27,6 +30,11 @@ from engine.progress import ProgressFn, report
 from engine.recordings.bounds import velocities
 from engine.recordings.corpus import Corpus, CorpusError
 from engine.recordings.registration import SPEAKER_MODES
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from engine.manifold.inverse import InverseMap
 
 __all__ = ["project_x", "Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
 
@@ -186,9 +194,11 @@ class Manifold(BaseEstimator):
         "dynamics_scale": SCALES,
     }
 
-    def __init__(self, *, variance=0.99, max_components=100, n_embedding=16, embedding_method="pca",
-                 n_landmarks=None, n_states=None, state_dims=3, n_neighbors=None, random_state=0,
-                 speaker_normalisation="auto", landmarks_above=50000, dynamics_scale="max"):
+    def __init__(self, *, variance: float = 0.99, max_components: int = 100, n_embedding: int = 16,
+                 embedding_method: str = "pca", n_landmarks: int | None = None, n_states: int | None = None,
+                 state_dims: int = 3, n_neighbors: int | None = None, random_state: int | None = 0,
+                 speaker_normalisation: str = "auto", landmarks_above: int = 50000,
+                 dynamics_scale: str = "max") -> None:
         self.variance = variance
         self.max_components = max_components
         self.n_embedding = n_embedding
@@ -203,7 +213,7 @@ class Manifold(BaseEstimator):
         self.dynamics_scale = dynamics_scale
 
     # ------------------------------------------------------------------ fitting
-    def fit(self, corpus: Corpus, *, progress: ProgressFn = None, executor=None):
+    def fit(self, corpus: Corpus, *, progress: ProgressFn = None, executor: Any = None) -> Manifold:
         """Fit every stage on ``corpus``. Cancelling (via ``progress``) leaves ``self`` unfitted.
 
         ``executor``: None fits in-process; an :class:`engine.scale.executor.DaskExecutor` runs the
@@ -272,7 +282,7 @@ class Manifold(BaseEstimator):
         self.shape_, self.dynamics_, self.embedding_ = shape, dyn, emb
         self.tangent_, self.states_ = tangent, states
         self.Fx_, self.Fxv_, self.G_, self.Fy_ = Fx, Fxv, G, Fy
-        self._inverse = None
+        self._inverse: InverseMap | None = None
         self.synthesis_choice_ = self.synthesis_states_ = None  # measured on this fit by fit_choice
         self.synthesis_models_ = {}
         t = time.perf_counter()
@@ -286,7 +296,7 @@ class Manifold(BaseEstimator):
         self.timings_ = timings
         return self
 
-    def _state_x(self, *, local: bool = False):
+    def _state_x(self, *, local: bool = False) -> np.ndarray | None:
         """(K, m) the Delaunay inverse map at every state centroid (first 3 dims), or None.
 
         ``local``: from local triangulations around each centroid (:func:`engine.manifold.inverse.delaunay_at`)
@@ -306,7 +316,7 @@ class Manifold(BaseEstimator):
             X[lost] = self.inverse_map.transform(C[lost])
         return X.astype(np.asarray(self.Fx_).dtype)
 
-    def state_inverse(self):
+    def state_inverse(self) -> np.ndarray | None:
         """(K, m) the Delaunay inverse map at every state centroid (``state_x_``), or None when the
         states live in other dims than the map's. A file without it (a large build of an older
         Lipspace) gets it here, once, from local triangulations."""
@@ -316,7 +326,7 @@ class Manifold(BaseEstimator):
         return self.state_x_
 
     # -------------------------------------------------------------- projections
-    def project(self, frames, bounds=None) -> np.ndarray:
+    def project(self, frames: ArrayLike, bounds: ArrayLike | None = None) -> np.ndarray:
         """Out-of-sample F^y for new frames (n, C) forming utterances ``bounds`` (default: one).
 
         Up to ``engine.manifold.shape.SMALL_QUERY_ROWS`` frames on one BLAS thread (interactive).
@@ -331,13 +341,14 @@ class Manifold(BaseEstimator):
             return self.embedding_.transform(G)
 
     @property
-    def inverse_map(self):
+    def inverse_map(self) -> InverseMap:
         """The Delaunay inverse map Y -> X, built on first use."""
         check_is_fitted(self, "Fy_")
         if getattr(self, "_inverse", None) is None:
             from engine.manifold.inverse import InverseMap
 
             self._inverse = InverseMap(n_dims=min(3, self.Fy_.shape[1])).fit(self.Fy_, self.Fx_)
+        assert self._inverse is not None
         return self._inverse
 
     def summary(self) -> dict:
@@ -358,7 +369,7 @@ class Manifold(BaseEstimator):
     _PARTS = {"shape": "shape_", "dynamics": "dynamics_", "embedding": "embedding_",
               "tangent": "tangent_", "states": "states_"}
 
-    def save(self, path, *, include_frames: bool | None = None) -> Path:
+    def save(self, path: str | os.PathLike[str], *, include_frames: bool | None = None) -> Path:
         """Write the fitted manifold (and its corpus) to one ``.npz`` file, atomically.
 
         ``include_frames=None`` stores the corpus frames when they take at most
@@ -373,7 +384,7 @@ class Manifold(BaseEstimator):
 
         check_is_fitted(self, "Fy_")
         path = Path(path)
-        reference = {}
+        reference: dict[str, Any] = {}
         if include_frames is None and isinstance(self.corpus_.frames, BlockFrames):
             from engine.recordings.corpus_blocks import frames_reference
 
@@ -408,7 +419,7 @@ class Manifold(BaseEstimator):
         return d
 
     @classmethod
-    def load(cls, path, *, memory_map: bool | None = None) -> "Manifold":
+    def load(cls, path: str | os.PathLike[str], *, memory_map: bool | None = None) -> Manifold:
         """Read a manifold written by :meth:`save`, without refitting.
 
         ``memory_map``: None (default) leaves the large per-frame arrays (of at least
@@ -460,7 +471,7 @@ class Manifold(BaseEstimator):
             msg = str(exc)
             raise ManifoldFileError(msg if msg.startswith(str(path)) else f"{path}: corpus part: {msg}") from None
 
-def project_x(manifold, Fx) -> np.ndarray:
+def project_x(manifold: Manifold, Fx: ArrayLike) -> np.ndarray:
     """Out-of-sample F^y of one utterance-long trajectory given in X.
 
     The fitted manifold's own pipeline without its shape stage: velocities inside the

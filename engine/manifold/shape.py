@@ -205,7 +205,7 @@ class ShapeSpace(BaseEstimator):
         Power iterations done (at most ``n_iter``).
     n_range_ : int
         Columns of the randomized range finder (computed components + oversampling):
-        every product with F is an (N, C) x (C, n_range_) GEMM.
+        every product with F is an (N, C) x (C, ``n_range_``) GEMM.
     """
 
     _parameter_constraints = {

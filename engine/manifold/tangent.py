@@ -98,9 +98,9 @@ class TangentFrames(BaseEstimator):
         when both ``n_neighbors`` and ``n_dims`` were given).
     n_anchors_ : int
         Frames the gradients were fitted at (all of them up to ``MAX_ANCHORS``).
-    s_, v_ : ndarray of shape (N, n_dims_), float32
+    s_, v_ : ndarray of shape (N, ``n_dims_``), float32
         Unit local shape and velocity directions.
-    step_ : ndarray of shape (N, n_dims_), float32
+    step_ : ndarray of shape (N, ``n_dims_``), float32
         Central steps z_i.
     velocity_ : ndarray of shape (N,), float32
         z_i . grad(opening): the opening velocity read on the manifold (opening unit / s).
@@ -111,7 +111,7 @@ class TangentFrames(BaseEstimator):
     classes_ : ndarray of shape (N,), int8
         0 opening/accelerating, 1 opening/decelerating, 2 closing/accelerating,
         3 closing/decelerating, -1 (``NO_STEP``) in utterances of one frame.
-    shape_direction_, velocity_direction_ : ndarray of shape (n_dims_,)
+    shape_direction_, velocity_direction_ : ndarray of shape (``n_dims_``,)
         Global S and V: the unit mean of the local s_i (v_i).
     S_, plane_normal_, plane_point_ : ndarray of shape (3,)
         The global frame drawn in Y1-3: S, and V as the normal of the zero-velocity

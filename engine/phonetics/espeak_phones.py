@@ -173,6 +173,7 @@ class EspeakWorker:
             Each phone spoken, in order: its mnemonic and its first sample.
         """
         p = self._proc
+        assert p.stdin is not None and p.stdout is not None  # opened with PIPE
         watchdog = threading.Timer(self.timeout_s, self._end_hung)  # a hung library: its reads end short
         watchdog.daemon = True
         watchdog.start()
@@ -215,6 +216,7 @@ class EspeakWorker:
     def close(self) -> None:
         """End the process."""
         running = self._proc.poll() is None
+        assert self._proc.stdin is not None and self._proc.stdout is not None  # opened with PIPE
         try:
             self._proc.stdin.close()
         except OSError:  # a killed process's pipe may fail to flush

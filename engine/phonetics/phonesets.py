@@ -44,6 +44,7 @@ import functools
 import re
 import unicodedata
 from dataclasses import dataclass
+from typing import Any
 
 from engine.files.assets import asset_path
 
@@ -128,6 +129,8 @@ def _load_table(path) -> _Table:
         raise PhoneSetError(f"{path}:{lines[0][0]}: header lacks column(s) {', '.join(missing)}; "
                             f"expected {','.join(_COLUMNS)}")
     col = {c: header.index(c) for c in _COLUMNS}
+    info: dict[str, Any]
+    lookup: dict[str, dict[str, str]]
     info, lookup = {}, {s: {} for s in PHONESETS}
     pauses = set()
     for (no, _), row in zip(lines[1:], rows[1:]):

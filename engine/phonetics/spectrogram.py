@@ -227,6 +227,7 @@ def spectrogram(samples, sample_rate, *, window_length: float = PRAAT_WIDEBAND["
     for b in range(n_blocks):
         report(progress, "spectrogram", b, n_blocks)
         sl = slice(b * _BLOCK, min(n_frames, (b + 1) * _BLOCK))
+        assert windows is not None  # n_frames > 0 here
         frames = windows[starts[sl]]  # (B, n_win), a copy of just these frames
         frames *= win
         spec = sfft.rfft(frames, n=n_fft, axis=1, overwrite_x=True)[:, :n_used]

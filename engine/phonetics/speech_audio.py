@@ -165,8 +165,8 @@ def _split_words(x, n_words) -> list[tuple[int, int]] | None:
     gaps = [(b - a, a + first, b + first) for a, b in zip(s, e) if b - a >= _MIN_GAP_S * SAMPLE_RATE]
     if len(gaps) < n_words - 1:
         return None
-    cut = sorted(gaps, reverse=True)[:n_words - 1]
-    cut = sorted((a, b) for _, a, b in cut)
+    longest = sorted(gaps, reverse=True)[:n_words - 1]
+    cut = sorted((a, b) for _, a, b in longest)
     bounds, start = [], first
     for a, b in cut:
         bounds.append((start, a))

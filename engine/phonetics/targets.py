@@ -14,13 +14,19 @@ Frame convention: frame ``k`` is at time ``k / rate``; a phone's mid-point frame
 """
 from __future__ import annotations
 
+import os
 import re
 from collections import Counter
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from engine.recordings.corpus import PhoneInterval
+
+if TYPE_CHECKING:
+    from engine.recordings.corpus import Corpus, Utterance
 
 __all__ = [
     "Target", "TargetSequence", "TargetError", "UnknownPhoneError", "PhoneMatcher", "parse_phone_string",
@@ -130,12 +136,12 @@ class PhoneMatcher:
         Corpus name for messages.
     """
 
-    def __init__(self, labels, name: str = "the corpus"):
+    def __init__(self, labels: Iterable[str], name: str = "the corpus") -> None:
         counts = Counter(str(s) for s in labels)
         self.name = name
         self.known = sorted(counts)
         self._exact = set(counts)
-        self._map = {}
+        self._map: dict[str, str] = {}
         from engine.phonetics.phonesets import detect_phoneset
 
         self.phoneset = detect_phoneset(list(counts))  # the corpus's own set decides its ambiguous symbols
@@ -145,7 +151,7 @@ class PhoneMatcher:
                 self._map.setdefault(key, lab)
 
     @classmethod
-    def for_corpus(cls, corpus) -> "PhoneMatcher":
+    def for_corpus(cls, corpus: Corpus) -> PhoneMatcher:
         return cls([p.label for u in corpus.utterances for p in u.phones], corpus.name)
 
     def match(self, label: str, where: str = "") -> str:
@@ -165,7 +171,7 @@ class PhoneMatcher:
             f"phone {label!r}{at} does not occur in {self.name}; known phones: {' '.join(self.known)}")
 
 
-def stand_in_phone(label: str, known) -> str | None:
+def stand_in_phone(label: str, known: Iterable[str]) -> str | None:
     """The known phone closest to ``label`` in articulation, for a phone the training corpus lacks.
 
     Tried in order: same lip-reading class, place and manner; same place and manner; same
@@ -191,7 +197,7 @@ def stand_in_phone(label: str, known) -> str | None:
     return None
 
 
-def resolve_phone(label, known, warnings, what):
+def resolve_phone(label: str, known: Sequence[str], warnings: list[str] | None, what: str) -> str:
     """``label`` if in ``known``, else a stand-in phone (:func:`stand_in_phone`, noted in ``warnings``),
     else a ValueError listing the known; ``what`` names what the phone lacks ("instances", ...)."""
     if label in known:
@@ -237,7 +243,7 @@ def parse_phone_string(text: str) -> list[tuple[str, float]]:
     return out
 
 
-def phones_from_durations(pairs) -> tuple[PhoneInterval, ...]:
+def phones_from_durations(pairs: Iterable[tuple[str, float]]) -> tuple[PhoneInterval, ...]:
     """Consecutive :class:`PhoneInterval` from (label, duration s) pairs, starting at 0."""
     out, t = [], 0.0
     for i, item in enumerate(pairs):
@@ -255,7 +261,7 @@ def phones_from_durations(pairs) -> tuple[PhoneInterval, ...]:
     return tuple(out)
 
 
-def _as_intervals(phones):
+def _as_intervals(phones: Any) -> tuple[PhoneInterval, ...]:
     if isinstance(phones, str):
         return phones_from_durations(parse_phone_string(phones))
     phones = list(phones)
@@ -277,10 +283,11 @@ def _frame_of(t: float, rate: float, n: int) -> int:
     return int(np.clip(int(round(t * rate)), 0, n - 1))
 
 
-def _mid_targets(phones, rate, n_frames, on_collision, source):
+def _mid_targets(phones: Sequence[PhoneInterval], rate: float, n_frames: int, on_collision: str,
+                 source: str) -> tuple[list[int], list[int]]:
     """Mid-point frames of ``phones``; resolve or reject collisions."""
     frames = [_frame_of(p.mid, rate, n_frames) for p in phones]
-    keep = []
+    keep: list[int] = []
     for i, f in enumerate(frames):
         if keep and f <= frames[keep[-1]]:
             j = keep[-1]
@@ -294,17 +301,17 @@ def _mid_targets(phones, rate, n_frames, on_collision, source):
     return keep, frames
 
 
-def _corpus_of(obj):
+def _corpus_of(obj: Any) -> Corpus:
     """A Corpus from a manifold (its training corpus) or a corpus."""
     return getattr(obj, "corpus_", obj)
 
 
-def _labelled(phones, matcher, source):
+def _labelled(phones: Iterable[PhoneInterval], matcher: PhoneMatcher, source: str) -> tuple[PhoneInterval, ...]:
     return tuple(PhoneInterval(p.start, p.end, matcher.match(p.label, f"{source}, phone {i}"))
                  for i, p in enumerate(phones))
 
 
-def targets_from_phones(manifold, phones, *, rate: float | None = None, on_collision: str = "error",
+def targets_from_phones(manifold: Any, phones: Any, *, rate: float | None = None, on_collision: str = "error",
                         source: str = "phones") -> TargetSequence:
     """Phone mid-point targets (labels only) from phones with durations.
 
@@ -329,7 +336,8 @@ def targets_from_phones(manifold, phones, *, rate: float | None = None, on_colli
     return TargetSequence(tuple(Target(frames[i], ph[i].label) for i in keep), ph, n, rate, source)
 
 
-def targets_from_textgrid(manifold, path, *, tier: str | None = None, on_collision: str = "error") -> TargetSequence:
+def targets_from_textgrid(manifold: Any, path: str | os.PathLike[str], *, tier: str | None = None,
+                          on_collision: str = "error") -> TargetSequence:
     """Targets from a Praat TextGrid (or HTK/MOCHA ``.lab``) phone alignment, via :func:`engine.io.read_alignment`."""
     from engine.io import read_alignment
 
@@ -341,7 +349,7 @@ def targets_from_textgrid(manifold, path, *, tier: str | None = None, on_collisi
     return targets_from_phones(manifold, shifted, on_collision=on_collision, source=str(path))
 
 
-def targets_from_text(manifold, text: str, *, duration_model=None, pauses: bool | None = None,
+def targets_from_text(manifold: Any, text: str, *, duration_model: Any = None, pauses: bool | None = None,
                       on_collision: str = "error") -> TargetSequence:
     """Targets from English text: :func:`engine.phonetics.phones.pronounce` and a :class:`~engine.phonetics.phones.DurationModel`.
 
@@ -368,14 +376,15 @@ def targets_from_text(manifold, text: str, *, duration_model=None, pauses: bool 
                                source=f"text {text[:40]!r}")
 
 
-def _match_or_keep(matcher, label):
+def _match_or_keep(matcher: PhoneMatcher, label: str) -> str:
     try:
         return matcher.match(label)
     except UnknownPhoneError:
         return label
 
 
-def targets_from_utterance(manifold, utterance, *, corpus=None, key_frames=None,
+def targets_from_utterance(manifold: Any, utterance: str | Utterance, *, corpus: Corpus | None = None,
+                           key_frames: Sequence[int] | str | None = None,
                            on_collision: str = "error") -> TargetSequence:
     """Oracle targets from a corpus utterance: its own phone mid-points (the paper's Fig. 3).
 
@@ -404,7 +413,7 @@ def targets_from_utterance(manifold, utterance, *, corpus=None, key_frames=None,
         Targets carry ``state``, ``y`` (F^y) and ``x`` (F^x) of their frame.
     """
     own = corpus is None
-    c = manifold.corpus_ if own else corpus
+    c: Any = manifold.corpus_ if own else corpus
     uid = getattr(utterance, "id", utterance)
     try:
         u = c.utterance(uid)
@@ -468,7 +477,8 @@ def targets_from_utterance(manifold, utterance, *, corpus=None, key_frames=None,
     return TargetSequence(targets, tuple(ph), n, c.rate, source, u.id)
 
 
-def targets_from_points(manifold, items, *, n_frames: int, rate: float | None = None) -> TargetSequence:
+def targets_from_points(manifold: Any, items: Iterable[tuple[int, Any]], *, n_frames: int,
+                        rate: float | None = None) -> TargetSequence:
     """Targets at explicit frames: ``items`` = sequence of (frame, state) or (frame, F^y point).
 
     Raises :class:`TargetError` for a frame outside ``0..n_frames-1``, frames out of order
@@ -476,7 +486,7 @@ def targets_from_points(manifold, items, *, n_frames: int, rate: float | None = 
     """
     K = int(manifold.states_.centroids_.shape[0])
     rate = float(rate or manifold.corpus_.rate)
-    out = []
+    out: list[Target] = []
     for i, (f, what) in enumerate(items):
         f = int(f)
         if not 0 <= f < n_frames:

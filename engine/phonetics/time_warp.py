@@ -103,7 +103,7 @@ def time_warp(x, source, target, n_out: int) -> np.ndarray:
         k = int(c) - h
         pos = int(pos)
         hi = min(pos + tol, int(lim) - win)
-        if prev_pos is not None and not exact and hi > pos - tol:
+        if prev_pos is not None and prev_k is not None and not exact and hi > pos - tol:
             # the input that would continue the previous frame naturally over this output hop
             follow = pad[edge + prev_pos + k - prev_k: edge + prev_pos + k - prev_k + win]
             corr = np.correlate(pad[edge + pos - tol: edge + hi + win], follow, mode="valid")

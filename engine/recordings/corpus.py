@@ -7,9 +7,12 @@ from __future__ import annotations
 
 import gc
 import math
+import os
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -49,7 +52,7 @@ class PhoneInterval:
         return 0.5 * (self.start + self.end)
 
     @classmethod
-    def _many(cls, times, labels) -> tuple:
+    def _many(cls, times: Sequence[tuple[float, float]], labels: Sequence[str]) -> tuple[PhoneInterval, ...]:
         """Phones from lists of ``(start, end)`` floats and ``str`` labels (already of those types, as
         ``tolist()`` of a file's float and str arrays gives them), without the dataclass's per-field
         ``__init__`` (a million-frame corpus has ~10^5 phones). :meth:`Corpus.validate` checks them."""
@@ -115,7 +118,7 @@ class Utterance:
         return self.stop - self.start
 
 
-def _as_phones(phones) -> tuple[PhoneInterval, ...]:
+def _as_phones(phones: Iterable[Any]) -> tuple[PhoneInterval, ...]:
     if type(phones) is _Phones:
         return phones  # a file's phones (PhoneInterval._many): kept, not rebuilt
     if type(phones) is tuple and all(type(p) is PhoneInterval for p in phones):
@@ -184,7 +187,7 @@ class Corpus:
     axes: str = ""
     units: str = "mm"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if not isinstance(self.frames, BlockFrames):  # frames stored in blocks stay there (engine.recordings.frame_blocks)
             self.frames = np.asarray(self.frames, dtype=np.float32)
         self.utterances = [u if (ph := _as_phones(u.phones)) is u.phones else replace(u, phones=ph)
@@ -323,7 +326,7 @@ class Corpus:
             self._check_phones(u)  # raises, naming the phone
             raise CorpusError(f"{self.name}: utterance {u.id!r} has a phone that fails the checks")
 
-    def _check_phones(self, u) -> None:
+    def _check_phones(self, u: Utterance) -> None:
         """Raise CorpusError naming the first faulty phone of ``u``."""
         dur = u.n_frames / self.rate
         prev_end = -np.inf
@@ -347,7 +350,7 @@ class Corpus:
                 )
             prev_end = p.end
 
-    def _where(self, u, k, p) -> str:
+    def _where(self, u: Utterance, k: int, p: PhoneInterval) -> str:
         return f"{self.name}: utterance {u.id!r} phone {k} ({p.label!r} {p.start:.4f}-{p.end:.4f} s)"
 
     # -------------------------------------------------------------- properties
@@ -405,7 +408,7 @@ class Corpus:
         utterance took milliseconds per lookup at ten million frames); a position whose
         utterance no longer has that id (the list was changed) rebuilds the table.
         """
-        table = self.__dict__.get("_positions")
+        table: Any = self.__dict__.get("_positions")
         for rebuild in (table is None or table[0] is not self.utterances, True):
             if rebuild:
                 table = (self.utterances, {u.id: i for i, u in enumerate(self.utterances)})
@@ -425,7 +428,7 @@ class Corpus:
         """Corpus frame index nearest to time ``t`` (s) inside utterance ``u``, clipped to it."""
         return int(np.clip(u.start + int(round(t * self.rate)), u.start, u.stop - 1))
 
-    def phone_table(self):
+    def phone_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """All phones with their mid-point frames.
 
         Returns
@@ -455,7 +458,8 @@ class Corpus:
         b = self.bounds
         lo, hi = b[utt, 0], b[utt, 1] - 1
 
-        def frame(t):  # time_to_frame, for every phone at once (np.rint rounds half to even, as round)
+        # time_to_frame, for every phone at once (np.rint rounds half to even, as round)
+        def frame(t: np.ndarray) -> np.ndarray:
             return np.clip(lo + np.rint(t * self.rate).astype(np.int64), lo, hi)
 
         table = (frame(times.sum(axis=1) * 0.5), labs, utt, frame(times[:, 0]), frame(times[:, 1]))
@@ -464,7 +468,7 @@ class Corpus:
         self.__dict__["_phone_table"] = (self.rate, tuple(self.utterances), table)
         return table
 
-    def subset(self, ids) -> "Corpus":
+    def subset(self, ids: Iterable[str]) -> Corpus:
         """A new corpus holding only the utterances named in ``ids`` (in corpus order)."""
         ids = set(ids)
         keep = [u for u in self.utterances if u.id in ids]
@@ -483,7 +487,8 @@ class Corpus:
         )
 
     # -------------------------------------------------------------- file i/o
-    def to_arrays(self, *, include_frames: bool = True, base=None) -> dict[str, np.ndarray]:
+    def to_arrays(self, *, include_frames: bool = True,
+                  base: str | os.PathLike[str] | None = None) -> dict[str, np.ndarray]:
         """Flat dict of arrays for ``np.savez`` (no pickled objects).
 
         ``base``: the folder of the file the arrays go to. Audio paths are then stored
@@ -536,7 +541,8 @@ class Corpus:
         return d
 
     @classmethod
-    def from_arrays(cls, d, *, frames=None, source: str = "<arrays>", base=None) -> "Corpus":
+    def from_arrays(cls, d: Mapping[str, Any], *, frames: Any = None, source: str = "<arrays>",
+                    base: str | os.PathLike[str] | None = None) -> Corpus:
         """Inverse of :meth:`to_arrays`; ``frames`` overrides the stored frames.
 
         ``base``: the folder of the file read. A relative audio path is taken relative to it
@@ -601,16 +607,16 @@ class Corpus:
         except CorpusError as exc:  # name the file, not only the corpus
             raise CorpusError(f"{source}: {exc}") from None
 
-    def save(self, path) -> Path:
+    def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the native corpus file (``.npz``) atomically."""
         path = Path(path)
         with atomic_write(path) as tmp:
             with open(tmp, "wb") as fh:
-                np.savez(fh, **self.to_arrays(base=path.resolve().parent))
+                np.savez(fh, **self.to_arrays(base=path.resolve().parent))  # type: ignore[arg-type]  # numpy types only the positional arrays
         return path
 
     @classmethod
-    def load(cls, path) -> "Corpus":
+    def load(cls, path: str | os.PathLike[str]) -> Corpus:
         """Read a native corpus file written by :meth:`save`."""
         path = Path(path)
         if not path.exists():
@@ -629,7 +635,7 @@ class Corpus:
 
 
 @contextmanager
-def _collection_paused():
+def _collection_paused() -> Iterator[None]:
     """Python's cyclic garbage collector off while a file's phones become objects.
 
     Each full collection walks every tracked object, and 1.6 million phones (ten million
@@ -645,7 +651,7 @@ def _collection_paused():
             gc.enable()
 
 
-def _as_list(a, chunk: int = 1 << 16) -> list:
+def _as_list(a: np.ndarray, chunk: int = 1 << 16) -> list[Any]:
     """``a.tolist()`` a block of rows at a time: one call over a million rows holds the GIL for a second."""
     out = []
     for s in range(0, len(a), chunk):
@@ -653,7 +659,7 @@ def _as_list(a, chunk: int = 1 << 16) -> list:
     return out
 
 
-def _words_of(d, n_utterances: int) -> list[tuple]:
+def _words_of(d: Mapping[str, Any], n_utterances: int) -> list[tuple[PhoneInterval, ...]]:
     """Each utterance's word tier from a file's ``corpus_word_*`` arrays."""
     utt = np.asarray(d["corpus_word_utt"], dtype=np.int64).reshape(-1)
     times = np.asarray(d["corpus_word_times"], dtype=np.float64).reshape(-1, 2)
@@ -667,7 +673,7 @@ def _words_of(d, n_utterances: int) -> list[tuple]:
     return [tuple(w) for w in out]
 
 
-def label_codes(labels) -> tuple[np.ndarray, np.ndarray]:
+def label_codes(labels: Iterable[str] | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``np.unique(np.asarray(labels, dtype=str), return_inverse=True)`` by hashing, not sorting strings.
 
     Parameters
@@ -686,14 +692,14 @@ def label_codes(labels) -> tuple[np.ndarray, np.ndarray]:
     return np.array(names, dtype=str), inverse
 
 
-def _absolute(audio) -> str:
+def _absolute(audio: str | os.PathLike[str] | None) -> str:
     """An audio path made absolute ("" for none), symlinks kept."""
     import os
 
     return os.path.abspath(audio) if audio else ""
 
 
-def _relative(audio, base) -> str:
+def _relative(audio: str | None, base: str | os.PathLike[str] | None) -> str:
     """An audio path as stored: relative to ``base`` when given (and on the same drive), else as it is."""
     import os
 
@@ -705,7 +711,7 @@ def _relative(audio, base) -> str:
         return _absolute(audio)
 
 
-def _resolve(stored: str, base, absolute: str) -> str | None:
+def _resolve(stored: str, base: str | os.PathLike[str] | None, absolute: str) -> str | None:
     """The audio path a stored one means (see :meth:`Corpus.from_arrays`); None for none."""
     import os
 

@@ -23,7 +23,9 @@ corpus file is an error naming it.
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -34,13 +36,14 @@ from engine.recordings.frame_blocks import BlockFrames, SpeakerAffine
 __all__ = ["save_blocked", "load_blocked", "is_blocked", "blocks_folder", "frames_reference", "frames_from_reference"]
 
 
-def blocks_folder(path) -> Path:
+def blocks_folder(path: str | os.PathLike[str]) -> Path:
     """``OUT.blocks`` beside ``OUT.npz``."""
     path = Path(path)
     return path.with_name(path.stem + ".blocks")
 
 
-def save_blocked(corpus: Corpus, path, *, block_frames: int = 8192, folder=None) -> list[Path]:
+def save_blocked(corpus: Corpus, path: str | os.PathLike[str], *, block_frames: int = 8192,
+                 folder: str | os.PathLike[str] | None = None) -> list[Path]:
     """Write ``corpus`` as ``path`` (.npz, no frames) and its frames as blocks in ``OUT.blocks/``.
 
     Parameters
@@ -74,11 +77,11 @@ def save_blocked(corpus: Corpus, path, *, block_frames: int = 8192, folder=None)
     d["blocks_frames"] = np.array([np.load(p, mmap_mode="r").shape[0] for p in paths], dtype=np.int64)
     with atomic_write(path) as tmp:
         with open(tmp, "wb") as fh:
-            np.savez(fh, **d)
+            np.savez(fh, **d)  # type: ignore[arg-type]  # numpy types only the positional arrays
     return paths
 
 
-def is_blocked(path) -> bool:
+def is_blocked(path: str | os.PathLike[str]) -> bool:
     """Whether ``path`` is a corpus file whose frames are stored in blocks."""
     from engine.files.persist import NpzReadError, read_npz
 
@@ -89,7 +92,7 @@ def is_blocked(path) -> bool:
     return "blocks_files" in keys and "corpus_frames" not in keys
 
 
-def load_blocked(path) -> Corpus:
+def load_blocked(path: str | os.PathLike[str]) -> Corpus:
     """Read a corpus written by :func:`save_blocked`.
 
     The corpus's frames are an :class:`engine.recordings.frame_blocks.BlockFrames` over the block
@@ -109,7 +112,7 @@ def load_blocked(path) -> Corpus:
     return Corpus.from_arrays(d, frames=_open_blocks(path, d), source=str(path), base=path.resolve().parent)
 
 
-def _open_blocks(path: Path, d) -> BlockFrames:
+def _open_blocks(path: Path, d: Mapping[str, Any]) -> BlockFrames:
     """The :class:`BlockFrames` of the blocked corpus file ``path`` whose arrays are ``d``."""
     if "blocks_files" not in d:
         raise CorpusError(f"{path}: not a corpus stored in blocks (no 'blocks_files'); read it with Corpus.load")
@@ -145,7 +148,7 @@ REFERENCE_FIELDS = ("corpus_blocks_source", "corpus_blocks_relative")
 _NORM = ("corpus_blocks_norm_mean", "corpus_blocks_norm_grand", "corpus_blocks_norm_code")
 
 
-def frames_reference(frames: BlockFrames, manifold_path) -> dict[str, np.ndarray]:
+def frames_reference(frames: BlockFrames, manifold_path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     """Fields for a manifold file at ``manifold_path`` standing for ``frames`` (read from a blocked
     corpus file): the corpus file's absolute path and its path relative to the manifold's folder
     (tried first, so the two can move together), and the per-speaker normalisation, if any."""
@@ -168,7 +171,8 @@ def frames_reference(frames: BlockFrames, manifold_path) -> dict[str, np.ndarray
     return d
 
 
-def frames_from_reference(d, manifold_path, *, n_frames: int, n_columns: int) -> BlockFrames:
+def frames_from_reference(d: Mapping[str, Any], manifold_path: str | os.PathLike[str], *, n_frames: int,
+                          n_columns: int) -> BlockFrames:
     """Reopen the frames a manifold file references (see :func:`frames_reference`).
 
     Raises

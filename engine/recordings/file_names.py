@@ -166,6 +166,9 @@ def name_structure(paths) -> NameStructure | None:
                 cols.append((f"[A-Za-z]{{{w}}}", [v[-w:] for v in vals], "L", False))
                 continue
         cols.append((any_of, vals, kind, len(set(vals)) == 1))
+    names: list[str]
+    out: list[tuple[str, tuple[str, ...]]]
+    regex: list[str]
     names, out, regex = [], [], []
     for j, (rx, vals, kind, constant) in enumerate(cols):
         first = j == 0

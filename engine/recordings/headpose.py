@@ -111,7 +111,7 @@ class HeadPose(BaseEstimator):
     _parameter_constraints = {
         "interocular_mm": [Interval(Real, 10, 200, closed="both")],
         "eye_points": [Condition(lambda e: len(e) == 2 and all(len(p) == 2 for p in e)
-                                 and all(isinstance(i, Integral) and not isinstance(i, bool) and i >= 0
+                                 and all(isinstance(i, Integral) and not isinstance(i, bool) and int(i) >= 0
                                          for p in e for i in p),
                                  "two pairs of point positions (integers >= 0)", bad=[(13, 14), ((13, 14),)])],
         "up_point": [Interval(Integral, 0, None, closed="left")],

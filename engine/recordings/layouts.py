@@ -290,7 +290,7 @@ def read_layout(path) -> Layout:
     rate = number("rate", float, base.rate if base else None)
     if rate is not None and not (np.isfinite(rate) and rate > 0):
         raise LayoutError(f"{fields['rate'][1]}: rate {rate}; expected a positive number of Hz")
-    xyz = base.xyz if base else (0, 1, 2)
+    xyz: tuple[int, ...] = base.xyz if base else (0, 1, 2)
     if "xyz" in fields:
         val, where = fields["xyz"]
         try:
@@ -314,7 +314,7 @@ def read_layout(path) -> Layout:
                 raise LayoutError(f"{where}: quality {val!r}; expected the 0-based position of the rms value "
                                   "(e.g. 5) or none") from None
     try:
-        return Layout(name, tuple(sensors), tuple(roles), values, tuple(xyz), rate,
+        return Layout(name, tuple(sensors), tuple(roles), values, tuple(xyz), rate,  # type: ignore[arg-type]  # Layout checks it has 3
                       base.format if base else "matrix", f"user layout {path.name}", quality)
     except LayoutError as exc:
         raise LayoutError(f"{path}: {exc}") from None

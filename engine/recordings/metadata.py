@@ -120,7 +120,7 @@ def field_levels(corpus, name: str) -> list[tuple[str, int, int]]:
     """``[(level, n utterances, n frames), ...]`` of field ``name``, most utterances first ("" = missing, last)."""
     vals = field_values(corpus, name)
     lengths = np.diff(corpus.bounds, axis=1)[:, 0]
-    out = {}
+    out: dict[str, tuple[int, int]] = {}
     for v, n in zip(vals.tolist(), lengths.tolist()):
         a, b = out.get(v, (0, 0))
         out[v] = (a + 1, b + int(n))

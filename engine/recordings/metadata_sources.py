@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any
 
 from engine.recordings.metadata import MetadataError, check_field_name
 
@@ -173,6 +174,8 @@ def read_metadata_table(path, *, key: str | None = None) -> MetadataTable:
         k = header.index(key) if key in header else snake.index(snake_case(key))
     else:
         k = next((i for i, s in enumerate(snake) if s in KEY_COLUMNS), 0)
+    fields: list[str]
+    cols: list[int]
     fields, cols = [], []
     for i, (h, s) in enumerate(zip(header, snake)):
         if i == k or (not h and all(i >= len(r) or not r[i].strip() for r in rows[1:])):
@@ -185,6 +188,7 @@ def read_metadata_table(path, *, key: str | None = None) -> MetadataTable:
         cols.append(i)
     if not fields:
         raise MetadataError(f"{path}: no field columns besides the key column {header[k]!r}")
+    where: dict[str, Any]
     out, where = {}, {}
     for r, row in enumerate(rows[1:], start=first + 2):
         if not any(c.strip() for c in row):
@@ -255,7 +259,7 @@ def assign_fields(paths, *, pattern=None, table=None, root=None) -> tuple[dict, 
         table disagree on a field of a file (naming the file, the field and both values).
     """
     paths = [str(p) for p in paths]
-    out = {p: {} for p in paths}
+    out: dict[str, dict[str, str]] = {p: {} for p in paths}
     notes = []
     if pattern is not None:
         pat = pattern if isinstance(pattern, FieldPattern) else FieldPattern(pattern)

@@ -92,6 +92,7 @@ def register(corpus: Corpus, *, method: str = "auto", drop_reference: bool = Tru
         return corpus
     P = _points(corpus) if method == "rigid" else None
     if method == "rigid":
+        assert P is not None
         if ref.size < 3:
             names = corpus.point_names or []
             raise CorpusError(f"{corpus.name}: rigid registration needs at least 3 reference sensors, the corpus has "

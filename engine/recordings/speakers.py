@@ -4,11 +4,13 @@ A corpus of many recordings names its speakers in the file names or the folders
 (``F01_B01_S01.mat``, ``S2/utt03.csv``, ``ABCFIA01.mat`` ... ``XYMNE16.mat``). A
 :class:`SpeakerRule` turns an input path into a speaker name:
 
+==============  ====================================================================
 ``dir``         the name of the folder holding the file, as the path was given (a
                 symlinked folder gives its own name, not its target's);
 ``prefix``      the file name up to the first ``_``;
 ``re:PATTERN``  the one group of a regular expression searched in the file name,
                 e.g. ``re:^(spk[0-9]+)`` or ``re:^([A-Z]{3})`` for ``ABCFIA01.mat``.
+==============  ====================================================================
 
 A rule that does not fit the names gives a corpus whose speaker normalisation is wrong
 without any error: every file its own speaker (each utterance normalised on its own), one
@@ -24,6 +26,7 @@ from __future__ import annotations
 import os
 import re
 from pathlib import Path
+from typing import Any
 
 from engine.recordings.corpus import CorpusWarning
 
@@ -92,6 +95,7 @@ class SpeakerRule:
             return name
         if self.spec == "prefix":
             return p.stem.split("_", 1)[0]
+        assert self.pattern is not None  # a 're:' rule
         m = self.pattern.search(p.name)
         if m is None or not m.group(1):
             raise SpeakerRuleError(f"{p}: the file name {p.name!r} does not match the speaker rule "
@@ -104,7 +108,8 @@ _LEADING = re.compile(r"^[^\W\d_]*")
 
 def leading_letters(stem: str) -> str:
     """The letters a file name starts with (``ABCFIA01`` -> ``ABCFIA``, ``F01_B01`` -> ``F``)."""
-    return _LEADING.match(stem).group(0)
+    m = _LEADING.match(stem)
+    return m.group(0) if m else ""  # the pattern matches every string (perhaps empty)
 
 
 def name_groups(paths) -> dict[str, int]:
@@ -197,7 +202,7 @@ def check_assignment(paths, speakers, *, rule: str | None) -> list[str]:
             out.append(f"all {n} inputs are {who}, but {hint}, or give --speaker NAME if they are one person")
     elif rule is not None and structure is not None and structure.plausible_speakers():
         spk = dict(structure.fields)["speaker"]
-        theirs = {}
+        theirs: dict[str, Any] = {}
         for mine, s in zip(speakers, spk):
             theirs.setdefault(mine, set()).add(s)
         if len(distinct) > len(set(spk)) and all(len(v) == 1 for v in theirs.values()):

@@ -213,7 +213,7 @@ def _orthonormal_columns(client, Y, passes: int = 2) -> list:
     tall-skinny QR, whose many small LAPACK calls took ~2 s for 4,500 x 110 on two shared
     cores (the Gram pass: one GEMM per block).
     """
-    Ws = []  # the rotations W_1, ..., W_p so far
+    Ws: list[np.ndarray] = []  # the rotations W_1, ..., W_p so far
     for _ in range(passes):
         Ws.append(_svqb_weights(_summed(client, _map_thin(client, _rotated_gram, Y, np.asarray(Ws)))))
     return list(_map_thin(client, _rotated32, Y, np.stack(Ws)))

@@ -6,7 +6,7 @@ is: for a gap of ``n`` frames from a point ``a`` of F^y (a target state's centro
 point ``b``, the *candidate* sub-trajectories of the training utterances are those that
 start among the ``n_pool`` frames nearest ``a`` or end among those nearest ``b``, and
 last ``L`` frames with ``n / (1 + r) <= L <= n (1 + r)`` (``r`` the
-``duration_tolerance``). Each is scored by
+``duration_tolerance``). Each is scored by::
 
     (|F^y_start - a|^2 + |F^y_end - b|^2) / s2 + (log(L / n) / log(1 + r))^2
 

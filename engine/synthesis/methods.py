@@ -1,19 +1,28 @@
 """Every synthesis method by name: the registry the explorer and the command line build from.
 
+====================  ===================================================================================
 ``"manifold"``        :class:`engine.synthesis.state_synthesis.LearntPathSynthesizer` (the learnt paths
                       between the states, with the corpus's validated settings);
 ``"viterbi"``         :class:`engine.synthesis.viterbi.ManifoldSynthesizer` (the paper's path);
 ``"sv-hermite"``      :class:`engine.synthesis.state_synthesis.StateHermiteSynthesizer`;
-``"linear"``, ``"cubic"``  :class:`engine.synthesis.viterbi.InterpolationSynthesizer`;
+``"linear"``          :class:`engine.synthesis.interpolation.InterpolationSynthesizer` (straight lines);
+``"cubic"``           the same class through a cubic spline;
 ``"unitselection"``   :class:`engine.synthesis.unitselection.UnitSelectionSynthesizer`;
 ``"dominance"``       :class:`engine.synthesis.dominance.DominanceModel`,
 ``"sliding-window"``  :class:`engine.synthesis.sliding_window.SlidingWindowRegressor`, each behind
                       :class:`engine.synthesis.trajectory.PhoneModelSynthesizer`.
+====================  ===================================================================================
 
 It sits above every synthesis module (none imports it), so they never import each other
 through it.
 """
 from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from engine.manifold.model import Manifold
+    from engine.synthesis.trajectory import Synthesizer
 
 __all__ = ["METHODS", "make_synthesizer"]
 
@@ -21,7 +30,7 @@ __all__ = ["METHODS", "make_synthesizer"]
 METHODS = ("manifold", "viterbi", "sv-hermite", "linear", "cubic", "unitselection", "dominance", "sliding-window")
 
 
-def make_synthesizer(method: str, manifold, **params):
+def make_synthesizer(method: str, manifold: Manifold, **params: Any) -> Synthesizer:
     """A fitted synthesiser by name (:data:`METHODS`).
 
     ``"manifold"`` and ``"sv-hermite"`` take ``choice`` (the validated settings of
@@ -39,7 +48,7 @@ def make_synthesizer(method: str, manifold, **params):
 
         return ManifoldSynthesizer(**params).fit(manifold)
     if method in ("linear", "cubic"):
-        from engine.synthesis.viterbi import InterpolationSynthesizer
+        from engine.synthesis.interpolation import InterpolationSynthesizer
 
         return InterpolationSynthesizer(kind=method, **params).fit(manifold)
     if method == "unitselection":

@@ -1,22 +1,32 @@
 """Every method of the three protocols: the trajectory each makes from what its protocol gives it.
 
-``states``  -- the target states only (the state of each target frame's F^y):
-    ``manifold``    state-velocity Hermite plus the validated share of the training paths
-                    between the states (:meth:`engine.synthesis.statepaths.StateModel.learnt_x`);
-    ``viterbi``     the paper's path: the maximum-probability state path of exactly each
-                    gap's length, X = each state's mean F^x, smoothed (sigma validated);
-    ``sv-hermite``  state-velocity Hermite: cubic Hermite through the states' mean F^x with
-                    the states' mean velocity F^x' (the manifold's dynamic features);
-    ``pchip``, ``linear``  through the states' mean F^x (no dynamics).
-``oracle``  -- the true X at the targets *and* the target states: the same methods, every
-    one through the true X (the two manifold paths pulled onto it, :func:`engine.synthesis.statepaths.anchor`).
-``phones``  -- the phones and their times only (what ``lipspace synthesize --text`` has):
-    ``manifold``, ``viterbi``  as above between the states the manifold's phone lattice
-                    chooses (:meth:`engine.synthesis.statepaths.StateModel.phone_states`);
-    ``unitselection``  concatenative unit selection (:mod:`engine.synthesis.unitselection`);
-    ``dominance``   Cohen-Massaro coarticulation (:mod:`engine.synthesis.dominance`);
-    ``sliding-window``  regression from windows of phone labels (:mod:`engine.synthesis.sliding_window`);
-    ``linear``      through each phone's mean F^x at the phone mid-points.
+``states``: the target states only (the state of each target frame's F^y)
+    ==================  ==========================================================================
+    ``manifold``        state-velocity Hermite plus the validated share of the training paths
+                        between the states (:meth:`engine.synthesis.statepaths.StateModel.learnt_x`)
+    ``viterbi``         the paper's path: the maximum-probability state path of exactly each
+                        gap's length, X = each state's mean F^x, smoothed (sigma validated)
+    ``sv-hermite``      state-velocity Hermite: cubic Hermite through the states' mean F^x with
+                        the states' mean velocity F^x' (the manifold's dynamic features)
+    ``pchip``           through the states' mean F^x (no dynamics)
+    ``linear``          the same, straight lines
+    ==================  ==========================================================================
+
+``oracle``: the true X at the targets *and* the target states
+    The same methods, every one through the true X (the two manifold paths pulled onto it,
+    :func:`engine.synthesis.statepaths.anchor`).
+
+``phones``: the phones and their times only (what ``lipspace synthesize --text`` has)
+    ==================  ==========================================================================
+    ``manifold``        as above, between the states the manifold's phone lattice chooses
+                        (:meth:`engine.synthesis.statepaths.StateModel.phone_states`)
+    ``viterbi``         the same
+    ``unitselection``   concatenative unit selection (:mod:`engine.synthesis.unitselection`)
+    ``dominance``       Cohen-Massaro coarticulation (:mod:`engine.synthesis.dominance`)
+    ``sliding-window``  regression from windows of phone labels (:mod:`engine.synthesis.sliding_window`)
+    ``linear``          through each phone's mean F^x at the phone mid-points
+    ==================  ==========================================================================
+
 Every protocol adds ``mean-frame``: the training mean frame, held.
 
 :class:`PhoneModels` holds the phone-driven models fitted on one set of utterances;
@@ -26,6 +36,7 @@ Every protocol adds ``mean-frame``: the training mean frame, held.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -104,7 +115,7 @@ class PhoneModels:
 
 def phone_means(sequences, rate) -> dict:
     """Mean X of each phone's mid-point frames over (X, phones) sequences, most frequent phone first."""
-    acc = {}
+    acc: dict[str, Any] = {}
     for X, phones in sequences:
         for p in phones:
             f = int(np.clip(round(p.mid * rate), 0, X.shape[0] - 1))

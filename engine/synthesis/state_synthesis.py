@@ -113,7 +113,7 @@ class _StateModelSynthesizer(BaseEstimator):
     @single_blas_thread
     def synthesize(self, targets) -> Trajectory:
         check_is_fitted(self, "model_")
-        warnings = []
+        warnings: list[str] = []
         f = target_frames(targets)
         protocol, states, xt = self._states(targets, warnings)
         X = self._x(protocol, f, states, targets.n_frames, xt)

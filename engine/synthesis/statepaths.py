@@ -113,8 +113,8 @@ class StateModel:
     def fit(self, Fy, Fx, Fxv, bounds, phones=None, *, centroids=None):
         """Fit on the frames given; ``centroids`` (K, state_dims): state centres fitted before (a manifold
         file's :attr:`engine.manifold.model.Manifold.synthesis_states_`), so no K-means runs."""
+        from engine.graph.max_product import MaxProductGraph, log_transitions, observed_transitions
         from engine.graph.states import StateGraph, default_n_states
-        from engine.synthesis.viterbi import MaxProductGraph, log_transitions, observed_transitions
 
         Fy = np.asarray(Fy)
         d = int(self.state_dims)
@@ -248,9 +248,11 @@ class StateModel:
         cands, prior = [], []
         for lab, st in zip(labels, fixed):
             if st is not None:
-                cands.append(np.array([int(st)])), prior.append(np.zeros(1))
+                cands.append(np.array([int(st)]))
+                prior.append(np.zeros(1))
                 continue
             s, lp = self.phone_table_[_resolve_phone(lab, known, warnings, "instances")]
-            cands.append(s[: int(n_candidates)]), prior.append(float(cluster_weight) * lp[: int(n_candidates)])
+            cands.append(s[: int(n_candidates)])
+            prior.append(float(cluster_weight) * lp[: int(n_candidates)])
         return np.asarray(phone_lattice(self._graph, self.state_y_, cands, prior, frames, strict=False,
                                         labels=list(labels), n_candidates=n_candidates), dtype=np.int64)

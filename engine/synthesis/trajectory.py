@@ -3,21 +3,29 @@
 frames, the Gaussian smoothing of a path along its frames and the direct
 interpolation of target X (:func:`interpolate_targets`).
 
-:mod:`engine.synthesis.viterbi` (the manifold method and the interpolation baselines),
-:mod:`engine.synthesis.unitselection` (the unit-selection baseline) and :mod:`engine.synthesis.statepaths`
-all import from here, so none of them imports another for these helpers.
+:mod:`engine.synthesis.viterbi` (the paper's method), :mod:`engine.synthesis.interpolation` (the
+interpolation baselines), :mod:`engine.synthesis.unitselection` (the unit-selection baseline) and
+:mod:`engine.synthesis.statepaths` all import from here, so none of them imports another for these helpers.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.ndimage import gaussian_filter1d
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import HasMethods, validate_params
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from engine.manifold.model import Manifold
+    from engine.phonetics.targets import TargetSequence
+    from engine.recordings.corpus import Corpus, PhoneInterval, Utterance
 
 __all__ = ["phone_mids", "Trajectory", "Synthesizer", "check_fitted_manifold", "target_frames", "smooth", "phone_sequences",
            "PhoneModelSynthesizer", "interpolate_targets", "INTERPOLATIONS"]
@@ -63,7 +71,7 @@ class Trajectory:
     def n_frames(self) -> int:
         return int(self.Fx.shape[0])
 
-    def frames(self, manifold) -> np.ndarray:
+    def frames(self, manifold: Manifold) -> np.ndarray:
         """Frames (n, C) reconstructed through the manifold's shape space."""
         return manifold.shape_.inverse_transform(self.Fx)
 
@@ -72,18 +80,18 @@ class Trajectory:
 class Synthesizer(Protocol):
     """Anything that turns a :class:`engine.phonetics.targets.TargetSequence` into a :class:`Trajectory`."""
 
-    def synthesize(self, targets) -> Trajectory:  # pragma: no cover - protocol
+    def synthesize(self, targets: TargetSequence) -> Trajectory:  # pragma: no cover - protocol
         ...
 
 
-def check_fitted_manifold(manifold):
+def check_fitted_manifold(manifold: Any) -> None:
     """ValueError naming the first missing attribute unless ``manifold`` is a fitted Manifold."""
     for attr in ("Fy_", "Fx_", "states_", "shape_", "corpus_"):
         if not hasattr(manifold, attr):
             raise ValueError(f"synthesis needs a fitted engine.manifold.model.Manifold (missing {attr}); call fit first")
 
 
-def target_frames(targets) -> np.ndarray:
+def target_frames(targets: TargetSequence) -> np.ndarray:
     """Frames (T,) int64 of the targets; ValueError when none, out of 0..n_frames-1 or not increasing."""
     f = np.array([t.frame for t in targets.targets], dtype=np.int64)
     if f.size == 0:
@@ -99,7 +107,7 @@ def target_frames(targets) -> np.ndarray:
     return f
 
 
-def smooth(A, sigma) -> np.ndarray:
+def smooth(A: ArrayLike, sigma: float) -> np.ndarray:
     """Gaussian smoothing along frames (axis 0) with s.d. ``sigma`` frames (0: unchanged).
 
     ``A`` is (n, m); returns (n, m) float64.
@@ -112,7 +120,8 @@ def smooth(A, sigma) -> np.ndarray:
     return gaussian_filter1d(A, float(sigma), axis=0, mode="nearest")
 
 
-def interpolate_targets(kind, frames, X_targets, n_frames, velocities=None) -> np.ndarray:
+def interpolate_targets(kind: str, frames: ArrayLike, X_targets: ArrayLike, n_frames: int,
+                        velocities: ArrayLike | None = None) -> np.ndarray:
     """Trajectory (n_frames, m) through target X at ``frames`` by ``kind`` in :data:`INTERPOLATIONS`.
 
     ``"linear"``, ``"cubic"`` (:class:`scipy.interpolate.CubicSpline`, not-a-knot ends),
@@ -141,7 +150,8 @@ def interpolate_targets(kind, frames, X_targets, n_frames, velocities=None) -> n
     return CubicHermiteSpline(f, Xt, np.asarray(velocities, dtype=np.float64), axis=0)(t)
 
 
-def phone_sequences(utterances, Fx):
+def phone_sequences(utterances: Sequence[Utterance],
+                    Fx: np.ndarray) -> list[tuple[np.ndarray, tuple[PhoneInterval, ...]]]:
     """(X (n, m) float64, phones) of each utterance with phones; ``Fx`` holds the corpus's rows."""
     return [(np.asarray(Fx[u.start:u.stop], dtype=np.float64), tuple(u.phones)) for u in utterances if u.phones]
 
@@ -164,11 +174,11 @@ class PhoneModelSynthesizer(BaseEstimator):
 
     _parameter_constraints = {"model": [HasMethods(("fit", "predict"))], "method": [str]}
 
-    def __init__(self, *, model, method):
+    def __init__(self, *, model: Any, method: str) -> None:
         self.model = model
         self.method = method
 
-    def fit(self, manifold):
+    def fit(self, manifold: Manifold) -> PhoneModelSynthesizer:
         from engine.synthesis.stored_choice import stored_model
 
         validate_params(self)
@@ -180,9 +190,9 @@ class PhoneModelSynthesizer(BaseEstimator):
             phone_sequences(c.utterances, manifold.Fx_), c.rate)
         return self
 
-    def synthesize(self, targets) -> Trajectory:
+    def synthesize(self, targets: TargetSequence) -> Trajectory:
         check_is_fitted(self, "model_")
-        warnings = []
+        warnings: list[str] = []
         X = self.model_.predict(targets.phones, targets.n_frames, targets.rate, warnings)
         f = target_frames(targets) if targets.targets else np.zeros(0, dtype=np.int64)
         return Trajectory(times=np.arange(targets.n_frames) / targets.rate, Fx=np.asarray(X, np.float32), Fy=None,
@@ -190,7 +200,7 @@ class PhoneModelSynthesizer(BaseEstimator):
                           warnings=warnings)
 
 
-def phone_mids(corpus, utts):
+def phone_mids(corpus: Corpus, utts: Sequence[Utterance]) -> tuple[np.ndarray, np.ndarray]:
     """(mid-point frames into the concatenated rows of ``utts``, labels) of their phones."""
     mids, labels, off = [], [], 0
     for u in utts:

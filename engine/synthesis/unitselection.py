@@ -268,7 +268,7 @@ class UnitSelectionSynthesizer(BaseEstimator):
         phones = list(targets.phones)
         if not phones:
             raise ValueError("unit selection needs the phone intervals of the utterance (targets.phones is empty)")
-        warnings = []
+        warnings: list[str] = []
         units, total = self._select(phones, warnings)
         n = int(targets.n_frames)
         rate = float(targets.rate)

@@ -258,6 +258,7 @@ def select_settings(manifold, *, val_fraction=0.2, random_state=0, state_dims=ST
                                    "rmse_x": row}
             if row["states/manifold"] < best_err:
                 best_key, best_err, best = f"{d}/{fps}", row["states/manifold"], (sms, acc, fitted)
+    assert best is not None and best_key is not None  # the grid is never empty
     sms, acc, fitted = best
     t = table[best_key]
     protos = ("states", "oracle", "phones") if phones else ("states", "oracle")

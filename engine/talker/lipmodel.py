@@ -24,6 +24,7 @@ mouth width ch-ch about 50 mm, upper vermilion ls-sto about 8 mm, lower sto-li a
 The controls (:data:`CONTROL_NAMES`; the signed ones, :data:`SIGNED_CONTROLS`, about
 -1..1, the others about 0..1):
 
+===============  ==========================================================================
 ``jaw``          jaw opening: the lower lip and chin go down (up to ~14.4 mm) and back,
                  the upper lip goes up a little (~3.6 mm); the largest motion. With
                  ``kinematics="calibrated"`` (see below) the mandible rotates about the
@@ -63,6 +64,7 @@ The controls (:data:`CONTROL_NAMES`; the signed ones, :data:`SIGNED_CONTROLS`, a
 ``mentalis``     chin raise (mentalis): the soft tissue of the chin goes up (3 mm) and
                  forward (1.5 mm), the mentolabial sulcus deepens, and the lower
                  vermilion is pushed up and out (1 mm); the inner contour is unchanged.
+===============  ==========================================================================
 
 Kinematics (:data:`KINEMATICS`). ``"classic"`` (the default) drops the lower lip almost
 straight, gives the upper lip a fifth of the opening and keeps the corners still.

@@ -20,6 +20,7 @@ per utterance, so tests and benchmarks can score what "opening" became.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -100,7 +101,7 @@ def generate_recordings(*, n_speakers=3, n_utterances=6, duration_s=(2.0, 3.0), 
         size = 1.0 + 0.12 * rng.normal()
         origin = np.array([speaker_offset * s, 0.3 * speaker_offset * (s % 2), -0.2 * speaker_offset * s])
         # rest positions (mm; x anterior, y lateral, z vertical) around the mouth
-        rest = {"UL": [0, 0, 6], "LL": [0, 0, -6], "LC": [-4, 25, 0], "RC": [-4, -25, 0],
+        rest: dict[str, Any] = {"UL": [0, 0, 6], "LL": [0, 0, -6], "LC": [-4, 25, 0], "RC": [-4, -25, 0],
                 "TT": [-15, 0, -2], "TB": [-35, 0, 2], "TD": [-55, 0, 0],
                 "NOSE": [5, 0, 45], "LMA": [-90, 60, 30], "RMA": [-90, -60, 30]}
         rest = {k: np.array(v, float) * size for k, v in rest.items()}

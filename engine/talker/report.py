@@ -214,7 +214,7 @@ def articulation_report(lip, controls, names=None, *, active=0.1, correlated=0.4
         act[name] = float(np.mean(np.abs(C[:, k] - np.median(C[:, k])) > active))
     sd = C.std(0)
     moving = np.flatnonzero(sd > 0)
-    R = np.corrcoef(C[:, moving].T) if len(moving) > 1 else np.ones((1, 1))
+    R = np.atleast_2d(np.corrcoef(C[:, moving].T)) if len(moving) > 1 else np.ones((1, 1))
     pairs = [(names[moving[i]], names[moving[j]], float(R[i, j])) for i in range(len(moving))
              for j in range(i + 1, len(moving)) if abs(R[i, j]) > correlated]
     pairs.sort(key=lambda p: -abs(p[2]))

@@ -31,17 +31,21 @@ import functools
 import hashlib
 import json
 import math
+import os
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from numbers import Integral, Real
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from sklearn.base import BaseEstimator
 
 from engine.constraints import Condition, Interval, StrOptions, validate_params
 from engine.files.assets import asset_path
 from engine.phonetics.phones import EXTRA_VOWELS, PAUSE, VOWELS, DurationModel, pronounce
-from engine.progress import report
+from engine.progress import ProgressFn, report
 from engine.recordings.corpus import Corpus, CorpusError, PhoneInterval, Utterance
 from engine.talker.lipmodel import CONTROL_NAMES, KINEMATICS, RESOLUTIONS, SIGNED_CONTROLS, Anatomy, LipModel
 from engine.threads import one_blas_thread
@@ -57,7 +61,7 @@ LIP_MODEL_AXES = "x=left,y=up,z=forward"
 GENERATOR_VERSION = 6
 
 #: Preset: seconds of speech (frames = seconds * rate) and lip-surface resolution.
-PRESETS = {
+PRESETS: dict[str, dict[str, Any]] = {
     "small": {"duration": 75.0, "resolution": "small", "speakers": 1},
     "default": {"duration": 480.0, "resolution": "default", "speakers": 1},
     "paper": {"duration": 28833 / 60.0, "resolution": "paper", "speakers": 1},
@@ -119,7 +123,11 @@ class Gesture:
     after: tuple   # (14,) same after the centre
 
 
-def _vowel(*subs):
+#: one control of a gesture: (target, dominance magnitude), or a dominance width (a, b)
+_Span = tuple[float, float]
+
+
+def _vowel(*subs: tuple[float, ...]) -> tuple[Any, ...]:
     """Vowel gestures from (jaw, round, spread, raise) targets, one or two (diphthong).
 
     Protrusion goes with rounding (0.85 of it), the corners rise with spreading and fall
@@ -137,9 +145,11 @@ def _vowel(*subs):
     return tuple(out)
 
 
-def _cons(jaw=(0.2, 0.4), rnd=(0.1, 0.15), spr=(0.1, 0.15), rai=(0.1, 0.3), clo=(0.0, 0.6),
-          lab=(0.0, 0.6), pro=None, dep=(0.0, 0.2), cor=(0.0, 0.2), jfw=(0.0, 0.3), rol=(0.0, 0.2), mnt=(0.0, 0.2),
-          frac=0.5, before=None, after=None, jaw_frac=None):
+def _cons(jaw: _Span = (0.2, 0.4), rnd: _Span = (0.1, 0.15), spr: _Span = (0.1, 0.15), rai: _Span = (0.1, 0.3),
+          clo: _Span = (0.0, 0.6), lab: _Span = (0.0, 0.6), pro: _Span | None = None, dep: _Span = (0.0, 0.2),
+          cor: _Span = (0.0, 0.2), jfw: _Span = (0.0, 0.3), rol: _Span = (0.0, 0.2), mnt: _Span = (0.0, 0.2),
+          frac: Any = 0.5, before: Iterable[_Span] | None = None, after: Iterable[_Span] | None = None,
+          jaw_frac: float | None = None) -> tuple[Any, ...]:
     if pro is None:
         pro = (0.85 * rnd[0], rnd[1])
     drift = ((0.0, 0.05), (0.0, 0.05))
@@ -156,7 +166,7 @@ def _cons(jaw=(0.2, 0.4), rnd=(0.1, 0.15), spr=(0.1, 0.15), rai=(0.1, 0.3), clo=
     return (Gesture(frac, tgt, alpha, b, a),)
 
 
-def _with(widths, k, val):
+def _with(widths: Iterable[Any], k: int, val: Any) -> tuple[Any, ...]:
     widths = list(widths)
     widths[k] = val
     return tuple(widths)
@@ -323,9 +333,11 @@ class SyntheticTalker(BaseEstimator):
         "kinematics": [StrOptions(KINEMATICS)],
     }
 
-    def __init__(self, *, preset="default", n_sentences=None, duration=None, resolution=None, rate=60.0,
-                 seed=0, noise=0.2, jitter=0.04, tempo=1.0, timing_sd=_TIMING_SD, dynamics_scale=1.0,
-                 coarticulation=1.0, speakers=None, registration=0.3, tissue=False, kinematics="classic"):
+    def __init__(self, *, preset: str = "default", n_sentences: int | None = None, duration: float | None = None,
+                 resolution: str | None = None, rate: float = 60.0, seed: int = 0, noise: float = 0.2,
+                 jitter: float = 0.04, tempo: float = 1.0, timing_sd: float = _TIMING_SD, dynamics_scale: float = 1.0,
+                 coarticulation: float = 1.0, speakers: int | None = None, registration: float = 0.3,
+                 tissue: bool = False, kinematics: str = "classic") -> None:
         self.preset = preset
         self.n_sentences = n_sentences
         self.duration = duration
@@ -344,14 +356,15 @@ class SyntheticTalker(BaseEstimator):
         self.kinematics = kinematics
 
     # -------------------------------------------------------------- validation
-    def _validate(self):
+    def _validate(self) -> Any:
         validate_params(self)
         dur = PRESETS[self.preset]["duration"] if self.duration is None else float(self.duration)
         res = PRESETS[self.preset]["resolution"] if self.resolution is None else self.resolution
         return dur, res
 
     # -------------------------------------------------------------- sentences
-    def _sentence(self, rng, dm, words, prons, n_words):
+    def _sentence(self, rng: np.random.Generator, dm: Any, words: Sequence[str], prons: Any,
+                  n_words: int) -> Any:
         dm = DurationModel(tempo=self.tempo * math.exp(_TEMPO_SD * rng.standard_normal()))  # this sentence's rate
         idx = rng.integers(0, len(words), size=n_words)
         phones, text = [PAUSE], []
@@ -376,7 +389,7 @@ class SyntheticTalker(BaseEstimator):
         sentence = " ".join(text)
         return phones, d, sentence[:1].upper() + sentence[1:] + "."
 
-    def _sentences(self, rng, total_frames):
+    def _sentences(self, rng: np.random.Generator, total_frames: int) -> list[Any]:
         words, prons = _lexicon()
         dm = DurationModel(tempo=self.tempo)
         rate = float(self.rate)
@@ -395,6 +408,7 @@ class SyntheticTalker(BaseEstimator):
                 remaining -= nf
                 continue
             # last sentence: fill the remaining frames exactly
+            text: list[str]
             phones, durs, text = [PAUSE], [rng.uniform(0.2, 0.3)], []
             tail_min = 0.15
             while True:
@@ -417,12 +431,20 @@ class SyntheticTalker(BaseEstimator):
             return out
 
     # -------------------------------------------------------------- articulation
-    def _controls(self, rng, phones, durs, n_frames, lateral=0.0):
+    def _controls(self, rng: np.random.Generator, phones: Sequence[str], durs: Any, n_frames: int,
+                  lateral: Any = 0.0) -> np.ndarray:
         """Controls after dynamics for one utterance, ndarray (n_frames, 14)."""
         rate = float(self.rate)
         sub = max(1, math.ceil(240.0 / rate))
         fs = rate * sub
         starts = np.concatenate([[0.0], np.cumsum(durs)[:-1]])
+        # lists of the gestures' values, then arrays of them
+        cen: Any
+        tgt: Any
+        alp: Any
+        wb: Any
+        wa: Any
+        vow: Any
         cen, tgt, alp, wb, wa, vow = [], [], [], [], [], []
         for p, s, d in zip(phones, starts, durs):
             gs = phone_gestures(p)
@@ -490,7 +512,7 @@ class SyntheticTalker(BaseEstimator):
         return np.clip(out[::sub], _LOW, 1.0)
 
     # -------------------------------------------------------------- generate
-    def generate(self, progress=None) -> Corpus:
+    def generate(self, progress: ProgressFn = None) -> Corpus:
         """Generate the corpus.
 
         Parameters
@@ -517,6 +539,7 @@ class SyntheticTalker(BaseEstimator):
         report(progress, "sentences", 0, 1)
         sents = self._sentences(rng, total)
         report(progress, "sentences", 1, 1)
+        who: Any
         ctrls, utts, pos, who = [], [], 0, []
         for k, (ph, d, txt, nf) in enumerate(sents):
             report(progress, "articulation", k, len(sents))
@@ -576,7 +599,8 @@ class SyntheticTalker(BaseEstimator):
                       point_names=lip.point_names, point_roles=lip_roles(lip), latent=latent,
                       name=f"synthetic-{self.preset}", axes=LIP_MODEL_AXES)
 
-    def _registration_field(self, rng, utts, n, lip):
+    def _registration_field(self, rng: np.random.Generator, utts: Sequence[Utterance], n: int,
+                            lip: Any) -> tuple[np.ndarray, np.ndarray]:
         """(coefficients (n, K), basis (K, 3 * n_points)) of the smooth registration error:
         products of low-order cosines over the rest surface's x and y (orders 0..3 each,
         amplitude 1 / (1 + a + b)) for each coordinate, coefficients a first-order process
@@ -602,7 +626,8 @@ class SyntheticTalker(BaseEstimator):
             coef[utt.start:utt.stop] = _slow_process(rng, utt.stop - utt.start, len(B), ph)
         return coef, B
 
-    def _head_motion(self, rng, utts, n):
+    def _head_motion(self, rng: np.random.Generator, utts: Sequence[Utterance],
+                     n: int) -> tuple[np.ndarray, np.ndarray] | None:
         """(rotation vectors (n, 3) in radians, translations (n, 3) in mm) of the residual
         registration error, or None when ``registration`` is 0: per utterance a slow
         first-order process (0.3 Hz) of s.d. ``0.6 * registration`` (mm; degrees)."""
@@ -621,7 +646,7 @@ class SyntheticTalker(BaseEstimator):
 _LOW = np.array([-1.0 if n in SIGNED_CONTROLS else 0.0 for n in CONTROL_NAMES])
 
 
-def _slow_process(rng, n, k, pole):
+def _slow_process(rng: np.random.Generator, n: int, k: int, pole: float) -> np.ndarray:
     """(n, k) independent first-order (AR(1)) processes of unit variance with ``pole``,
     stationary from the first sample (its state drawn from the stationary distribution)."""
     from scipy.signal import lfilter
@@ -636,7 +661,7 @@ def speaker_anatomy(seed: int, speaker: int) -> Anatomy:
     return Anatomy.draw(np.random.default_rng([int(seed), 1000 + int(speaker)]))
 
 
-def lip_roles(lip) -> list[str]:
+def lip_roles(lip: Any) -> list[str]:
     """Point roles of a lip surface: the inner-contour midline points are the upper and lower
     lip (their distance is the lip aperture, as :meth:`engine.talker.lipmodel.LipModel.aperture`
     defines it), the inner-contour points at the commissures the corners, the rest lip."""
@@ -649,7 +674,7 @@ def lip_roles(lip) -> list[str]:
     return roles
 
 
-def gesture_phases(aperture, bounds) -> np.ndarray:
+def gesture_phases(aperture: ArrayLike, bounds: ArrayLike) -> np.ndarray:
     """The ground-truth phase of the lip gesture per frame, from the exact aperture.
 
     Forward steps inside each utterance: opening when the aperture grows to the next
@@ -677,7 +702,7 @@ def gesture_phases(aperture, bounds) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ caching
-def cache_folder(override=None) -> Path:
+def cache_folder(override: str | os.PathLike[str] | None = None) -> Path:
     """Folder of cached corpora: ``override``, else ``$LIPSPACE_CACHE_DIR``, else the
     platform's user cache folder for ``lipspace``."""
     if override is not None:
@@ -723,7 +748,7 @@ def talker_key(preset="default", **params) -> str:
     return _cache_key(key)
 
 
-def cache_token(preset="default", **params) -> str:
+def cache_token(preset: str = "default", **params: Any) -> str:
     """The preset part of a cached talker's file name: the preset, and the opt-in variants
     (``_calibrated``, ``_tissue``) so that the cache keeps one entry of each apart."""
     out = preset
@@ -734,8 +759,9 @@ def cache_token(preset="default", **params) -> str:
     return out
 
 
-def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=False, save_later=None,
-                   **params) -> Corpus:
+def load_synthetic(*, preset: str = "default", progress: ProgressFn = None,
+                   cache_dir: str | os.PathLike[str] | None = None, audio: bool = False,
+                   save_later: list | None = None, **params: Any) -> Corpus:
     """The synthetic corpus for ``preset``, generated once and cached.
 
     Parameters
@@ -795,7 +821,7 @@ def load_synthetic(*, preset="default", progress=None, cache_dir=None, audio=Fal
     return _with_audio(corpus, path, progress) if audio else corpus
 
 
-def _with_audio(corpus, path, progress):
+def _with_audio(corpus: Corpus, path: Path, progress: ProgressFn) -> Corpus:
     """The corpus with speech audio in ``<path stem>-audio/``, or without it and a note why."""
     import subprocess
 

@@ -175,7 +175,7 @@ def read_lab(path, *, units: str = "auto", sample_rate: float | None = None) -> 
     if units == "samples" and not (sample_rate and sample_rate > 0):
         raise ValueError(f"units='samples' needs sample_rate (Hz) > 0, got {sample_rate!r}")
     body = _xlabel_body(lines)
-    rows = []  # (line number, start, end, label, all-integer?)
+    rows: list[tuple[int, float, float, str, bool]] = []  # (line number, start, end, label, all-integer?)
     if body is not None:
         prev = 0.0
         for i in range(body, len(lines)):
@@ -190,14 +190,14 @@ def read_lab(path, *, units: str = "auto", sample_rate: float | None = None) -> 
             prev = end
     else:
         for i, raw in enumerate(lines):
-            s = raw.strip()
-            if not s or s[0] in "#;\"":  # comments, '#!MLF!#' and MLF file-name lines
+            text = raw.strip()
+            if not text or text[0] in "#;\"":  # comments, '#!MLF!#' and MLF file-name lines
                 continue
-            if s == ".":
+            if text == ".":
                 break
-            tok = s.split()
+            tok = text.split()
             if len(tok) < 3:
-                raise ImportFormatError(path, f"found {s[:60]!r} ({len(tok)} field{'s' * (len(tok) != 1)}); "
+                raise ImportFormatError(path, f"found {text[:60]!r} ({len(tok)} field{'s' * (len(tok) != 1)}); "
                                         "expected 'start end label'", line=i + 1)
             start, end = parse_floats(tok[:2], path, i + 1, "a time")
             rows.append((i + 1, start, end, tok[2], bool(_INT.match(tok[0]) and _INT.match(tok[1]))))
@@ -207,7 +207,7 @@ def read_lab(path, *, units: str = "auto", sample_rate: float | None = None) -> 
         htk = all(r[4] for r in rows) and max(r[2] for r in rows) > HTK_AUTO_THRESHOLD
         scale = 1e-7 if htk else 1.0
     else:
-        scale = {"seconds": 1.0, "htk": 1e-7}.get(units) or 1.0 / float(sample_rate)
+        scale = {"seconds": 1.0, "htk": 1e-7}.get(units) or 1.0 / float(sample_rate or 0)  # checked > 0 above
     out, prev_end = [], -math.inf
     for line, s, e, lab, _ in rows:
         s, e = s * scale, e * scale

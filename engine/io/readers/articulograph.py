@@ -195,15 +195,17 @@ def read_wave(path, *, layout=None, rate: float | None = None, points=None, alig
             times.append(float(tok[t_col]))
         except ValueError:
             raise ImportFormatError(path, f"Time is {tok[t_col][:30]!r}; expected a number", line=ln + 1) from None
+        vals: list[float]
+        q: list[float]
         vals, miss, q = [], [], []
         for xyz, st, err in blocks:
             ok = st is None or tok[st].strip().upper() in ("OK", "0", "")
             for j in xyz + ([err] if err is not None else []):
-                t = tok[j].strip()
+                cell = tok[j].strip()
                 try:
-                    (q if j == err else vals).append(float(t) if t and t.lower() != "nan" else np.nan)
+                    (q if j == err else vals).append(float(cell) if cell and cell.lower() != "nan" else np.nan)
                 except ValueError:
-                    raise ImportFormatError(path, f"column {j + 1} ({head[j]}) is {t[:30]!r}; expected a number",
+                    raise ImportFormatError(path, f"column {j + 1} ({head[j]}) is {cell[:30]!r}; expected a number",
                                             line=ln + 1) from None
             if has_q and err is None:
                 q.append(0.0)  # this sensor has no error column: not measured

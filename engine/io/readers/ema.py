@@ -96,17 +96,17 @@ def _parse_est_header(data: bytes, path):
 
     n_frames, n_ch = integer("NumFrames", 1), integer("NumChannels", 1)
     n_aux = integer("NumAuxChannels", 0) if "NumAuxChannels" in hdr else 0
-    dtype, i = hdr.get("DataType", ("ascii", None))
+    dtype, at = hdr.get("DataType", ("ascii", None))
     if dtype not in ("binary", "ascii"):
-        raise ImportFormatError(path, f"DataType is {dtype[:30]!r}; expected 'binary' or 'ascii'", line=i)
-    order, i = hdr.get("ByteOrder", ("10", None))
+        raise ImportFormatError(path, f"DataType is {dtype[:30]!r}; expected 'binary' or 'ascii'", line=at)
+    order, at = hdr.get("ByteOrder", ("10", None))
     if order in ("01", "LSB", "LD", "little"):
         endian = "<"
     elif order in ("10", "MSB", "BD", "big"):
         endian = ">"
     else:
         raise ImportFormatError(path, f"ByteOrder is {order[:30]!r}; expected '01' (little-endian) or '10' "
-                                "(big-endian)", line=i)
+                                "(big-endian)", line=at)
     for k, (_, i) in names.items():
         if k >= n_ch:
             raise ImportFormatError(path, f"Channel_{k} is named but NumChannels is {n_ch}", line=i)

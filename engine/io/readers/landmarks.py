@@ -177,7 +177,7 @@ def read_csv_landmarks(path, *, rate: float | None = None, points=None, space: s
     if space not in ("auto", "2d", "3d"):
         raise ValueError(f"space={space!r}; expected 'auto', '2d' or '3d'")
     hline, header, body = _rows(path, delimiter)
-    seen = {}
+    seen: dict[str, int] = {}
     for j, h in enumerate(header):
         if h and h in seen:
             raise _twice(path, header, seen[h], j)

@@ -148,7 +148,7 @@ def read_matrix(path, *, layout, rate: float | None = None, variable: str | None
         raise ImportFormatError(path, f"a .pos file is an AG500/AG501 binary; layout {lay.name!r} describes a plain "
                                 "matrix: use layout ag500 or ag501, or a layout file with 'base: ag501'")
     found = None
-    damage = []
+    damage: list[str] = []
     if suf == ".mat":
         M, found = _from_mat(path, variable, damage)
     elif suf == ".npy":

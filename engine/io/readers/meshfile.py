@@ -15,6 +15,7 @@ are). :func:`read_vertex_labels` reads them back from either format.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -110,6 +111,7 @@ def _ply_header(data: bytes, path):
     nl = data.find(b"\n", end)
     body = len(data) if nl < 0 else nl + 1
     lines = decode_text(data[:end], path).split("\n")
+    elements: list[dict[str, Any]]
     fmt, elements = None, []
     for i, raw in enumerate(lines[1:], start=2):
         tok = raw.split()

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -117,8 +118,9 @@ def _phones(entry0, path, field: str = "PHONES") -> tuple[list[PhoneInterval], s
         return [], text
     if not {"LABEL", "OFFS"} <= set(ph.fields):
         raise ImportFormatError(path, f"{field} has no LABEL / OFFS fields; expected MVIEW {what} labels")
-    out = []
-    for k, p in enumerate(ph):
+    out: list[PhoneInterval] = []
+    p: Any
+    for k, p in enumerate(ph):  # type: ignore[arg-type]  # a MatStruct iterates over its entries
         offs = p["OFFS"]
         lab = _text(p["LABEL"]).strip()
         if not isinstance(offs, np.ndarray) or offs.size != 2 or not np.issubdtype(offs.dtype, np.number):
@@ -163,7 +165,7 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
         (see :func:`write_audio`).
     """
     path = Path(path)
-    damage = []
+    damage: list[str] = []
     s, ent = _entries(path, damage)
     if isinstance(sensors, str) and sensors == "all":
         want = [n for n, (i, e) in ent.items()
@@ -209,8 +211,8 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
     words, _ = _phones(s[0], path, "WORDS")
     if words:  # the word tier, inside the recording
         end = c.n_frames / native
-        words = tuple(PhoneInterval(w.start, min(w.end, end), w.label) for w in words if w.start < end)
-        c = replace(c, utterances=[replace(u, words=words) for u in c.utterances])
+        kept = tuple(PhoneInterval(w.start, min(w.end, end), w.label) for w in words if w.start < end)
+        c = replace(c, utterances=[replace(u, words=kept) for u in c.utterances])
     c.history.extend(f"{path.name}: {d}" for d in damage)  # what a damaged file still gave
     return c
 

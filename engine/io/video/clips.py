@@ -227,7 +227,7 @@ class _AudioTrack:
         av = _require_av()
         self.stream = container.streams.audio[0] if container.streams.audio else None
         self._resampler = av.AudioResampler(format="s16", layout="mono", rate=int(rate))
-        self._chunks = []
+        self._chunks: list[np.ndarray] = []
 
     def _keep(self, frame):
         for out in self._resampler.resample(frame):

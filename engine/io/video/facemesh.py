@@ -207,6 +207,8 @@ class FaceTracker:
         rgb = np.ascontiguousarray(rgb, dtype=np.uint8)
         if rgb.ndim != 3 or rgb.shape[2] != 3:
             raise ValueError(f"frame of shape {rgb.shape}; expected (height, width, 3) RGB")
+        if self._mesh is None:
+            raise ValueError("the face tracker is closed; make a new one")
         try:
             res = self._mesh.process(rgb)
         finally:

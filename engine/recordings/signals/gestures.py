@@ -5,6 +5,7 @@ target and back: for a constriction the track falls to a minimum and rises again
 aperture closing for /p/ and opening after it); ``target="max"`` takes maxima instead
 (protrusion for /u/). Per gesture, on the low-passed track and its velocity v:
 
+=========  =================================================================================
 ``GONS``   gesture onset: before PVEL, the last time the speed toward the target is
            below ``threshold`` (20 %) of its peak
 ``PVEL``   peak velocity of the movement toward the target
@@ -16,6 +17,7 @@ aperture closing for /p/ and opening after it); ``target="max"`` takes maxima in
            its peak
 ``PVEL2``  peak velocity of the movement away from the target
 ``GOFFS``  gesture offset: after PVEL2, the speed away falls below the threshold of its peak
+=========  =================================================================================
 
 Targets are the track's extrema standing out by ``prominence`` of its robust range
 over the corpus (5th-95th percentile), at least ``min_separation_s`` apart; the

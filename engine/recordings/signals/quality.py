@@ -16,18 +16,21 @@ relative rule, since units and typical residuals differ between systems and set-
 samples and the longest run of them. :func:`apply_quality` then does what the user chose
 (:class:`QualityPolicy`):
 
+=========  ===========================================================================
 ``keep``   nothing changes (the report and the corpus history say so);
 ``mask``   runs of suspect samples up to ``max_gap_s`` long are interpolated linearly
            between the neighbouring good samples (held at an utterance's edge); longer
            runs are left as recorded and named;
 ``drop``   as ``mask``, and every utterance that still has a longer run is left out,
            named.
+=========  ===========================================================================
 
 Nothing is done without a line in the corpus history (``lipspace info`` lists them).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -194,6 +197,7 @@ def apply_quality(corpus, threshold: float, policy: QualityPolicy) -> QualityRes
     max_gap = _max_gap(policy, corpus.rate)
     F = np.array(corpus.frames, dtype=np.float32)
     d, names = corpus.dims, corpus.point_names or [f"p{j}" for j in range(corpus.n_points)]
+    long_runs: dict[str, Any]
     done, long_runs = {}, {}
     for u in corpus.utterances:
         for j in range(corpus.n_points):

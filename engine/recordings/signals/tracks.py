@@ -4,6 +4,7 @@ A track is one number per frame with a name, a unit and a meaning. The positions
 low-passed first (zero phase, :mod:`engine.recordings.signals.filters`; ``lowpass_hz=None``
 keeps them raw), then:
 
+========================  ======================================================================
 ``lip_aperture``          distance between the upper- and lower-lip centroids (mm)
 ``lip_protrusion``        the lips' centroid (upper and lower lip) along the talker's forward
                           axis (:func:`engine.recordings.orientation.anatomical_frame`), against
@@ -11,11 +12,12 @@ keeps them raw), then:
                           (head sensors), else against the corpus mean (+ = forward)
 ``speed_<point>``         tangential velocity of a point: the length of its 3-D (2-D)
                           velocity, mm/s
-``<point>_forward``,      a point's position along the talker's forward / up / left axis,
-``<point>_up``,           against its corpus mean (mm)
-``<point>_left``
+``<point>_forward``       a point's position along the talker's forward axis, against its
+                          corpus mean (mm); ``<point>_up`` and ``<point>_left`` along the up and
+                          left axes
 ``rms_<point>``           the point's sensor quality value per frame, when the file had one
                           (:mod:`engine.recordings.signals.quality`; not filtered)
+========================  ======================================================================
 
 :func:`available_tracks` lists what a corpus can give; :func:`derived_track` computes one.
 Tracks are what ``lipspace table --tracks`` writes, what the gestural landmarks
