@@ -147,7 +147,7 @@ def recover_stale(folder, names=()) -> list[str]:
     also issued as a :class:`StagingWarning`. Errors are ignored (tried again next time).
     """
     folder = Path(folder)
-    restored = []
+    restored: list[str] = []
     try:
         entries = list(os.scandir(folder))
     except OSError:

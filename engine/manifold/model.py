@@ -284,7 +284,7 @@ class Manifold(BaseEstimator):
         self.Fx_, self.Fxv_, self.G_, self.Fy_ = Fx, Fxv, G, Fy
         self._inverse: InverseMap | None = None
         self.synthesis_choice_ = self.synthesis_states_ = None  # measured on this fit by fit_choice
-        self.synthesis_models_ = {}
+        self.synthesis_models_: dict[str, Any] = {}
         t = time.perf_counter()
         report(progress, "inverse map", 0, 1)
         # exact-sized builds tetrahedralise every frame (the inverse map synthesis uses anyway); above
@@ -445,7 +445,8 @@ class Manifold(BaseEstimator):
         return cls.from_arrays(d, source=path)
 
     @classmethod
-    def from_arrays(cls, d, *, source, corpus=None) -> "Manifold":
+    def from_arrays(cls, d: Mapping[str, Any], *, source: str | os.PathLike[str],
+                    corpus: Corpus | None = None) -> Manifold:
         """A manifold from the arrays :meth:`save` writes (``d``: name -> ndarray), every one checked.
 
         ``corpus``: the corpus the manifold was fitted to, when ``d`` holds only what the fit made

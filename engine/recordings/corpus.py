@@ -273,7 +273,7 @@ class Corpus:
                 f"{self.name}: {len(self.point_names)} point names for {self.n_points} points"
             )
         if self.point_names is not None and len(set(self.point_names)) != len(self.point_names):
-            first = {}
+            first: dict[str, int] = {}
             for k, n in enumerate(self.point_names):  # which point is which cannot be told: refused, not guessed
                 if n in first:
                     raise CorpusError(f"{self.name}: points {first[n] + 1} and {k + 1} are both named {n!r}; "
@@ -295,9 +295,9 @@ class Corpus:
             bad_roles = sorted({r for r in self.point_roles if r and r not in ROLES})
             if bad_roles:
                 raise CorpusError(f"{self.name}: unknown point role(s) {bad_roles}; expected one of {list(ROLES)}")
-        for k, v in self.latent.items():
+        for key, v in self.latent.items():
             if v.shape[0] != F.shape[0]:
-                raise CorpusError(f"{self.name}: latent {k!r} has {v.shape[0]} rows, frames have {F.shape[0]}")
+                raise CorpusError(f"{self.name}: latent {key!r} has {v.shape[0]} rows, frames have {F.shape[0]}")
 
     def _validate_phones(self) -> None:
         """Every phone's checks at once (a ten-million-frame corpus has 1.6 million phones); the first

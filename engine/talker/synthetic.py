@@ -726,19 +726,20 @@ def _cache_key(params: dict) -> str:
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 
-def cache_path(preset="default", *, cache_dir=None, **params) -> Path:
+def cache_path(preset: str = "default", *, cache_dir: str | os.PathLike[str] | None = None,
+               **params: Any) -> Path:
     """Where :func:`load_synthetic` caches the corpus of ``preset`` with ``params``; its speech audio
     goes in the folder of the same name ending ``-audio`` (:func:`audio_folder`)."""
     return cache_folder(cache_dir) / f"synthetic-{cache_token(preset, **params)}-{talker_key(preset, **params)}.npz"
 
 
-def audio_folder(corpus_path) -> Path:
+def audio_folder(corpus_path: str | os.PathLike[str]) -> Path:
     """The folder of a cached corpus's speech audio: its file name without ``.npz``, ending ``-audio``."""
     corpus_path = Path(corpus_path)
     return corpus_path.with_name(corpus_path.stem + "-audio")
 
 
-def talker_key(preset="default", **params) -> str:
+def talker_key(preset: str = "default", **params: Any) -> str:
     """The key of the corpus :class:`SyntheticTalker` ``(preset=preset, **params)`` generates: a hash of its
     parameters, :data:`GENERATOR_VERSION` and the generator's code (:func:`generator_fingerprint`).
     ValueError for parameters the talker refuses."""
@@ -803,7 +804,7 @@ def load_synthetic(*, preset: str = "default", progress: ProgressFn = None,
             pass  # damaged cache file: regenerate it
     corpus = talker.generate(progress=progress)
 
-    def save():
+    def save() -> None:
         from engine.files.ownership import mark
 
         try:

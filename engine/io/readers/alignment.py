@@ -276,7 +276,7 @@ def resolve_alignment(data_path, alignment, *, tier: str | None = None) -> tuple
         return [], None
     if alignment is None:
         p = Path(data_path)
-        found = []
+        found: list[Path] = []
         for suf in SIDECAR_SUFFIXES:
             cand = p.with_suffix(suf)
             if cand.is_file() and cand != p and not any(_same(cand, f) for f in found):
