@@ -187,3 +187,23 @@ def test_channels_chosen_in_the_signals_menu_stack_under_the_timeline(win, qapp)
     assert settings["channels"] == ["lip_aperture", "lip_protrusion"]
     ed.toggle_channel("lip_protrusion", False)
     assert ed.signals.panel.channels == ("lip_aperture",)
+
+
+def test_a_session_keeps_the_channels_and_the_edited_landmarks(win, qapp):
+    ed = _load_utterance(win, qapp)
+    gs = win.state.gestures
+    g = int(np.flatnonzero(np.all(np.isfinite(gs.times), axis=1))[0])
+    j = LANDMARKS.index("NONS")
+    lo, hi = ed.signals.editor.bounds(g, j)
+    ed.move_landmark(g, j, 0.5 * (lo + hi))
+    ed.toggle_channel("lip_protrusion", True)
+    extra = win.session_extra()
+    edited = win.state.gestures.times.copy()
+    ed.apply_signals_settings(extra["signals"])  # as a session opened on this corpus restores them
+    assert ed._finder.wait(60_000)
+    _settle(qapp)
+    assert ed.signals.panel.channels == ("lip_aperture", "lip_protrusion") and ed.signals.edited
+    np.testing.assert_allclose(win.state.gestures.times, edited, atol=1e-6, equal_nan=True)
+    assert not ed.gesture_undo_stack.canUndo()  # a session's edits start a new history
+    assert win.compare_panel.settings()["field"] == extra["compare"]["field"]
+    ed.toggle_channel("lip_protrusion", False)
