@@ -34,7 +34,9 @@ def _tree(tmp_path: Path, files: dict) -> Path:
         lines.append("[[tool.importlinter.contracts]]")
         lines += [f"{k} = {json.dumps(v)}" for k, v in c.items()]
     (tmp_path / "pyproject.toml").write_text("\n".join(lines) + "\n")
-    for pkg in ("engine", "engine/io", "engine/files", "app", "app/models", "app/files"):
+    app_layers = [f"app/{name.strip()}" for c in config["contracts"] if c.get("containers") == ["app"]
+                  for layer in c["layers"] for name in layer.split("|")]
+    for pkg in ("engine", "engine/io", "engine/files", "app", "app/models", "app/files", *app_layers):
         (tmp_path / pkg).mkdir(parents=True, exist_ok=True)
         (tmp_path / pkg / "__init__.py").write_text("")
     for name, text in files.items():
@@ -48,6 +50,8 @@ def _tree(tmp_path: Path, files: dict) -> Path:
     ({"engine/files/up.py": "import app.models\n"}, "engine.files.up -> app.models"),
     ({"engine/io/a.py": "import engine.files.b\n", "engine/files/b.py": "import engine.io.a\n"}, "No cycles"),
     ({"engine/io/_private.py": "", "engine/files/c.py": "import engine.io._private\n"}, "engine.io._private"),
+    ({"app/models/pick.py": "import app.views\n"}, "app.models is not allowed to import app.views"),
+    ({"app/files/load.py": "import app.window\n"}, "app.files is not allowed to import app.window"),
 ])
 def test_each_contract_catches_its_breach(tmp_path, files, broken):
     r = _lint(_tree(tmp_path, files))

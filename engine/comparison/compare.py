@@ -12,7 +12,7 @@ over every contrast of the fit. Every row states its design.
 """
 from __future__ import annotations
 
-import numbers
+from numbers import Integral, Real
 
 import numpy as np
 from sklearn.base import BaseEstimator
@@ -24,6 +24,7 @@ from engine.comparison.dynamics import dynamics_family, utterance_dynamics
 from engine.comparison.enrichment import enrichment_family, state_counts
 from engine.comparison.fields import level_counts
 from engine.comparison.statistics import bh_qvalues, run_families
+from engine.constraints import Interval, StrOptions, validate_params
 
 __all__ = ["ConditionComparison", "COLUMNS", "FAMILIES", "default_contrasts"]
 
@@ -98,6 +99,18 @@ class ConditionComparison(BaseEstimator):
     notes_ : list of str
     """
 
+    _parameter_constraints = {
+        "n_permutations": [Interval(Integral, 1, None, closed="left")],
+        "n_bootstrap": [Interval(Integral, 0, None, closed="left")],
+        "confidence": [Interval(Real, 0, 1, closed="neither")],
+        "alpha": [Interval(Real, 0, 1, closed="neither")],
+        "horizon_s": [Interval(Real, 0, None, closed="neither")],
+        "n_dims": [Interval(Integral, 1, None, closed="left")],
+        "min_count": [Interval(Integral, 2, None, closed="left")],  # a covariance needs two members
+        "labels": [StrOptions({"auto", "phones", "kinematic"})],
+        "random_state": [Interval(Integral, 0, 2**32 - 1, closed="both")],  # a SeedSequence entry
+    }
+
     def __init__(self, *, n_permutations=4999, n_bootstrap=1000, confidence=0.95, alpha=0.05, horizon_s=0.1,
                  n_dims=3, min_count=3, labels="auto", random_state=0):
         self.n_permutations = n_permutations
@@ -109,18 +122,6 @@ class ConditionComparison(BaseEstimator):
         self.min_count = min_count
         self.labels = labels
         self.random_state = random_state
-
-    def _check_params(self):
-        for name, lo in (("n_permutations", 1), ("n_bootstrap", 0), ("n_dims", 1), ("min_count", 2)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < lo:
-                raise ValueError(f"{name}={v!r}: must be an integer >= {lo}")
-        for name in ("confidence", "alpha"):
-            v = getattr(self, name)
-            if not (isinstance(v, numbers.Real) and 0 < v < 1):
-                raise ValueError(f"{name}={v!r}: must be between 0 and 1 (e.g. 0.95 / 0.05)")
-        if self.labels not in ("auto", "phones", "kinematic"):
-            raise ValueError(f"labels={self.labels!r}; expected 'auto', 'phones' or 'kinematic'")
 
     def fit(self, manifold, levels, *, by: str = "level", contrasts=None, speakers=None, pairs=None,
             paired_by: str = "", progress=None):
@@ -147,7 +148,7 @@ class ConditionComparison(BaseEstimator):
         -------
         self
         """
-        self._check_params()
+        validate_params(self)
         c = manifold.corpus_
         n_utt = len(c.utterances)
         levels = np.asarray(["" if v is None else str(v) for v in levels], dtype=str)

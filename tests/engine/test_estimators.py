@@ -74,6 +74,7 @@ CONSTRUCT = {
     "LearntPathSynthesizer": lambda: {"choice": {"state_dims": 3}},
     "StateHermiteSynthesizer": lambda: {"choice": {"state_dims": 3}},
     "SyntheticTalker": lambda: {"preset": "small", "n_sentences": 2},
+    "ConditionComparison": lambda: {"n_permutations": 19, "n_bootstrap": 0},
 }
 
 
@@ -135,6 +136,7 @@ FIT_ARGS = {
     "PhoneModelSynthesizer": lambda m: ("fit", (m,), {}),
     "LearntPathSynthesizer": lambda m: ("fit", (m,), {}),
     "StateHermiteSynthesizer": lambda m: ("fit", (m,), {}),
+    "ConditionComparison": lambda m: ("fit", (m, ["a", "b", "a"][: len(m.corpus_.utterances)]), {}),
     "SyntheticTalker": lambda m: ("generate", (), {}),  # no fit: generate is its first call
 }
 

@@ -122,7 +122,7 @@ def test_bad_input_and_cancellation(conditions):
     cc, m = conditions
     with pytest.raises(ValueError, match="levels has 3 values for 60 utterances"):
         ConditionComparison().fit(m, ["a", "b", "c"])
-    with pytest.raises(ValueError, match="n_permutations=0"):
+    with pytest.raises(ValueError, match="n_permutations must be an integer >= 1, got 0"):
         ConditionComparison(n_permutations=0).fit(m, cc.fields["condition"], contrasts=[("a", "b")])
 
     def stop(stage, done, total):
