@@ -10,8 +10,8 @@ import weakref
 
 import numpy as np
 
-__all__ = ["corpus_palette", "knn_density", "frame_phones", "frame_phone_codes", "cluster_table", "prepare_derived", "PREPARED",
-           "DerivedCaches"]
+__all__ = ["corpus_palette", "knn_density", "frame_phones", "frame_phone_codes", "cluster_table", "prepare_derived",
+           "PREPARED", "DerivedCaches"]
 
 #: derived data computed ahead of time per manifold object (see prepare_derived)
 PREPARED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()

@@ -139,7 +139,8 @@ def test_the_gesture_tier_drags_and_deletes_landmarks_undoably(win, qapp):
     x1 = int(round(tier.time_x(target)))
     assert abs(x1 - x0) >= 2
     y = tier.height() // 2
-    QTest.mousePress(tier, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, QtCore.QPoint(x0, y))
+    QTest.mousePress(tier, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                     QtCore.QPoint(x0, y))
     assert tier.chosen == (g, j)
     QTest.mouseMove(tier, QtCore.QPoint(x1, y))
     QTest.mouseRelease(tier, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
