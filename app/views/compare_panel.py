@@ -27,6 +27,7 @@ from app.models.compare_run import (
     sort_key,
 )
 from app.views._common import connect_all, disconnect_all, elided_label
+from app.views.flow_layout import FlowLayout
 
 __all__ = ["ComparePanel", "ComparisonTableModel", "FAMILY_CHOICES", "SUGGEST_MAX"]
 
@@ -127,20 +128,19 @@ class ComparePanel(QtWidgets.QWidget):
         self.table.setSelectionMode(QtWidgets.QAbstractItemView.SelectionMode.SingleSelection)
         self.table.verticalHeader().setVisible(False)
         self.table.horizontalHeader().setStretchLastSection(True)
+        self.table.verticalHeader().setDefaultSectionSize(self.fontMetrics().height() + 6)
         self.table.selectionModel().currentRowChanged.connect(lambda cur, _prev: self.choose_row(cur.row()))
-        form = QtWidgets.QGridLayout()
-        for k, (label, w) in enumerate((("Field:", self.field_box), ("Levels:", self.levels_edit),
-                                        ("Pair by:", self.pair_box), ("Permutations:", self.perm_spin))):
-            form.addWidget(QtWidgets.QLabel(label), k // 2, 2 * (k % 2))
-            form.addWidget(w, k // 2, 2 * (k % 2) + 1)
-        buttons = QtWidgets.QHBoxLayout()
-        for w in (self.run_btn, self.cancel_btn, QtWidgets.QLabel("Show:"), self.contrast_box, self.family_box):
-            buttons.addWidget(w)
-        buttons.addStretch(1)
+        # the controls wrap in a narrow dock, so the table keeps the height
+        bar = FlowLayout(spacing=8, row_spacing=3)
+        for group in ((QtWidgets.QLabel("Field:"), self.field_box), (QtWidgets.QLabel("Levels:"), self.levels_edit),
+                      (QtWidgets.QLabel("Pair by:"), self.pair_box),
+                      (QtWidgets.QLabel("Permutations:"), self.perm_spin, self.run_btn, self.cancel_btn),
+                      (QtWidgets.QLabel("Show:"), self.contrast_box, self.family_box)):
+            bar.add_group(group)
+        self.levels_edit.setMinimumWidth(160)
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
-        lay.addLayout(form)
-        lay.addLayout(buttons)
+        lay.addLayout(bar)
         lay.addWidget(self.status)
         lay.addWidget(self.table, 1)
         self._connections = [(state.events.changed, self._on_changed)]
@@ -277,6 +277,10 @@ class ComparePanel(QtWidgets.QWidget):
         header = self.table.horizontalHeader()
         if header.sortIndicatorSection() >= 0 and rows:
             self.model.sort(header.sortIndicatorSection(), header.sortIndicatorOrder())
+        # one field per comparison (the status line names it): its column would repeat it on every row
+        self.table.setColumnHidden(self.model.cols.index("field"), True)
+        if rows:
+            self.table.resizeColumnsToContents()
 
     def _on_contrast_chosen(self, i: int) -> None:
         shown = self.state.comparison

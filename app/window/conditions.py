@@ -45,8 +45,10 @@ class ConditionDocks:
         for key in ("compare", "multiples"):
             self.docks[key].show()
             self.docks[key].raise_()
-        # the table wants rows to read: the larger share of the column's height
-        self.resizeDocks([self.docks["multiples"], self.docks["compare"]], [300, 420], QtCore.Qt.Orientation.Vertical)
+        # the table wants rows to read: three fifths of the column's height
+        h = max(self.docks["multiples"].height() + self.docks["compare"].height(), 2)
+        self.resizeDocks([self.docks["multiples"], self.docks["compare"]], [2 * h // 5, 3 * h // 5],
+                         QtCore.Qt.Orientation.Vertical)
 
     def _close_condition_views(self) -> None:
         self.camera_link.remove()
