@@ -103,6 +103,23 @@ def test_small_multiples_show_one_view_per_level_through_one_camera(win, qapp):
     _settle(qapp)
     for view in sm.views:  # the selection is marked in every view
         assert view["marker"].visible
+    # the hemisphere within the horizon, coloured in every view as in the main one
+    from app.models.colouring import point_colors
+    from app.scene.manifold import to_rgb8
+
+    with s.batch():
+        s.select_state(int(s.manifold.states_.labels_[sm.frames[0][0]]))
+        s.set_color_mode("distance")
+        s.set_horizon(50.0)
+    _settle(qapp)
+    c = point_colors("distance", s.manifold, s)
+    for view, f in zip(sm.views, sm.frames):
+        np.testing.assert_array_equal(view["points"].rgb, to_rgb8(c.rgb[s.cloud.group_of[f]]))
+    s.set_horizon(150.0)
+    _settle(qapp)
+    assert not np.array_equal(to_rgb8(point_colors("distance", s.manifold, s).rgb), to_rgb8(c.rgb))
+    c = point_colors("distance", s.manifold, s)
+    np.testing.assert_array_equal(sm.views[0]["points"].rgb, to_rgb8(c.rgb[s.cloud.group_of[sm.frames[0]]]))
     s.set_field_levels("condition", ["a", "c"])
     _settle(qapp, 20)
     assert sm.levels == [lv for lv in sm.levels if lv in ("a", "c")] and len(sm.levels) == 2
