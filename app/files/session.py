@@ -64,6 +64,8 @@ def session_dict(state, *, cameras: dict | None = None, extra: dict | None = Non
         "visible_phones": sorted(state.visible_phones),
         "ellipsoid_opacity": float(state.ellipsoid_opacity),
         "hidden_layers": sorted(state.hidden_layers),
+        "color_field": state.color_field,
+        "field_filter": [list(p) for p in sorted(state.field_filter)],
         "palette": None if state.palette is None else state.palette.to_dict(),
         "component": state.component,
         "cameras": {k: [[float(x) for x in row] for row in v] for k, v in (cameras or {}).items()},
@@ -263,6 +265,12 @@ def check_fields(d: dict, path) -> None:
     v = d.get("hidden_layers", [])
     if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
         bad("hidden_layers", "an array of layer names", v)
+    if d.get("color_field") is not None and not isinstance(d["color_field"], str):
+        bad("color_field", "a field name", d["color_field"])
+    v = d.get("field_filter", [])
+    if not isinstance(v, list) or not all(isinstance(x, list) and len(x) == 2 and all(isinstance(y, str) for y in x)
+                                          for x in v):
+        bad("field_filter", "an array of [field, level] pairs", v)
     if "ellipsoid_opacity" in d and not (number(d["ellipsoid_opacity"]) and 0 <= d["ellipsoid_opacity"] <= 1):
         bad("ellipsoid_opacity", "a number from 0 to 1", d["ellipsoid_opacity"])
     if d.get("palette") is not None:
@@ -399,6 +407,8 @@ def apply_session(state, d: dict):
         state.set_ellipsoid_opacity(d.get("ellipsoid_opacity", state.ellipsoid_opacity))
         state.set_hidden_layers(d.get("hidden_layers", []))
         state.set_component(d.get("component"))
+        state.set_color_field(d.get("color_field"))
+        state.set_field_filter(d.get("field_filter", []))
         state.set_color_mode(d.get("color_mode", "density"))
         syn, targets = d.get("_synthetic"), d.get("_targets")
         _check_fits(state.manifold, syn, targets)

@@ -88,3 +88,22 @@ def test_the_difference_view_colours_each_point_by_its_states_enrichment(state, 
     assert [row[0] for row in c.legend][:2] == ["more a (orange)", "more b (purple)"]
     state.set_comparison(condition_comparison.with_contrast(1))
     assert point_colors("difference", state.manifold, state).title == "log2 occupancy\nc / a"
+
+
+def test_a_session_keeps_the_colour_field_and_the_filter(state, tmp_path):
+    import json
+
+    from app.files.session import SessionError, apply_session, load_session, save_session
+
+    state.colour_by_field("condition")
+    state.set_field_levels("condition", ["b", "c"])
+    path = save_session(state, tmp_path / "s.lipspace")
+    back = AppState(state.manifold)
+    apply_session(back, load_session(path))
+    assert (back.color_mode, back.color_field) == ("field", "condition")
+    assert back.field_filter == {("condition", "b"), ("condition", "c")}
+    d = json.loads(path.read_text())
+    d["field_filter"] = [["condition"]]
+    path.write_text(json.dumps(d))
+    with pytest.raises(SessionError, match="field 'field_filter' must be an array of \\[field, level\\] pairs"):
+        load_session(path)
