@@ -21,7 +21,7 @@ from app.models.tracks import TrackPanel
 from engine.recordings.signals.filters import DEFAULT_CUTOFF_HZ
 from engine.recordings.signals.gestures import DEFAULT_THRESHOLD, LANDMARKS
 
-__all__ = ["Signals", "LANDMARK_WORDS", "GESTURE_TRACKS", "landmark_colour", "SignalsError"]
+__all__ = ["Signals", "LANDMARK_WORDS", "GESTURE_TRACKS", "landmark_colour", "SignalsError", "default_lowpass"]
 
 #: the palette's name of each landmark (app.models.palette.LANDMARK_ORDER)
 LANDMARK_WORDS = dict(zip(LANDMARKS, ("gesture onset", "peak velocity (to target)", "nucleus onset",
@@ -29,6 +29,13 @@ LANDMARK_WORDS = dict(zip(LANDMARKS, ("gesture onset", "peak velocity (to target
                                       "gesture offset")))
 #: tracks whose gestures have a known target (a minimum of the aperture, a maximum of the protrusion)
 GESTURE_TRACKS = ("lip_aperture", "lip_protrusion")
+
+
+def default_lowpass(rate: float) -> float | None:
+    """The window's first cut-off for frames at ``rate`` Hz: :data:`DEFAULT_CUTOFF_HZ` where it lies below the
+    Nyquist frequency, else None (raw positions: a 30 Hz video's tracks, which no cut-off below 15 Hz would leave
+    the speech movements of)."""
+    return DEFAULT_CUTOFF_HZ if DEFAULT_CUTOFF_HZ < 0.5 * float(rate) else None
 
 
 class SignalsError(ValueError):
@@ -48,17 +55,20 @@ class Signals:
     corpus : Corpus
     channels : sequence of str, optional
         Channels shown (default: the lip aperture where the corpus has one).
-    lowpass_hz : float or None
-        Cut-off of the zero-phase low-pass of the positions (None: raw).
+    lowpass_hz : float or None or "default"
+        Cut-off of the zero-phase low-pass of the positions (None: raw; "default":
+        :func:`default_lowpass` of the corpus's rate).
     gesture_track : str or None or "auto"
         The track whose gestures the tier shows ("auto": the lip aperture where there is one).
     threshold : float
         Share of each peak speed marking onsets and offsets.
     """
 
-    def __init__(self, corpus, *, channels=None, lowpass_hz: float | None = DEFAULT_CUTOFF_HZ,
-                 gesture_track="auto", threshold: float = DEFAULT_THRESHOLD):
+    def __init__(self, corpus, *, channels=None, lowpass_hz="default", gesture_track="auto",
+                 threshold: float = DEFAULT_THRESHOLD):
         self.corpus = corpus
+        if lowpass_hz == "default":
+            lowpass_hz = default_lowpass(corpus.rate)
         self.panel = TrackPanel(corpus, channels=channels, lowpass_hz=lowpass_hz)
         if gesture_track == "auto":
             gesture_track = next((t for t in GESTURE_TRACKS if t in self.panel.available), None)
@@ -128,13 +138,13 @@ class Signals:
     @classmethod
     def from_settings(cls, corpus, d: dict) -> "Signals":
         """The signals a session's :meth:`settings` describe (edited landmarks: :meth:`gestures_from_settings`)."""
-        have = TrackPanel(corpus, channels=()).available
+        have = TrackPanel(corpus, channels=(), lowpass_hz=None).available
         chans = [c for c in d.get("channels", []) if c in have]  # a channel the corpus lacks: left out, not fatal
         track = d.get("gesture_track", "auto")
         if track is not None and track not in [t for t in GESTURE_TRACKS if t in have]:
             track = "auto"
         try:
-            return cls(corpus, channels=chans, lowpass_hz=d.get("lowpass_hz", DEFAULT_CUTOFF_HZ),
+            return cls(corpus, channels=chans, lowpass_hz=d.get("lowpass_hz", "default"),
                        gesture_track=track, threshold=d.get("threshold", DEFAULT_THRESHOLD))
         except ValueError as exc:
             raise SignalsError(f"signals settings: {exc}") from None

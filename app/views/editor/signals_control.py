@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from app.models.signals import LANDMARK_WORDS, Signals, landmark_colour
+from app.models.signals import LANDMARK_WORDS, Signals, default_lowpass, landmark_colour
 from app.views.gesture_tier import GestureTier
 from app.views.track_channels import TrackChannels
 
@@ -251,8 +251,9 @@ class SignalsControl:
                     a.setChecked(n in sig.panel.channels)
         low = menu.addMenu(f"Low-pass cut-off: {self._lowpass_text(sig.panel.lowpass_hz)}")
         for hz in LOWPASS_CHOICES + (None,):
-            a = low.addAction(self._lowpass_text(hz) + (" (default)" if hz == 15.0 else ""),
+            a = low.addAction(self._lowpass_text(hz) + (" (default)" if hz == default_lowpass(sig.corpus.rate) else ""),
                               lambda _on=False, hz=hz: self.set_lowpass(hz))
+            a.setEnabled(hz is None or hz < 0.5 * sig.corpus.rate)  # below the Nyquist frequency only
             a.setCheckable(True)
             a.setChecked(sig.panel.lowpass_hz == hz)
         low.addAction("Other…", self._ask_lowpass)

@@ -66,3 +66,19 @@ def test_every_landmark_has_its_own_palette_colour(app_manifold):
     pal = AppState(app_manifold).palette
     cols = {tuple(np.round(landmark_colour(pal, k), 4)) for k in LANDMARK_WORDS}
     assert len(cols) == len(LANDMARKS)
+
+
+def test_a_corpus_too_slow_for_the_default_cut_off_shows_raw_positions(app_manifold):
+    from dataclasses import replace
+
+    from app.models.signals import default_lowpass
+
+    assert default_lowpass(60.0) == 15.0 and default_lowpass(250.0) == 15.0
+    assert default_lowpass(30.0) is None  # 15 Hz is the Nyquist frequency of a 30 Hz video
+    video_rate = replace(app_manifold.corpus_, rate=30.0)
+    sig = Signals(video_rate)
+    assert sig.panel.lowpass_hz is None and sig.panel.channels == ("lip_aperture",)
+    back = Signals.from_settings(video_rate, {"channels": ["lip_aperture"]})
+    assert back.panel.lowpass_hz is None
+    with pytest.raises(SignalsError, match="low-pass cut-off 20 Hz: must be above 0 and below the Nyquist"):
+        Signals.from_settings(video_rate, {"lowpass_hz": 20.0})
