@@ -134,10 +134,10 @@ class ComparePanel(QtWidgets.QWidget):
         bar = FlowLayout(spacing=8, row_spacing=3)
         for group in ((QtWidgets.QLabel("Field:"), self.field_box), (QtWidgets.QLabel("Levels:"), self.levels_edit),
                       (QtWidgets.QLabel("Pair by:"), self.pair_box),
-                      (QtWidgets.QLabel("Permutations:"), self.perm_spin, self.run_btn, self.cancel_btn),
-                      (QtWidgets.QLabel("Show:"), self.contrast_box, self.family_box)):
+                      (QtWidgets.QLabel("Permutations:"), self.perm_spin), (self.run_btn, self.cancel_btn),
+                      (QtWidgets.QLabel("Show:"), self.contrast_box), (self.family_box,)):
             bar.add_group(group)
-        self.levels_edit.setMinimumWidth(160)
+        self.levels_edit.setMinimumWidth(140)
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
         lay.addLayout(bar)

@@ -2,7 +2,8 @@
 
 :class:`app.views.small_multiples.SmallMultiples` (one manifold view per level of the colour
 field) is docked beside the lips, :class:`app.views.compare_panel.ComparePanel` beside the
-clusters. The small multiples show the manifold view's own camera
+clusters. The small multiples' dock starts hidden (View menu; :meth:`ConditionDocks.show_compare` shows it).
+The small multiples show the manifold view's own camera
 (:class:`app.views.camera_link.CameraLink` renders every view showing it once when it turns);
 selection, horizon and colours are the state's, so they follow by design. Neither view calls
 another: both observe the state.
@@ -34,7 +35,10 @@ class ConditionDocks:
             self.docks[key] = dock
         self.tabifyDockWidget(self.docks["lips"], self.docks["multiples"])
         self.tabifyDockWidget(self.docks["scree"], self.docks["compare"])
-        self.docks["lips"].raise_()
+        for key in ("lips", "clusters"):  # the tabs first shown stay those shown before
+            self.docks[key].raise_()
+        # shown on demand (View menu, the Compare panel): a tab bar over the lips costs them room on a laptop
+        self.docks["multiples"].hide()
         camera = self.manifold_view.plotter.renderer.GetActiveCamera()
         self.small_multiples.link_camera(camera)
         self.camera_link = CameraLink(camera, [(self.manifold_view.plotter, self.manifold_view.renderer),

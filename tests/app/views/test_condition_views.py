@@ -225,3 +225,25 @@ def test_a_session_keeps_the_channels_and_the_edited_landmarks(win, qapp):
     assert not ed.gesture_undo_stack.canUndo()  # a session's edits start a new history
     assert win.compare_panel.settings()["field"] == extra["compare"]["field"]
     ed.toggle_channel("lip_protrusion", False)
+
+
+def test_the_colour_box_and_the_filter_menu_write_the_state(win, qapp):
+    s, view = win.state, win.manifold_view
+    with s.batch():
+        s.set_field_filter(())
+        s.set_color_mode("density")
+    box = view.color_box
+    items = [box.itemText(k) for k in range(box.count())]
+    assert {"Field: condition", "Field: text", "Field: repetition", "Difference"} <= set(items)
+    box.setCurrentIndex(box.findData("field:condition"))
+    assert (s.color_mode, s.color_field) == ("field", "condition")
+    win.undo_action.trigger()  # choosing a field is one action, undone as one
+    assert s.color_mode == "density" and box.currentData() == "density"
+    view._fill_filter_menu()
+    subs = {a.text(): a.menu() for a in view.filter_menu.actions() if a.menu() is not None}
+    cond = subs["condition (3 levels)"]
+    b = next(a for a in cond.actions() if a.text() == "b")
+    b.setChecked(True)
+    assert s.field_filter == {("condition", "b")} and view.filter_btn.text() == "Filter (1)"
+    s.set_field_filter(())
+    assert view.filter_btn.text() == "Filter"
