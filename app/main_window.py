@@ -16,6 +16,7 @@ from pathlib import Path
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from app.models.state import AppState
+from app.window.conditions import ConditionDocks
 from app.window.exports import ANIMATION_FILTERS, FIGURE_FILTERS, TRAJECTORY_FILTERS, ExportActions
 from app.window.menus import MenuActions
 from app.window.sessions import SessionActions
@@ -25,7 +26,7 @@ __all__ = ["MainWindow", "launch", "stop_on_signals", "ask_restore", "STOP_SIGNA
            "ANIMATION_FILTERS", "FIGURE_FILTERS"]
 
 
-class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWindow):
+class MainWindow(MenuActions, SessionActions, ExportActions, ConditionDocks, QtWidgets.QMainWindow):
     """Docked views over one :class:`AppState`.
 
     Parameters
@@ -80,6 +81,7 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
         ed.setFeatures(ed.features() | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetVerticalTitleBar)
         self.tabifyDockWidget(self.docks["clusters"], self.docks["scree"])
         self.docks["clusters"].raise_()
+        self._make_condition_docks()  # the small multiples and the Compare panel
         self._size_docks()
         self._set_minimum_sizes()
         self._default_layout = self.saveState()  # View > Reset layout goes back to this
@@ -112,7 +114,7 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
     #: smallest useful size of each view: below it the window stops shrinking instead of
     #: collapsing a dock to nothing (the Lips dock vanished at 1179 x 407 before)
     VIEW_MINIMUM = {"manifold": (360, 260), "lips": (240, 170), "clusters": (240, 150), "scree": (240, 150),
-                    "editor": (560, 120)}
+                    "editor": (560, 120), "multiples": (240, 170), "compare": (240, 150)}
 
     def _set_minimum_sizes(self) -> None:
         views = {"manifold": self.manifold_view, **{k: d.widget() for k, d in self.docks.items()}}
@@ -289,6 +291,7 @@ class MainWindow(MenuActions, SessionActions, ExportActions, QtWidgets.QMainWind
             self._help.close()
         self._autosave_timer.stop()
         cancel_all()
+        self._close_condition_views()
         for view in (self.manifold_view, self.lip_view, self.editor, self.clusters, self.scree):
             view.close_view()
         super().closeEvent(event)

@@ -65,6 +65,8 @@ def session_dict(state, *, cameras: dict | None = None, extra: dict | None = Non
         "visible_phones": sorted(state.visible_phones),
         "ellipsoid_opacity": float(state.ellipsoid_opacity),
         "hidden_layers": sorted(state.hidden_layers),
+        "color_field": state.color_field,
+        "field_filter": [list(p) for p in sorted(state.field_filter)],
         "palette": None if state.palette is None else state.palette.to_dict(),
         "component": state.component,
         "cameras": {k: [[float(x) for x in row] for row in v] for k, v in (cameras or {}).items()},
@@ -327,6 +329,8 @@ def apply_session(state, d: dict):
         state.set_ellipsoid_opacity(d.get("ellipsoid_opacity", state.ellipsoid_opacity))
         state.set_hidden_layers(d.get("hidden_layers", []))
         state.set_component(d.get("component"))
+        state.set_color_field(d.get("color_field"))
+        state.set_field_filter(d.get("field_filter", []))
         state.set_color_mode(d.get("color_mode", "density"))
         syn, targets = d.get("_synthetic"), d.get("_targets")
         _check_fits(state.manifold, syn, targets)

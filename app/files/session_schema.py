@@ -164,6 +164,12 @@ def word(v, field):
     return v
 
 
+def field_level(v, field):
+    if not (isinstance(v, list) and len(v) == 2 and all(isinstance(x, str) for x in v)):
+        raise _Bad(field, "a [field, level] pair", v)
+    return v
+
+
 def palette(v, field):
     """The session palette's record (``{"ranking": {kind: [levels]}}``), or null."""
     if v is None:
@@ -201,13 +207,22 @@ def _session_schema():
         "component": (whole(0, null=True, what="a component index"), None),
         "hidden_layers": (array(text(), what="an array of layer names"), list),
         "ellipsoid_opacity": (number(0, 1, what="a number from 0 to 1"), _ABSENT),
+        "color_field": (text(null=True, what="a field name"), None),
+        "field_filter": (array(field_level, what="an array of [field, level] pairs"), list),
         "palette": (palette, None),
         "cameras": (cameras, dict),
         "extra": (record({"editor": (record({"text": (text(null=True), None), "method": (text(null=True), None),
                                              "source": (text(null=True), None), "oracle": (boolean, True),
                                              "words": (array(word, what="an array of [start s, end s, word] (the "
                                                              "editor's word tier)"), list),
-                                             "sound": (boolean, True)}), dict)}), dict),
+                                             "sound": (boolean, True)}), dict),
+                      # the signals' own fields are checked by app.models.signals.Signals.from_settings
+                      "signals": (record({}, null=True), None),
+                      "compare": (record({"field": (text(what="a field name"), _ABSENT),
+                                          "levels": (array(text(), what="an array of level names"), _ABSENT),
+                                          "paired_by": (text(what="a field name"), _ABSENT),
+                                          "n_permutations": (whole(1, what="a whole number of permutations >= 1"),
+                                                             _ABSENT)}, null=True), None)}), dict),
         "synthetic": (record({"label": (text(), ""), "rate": (rate, _REQUIRED),
                               "method": (text(null=True), None),
                               "warnings": (array(text(), what="an array of strings"), list)}, null=True), None),

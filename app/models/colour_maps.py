@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["Coloring", "DENSITY_CMAP", "FUTURE_CMAP", "PAST_CMAP", "UNREACHABLE_RGB", "OUTSIDE_RGB", "RESERVED_COLOURS",
-           "LEGEND_MAX", "colour_table", "colormap_rgb", "map_values", "dim", "delta_e", "lightness"]
+           "LEGEND_MAX", "colour_table", "colormap_rgb", "map_values", "dim", "delta_e", "lightness", "limited_legend"]
 
 #: frames with no value (unreachable state, no phone, no forward step)
 UNREACHABLE_RGB = (0.82, 0.82, 0.82)
@@ -96,6 +96,13 @@ def delta_e(a, b) -> np.ndarray:
     from app.models.palette import srgb_to_lab
 
     return np.linalg.norm(srgb_to_lab(np.asarray(a, float)) - srgb_to_lab(np.asarray(b, float)), axis=-1)
+
+
+def limited_legend(entries, what: str) -> list:
+    """At most :data:`LEGEND_MAX` legend rows, the last saying how many more there are."""
+    if len(entries) <= LEGEND_MAX:
+        return list(entries)
+    return list(entries[:LEGEND_MAX]) + [(f"… {len(entries) - LEGEND_MAX} more ({what})", UNREACHABLE_RGB)]
 
 
 def dim(rgb, amount: float = 0.7) -> np.ndarray:

@@ -27,6 +27,7 @@ from app.models.colour_maps import (
     colour_table,
     delta_e,
     dim,
+    limited_legend,
     map_values,
 )
 from app.models.hop_colouring import hemisphere_coloring, hop_table
@@ -58,16 +59,13 @@ def point_colors(mode: str, manifold, state=None) -> Coloring:
     if state is None:
         state = AppState(manifold)
     c = _mode_colors(mode, manifold, state, COLOR_MODES)
+    if state.field_filter:
+        from app.models.field_colouring import filtered
+
+        c = filtered(c, state)
     if state.visible_phones:
         c.rgb = dim(c.rgb)
     return c
-
-
-def _limited(entries, what: str) -> list:
-    """At most :data:`LEGEND_MAX` legend rows, the last saying how many more there are."""
-    if len(entries) <= LEGEND_MAX:
-        return list(entries)
-    return list(entries[:LEGEND_MAX]) + [(f"… {len(entries) - LEGEND_MAX} more ({what})", UNREACHABLE_RGB)]
 
 
 def _phone_counts(state):
@@ -142,7 +140,7 @@ def _mode_colors(mode, manifold, state, modes) -> Coloring:
         if "" in levels:  # no name: grey, not a speaker's colour
             rgb[top == levels.index("")] = UNREACHABLE_RGB
             pal[levels.index("")] = UNREACHABLE_RGB
-        legend = _limited([(n, tuple(float(x) for x in pal[k])) for k, n in enumerate(shown)], "speakers")
+        legend = limited_legend([(n, tuple(float(x) for x in pal[k])) for k, n in enumerate(shown)], "speakers")
         return Coloring(rgb.astype(np.float32), None, None, None, "speaker", legend,
                         readout=f"{len([n for n in levels if n])} named speaker(s)")
     if mode == "utterance":
@@ -155,7 +153,11 @@ def _mode_colors(mode, manifold, state, modes) -> Coloring:
             rgb = rgb * 0.25 + 0.75 * np.asarray(UNREACHABLE_RGB, np.float32)
             rgb[cd.groups_of(np.arange(u.start, u.stop))] = (0.0, 0.0, 0.0)  # every point holding one of its frames
             legend = [(f"{u.id} (current)", (0.0, 0.0, 0.0)), ("the other utterances (faded)", UNREACHABLE_RGB)]
-        return Coloring(rgb.astype(np.float32), None, None, None, "utterance", _limited(legend, "utterances"))
+        return Coloring(rgb.astype(np.float32), None, None, None, "utterance", limited_legend(legend, "utterances"))
+    if mode in ("field", "difference"):  # per-utterance metadata, and a comparison's enrichment
+        from app.models.field_colouring import difference_coloring, field_coloring
+
+        return field_coloring(state) if mode == "field" else difference_coloring(state)
     raise ValueError(f"colour mode must be one of {modes}, got {mode!r}")
 
 
@@ -178,7 +180,7 @@ def _phone_colors(state) -> Coloring:
     else:
         chosen, cols = names, np.arange(P)
         rgb = pal[state.derived("phone_points", lambda: _row_argmax(counts))]
-    legend = _limited([(n, tuple(float(x) for x in pal[names.index(n)])) for n in chosen], "filter phones")
+    legend = limited_legend([(n, tuple(float(x) for x in pal[names.index(n)])) for n in chosen], "filter phones")
     if state.phone_filter:
         legend.append(("other phones (dimmed)", OUTSIDE_RGB))
     shown = f"{len(chosen)} of {len(names)} phones" if state.phone_filter else f"all {len(names)} phones"

@@ -27,7 +27,7 @@ def ellipsoid_kind(state) -> str:
     return "landmark" if state.cluster_kind == "kinematic" else "phone"
 
 
-def glyph_legend(state, *, hidden=frozenset(), local_frame: bool = False) -> list[tuple]:
+def glyph_legend(state, *, hidden=frozenset(), local_frame: bool = False, landmarks=()) -> list[tuple]:
     """One row per kind of glyph drawn now.
 
     Parameters
@@ -37,6 +37,8 @@ def glyph_legend(state, *, hidden=frozenset(), local_frame: bool = False) -> lis
         Layers the user hid (``"plane"``, ``"axes"``: S, V and the named Y axes).
     local_frame : bool
         Whether the selected frame's local arrows are drawn (a frame with a forward step).
+    landmarks : sequence of (str, rgb)
+        The gestural landmarks marked now (code, colour), in gesture order.
     """
     rows = []
     if state.manifold is None:
@@ -63,6 +65,10 @@ def glyph_legend(state, *, hidden=frozenset(), local_frame: bool = False) -> lis
         rows += [("S: global shape direction", R["S"], "arrow"), ("V: global velocity direction", R["V"], "arrow")]
     if "plane" not in hidden:
         rows.append(("zero-velocity plane (V = 0)", R["plane"], "square"))
+    if landmarks:
+        track = state.gestures.track if state.gestures is not None else "a track"
+        rows += [(f"{code}: landmark of {track}" if k == 0 else code, rgb, "square")
+                 for k, (code, rgb) in enumerate(landmarks)]
     if state.visible_phones and state.palette is not None:
         kind = ellipsoid_kind(state)
         for label in sorted(state.visible_phones):

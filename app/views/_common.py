@@ -69,18 +69,20 @@ def elided_label(text: str = ""):
     return _Elided(text)
 
 
-def make_plotter(parent):
-    """A pyvistaqt QtInteractor with the explorer's look (white background, paper style)."""
+def make_plotter(parent, shape=(1, 1)):
+    """A pyvistaqt QtInteractor with the explorer's look (white background, paper style); ``shape``: its grid
+    of renderers (the small multiples')."""
     from pyvistaqt import QtInteractor
 
     # no auto-update timer: views render on demand (RenderScheduler), so an idle window costs nothing.
     # No multisampling: with software OpenGL (Mesa llvmpipe) 4x MSAA costs 20-40 % of every frame
     # (docs/DECISIONS.md, H3); points are drawn as shaded spheres, which need none.
-    plotter = QtInteractor(parent, auto_update=False, multi_samples=0)
+    plotter = QtInteractor(parent, auto_update=False, multi_samples=0, shape=tuple(shape), border=False)
     plotter.set_background("white")
     # plain alpha blending for the few translucent things (zero-velocity plane, convex ellipsoids drawn
     # front faces only): order-independent transparency adds full-window passes to every frame
-    plotter.renderer.SetUseOIT(False)
+    for ren in plotter.renderers:
+        ren.SetUseOIT(False)
     _native_when_shown(plotter.interactor)
     return plotter
 

@@ -29,13 +29,16 @@ from app.views._common import (
 )
 from app.views.manifold.camera import ManifoldCamera
 from app.views.manifold.controls import ManifoldControls
+from app.views.manifold.field_controls import FieldControls
+from app.views.manifold.gesture_marks import GestureMarks
 from app.views.manifold.layers import ManifoldLayers, axes_origin
 from app.views.manifold.legends import ManifoldLegends
 
 __all__ = ["ManifoldView", "axes_origin"]
 
 
-class ManifoldView(ManifoldControls, ManifoldLayers, ManifoldLegends, ManifoldCamera, QtWidgets.QWidget):
+class ManifoldView(ManifoldControls, FieldControls, ManifoldLayers, GestureMarks, ManifoldLegends, ManifoldCamera,
+                   QtWidgets.QWidget):
     """3-D view of the manifold bound to an :class:`app.models.state.AppState`.
 
     Its controls and readouts are :class:`app.views.manifold.controls.ManifoldControls`, its
@@ -140,6 +143,8 @@ class ManifoldView(ManifoldControls, ManifoldLayers, ManifoldLegends, ManifoldCa
         if "manifold" in names:
             self._sync_horizon()
             self._sync_phone_edit()
+            self._fill_colour_box()  # the corpus's fields
+            self._sync_filter_btn()
             self.rebuild()
             return
         if "palette" in names:  # a session's palette: every category colour may change
@@ -150,12 +155,18 @@ class ManifoldView(ManifoldControls, ManifoldLayers, ManifoldLegends, ManifoldCa
             return
         s = self.state
         selection = bool(names & {"frame", "state", "target"})
-        recolor = (bool(names & {"color_mode", "hemisphere", "visible_phones"})
+        recolor = (bool(names & {"color_mode", "hemisphere", "visible_phones", "field_filter"})
                    or (s.color_mode == "distance" and bool(names & {"state", "horizon_ms"}))
                    or (s.color_mode == "phone" and "phone_filter" in names)
-                   or (s.color_mode == "utterance" and "utterance" in names))
-        if names & {"color_mode", "hemisphere"}:
+                   or (s.color_mode == "utterance" and "utterance" in names)
+                   or (s.color_mode == "field" and "color_field" in names)
+                   or (s.color_mode == "difference" and "comparison" in names))
+        if names & {"color_mode", "hemisphere", "color_field"}:
             self._sync_mode_boxes()
+        if "field_filter" in names:
+            self._sync_filter_btn()
+        if names & {"gestures", "utterance"}:
+            self._on_gesture_marks(render=False)
         if "horizon_ms" in names:
             self._sync_horizon()
         if "phone_filter" in names:
@@ -180,7 +191,7 @@ class ManifoldView(ManifoldControls, ManifoldLayers, ManifoldLegends, ManifoldCa
             if shown != (self.state.playback is not None):  # the playback row comes and goes, once
                 self._update_legends()
         if recolor or selection or names & {"path", "trajectory", "visible_phones", "horizon_ms", "phone_filter",
-                                            "ellipsoid_opacity", "hidden_layers"}:
+                                            "ellipsoid_opacity", "hidden_layers", "gestures", "utterance"}:
             self.renderer.request()
         elif names & {"playback", "playing"}:
             if "playing" in names and self.state.playing:

@@ -28,6 +28,7 @@ from app.models.target_editing import remove_target
 from app.models.trajectories import METHOD_LABELS, synthesize_targets, trajectory_error
 from app.views._common import READOUT_INTERVAL_S, Throttle, connect_all, disconnect_all, elided_label
 from app.views.editor.commands import TargetsEdit
+from app.views.editor.signals_control import SignalsControl
 from app.views.editor.timeline_control import ZOOM_RANGE, TimelineControl
 from app.views.flow_layout import FlowLayout
 
@@ -48,7 +49,7 @@ def _words_up_to(text: str, n: int) -> str:
 
 
 # ============================================================================ the editor
-class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
+class TrajectoryEditor(TimelineControl, SignalsControl, QtWidgets.QWidget):
     """Build targets, synthesise, play and compare; bound to an :class:`app.models.state.AppState`.
 
     .. rubric:: Signals
@@ -141,7 +142,8 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
                        self.oracle_box, self.load_btn, self.add_state_btn),
                       (QtWidgets.QLabel("Method:"), self.method_box, self.synth_btn, self.play_btn),
                       (self.remove_btn, self.reset_btn, self.save_tiers_btn),
-                      (QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn, self.fit_btn, self.sound_box),
+                      (QtWidgets.QLabel("Zoom:"), self.zoom_out_btn, self.zoom_in_btn, self.fit_btn, self.sound_box,
+                       self.signals_btn),
                       (self.readout,)):
             bar.add_group(group)
         lay = QtWidgets.QVBoxLayout(self)
@@ -179,7 +181,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
                              (ev.utterance, self._on_utterance),
                              (ev.trajectory, lambda _o, syn: self._show_warnings(syn)),
                              (ev.state, lambda st: self.add_state_btn.setEnabled(st is not None)),
-                             (ev.palette, lambda _p: self.timeline.update())]
+                             (ev.palette, lambda _p: (self.timeline.update(), self._show_signals()))]
         connect_all(self._connections)
         self.rebuild()  # fills the methods once a manifold is there
 
@@ -242,6 +244,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
         self.timeline.set_targets(None, ())
         self.set_time_selection(None)
         self.sound_track.clear_cache()
+        self._signals_on_manifold()
         self._sync_buttons()
         self.utt_box.blockSignals(True)
         self.utt_box.clear()
@@ -364,7 +367,7 @@ class TrajectoryEditor(TimelineControl, QtWidgets.QWidget):
         if targets is not None:
             self.sound.set_span(targets.n_frames, targets.rate, targets.phones)
         self.sound_track.show(None if targets is None else targets.utterance)
-        self._layout_tracks()
+        self._show_signals()  # lays the strip out
         self.say(message)
         self._sync_buttons()
 

@@ -79,7 +79,8 @@ class MenuActions:
         # one history: the editor's target edits and the view's settings, in the order they were made
         from app.window.undo import History
 
-        self.history = History([self.editor.undo_stack, self.view_undo_stack], parent=self)
+        self.history = History([self.editor.undo_stack, self.editor.gesture_undo_stack, self.view_undo_stack],
+                               parent=self)
         self.undo_action, self.redo_action = self.history.undo_action, self.history.redo_action
         self.undo_action.setShortcut(QtGui.QKeySequence.StandardKey.Undo)
         self.redo_action.setShortcuts([QtGui.QKeySequence("Ctrl+Shift+Z"), QtGui.QKeySequence("Ctrl+Y")])

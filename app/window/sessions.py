@@ -17,8 +17,16 @@ class SessionActions:
     def save_session(self, path) -> Path:
         from app.files.session import save_session
 
-        return save_session(self.state, path, cameras=self.cameras(), extra={"editor": self.editor.settings()},
+        return save_session(self.state, path, cameras=self.cameras(), extra=self.session_extra(),
                             targets=self.editor.targets)
+
+    def session_extra(self) -> dict:
+        """The views' settings a session keeps beside the state: the editor's, its signals', the Compare panel's."""
+        extra = {"editor": self.editor.settings(), "signals": self.editor.signals_settings()}
+        compare = getattr(self, "compare_panel", None)
+        if compare is not None:
+            extra["compare"] = compare.settings()
+        return extra
 
     def _autosave_tick(self):
         """Timer slot: save the session once it has been unchanged for the autosave delay."""
@@ -27,7 +35,7 @@ class SessionActions:
         a = self.autosaver
         if a is None or self._pending_session is not None or self.state.manifold is None:
             return
-        fp = session_fingerprint(self.state, cameras=self.cameras(), extra={"editor": self.editor.settings()},
+        fp = session_fingerprint(self.state, cameras=self.cameras(), extra=self.session_extra(),
                                  targets=self.editor.targets)
         if not a.tick(fp, self.save_session) and a.last_error:
             self.statusBar().showMessage(a.last_error, 10000)
@@ -37,7 +45,12 @@ class SessionActions:
         from app.files.session import apply_session
 
         targets = apply_session(self.state, d)
-        self.editor.apply_settings(d.get("extra", {}).get("editor", {}))
+        extra = d.get("extra", {})
+        self.editor.apply_settings(extra.get("editor", {}))
+        self.editor.apply_signals_settings(extra.get("signals"))
+        compare = getattr(self, "compare_panel", None)
+        if compare is not None and extra.get("compare"):
+            compare.apply_settings(extra["compare"])
         if targets is not None:  # the editor's (edited) key targets, and its word tier
             from engine.recordings.corpus import PhoneInterval
 

@@ -217,3 +217,26 @@ def articulograph_manifold(*, n_speakers=2, n_utterances=2, duration_s=(2.0, 2.0
 def make_articulograph_manifold():
     """:func:`articulograph_manifold`: ``make_articulograph_manifold(n_speakers=3, ...)``."""
     return articulograph_manifold
+
+
+@pytest.fixture(scope="session")
+def field_manifold(conditions):
+    """The conditions' manifold (three levels ``a``, ``b``, ``c`` of field ``condition``, ten texts said twice in
+    each) with its utterances carrying the fields a lab's metadata gives (condition, text, speaker, repetition)."""
+    import copy
+
+    from engine.comparison.fields import attach_fields
+
+    cc, m = conditions
+    out = copy.copy(m)
+    out.corpus_ = attach_fields(m.corpus_, cc.fields)
+    return out
+
+
+@pytest.fixture(scope="session")
+def condition_comparison(field_manifold):
+    """``condition`` b and c against a on :func:`field_manifold`, paired by text (few permutations: a GUI's run)."""
+    from app.models.compare_run import ComparisonRequest, run_comparison
+
+    return run_comparison(field_manifold, ComparisonRequest(field="condition", levels=("a", "b", "c"),
+                                                            paired_by="text", n_permutations=199, n_bootstrap=99))

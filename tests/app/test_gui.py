@@ -54,7 +54,7 @@ def test_window_opens_with_every_view(win, app_manifold):
     assert f"{N} frames" in win.summary_label.text()
     assert win.manifold_view.handles["points"].mesh.n_points == N
     assert win.lip_view.main.mesh.n_points == m.corpus_.n_points
-    assert set(win.docks) == {"lips", "clusters", "scree", "editor"}
+    assert set(win.docks) == {"lips", "clusters", "scree", "editor", "multiples", "compare"}
     assert win.editor.utt_box.count() == len(m.corpus_.utterances)
     img = win.manifold_view.plotter.screenshot()
     assert img.std() > 5  # not blank

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from app.models.state.conditions import ConditionMutators
 from app.models.state.derived import DerivedCaches
 from app.models.state.events import Batching, Events, batched
 from app.models.state.fields import EVENT_FIELDS, FIELD, FIELDS, SETTINGS
@@ -20,7 +21,7 @@ from app.models.state.trajectory import original_trajectory
 __all__ = ["AppState"]
 
 
-class AppState(Batching, DerivedCaches):
+class AppState(Batching, DerivedCaches, ConditionMutators):
     """What the user has selected and how things are shown; observed by every view.
 
     Parameters
@@ -39,7 +40,15 @@ class AppState(Batching, DerivedCaches):
     horizon_ms : float or None
         Time horizon of the hemisphere in ms (None: every reachable state); converted to
         hops at the corpus frame rate (:func:`engine.graph.hemispheres.horizon_hops`).
-    color_mode : {"density", "class", "phone", "utterance", "distance"}
+    color_mode : {"density", "class", "phone", "speaker", "utterance", "distance", "field", "difference"}
+    color_field : str or None
+        The per-utterance field the "field" colouring and the small multiples show.
+    field_filter : frozenset of (str, str)
+        ``(field, level)`` pairs shown (empty: every frame); the others are dimmed.
+    comparison : app.models.compare_run.ComparisonShown or None
+        What the difference colouring shows.
+    gestures : engine.recordings.signals.gestures.GestureSet or None
+        The gestural landmarks shown (the timeline's tier, the marks in the manifold view).
     phone_filter : frozenset of str
         Phones the phone colouring shows (empty: all phones).
     path_mode : bool

@@ -10,8 +10,8 @@ import weakref
 
 import numpy as np
 
-__all__ = ["knn_density", "frame_phones", "frame_phone_codes", "cluster_table", "prepare_derived", "PREPARED",
-           "DerivedCaches"]
+__all__ = ["corpus_palette", "knn_density", "frame_phones", "frame_phone_codes", "cluster_table", "prepare_derived",
+           "PREPARED", "DerivedCaches"]
 
 #: derived data computed ahead of time per manifold object (see prepare_derived)
 PREPARED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -49,11 +49,19 @@ def prepare_derived(manifold, progress=None) -> None:
         out["clusters"], out["cluster_kind"], out["cluster_note"] = clusters_of(manifold)
     except ValueError:
         pass  # the panel computes (and reports) it when shown
-    from app.models.palette import SessionPalette
-
-    out["palette"] = SessionPalette.for_corpus(manifold.corpus_)
+    out["palette"] = corpus_palette(manifold.corpus_)
     report(progress, stage, 4, 4)
     PREPARED[manifold] = out
+
+
+def corpus_palette(corpus):
+    """The session palette of ``corpus``: its phones, speakers, utterances and the levels of every
+    per-utterance field (ranked as ``lipspace compare`` ranks them for its figure)."""
+    from app.models.palette import SessionPalette
+    from engine.comparison.fields import utterance_fields
+
+    fields = {k: v for k, v in utterance_fields(corpus).items() if k != "speaker"}
+    return SessionPalette.for_corpus(corpus, fields=fields)
 
 
 def knn_density(Y, k: int = 10, n_dims: int = 3) -> np.ndarray:
@@ -162,9 +170,7 @@ class DerivedCaches:
         pre = PREPARED.get(manifold, {})
         if "palette" in pre:
             return pre["palette"]
-        from app.models.palette import SessionPalette
-
-        return SessionPalette.for_corpus(manifold.corpus_)
+        return corpus_palette(manifold.corpus_)
 
     def _require(self):
         if self.manifold is None:

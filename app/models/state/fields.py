@@ -13,7 +13,8 @@ __all__ = ["StateField", "FIELDS", "FIELD", "EVENT_FIELDS", "SETTINGS", "HEMISPH
            "DEFAULT_HORIZON_MS", "HORIZON_MAX_MS", "DEFAULT_ELLIPSOID_OPACITY"]
 
 HEMISPHERES = ("future", "past", "both", "off")
-COLOR_MODES = ("density", "class", "phone", "speaker", "utterance", "distance")
+#: "field": each utterance's level of :attr:`AppState.color_field`; "difference": the comparison's enrichment
+COLOR_MODES = ("density", "class", "phone", "speaker", "utterance", "distance", "field", "difference")
 #: layers of the manifold view the user can hide (View menu, the view's boxes)
 LAYERS = ("points", "plane", "axes", "legend")
 #: how opaque a cluster ellipsoid's fill is when first shown (its outline is always opaque)
@@ -65,6 +66,39 @@ def _phone_filter(state, labels):
         if bad:
             raise ValueError(f"unknown phone(s) {', '.join(bad)}; this corpus has {', '.join(sorted(known))}")
     return labels
+
+
+def _field_name(state, name):
+    if name is None:
+        return None
+    name = str(name)
+    if state.manifold is not None:
+        from app.models.field_colouring import utterance_field_values
+
+        known = utterance_field_values(state)
+        if name not in known:
+            raise ValueError(f"no field {name!r}; this corpus's utterances have {', '.join(known)}")
+    return name
+
+
+def _field_filter(state, pairs):
+    """A frozenset of (field, level) pairs: the levels shown of each field named (empty: every frame)."""
+    out = set()
+    for pair in pairs:
+        if isinstance(pair, str) or len(pair) != 2:
+            raise TypeError(f"a field filter holds (field, level) pairs, got {pair!r}")
+        out.add((str(pair[0]), str(pair[1])))
+    if out and state.manifold is not None:
+        from app.models.field_colouring import utterance_field_values
+
+        known = utterance_field_values(state)
+        for name, level in sorted(out):
+            if name not in known:
+                raise ValueError(f"no field {name!r}; this corpus's utterances have {', '.join(known)}")
+            if level not in set(known[name].tolist()):
+                levels = sorted(set(known[name].tolist()) - {""})
+                raise ValueError(f"field {name!r} has no level {level!r}; its levels are {', '.join(levels[:20])}")
+    return frozenset(out)
 
 
 def _play_stop(state, k):
@@ -171,6 +205,10 @@ FIELDS = (
     StateField("visible_phones", frozenset(), _labels, view=True, setting=True),
     StateField("ellipsoid_opacity", DEFAULT_ELLIPSOID_OPACITY, _opacity, view=True, setting=True),
     StateField("hidden_layers", frozenset(), _layers, view=True, setting=True),
+    StateField("color_field", check=_field_name, view=True, setting=True),
+    StateField("field_filter", frozenset(), _field_filter, view=True, setting=True),
+    StateField("comparison", same=_same_object),
+    StateField("gestures", same=_same_object),
     StateField("palette", check=_palette, same=_same_object),
     StateField("playback", check=_playback),
     StateField("playing", False, lambda s, on: bool(on) and s.n_playback > 0),

@@ -45,6 +45,7 @@ class TimelineControl:
         self.sound.move(0, self.timeline.tiers_height())
         self.sound.hide()
         self.sound_track = SoundTrack(self.sound, state, parent=self)
+        self._make_signals(state)  # the gesture tier and the channels under the sound
         self.sound_box = QtWidgets.QCheckBox("Sound")
         self.sound_box.setChecked(True)
         self.sound_box.setToolTip("Show the utterance's waveform and wide-band spectrogram under the phones "
@@ -58,7 +59,7 @@ class TimelineControl:
         self.scroll.setFocusPolicy(QtCore.Qt.FocusPolicy.NoFocus)
         self.scroll.setMinimumWidth(200)
         self.scroll.viewport().installEventFilter(self)
-        for w in (self.timeline, self.sound):
+        for w in (self.timeline, self.sound, *self.signal_rows):
             w.pressed.connect(self._on_time_pressed)
             w.dragged.connect(self._on_time_dragged)
             w.released.connect(self._on_time_released)
@@ -96,6 +97,8 @@ class TimelineControl:
         width = max(int(round(view_w * self.zoom)), 1)
         tl.resize(width, tl.tiers_height())
         self.sound.resize(width, self.sound.HEIGHT)
+        for row in self.signal_rows:
+            row.resize(width, row.height())
         self.tracks.resize(width, self._tracks_height())
         if anchor is not None and tl.targets is not None:
             bar.setValue(int(round(tl._x(anchor[0]) - anchor[1])))
@@ -127,17 +130,34 @@ class TimelineControl:
         return True
 
     def _tracks_height(self) -> int:
-        return self.timeline.tiers_height() + (self.sound.HEIGHT if self.sound.isVisibleTo(self.tracks) else 0)
+        h = self.timeline.tiers_height() + (self.sound.HEIGHT if self.sound.isVisibleTo(self.tracks) else 0)
+        return h + sum(row.height() for row in self.signal_rows if row.isVisibleTo(self.tracks))
+
+    def strip_cap(self) -> int:
+        """The most height the strip shows at once: the tiers, the sound's room and, on a large screen, a gesture
+        tier and two channels (taller contents scroll), so the 3-D view keeps its half of the window."""
+        cap = self.timeline.tiers_height() + self.sound.HEIGHT
+        return cap if getattr(self, "compact", False) else cap + self.gesture_tier.HEIGHT + 2 * self.channels.ROW_H
 
     def _layout_tracks(self) -> None:
-        """Show the sound under the tiers when asked for and the utterance has audio; size the strip to it."""
+        """Show the sound under the tiers when asked for and the utterance has audio, the gesture tier and the
+        channels under it; size the strip to them (at most :meth:`strip_cap` shown, the rest scrolled)."""
         show = self.sound_box.isChecked() and self.sound_track.wanted is not None
         self.sound.setVisible(show)
         self.timeline.resize(self.timeline.width(), self.timeline.tiers_height())
-        self.sound.move(0, self.timeline.tiers_height())
+        y = self.timeline.tiers_height()
+        self.sound.move(0, y)
+        y += self.sound.HEIGHT if show else 0
+        for row in self.signal_rows:
+            row.move(0, y)
+            row.resize(self.timeline.width(), row.height())
+            y += row.height() if row.isVisibleTo(self.tracks) else 0
         h = self._tracks_height()
         self.tracks.resize(self.timeline.width(), h)
-        self.scroll.setFixedHeight(h + self.scroll.horizontalScrollBar().sizeHint().height() + 4)
+        shown = min(h, self.strip_cap())
+        self.scroll.setVerticalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded if shown < h else
+                                               QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.scroll.setFixedHeight(shown + self.scroll.horizontalScrollBar().sizeHint().height() + 4)
         self._update_height()
 
     def needed_height(self) -> int:
@@ -169,6 +189,8 @@ class TimelineControl:
         self.compact = bool(on)
         self.timeline.set_compact(on)
         self.sound.set_compact(on)
+        for row in self.signal_rows:
+            row.set_compact(on)
         self.set_zoom(self.zoom)
         self._layout_tracks()
 
@@ -182,13 +204,13 @@ class TimelineControl:
         """Where playback is (the state's playback frame), drawn as the cursor."""
         if frame is None:
             return
-        self.timeline.set_cursor(frame)
-        self.sound.set_cursor(frame)
+        for w in (self.timeline, self.sound, *self.signal_rows):
+            w.set_cursor(frame)
 
     def set_time_selection(self, span) -> None:
-        """The selected stretch ``(first, last)`` frame on the tiers and the sound (None: none)."""
-        self.timeline.set_time_selection(span)
-        self.sound.set_time_selection(span)
+        """The selected stretch ``(first, last)`` frame on the tiers, the sound and the rows under it (None: none)."""
+        for w in (self.timeline, self.sound, *self.signal_rows):
+            w.set_time_selection(span)
 
     def _on_time_pressed(self, frame, x) -> None:
         self._press = (float(frame), float(x))
@@ -211,8 +233,8 @@ class TimelineControl:
         if tl.targets is None:
             return
         k = int(min(max(round(float(frame)), 0), tl.targets.n_frames - 1))
-        tl.set_cursor(k)
-        self.sound.set_cursor(k)
+        for w in (tl, self.sound, *self.signal_rows):
+            w.set_cursor(k)
         s = self.state
         with s.batch():  # one action: every view redraws once
             if s.n_playback:

@@ -1,4 +1,5 @@
-"""The manifold view's controls: colouring, hemisphere and horizon, layers, standard views, readouts.
+"""The manifold view's controls: colouring, hemisphere and horizon, layers, standard views, readouts (the colour
+box and the field filter are :mod:`app.views.manifold.field_controls`').
 
 A part of :class:`app.views.manifold_view.ManifoldView` (a mixin): the widgets, how they
 write the state, and how they follow it.
@@ -10,14 +11,13 @@ from PySide6 import QtCore, QtWidgets
 
 from app.models.colouring import CLASS_LABELS
 from app.models.picking import hover_text
-from app.models.state.fields import COLOR_MODES, HEMISPHERES
+from app.models.state.fields import HEMISPHERES
 from app.views._common import blocked, elided_label
 from app.views.flow_layout import FlowLayout
+from app.views.manifold.field_controls import COLOR_LABELS
 
 __all__ = ["ManifoldControls", "COLOR_LABELS", "HEMI_LABELS", "HORIZON_SLIDER_MS"]
 
-COLOR_LABELS = {"density": "Density", "class": "Tangent class", "phone": "Phone", "speaker": "Speaker",
-                "utterance": "Utterance", "distance": "Hop distance"}
 HEMI_LABELS = {"future": "Future hemisphere", "past": "Past hemisphere", "both": "Past and future",
                "off": "No hemisphere"}
 #: the horizon slider runs 0..HORIZON_SLIDER_MS in whole frame periods; the "Horizon" box off means no horizon
@@ -29,11 +29,7 @@ class ManifoldControls:
 
     def _make_controls(self) -> FlowLayout:
         """Make the controls; returns their bar (groups that wrap to a new row in a narrow window)."""
-        self.color_box = QtWidgets.QComboBox()
-        for m in COLOR_MODES:
-            self.color_box.addItem(COLOR_LABELS[m], m)
-        self.color_box.setToolTip("Colour the points by")
-        self.color_box.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToContents)
+        self._make_field_controls()  # the colour box and the field filter
         self.hemi_box = QtWidgets.QComboBox()
         for m in HEMISPHERES:
             self.hemi_box.addItem(HEMI_LABELS[m], m)
@@ -92,13 +88,13 @@ class ManifoldControls:
         bar = FlowLayout(spacing=10, row_spacing=3)
         for group in ((QtWidgets.QLabel("Colour:"), self.color_box, self.phone_edit),
                       (self.hemi_box, self.horizon_box, self.horizon_slider, self.horizon_label),
+                      (self.filter_btn,),
                       (self.path_box, *self.layer_boxes.values()),
                       (*self.view_btns.values(), self.clear_btn)):
             bar.add_group(group)
         return bar
 
     def _connect_controls(self, state) -> None:
-        self.color_box.currentIndexChanged.connect(lambda _: state.set_color_mode(self.color_box.currentData()))
         self.hemi_box.currentIndexChanged.connect(lambda _: state.set_hemisphere(self.hemi_box.currentData()))
         self.path_box.toggled.connect(state.set_path_mode)
         for key, box in self.layer_boxes.items():
@@ -114,8 +110,8 @@ class ManifoldControls:
                 box.setChecked(key not in self.state.hidden_layers)
 
     def _sync_mode_boxes(self):
-        with blocked(self.color_box, self.hemi_box):
-            self.color_box.setCurrentIndex(COLOR_MODES.index(self.state.color_mode))
+        self._sync_colour_box()
+        with blocked(self.hemi_box):
             self.hemi_box.setCurrentIndex(HEMISPHERES.index(self.state.hemisphere))
         self.phone_edit.setEnabled(self.state.color_mode == "phone")
 

@@ -85,6 +85,7 @@ class ManifoldLayers:
         h["play_s"] = scene.add_marker(p, None, 0.016 * L, color=scene.SYNTHETIC_COLOUR, name="play_synthetic")
         for key in self.OVERLAY:  # drawn over the cloud: never buried inside it
             scene.move_to_overlay(p, h[key])
+        self._add_gesture_marks(L)
         self._bar = add_scalar_bar(p)
         # a click or the pointer finds its frame among every frame, drawn or not
         self.locator = CloudLocator(m.Fy_, cloud, dot_radius=0.5 * size)
@@ -97,6 +98,7 @@ class ManifoldLayers:
         self._on_path(render=False)
         self._on_trajectories(render=False)
         self._on_phones(render=False)
+        self._on_gesture_marks(render=False)
         self._install_hover()
         self._update_hover()  # the last file's pointer readout goes with it
         self.standard_view("default", render=False)

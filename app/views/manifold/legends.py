@@ -40,7 +40,8 @@ class ManifoldLegends:
         local = bool(self.handles["local"].visible) if "local" in self.handles else False
         rows = {
             "points": () if off or "points" in s.hidden_layers else tuple(point_legend(self.coloring)),
-            "glyphs": () if off else tuple(glyph_legend(s, hidden=s.hidden_layers, local_frame=local)),
+            "glyphs": () if off else tuple(glyph_legend(s, hidden=s.hidden_layers, local_frame=local,
+                                                        landmarks=self.landmark_rows())),
         }
         where = {"points": "lower left", "glyphs": "upper left"}
         W, H = (max(int(v), 1) for v in self.plotter.renderer.GetSize())

@@ -32,6 +32,11 @@ def _session(tmp_path, name="s.lipspace.json", **fields):
      "[start, end, label]"),
     ({"arrays": {"file": "a.npz", "sha256": "xyz"}}, "arrays.sha256", "a SHA-256"),
     ({"phone_filter": ["a", 3]}, "phone_filter[1]", "a string"),
+    ({"color_field": 3}, "color_field", "a field name"),
+    ({"field_filter": [["condition", 1]]}, "field_filter[0]", "a [field, level] pair"),
+    ({"extra": {"signals": "on"}}, "extra.signals", "an object or null"),
+    ({"extra": {"compare": {"levels": "a, b"}}}, "extra.compare.levels", "an array of level names"),
+    ({"extra": {"compare": {"n_permutations": 0}}}, "extra.compare.n_permutations", "a whole number of permutations"),
 ])
 def test_every_field_is_checked_against_the_schema(tmp_path, fields, field, what):
     with pytest.raises(SessionError, match=rf"field '{__import__('re').escape(field)}' must be "
@@ -43,7 +48,7 @@ def test_missing_fields_get_their_defaults(tmp_path):
     d = load_session(_session(tmp_path))
     assert d["selection"] == {"frame": None, "state": None, "target": None} and d["cameras"] == {}
     assert d["extra"] == {"editor": {"text": None, "method": None, "source": None, "oracle": True, "sound": True,
-                                    "words": []}}
+                                    "words": []}, "signals": None, "compare": None}
 
 
 def test_files_that_are_not_small_regular_files_are_refused_without_reading(tmp_path):

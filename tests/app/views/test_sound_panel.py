@@ -47,6 +47,9 @@ def sound_manifold(app_manifold, tmp_path_factory):
 @pytest.fixture(scope="module")
 def window(qapp, sound_manifold, main_window_factory):
     with main_window_factory(qapp, sound_manifold) as w:
+        # the sound's room alone: no channel or gesture tier under it (tests/app/views/test_condition_views.py)
+        w.editor.set_channels([])
+        w.editor.set_gesture_track(None)
         yield w
 
 
