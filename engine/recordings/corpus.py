@@ -508,7 +508,6 @@ class Corpus:
             "corpus_utt_audio": np.array([_relative(u.audio, base) for u in self.utterances], dtype=str),
             "corpus_utt_text": np.array([u.text for u in self.utterances], dtype=str),
             "corpus_utt_speaker": np.array([u.speaker for u in self.utterances], dtype=str),
-            "corpus_utt_duration": np.array([float(u.duration_s) for u in self.utterances], dtype=np.float64),
             "corpus_registration": np.array(self.registration),
             "corpus_history": np.array(self.history, dtype=str).reshape(-1),
             "corpus_phone_utt": np.array([p[0] for p in phones], dtype=np.int64),
@@ -516,6 +515,8 @@ class Corpus:
             "corpus_phone_labels": np.array([p[3] for p in phones], dtype=str),
         }
         words = [(k, w.start, w.end, w.label) for k, u in enumerate(self.utterances) for w in u.words]
+        if any(u.duration_s for u in self.utterances):  # resampled recordings' true durations (else as before)
+            d["corpus_utt_duration"] = np.array([float(u.duration_s) for u in self.utterances], dtype=np.float64)
         if words:  # the word tiers, where the source had them (files without them read as before)
             d["corpus_word_utt"] = np.array([w[0] for w in words], dtype=np.int64)
             d["corpus_word_times"] = np.array([[w[1], w[2]] for w in words], dtype=np.float64).reshape(-1, 2)
