@@ -163,11 +163,11 @@ class ProtocolResult:
     def _header(self) -> list[str]:
         s = self.settings
         sig = ", ".join(f"{k} {v:g}" for k, v in s.get("sigma", {}).items())
+        per = "" if s.get("frames_per_state") is None else f" (one per {s['frames_per_state']} training frames)"
         lines = [f"held-out synthesis on {self.corpus}: {len(self.test_ids)} test utterance(s), "
                  f"{len(self.train_ids)} training ({self.n_train_frames} frames)",
                  f"states: {self.n_states} K-means states"
-                 f"{'' if s.get('frames_per_state') is None else ' (one per %s training frames)' % s['frames_per_state']}"
-                 f" of the first {s['state_dims']} dims of F^y; local-linear "
+                 f"{per} of the first {s['state_dims']} dims of F^y; local-linear "
                  f"inverse k = {s['n_neighbors']}; Viterbi smoothing (frames) {sig}; {s.get('note', '')}"]
         for p, w in (s.get("blend") or {}).items():
             lines.append(f"manifold, {p}: {_blend_summary(w)}")
@@ -215,7 +215,10 @@ class ProtocolResult:
         for p in self.protocols():
             head, body = self._table(p)
             w = [max(len(h), *(len(b[i]) for b in body)) for i, h in enumerate(head)]
-            fmt = lambda row: "  ".join(s.rjust(w[i]) if i else s.ljust(w[i]) for i, s in enumerate(row))  # noqa: E731
+
+            def fmt(row, w=w):
+                return "  ".join(s.rjust(w[i]) if i else s.ljust(w[i]) for i, s in enumerate(row))
+
             out += ["", f"protocol {p!r}", fmt(head), fmt(["-" * x for x in w])] + [fmt(b) for b in body]
             out += [f"verdict X: {self.verdict(p, 'rmse_x')}", f"verdict Y: {self.verdict(p, 'rmse_y')}",
                     f"verdict LVE: {self.verdict(p, 'lve')}", f"verdict velocity: {self.verdict(p, 'vel')}"]

@@ -108,7 +108,7 @@ class TargetSequence:
     def has_oracle(self) -> bool:
         return bool(self.targets) and all(t.state is not None or t.y is not None for t in self.targets)
 
-    def phones_only(self) -> "TargetSequence":
+    def phones_only(self) -> TargetSequence:
         """The same targets with the oracle (state, F^y, F^x) removed: labels and times only."""
         return replace(self, targets=tuple(Target(t.frame, t.label) for t in self.targets))
 

@@ -390,7 +390,7 @@ class DaskExecutor:
         self._own = own_cluster
 
     @classmethod
-    def connect(cls, address: str, **kwargs) -> "DaskExecutor":
+    def connect(cls, address: str, **kwargs) -> DaskExecutor:
         """``"local"``: a LocalCluster with one single-threaded worker per core (memory split
         evenly); otherwise the address of a running scheduler (``tcp://host:8786``)."""
         from distributed import Client, LocalCluster
