@@ -189,7 +189,10 @@ def compare(label: str, per_spec: dict, unit: str = "ms", scale: float = 1e3, *,
         line = f"   {label} [{spec_label(spec)}]: min {v.min():.1f} {unit}, median {np.median(v):.1f} {unit} (n={v.size})"
         b = np.asarray(per_spec[base], float) * scale
         if spec != base and b.size:
-            ratio = (lambda x, y: f"{x / y:.2f}" if y else "n/a")
+
+            def ratio(x, y):
+                return f"{x / y:.2f}" if y else "n/a"
+
             line += f"; / {spec_label(base)}: median {ratio(np.median(v), np.median(b))}, min {ratio(v.min(), b.min())}"
         print(line)
         if bench is not None:

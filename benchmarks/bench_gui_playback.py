@@ -129,7 +129,10 @@ def play_once(app, win, max_seconds):
     held = (t_next - t0) * rate - ks
     duration = t_end - t_press
     dropped = int(ks.max() + 1 - len(ks)) if len(ks) else 0
-    pct = (lambda a, q: float(np.nanpercentile(a, q)) if np.isfinite(a).any() else float("nan"))
+
+    def pct(a, q):
+        return float(np.nanpercentile(a, q)) if np.isfinite(a).any() else float("nan")
+
     late = lag > 1
     return {"fps": len(ks) / duration, "frames": len(ks), "last": int(ks.max()) if len(ks) else -1, "n": n,
             "duration": duration, "lag_med": pct(lag, 50), "lag_p95": pct(lag, 95), "lag_p99": pct(lag, 99),

@@ -312,9 +312,9 @@ def main():
             print()
             if saved.is_file():
                 g, _ = bench.measure(f"StateGraph loaded K={K}", cpu=True, file=saved.name,
-                                     fn=lambda: load_estimator(StateGraph, read_npz(saved), "states"))
+                                     fn=lambda saved=saved: load_estimator(StateGraph, read_npz(saved), "states"))
             else:
-                g, _ = bench.measure(f"StateGraph.fit K={K}", lambda: StateGraph(n_states=K).fit(Fy, b), cpu=True)
+                g, _ = bench.measure(f"StateGraph.fit K={K}", lambda K=K: StateGraph(n_states=K).fit(Fy, b), cpu=True)
                 with atomic_write(saved) as part:
                     np.savez(part, **dump_estimator(g, "states"))
         print("  " + g.connectivity_report().replace("\n", "\n  "))

@@ -222,7 +222,7 @@ def _explore_script(when_shown: str) -> str:
 
             def poll():
                 if self.state.manifold is not None:
-                    %s
+                    {actions}
                 else:
                     QtCore.QTimer.singleShot(50, poll)
 
@@ -231,7 +231,7 @@ def _explore_script(when_shown: str) -> str:
         MainWindow.show = show_then_act
         from app.cli import main
         sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
-    """) % "\n                    ".join(when_shown.strip().splitlines()))
+    """).format(actions="\n                    ".join(when_shown.strip().splitlines())))
 
 
 def _explore_env(tmp_path) -> dict:

@@ -271,7 +271,7 @@ def test_progress_and_cancel():
     assert calls[0] == ("state graph", 0, 3) and calls[-1] == ("state graph", 3, 3)
 
     for at in (1, 3):
-        def cancel(stage, done, total):
+        def cancel(stage, done, total, at=at):
             if done == at:
                 raise Cancelled()
 
