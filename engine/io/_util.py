@@ -175,8 +175,8 @@ def fill_gaps(X: np.ndarray, missing: np.ndarray, *, path, names=None, fill: boo
     edge = " (a column missing at the start or the end holds its first or last valid value)" if \
         miss[0].any() or miss[-1].any() else ""
     report_repair(path, f"{int(miss.sum())} missing samples ({why()}) in {', '.join(shown)}{more}, in "
-                  f"{rows.size} of {n} frames ({frame_runs(rows + first_frame)}); interpolated linearly between the nearest "
-                  f"valid frames{edge}")
+                  f"{rows.size} of {n} frames ({frame_runs(rows + first_frame)}); interpolated linearly between the "
+                  f"nearest valid frames{edge}")
     return X
 
 

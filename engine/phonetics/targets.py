@@ -351,7 +351,8 @@ def targets_from_textgrid(manifold: Any, path: str | os.PathLike[str], *, tier: 
 
 def targets_from_text(manifold: Any, text: str, *, duration_model: Any = None, pauses: bool | None = None,
                       on_collision: str = "error") -> TargetSequence:
-    """Targets from English text: :func:`engine.phonetics.phones.pronounce` and a :class:`~engine.phonetics.phones.DurationModel`.
+    """Targets from English text: :func:`engine.phonetics.phones.pronounce` and a
+    :class:`~engine.phonetics.phones.DurationModel`.
 
     ``pauses=None`` brackets the text with the pause phone when the corpus has one.
     """
