@@ -206,7 +206,8 @@ def test_every_method_is_scored_in_y_through_the_same_projection(result, small_c
     X = interpolate_targets("linear", tg.frames, Xo, u.n_frames)
     lo, hi = tg.frames[0], tg.frames[-1] + 1
     ey = np.linalg.norm(project_x(m, X)[lo:hi, :3] - m.project(F)[lo:hi, :3], axis=1)
-    row = next(x for x in result.per_utterance if (x["protocol"], x["method"], x["utterance"]) == ("oracle", "linear", uid))
+    row = next(x for x in result.per_utterance
+               if (x["protocol"], x["method"], x["utterance"]) == ("oracle", "linear", uid))
     assert row["rmse_y"] == pytest.approx(float(np.sqrt((ey ** 2).mean())), rel=1e-4)
     # the velocity error is the RMSE of the first difference against the real one's
     Xt = m.shape_.transform(F).astype(np.float64)
