@@ -1,6 +1,6 @@
 # Two commands on a fresh machine (each makes .venv by itself):
 #   make run    open the explorer on the embedded synthetic talker
-#   make test   type-check the engine (mypy), then run the whole test suite (GUI tests under a virtual X server)
+#   make test   lint (ruff), type-check the engine (mypy), then run the whole test suite (GUI tests under Xvfb)
 #   make docs   build the guide and the API reference into docs/_build/html (warnings are errors)
 PY      ?= python3
 VENV    := .venv
@@ -21,6 +21,7 @@ run: $(STAMP)
 	$(BIN)/lipspace explore
 
 test: $(STAMP)
+	$(BIN)/ruff check .
 	$(BIN)/python -m mypy
 	@if [ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null 2>&1; then \
 		xvfb-run -a -s "-screen 0 1600x1200x24" $(BIN)/python -m pytest -q $(PYTEST_ARGS); \

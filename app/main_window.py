@@ -245,7 +245,8 @@ class MainWindow(MenuActions, SessionActions, ExportActions, ConditionDocks, QtW
             self.resizeDocks([self.docks[k] for k in keys], list(sizes), direction)
 
     def say_once(self, message: str, ms: int = 15000) -> bool:
-        """Show ``message`` in the status bar, unless it was said already in this window (returns whether it was shown)."""
+        """Show ``message`` in the status bar, unless it was said already in this window (returns whether it was
+        shown)."""
         if message in self._said:
             return False
         self._said.add(message)

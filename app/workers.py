@@ -214,7 +214,7 @@ class TaskRunner(QtCore.QObject):
             self._tick.setInterval(1000)
             self._tick.timeout.connect(lambda: self._on_progress(*self._progress))
 
-    def start(self) -> "TaskRunner":
+    def start(self) -> TaskRunner:
         WARNINGS.install()
         self.thread.start()
         if self.dialog is not None:

@@ -20,7 +20,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from engine.phonetics import PAPER_COUNTS, PHONES, PAUSE, pronounce, UnknownWordError  # noqa: E402
+from engine.phonetics import PAPER_COUNTS, PAUSE, PHONES, UnknownWordError, pronounce  # noqa: E402
 
 N_POOL, N_START, N_TOTAL = 20000, 1500, 3000
 BLOCK = set("""

@@ -97,7 +97,8 @@ def cases(d: Path):
     s_fifo = session("fifo", {"lipspace_session": 1, "source": {"path": str(fifo)}})
     load = ("from app.files.session import load_session, SessionError\ntry:\n    d = load_session({!r})\n"
             "except SessionError as exc:\n    print('refused:', exc)\nelse:\n    print('loaded', d['source'])")
-    apply = ("from app.files.session import load_session, apply_session, SessionError\nfrom app.models.state import AppState\n"
+    apply = ("from app.files.session import load_session, apply_session, SessionError\n"
+             "from app.models.state import AppState\n"
              "from engine.manifold.model import Manifold\nd = load_session({!r})\n"
              "st = AppState(Manifold.load(d['source']['path']))\ntry:\n    apply_session(st, d)\n"
              "except SessionError as exc:\n    print('refused:', exc)\nelse:\n    print('applied')")
@@ -300,7 +301,8 @@ def cases_30(d: Path):
         Case(".pos 60 % NaN", imp + [pos60, "-o", f"{o}/c.npz"], 2, "60 of 100 frames", [f"{o}/c.npz"]),
         *[Case(f".pos SamplingFrequencyHz={v}", imp + [p, "-o", f"{o}/c.npz"], 2, "SamplingFrequencyHz",
                [f"{o}/c.npz"]) for v, p in pos.items()],
-        Case("MVIEW SRATE 1e300", imp + [mat_rate, "-o", f"{o}/c.npz", "--points", "UL,LL"], 2, "SRATE is 1e+300", [f"{o}/c.npz"]),
+        Case("MVIEW SRATE 1e300", imp + [mat_rate, "-o", f"{o}/c.npz", "--points", "UL,LL"], 2, "SRATE is 1e+300",
+             [f"{o}/c.npz"]),
         Case("CSV UL_x twice, no LL_x", imp + [str(dup), "-o", f"{o}/c.npz"], 2, "name the same coordinate",
              [f"{o}/c.npz"]),
         Case("CSV LL_y without LL_x", imp + [str(nolx), "-o", f"{o}/c.npz"], 2, "no LL_x column", [f"{o}/c.npz"]),

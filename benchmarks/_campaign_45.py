@@ -351,9 +351,10 @@ def cases_45(d: Path):
     vids = d / "vids"
     video_case = ["@sh", "exit 97"]
     try:
-        from engine.io.video.synth import write_video  # noqa: F401
         import mediapipe  # noqa: F401
         import skimage.data
+
+        from engine.io.video.synth import write_video  # noqa: F401
 
         vids.mkdir(exist_ok=True)
         from engine.io.video.synth import moving_image_frames

@@ -67,7 +67,8 @@ def header(title: str) -> None:
 
     print(f"== {title}")
     print(f"   python {platform.python_version()}, numpy {np.__version__}, BLAS {blas_kernel()}")
-    print(f"   {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at start, DISPLAY={os.environ.get('DISPLAY')}")
+    print(f"   {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} at start, "
+          f"DISPLAY={os.environ.get('DISPLAY')}")
 
 
 def default_manifold(preset: str = "default"):
@@ -97,12 +98,13 @@ def add_manifold_argument(ap) -> None:
                          f"'{TALKER}' is the default synthetic talker; several are measured side by side, "
                          "each in fresh processes, in alternating order")
     ap.add_argument("--max-points", type=int, default=None,
-                    help="points the manifold view draws at most (app.models.lod.DEFAULT_MAX_POINTS; default its value)")
+                    help="points the manifold view draws at most (app.models.lod.DEFAULT_MAX_POINTS; "
+                         "default its value)")
 
 
 def parse_bench_args(ap):
-    """Add ``--preset``, ``--manifold``, ``--max-points`` and the hidden ``--child``; parse; make sure there is a display
-    (:func:`ensure_display`) and apply ``--max-points``. Returns ``(args, cap)``, ``cap`` the option to
+    """Add ``--preset``, ``--manifold``, ``--max-points`` and the hidden ``--child``; parse; make sure there is a
+    display (:func:`ensure_display`) and apply ``--max-points``. Returns ``(args, cap)``, ``cap`` the option to
     pass on to child processes."""
     import argparse
 
@@ -186,10 +188,14 @@ def compare(label: str, per_spec: dict, unit: str = "ms", scale: float = 1e3, *,
         v = np.asarray(per_spec[spec], float) * scale
         if v.size == 0:
             continue
-        line = f"   {label} [{spec_label(spec)}]: min {v.min():.1f} {unit}, median {np.median(v):.1f} {unit} (n={v.size})"
+        line = (f"   {label} [{spec_label(spec)}]: min {v.min():.1f} {unit}, median {np.median(v):.1f} {unit} "
+                f"(n={v.size})")
         b = np.asarray(per_spec[base], float) * scale
         if spec != base and b.size:
-            ratio = (lambda x, y: f"{x / y:.2f}" if y else "n/a")
+
+            def ratio(x, y):
+                return f"{x / y:.2f}" if y else "n/a"
+
             line += f"; / {spec_label(base)}: median {ratio(np.median(v), np.median(b))}, min {ratio(v.min(), b.min())}"
         print(line)
         if bench is not None:

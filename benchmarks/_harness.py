@@ -89,7 +89,8 @@ class Measurement:
         return self.values[0]
 
     def as_dict(self) -> dict:
-        d = {k: v for k, v in asdict(self).items() if v not in (None, "", {}) and k not in ("name", "first_is_separate")}
+        d = {k: v for k, v in asdict(self).items()
+             if v not in (None, "", {}) and k not in ("name", "first_is_separate")}
         d.update(min=self.min, median=self.median, n=len(self.values), n_warm=len(self.warm))
         if self.first_is_separate:
             d["first"] = self.first

@@ -152,7 +152,8 @@ class HelperWaits:
         me = threading.get_native_id()
         self.paths = [f"/proc/self/task/{t}/schedstat" for t in os.listdir("/proc/self/task") if int(t) != me]
         pid = x_server_pid()
-        self.x_paths = [] if pid is None else [f"/proc/{pid}/task/{t}/schedstat" for t in os.listdir(f"/proc/{pid}/task")]
+        self.x_paths = ([] if pid is None else
+                        [f"/proc/{pid}/task/{t}/schedstat" for t in os.listdir(f"/proc/{pid}/task")])
 
     def __call__(self) -> tuple[float, float]:
         """(largest wait of one rasteriser/helper thread, X server's total wait), cumulative seconds."""

@@ -55,7 +55,8 @@ def main():
     total = time.perf_counter() - t0
     bench.figure("TOTAL build (excluding corpus generation)", total, cold=True, headline=True,
                  peak_traced_mib=max(r[2] for r in rows[1:]))
-    bench.fact(frames=corpus.n_frames, coordinates=int(corpus.frames.shape[1]), shape_components=int(shape.n_components_))
+    bench.fact(frames=corpus.n_frames, coordinates=int(corpus.frames.shape[1]),
+               shape_components=int(shape.n_components_))
     print(f"\nshape: {shape.n_components_} components hold {100 * shape.recovered_ratio_[shape.n_components_ - 1]:.2f}%"
           f"; Y first 3 dims hold {100 * emb.recovered_ratio_[2]:.1f}% of recovered variance; "
           f"{emb.n_passes_} passes over D")

@@ -125,7 +125,8 @@ def main(argv=None) -> int:
     widths = None  # read from pair 0's build, which runs first
     rows = []
     for i in range(args.pairs):
-        jobs = ["build", "own"] + ([] if args.no_issue_floor else ["issue"]) + (["vs-tree build"] if args.vs_tree else [])
+        jobs = (["build", "own"] + ([] if args.no_issue_floor else ["issue"])
+                + (["vs-tree build"] if args.vs_tree else []))
         if i % 2 == 1:  # odd pairs: the same runs in reverse order (widths from the previous pair's build)
             jobs.reverse()
         floors, b = {}, None
@@ -142,8 +143,8 @@ def main(argv=None) -> int:
         rows.append((b, floors, ratios))
         st = ", ".join(f"{k} {v:.1f}" for k, v in b["stages"].items())
         fl = "; ".join(f"{_label(k)} {f['wall_s']:.1f} s wall / {f['cpu_s']:.1f} s CPU (" + (
-            f"shape {f['parts']['shape']:.1f}, embedding {f['parts']['embedding']:.1f}; {f['work']['gflop']:.0f} GFLOP, "
-            f"{f['work']['gb_read']:.1f} GB read" if "parts" in f else
+            f"shape {f['parts']['shape']:.1f}, embedding {f['parts']['embedding']:.1f}; "
+            f"{f['work']['gflop']:.0f} GFLOP, {f['work']['gb_read']:.1f} GB read" if "parts" in f else
             ", ".join(f"{s} {v:.1f}" for s, v in f["stages"].items())) + f"), ratio {ratios[k]:.2f}"
             for k, f in floors.items())
         ch = f"; then the synthesis choice {b['choice_s']:.1f} s" if b.get("choice_s") is not None else ""
@@ -174,13 +175,14 @@ def main(argv=None) -> int:
         extra = {k: v for k, v in stage.items() if k not in part}
         print("stage by stage (medians over pairs): " + "; ".join(
             f"{k} {stage.get(k, 0.0):.1f} s against its floor {part[k]:.1f} s ({stage.get(k, 0.0) / part[k]:.2f})"
-            for k in part if part[k] > 0) + "; without a floor: " + ", ".join(f"{k} {v:.1f} s" for k, v in extra.items())
-              + f" (together {sum(extra.values()):.1f} s, {100 * sum(extra.values()) / max(med(builds), 1e-9):.0f} % of "
-              "the build)")
+            for k in part if part[k] > 0)
+              + "; without a floor: " + ", ".join(f"{k} {v:.1f} s" for k, v in extra.items())
+              + f" (together {sum(extra.values()):.1f} s, "
+              f"{100 * sum(extra.values()) / max(med(builds), 1e-9):.0f} % of the build)")
     choices = [r[0]["choice_s"] for r in rows if r[0].get("choice_s") is not None]
     if choices:
-        print(f"synthesis choice after the fit (lipspace build stores it; not in the ratios): min {min(choices):.1f} s, "
-              f"median {med(choices):.1f} s")
+        print(f"synthesis choice after the fit (lipspace build stores it; not in the ratios): "
+              f"min {min(choices):.1f} s, median {med(choices):.1f} s")
     print(f"load average (1/5/15 min) before {'/'.join(f'{x:.1f}' for x in load_before)}, after "
           f"{'/'.join(f'{x:.1f}' for x in os.getloadavg())}; {os.cpu_count()} cores\nBLAS: {b0['blas']}")
     return 0

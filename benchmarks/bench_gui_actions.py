@@ -77,9 +77,10 @@ def run(spec: str, repeats: int, preset: str) -> dict:
     phones = [r["phone"] for r in rows[:repeats]]
     for ph in phones:
         item = win.clusters.table.findItems(ph, QtCore.Qt.MatchFlag.MatchExactly)[0]
-        out["ellipsoid on"].append(until_drawn(app, view, log, lambda: item.setCheckState(QtCore.Qt.CheckState.Checked)))
+        out["ellipsoid on"].append(until_drawn(app, view, log,
+                                               lambda item=item: item.setCheckState(QtCore.Qt.CheckState.Checked)))
         out["ellipsoid off"].append(until_drawn(app, view, log,
-                                                lambda: item.setCheckState(QtCore.Qt.CheckState.Unchecked)))
+                                                lambda item=item: item.setCheckState(QtCore.Qt.CheckState.Unchecked)))
     until_drawn(app, view, log, lambda: view.color_box.setCurrentIndex(view.color_box.findData("phone")))
     names = list(s.phone_names)
     filters = [" ".join(names[k:k + 3]) for k in range(0, 3 * repeats, 3)]

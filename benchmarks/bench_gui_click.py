@@ -191,7 +191,8 @@ def run_clicks(n_clicks: int, spec: str, preset: str, sound: str = "off") -> dic
                        "candidates": win.manifold_view.locator.n_candidates})
     out = {"spec": spec, "n_frames": int(m.Fy_.shape[0]), "n_points": int(win.state.cloud.n_points),
            "first": res[0], "warm": res[1:], "checks": checks, "load_s": loaded, "window_s": opened,
-           "gl": gb.gl_renderer(win.manifold_view.plotter), "size": list(win.manifold_view.plotter.render_window.GetSize()),
+           "gl": gb.gl_renderer(win.manifold_view.plotter),
+           "size": list(win.manifold_view.plotter.render_window.GetSize()),
            "rss_mb": gb.peak_rss_mb(), "load": (load0 + os.getloadavg()[0]) / 2, "sound": snd, "shown": shown}
     win.close()
     return out

@@ -129,7 +129,10 @@ def play_once(app, win, max_seconds):
     held = (t_next - t0) * rate - ks
     duration = t_end - t_press
     dropped = int(ks.max() + 1 - len(ks)) if len(ks) else 0
-    pct = (lambda a, q: float(np.nanpercentile(a, q)) if np.isfinite(a).any() else float("nan"))
+
+    def pct(a, q):
+        return float(np.nanpercentile(a, q)) if np.isfinite(a).any() else float("nan")
+
     late = lag > 1
     return {"fps": len(ks) / duration, "frames": len(ks), "last": int(ks.max()) if len(ks) else -1, "n": n,
             "duration": duration, "lag_med": pct(lag, 50), "lag_p95": pct(lag, 95), "lag_p99": pct(lag, 99),
@@ -282,17 +285,20 @@ def main():
         res.append(x)
         print(f"   repeat {r + 1} ({'cold' if r == 0 else 'warm'}, load {x['load']:.1f}): {x['fps']:5.1f} frames/s "
               f"shown ({x['frames']} distinct, up to {x['last'] + 1}/{x['n']} in {x['duration']:.2f} s, "
-              f"{x['dropped']} dropped); lag median {x['lag_med']:.2f}, p95 {x['lag_p95']:.2f}, p99 {x['lag_p99']:.2f}, "
+              f"{x['dropped']} dropped); lag median {x['lag_med']:.2f}, p95 {x['lag_p95']:.2f}, "
+              f"p99 {x['lag_p99']:.2f}, "
               f"max {x['lag_max']:.2f}, min {x['lag_min']:.2f} periods, {100 * x['late']:.1f} % > 1 late, "
               f"{100 * x['early']:.1f} % > 1 early; held lag p95 {x['held_p95']:.2f}, max {x['held_max']:.2f}; "
               f"{x['main_swaps']} main-window compositions, {x['m_renders']} manifold renders; "
               f"CPU {x['cpu_ms']:.1f} ms per frame shown", flush=True)
         print(f"      clock started {x['press_ms']:.1f} ms after Play was pressed, the first new frame on screen "
-              f"{x['first_move_ms']:.1f} ms after it; stages (median ms): chosen->render {x['queue_med']:.1f}, render {x['render_med']:.1f} "
+              f"{x['first_move_ms']:.1f} ms after it; stages (median ms): chosen->render {x['queue_med']:.1f}, "
+              f"render {x['render_med']:.1f} "
               f"(max {x['render_max']:.1f}), render->swap {x['compose_med']:.1f}, chosen->swap {x['latency_med']:.1f}; "
               f"timer late p95 {x['timer_late_p95']:.1f}, max {x['timer_late_max']:.1f} ms; GUI thread waited "
-              f"{x['run_wait']:.0f} ms for a core between choice and swap (helpers + X server {x['helper_wait']:.0f} ms); "
-              f"{len(x['gcs'])} collections ({', '.join(f'gen {g} {1e3 * (b - a):.1f} ms' for a, b, g in x['gcs'][:6])})")
+              f"{x['run_wait']:.0f} ms for a core between choice and swap "
+              f"(helpers + X server {x['helper_wait']:.0f} ms); {len(x['gcs'])} collections "
+              f"({', '.join(f'gen {g} {1e3 * (b - a):.1f} ms' for a, b, g in x['gcs'][:6])})")
         print("      late frames by cause: " + ", ".join(f"{c} {n}" for c, n in x["causes"].items())
               + "; per late frame, ms (GUI thread waited for a core / rasteriser thread + X server waited / "
               "GUI CPU / chosen->swap / look-ahead): "

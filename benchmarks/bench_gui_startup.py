@@ -197,10 +197,12 @@ def read_into_file_cache(files) -> None:
 
 
 def show(kind: str, k: int, r: dict, label: str = "") -> None:
-    print(f"   {kind} {k}{f' [{label}]' if label else ''}: window on screen {r['window']:.2f} s, interactive {r['interactive']:.2f} s "
+    tag = f" [{label}]" if label else ""
+    print(f"   {kind} {k}{tag}: window on screen {r['window']:.2f} s, interactive {r['interactive']:.2f} s "
           f"(process CPU {r.get('cpu_interactive', float('nan')):.2f} s until then), "
           f"manifold in the window {r['manifold']:.2f} s, drawn {r['shown']:.2f} s; longest event-loop stall "
-          f"while loading {1e3 * r['stall_loading']:.0f} ms (ending at {r.get('stall_loading_at', 0):.2f} s), around showing it {1e3 * r['stall_showing']:.0f} ms; "
+          f"while loading {1e3 * r['stall_loading']:.0f} ms (ending at {r.get('stall_loading_at', 0):.2f} s), "
+          f"around showing it {1e3 * r['stall_showing']:.0f} ms; "
           f"window blocked by a modal dialog for {r.get('modal_s', 0.0):.1f} s of the load; "
           f"peak RSS {r.get('rss_mb', 0):.0f} MiB; load average {r.get('load', float('nan')):.1f}", flush=True)
 
@@ -226,8 +228,8 @@ def environment_notes(compile_first: bool) -> None:
           f"{' (compiled first: --compile)' if compile_first else ''}; PYTHONDONTWRITEBYTECODE="
           f"{os.environ.get('PYTHONDONTWRITEBYTECODE', 'unset')}")
     has_pandas = importlib.util.find_spec("pandas") is not None
-    print(f"   pandas {'installed' if has_pandas else 'not installed'}"
-          f"{' (scikit-learn imports it, and pyarrow with it, at every start: the [test] extra)' if has_pandas else ''}")
+    why = " (scikit-learn imports it, and pyarrow with it, at every start: the [test] extra)" if has_pandas else ""
+    print(f"   pandas {'installed' if has_pandas else 'not installed'}{why}")
 
 
 def main():
@@ -293,7 +295,8 @@ def main():
             shown = [r["shown"] for r in rs]
             rss = [r.get("rss_mb", 0.0) for r in rs]
             print(f"{kind} [{gb.spec_label(spec)}]: window interactive (no modal dialog) min {min(inter):.2f} s, "
-                  f"median {np.median(inter):.2f} s (goal < {goal:g} s); manifold drawn (usable) min {min(shown):.2f} s, "
+                  f"median {np.median(inter):.2f} s (goal < {goal:g} s); "
+                  f"manifold drawn (usable) min {min(shown):.2f} s, "
                   f"median {np.median(shown):.2f} s; peak RSS max {max(rss):.0f} MiB (n={len(rs)})")
             floors = [r["floor"] for r in rs if r.get("floor")]
             if floors:

@@ -52,11 +52,13 @@ inv = InverseMap(n_dims=3)
 Fy3 = np.asarray(m.Fy_[:, :3], dtype=np.float64)
 t = time.perf_counter(); tri = Delaunay(inv._check_Y(Fy3, 3) - Fy3.mean(0), qhull_options=QHULL_OPTIONS)
 out["Delaunay (qhull)"] = time.perf_counter() - t
-t = time.perf_counter(); T_old = tri.transform; out["transforms, old path (scipy per simplex)"] = time.perf_counter() - t
+t = time.perf_counter(); T_old = tri.transform
+out["transforms, old path (scipy per simplex)"] = time.perf_counter() - t
 t = time.perf_counter(); T_new = barycentric_transforms(tri.points, tri.simplices)
 out["transforms, new path (numpy batch)"] = time.perf_counter() - t
 out["simplices"] = int(tri.simplices.shape[0])
-t = time.perf_counter(); inv.fit(m.Fy_, m.Fx_); out["InverseMap.fit (qhull + batch transforms)"] = time.perf_counter() - t
+t = time.perf_counter(); inv.fit(m.Fy_, m.Fx_)
+out["InverseMap.fit (qhull + batch transforms)"] = time.perf_counter() - t
 q = m.states_.centroids_[:79, :3]
 t = time.perf_counter(); inv.transform(q); out["first query, 79 points (cold)"] = time.perf_counter() - t
 t = time.perf_counter(); inv.transform(q); out["second query, 79 points (warm)"] = time.perf_counter() - t

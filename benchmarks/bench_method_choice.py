@@ -136,8 +136,9 @@ def first(args):
                     print(f"{spec} {protocol} round {r}: did not finish in {args.timeout:.0f} s", flush=True)
                     continue
                 runs.setdefault((spec, protocol), []).append(out)
-                print(f"{spec} {protocol} round {r}: {out['frames']} frames; load {out['load_s']:.2f} s; first synthesis "
-                      f"{out['first_s']:.2f} s ({out['method']}, {out['n_frames']} frames; choice stored in the file: "
+                print(f"{spec} {protocol} round {r}: {out['frames']} frames; load {out['load_s']:.2f} s; "
+                      f"first synthesis {out['first_s']:.2f} s ({out['method']}, {out['n_frames']} frames; "
+                      f"choice stored in the file: "
                       f"{out['stored']}); peak RSS {out['rss']:.0f} MiB; load average {out['load']:.1f}", flush=True)
     print("\nsummary: first synthesis with 'best' (min / median over fresh processes)")
     for (spec, protocol), outs in runs.items():

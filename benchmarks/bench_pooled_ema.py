@@ -111,9 +111,11 @@ def main(argv=None) -> int:
         walls.append(res["wall_s"])
         peaks.append(res["rss_peak_mb"])
         st = ", ".join(f"{k} {v:.1f}" for k, v in res["stages"].items())
-        wk = f"; workers' peak {', '.join(f'{w:.0f}' for w in res['worker_peak_mb'])} MB" if res["worker_peak_mb"] else ""
+        worker_peaks = ", ".join(f"{w:.0f}" for w in res["worker_peak_mb"])
+        wk = f"; workers' peak {worker_peaks} MB" if res["worker_peak_mb"] else ""
         print(f"repeat {r}: {res['n_frames']} frames x {res['coords']} coordinates, {res['utterances']} utterances, "
-              f"L = {res['L']}, K = {res['K']}: build {res['wall_s']:.1f} s wall, client CPU {res['client_cpu_s']:.1f} s "
+              f"L = {res['L']}, K = {res['K']}: build {res['wall_s']:.1f} s wall, "
+              f"client CPU {res['client_cpu_s']:.1f} s "
               f"({st}); RSS at start {res['rss_start_mb']:.0f} MB, peak {res['rss_peak_mb']:.0f} MB{wk}; "
               f"load average {res['load_before'][0]:.1f} before, {res['load_after'][0]:.1f} after "
               f"({os.cpu_count()} cores)", flush=True)

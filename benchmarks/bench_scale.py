@@ -319,7 +319,8 @@ def main(argv=None) -> int:
         path = os.path.join(args.work, f"talker-{n}-{args.resolution}.npz")
         gen = "reused"
         if not os.path.isfile(path):
-            gen = f"generated in {run_child_json(me + ['--generate', str(n), '--one', path, '--resolution', args.resolution])['generate_s']:.1f} s"
+            made = run_child_json(me + ['--generate', str(n), '--one', path, '--resolution', args.resolution])
+            gen = f"generated in {made['generate_s']:.1f} s"
         for i in range(max(1, args.repeat)):
             for root in trees if i % 2 == 0 else trees[::-1]:  # alternating: neither tree always runs first
                 cmd, env = _child_command(me, path, args, root)

@@ -199,11 +199,13 @@ def main() -> None:
         r0 = runs[0][0]
         print(f"{method:<7} cold {r0['utterances']} utterances, {r0['speech_s']:.0f} s of speech: "
               f"min {min(secs):.2f} s, median {np.median(secs):.2f} s of {len(secs)} "
-              f"(load {', '.join(f'{lo:.1f}' for _, lo in runs)}); peak RSS {max(r['rss_MiB'] for r, _ in runs):.0f} MiB",
+              f"(load {', '.join(f'{lo:.1f}' for _, lo in runs)}); "
+              f"peak RSS {max(r['rss_MiB'] for r, _ in runs):.0f} MiB",
               flush=True)
         print(f"        {r0['history']}", flush=True)
-        bench.figure(f"{method}: audio for the corpus", secs, cold=True, peak_rss_mib=max(r["rss_MiB"] for r, _ in runs),
-                     headline=True, show=False, speech_s=r0["speech_s"], utterances=r0["utterances"])
+        bench.figure(f"{method}: audio for the corpus", secs, cold=True,
+                     peak_rss_mib=max(r["rss_MiB"] for r, _ in runs), headline=True, show=False,
+                     speech_s=r0["speech_s"], utterances=r0["utterances"])
     t = time.perf_counter()
     res = analyse(args.preset, not args.no_words)
     print(f"analysis ({time.perf_counter() - t:.1f} s, load {os.getloadavg()[0]:.1f}):")

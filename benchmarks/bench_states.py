@@ -28,15 +28,16 @@ each **warm** (the same process, after one query has built the cached csr forms:
 median of ``--repeats`` queries, wall and CPU time) and **cold** (``--cold-runs`` fresh
 processes, each loading the saved graph and timing its first query: right after loading,
 so building A and A^T as csr is included, and after ``StateGraph.prepare_queries``, which
-the explorer's loading worker calls; loading is timed apart). Also the state path ``lipspace synthesize`` and ``StateModel.path`` find:
-10 targets (the states of every 6th frame of a training utterance, 0.1 s apart at
-60 Hz), each gap the most probable path of exactly its length (``engine.graph.bridges.bridge``),
+the explorer's loading worker calls; loading is timed apart). Also the state path
+``lipspace synthesize`` and ``StateModel.path`` find: 10 targets (the states of every 6th
+frame of a training utterance, 0.1 s apart at 60 Hz), each gap the most probable path of
+exactly its length (``engine.graph.bridges.bridge``),
 beside the full recursion over every edge it replaced (``MaxProductGraph.viterbi`` +
 ``backtrack``) on the same targets, min / median of ``--synthesis-repeats``; and the
 phone lattice of ``synthesize --text`` (scores from up to 8 candidate states per target
-to the next target's, ``engine.graph.bridges.forward_to`` beside ``MaxProductGraph.forward``). Every line carries the load average; the BLAS kernel is printed
-once (no query calls BLAS). Target (issue 13 item 8): hemisphere and path <= 20 ms at
-K = 20,000.
+to the next target's, ``engine.graph.bridges.forward_to`` beside ``MaxProductGraph.forward``).
+Every line carries the load average; the BLAS kernel is printed once (no query calls BLAS).
+Target (issue 13 item 8): hemisphere and path <= 20 ms at K = 20,000.
 """
 from __future__ import annotations
 
@@ -177,7 +178,8 @@ def _cold(path, query, runs, bench, K):
                  load_s_median=float(np.median(load[1])))
     return (f"first query right after loading {_stats(first[0])} fresh processes; after prepare_queries() "
             f"(the explorer's loader) {_stats(first[1])} (import + load of the graph: median "
-            f"{np.median(load[0]):.2f} s, with prepare_queries {np.median(load[1]):.2f} s, not included); {_load_avg()}")
+            f"{np.median(load[0]):.2f} s, with prepare_queries {np.median(load[1]):.2f} s, not included); "
+            f"{_load_avg()}")
 
 
 def _max_product_graph(g):
@@ -312,9 +314,9 @@ def main():
             print()
             if saved.is_file():
                 g, _ = bench.measure(f"StateGraph loaded K={K}", cpu=True, file=saved.name,
-                                     fn=lambda: load_estimator(StateGraph, read_npz(saved), "states"))
+                                     fn=lambda saved=saved: load_estimator(StateGraph, read_npz(saved), "states"))
             else:
-                g, _ = bench.measure(f"StateGraph.fit K={K}", lambda: StateGraph(n_states=K).fit(Fy, b), cpu=True)
+                g, _ = bench.measure(f"StateGraph.fit K={K}", lambda K=K: StateGraph(n_states=K).fit(Fy, b), cpu=True)
                 with atomic_write(saved) as part:
                     np.savez(part, **dump_estimator(g, "states"))
         print("  " + g.connectivity_report().replace("\n", "\n  "))

@@ -255,7 +255,8 @@ def main() -> int:
     cap = int(args.cap_gb * 2**30)
     mountable = can_mount()
     print(f"tree {root}; load average {os.getloadavg()[0]:.2f}; cap {args.cap_gb:g} GB address space; "
-          f"timeout {args.timeout:g} s; full/read-only disks: {'tmpfs in a private mount namespace' if mountable else 'n/a'}")
+          f"timeout {args.timeout:g} s; full/read-only disks: "
+          f"{'tmpfs in a private mount namespace' if mountable else 'n/a'}")
     rows = []
     with tempfile.TemporaryDirectory(prefix="lipspace-campaign-") as tmp:
         d = Path(tmp)

@@ -7,11 +7,11 @@ it). Engine objects are left unfitted when a fit is cancelled.
 """
 from __future__ import annotations
 
-from typing import Callable, Optional
+from collections.abc import Callable
 
 __all__ = ["Cancelled", "ProgressFn", "report"]
 
-ProgressFn = Optional[Callable[[str, int, int], None]]
+ProgressFn = Callable[[str, int, int], None] | None
 
 
 class Cancelled(Exception):

@@ -12,9 +12,9 @@ the entries are counted under a lock: a click on the window's thread and a build
 on a worker thread may overlap in any order without leaving BLAS stuck at one thread
 (nesting ``threadpoolctl.threadpool_limits`` from two threads restores in the wrong
 order); threadpoolctl's rule that only one thread may change a shared OpenBLAS pool
-is respected by handing control back after each change. Entering costs about a millisecond (one cached ``ThreadpoolController``),
-against about 40 ms for ``threadpool_limits``, which scans the loaded libraries on every
-call.
+is respected by handing control back after each change. Entering costs about a
+millisecond (one cached ``ThreadpoolController``), against about 40 ms for
+``threadpool_limits``, which scans the loaded libraries on every call.
 """
 from __future__ import annotations
 

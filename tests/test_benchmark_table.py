@@ -132,7 +132,8 @@ def test_harness_record_appended_to_the_history(tmp_path, monkeypatch):
 
 def test_harness_children_are_cold_figures(tmp_path):
     bench = Harness("bench_made_up", None, history=tmp_path / "h.jsonl", quiet=True)
-    child = [sys.executable, "-c", "import json; print('noise'); print(json.dumps({'wall_s': 0.5, 'max_rss_MiB': 12.0}))"]
+    child = [sys.executable, "-c",
+             "import json; print('noise'); print(json.dumps({'wall_s': 0.5, 'max_rss_MiB': 12.0}))"]
     rows = bench.children("child", child, repeat=2, headline=True)
     assert rows == [{"wall_s": 0.5, "max_rss_MiB": 12.0}] * 2
     f = bench.record()["figures"]["child"]

@@ -120,7 +120,8 @@ def table(records: list[dict], source: str = "benchmarks/history.jsonl") -> str:
              f"of each of {len(last)} benchmarks); do not edit by hand. Times are min / median over the "
              "repeats; *taken* says whether they are cold (a fresh process each) or warm (repeated in one "
              "process).", "",
-             "| benchmark, as run | figure | min / median | taken | peak RSS | load | BLAS kernel; setting | commit, date |",
+             "| benchmark, as run | figure | min / median | taken | peak RSS | load | BLAS kernel; setting "
+             "| commit, date |",
              "|---|---|---|---|---|---|---|---|"]
     for r in last.values():
         commit = (r.get("commit") or "?") + (" +changes" if r.get("dirty") else "")

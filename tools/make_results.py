@@ -55,10 +55,13 @@ _SPREAD = {"mean": "", "mean+scale": ", spreads equalised"}
 SECTION_FORMAT = 2
 PROTOCOLS = ("states", "oracle", "phones")
 #: code whose change makes a cached section stale
-CODE = ("engine.evaluation.protocols", "engine.synthesis.protocol_methods", "engine.evaluation.protocol_report", "engine.synthesis.learnt_paths",
-        "engine.synthesis.statepaths", "engine.synthesis.dominance", "engine.synthesis.sliding_window", "engine.synthesis.unitselection", "engine.synthesis.viterbi",
-        "engine.graph.states", "engine.manifold.model", "engine.manifold.embedding", "engine.manifold.shape", "engine.manifold.dynamics", "engine.talker.synthetic",
-        "engine.phonetics.targets", "engine.recordings.kinematics", "engine.evaluation.paired", "engine.recordings.registration", "engine.manifold.inverse_local")
+CODE = ("engine.evaluation.protocols", "engine.synthesis.protocol_methods", "engine.evaluation.protocol_report",
+        "engine.synthesis.learnt_paths", "engine.synthesis.statepaths", "engine.synthesis.dominance",
+        "engine.synthesis.sliding_window", "engine.synthesis.unitselection", "engine.synthesis.viterbi",
+        "engine.graph.states", "engine.manifold.model", "engine.manifold.embedding", "engine.manifold.shape",
+        "engine.manifold.dynamics", "engine.talker.synthetic", "engine.phonetics.targets",
+        "engine.recordings.kinematics", "engine.evaluation.paired", "engine.recordings.registration",
+        "engine.manifold.inverse_local")
 
 
 def _blas():
@@ -143,7 +146,8 @@ def run_haskins(args):
     sec = Section("haskins")
     mats = sorted(Path(args.haskins_dir).glob("*.mat"))
     if len(mats) < 2:
-        sec.markdown.append(f"### Haskins pair\n\nNot run: no Haskins samples (*.mat) in {Path(args.haskins_dir).name}/.\n")
+        sec.markdown.append("### Haskins pair\n\n"
+                            f"Not run: no Haskins samples (*.mat) in {Path(args.haskins_dir).name}/.\n")
         return sec
     raw = name_haskins_speakers(read_corpus([str(p) for p in mats]))
     norm = normalise_per_speaker(raw, mode=args.speaker_norm)

@@ -30,7 +30,7 @@ from engine.io import concat, read_corpus, resample
 from engine.io.readers.matrix import corpus_from_matrix
 from engine.manifold.class_agreement import class_agreement
 from engine.manifold.model import Manifold
-from engine.recordings.corpus import Corpus, CorpusWarning, Utterance
+from engine.recordings.corpus import CorpusWarning, Utterance
 from engine.recordings.kinematics import lip_aperture
 from engine.recordings.layouts import BUILTIN, read_layout
 from engine.recordings.registration import register

@@ -232,7 +232,8 @@ def main(argv=None):
         "against its central velocity, gets the speed change right: acceleration read off the exact aperture "
         "from one step, as a class reads it. **opening wrong**: the moving frames whose opening class "
         "differs from the aperture (where the method and the rule differ on a real corpus), and the share of "
-        "them whose aperture changes by less than 0.15 mm per frame, near a turn of the movement. **bounds met**: opening >= 95 % and accelerating >= 85 %. "
+        "them whose aperture changes by less than 0.15 mm per frame, near a turn of the movement. "
+        "**bounds met**: opening >= 95 % and accelerating >= 85 %. "
         "**dims, k**: the dimensions of Y and the neighbourhood the tangent frames were read in, chosen for each "
         "corpus by held-out validation. **graph SCCs**: strongly connected components of the state graph.",
         "",
@@ -253,8 +254,8 @@ def main(argv=None):
         "",
         "The same clips imported with `--resample native` (22.1, 25 and 30 frames per second). A frame then spans "
         "33-45 ms of a movement: the aperture's velocity often changes sign between neighbouring frames, and the "
-        "aperture's own second-difference reading falls below the 85 % bound. This is why every input, video included, is analysed "
-        "at 60 Hz.",
+        "aperture's own second-difference reading falls below the 85 % bound. This is why every input, "
+        "video included, is analysed at 60 Hz.",
         "",
         HEADER, *(_row(r) for r in native),
         "",

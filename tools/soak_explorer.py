@@ -366,7 +366,8 @@ def monitor(args) -> int:
           f"({summary['clicks_selected']} selected a frame, {summary['picker_fallbacks']} via the VTK picker "
           f"fallback); syntheses {summary['synths']} ({summary['synth_failures']} failed); panel switches "
           f"{summary['panel_switches']}; playback restarts {summary['playback_restarts']}; autosaves "
-          f"{summary['autosaves']}" + (f" (last error: {summary['autosave_error']})" if summary['autosave_error'] else ""))
+          f"{summary['autosaves']}"
+          + (f" (last error: {summary['autosave_error']})" if summary['autosave_error'] else ""))
     print(f"  sys.getrefcount(None) in the child: {summary['none_refcount_start']} at start -> "
           f"{summary['none_refcount_end']} at the end of the soak")
     if soak:
@@ -380,7 +381,8 @@ def monitor(args) -> int:
               f"{summary['rss_slope_after_warmup_mb_per_min']:+.2f} MB/min")
     if "py_traced_slope_after_warmup_mb_per_min" in summary:
         a, b = summary["py_traced_after_warmup_mb"]
-        print(f"  tracemalloc ({args.tracemalloc} frames), after the warm-up: Python objects hold {a:.1f} -> {b:.1f} MB, "
+        print(f"  tracemalloc ({args.tracemalloc} frames), after the warm-up: "
+              f"Python objects hold {a:.1f} -> {b:.1f} MB, "
               f"slope {summary['py_traced_slope_after_warmup_mb_per_min']:+.2f} MB/min; RSS (same samples) "
               f"{summary['rss_in_child_slope_after_warmup_mb_per_min']:+.2f} MB/min; the rest is native")
         for st in summary["tracemalloc_top"]:

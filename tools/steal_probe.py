@@ -75,8 +75,8 @@ def summary(rows: np.ndarray) -> list[str]:
     med = float(np.median(cpu))
     charged = cpu > CHARGED_FACTOR * med
     seen = np.nan_to_num(np.fmax(steal, steal_next)) > 0
-    out = [f"{len(rows)} pieces; own CPU per piece median {1e3 * med:.3f} ms, p99 {1e3 * np.percentile(cpu, 99):.2f} ms, "
-           f"max {1e3 * cpu.max():.1f} ms",
+    out = [f"{len(rows)} pieces; own CPU per piece median {1e3 * med:.3f} ms, "
+           f"p99 {1e3 * np.percentile(cpu, 99):.2f} ms, max {1e3 * cpu.max():.1f} ms",
            f"wall in pieces {wall.sum():.2f} s, own CPU {cpu.sum():.2f} s, run-queue wait {wait.sum():.2f} s; "
            f"steal reported on their cores during them {np.nansum(steal):.2f} s (10-ms steps)",
            f"pieces charged > {CHARGED_FACTOR:g}x the median own CPU: {int(charged.sum())} "

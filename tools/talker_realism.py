@@ -111,8 +111,8 @@ _HASKINS, _MOCHA = _DATA / "haskins-ieee", _DATA / "mocha-fsew0"
 def _motion_line(label, motion, roles):
     """Each sensor's RMS movement (mm) and, in brackets, its ratio to the lower lip's."""
     ll = motion[list(roles).index("LL")]
-    return f"{label}{': ' if label else ''}RMS movement (mm, / LL's) " + ", ".join(f"{k} {v:.2f} ({v / ll:.2f})" for k, v in
-                                                            zip(roles, motion))
+    return (f"{label}{': ' if label else ''}RMS movement (mm, / LL's) "
+            + ", ".join(f"{k} {v:.2f} ({v / ll:.2f})" for k, v in zip(roles, motion)))
 
 
 def _sensor_line(label, r, motion, roles):

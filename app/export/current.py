@@ -73,6 +73,7 @@ def export_current_animation(state, path, *, size=(640, 480), progress=None) -> 
 
     return [render_video(path, lip_frames(m, traj), rate=traj.rate, faces=c.faces, dims=c.dims,
                          orientation=anatomical_frame(c, m.shape_.mean_), unit=c.unit_label,
-                         roles=c.point_roles or None, names=c.point_names or None, original=original, Y=np.asarray(traj.Y)[:, :3],
+                         roles=c.point_roles or None, names=c.point_names or None, original=original,
+                         Y=np.asarray(traj.Y)[:, :3],
                          Y_original=np.asarray(state.original.Y)[:, :3] if two else None, cloud=m.Fy_[:, :3],
                          audio=audio, size=size, title=traj.label, progress=progress)]

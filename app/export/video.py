@@ -346,10 +346,10 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=
         frames = orientation.view_frames(np.asarray(frames))
         original = None if original is None else orientation.view_frames(np.asarray(original))
     F = _frames3(frames, dims, "frames")
-    O = None if original is None else _frames3(original, dims, "original frames")
-    if O is not None and O.shape[1] != F.shape[1]:
-        raise ValueError(f"the original has {O.shape[1]} points per frame, the trajectory {F.shape[1]}")
-    n = max(len(F), len(O) if O is not None else 0)
+    Fo = None if original is None else _frames3(original, dims, "original frames")
+    if Fo is not None and Fo.shape[1] != F.shape[1]:
+        raise ValueError(f"the original has {Fo.shape[1]} points per frame, the trajectory {F.shape[1]}")
+    n = max(len(F), len(Fo) if Fo is not None else 0)
     if Y is not None:
         Y = np.asarray(Y, np.float64)
         if Y.ndim != 2 or Y.shape[1] < 3 or len(Y) != len(F):
@@ -371,7 +371,7 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=
 
             drawing = drawing_of(F.mean(axis=0), dims=dims, faces=faces, roles=roles, names=names, unit=unit,
                                  facing_known=orientation is not None and orientation.source != "none")
-        scene = _Scene(F, O, faces, Y, Y_original, cloud, size, drawing)
+        scene = _Scene(F, Fo, faces, Y, Y_original, cloud, size, drawing)
     except BaseException:
         quiet.restore()
         raise
@@ -391,8 +391,8 @@ def render_video(path, frames, *, rate: float, faces=None, dims: int = 3, roles=
                 encoder = _Encoder(out, vs, fps)
                 try:
                     for k in range(n):
-                        main_k = F[min(k, len(F) - 1)] if O is None else O[min(k, len(O) - 1)]
-                        second_k = None if O is None else F[min(k, len(F) - 1)]
+                        main_k = F[min(k, len(F) - 1)] if Fo is None else Fo[min(k, len(Fo) - 1)]
+                        second_k = None if Fo is None else F[min(k, len(F) - 1)]
                         y_k = None if Y is None else Y[min(k, len(Y) - 1), :3]
                         img = scene.draw(main_k, second_k, y_k, f"{title}  {k / float(fps):5.2f} s".strip())
                         if img.shape[:2] != (h, w):

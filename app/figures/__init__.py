@@ -34,8 +34,9 @@ from app.figures.manifold import make_fig2a
 from app.figures.shape import make_fig1a, make_fig1b, make_fig2c, make_scree
 from app.figures.synthesis import make_fig3
 
-__all__ = ["FIGURES", "DESCRIPTIONS", "UTTERANCE_FIGURES", "make_figure", "export_figure", "save_figure", "save_plotter_image",
-           "save_plotter_vector", "vector_export_available", "VectorExportUnavailable", "FIGURE_FORMATS",
+__all__ = ["FIGURES", "DESCRIPTIONS", "UTTERANCE_FIGURES", "make_figure", "export_figure", "save_figure",
+           "save_plotter_image", "save_plotter_vector", "vector_export_available", "VectorExportUnavailable",
+           "FIGURE_FORMATS",
            "VECTOR_3D_FORMATS", "make_fig1a", "make_fig1b", "make_fig2a", "make_fig2b", "make_fig2c",
            "make_fig3", "make_fig4", "make_scree", "make_classes"]
 

@@ -42,7 +42,7 @@ V_COLOUR = reserved("V")
 UNREACHABLE = tuple(float(c) for c in UNREACHABLE_RGB)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def continuous_cmap(name: str):
     """The matplotlib colour map the explorer calls ``name`` (:func:`app.figures.colour_tables.colormap`:
     matplotlib's own, or one of the explorer's maps), so a figure shows a meaning in the window's colours."""

@@ -10,8 +10,9 @@ from pathlib import Path
 from app.figures.style import SCREEN_DPI
 from engine.files.atomic import atomic_write
 
-__all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure", "suffix_from_filter", "filter_suffixes", "save_vector_figure",
-           "save_plotter_image", "save_plotter_vector", "vector_export_available"]
+__all__ = ["FIGURE_FORMATS", "VECTOR_3D_FORMATS", "VectorExportUnavailable", "save_figure", "suffix_from_filter",
+           "filter_suffixes", "save_vector_figure", "save_plotter_image", "save_plotter_vector",
+           "vector_export_available"]
 
 #: suffix -> matplotlib format name for 2-D figures
 FIGURE_FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}

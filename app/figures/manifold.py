@@ -214,7 +214,7 @@ def _panel3d(ax, Y, dens, tan, o, S, V, L, traj, view, cmap):
         Lv = min(L, 0.85 * reach_in_box(o, vec, lo, hi))
         ax.quiver(*o, *(Lv * vec), color=col, linewidth=1.8, arrow_length_ratio=0.15, zorder=5)
         ax.text(*(o + 1.1 * Lv * vec), lab, color=col, fontweight="bold", zorder=6, path_effects=halo())
-    for k, (setter, name) in enumerate(((ax.set_xlabel, "Y1"), (ax.set_ylabel, "Y2"), (ax.set_zlabel, "Y3"))):
+    for setter, name in ((ax.set_xlabel, "Y1"), (ax.set_ylabel, "Y2"), (ax.set_zlabel, "Y3")):
         setter(name, labelpad=1)
     ax.set_title(f"Y1-Y3 {ARBITRARY}", pad=0)
     ax.set_xlim(lo[0], hi[0])

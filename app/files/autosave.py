@@ -34,8 +34,8 @@ from pathlib import Path
 
 from engine.files.atomic import write_text_atomic
 
-__all__ = ["STATE_DIR_ENV", "DEFAULT_DELAY_S", "DEFAULT_MAX_DELAY_S", "state_dir", "Recovery", "Autosaver", "session_fingerprint",
-           "resolve_recovery", "pid_alive"]
+__all__ = ["STATE_DIR_ENV", "DEFAULT_DELAY_S", "DEFAULT_MAX_DELAY_S", "state_dir", "Recovery", "Autosaver",
+           "session_fingerprint", "resolve_recovery", "pid_alive"]
 
 STATE_DIR_ENV = "LIPSPACE_STATE_DIR"
 DEFAULT_DELAY_S = 3.0

@@ -39,7 +39,8 @@ KINEMATICS_LABELS = {"classic": "classic", "calibrated": "calibrated on articulo
 
 
 def check_kinematics(kinematics) -> str:
-    """``kinematics`` if it is one of :data:`engine.talker.lipmodel.KINEMATICS`, else ValueError naming it and the choices."""
+    """``kinematics`` if it is one of :data:`engine.talker.lipmodel.KINEMATICS`, else ValueError naming it and
+    the choices."""
     from engine.talker.lipmodel import KINEMATICS
 
     if not isinstance(kinematics, str) or kinematics not in KINEMATICS:

@@ -33,7 +33,8 @@ from app.scene.sensors import SensorsHandle, add_sensors
 
 __all__ = ["Handle", "PointsHandle", "LipsHandle", "SensorsHandle", "add_sensors", "ClickPicker",
            "add_manifold_points", "add_zero_velocity_plane",
-           "add_global_axes", "label_zoom", "add_local_frame", "add_trajectory", "add_cluster_ellipsoids", "add_state_path",
+           "add_global_axes", "label_zoom", "add_local_frame", "add_trajectory", "add_cluster_ellipsoids",
+           "add_state_path",
            "add_marker", "add_point_markers", "add_lips", "lip_mesh", "enable_click_picking", "pick_display_point",
            "scene_scale", "overlay_renderer", "move_to_overlay",
            "to_rgb8", "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR", "S_COLOUR", "V_COLOUR"]

@@ -14,7 +14,8 @@ from app.scene.handles import Handle
 __all__ = ["PointsHandle", "LocalFrameHandle", "PolylineHandle", "add_manifold_points", "add_zero_velocity_plane",
            "add_global_axes", "label_zoom", "add_local_frame", "add_point_markers", "add_trajectory", "add_state_path",
            "add_cluster_ellipsoids", "EllipsoidHandle", "outline_colour", "direction_arrows", "DIRECTION_ARROWS",
-           "add_marker", "MarkerHandle", "scene_scale", "overlay_renderer", "move_to_overlay", "to_rgb8", "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR",
+           "add_marker", "MarkerHandle", "scene_scale", "overlay_renderer", "move_to_overlay", "to_rgb8",
+           "ORIGINAL_COLOUR", "SYNTHETIC_COLOUR", "PATH_COLOUR",
            "S_COLOUR", "V_COLOUR", "NORMAL_COLOUR", "PLANE_COLOUR"]
 
 # each glyph's colour is declared once (app.models.colour_maps.RESERVED_COLOURS), where the legend reads it
@@ -128,7 +129,8 @@ def add_manifold_points(plotter, Fy3, rgb=None, values=None, *, point_size: floa
     mesh.point_data["rgb"] = np.full((n, 3), 160, np.uint8) if rgb is None else np.zeros((n, 3), np.uint8)
     mesh.point_data["value"] = np.full(n, np.nan, np.float32)
     actor = plotter.add_mesh(mesh, scalars="rgb", rgb=True, point_size=point_size,
-                             render_points_as_spheres=bool(spheres), name=name, pickable=True, show_scalar_bar=False, reset_camera=False, render=False)
+                             render_points_as_spheres=bool(spheres), name=name, pickable=True, show_scalar_bar=False,
+                             reset_camera=False, render=False)
     h = PointsHandle(plotter, mesh, actor)
     h.frames = frames
     if rgb is not None:

@@ -144,9 +144,9 @@ class SensorsHandle:
                                                 pickable=False, reset_camera=False, render=False))
         if len(drawing.segments):
             self.segments = _lines(Q, drawing.segments)
-            self.segment_actor = plotter.add_mesh(self.segments, color=tuple(0.6 * np.asarray(pv.Color(color).float_rgb)),
-                                                  line_width=3.0, name=f"{name}_segments", pickable=False,
-                                                  reset_camera=False, render=False)
+            dark = tuple(0.6 * np.asarray(pv.Color(color).float_rgb))
+            self.segment_actor = plotter.add_mesh(self.segments, color=dark, line_width=3.0, name=f"{name}_segments",
+                                                  pickable=False, reset_camera=False, render=False)
             self.actors.append(self.segment_actor)
         if drawing.has_aperture:
             self.aperture_line = _lines(np.zeros((2, 3), np.float32), [(0, 1)])

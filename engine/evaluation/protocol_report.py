@@ -74,7 +74,8 @@ class ProtocolResult:
     # ---------------------------------------------------------------- building
     @classmethod
     def build(cls, per, *, n_boot, random_state, inverse, **kw):
-        """From per-utterance sums (:func:`engine.synthesis.protocol_methods.scores` plus protocol, method, utterance)."""
+        """From per-utterance sums (:func:`engine.synthesis.protocol_methods.scores` plus protocol, method,
+        utterance)."""
         rows, comps = [], []
         keys = list(dict.fromkeys((p["protocol"], p["method"]) for p in per))
         slim = [_per_utterance(p) for p in per]
@@ -97,7 +98,8 @@ class ProtocolResult:
                     comps.append({"protocol": proto, "method": m, "measure": meas, **c.as_dict(), "unit": unit})
         inv = [{"map": k, "frames": v["frames"], "rmse_x": float(np.sqrt(v["sq_x"] / v["frames"])),
                 "lve": v["lve_sum"] / v["frames"],
-                "r2": [float(x) for x in 1.0 - np.asarray(v["sq_comp"]) / np.maximum(np.asarray(v["var_comp"]), 1e-300)]}
+                "r2": [float(x)
+                       for x in 1.0 - np.asarray(v["sq_comp"]) / np.maximum(np.asarray(v["var_comp"]), 1e-300)]}
                for k, v in inverse.items() if not k.startswith("_")]
         out = cls(rows=rows, per_utterance=slim, comparisons=comps, inverse_rows=inv, **kw)
         out._sums = list(per)
@@ -163,11 +165,11 @@ class ProtocolResult:
     def _header(self) -> list[str]:
         s = self.settings
         sig = ", ".join(f"{k} {v:g}" for k, v in s.get("sigma", {}).items())
+        per = "" if s.get("frames_per_state") is None else f" (one per {s['frames_per_state']} training frames)"
         lines = [f"held-out synthesis on {self.corpus}: {len(self.test_ids)} test utterance(s), "
                  f"{len(self.train_ids)} training ({self.n_train_frames} frames)",
                  f"states: {self.n_states} K-means states"
-                 f"{'' if s.get('frames_per_state') is None else ' (one per %s training frames)' % s['frames_per_state']}"
-                 f" of the first {s['state_dims']} dims of F^y; local-linear "
+                 f"{per} of the first {s['state_dims']} dims of F^y; local-linear "
                  f"inverse k = {s['n_neighbors']}; Viterbi smoothing (frames) {sig}; {s.get('note', '')}"]
         for p, w in (s.get("blend") or {}).items():
             lines.append(f"manifold, {p}: {_blend_summary(w)}")
@@ -188,8 +190,8 @@ class ProtocolResult:
             lines.append(f"{len(self.failures)} utterance(s) not scored, e.g. {self.failures[0]}")
         gaps = [c["n"] for c in self.comparisons if c.get("unit") == "gaps"]
         if gaps:
-            lines.append(f"one test utterance: the intervals, wins and tests of X and LVE are over its {max(gaps)} gaps "
-                         f"between targets (those of Y3 and velocity cannot be paired)")
+            lines.append(f"one test utterance: the intervals, wins and tests of X and LVE are over its "
+                         f"{max(gaps)} gaps between targets (those of Y3 and velocity cannot be paired)")
         return lines
 
     def _table(self, protocol):
@@ -206,7 +208,8 @@ class ProtocolResult:
             cl = self.comparison(protocol, r["method"], "lve")
             ci = "" if not np.isfinite(c["ci_low"]) else f" [{c['ci_low']:+.3g}, {c['ci_high']:+.3g}]"
             body.append(cells + [f"{c['mean_diff']:+.3g}{ci}", f"{c['wins']}/{c['n']} / {cl['wins']}/{cl['n']}",
-                                 f"{c['p_sign']:.2g}, {c['p_wilcoxon']:.2g}", f"{cl['p_sign']:.2g}, {cl['p_wilcoxon']:.2g}"])
+                                 f"{c['p_sign']:.2g}, {c['p_wilcoxon']:.2g}",
+                                 f"{cl['p_sign']:.2g}, {cl['p_wilcoxon']:.2g}"])
         return head, body
 
     def format(self) -> str:
@@ -215,7 +218,10 @@ class ProtocolResult:
         for p in self.protocols():
             head, body = self._table(p)
             w = [max(len(h), *(len(b[i]) for b in body)) for i, h in enumerate(head)]
-            fmt = lambda row: "  ".join(s.rjust(w[i]) if i else s.ljust(w[i]) for i, s in enumerate(row))  # noqa: E731
+
+            def fmt(row, w=w):
+                return "  ".join(s.rjust(w[i]) if i else s.ljust(w[i]) for i, s in enumerate(row))
+
             out += ["", f"protocol {p!r}", fmt(head), fmt(["-" * x for x in w])] + [fmt(b) for b in body]
             out += [f"verdict X: {self.verdict(p, 'rmse_x')}", f"verdict Y: {self.verdict(p, 'rmse_y')}",
                     f"verdict LVE: {self.verdict(p, 'lve')}", f"verdict velocity: {self.verdict(p, 'vel')}"]
@@ -241,8 +247,8 @@ class ProtocolResult:
             out += [f"{h}# Inverse maps (held-out frames' X from their own F^y)", "",
                     "| map | RMSE X | LVE | " + " | ".join(f"R² X{j + 1}" for j in range(nc)) + " |",
                     "|---|---|---|" + "---|" * nc]
-            out += [f"| {r['map']} | {r['rmse_x']:.4g} | {r['lve']:.4g} | " + " | ".join(f"{x:.3f}" for x in r["r2"][:nc])
-                    + " |" for r in self.inverse_rows]
+            out += [f"| {r['map']} | {r['rmse_x']:.4g} | {r['lve']:.4g} | "
+                    + " | ".join(f"{x:.3f}" for x in r["r2"][:nc]) + " |" for r in self.inverse_rows]
             out.append("")
         return "\n".join(out)
 

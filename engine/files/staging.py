@@ -334,7 +334,7 @@ class Outputs:
                 stale += [(q, option) for q in old] if self.force else []
                 clash += [] if self.force else [(q, option) for q in old]
             moves += [(tmp / name, target / name, option, self.force) for name in new]
-        for _, t, o, force in moves:  # what changed at the outputs while the command ran
+        for _, t, o, _force in moves:  # what changed at the outputs while the command ran
             kind = output_kind(t)
             if kind not in (None, "file", "link"):
                 self.discard()

@@ -169,7 +169,8 @@ def fewest_hop_path(G, GT, a: int, b: int):
     db = np.full(K, -1, dtype=np.int32)  # hops to b (backward ball)
     da[a], db[b] = 0, 0
     back = csr_rows(GT)
-    for ka, kb, forward_grew, front in grow_balls(csr_rows(G), back, da, db, np.array([a]), np.array([b])):
+    for level in grow_balls(csr_rows(G), back, da, db, np.array([a]), np.array([b])):
+        ka, kb, forward_grew, front = level  # ka, kb at the break are read after the loop
         if front.size == 0:  # one ball stopped growing before they met
             return None
         meet = front[(db if forward_grew else da)[front] >= 0]

@@ -23,8 +23,7 @@ def read_bytes(path, *, expansion: int | None = None) -> bytes:
     (:func:`engine.files.bounded.input_limit`; default: a text table's expansion): a 6 GB
     file is refused naming its size and the limit before a byte is read.
     """
-    from engine.files.bounded import TEXT_EXPANSION, InputTooLargeError, NotRegularFileError, input_limit, \
-        read_bounded
+    from engine.files.bounded import TEXT_EXPANSION, InputTooLargeError, NotRegularFileError, input_limit, read_bounded
 
     path = Path(path)
     limit, why = input_limit(TEXT_EXPANSION if expansion is None else expansion)
@@ -176,8 +175,8 @@ def fill_gaps(X: np.ndarray, missing: np.ndarray, *, path, names=None, fill: boo
     edge = " (a column missing at the start or the end holds its first or last valid value)" if \
         miss[0].any() or miss[-1].any() else ""
     report_repair(path, f"{int(miss.sum())} missing samples ({why()}) in {', '.join(shown)}{more}, in "
-                  f"{rows.size} of {n} frames ({frame_runs(rows + first_frame)}); interpolated linearly between the nearest "
-                  f"valid frames{edge}")
+                  f"{rows.size} of {n} frames ({frame_runs(rows + first_frame)}); interpolated linearly between the "
+                  f"nearest valid frames{edge}")
     return X
 
 
@@ -302,7 +301,7 @@ def sidecar_audio(path) -> str | None:
         cand = Path(path).with_suffix(suf)
         if cand.is_file():
             try:
-                w = wav_info(cand)
+                wav_info(cand)  # raises on a file that is not a readable WAV
             except (OSError, ValueError) as exc:
                 report_repair(path, f"{cand.name} beside it was not linked as its audio: "
                               f"{str(exc).removeprefix(f'{cand}: ')}")

@@ -23,7 +23,8 @@ FORMATS = {
                "names, AG500/AG501 .pos, NDI Wave TSV) read through a sensor layout (layout=)"),
     "pos": ("engine.io.readers.articulograph", "read_pos", "Carstens AG500 / AG501 .pos binary"),
     "wave": ("engine.io.readers.articulograph", "read_wave", "NDI Wave TSV export"),
-    "video": ("engine.io.video.clips", "read_video", "video of a talking face (.mp4 .mov .avi .mkv ...; a folder of them): "
+    "video": ("engine.io.video.clips", "read_video",
+              "video of a talking face (.mp4 .mov .avi .mkv ...; a folder of them): "
               "FaceMesh lip landmarks, head pose removed, mm (needs the [video] extra)"),
 }
 FORMAT_ALIASES = {"mocha": "ema", "est": "ema", "haskins": "mview", "mat": "mview", "obj": "mesh", "ply": "mesh",

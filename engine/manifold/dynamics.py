@@ -112,7 +112,8 @@ class DynamicFeatures(BaseEstimator):
             ratio = mx / p99 if p99 > 0 else float("inf") if mx > 0 else 1.0
             setattr(self, f"{name}_outlier_ratio_", float(ratio))
             if ratio > OUTLIER_RATIO:
-                hint = "" if q is not None else "; a percentile scale (lipspace build --dynamics-scale p99) is robust to them"
+                hint = ("" if q is not None else
+                        "; a percentile scale (lipspace build --dynamics-scale p99) is robust to them")
                 warnings.warn(f"the {name} block of G: its largest |entry| {mx:.4g} is {ratio:.1f} x its 99th "
                               f"percentile {p99:.4g} (more than {OUTLIER_RATIO:g} x): a few extreme frames "
                               f"(tracking glitches?) set the scale{hint}", DynamicScaleWarning, stacklevel=2)

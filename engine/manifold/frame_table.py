@@ -119,7 +119,8 @@ def _phone_at_frames(u, rate) -> np.ndarray:
 
 
 def landmarks(manifold, opening) -> tuple[np.ndarray, np.ndarray]:
-    """Kinematic landmarks (corpus frames, labels) of the opening measure (:func:`engine.recordings.kinematics.kinematic_landmarks`)."""
+    """Kinematic landmarks (corpus frames, labels) of the opening measure
+    (:func:`engine.recordings.kinematics.kinematic_landmarks`)."""
     from engine.recordings.kinematics import kinematic_landmarks
 
     return kinematic_landmarks(manifold.corpus_, aperture=opening)

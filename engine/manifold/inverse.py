@@ -456,8 +456,9 @@ def delaunay_at(Fy, Fx, queries, *, tree=None, n_neighbors: int = 32, max_neighb
                         T = barycentric_transforms(Y[verts], np.arange(4)[None])[0]
                         b = T[:3] @ (q - T[3])
                         w = np.r_[b, 1.0 - b.sum()]
-                        vals = np.stack([np.asarray(Fx)[tree.query_ball_point(Y[v], 0.0)].astype(np.float64).mean(axis=0)
-                                         for v in verts])
+                        vals = np.stack([
+                            np.asarray(Fx)[tree.query_ball_point(Y[v], 0.0)].astype(np.float64).mean(axis=0)
+                            for v in verts])
                         out[i] = w @ vals
                         break
                     if extra.size and idx.size < max_neighbors:  # frames inside the sphere: triangulate with them

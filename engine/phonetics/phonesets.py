@@ -262,7 +262,8 @@ def lipreading_class(label, *, strict: bool = True, phoneset: str | None = None)
 
 
 def place(label, *, strict: bool = True, phoneset: str | None = None) -> str:
-    """Place of articulation (``labial-velar`` for w, ``vowel``, ``pause``), as :data:`engine.phonetics.phones.PLACE`."""
+    """Place of articulation (``labial-velar`` for w, ``vowel``, ``pause``), as
+    :data:`engine.phonetics.phones.PLACE`."""
     return _field(label, "place", strict, phoneset)
 
 

@@ -252,7 +252,8 @@ def _match_events(expected, events):
                 break
         else:
             # one phone said as another (espeak-ng assimilates: 'n' before 'k' as 'N'), the next in step
-            if e < len(events) and not events[e][0].startswith("_") and (i + 1 == len(bare) or same(e + 1, bare[i + 1])):
+            if (e < len(events) and not events[e][0].startswith("_")
+                    and (i + 1 == len(bare) or same(e + 1, bare[i + 1]))):
                 starts.append(events[e][1])
                 i += 1
                 d = 0
@@ -511,7 +512,8 @@ def add_speech_audio(corpus, folder, *, progress=None, workers: int = 2):
 def _history_line(method, n, fell_back, made) -> str:
     reused = f"{n - made} reused, {made} made" if made < n else f"{n} made"
     if method == "phones":
-        back = f"; {fell_back} of the {made} made now word by word (the library did not speak their phones as given)" if fell_back else ""
+        back = (f"; {fell_back} of the {made} made now word by word (the library did not speak their phones "
+                f"as given)") if fell_back else ""
         return (f"speech audio: espeak-ng library, every phone placed on the talker's phone start "
                 f"({n} utterances, {reused}{back})")
     return (f"speech audio: espeak-ng program, each word stretched to the talker's word span, phones inside a "

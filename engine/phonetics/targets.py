@@ -108,7 +108,7 @@ class TargetSequence:
     def has_oracle(self) -> bool:
         return bool(self.targets) and all(t.state is not None or t.y is not None for t in self.targets)
 
-    def phones_only(self) -> "TargetSequence":
+    def phones_only(self) -> TargetSequence:
         """The same targets with the oracle (state, F^y, F^x) removed: labels and times only."""
         return replace(self, targets=tuple(Target(t.frame, t.label) for t in self.targets))
 
@@ -351,7 +351,8 @@ def targets_from_textgrid(manifold: Any, path: str | os.PathLike[str], *, tier: 
 
 def targets_from_text(manifold: Any, text: str, *, duration_model: Any = None, pauses: bool | None = None,
                       on_collision: str = "error") -> TargetSequence:
-    """Targets from English text: :func:`engine.phonetics.phones.pronounce` and a :class:`~engine.phonetics.phones.DurationModel`.
+    """Targets from English text: :func:`engine.phonetics.phones.pronounce` and a
+    :class:`~engine.phonetics.phones.DurationModel`.
 
     ``pauses=None`` brackets the text with the pause phone when the corpus has one.
     """

@@ -1,1 +1,2 @@
-"""Recordings: the corpus, blocked corpora, registration, kinematics, sensor layouts, speakers, orientation, head pose."""
+"""Recordings: the corpus, blocked corpora, registration, kinematics, sensor layouts, speakers, orientation,
+head pose."""

@@ -99,8 +99,8 @@ def load_blocked(path: str | os.PathLike[str]) -> Corpus:
     files (nothing is gathered; ``corpus.frames.paths`` names them in frame order).
     Every block's header is checked against the corpus file (present, 2-D float32, the
     recorded number of frames, the corpus's number of coordinates) before it is used; a
-    fault raises :class:`engine.recordings.corpus.CorpusError` naming the block file. NaN/inf in the blocks are found where they are read (the
-    shape stage names the frame).
+    fault raises :class:`engine.recordings.corpus.CorpusError` naming the block file. NaN/inf in the
+    blocks are found where they are read (the shape stage names the frame).
     """
     from engine.files.persist import NpzReadError, read_npz
 

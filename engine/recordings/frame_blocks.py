@@ -88,7 +88,7 @@ class SpeakerAffine:
     factor: np.ndarray | None
     grand: np.ndarray
 
-    def then(self, other: "SpeakerAffine") -> "SpeakerAffine":
+    def then(self, other: SpeakerAffine) -> SpeakerAffine:
         """One map doing ``self`` and then ``other`` (normalising frames normalised already)."""
         f1 = np.ones(len(self.mean)) if self.factor is None else self.factor
         mean = self.mean + (other.mean - self.grand) / f1[:, None]
@@ -167,7 +167,7 @@ class BlockFrames:
         self._token = uuid.uuid4().hex
 
     @classmethod
-    def from_files(cls, paths, *, source=None) -> "BlockFrames":
+    def from_files(cls, paths, *, source=None) -> BlockFrames:
         """Blocks named by ``paths``, their row counts read from the .npy headers (each checked:
         2-D float32, all of one width)."""
         counts, widths = [], set()
@@ -184,7 +184,7 @@ class BlockFrames:
             raise ValueError(f"block files disagree on the number of coordinates: {sorted(widths)}")
         return cls(paths, counts, widths.pop(), source=source)
 
-    def with_normalisation(self, normalisation: SpeakerAffine | None) -> "BlockFrames":
+    def with_normalisation(self, normalisation: SpeakerAffine | None) -> BlockFrames:
         """The same blocks read through ``normalisation`` after the normalisation this object already
         carries, if any (a new object; the files are not touched)."""
         if self.normalisation is not None and normalisation is not None:

@@ -122,7 +122,7 @@ class Layout:
     def n_columns(self) -> int:
         return len(self.sensors) * int(self.values)
 
-    def with_channels(self, n: int) -> "Layout":
+    def with_channels(self, n: int) -> Layout:
         """This layout for ``n`` channels: generic names ``ch1..`` when it names none of its own."""
         if n == len(self.sensors):
             return self

@@ -110,7 +110,8 @@ class AnatomicalFrame:
             k = int(np.argmax(np.abs(col)))
             pos, neg = words[_VIEW_AXES[self.dims][k]]
             w = pos if col[k] > 0 else neg
-            parts.append(f"{_NAMES[j]} = {w}" + ("" if abs(col[k]) > 0.999 else f" ({np.degrees(np.arccos(min(1.0, abs(col[k])))):.0f} deg off)"))
+            off = "" if abs(col[k]) > 0.999 else f" ({np.degrees(np.arccos(min(1.0, abs(col[k])))):.0f} deg off)"
+            parts.append(f"{_NAMES[j]} = {w}{off}")
         return ", ".join(parts)
 
     def describe(self) -> str:

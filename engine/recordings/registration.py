@@ -319,7 +319,8 @@ def explain_split(states, corpus: Corpus) -> str | None:
         per = []
         for c in big:
             ids = [u.id for u in corpus.utterances if np.mean(frame_comp[u.start:u.stop] == c) >= 0.5]
-            per.append(f"{len(ids)} utterance{'s' * (len(ids) != 1)} ({', '.join(ids[:3])}{' ...' if len(ids) > 3 else ''})")
+            more = " ..." if len(ids) > 3 else ""
+            per.append(f"{len(ids)} utterance{'s' * (len(ids) != 1)} ({', '.join(ids[:3])}{more})")
         return (f"the state graph splits into {len(big)} {kind} (holding {share} of the frames) along recordings: "
                 f"each utterance lies in one piece: {'; '.join(per)}. Cause: offsets between recordings or "
                 "speakers dominate the shape space. Fix: register the recordings (import --register utterance, "

@@ -32,9 +32,9 @@
 
 The client keeps the small work: the dynamic features (O(N m), one pass), the
 zero-velocity plane and the movement classes (O(N) numpy), the mini-batch K-means fit
-(a few thousand frames per step) and the graph of K states. Without an executor :meth:`engine.manifold.model.Manifold.fit` runs
-the same algorithms in-process; the two agree up to round-off (same random draws,
-same range finder).
+(a few thousand frames per step) and the graph of K states. Without an executor
+:meth:`engine.manifold.model.Manifold.fit` runs the same algorithms in-process; the two
+agree up to round-off (same random draws, same range finder).
 
 The cluster is ``DaskExecutor.connect("local")`` (a ``distributed.LocalCluster`` with
 one single-threaded worker per core) or ``DaskExecutor.connect("tcp://host:8786")`` (an
@@ -390,7 +390,7 @@ class DaskExecutor:
         self._own = own_cluster
 
     @classmethod
-    def connect(cls, address: str, **kwargs) -> "DaskExecutor":
+    def connect(cls, address: str, **kwargs) -> DaskExecutor:
         """``"local"``: a LocalCluster with one single-threaded worker per core (memory split
         evenly); otherwise the address of a running scheduler (``tcp://host:8786``)."""
         from distributed import Client, LocalCluster

@@ -143,7 +143,7 @@ class Anatomy:
     asymmetry: float = 0.0
 
     @classmethod
-    def draw(cls, rng, sd: float = 0.08) -> "Anatomy":
+    def draw(cls, rng, sd: float = 0.08) -> Anatomy:
         """A speaker drawn around the mean: every size times exp(sd * N(0, 1)) (s.d. ``sd``),
         a habitual asymmetry of s.d. 0.1."""
         out = {}

@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["talker_realism", "components_for", "components_of_total", "rule_classes", "format_realism", "articulation_report",
-           "format_articulation"]
+__all__ = ["talker_realism", "components_for", "components_of_total", "rule_classes", "format_realism",
+           "articulation_report", "format_articulation"]
 
 
 def components_for(ratios, fractions=(0.80, 0.95, 0.99)) -> tuple[int, ...]:

@@ -623,7 +623,8 @@ def test_worker_shows_engine_warnings_in_the_status_bar(win, qtbot):
 
     def task(progress):
         progress("fitting", 1, 1)
-        warnings.warn("the state graph is not strongly connected: 2 components", StateGraphConnectivityWarning)
+        warnings.warn("the state graph is not strongly connected: 2 components", StateGraphConnectivityWarning,
+                      stacklevel=1)
         return 7
 
     runner = run_task(task, parent=win, dialog=False)

@@ -109,9 +109,9 @@ def test_qt_calls_returning_nothing_keep_none_alive(qapp, qtbot):
         n_label, n_tip, n_enable, n_paint = 8_000, 6_000, 2_000, 4_000
         painted.calls = 0
         for i in range(n_label):
-            label.setText("frame %d" % (i & 7))
+            label.setText(f"frame {i & 7}")
         for i in range(n_tip):
-            button.setToolTip("tip %d" % (i & 7))
+            button.setToolTip(f"tip {i & 7}")
         for i in range(n_enable):
             button.setEnabled(bool(i & 1))
         for _ in range(n_paint // Painted.per_paint):

@@ -151,7 +151,8 @@ def test_user_guide_shortcut_sheet_and_about(qapp, tmp_path):
         for keys, where, _what in SHORTCUTS:
             if where == "window":
                 assert keys in bound, keys
-        assert w.editor.add_state_btn.shortcut().toString() == next(k for k, _w, t in SHORTCUTS if "Add the selected state" in t)
+        add_state_key = next(k for k, _w, t in SHORTCUTS if "Add the selected state" in t)
+        assert w.editor.add_state_btn.shortcut().toString() == add_state_key
         # the editor's keys are bound where the sheet says
         assert {"Space", "Tab", "Shift+Tab"} <= set(w.editor.key_shortcuts)
         assert w.frame_action.shortcut().toString() == "F"
@@ -222,7 +223,7 @@ def _explore_script(when_shown: str) -> str:
 
             def poll():
                 if self.state.manifold is not None:
-                    %s
+                    {actions}
                 else:
                     QtCore.QTimer.singleShot(50, poll)
 
@@ -231,7 +232,7 @@ def _explore_script(when_shown: str) -> str:
         MainWindow.show = show_then_act
         from app.cli import main
         sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
-    """) % "\n                    ".join(when_shown.strip().splitlines()))
+    """).format(actions="\n                    ".join(when_shown.strip().splitlines())))
 
 
 def _explore_env(tmp_path) -> dict:

@@ -27,7 +27,7 @@ def _recorder(into: list):
 def _warn_loop(tag: str, order: list, n: int = N_WARNINGS, category=CorpusWarning):
     for k in range(n):
         order.append((tag, k))
-        warnings.warn(f"{tag} {k}", category)
+        warnings.warn(f"{tag} {k}", category, stacklevel=1)
         time.sleep(0.0005)  # let the other thread run in between
 
 
@@ -49,7 +49,7 @@ def test_router_dispatches_by_thread_without_qt(monkeypatch):
         with router.route(routed.append):
             start.wait(10)
             _warn_loop("worker", order)
-        warnings.warn("worker after its task", CorpusWarning)  # no longer routed
+        warnings.warn("worker after its task", CorpusWarning, stacklevel=1)  # no longer routed
 
     t = threading.Thread(target=worker)
     t.start()
@@ -84,7 +84,7 @@ def test_router_reinstalled_over_a_handler_that_wraps_it_does_not_loop(monkeypat
 
     warnings.showwarning = cli_show
     router.install()
-    warnings.warn("once", CorpusWarning)  # GUI thread: router -> CLI handler -> router -> Python's own
+    warnings.warn("once", CorpusWarning, stacklevel=1)  # GUI thread: router -> CLI handler -> router -> Python's own
     assert seen == [("once", CorpusWarning)]
 
 
@@ -124,7 +124,7 @@ def test_other_warnings_in_a_worker_keep_the_process_filters(qapp, qtbot):
     from app.workers import TaskRunner
 
     def task(progress):
-        warnings.warn("not about the data", RuntimeWarning)
+        warnings.warn("not about the data", RuntimeWarning, stacklevel=1)
         return 1
 
     # pytest runs with filterwarnings=error: a non-data warning still raises in the worker

@@ -27,8 +27,8 @@ import numpy as np
 from engine.files.atomic import write_wav_atomic
 from engine.io.errors import ImportFormatError
 
-__all__ = ["read_video", "read_videos", "head_pose_model", "iter_video_frames", "track_video", "VIDEO_EXTENSIONS", "DEFAULT_BRIDGE_S",
-           "AUDIO_RATE", "find_gaps", "segments", "read_audio_track", "video_rate", "video_info"]
+__all__ = ["read_video", "read_videos", "head_pose_model", "iter_video_frames", "track_video", "VIDEO_EXTENSIONS",
+           "DEFAULT_BRIDGE_S", "AUDIO_RATE", "find_gaps", "segments", "read_audio_track", "video_rate", "video_info"]
 
 VIDEO_EXTENSIONS = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".mpg", ".mpeg", ".wmv", ".flv")
 #: longest run of face-less frames bridged by interpolation (s)
@@ -281,7 +281,8 @@ def _span(a, b, rate):
 
 
 def head_pose_model(interocular_mm: float = 63.0):
-    """An unfitted :class:`engine.recordings.headpose.HeadPose` for :data:`engine.io.video.facemesh.REFERENCE_POINTS`."""
+    """An unfitted :class:`engine.recordings.headpose.HeadPose` for
+    :data:`engine.io.video.facemesh.REFERENCE_POINTS`."""
     from engine.io.video.facemesh import EYE_CORNERS, REFERENCE_POINTS
     from engine.recordings.headpose import HeadPose
 

@@ -79,8 +79,8 @@ def textgrid_text(xmin: float, xmax: float, tiers) -> str:
                       f"        xmin = {_num(xmin)} ", f"        xmax = {_num(xmax)} ",
                       f"        intervals: size = {len(ivs)} "]
             for k, (s, e, lab) in enumerate(ivs, start=1):
-                lines += [f"        intervals [{k}]:", f"            xmin = {_num(s)} ", f"            xmax = {_num(e)} ",
-                          f"            text = {_quote(lab)} "]
+                lines += [f"        intervals [{k}]:", f"            xmin = {_num(s)} ",
+                          f"            xmax = {_num(e)} ", f"            text = {_quote(lab)} "]
         elif isinstance(tier, PointTier):
             pts = [(float(t), str(lab)) for t, lab in tier.points if xmin <= float(t) <= xmax]
             if any(b[0] < a[0] for a, b in zip(pts, pts[1:])):
@@ -89,7 +89,8 @@ def textgrid_text(xmin: float, xmax: float, tiers) -> str:
                       f"        xmin = {_num(xmin)} ", f"        xmax = {_num(xmax)} ",
                       f"        points: size = {len(pts)} "]
             for k, (t, lab) in enumerate(pts, start=1):
-                lines += [f"        points [{k}]:", f"            number = {_num(t)} ", f"            mark = {_quote(lab)} "]
+                lines += [f"        points [{k}]:", f"            number = {_num(t)} ",
+                          f"            mark = {_quote(lab)} "]
         else:
             raise TypeError(f"tier {i}: expected an IntervalTier or PointTier, got {type(tier).__name__}")
     return "\n".join(lines) + "\n"

@@ -63,7 +63,7 @@ def _csv_rows(columns, na: str):
             lists.append(v.astype(np.int64).tolist())
         elif v.dtype.kind == "f":  # non-finite values: missing
             fmts.append("%s")
-            lists.append([("%.7g" % x) if np.isfinite(x) else na for x in v.tolist()])
+            lists.append([f"{x:.7g}" if np.isfinite(x) else na for x in v.tolist()])
         else:
             fmts.append("%s")
             lists.append([_csv_text(x, na) for x in v.tolist()])

@@ -99,14 +99,14 @@ class GestureSet:
         out = np.clip(b[:, :1] + f, b[:, :1], b[:, 1:] - 1)
         return np.where(np.isfinite(self.times), out, -1)
 
-    def with_times(self, times) -> "GestureSet":
+    def with_times(self, times) -> GestureSet:
         """A copy with other landmark times (values not re-measured: :func:`remeasure`)."""
         t = np.asarray(times, np.float64)
         if t.shape != self.times.shape:
             raise ValueError(f"times of shape {t.shape}; expected {self.times.shape}")
         return replace(self, times=t)
 
-    def subset(self, index) -> "GestureSet":
+    def subset(self, index) -> GestureSet:
         idx = np.asarray(index)
         return replace(self, utterance=self.utterance[idx], times=self.times[idx],
                        peak_velocity=self.peak_velocity[idx], maxc_value=self.maxc_value[idx])

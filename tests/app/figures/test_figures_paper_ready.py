@@ -214,7 +214,7 @@ def _fonts(path) -> list:
 # ------------------------------------------------------------------------------------------ the checks
 def test_no_text_below_six_points(corpus_figures):
     kind, _, figs = corpus_figures
-    for (name, w), (fig, pdf) in figs.items():
+    for (name, w), (_fig, pdf) in figs.items():
         assert len(pdf["chars"]) >= 20, (kind, name, w)
         small = sorted({(t, round(s, 2)) for t, _, s, _, _ in pdf["chars"] if s < MIN_PT - 0.01})
         assert small == [], (kind, name, w, small[:10])
@@ -222,14 +222,14 @@ def test_no_text_below_six_points(corpus_figures):
 
 def test_no_two_words_overlap(corpus_figures):
     kind, _, figs = corpus_figures
-    for (name, w), (fig, pdf) in figs.items():
+    for (name, w), (_fig, pdf) in figs.items():
         bad = _collisions(pdf["chars"])
         assert bad == [], (kind, name, w, bad[:8])
 
 
 def test_every_text_lies_on_the_page(corpus_figures):
     kind, _, figs = corpus_figures
-    for (name, w), (fig, pdf) in figs.items():
+    for (name, w), (_fig, pdf) in figs.items():
         W, H = pdf["page"]
         assert W / 72 * 25.4 == pytest.approx(w, abs=0.5), (kind, name)
         assert H / 72 * 25.4 <= 240, (kind, name, w)  # a journal page's text block
@@ -239,7 +239,7 @@ def test_every_text_lies_on_the_page(corpus_figures):
 
 def test_all_fonts_are_embedded(corpus_figures):
     kind, _, figs = corpus_figures
-    for (name, w), (fig, pdf) in figs.items():
+    for (name, w), (_fig, pdf) in figs.items():
         fonts = pdf["fonts"]
         assert fonts, (kind, name, w)
         assert all(embedded for _, embedded in fonts), (kind, name, w, fonts)

@@ -167,7 +167,8 @@ def test_cache_and_state_folders_follow_one_rule(monkeypatch, tmp_path):
 
 
 def test_method_choices_are_entries_and_cleared(tmp_path, small_manifold):
-    """The measured choice of synthesis method per corpus (engine.synthesis.method_choice) is Lipspace's to list and clear."""
+    """The measured choice of synthesis method per corpus (engine.synthesis.method_choice) is Lipspace's to list and
+    clear."""
     from engine.synthesis.method_choice import choice_path
 
     mine = choice_path(small_manifold, tmp_path)

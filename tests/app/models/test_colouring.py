@@ -52,7 +52,8 @@ def test_hemisphere_coloring_dims_outside_the_horizon_and_reads_out_the_fraction
     np.testing.assert_allclose(c.rgb[inside], t[(c.values[inside] - lo).astype(int)], atol=1e-6)
     # no horizon: every reachable frame coloured, scale up to the deepest state
     full = hemisphere_coloring(m, s, "future", None)
-    assert np.array_equal(np.isfinite(full.values), np.isfinite(d)) and full.clim[1] == np.nanmax(d[np.isfinite(d)]) + 0.5
+    assert np.array_equal(np.isfinite(full.values), np.isfinite(d))
+    assert full.clim[1] == np.nanmax(d[np.isfinite(d)]) + 0.5
     # both: past frames negative, future positive, each the nearer side
     both = hemisphere_coloring(m, s, "both", None)
     fut, past = g.future(s)[lab], g.past(s)[lab]

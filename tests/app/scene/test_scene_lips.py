@@ -50,7 +50,8 @@ def test_sensors_are_spheres_straight_lines_labels_and_the_aperture(plotter):
         assert actor.GetMapper().GetPlaceAllLabels()  # never hidden where two would touch
     assert [drawn[k] for k in range(len(h.label_texts))] == h.label_texts
     for d, (ha, va) in zip(h._dirs, h._justify):  # the text runs away from its sensor
-        assert {"left": d[0] > 0, "right": d[0] < 0}.get(ha, True) and {"bottom": d[1] > 0, "top": d[1] < 0}.get(va, True)
+        assert {"left": d[0] > 0, "right": d[0] < 0}.get(ha, True)
+        assert {"bottom": d[1] > 0, "top": d[1] < 0}.get(va, True)
     h.set_visible(False)
     assert not h.visible and not any(a.GetVisibility() for a in h.actors)
     plotter.render()

@@ -277,7 +277,7 @@ def test_default_method_is_the_one_best_on_this_corpus_validation_and_is_named(e
         else:
             assert ed.set_text(text, source=source)
         runner = ed.synthesize()
-        qtbot.waitUntil(lambda: runner.state != "running", timeout=240000)
+        qtbot.waitUntil(lambda runner=runner: runner.state != "running", timeout=240000)
         best = choice["best"][protocol]
         syn = editor_window.state.synthetic
         assert syn.extra["method"] == best

@@ -302,7 +302,8 @@ def test_a_level_of_detail_cloud_is_coloured_from_every_frame_and_clicks_find_un
     import app.models.state.derived
 
     monkeypatch.setattr(app.models.lod, "DEFAULT_MAX_POINTS", 800)
-    monkeypatch.setattr(app.models.state.derived, "PREPARED", type(app.models.state.derived.PREPARED)())  # not another test's cloud
+    # not another test's cloud
+    monkeypatch.setattr(app.models.state.derived, "PREPARED", type(app.models.state.derived.PREPARED)())
     s = AppState(m)
     v = ManifoldView(s)
     try:

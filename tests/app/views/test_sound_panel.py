@@ -248,10 +248,12 @@ def test_a_laptops_screen_keeps_the_3d_view_tall_and_clips_nothing(window, qtbot
     assert w.lip_view.plotter.interactor.height() >= 120
     def nothing_cut():
         for x in w.findChildren(QtWidgets.QAbstractButton) + w.findChildren(QtWidgets.QComboBox):
-            if x.window() is not w or not x.isVisible() or x.visibleRegion().isEmpty() or x.objectName().startswith("qt_"):
+            if (x.window() is not w or not x.isVisible() or x.visibleRegion().isEmpty()
+                    or x.objectName().startswith("qt_")):
                 continue  # (what a dock's other tab hides; Qt's own dock title buttons place themselves)
             if not isinstance(x.parentWidget(), QtWidgets.QTabBar):
-                assert x.width() >= x.minimumSizeHint().width(), (type(x).__name__, x.text() if hasattr(x, "text") else "")
+                assert x.width() >= x.minimumSizeHint().width(), (type(x).__name__,
+                                                                  x.text() if hasattr(x, "text") else "")
                 r = x.mapTo(w, x.rect().topLeft())
                 assert 0 <= r.x() and r.x() + x.width() <= w.width() and r.y() + x.height() <= w.height(), x
             if isinstance(x, QtWidgets.QComboBox):
@@ -269,5 +271,6 @@ def test_a_laptops_screen_keeps_the_3d_view_tall_and_clips_nothing(window, qtbot
     box = note.geometry().translated(note.parentWidget().mapTo(w, note.parentWidget().rect().topLeft()))
     for t in tabs:
         if t.isVisible():
-            assert not box.intersects(t.geometry().translated(t.parentWidget().mapTo(w, t.parentWidget().rect().topLeft())))
+            corner = t.parentWidget().mapTo(w, t.parentWidget().rect().topLeft())
+            assert not box.intersects(t.geometry().translated(corner))
     w.resize(1300, 850)

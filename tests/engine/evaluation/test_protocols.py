@@ -206,7 +206,8 @@ def test_every_method_is_scored_in_y_through_the_same_projection(result, small_c
     X = interpolate_targets("linear", tg.frames, Xo, u.n_frames)
     lo, hi = tg.frames[0], tg.frames[-1] + 1
     ey = np.linalg.norm(project_x(m, X)[lo:hi, :3] - m.project(F)[lo:hi, :3], axis=1)
-    row = next(x for x in result.per_utterance if (x["protocol"], x["method"], x["utterance"]) == ("oracle", "linear", uid))
+    row = next(x for x in result.per_utterance
+               if (x["protocol"], x["method"], x["utterance"]) == ("oracle", "linear", uid))
     assert row["rmse_y"] == pytest.approx(float(np.sqrt((ey ** 2).mean())), rel=1e-4)
     # the velocity error is the RMSE of the first difference against the real one's
     Xt = m.shape_.transform(F).astype(np.float64)
@@ -282,7 +283,7 @@ def test_one_test_utterance_is_compared_gap_by_gap(small_corpus):
     r = evaluate_protocols(small_corpus, test_ids=[uid], n_boot=200, inverse_table=False, phones=False,
                            settings_factory=lambda m: select_settings(m, phones=False, **GRID))
     raw = {(p["protocol"], p["method"]): p for p in r._sums}
-    for (proto, method), p in raw.items():
+    for p in raw.values():
         assert sum(p["gap_frames"]) == p["frames"]
         assert sum(p["gap_sq_x"]) == pytest.approx(p["sq_x"], rel=1e-9)
         assert sum(p["gap_lve"]) == pytest.approx(p["lve_sum"], rel=1e-9)
@@ -291,7 +292,10 @@ def test_one_test_utterance_is_compared_gap_by_gap(small_corpus):
     for proto in ("states", "oracle"):
         c = r.comparison(proto, "linear", "rmse_x")
         assert c["unit"] == "gaps" and c["n"] == n_gaps and np.isfinite(c["ci_low"]) and c["ci_low"] <= c["ci_high"]
-        gx = lambda m: np.sqrt(np.array(raw[(proto, m)]["gap_sq_x"]) / np.array(raw[(proto, m)]["gap_frames"]))  # noqa: E731
+
+        def gx(m, proto=proto):
+            return np.sqrt(np.array(raw[(proto, m)]["gap_sq_x"]) / np.array(raw[(proto, m)]["gap_frames"]))
+
         assert c["mean_diff"] == pytest.approx(float((gx("linear") - gx("manifold")).mean()))
         assert c["wins"] == int((gx("linear") > gx("manifold")).sum())
         assert r.comparison(proto, "linear", "rmse_y")["unit"] == "utterances"  # Y3 is not paired by gap

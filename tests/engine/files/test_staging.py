@@ -1,7 +1,6 @@
 """engine.files.staging: a command's outputs are all written or none; an existing file is replaced only when asked;
 errors name the user's file, never a temporary one. A full disk is simulated by making writes raise ENOSPC."""
 import errno
-import os
 
 import numpy as np
 import pytest

@@ -243,7 +243,8 @@ def test_minibatch_centroids_from_a_subset_every_frame_assigned(monkeypatch):
     monkeypatch.setattr(states_mod, "KMEANS_FIT_FRAMES", 150)
     seen = []
     fit = MiniBatchKMeans.fit
-    monkeypatch.setattr(MiniBatchKMeans, "fit", lambda self, X, *a, **k: (seen.append(len(X)), fit(self, X, *a, **k))[1])
+    monkeypatch.setattr(MiniBatchKMeans, "fit",
+                        lambda self, X, *a, **k: (seen.append(len(X)), fit(self, X, *a, **k))[1])
     utts = [[0, 1, 2, 3, 4, 5, 0, 1, 2]] * 40  # 360 frames of 6 handmade states
     g, m = _fit_handmade(utts, 6, batch_size=48)
     assert seen == [150]
@@ -271,7 +272,7 @@ def test_progress_and_cancel():
     assert calls[0] == ("state graph", 0, 3) and calls[-1] == ("state graph", 3, 3)
 
     for at in (1, 3):
-        def cancel(stage, done, total):
+        def cancel(stage, done, total, at=at):
             if done == at:
                 raise Cancelled()
 

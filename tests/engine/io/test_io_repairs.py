@@ -377,8 +377,10 @@ def test_mview_srate_is_in_range_or_refused_by_name(tmp_path, srate):
 
 def test_reversed_and_zero_length_phones_are_refused_or_reported(tmp_path):
     p = tmp_path / "r.TextGrid"
-    p.write_text(_long_textgrid(2, 2).replace("            xmax = 0.5\n", "            xmax = 0.25\n", 1).replace(
-        "            xmin = 0.5\n", "            xmin = 0.3\n", 1).replace("            xmax = 1.0", "            xmax = 0.28"))
+    p.write_text(_long_textgrid(2, 2)
+                 .replace("            xmax = 0.5\n", "            xmax = 0.25\n", 1)
+                 .replace("            xmin = 0.5\n", "            xmin = 0.3\n", 1)
+                 .replace("            xmax = 1.0", "            xmax = 0.28"))
     with pytest.raises(ImportFormatError, match=r"xmin > xmax"):  # a reversed interval: never dropped quietly
         read_textgrid(p)
     csv = tmp_path / "a.csv"

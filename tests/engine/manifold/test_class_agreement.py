@@ -1,4 +1,5 @@
-"""engine.manifold.class_agreement: the classes against the aperture, the trivial rule and the second-difference reading."""
+"""engine.manifold.class_agreement: the classes against the aperture, the trivial rule and the second-difference
+reading."""
 import numpy as np
 import pytest
 

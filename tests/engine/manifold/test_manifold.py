@@ -312,8 +312,8 @@ def test_cache_key_covers_every_engine_module_a_fit_imports(tmp_path):
     assert used, "the fit imported no engine module after the corpus was made: the check sees nothing"
     missing = used - covered - {"engine"}
     assert not missing, f"modules the fit imports but the cache key leaves out: {sorted(missing)}"
-    assert {"engine.recordings.registration", "engine.recordings.kinematics", "engine.manifold.buildplan", "engine.manifold.inverse",
-            "engine.manifold.tangent", "engine.manifold.local_gradients"} <= covered
+    assert {"engine.recordings.registration", "engine.recordings.kinematics", "engine.manifold.buildplan",
+            "engine.manifold.inverse", "engine.manifold.tangent", "engine.manifold.local_gradients"} <= covered
 
 
 def test_the_cache_key_finds_every_engine_import_the_parser_finds():

@@ -47,7 +47,10 @@ def test_utterance_audio_speaks_the_words_in_their_spans_and_is_silent_in_pauses
         sr = sa.SAMPLE_RATE
         assert len(x) == int(round(u.phones[-1].end * sr))
         assert info["split"] and info["words"] == len(u.text.split())
-        rms = lambda a, b: float(np.sqrt(np.mean(x[int(a * sr):int(b * sr)] ** 2)))  # noqa: E731
+
+        def rms(a, b, x=x, sr=sr):
+            return float(np.sqrt(np.mean(x[int(a * sr):int(b * sr)] ** 2)))
+
         level = rms(0, len(x) / sr)
         first, last = u.phones[0], u.phones[-1]
         assert rms(first.start, first.end) < 0.01 * level and rms(last.start, last.end) < 0.01 * level

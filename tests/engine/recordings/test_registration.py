@@ -50,8 +50,8 @@ def test_rigid_registration_removes_head_motion(with_reference):
 def test_rigid_needs_three_reference_sensors(with_reference):
     c, _ = with_reference
     lips = c.subset([c.utterances[0].id])
-    lips = Corpus(frames=lips.frames[:, :12], rate=lips.rate, utterances=lips.utterances, point_names=lips.point_names[:4],
-                  point_roles=lips.point_roles[:4])
+    lips = Corpus(frames=lips.frames[:, :12], rate=lips.rate, utterances=lips.utterances,
+                  point_names=lips.point_names[:4], point_roles=lips.point_roles[:4])
     with pytest.raises(CorpusError, match=r"at least 3 reference sensors.*method='utterance'"):
         register(lips, method="rigid")
     with pytest.raises(ValueError, match=r"expected one of auto, rigid"):

@@ -1,4 +1,5 @@
-"""The documented multi-node recipe (docs/ARCHITECTURE.md, dask-jobqueue) makes a valid job script; nothing is submitted."""
+"""The documented multi-node recipe (docs/ARCHITECTURE.md, dask-jobqueue) makes a valid job script; nothing is
+submitted."""
 import re
 from pathlib import Path
 

@@ -82,7 +82,8 @@ def test_too_few_targets_or_nothing_to_choose_keep_the_state_velocities():
     w = calibration_weight(f, X, V)
     assert 0 < w < 1
     D = pchip_slopes(f, X)
-    np.testing.assert_allclose(calibrated_spline(f, X, V, 20), interpolate_targets("hermite", f, X, 20, D + w * (V - D)))
+    np.testing.assert_allclose(calibrated_spline(f, X, V, 20),
+                               interpolate_targets("hermite", f, X, 20, D + w * (V - D)))
 
 
 @pytest.mark.parametrize("T", [1, 2, 3, 7])

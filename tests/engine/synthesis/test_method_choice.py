@@ -94,7 +94,8 @@ def _fake_choice(m, best):
     from engine.synthesis.learnt_paths import prior_blend
 
     return {"best": best, "state_dims": 3, "n_states": 40, "n_neighbors": 20, "frames_per_state": 30,
-            "sigma": {"states/viterbi": 2.0}, "sliding_window": [4, 3, 1.0], "protocols": ["states", "oracle", "phones"],
+            "sigma": {"states/viterbi": 2.0}, "sliding_window": [4, 3, 1.0],
+            "protocols": ["states", "oracle", "phones"],
             "blend": {p: prior_blend(m.Fx_.shape[1]) for p in ("states", "oracle", "phones")}, "method_validation": {},
             "val_ids": [], "note": "a test's choice"}
 

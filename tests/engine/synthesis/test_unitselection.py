@@ -12,7 +12,7 @@ from engine.synthesis.unitselection import (
 
 
 def test_overlap_table_is_the_papers_table_1():
-    P, I, N = "protected", "invisible", "normal"
+    P, I, N = "protected", "invisible", "normal"  # noqa: E741 (the letters of the paper's table)
     expected = {(P, P): (50, 50), (P, I): (77, 23), (P, N): (55, 45),
                 (I, P): (23, 77), (I, I): (50, 50), (I, N): (27, 73),
                 (N, P): (45, 55), (N, I): (77, 23), (N, N): (50, 50)}

@@ -127,6 +127,7 @@ def test_a_corpus_too_small_for_a_split_is_validated_by_leaving_each_utterance_o
         np.testing.assert_array_equal(Fy, np.concatenate([m.Fy_[u.start:u.stop] for u in kept]))
         assert K == max(2, round(len(Fy) / GRID["frames_per_state"][j // per_candidate]))
     # every method measured on all five, the manifold's weights fitted on the other folds
-    assert set(s["method_validation"]) == {"states", "oracle"} and s["best"]["states"] in s["method_validation"]["states"]
+    assert set(s["method_validation"]) == {"states", "oracle"}
+    assert s["best"]["states"] in s["method_validation"]["states"]
     assert s["blend"]["states"]["frames"] == sum(
         int(t.frames[-1]) + 1 - int(t.frames[0]) for t in (val.mid_frames(m, u.id) for u in utts))

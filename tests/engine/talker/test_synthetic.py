@@ -90,8 +90,8 @@ def test_aperture_is_the_geometric_inner_lip_distance():
     signed = [CONTROL_NAMES.index(n) for n in SIGNED_CONTROLS]
     c[:, signed] = 2 * c[:, signed] - 1
     P = lip.deform(c).reshape(50, -1, 3)
-    u, l = lip.midline
-    np.testing.assert_allclose(lip.aperture(c), P[:, u, 1] - P[:, l, 1], atol=1e-4)
+    upper, lower = lip.midline
+    np.testing.assert_allclose(lip.aperture(c), P[:, upper, 1] - P[:, lower, 1], atol=1e-4)
     assert (lip.aperture(c) >= 0).all()
     # lips never pass through each other anywhere along the contour
     n = lip.rows * lip.cols
@@ -101,7 +101,7 @@ def test_aperture_is_the_geometric_inner_lip_distance():
 # -------------------------------------------------------------- the talker
 def test_every_phone_has_articulatory_targets():
     assert set(PHONES) <= set(PHONE_GESTURES)
-    for p, gestures in PHONE_GESTURES.items():
+    for gestures in PHONE_GESTURES.values():
         for g in gestures:
             assert len(g.target) == len(CONTROL_NAMES) and all(-1 <= t <= 1 for t in g.target)
 

@@ -74,7 +74,8 @@ def test_articulation_report_shares_activity_and_pairs():
     out = articulation_report(lip, C)
     # the jaw is the largest source; shares are fractions of the noise-free variance
     assert max(out["share"], key=out["share"].get) == "jaw"
-    assert all(0 <= v <= 1 for v in out["share"].values()) and out["share"]["closure"] == 0.0  # never moves: not deformed at all
+    assert all(0 <= v <= 1 for v in out["share"].values())
+    assert out["share"]["closure"] == 0.0  # never moves: not deformed at all
     assert 0.95 < sum(out["share"].values()) < 1.05  # the surface is nearly linear in independent controls (0.99)
     assert out["active"]["jaw"] > 0.7 and out["active"]["corner"] == pytest.approx(0.1)
     assert out["active"]["closure"] == 0

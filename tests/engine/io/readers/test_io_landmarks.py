@@ -124,7 +124,8 @@ def test_time_column_and_a_different_rate_is_refused(tmp_path):
     """A CSV's own times decide its rate: a --rate that disagrees is an error, not silently used."""
     p = tmp_path / "t.csv"
     p.write_text("time,a_x,a_y\n" + "".join(f"{k / 100:.2f},{k},{-k}\n" for k in range(20)))
-    with pytest.raises(ImportFormatError, match=r"time column 'time' gives 100 Hz but a rate of 60 Hz was given \(--rate\)"):
+    with pytest.raises(ImportFormatError,
+                       match=r"time column 'time' gives 100 Hz but a rate of 60 Hz was given \(--rate\)"):
         read_csv_landmarks(p, rate=60)
     assert read_csv_landmarks(p, rate=100).rate == 100 == read_csv_landmarks(p).rate
     q = tmp_path / "long.csv"

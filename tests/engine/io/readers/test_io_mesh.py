@@ -49,9 +49,9 @@ def test_obj_polygons_slashes_and_negative_indices(tmp_path):
 
 def test_big_endian_ply_with_extra_properties(tmp_path):
     V, F = _grid_mesh()
-    head = ("ply\nformat binary_big_endian 1.0\ncomment x\nelement vertex %d\nproperty double x\nproperty double y\n"
-            "property double z\nproperty uchar red\nelement face %d\nproperty list uchar uint vertex_indices\n"
-            "property float quality\nend_header\n" % (len(V), len(F))).encode()
+    head = (f"ply\nformat binary_big_endian 1.0\ncomment x\nelement vertex {len(V)}\nproperty double x\n"
+            f"property double y\nproperty double z\nproperty uchar red\nelement face {len(F)}\n"
+            "property list uchar uint vertex_indices\nproperty float quality\nend_header\n").encode()
     vrec = np.empty(len(V), dtype=[("x", ">f8"), ("y", ">f8"), ("z", ">f8"), ("r", "u1")])
     vrec["x"], vrec["y"], vrec["z"], vrec["r"] = V[:, 0], V[:, 1], V[:, 2], 7
     frec = np.empty(len(F), dtype=[("n", "u1"), ("i", ">u4", (3,)), ("q", ">f4")])

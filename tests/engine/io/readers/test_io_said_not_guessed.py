@@ -13,7 +13,8 @@ from engine.io.readers.mview import read_mview
 
 HEAD = 'File type = "ooTextFile"\nObject class = "TextGrid"\n\nxmin = {xmin}\nxmax = 0.6\ntiers? <exists>\nsize = {n}\n'
 TIER = ('item [{k}]:\n    class = "IntervalTier"\n    name = "{name}"\n    xmin = {xmin}\n    xmax = 0.6\n'
-        '    intervals: size = 2\n    intervals [1]:\n        xmin = {xmin}\n        xmax = 0.3\n        text = {first}\n'
+        '    intervals: size = 2\n    intervals [1]:\n        xmin = {xmin}\n        xmax = 0.3\n'
+        '        text = {first}\n'
         '    intervals [2]:\n        xmin = 0.3\n        xmax = 0.6\n        text = "aa"\n')
 
 

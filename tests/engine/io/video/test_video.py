@@ -261,7 +261,8 @@ def test_missing_extra_gives_one_install_line(videos, tmp_path):
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 2
     lines = [s for s in r.stderr.splitlines() if s.strip()]
-    assert len(lines) == 1 and "pip install -e '.[video]'" in lines[0] and lines[0].startswith("lipspace import: error:")
+    assert len(lines) == 1 and "pip install -e '.[video]'" in lines[0]
+    assert lines[0].startswith("lipspace import: error:")
     assert not (tmp_path / "x.npz").exists()
 
 

@@ -150,7 +150,7 @@ def test_default_threshold_is_relative_and_the_summary_names_the_bad_speaker(tmp
     from engine.recordings.metadata import with_fields
 
     parts = []
-    for k, (spk, r) in enumerate((("XYZ", 8.6), ("ABC", 1.0), ("DEF", 1.0))):
+    for spk, r in (("XYZ", 8.6), ("ABC", 1.0), ("DEF", 1.0)):
         rms = np.full((60, 2), 1.0)
         rms[:, 0] = r
         c = _one(rms)
