@@ -56,5 +56,5 @@ def test_the_stub_and_the_typed_marker_ship_with_the_package():
     tomllib = pytest.importorskip("tomllib")  # Python 3.11+
 
     data = tomllib.loads((STUB.parents[1] / "pyproject.toml").read_text(encoding="utf-8"))
-    patterns = data["tool"]["setuptools"]["package-data"]["*"]
+    patterns = data["tool"]["setuptools"]["package-data"]["engine"]
     assert "*.pyi" in patterns and "py.typed" in patterns
