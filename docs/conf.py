@@ -1,6 +1,7 @@
 """Sphinx configuration: the user guide, method and results pages (Markdown, through MyST) and the
-API reference generated from the code's numpydoc docstrings (autosummary). ``make docs`` builds it
-with warnings as errors."""
+API reference generated from the code's numpydoc docstrings (autosummary), with the module
+reference listed from the source tree at every build (``_ext/module_reference.py``). ``make docs``
+builds it with warnings as errors."""
 from __future__ import annotations
 
 import os
@@ -9,6 +10,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent / "_ext"))
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")  # the app's modules import Qt; nothing is shown
 
 import engine  # noqa: E402
@@ -24,10 +26,11 @@ extensions = [
     "sphinx.ext.mathjax",
     "numpydoc",
     "myst_parser",
+    "module_reference",  # docs/_ext: writes generated/modules.rst, every module of engine and app
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "screenshots/*.py", "gltf_web_check", "**/README.md"]
+exclude_patterns = ["_build", "screenshots/*.py", "gltf_web_check"]
 templates_path = ["_templates"]
 
 # API reference: one page per public name and per module, generated at build time
