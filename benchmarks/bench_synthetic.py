@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def one(preset: str, save_dir: str | None) -> dict:
     sys.path.insert(0, str(ROOT))
-    from engine.talker.synthetic import SyntheticTalker, _lexicon
+    from engine.talker.synthetic_talker import SyntheticTalker, _lexicon
 
     t = time.perf_counter()
     _lexicon()  # word list + CMU dictionary, loaded once per process

@@ -89,10 +89,10 @@ from engine.synthesis.methods import (
 from engine.synthesis.trajectory import (
     Trajectory as Trajectory,
 )
-from engine.talker.synthetic import (
+from engine.talker.synthetic_talker import (
     SyntheticTalker as SyntheticTalker,
 )
-from engine.talker.synthetic import (
+from engine.talker.talker_cache import (
     load_synthetic as load_synthetic,
 )
 

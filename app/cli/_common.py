@@ -79,7 +79,7 @@ def load_corpus_arg(path, *, synthetic_preset: str = "default", progress=None, k
 
     if path is None:
         from app.files.source_loading import prune_talker_cache
-        from engine.talker.synthetic import load_synthetic
+        from engine.talker.talker_cache import load_synthetic
 
         corpus = load_synthetic(preset=synthetic_preset, progress=progress, kinematics=kinematics, audio=audio)
         prune_talker_cache(synthetic_preset, kinematics)  # the corpora older code left behind

@@ -31,9 +31,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from engine.synthesis.methods import SYNTHESIS_METHODS
+
 PRESETS = ("small", "default", "paper")
-#: engine.synthesis.methods.METHODS (a test keeps them equal); "best" resolves to one of them
-METHODS = ("manifold", "viterbi", "sv-hermite", "linear", "cubic", "unitselection", "dominance", "sliding-window")
+#: the registry's methods (engine.synthesis.methods); "best" resolves to one of them
+METHODS = tuple(SYNTHESIS_METHODS)
 BEST = "best"
 #: the manifold synthesiser's inverse maps (engine.synthesis.viterbi.INVERSES; a test keeps them equal)
 INVERSES = ("delaunay", "state-mean", "local-linear")

@@ -41,7 +41,7 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     """Fig. 3: a generated trajectory in the first two components of Y.
 
     The utterance's own phone mid-points are the targets (oracle states,
-    :func:`engine.phonetics.targets.targets_from_utterance`); :class:`engine.synthesis.viterbi.ManifoldSynthesizer`
+    :func:`engine.phonetics.targets.targets_from_utterance`); :class:`engine.synthesis.viterbi.ViterbiSynthesizer`
     fills every gap with the most probable state path of exactly the gap's length
     (``strict=False``: a gap that cannot be bridged in time ends at the nearest
     reachable state and the figure notes it). Original black, generated red (the
@@ -66,7 +66,7 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     """
     require_fitted(manifold, "states_")
     from engine.phonetics.targets import targets_from_utterance
-    from engine.synthesis.viterbi import ManifoldSynthesizer
+    from engine.synthesis.viterbi import ViterbiSynthesizer
 
     corpus = manifold.corpus_
     a, b = (int(v) for v in axes)
@@ -83,7 +83,7 @@ def make_fig3(manifold, *, utterance=None, axes=(0, 1), label_phones: bool = Tru
     from engine.threads import one_blas_thread
 
     with one_blas_thread():  # the inverse map's Delaunay set-up: one tiny LAPACK call per simplex
-        traj = ManifoldSynthesizer(strict=False).fit(manifold).synthesize(targets)
+        traj = ViterbiSynthesizer(strict=False).fit(manifold).synthesize(targets)
     orig = np.asarray(manifold.Fy_[u.start:u.stop], dtype=np.float64)
     gen = np.asarray(traj.Fy, dtype=np.float64)
     if gen.shape[1] <= max(a, b):

@@ -66,13 +66,13 @@ def cached_manifold_path(preset: str, kinematics: str = "classic") -> Path:
     """
     from engine import __version__
     from engine.manifold.model import FILE_VERSION
-    from engine.talker.synthetic import GENERATOR_VERSION
+    from engine.talker.synthetic_talker import GENERATOR_VERSION
 
     if preset not in PRESETS:
         raise ValueError(f"preset must be one of {PRESETS}, got {preset!r}")
     check_kinematics(kinematics)
     from engine.manifold.model import algorithm_fingerprint
-    from engine.talker.synthetic import cache_token, generator_fingerprint
+    from engine.talker.talker_cache import cache_token, generator_fingerprint
 
     token = cache_token(preset, kinematics=kinematics)
     # keyed on the generator's and the fitting code and parameters: never a manifold made by older code
@@ -234,7 +234,7 @@ def _load_manifold(path, preset, progress, use_cache, kinematics="classic", late
             return m, src
         except (ManifoldFileError, OSError):
             pass  # stale or damaged cache: rebuild below
-    from engine.talker.synthetic import load_synthetic
+    from engine.talker.talker_cache import load_synthetic
 
     # speech audio when espeak-ng is installed: now, or (later given) named now and made in the background
     corpus = load_synthetic(preset=preset, progress=progress, audio=later is None, kinematics=kinematics,
@@ -290,7 +290,7 @@ def _audio_later(corpus, preset, kinematics):
     import subprocess
 
     from engine.phonetics.speech_audio import SpeechAudioUnavailable, add_speech_audio, planned_speech_audio
-    from engine.talker.synthetic import audio_folder, cache_path
+    from engine.talker.talker_cache import audio_folder, cache_path
 
     folder = audio_folder(cache_path(preset, kinematics=kinematics))
     try:
@@ -389,6 +389,6 @@ def prune_talker_cache(preset, kinematics="classic", keep=()) -> None:
     ``kinematics``, keeping its newest corpus and the files ``keep`` (see :func:`app.files.cache.prune`);
     the other kinematics' entries have another preset token and stay."""
     from app.files.cache import newest, prune
-    from engine.talker.synthetic import cache_token
+    from engine.talker.talker_cache import cache_token
 
     prune([*keep, *newest("corpus", cache_token(preset, kinematics=kinematics))])

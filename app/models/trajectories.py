@@ -12,15 +12,15 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.synthesis.methods import SYNTHESIS_METHODS
+
 __all__ = ["lip_frames", "trajectory_table", "export_trajectory", "synthesize_targets", "trajectory_error",
            "METHOD_LABELS", "resolve_method", "method_params"]
 
-METHOD_LABELS = {"best": "Best on validation (per corpus)", "manifold": "Manifold (learnt paths)",
-                 "viterbi": "Manifold, max-probability path (paper)", "sv-hermite": "State-velocity Hermite",
-                 "linear": "Linear interpolation (X)", "cubic": "Cubic spline (X)", "unitselection": "Unit selection",
-                 "dominance": "Dominance (Cohen–Massaro)", "sliding-window": "Sliding-window regression"}
+#: the method menu's entries: "best", then each method of the registry (engine.synthesis.methods)
+METHOD_LABELS = {"best": "Best on validation (per corpus)", **{name: m.label for name, m in SYNTHESIS_METHODS.items()}}
 #: methods that need the corpus's validated settings (engine.synthesis.method_choice)
-_VALIDATED = ("manifold", "sv-hermite")
+_VALIDATED = tuple(name for name, m in SYNTHESIS_METHODS.items() if m.build == "validated")
 
 
 def _choice(manifold, cache, progress=None):

@@ -5,132 +5,38 @@ across utterance boundaries: no velocity, transition or path crosses one.
 """
 from __future__ import annotations
 
-import gc
 import math
 import os
-from collections.abc import Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from engine.files.atomic import atomic_write
+from engine.recordings.corpus_format import (
+    FORMAT_VERSION,
+    corpus_from_arrays,
+    corpus_to_arrays,
+    load_corpus,
+    save_corpus,
+)
 from engine.recordings.frame_blocks import BlockFrames
+from engine.recordings.utterances import (
+    CorpusError,
+    CorpusWarning,
+    PhoneInterval,
+    Utterance,
+    _as_phones,
+    frame_points,
+    label_codes,
+)
 
-__all__ = ["CorpusError", "CorpusWarning", "PhoneInterval", "Utterance", "Corpus", "label_codes"]
+__all__ = ["CorpusError", "CorpusWarning", "PhoneInterval", "Utterance", "Corpus", "label_codes", "frame_points",
+           "FORMAT_VERSION"]
 
-FORMAT_VERSION = 1
 #: largest coordinate magnitude a corpus holds (the importers treat larger samples as dropouts)
 MAX_COORDINATE = 1e6
-
-
-class CorpusError(ValueError):
-    """Raised when corpus data is malformed; the message names what and where."""
-
-
-class CorpusWarning(UserWarning):
-    """Something about the user's data that the results depend on; the work goes on.
-
-    Base class of the engine's warnings about data (e.g. a disconnected state graph).
-    The command line prints them as one plain line and the window shows them in its
-    status bar.
-    """
-
-
-@dataclass(frozen=True)
-class PhoneInterval:
-    """One phone of an alignment, times in seconds from the utterance start."""
-
-    start: float
-    end: float
-    label: str
-
-    @property
-    def mid(self) -> float:
-        return 0.5 * (self.start + self.end)
-
-    @classmethod
-    def _many(cls, times: Sequence[tuple[float, float]], labels: Sequence[str]) -> tuple[PhoneInterval, ...]:
-        """Phones from lists of ``(start, end)`` floats and ``str`` labels (already of those types, as
-        ``tolist()`` of a file's float and str arrays gives them), without the dataclass's per-field
-        ``__init__`` (a million-frame corpus has ~10^5 phones). :meth:`Corpus.validate` checks them."""
-        new = object.__new__
-        out = []
-        for (t0, t1), lab in zip(times, labels):
-            p = new(cls)
-            p.__dict__.update(start=t0, end=t1, label=lab)
-            out.append(p)
-        return _Phones(out)
-
-
-class _Phones(tuple):
-    """A tuple of PhoneInterval built by :meth:`PhoneInterval._many`: a corpus keeps it as it is."""
-
-    __slots__ = ()
-
-
-@dataclass(frozen=True)
-class Utterance:
-    """A contiguous frame range ``[start, stop)`` of the corpus.
-
-    Parameters
-    ----------
-    id : str
-        Unique name of the utterance.
-    start, stop : int
-        Frame range in the corpus (``stop`` exclusive).
-    phones : tuple of PhoneInterval
-        Sorted, non-overlapping phone intervals, seconds from the utterance start.
-    audio : str or None
-        Path of a WAV file holding the utterance's audio, if any.
-    text : str
-        Orthographic text, if known.
-    speaker : str
-        Who spoke it ("" = unknown). Multi-speaker corpora are normalised per speaker
-        before the shape space (:mod:`engine.recordings.registration`).
-    duration_s : float
-        How long the recording lasts (s) when that is known more finely than its frames: an
-        utterance resampled from n frames at r Hz lasts n / r, which its frames at the new rate
-        round up (:func:`engine.io.resample`). 0: ``n_frames / rate``.
-    fields : tuple of (str, str)
-        Other metadata fields, ``(name, value)`` in order (sex, emotion, text number,
-        session, group ...; :mod:`engine.recordings.metadata` reads them).
-    words : tuple of PhoneInterval
-        The word tier where the source has one (a Haskins file's ``WORDS``), seconds from
-        the utterance start, labels as given; () when the source has none.
-    """
-
-    id: str
-    start: int
-    stop: int
-    phones: tuple[PhoneInterval, ...] = ()
-    audio: str | None = None
-    text: str = ""
-    speaker: str = ""
-    duration_s: float = 0.0
-    fields: tuple[tuple[str, str], ...] = ()
-    words: tuple = ()
-
-    @property
-    def n_frames(self) -> int:
-        return self.stop - self.start
-
-
-def _as_phones(phones: Iterable[Any]) -> tuple[PhoneInterval, ...]:
-    if type(phones) is _Phones:
-        return phones  # a file's phones (PhoneInterval._many): kept, not rebuilt
-    if type(phones) is tuple and all(type(p) is PhoneInterval for p in phones):
-        return phones  # already phones: kept
-    out = []
-    for p in phones:
-        if isinstance(p, PhoneInterval):
-            out.append(p)
-        else:
-            s, e, lab = p
-            out.append(PhoneInterval(float(s), float(e), str(lab)))
-    return tuple(out)
 
 
 @dataclass
@@ -188,7 +94,8 @@ class Corpus:
     units: str = "mm"
 
     def __post_init__(self) -> None:
-        if not isinstance(self.frames, BlockFrames):  # frames stored in blocks stay there (engine.recordings.frame_blocks)
+        # frames stored in blocks stay there (engine.recordings.frame_blocks)
+        if not isinstance(self.frames, BlockFrames):
             self.frames = np.asarray(self.frames, dtype=np.float32)
         self.utterances = [u if (ph := _as_phones(u.phones)) is u.phones else replace(u, phones=ph)
                            for u in self.utterances]
@@ -486,60 +393,16 @@ class Corpus:
             axes=self.axes, units=self.units,
         )
 
-    # -------------------------------------------------------------- file i/o
+    # -------------------------------------------------------------- file i/o (engine.recordings.corpus_format)
     def to_arrays(self, *, include_frames: bool = True,
                   base: str | os.PathLike[str] | None = None) -> dict[str, np.ndarray]:
-        """Flat dict of arrays for ``np.savez`` (no pickled objects).
+        """Flat dict of arrays for ``np.savez`` (no pickled objects; :mod:`engine.recordings.corpus_format`).
 
         ``base``: the folder of the file the arrays go to. Audio paths are then stored
         relative to it (``corpus_utt_audio``), so a folder moved with its sound keeps it, and
         absolute as well (``corpus_utt_audio_abs``), for a corpus file moved on its own.
         """
-        phones = [(k, p.start, p.end, p.label) for k, u in enumerate(self.utterances) for p in u.phones]
-        d = {
-            "corpus_version": np.array(FORMAT_VERSION),
-            "corpus_rate": np.array(self.rate),
-            "corpus_dims": np.array(self.dims),
-            "corpus_name": np.array(self.name),
-            "corpus_n_frames": np.array(self.n_frames),
-            "corpus_n_columns": np.array(self.frames.shape[1]),
-            "corpus_utt_ids": np.array([u.id for u in self.utterances], dtype=str),
-            "corpus_utt_bounds": self.bounds,
-            "corpus_utt_audio": np.array([_relative(u.audio, base) for u in self.utterances], dtype=str),
-            "corpus_utt_text": np.array([u.text for u in self.utterances], dtype=str),
-            "corpus_utt_speaker": np.array([u.speaker for u in self.utterances], dtype=str),
-            "corpus_registration": np.array(self.registration),
-            "corpus_history": np.array(self.history, dtype=str).reshape(-1),
-            "corpus_phone_utt": np.array([p[0] for p in phones], dtype=np.int64),
-            "corpus_phone_times": np.array([[p[1], p[2]] for p in phones], dtype=np.float64).reshape(-1, 2),
-            "corpus_phone_labels": np.array([p[3] for p in phones], dtype=str),
-        }
-        words = [(k, w.start, w.end, w.label) for k, u in enumerate(self.utterances) for w in u.words]
-        if any(u.duration_s for u in self.utterances):  # resampled recordings' true durations (else as before)
-            d["corpus_utt_duration"] = np.array([float(u.duration_s) for u in self.utterances], dtype=np.float64)
-        if words:  # the word tiers, where the source had them (files without them read as before)
-            d["corpus_word_utt"] = np.array([w[0] for w in words], dtype=np.int64)
-            d["corpus_word_times"] = np.array([[w[1], w[2]] for w in words], dtype=np.float64).reshape(-1, 2)
-            d["corpus_word_labels"] = np.array([w[3] for w in words], dtype=str)
-        if include_frames:
-            d["corpus_frames"] = self.frames
-        if self.faces is not None:
-            d["corpus_faces"] = self.faces
-        if self.point_names is not None:
-            d["corpus_point_names"] = np.array(self.point_names, dtype=str)
-        if self.point_roles is not None:
-            d["corpus_point_roles"] = np.array(self.point_roles, dtype=str)
-        if self.axes:
-            d["corpus_axes"] = np.array(self.axes)
-        d["corpus_units"] = np.array(self.units)
-        from engine.recordings.field_arrays import fields_to_arrays
-
-        d.update(fields_to_arrays(self.utterances))
-        if base is not None:
-            d["corpus_utt_audio_abs"] = np.array([_absolute(u.audio) for u in self.utterances], dtype=str)
-        for k, v in self.latent.items():
-            d[f"corpus_latent_{k}"] = v
-        return d
+        return corpus_to_arrays(self, include_frames=include_frames, base=base)
 
     @classmethod
     def from_arrays(cls, d: Mapping[str, Any], *, frames: Any = None, source: str = "<arrays>",
@@ -550,186 +413,13 @@ class Corpus:
         (made absolute); when that file is missing and the absolute path stored beside it
         exists, that one. Absolute paths (files written before) are kept.
         """
-        from engine.files.validate import FieldError, check_corpus_arrays
-        from engine.recordings.field_arrays import fields_from_arrays
-
-        try:  # dtypes, shapes and index ranges checked before anything is built from them
-            check_corpus_arrays(d, source=source, frames_given=frames is not None)
-            fields = fields_from_arrays(d, len(d["corpus_utt_ids"]), source=source)
-        except FieldError as exc:
-            raise CorpusError(str(exc)) from None
-        try:
-            version = int(d["corpus_version"])
-            if version > FORMAT_VERSION:
-                raise CorpusError(f"{source}: corpus format {version} is newer than this Lipspace ({FORMAT_VERSION})")
-            if frames is None:
-                frames = d["corpus_frames"]
-            bounds = d["corpus_utt_bounds"]
-            ids = d["corpus_utt_ids"]
-            audio = d["corpus_utt_audio"]
-            text = d["corpus_utt_text"]
-            p_utt = d["corpus_phone_utt"]
-            p_t = d["corpus_phone_times"]
-            p_lab = d["corpus_phone_labels"]
-            keys = list(d.keys())
-            latent = {k[len("corpus_latent_"):]: d[k] for k in keys if k.startswith("corpus_latent_")}
-            faces = d["corpus_faces"] if "corpus_faces" in keys else None
-            names = list(d["corpus_point_names"]) if "corpus_point_names" in keys else None
-            roles = list(d["corpus_point_roles"]) if "corpus_point_roles" in keys else None
-            speaker = d["corpus_utt_speaker"] if "corpus_utt_speaker" in keys else [""] * len(ids)
-            duration = d["corpus_utt_duration"] if "corpus_utt_duration" in keys else np.zeros(len(ids))
-            registration = str(d["corpus_registration"]) if "corpus_registration" in keys else ""
-            history = [str(h) for h in d["corpus_history"]] if "corpus_history" in keys else []
-            axes = str(d["corpus_axes"]) if "corpus_axes" in keys else ""
-            units = str(d["corpus_units"]) if "corpus_units" in keys else ""  # older files did not say
-            audio_abs = d["corpus_utt_audio_abs"] if "corpus_utt_audio_abs" in keys else None
-            words = _words_of(d, len(ids)) if "corpus_word_utt" in keys else None
-            rate, dims, name = float(d["corpus_rate"]), int(d["corpus_dims"]), str(d["corpus_name"])
-        except KeyError as exc:
-            raise CorpusError(f"{source}: not a Lipspace corpus file (missing {exc.args[0]!r})") from None
-        utts = []
-        # each utterance's phones in file order, found by one sort (not a scan of every phone per utterance)
-        by_utt = np.argsort(np.asarray(p_utt), kind="stable")
-        cuts = np.searchsorted(np.asarray(p_utt)[by_utt], np.arange(len(ids) + 1))
-        with _collection_paused():
-            times, labels = _as_list(np.asarray(p_t)[by_utt]), _as_list(np.asarray(p_lab)[by_utt])
-            for k, (b, uid) in enumerate(zip(bounds.tolist(), ids.tolist())):
-                a, e = int(cuts[k]), int(cuts[k + 1])
-                phones = PhoneInterval._many(times[a:e], labels[a:e])
-                wav = _resolve(str(audio[k]), base, str(audio_abs[k]) if audio_abs is not None else "")
-                utts.append(Utterance(str(uid), int(b[0]), int(b[1]), phones, wav, str(text[k]), str(speaker[k]),
-                                      float(duration[k]),
-                                      fields=fields[k] if fields is not None else (),
-                                      words=words[k] if words is not None else ()))
-        try:
-            return cls(frames=frames, rate=rate, utterances=utts, dims=dims, faces=faces, point_names=names,
-                       latent=latent, name=name, point_roles=roles, registration=registration, history=history,
-                       axes=axes, units=units)
-        except CorpusError as exc:  # name the file, not only the corpus
-            raise CorpusError(f"{source}: {exc}") from None
+        return corpus_from_arrays(cls, d, frames=frames, source=source, base=base)
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the native corpus file (``.npz``) atomically."""
-        path = Path(path)
-        with atomic_write(path) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez(fh, **self.to_arrays(base=path.resolve().parent))  # type: ignore[arg-type]  # numpy types only the positional arrays
-        return path
+        return save_corpus(self, path)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Corpus:
         """Read a native corpus file written by :meth:`save`."""
-        path = Path(path)
-        if not path.exists():
-            raise FileNotFoundError(f"{path}: no such corpus file")
-        from engine.files.persist import NpzReadError, read_npz
-
-        try:
-            return cls.from_arrays(read_npz(path), source=str(path), base=path.resolve().parent)
-        except CorpusError:
-            raise
-        except NpzReadError as exc:
-            reason = exc.reason
-        except Exception as exc:  # arrays of the wrong shape or type
-            reason = f"its arrays do not form a corpus ({exc})"
-        raise CorpusError(f"{path}: cannot read as a Lipspace corpus (.npz): {reason}")
-
-
-@contextmanager
-def _collection_paused() -> Iterator[None]:
-    """Python's cyclic garbage collector off while a file's phones become objects.
-
-    Each full collection walks every tracked object, and 1.6 million phones (ten million
-    frames) set several off, each holding the GIL -- and so the window's event loop, when a
-    worker thread loads -- for 0.3-0.7 s. Nothing built here forms a cycle.
-    """
-    was = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was:
-            gc.enable()
-
-
-def _as_list(a: np.ndarray, chunk: int = 1 << 16) -> list[Any]:
-    """``a.tolist()`` a block of rows at a time: one call over a million rows holds the GIL for a second."""
-    out = []
-    for s in range(0, len(a), chunk):
-        out.extend(a[s:s + chunk].tolist())
-    return out
-
-
-def _words_of(d: Mapping[str, Any], n_utterances: int) -> list[tuple[PhoneInterval, ...]]:
-    """Each utterance's word tier from a file's ``corpus_word_*`` arrays."""
-    utt = np.asarray(d["corpus_word_utt"], dtype=np.int64).reshape(-1)
-    times = np.asarray(d["corpus_word_times"], dtype=np.float64).reshape(-1, 2)
-    labels = np.asarray(d["corpus_word_labels"]).reshape(-1)
-    if not (len(utt) == len(times) == len(labels)) or (len(utt) and (utt.min() < 0 or utt.max() >= n_utterances)):
-        raise CorpusError(f"word tiers: {len(utt)} utterance indices, {len(times)} times, {len(labels)} labels "
-                          f"for {n_utterances} utterances; expected one of each per word, indices in range")
-    out: list[list] = [[] for _ in range(n_utterances)]
-    for k, (t0, t1), lab in zip(utt.tolist(), times.tolist(), labels.tolist()):
-        out[k].append(PhoneInterval(float(t0), float(t1), str(lab)))
-    return [tuple(w) for w in out]
-
-
-def label_codes(labels: Iterable[str] | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``np.unique(np.asarray(labels, dtype=str), return_inverse=True)`` by hashing, not sorting strings.
-
-    Parameters
-    ----------
-    labels : sequence of str or ndarray of str, shape (n,)
-
-    Returns
-    -------
-    names : ndarray of str, sorted distinct labels
-    inverse : ndarray of shape (n,) int64, ``names[inverse] == labels``
-    """
-    seq = labels.tolist() if isinstance(labels, np.ndarray) else [str(x) for x in labels]
-    names = sorted(set(seq))  # code-point order, as numpy sorts strings
-    pos = {x: i for i, x in enumerate(names)}
-    inverse = np.fromiter(map(pos.__getitem__, seq), np.int64, count=len(seq))
-    return np.array(names, dtype=str), inverse
-
-
-def _absolute(audio: str | os.PathLike[str] | None) -> str:
-    """An audio path made absolute ("" for none), symlinks kept."""
-    import os
-
-    return os.path.abspath(audio) if audio else ""
-
-
-def _relative(audio: str | None, base: str | os.PathLike[str] | None) -> str:
-    """An audio path as stored: relative to ``base`` when given (and on the same drive), else as it is."""
-    import os
-
-    if not audio or base is None:
-        return audio or ""
-    try:
-        return os.path.relpath(os.path.abspath(audio), os.path.abspath(base))
-    except ValueError:  # another drive (Windows): no relative path exists
-        return _absolute(audio)
-
-
-def _resolve(stored: str, base: str | os.PathLike[str] | None, absolute: str) -> str | None:
-    """The audio path a stored one means (see :meth:`Corpus.from_arrays`); None for none."""
-    import os
-
-    if not stored:
-        return None
-    if os.path.isabs(stored) or base is None:
-        return stored
-    p = os.path.normpath(os.path.join(str(base), stored))
-    if not os.path.isfile(p) and absolute and os.path.isfile(absolute):
-        return absolute  # the corpus file was moved without its sound
-    return p
-
-
-def frame_points(row: np.ndarray, dims: int) -> np.ndarray:
-    """Reshape one frame (or (n, dims*V) frames) to points with 3 coordinates (z = 0 for 2-D)."""
-    row = np.asarray(row)
-    pts = row.reshape(*row.shape[:-1], -1, dims)
-    if dims == 2:
-        pts = np.concatenate([pts, np.zeros(pts.shape[:-1] + (1,), pts.dtype)], axis=-1)
-    return pts
+        return load_corpus(cls, path)

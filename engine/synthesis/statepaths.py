@@ -10,7 +10,7 @@ from the states, and the baselines that get the same information:
     (:class:`engine.manifold.inverse_local.LocalLinearInverse`) in the same dims.
 :meth:`StateModel.path`
     The maximum-probability state path of exactly each gap's length between the
-    target states (Viterbi, as :class:`engine.synthesis.viterbi.ManifoldSynthesizer`; a gap no
+    target states (Viterbi, as :class:`engine.synthesis.viterbi.ViterbiSynthesizer`; a gap no
     path bridges in time ends at the reachable state nearest the target, as its
     ``strict=False``).
 :meth:`StateModel.path_x`

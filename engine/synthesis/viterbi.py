@@ -34,6 +34,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from engine._deprecated import deprecated_names
 from engine.constraints import Interval, StrOptions, validate_params
 from engine.graph.bridges import bridge, forward_to
 from engine.graph.max_product import (
@@ -54,12 +55,15 @@ from engine.threads import single_blas_thread
 
 __all__ = [
     "NoPathError", "MaxProductGraph", "log_transitions", "observed_transitions", "viterbi_path", "Trajectory", "Synthesizer",
-    "ManifoldSynthesizer", "InterpolationSynthesizer", "phone_lattice", "phone_state_table", "join_states",
+    "ViterbiSynthesizer", "InterpolationSynthesizer", "phone_lattice", "phone_state_table", "join_states",
 ]
+
+# the class's name before it said its method ("viterbi"); kept for scripts, with a warning
+__getattr__ = deprecated_names(__name__, {"ManifoldSynthesizer": (__name__, "ViterbiSynthesizer")})
 
 #: log-probability cost of a gap no path of its length bridges (``strict=False`` lattices)
 _UNBRIDGED_PENALTY = 1e6
-#: inverse maps of :class:`ManifoldSynthesizer`
+#: inverse maps of :class:`ViterbiSynthesizer`
 INVERSES = ("delaunay", "state-mean", "local-linear")
 
 
@@ -144,7 +148,7 @@ def phone_state_table(states, labels) -> dict:
     return table
 
 
-class ManifoldSynthesizer(BaseEstimator):
+class ViterbiSynthesizer(BaseEstimator):
     """The paper's synthesiser (method ``"viterbi"``): maximum-probability paths between timed targets on the state graph.
 
     Parameters

@@ -81,7 +81,8 @@ def midsagittal_corpus(folder, *, n_utterances=4, duration_s=(2.0, 2.5), seed=3,
     (upper lip, lower lip, lower incisor), joined, centred per utterance and resampled to 60 Hz.
     """
     from engine.io import concat, read_corpus, resample
-    from engine.io.readers.ema import MOCHA_CHANNELS, write_est_track
+    from engine.io.readers.ema import MOCHA_CHANNELS
+    from engine.io.writers.est_track import write_est_track
     from engine.recordings.registration import register
     from engine.talker.multispeaker import generate_recordings
 

@@ -56,7 +56,7 @@ def prebuilt_key(preset=PRESET, **params) -> str:
     parameters, and the synthesis choice's code."""
     from engine.manifold.model import algorithm_fingerprint
     from engine.synthesis.method_choice import choice_code
-    from engine.talker.synthetic import talker_key
+    from engine.talker.talker_cache import talker_key
 
     blob = json.dumps({"talker": talker_key(preset, **params), "fit": algorithm_fingerprint(),
                        "choice": choice_code()}, sort_keys=True)
@@ -202,7 +202,7 @@ def fresh(*, progress=None):
     """The default talker's manifold and synthesis choice computed now (what the shipped file holds)."""
     from engine.manifold.model import Manifold
     from engine.synthesis.method_choice import fit_choice
-    from engine.talker.synthetic import load_synthetic
+    from engine.talker.talker_cache import load_synthetic
 
     m = Manifold().fit(load_synthetic(preset=PRESET, progress=progress), progress=progress)
     fit_choice(m, progress=progress)
@@ -261,7 +261,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     t = time.perf_counter()
     if args.check:
-        from engine.talker.synthetic import load_synthetic
+        from engine.talker.talker_cache import load_synthetic
 
         m = fresh()
         shipped, why = load_prebuilt(load_synthetic(preset=PRESET), path=args.output)

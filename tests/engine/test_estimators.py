@@ -130,7 +130,7 @@ FIT_ARGS = {
     "DominanceModel": lambda m: ("fit", (_sequences(m), m.corpus_.rate), {}),
     "SlidingWindowRegressor": lambda m: ("fit", (_sequences(m), m.corpus_.rate), {}),
     "LearntPaths": lambda m: ("fit", (m.Fy_, m.Fx_, m.corpus_.bounds, m.states_.labels_, m.states_.centroids_), {}),
-    "ManifoldSynthesizer": lambda m: ("fit", (m,), {}),
+    "ViterbiSynthesizer": lambda m: ("fit", (m,), {}),
     "InterpolationSynthesizer": lambda m: ("fit", (m,), {}),
     "UnitSelectionSynthesizer": lambda m: ("fit", (m,), {}),
     "PhoneModelSynthesizer": lambda m: ("fit", (m,), {}),

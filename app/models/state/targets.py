@@ -27,7 +27,7 @@ def insert_state_target(manifold, targets, state: int, *, frame=None, spacing: f
     The target goes at ``frame`` (replacing a target already there), or, with
     ``frame=None``, ``spacing`` seconds after the last target (frame 0 when there are
     none). The trajectory is lengthened to reach the new target. The target carries the
-    state (which :class:`engine.synthesis.viterbi.ManifoldSynthesizer` passes through) and the
+    state (which :class:`engine.synthesis.viterbi.ViterbiSynthesizer` passes through) and the
     state's X (the manifold's map of its centroid, ``state_x_``, else the mean F^x of its
     frames), so the methods that interpolate in X pass through it too. Its label is "".
     """

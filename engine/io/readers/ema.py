@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine._deprecated import deprecated_names
 from engine.io._util import (
     check_rate,
     decode_text,
@@ -37,7 +38,10 @@ from engine.io.errors import ImportFormatError
 from engine.io.readers.alignment import resolve_alignment
 from engine.io.repairs import reports_repairs
 
-__all__ = ["read_ema", "read_est_track", "write_est_track", "MOCHA_CHANNELS", "MOCHA_SENSORS", "LIP_SENSORS"]
+__all__ = ["read_ema", "read_est_track", "MOCHA_CHANNELS", "MOCHA_SENSORS", "LIP_SENSORS"]
+
+# the writer moved to engine.io.writers.est_track; this old home still gives it, with a warning
+__getattr__ = deprecated_names(__name__, {"write_est_track": ("engine.io.writers.est_track", "write_est_track")})
 
 #: MOCHA's 20 channels in file order (MOCHAread.m): sensor_axis. 'S15' is a coil the
 #: MOCHAtools documentation leaves unnamed.
@@ -171,52 +175,6 @@ def read_est_track(path):
     times = arr[:, 0]
     valid = arr[:, 1] != 0 if h["breaks"] else np.ones(n, dtype=bool)
     return times, arr[:, 1 + h["breaks"]:], valid, h["names"]
-
-
-def write_est_track(path, times, values, names, *, valid=None, binary: bool = True, byte_order: str = "01"):
-    """Write an EST Track file (the layout :func:`read_est_track` reads), atomically.
-
-    Parameters
-    ----------
-    path : str or Path
-    times : array of shape (n_frames,), seconds
-    values : array of shape (n_frames, n_channels)
-    names : sequence of str, one per channel
-    valid : bool array of shape (n_frames,), optional
-        Written as the break column (1 valid, 0 break); all valid by default.
-    binary : bool
-        Binary float32 data (True) or ASCII.
-    byte_order : {"01", "10"}
-        Little- or big-endian binary data.
-    """
-    from engine.files.atomic import atomic_write
-
-    times = np.asarray(times, dtype=np.float64).ravel()
-    values = np.asarray(values, dtype=np.float64)
-    n = times.shape[0]
-    if values.ndim != 2 or values.shape[0] != n or len(names) != values.shape[1]:
-        raise ValueError(f"values {values.shape} must be (n_frames={n}, n_channels={len(names)})")
-    if byte_order not in ("01", "10"):
-        raise ValueError(f"byte_order={byte_order!r}; expected '01' (little) or '10' (big)")
-    valid = np.ones(n, bool) if valid is None else np.asarray(valid, bool)
-    step = float(np.median(np.diff(times))) if n > 1 else 0.0
-    head = ["EST_File Track", f"DataType {'binary' if binary else 'ascii'}"]
-    if binary:
-        head.append(f"ByteOrder {byte_order}")
-    head += [f"NumFrames {n}", f"NumChannels {values.shape[1]}", "NumAuxChannels 0", f"EqualSpace {int(step > 0)}",
-             "BreaksPresent true", "CommentChar ;", ""]
-    head += [f"Channel_{k} {nm}" for k, nm in enumerate(names)]
-    head.append("EST_Header_End")
-    table = np.column_stack([times, valid.astype(np.float64), values])
-    with atomic_write(path) as tmp:
-        with open(tmp, "wb") as fh:
-            fh.write(("\n".join(head) + "\n").encode("ascii"))
-            if binary:
-                fh.write(table.astype(("<" if byte_order == "01" else ">") + "f4").tobytes())
-            else:
-                for row in table:
-                    fh.write((" ".join(f"{v:.6f}" for v in row) + "\n").encode("ascii"))
-    return Path(path)
 
 
 # ---------------------------------------------------------------------------- MOCHA ASCII

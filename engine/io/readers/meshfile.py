@@ -1,10 +1,9 @@
-"""Single mesh files: Wavefront OBJ and Stanford PLY (ASCII and binary), read and written
-with numpy only.
+"""Single mesh files: Wavefront OBJ and Stanford PLY (ASCII and binary), read with numpy only.
 
 Readers return ``(vertices (V, 3) float64, faces (F, 3) int64 or None)``; polygons are
-split into triangle fans. Writers write atomically.
+split into triangle fans. The writers are :mod:`engine.io.writers.meshfile`.
 
-Writers can label vertices (e.g. the articulograph sensors of a lip contour mesh),
+The writers can label vertices (e.g. the articulograph sensors of a lip contour mesh),
 ``labels=[(name, vertex index 0-based), ...]``. OBJ: a ``# sensor <name> vertex <k>``
 comment per label (``k`` 1-based, as OBJ indices are) before the vertices, the faces
 in group ``g mesh``, then per label a group ``g <name>`` (whitespace in the name
@@ -19,11 +18,15 @@ from typing import Any
 
 import numpy as np
 
-from engine.files.atomic import atomic_write
+from engine._deprecated import deprecated_names
 from engine.io._util import decode_text, read_bytes
 from engine.io.errors import ImportFormatError
 
-__all__ = ["read_obj", "read_ply", "read_mesh", "write_obj", "write_ply", "write_mesh", "read_vertex_labels"]
+__all__ = ["read_obj", "read_ply", "read_mesh", "read_vertex_labels"]
+
+# the writers moved to engine.io.writers.meshfile; this old home still gives them, with a warning
+__getattr__ = deprecated_names(__name__, {name: ("engine.io.writers.meshfile", name)
+                                          for name in ("write_obj", "write_ply", "write_mesh")})
 
 _PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
@@ -463,59 +466,6 @@ def read_mesh(path):
     return read_ply(p) if head == b"ply" or p.suffix.lower() == ".ply" else read_obj(p)
 
 
-# ---------------------------------------------------------------------------- writers
-def _check(vertices, faces):
-    V = np.asarray(vertices, dtype=np.float64)
-    if V.ndim != 2 or V.shape[1] != 3:
-        raise ValueError(f"vertices must be (V, 3), got {V.shape}")
-    F = None
-    if faces is not None:
-        F = np.asarray(faces, dtype=np.int64)
-        if F.ndim != 2 or F.shape[1] != 3 or (F.size and (F.min() < 0 or F.max() >= V.shape[0])):
-            raise ValueError(f"faces must be (F, 3) indices < {V.shape[0]}, got shape {F.shape}")
-    return V, F
-
-
-def _check_labels(labels, n_vertices):
-    """``labels`` as a list of (name, 0-based index); ValueError naming the bad one."""
-    out = []
-    for j, item in enumerate(labels or ()):
-        try:
-            name, k = item
-            k = int(k)
-        except (TypeError, ValueError):
-            raise ValueError(f"vertex label {j}: expected (name, vertex index), got {item!r}") from None
-        name = str(name)
-        if not name.strip() or any(c in name for c in "\r\n") or not name.isascii():
-            raise ValueError(f"vertex label {j}: name {name!r} must be non-empty ASCII on one line")
-        if not 0 <= k < n_vertices:
-            raise ValueError(f"vertex label {j} ({name!r}): vertex {k} is outside 0..{n_vertices - 1}")
-        out.append((name, k))
-    return out
-
-
-def write_obj(path, vertices, faces=None, *, labels=None, precision: int = 9) -> Path:
-    """Write an OBJ file (``v`` records, ``f`` records when ``faces`` is given), atomically.
-
-    ``labels`` : sequence of (name, vertex index 0-based), optional; see the module notes.
-    """
-    V, F = _check(vertices, faces)
-    L = _check_labels(labels, len(V))
-    fmt = f"%.{precision}g"
-    with atomic_write(path) as tmp:
-        with open(tmp, "w", encoding="ascii") as fh:
-            fh.write("# written by Lipspace\n")
-            fh.write("".join(f"# sensor {name} vertex {k + 1}\n" for name, k in L))
-            fh.write((f"v {fmt} {fmt} {fmt}\n" * len(V)) % tuple(V.ravel().tolist()))
-            if F is not None and len(F):
-                if L:
-                    fh.write("g mesh\n")
-                fh.write(("f %d %d %d\n" * len(F)) % tuple((F + 1).ravel().tolist()))
-            for name, k in L:
-                fh.write(f"g {'_'.join(name.split())}\np {k + 1}\n")
-    return Path(path)
-
-
 def read_vertex_labels(path) -> list[tuple[str, int]]:
     """The vertex labels a Lipspace writer put in an OBJ or PLY file: [(name, vertex index 0-based)]."""
     import re
@@ -529,42 +479,3 @@ def read_vertex_labels(path) -> list[tuple[str, int]]:
     else:
         text, pat, base = decode_text(data, path), r"^# sensor (.+) vertex (\d+)\s*$", 1
     return [(m.group(1), int(m.group(2)) - base) for m in re.finditer(pat, text, flags=re.M)]
-
-
-def write_ply(path, vertices, faces=None, *, binary: bool = False, labels=None, precision: int = 9) -> Path:
-    """Write a PLY file (float32 vertices, int32 triangle lists), ASCII or little-endian binary, atomically.
-
-    ``labels`` : sequence of (name, vertex index 0-based), optional; see the module notes.
-    """
-    V, F = _check(vertices, faces)
-    L = _check_labels(labels, len(V))
-    head = ["ply", f"format {'binary_little_endian' if binary else 'ascii'} 1.0", "comment written by Lipspace",
-            *(f"comment sensor {name} vertex {k}" for name, k in L), f"element vertex {len(V)}", "property float x", "property float y", "property float z"]
-    if F is not None:
-        head += [f"element face {len(F)}", "property list uchar int vertex_indices"]
-    head.append("end_header")
-    with atomic_write(path) as tmp:
-        with open(tmp, "wb") as fh:
-            fh.write(("\n".join(head) + "\n").encode("ascii"))
-            if binary:
-                fh.write(V.astype("<f4").tobytes())
-                if F is not None:
-                    rec = np.empty(len(F), dtype=[("n", "u1"), ("i", "<i4", (3,))])
-                    rec["n"], rec["i"] = 3, F
-                    fh.write(rec.tobytes())
-            else:
-                fmt = f"%.{precision}g"
-                text = (f"{fmt} {fmt} {fmt}\n" * len(V)) % tuple(V.ravel().tolist())
-                if F is not None:
-                    text += ("3 %d %d %d\n" * len(F)) % tuple(F.ravel().tolist())
-                fh.write(text.encode("ascii"))
-    return Path(path)
-
-
-def write_mesh(path, vertices, faces=None, **kw) -> Path:
-    """:func:`write_ply` for ``.ply`` paths, else :func:`write_obj`."""
-    if Path(path).suffix.lower() == ".ply":
-        return write_ply(path, vertices, faces, **kw)
-    kw.pop("binary", None)
-    return write_obj(path, vertices, faces, **kw)
-

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from engine._deprecated import deprecated_names
 from engine.io._util import check_rate, one_utterance_corpus, plausible_rate, sidecar_audio
 from engine.io._util import fill_gaps as _fill_gaps
 from engine.io.errors import ImportFormatError
@@ -27,7 +28,10 @@ from engine.io.readers.matfile import MatStruct, read_mat
 from engine.io.repairs import reports_repairs
 from engine.recordings.corpus import PhoneInterval
 
-__all__ = ["read_mview", "read_mview_audio", "write_audio", "MVIEW_LIP_SENSORS"]
+__all__ = ["read_mview", "read_mview_audio", "MVIEW_LIP_SENSORS"]
+
+# the writer moved to engine.io.writers.audio; this old home still gives it, with a warning
+__getattr__ = deprecated_names(__name__, {"write_audio": ("engine.io.writers.audio", "write_audio")})
 
 #: default selection: upper lip, lower lip, left mouth corner, jaw (central incisor), jaw left
 MVIEW_LIP_SENSORS = ("UL", "LL", "ML", "JAW", "JAWL")
@@ -162,7 +166,7 @@ def read_mview(path, *, sensors=MVIEW_LIP_SENSORS, rate: float | None = None, al
     Corpus
         One utterance named after the file (text = ``SENTENCE``), frames (n, 3 * n_sensors)
         in mm, x anterior, y lateral, z vertical; audio ``<stem>.wav`` when present
-        (see :func:`write_audio`).
+        (see :func:`engine.io.writers.audio.write_audio`).
     """
     path = Path(path)
     damage: list[str] = []
@@ -232,42 +236,3 @@ def read_mview_audio(path) -> tuple[np.ndarray, float]:
     r = plausible_rate(path, r, f"entry {i + 1} (AUDIO) SRATE", audio=True)
     with np.errstate(over="ignore", invalid="ignore"):
         return x.reshape(x.shape[0], -1)[:, 0].astype(np.float32), float(r)
-
-
-def write_audio(path, wav_path=None) -> Path:
-    """Write the ``AUDIO`` entry of an MVIEW file to a 16-bit PCM WAV, atomically.
-
-    Parameters
-    ----------
-    path : str or Path
-        The ``.mat`` file.
-    wav_path : str or Path, optional
-        Output file; default ``<stem>.wav`` beside ``path`` (where :func:`read_mview` finds it).
-
-    Returns
-    -------
-    Path of the WAV written. Samples are scaled by the peak only if it exceeds 1.
-    Non-finite samples (NaN, infinite) are written as silence and reported
-    (:func:`engine.io.repairs.report_repair`); a signal without a finite sample is refused.
-    """
-    from engine.files.atomic import write_wav_atomic
-
-    x, r = read_mview_audio(path)
-    wav_path = Path(wav_path) if wav_path is not None else Path(path).with_suffix(".wav")
-    x = x.astype(np.float64)
-    bad = ~np.isfinite(x)
-    if bad.all():
-        raise ImportFormatError(path, f"the AUDIO signal has no finite sample ({x.size} samples, all NaN or "
-                                "infinite); expected sound")
-    if bad.any():
-        x[bad] = 0.0
-        from engine.io.repairs import report_repair
-
-        where = np.flatnonzero(bad)
-        report_repair(path, f"AUDIO: {where.size} of {x.size} samples are not finite (NaN or infinite), from "
-                      f"{where[0] / r:.3f} s to {where[-1] / r:.3f} s; written as silence")
-    peak = float(np.max(np.abs(x))) if x.size else 0.0
-    if peak > 1.0:
-        x = x / peak
-    write_wav_atomic(wav_path, x, r)
-    return wav_path

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.files.atomic import atomic_write
-from engine.io.readers.meshfile import write_obj, write_ply
+from engine.io.writers.meshfile import write_obj, write_ply
 
 __all__ = ["write_trajectory_csv", "write_trajectory_npy", "write_mesh_sequence", "write_table_csv",
            "point_columns", "corpus_columns"]

@@ -128,7 +128,7 @@ def test_clear_and_the_cache_command(tmp_path, monkeypatch, capsys):
 
 def test_window_cache_uses_the_current_entry_rebuilds_a_damaged_one_and_prunes(small_manifold, small_corpus,
                                                                              monkeypatch, tmp_path):
-    import engine.talker.synthetic
+    import engine.talker.talker_cache
     from app.files.source_loading import cached_manifold_path, load_source
 
     monkeypatch.setenv("LIPSPACE_CACHE_DIR", str(tmp_path))
@@ -145,7 +145,7 @@ def test_window_cache_uses_the_current_entry_rebuilds_a_damaged_one_and_prunes(s
     np.testing.assert_array_equal(m.Fy_, small_manifold.Fy_)
     cur.write_bytes(cur.read_bytes()[:1000])  # damaged (cut short): rebuilt, never used
     tiny = small_corpus.subset([u.id for u in small_corpus.utterances[:4]])
-    monkeypatch.setattr(engine.talker.synthetic, "load_synthetic", lambda **kw: tiny)
+    monkeypatch.setattr(engine.talker.talker_cache, "load_synthetic", lambda **kw: tiny)
     stages.clear()
     m2, _ = load_source(None, "small", lambda st, d, t: stages.append(st), prepare_views=False)
     assert "loading cached manifold" in stages and len(set(stages)) > 1  # tried, then fitted anew

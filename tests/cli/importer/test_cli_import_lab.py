@@ -146,7 +146,7 @@ def test_the_real_ag501_folder_imports_with_its_tag_files_left_out(shared_data, 
 
 
 def test_recursive_folders_of_mesh_frames_are_one_utterance_each(tmp_path, cli):
-    from engine.io.readers.meshfile import write_obj
+    from engine.io.writers.meshfile import write_obj
 
     root = tmp_path / "meshes"
     for k, name in enumerate(("sentence02", "sentence10", "sentence01")):

@@ -7,7 +7,7 @@ from engine.evaluation.measures import trajectory_errors, trajectory_y
 def test_trajectories_in_y(small_manifold):
     from engine.manifold.model import project_x
     from engine.phonetics.targets import targets_from_utterance
-    from engine.synthesis.viterbi import InterpolationSynthesizer, ManifoldSynthesizer, Trajectory
+    from engine.synthesis.viterbi import InterpolationSynthesizer, ViterbiSynthesizer, Trajectory
 
     m = small_manifold
     u = m.corpus_.utterances[1]
@@ -18,7 +18,7 @@ def test_trajectories_in_y(small_manifold):
     np.testing.assert_allclose(project_x(m, m.Fx_[u.start:u.stop]), m.Fy_[u.start:u.stop], rtol=1e-3,
                                atol=1e-3 * float(np.abs(m.Fy_).max()))
     tg = targets_from_utterance(m, u.id)
-    man = ManifoldSynthesizer().fit(m).synthesize(tg)
+    man = ViterbiSynthesizer().fit(m).synthesize(tg)
     Ym = trajectory_y(m, man)
     assert Ym.shape == (u.n_frames, 3)
     np.testing.assert_allclose(Ym, m.states_.centroids_[man.states][:, :3], rtol=1e-6)  # before the inverse map

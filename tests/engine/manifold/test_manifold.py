@@ -404,7 +404,7 @@ def test_state_inverse_table_of_the_landmark_path_comes_from_local_triangulation
     without the table gets it on first synthesis, the same way."""
     from engine.manifold.inverse import InverseMap, delaunay_at
     from engine.phonetics.targets import targets_from_utterance
-    from engine.synthesis.viterbi import ManifoldSynthesizer
+    from engine.synthesis.viterbi import ViterbiSynthesizer
 
     assert small_manifold.state_x_ is not None
     m = Manifold(n_landmarks=300).fit(small_corpus)
@@ -420,5 +420,5 @@ def test_state_inverse_table_of_the_landmark_path_comes_from_local_triangulation
     np.testing.assert_allclose(got[ok], whole.transform(q)[ok], rtol=0, atol=1e-5 * np.abs(m.Fx_).max())
     m.state_x_ = None  # as a file of an older build
     u = m.corpus_.utterances[0]
-    traj = ManifoldSynthesizer(strict=False).fit(m).synthesize(targets_from_utterance(m, u.id, on_collision="merge"))
+    traj = ViterbiSynthesizer(strict=False).fit(m).synthesize(targets_from_utterance(m, u.id, on_collision="merge"))
     assert np.isfinite(traj.Fx).all() and m.state_x_ is not None and m._inverse is None

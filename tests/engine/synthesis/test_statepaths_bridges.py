@@ -76,13 +76,13 @@ def test_bridge_equals_the_full_recursion_on_a_fitted_state_graph(small_manifold
 
 
 def test_synthesis_paths_unchanged(small_manifold):
-    """ManifoldSynthesizer's state path is the gap-by-gap full Viterbi path (strict and not)."""
+    """ViterbiSynthesizer's state path is the gap-by-gap full Viterbi path (strict and not)."""
     from engine.phonetics.targets import Target, TargetSequence
-    from engine.synthesis.viterbi import ManifoldSynthesizer
+    from engine.synthesis.viterbi import ViterbiSynthesizer
 
     st = small_manifold.states_
     lab = np.asarray(st.labels_)
-    syn = ManifoldSynthesizer(strict=False, inverse="state-mean").fit(small_manifold)
+    syn = ViterbiSynthesizer(strict=False, inverse="state-mean").fit(small_manifold)
     g = syn._graph
     rng = np.random.default_rng(8)
     compared = 0

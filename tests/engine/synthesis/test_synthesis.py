@@ -18,7 +18,7 @@ from engine.phonetics.targets import (
 )
 from engine.synthesis.methods import make_synthesizer
 from engine.synthesis.viterbi import (
-    ManifoldSynthesizer,
+    ViterbiSynthesizer,
     MaxProductGraph,
     NoPathError,
     Synthesizer,
@@ -108,7 +108,7 @@ def test_viterbi_argument_errors():
 # ---------------------------------------------------------------- on the manifold
 @pytest.fixture(scope="module")
 def msynth(small_manifold):
-    return ManifoldSynthesizer().fit(small_manifold)
+    return ViterbiSynthesizer().fit(small_manifold)
 
 
 def test_manifold_path_has_n_frames_hits_targets_and_uses_observed_transitions(small_manifold, msynth):
@@ -152,7 +152,7 @@ def test_no_path_error_names_the_gap(small_manifold, msynth):
     tg = targets_from_points(m, [(0, 0), (1, far)], n_frames=4)
     with pytest.raises(NoPathError, match=r"gap 0 .*frame 0.*frame 1.*2 frames"):
         msynth.synthesize(tg)
-    loose = ManifoldSynthesizer(strict=False).fit(m).synthesize(tg)
+    loose = ViterbiSynthesizer(strict=False).fit(m).synthesize(tg)
     assert loose.warnings and "unreachable" in loose.warnings[0]
     assert loose.states[1] != far
 
@@ -259,7 +259,7 @@ def test_targets_from_textgrid_and_text(small_manifold, tmp_path):
     assert tg.labels == ["sil", "m", "aa"] and tg.n_frames == 24
     tx = targets_from_text(m, "map")
     assert tx.labels[0] == "sil" and tx.labels[1:4] == ["m", "ae", "p"]
-    tr = ManifoldSynthesizer(strict=False).fit(m).synthesize(tx)
+    tr = ViterbiSynthesizer(strict=False).fit(m).synthesize(tx)
     assert tr.n_frames == tx.n_frames and np.isfinite(tr.Fx).all()
 
 
@@ -296,9 +296,9 @@ def test_phones_missing_from_training_get_a_stand_in(small_manifold):
 def test_inverse_dims_maps_state_means_through_a_higher_dimensional_map(small_manifold):
     m = small_manifold
     tg = targets_from_utterance(m, m.corpus_.utterances[5].id)
-    syn = ManifoldSynthesizer(inverse_dims=4).fit(m)
+    syn = ViterbiSynthesizer(inverse_dims=4).fit(m)
     tr = syn.synthesize(tg)
-    base = ManifoldSynthesizer().fit(m).synthesize(tg)
+    base = ViterbiSynthesizer().fit(m).synthesize(tg)
     np.testing.assert_array_equal(tr.states, base.states)  # same path, mapped back differently
     lab = m.states_.labels_
     s = int(tr.states[tg.frames[1]])
@@ -306,51 +306,51 @@ def test_inverse_dims_maps_state_means_through_a_higher_dimensional_map(small_ma
     assert syn._inverse().n_dims == 4 and tr.Fx.shape == base.Fx.shape and np.isfinite(tr.Fx).all()
     k = m.Fy_.shape[1]
     with pytest.raises(ValueError, match=f"inverse_dims must be in 1..{k}"):
-        ManifoldSynthesizer(inverse_dims=k + 1).fit(m)
+        ViterbiSynthesizer(inverse_dims=k + 1).fit(m)
 
 
 def test_inverse_maps_beside_delaunay(small_manifold):
-    """ManifoldSynthesizer(inverse=...): the same state path through the state means or the local-linear map."""
+    """ViterbiSynthesizer(inverse=...): the same state path through the state means or the local-linear map."""
     from engine.phonetics.targets import targets_from_utterance
-    from engine.synthesis.viterbi import ManifoldSynthesizer
+    from engine.synthesis.viterbi import ViterbiSynthesizer
 
     m = small_manifold
     u = m.corpus_.utterances[2]
     tg = targets_from_utterance(m, u.id)
-    dela = ManifoldSynthesizer().fit(m).synthesize(tg)
-    mean = ManifoldSynthesizer(inverse="state-mean").fit(m).synthesize(tg)
+    dela = ViterbiSynthesizer().fit(m).synthesize(tg)
+    mean = ViterbiSynthesizer(inverse="state-mean").fit(m).synthesize(tg)
     np.testing.assert_array_equal(mean.states, dela.states)  # the inverse map never changes the path
     lab = m.states_.labels_
     expect = np.stack([m.Fx_[lab == k].mean(0) for k in mean.states])
     np.testing.assert_allclose(mean.Fx, expect, rtol=1e-4, atol=1e-4)
-    smooth = ManifoldSynthesizer(inverse="state-mean", smoothing=2.0).fit(m).synthesize(tg)
+    smooth = ViterbiSynthesizer(inverse="state-mean", smoothing=2.0).fit(m).synthesize(tg)
     assert np.abs(np.diff(smooth.Fx, axis=0)).sum() < np.abs(np.diff(mean.Fx, axis=0)).sum()
-    ll = ManifoldSynthesizer(inverse="local-linear", inverse_dims=5, n_neighbors=30).fit(m).synthesize(tg)
+    ll = ViterbiSynthesizer(inverse="local-linear", inverse_dims=5, n_neighbors=30).fit(m).synthesize(tg)
     assert ll.Fx.shape == dela.Fx.shape and np.isfinite(ll.Fx).all()
     # the 5-D local-linear map places the path's states nearer the real frames than 3-D Delaunay does
     truth = m.Fx_[u.start:u.stop]
     err = {k: float(np.sqrt(((t.Fx - truth) ** 2).sum(1).mean())) for k, t in (("delaunay", dela), ("ll5", ll))}
     assert err["ll5"] < err["delaunay"], err
     with pytest.raises(ValueError, match="inverse must be one of"):
-        ManifoldSynthesizer(inverse="nearest").fit(m)
+        ViterbiSynthesizer(inverse="nearest").fit(m)
     with pytest.raises(ValueError, match="smoothing must be >= 0"):
-        ManifoldSynthesizer(smoothing=-1).fit(m)
+        ViterbiSynthesizer(smoothing=-1).fit(m)
 
 
 def test_stored_state_inverse_table_gives_the_delaunay_path_exactly(small_manifold, tmp_path):
     """The manifold file's state_x_ table replaces the tetrahedralisation in a new process."""
     from engine.manifold.model import Manifold
     from engine.phonetics.targets import targets_from_utterance
-    from engine.synthesis.viterbi import ManifoldSynthesizer
+    from engine.synthesis.viterbi import ViterbiSynthesizer
 
     m = Manifold.load(small_manifold.save(tmp_path / "m.npz"))
     assert m.state_x_ is not None and m._inverse is None
     np.testing.assert_array_equal(m.state_x_, small_manifold.inverse_map.transform(small_manifold.states_.centroids_))
     u = m.corpus_.utterances[0]
     targets = targets_from_utterance(m, u.id, on_collision="merge")
-    fast = ManifoldSynthesizer(strict=False).fit(m).synthesize(targets)
+    fast = ViterbiSynthesizer(strict=False).fit(m).synthesize(targets)
     assert m._inverse is None  # no Delaunay was built
     m.state_x_ = None  # a file without the table: made again from local triangulations, the same rows
-    again = ManifoldSynthesizer(strict=False).fit(m).synthesize(targets)
+    again = ViterbiSynthesizer(strict=False).fit(m).synthesize(targets)
     assert m._inverse is None and m.state_x_ is not None
     np.testing.assert_allclose(again.Fx, fast.Fx, rtol=0, atol=1e-5 * np.abs(fast.Fx).max())

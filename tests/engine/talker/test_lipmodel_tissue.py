@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import engine.talker.synthetic as synthetic
+import engine.talker.synthetic_talker as synthetic
 from engine.talker.lipmodel import CONTROL_NAMES, LipModel
 from engine.talker.synthetic import SyntheticTalker
 

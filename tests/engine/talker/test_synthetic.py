@@ -268,7 +268,7 @@ def test_manifold_of_the_small_corpus_is_paper_like(small_manifold):
 def test_generator_variants_leave_the_default_talker_unchanged(tmp_cache):
     """The held-out talker's keyword-only parameters: at their defaults nothing changes (same
     frames, same cache file name); the held-out talker differs in timing and dynamics."""
-    from engine.talker.synthetic import _VARIANT_DEFAULTS, HELD_OUT_TALKER
+    from engine.talker.synthetic_talker import _VARIANT_DEFAULTS, HELD_OUT_TALKER
 
     a = SyntheticTalker(preset="small", n_sentences=3).generate()
     b = SyntheticTalker(preset="small", n_sentences=3, **_VARIANT_DEFAULTS).generate()
