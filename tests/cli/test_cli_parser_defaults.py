@@ -69,3 +69,48 @@ def test_every_subcommand_is_in_the_snapshot():
 if __name__ == "__main__":
     SNAPSHOT.write_text(json.dumps(parser_options(), indent=1, sort_keys=True) + "\n", encoding="utf-8")
     print(f"wrote {SNAPSHOT}")
+
+
+def test_build_defaults_are_the_manifolds():
+    """`lipspace build`'s manifold options are declared from the estimator: its defaults and choices."""
+    from app.cli.options import MANIFOLD_ARGS, manifold_choices
+    from engine.manifold.model import Manifold
+
+    build = parser_options()["build"]["options"]
+    params = Manifold().get_params()
+    for param, dest in MANIFOLD_ARGS.items():
+        assert build[dest]["default"] == params[param], dest
+    assert build["method"]["choices"] == list(manifold_choices("embedding_method"))
+    assert build["speaker_norm"]["choices"] == list(manifold_choices("speaker_normalisation"))
+
+
+def test_no_subcommand_imports_another_ones_private_names():
+    """Steps two commands share live in a module of their own (app/cli/synthesis_steps.py), not behind
+    an underscore in one of them."""
+    import ast
+
+    import app.cli
+
+    for path in sorted(Path(app.cli.__file__).parent.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("app.cli."):
+                private = [a.name for a in node.names if a.name.startswith("_")]
+                assert not private, f"{path.name} imports {private} from {node.module}"
+
+
+def test_build_makes_its_plan_once(tiny_manifold_file, tmp_path, monkeypatch):
+    from app.cli import main
+    from engine.manifold import buildplan
+
+    calls = []
+    real = buildplan.plan_build
+
+    def counted(*args, **kwargs):
+        calls.append(args)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(buildplan, "plan_build", counted)
+    corpus = tiny_manifold_file.parent / "corpus.npz"
+    assert main(["build", str(corpus), "-o", str(tmp_path / "m.npz"), "--states", "20", "-q",
+                 "--no-method-choice"]) == 0
+    assert len(calls) == 1
