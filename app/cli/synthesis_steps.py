@@ -41,6 +41,7 @@ def add_synthesis_options(p):
 
 
 def load_manifold(args):
+    """The manifold of ``--manifold FILE``, or the synthetic talker's of ``--preset`` (cached or shipped)."""
     from app.cli import CliError
     from app.cli._common import load_manifold_arg, progress_bar
 
@@ -57,6 +58,8 @@ def load_manifold(args):
 
 
 def make_targets(args, manifold):
+    """The synthesis targets of whichever source option was given (``--phones``, ``--textgrid``,
+    ``--text``, ``--states`` or ``--utterance``)."""
     from engine.phonetics import targets as T
 
     if args.phones is not None:
@@ -86,6 +89,7 @@ def make_targets(args, manifold):
 
 
 def key_frames(args, manifold):
+    """The frames of ``--utterance`` that ``--key-frames`` names: indices, ``kinematic`` or ``gestures[:...]``."""
     spec = args.key_frames.strip()
     if spec == "kinematic":
         from engine.recordings.kinematics import kinematic_key_frames, lip_aperture
