@@ -188,3 +188,80 @@ def haskins_file(path, *, seconds=2.0, words=("sp", "BOB", "MEETS", "MUM", "sp")
 def make_haskins_file():
     """:func:`haskins_file`: ``make_haskins_file(tmp_path / "F01_B01_S01_R01_N.mat", seconds=2.0)``."""
     return haskins_file
+
+
+# --------------------------------------------------------------------------- no window outlives its test
+def _visible_top_levels() -> dict[int, str]:
+    """``{id: description}`` of the visible Qt top-level widgets (none when Qt was never imported)."""
+    import sys
+
+    if "PySide6.QtWidgets" not in sys.modules:
+        return {}
+    from PySide6.QtWidgets import QApplication
+
+    if QApplication.instance() is None:
+        return {}
+    return {id(w): f"{type(w).__name__} {w.windowTitle()!r}" for w in QApplication.topLevelWidgets()
+            if w.isVisible()}
+
+
+def _open_plotters() -> dict[str, str]:
+    """``{id: description}`` of the pyvista plotters not closed (none when pyvista was never imported)."""
+    import sys
+
+    if "pyvista" not in sys.modules:
+        return {}
+    from pyvista.plotting.plotter import _ALL_PLOTTERS
+
+    return {k: type(p).__name__ for k, p in _ALL_PLOTTERS.items() if not getattr(p, "_closed", False)}
+
+
+def _settle_qt() -> None:
+    """Run Qt's pending events and deferred deletions, so a window closed at the test's end is gone."""
+    import sys
+
+    if "PySide6.QtWidgets" not in sys.modules:
+        return
+    from PySide6.QtCore import QCoreApplication, QEvent
+    from PySide6.QtWidgets import QApplication
+
+    if QApplication.instance() is not None:
+        QApplication.processEvents()
+        QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+        QApplication.processEvents()
+
+
+@pytest.fixture(autouse=True)
+def no_window_left_open(request):
+    """Fail a test that leaves a visible Qt top-level window or an open VTK plotter behind (after
+    MNE's ``brain_gc`` and napari's ``make_napari_viewer``): each one left open kept its render
+    window, and a later test's picking, screenshots or focus met it.
+
+    Windows and plotters that module- or session-scoped fixtures made before the test (a shared
+    explorer window) are theirs to close and are not counted. What is found is closed, so one
+    leak fails one test.
+    """
+    windows, plotters = _visible_top_levels(), _open_plotters()
+    yield
+    _settle_qt()
+    new_windows = {k: v for k, v in _visible_top_levels().items() if k not in windows}
+    new_plotters = {k: v for k, v in _open_plotters().items() if k not in plotters}
+    if not new_windows and not new_plotters:
+        return
+    if new_windows:
+        from PySide6.QtWidgets import QApplication
+
+        for w in QApplication.topLevelWidgets():
+            if id(w) in new_windows:
+                w.close()
+    if new_plotters:
+        from pyvista.plotting.plotter import _ALL_PLOTTERS
+
+        for k in new_plotters:
+            p = _ALL_PLOTTERS.get(k)
+            if p is not None:
+                p.close()
+    _settle_qt()
+    left = sorted(new_windows.values()) + [f"pyvista {v}" for v in sorted(new_plotters.values())]
+    pytest.fail(f"{request.node.nodeid} left open: {', '.join(left)}; close them in the test "
+                "(qtbot.addWidget, a fixture's teardown, plotter.close())", pytrace=False)

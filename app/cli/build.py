@@ -6,7 +6,8 @@ import time
 from pathlib import Path
 
 from app.cli._common import load_corpus_arg, progress_bar
-from app.files.source_loading import ANALYSIS_RATE, KINEMATICS_CHOICES, PRESETS
+from app.cli.options import add_manifold_options, add_quiet_option, add_talker_options, manifold_params
+from app.files.source_loading import ANALYSIS_RATE
 
 
 def add_arguments(p):
@@ -14,43 +15,21 @@ def add_arguments(p):
                                              "'lipspace import --block-frames'; a manifold built from blocks reads "
                                              "its frames from them, so keep the corpus); omit for the synthetic "
                                              "talker")
-    p.add_argument("--preset", choices=PRESETS, default="default",
-                   help="synthetic talker preset when no corpus is given (default: %(default)s)")
-    p.add_argument("--kinematics", choices=KINEMATICS_CHOICES, default="classic",
-                   help="the synthetic talker's kinematics when no corpus is given: 'calibrated' moves the jaw, "
-                        "upper lip and corners as real speakers' articulograph sensors do (opt-in; "
-                        "default: %(default)s)")
+    add_talker_options(p, kinematics="moves the jaw, upper lip and corners as real speakers' articulograph "
+                                     "sensors do (opt-in)")
     p.add_argument("-o", "--output", required=True, help="manifold file to write (.npz)")
-    p.add_argument("--variance", type=float, default=0.99, help="shape variance kept (default: %(default)s)")
-    p.add_argument("--embedding-dims", type=int, default=16, help="dimensions of Y (default: %(default)s)")
-    p.add_argument("--method", choices=("pca", "mds"), default="pca", help="embedding method (default: %(default)s)")
-    p.add_argument("--landmarks", type=int, default=None,
-                   help="force the landmark embedding with this many landmarks (default: exact up to "
-                        "--landmarks-above frames, 2000 landmarks above)")
-    p.add_argument("--landmarks-above", type=int, default=50000, metavar="N",
-                   help="frames above which the landmark embedding is chosen (default: %(default)s)")
+    add_manifold_options(p)
     p.add_argument("--dask", metavar="local|ADDRESS", default=None,
                    help="run the shape space and the embedding on Dask: 'local' starts a cluster with one worker "
                         "per core, an address (tcp://host:8786) uses a running scheduler (default: in-process)")
     p.add_argument("--dask-blocks", metavar="DIR", default=None,
                    help="folder for the frames stored in blocks, readable by every worker (default: a temporary "
                         "folder; give shared storage for workers on other machines)")
-    p.add_argument("--states", type=int, default=None, help="K, the number of states (default: about N/30)")
-    p.add_argument("--neighbors", type=int, default=None,
-                   help="frames each local tangent frame is fitted to (default: chosen for the corpus by held-out "
-                        "validation, which 'lipspace info' reports)")
-    p.add_argument("--speaker-norm", choices=("auto", "mean", "mean+scale", "none"), default="auto",
-                   help="per-speaker normalisation before the shape space: each speaker's mean frame removed "
-                        "(and spread scaled); auto = mean when utterances name 2+ speakers (default: %(default)s)")
-    p.add_argument("--dynamics-scale", default="max", metavar="max|pQ",
-                   help="scale of each block of the dynamic features G: the largest entry (the paper's) or the "
-                        "Q-th percentile of absolute values, e.g. p99, robust to outlying frames (default: %(default)s)")
-    p.add_argument("--seed", type=int, default=0)
     p.add_argument("--no-method-choice", dest="method_choice", action="store_false",
                    help="leave out measuring which synthesis method is best on the corpus's own validation split "
                         "(by default the build measures it and stores it in the file, so the first synthesis "
                         "starts at once; without it the first synthesis measures it)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    add_quiet_option(p)
 
 
 def run(args) -> int:
@@ -90,13 +69,9 @@ def _fit_and_save(args, outputs) -> str:
             plan = plan_build(corpus.n_frames, n_landmarks=args.landmarks, landmarks_above=args.landmarks_above)
             print(f"lipspace build: {plan.describe()}", file=sys.stdout)
             executor = _dask_executor(args)
-            manifold = Manifold(variance=args.variance, n_embedding=args.embedding_dims,
-                                embedding_method=args.method, n_landmarks=args.landmarks,
-                                n_states=args.states, n_neighbors=args.neighbors,
-                                random_state=args.seed, speaker_normalisation=args.speaker_norm,
-                                landmarks_above=args.landmarks_above, dynamics_scale=args.dynamics_scale)
+            manifold = Manifold(**manifold_params(args))
             try:
-                manifold.fit(corpus, progress=progress, executor=executor)
+                manifold.fit(corpus, progress=progress, executor=executor, plan=plan)
             finally:
                 if executor is not None:
                     executor.close()

@@ -14,7 +14,8 @@ import math
 import sys
 from pathlib import Path
 
-PRESETS = ("small", "default", "paper")
+from app.cli.options import add_quiet_option, add_talker_options
+
 MEASURES = ("bhattacharyya", "dprime")
 
 
@@ -22,8 +23,7 @@ def add_arguments(p):
     p.add_argument("input", nargs="?", metavar="MANIFOLD_OR_CORPUS",
                    help="manifold file (.npz from 'lipspace build') or native corpus file; "
                         "omit for the synthetic talker")
-    p.add_argument("--preset", choices=PRESETS, default="default",
-                   help="synthetic talker preset when no input is given (default: %(default)s)")
+    add_talker_options(p, when="when no input is given")
     p.add_argument("--phones", default=None, metavar="P1,P2,...",
                    help="only these phones (comma-separated), plus their pairwise separation matrices")
     p.add_argument("--csv", default=None, metavar="OUT.csv", help="also write the table as CSV")
@@ -38,7 +38,7 @@ def add_arguments(p):
                    help="cluster phone mid-points, or kinematic landmarks (aperture maxima 'open', minima "
                         "'closed', peak velocities 'opening' / 'closing'); auto = phones when the corpus has any "
                         "(default: %(default)s)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    add_quiet_option(p)
 
 
 def _manifold(args):

@@ -15,6 +15,8 @@ import math
 import sys
 from pathlib import Path
 
+from app.cli.options import add_quiet_option, add_seed_option
+
 FIGURE_SUFFIXES = (".pdf", ".png", ".svg")
 
 
@@ -44,9 +46,9 @@ def add_arguments(p):
                    help="horizon of the future hemisphere (default: %(default)s ms, the window's)")
     p.add_argument("--labels", choices=("auto", "phones", "kinematic"), default="auto",
                    help="clusters of phone mid-points or of kinematic landmarks (default: %(default)s)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the permutations and the bootstrap (default: 0)")
+    add_seed_option(p, what="the permutations and the bootstrap")
     p.add_argument("--show", type=int, default=10, metavar="N", help="rows printed per family (default: 10)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    add_quiet_option(p)
 
 
 def _check(args):

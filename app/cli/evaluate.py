@@ -25,7 +25,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-PRESETS = ("small", "default", "paper")
+from app.cli.options import add_quiet_option, add_seed_option, add_talker_options
+
 #: the older per-method table's methods -> where the protocols score them
 RETIRED_METHODS = {
     "manifold": "oracle/viterbi and oracle/manifold",
@@ -44,8 +45,7 @@ def add_arguments(p):
                    help="corpus file(s): native .npz or any importable format; omit for the synthetic talker")
     p.add_argument("--haskins", action="store_true",
                    help=f"evaluate on the Haskins IEEE sample pair ({HASKINS_DIR})")
-    p.add_argument("--preset", choices=PRESETS, default="small",
-                   help="synthetic talker preset when no corpus is given (default: %(default)s)")
+    add_talker_options(p, default="small")
     p.add_argument("--test-fraction", type=float, default=0.1,
                    help="fraction of utterances held out, at least one (default: %(default)s)")
     p.add_argument("--test-ids", default=None, metavar="ID,ID,...", help="hold out exactly these utterances")
@@ -68,7 +68,7 @@ def add_arguments(p):
                         "scaled to the pooled spread (as 'lipspace build --speaker-norm mean+scale'); none: never")
     p.add_argument("--inverse-dims", type=int, default=None,
                    help="retired with --methods: the protocols' table reports every inverse map")
-    p.add_argument("--seed", type=int, default=0, help="seed of the split and the manifold (default: 0)")
+    add_seed_option(p, what="the split and the manifold")
     p.add_argument("--csv", metavar="OUT.csv", default=None,
                    help="also write the table as CSV (protocols: protocol, method, utterance, rmse_x, rmse_y, "
                         "lve; one row per utterance and an ALL row per method)")
@@ -77,7 +77,7 @@ def add_arguments(p):
                    help="also report the errors per level of a metadata field of the utterances (speaker, sex, "
                         "emotion ...: lipspace info lists them); --csv then has a column FIELD and a "
                         "per-level table goes to FIELD-levels beside it")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    add_quiet_option(p)
 
 
 def _corpus(args, progress):
@@ -256,7 +256,7 @@ def _run_protocols(args) -> int:
 
     from app.cli import CliError
     from app.cli._common import progress_bar
-    from app.cli.synthesize import MAX_SMOOTHING_FRAMES
+    from app.cli.synthesis_steps import MAX_SMOOTHING_FRAMES
     from engine.evaluation.protocols import evaluate_protocols
     from engine.manifold.model import Manifold
 

@@ -15,7 +15,8 @@ import contextlib
 import os
 import sys
 
-from app.files.source_loading import KINEMATICS_CHOICES, PRESETS, source_kind
+from app.cli.options import add_talker_options
+from app.files.source_loading import source_kind
 
 __all__ = ["add_arguments", "run", "has_display", "NO_DISPLAY_MESSAGE", "EXIT_NO_DISPLAY"]
 
@@ -44,12 +45,9 @@ These commands work without a display:
 def add_arguments(p):
     p.add_argument("file", nargs="?", help="manifold (from 'lipspace build') or native corpus file (.npz); "
                                            "omit for the embedded synthetic talker")
-    p.add_argument("--preset", choices=PRESETS, default="default",
-                   help="synthetic talker preset when no file is given (default: %(default)s)")
-    p.add_argument("--kinematics", choices=KINEMATICS_CHOICES, default="classic",
-                   help="the synthetic talker's kinematics when no file is given: 'calibrated' opens the opt-in "
-                        "talker whose jaw, upper lip and corners move as real speakers' articulograph sensors do "
-                        "(default: %(default)s)")
+    add_talker_options(p, when="when no file is given",
+                       kinematics="opens the opt-in talker whose jaw, upper lip and corners move as real "
+                                  "speakers' articulograph sensors do")
     p.add_argument("--session", default=None, help="session file to reopen (from File > Save session)")
     p.add_argument("--restore", action=argparse.BooleanOptionalAction, default=None,
                    help="after an abnormal exit, reopen (--restore) or keep for later (--no-restore) the "

@@ -5,6 +5,8 @@ import sys
 import time
 from pathlib import Path
 
+from app.cli.options import add_quiet_option, add_talker_options
+
 FORMATS = ("png", "svg", "pdf")
 
 
@@ -13,8 +15,6 @@ MAX_DPI = 1200
 
 
 def add_arguments(p):
-    from app.files.source_loading import PRESETS as BUILD_PRESETS
-
     p.add_argument("manifold", nargs="?",
                    help="manifold file from 'lipspace build' (a corpus file is fitted first); "
                         "omit to build on the synthetic talker")
@@ -25,8 +25,7 @@ def add_arguments(p):
                    help="comma-separated figure names (default: all): " + ",".join(_names()))
     p.add_argument("--utterance", default=None,
                    help="utterance id for the example trajectory (fig2a) and regenerated utterance (fig3)")
-    p.add_argument("--preset", choices=BUILD_PRESETS, default="default",
-                   help="synthetic talker preset when no file is given (default: %(default)s)")
+    add_talker_options(p, when="when no file is given")
     p.add_argument("--width", default="180mm", metavar="85mm|180mm",
                    help="figure width for a journal page: 85mm (one column) or 180mm (two columns; default), or "
                         "another length from 40mm to 260mm (also cm or in); each figure lays itself out for it, "
@@ -35,7 +34,7 @@ def add_arguments(p):
     p.add_argument("--skip-bad", action="store_true",
                    help="write the figures that could be drawn when others fail, saying how many failed "
                         "(default: a failed figure stops the command and nothing is written)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    add_quiet_option(p)
 
 
 def _names():

@@ -18,6 +18,7 @@ from app.cli.import_lab import (
     quality_policy,
 )
 from app.cli.import_reading import has_audio, read_group, read_many
+from app.cli.options import add_quiet_option
 from app.files.source_loading import ANALYSIS_RATE
 
 #: which reader option ``--points`` sets, per format
@@ -99,7 +100,7 @@ def add_arguments(p):
     p.add_argument("--dask", metavar="local|ADDRESS", default=None,
                    help="with several inputs: read them on Dask workers, 'local' (one per core) or a running "
                         "scheduler's address; the files must be readable by every worker")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_quiet_option(p, what="no progress bar")
     p.add_argument("--block-frames", type=int, default=None, metavar="N",
                    help="store the frames in blocks of N frames (.npy files in OUT.blocks/ beside OUT.npz) that "
                         "Dask workers read in place during 'lipspace build --dask' (default: inside OUT.npz)")

@@ -15,7 +15,16 @@ import sys
 import time
 from pathlib import Path
 
-from app.cli.synthesize import BEST, METHODS, PRESETS, add_synthesis_options
+from app.cli.options import add_quiet_option, add_talker_options
+from app.cli.synthesis_steps import (
+    BEST,
+    METHODS,
+    add_synthesis_options,
+    check_synthesis_options,
+    load_manifold,
+    make_synthesizer,
+    make_targets,
+)
 
 __all__ = ["add_arguments", "run"]
 
@@ -43,8 +52,7 @@ def add_arguments(p):
     p.add_argument("-o", "--output", metavar="TALK.mp4", required=True, help="the video file to write (.mp4)")
     p.add_argument("--manifold", metavar="FILE", help="manifold file from 'lipspace build' (default: fit the "
                                                      "synthetic talker)")
-    p.add_argument("--preset", choices=PRESETS, default="default",
-                   help="synthetic talker preset without --manifold (default: %(default)s)")
+    add_talker_options(p, when="without --manifold")
     p.add_argument("--method", choices=(BEST,) + METHODS + ("original",), default=BEST,
                    help="synthesis method ('best': the one measured best on the corpus's validation split for "
                         "these targets), or 'original' to render the --utterance as captured (default: %(default)s)")
@@ -58,28 +66,12 @@ def add_arguments(p):
     p.add_argument("--size", type=_size, default=(640, 480), metavar="WxH",
                    help="pixels of one panel (default: 640x480)")
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, 0 (lossless) .. 51 (default: %(default)s)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
-
-
-def _with_synthesize_defaults(args):
-    """Give ``args`` every option of ``lipspace synthesize`` it lacks, at that option's default,
-    so the target and synthesizer helpers shared with it read what they expect."""
-    import argparse
-
-    from app.cli import synthesize
-
-    sp = argparse.ArgumentParser(add_help=False)
-    synthesize.add_arguments(sp)
-    for action in sp._actions:
-        if action.dest != argparse.SUPPRESS and not hasattr(args, action.dest):
-            setattr(args, action.dest, action.default)
-    return args
+    add_quiet_option(p)
 
 
 def _trajectory(args, manifold):
     """(frames, F^y path or None, label) of what is rendered."""
     from app.cli import CliError
-    from app.cli.synthesize import _synthesizer, _targets
     from engine.evaluation.measures import trajectory_y
 
     c = manifold.corpus_
@@ -89,9 +81,9 @@ def _trajectory(args, manifold):
         u = _utterance(manifold, args.utterance)
         return c.frames[u.start:u.stop], manifold.Fy_[u.start:u.stop, :3] if args.trajectory else None, u.id
     try:
-        targets = _targets(args, manifold)
+        targets = make_targets(args, manifold)
         args.rendered_targets = targets  # typed text is spoken on these times (_audio)
-        traj = _synthesizer(args, manifold, targets).synthesize(targets)
+        traj = make_synthesizer(args, manifold, targets).synthesize(targets)
     except (ValueError, FileNotFoundError) as exc:
         raise CliError(str(exc)) from None
     for w in traj.warnings:
@@ -140,10 +132,8 @@ def _audio(args, manifold):
 def run(args) -> int:
     from app.cli import CliError
     from app.cli._common import progress_bar
-    from app.cli.synthesize import _manifold
     from app.export.video import render_video
 
-    args = _with_synthesize_defaults(args)
     out = Path(args.output)
     if out.suffix.lower() != ".mp4":
         raise CliError(f"{out}: the video file must end in .mp4")
@@ -153,12 +143,10 @@ def run(args) -> int:
         raise CliError("--side-by-side with --method original would show the utterance twice; choose a method")
     if args.audio is not None and args.no_audio:
         raise CliError("--audio and --no-audio contradict each other; give one")
-    from app.cli.synthesize import check_synthesis_options
-
     check_synthesis_options(args)
     if not 0 <= args.crf <= 51:
         raise CliError(f"--crf {args.crf}: must be from 0 (lossless) to 51")
-    manifold = _manifold(args)
+    manifold = load_manifold(args)
     c = manifold.corpus_
     frames, Y, label = _trajectory(args, manifold)
     original = Y_original = None
@@ -172,9 +160,8 @@ def run(args) -> int:
     if original is not None:
         title = f"{args.utterance}: original (left), {title} (right)"
     t0 = time.perf_counter()
-    from engine.recordings.orientation import anatomical_frame
-
     from app.cli._common import command_outputs
+    from engine.recordings.orientation import anatomical_frame
 
     with progress_bar(disable=True if args.quiet else None) as progress, command_outputs(args) as outputs:
         try:

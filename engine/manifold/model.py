@@ -34,6 +34,7 @@ from engine.recordings.registration import SPEAKER_MODES
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
+    from engine.manifold.buildplan import BuildPlan
     from engine.manifold.inverse import InverseMap
 
 __all__ = ["project_x", "Manifold", "ManifoldFileError", "algorithm_fingerprint", "fit_modules"]
@@ -213,8 +214,12 @@ class Manifold(BaseEstimator):
         self.dynamics_scale = dynamics_scale
 
     # ------------------------------------------------------------------ fitting
-    def fit(self, corpus: Corpus, *, progress: ProgressFn = None, executor: Any = None) -> Manifold:
+    def fit(self, corpus: Corpus, *, progress: ProgressFn = None, executor: Any = None,
+            plan: BuildPlan | None = None) -> Manifold:
         """Fit every stage on ``corpus``. Cancelling (via ``progress``) leaves ``self`` unfitted.
+
+        ``plan``: the :class:`~engine.manifold.buildplan.BuildPlan` of this corpus and these
+        parameters when the caller already made it (to show it before the fit); None makes it here.
 
         ``executor``: None fits in-process; an :class:`engine.scale.executor.DaskExecutor` runs the
         shape space, the embedding, the local tangent frames and the assignment to states
@@ -238,7 +243,11 @@ class Manifold(BaseEstimator):
         timings = {}
         bounds = corpus.bounds
 
-        plan = plan_build(N, n_landmarks=self.n_landmarks, landmarks_above=self.landmarks_above)
+        if plan is None:
+            plan = plan_build(N, n_landmarks=self.n_landmarks, landmarks_above=self.landmarks_above)
+        elif plan.n_frames != N:
+            raise ValueError(f"plan is for {plan.n_frames} frames but {corpus.name} has {N}; "
+                             "make it with plan_build(corpus.n_frames, ...) or leave it out")
         t = time.perf_counter()
         shape = ShapeSpace(max_components=self.max_components, variance=self.variance,
                            random_state=self.random_state)

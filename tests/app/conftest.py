@@ -1,77 +1,24 @@
-"""GUI test support: a display for tests marked ``gui`` (an X server, or Xvfb started here).
+"""GUI test support: the shared explorer window, its settings, and a skip where there is no display.
 
-Qt's QtInteractor needs a real X display (QT_QPA_PLATFORM=offscreen does not work
-with VTK's OpenGL widget). When DISPLAY is unset and ``Xvfb`` is installed, one
-server is started for the whole run and stopped at exit; otherwise ``gui`` tests
-are skipped with the reason.
+The display is the virtual X server pytest-xvfb starts for the run (the ``xvfb_*`` settings in
+pyproject.toml: 1600x1200x24); Qt's QtInteractor needs a real X display
+(QT_QPA_PLATFORM=offscreen does not work with VTK's OpenGL widget). Where neither Xvfb nor a
+DISPLAY is there, tests marked ``gui`` are skipped with the reason.
 """
 from __future__ import annotations
 
-import atexit
 import contextlib
 import os
-import shutil
 import subprocess
-import time
 from pathlib import Path
 
 import pytest
 
-_XVFB = {"proc": None, "error": None}
-
-
-def _start_xvfb() -> str | None:
-    """Start Xvfb on a free display; returns the DISPLAY string or None (reason in _XVFB)."""
-    exe = shutil.which("Xvfb")
-    if exe is None:
-        _XVFB["error"] = ("no display (DISPLAY unset) and Xvfb is not installed; install xvfb or run "
-                          "'xvfb-run -a python -m pytest'")
-        return None
-    for n in range(97, 140):
-        if Path(f"/tmp/.X{n}-lock").exists() or Path(f"/tmp/.X11-unix/X{n}").exists():
-            continue
-        proc = subprocess.Popen([exe, f":{n}", "-screen", "0", "1600x1200x24", "-nolisten", "tcp"],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        for _ in range(100):
-            if Path(f"/tmp/.X11-unix/X{n}").exists():
-                _XVFB["proc"] = proc
-                atexit.register(_stop_xvfb)
-                return f":{n}"
-            if proc.poll() is not None:
-                break
-            time.sleep(0.05)
-        if proc.poll() is None:
-            proc.terminate()
-            proc.wait(5)
-    _XVFB["error"] = "could not start Xvfb on any display :97..:139"
-    return None
-
-
-def _stop_xvfb():
-    proc = _XVFB["proc"]
-    if proc is not None and proc.poll() is None:
-        proc.terminate()
-        try:
-            proc.wait(5)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-
-
-def ensure_display() -> str | None:
-    """A usable DISPLAY (the existing one or a started Xvfb); None with the reason in _XVFB['error']."""
-    if os.environ.get("DISPLAY"):
-        return os.environ["DISPLAY"]
-    if _XVFB["error"] is not None:
-        return None
-    d = _start_xvfb()
-    if d is not None:
-        os.environ["DISPLAY"] = d
-    return d
-
 
 def pytest_runtest_setup(item):
-    if item.get_closest_marker("gui") is not None and ensure_display() is None:
-        pytest.skip(f"GUI test needs a display: {_XVFB['error']}")
+    if item.get_closest_marker("gui") is not None and not os.environ.get("DISPLAY"):
+        pytest.skip("GUI test needs a display: install Xvfb (the xvfb package; pytest-xvfb starts it) or run "
+                    "under an X server")
 
 
 @pytest.fixture(scope="session")
@@ -106,6 +53,29 @@ def shown_main_window(qapp, manifold, size=(1300, 850)):
 def main_window_factory():
     """:func:`shown_main_window`: ``with main_window_factory(qapp, manifold) as w: ...``."""
     return shown_main_window
+
+
+def reset_window(window, qapp) -> None:
+    """A shared explorer window back to how a fresh one starts: playback stopped, no utterance, every
+    view field and setting at its default (no selection, path, component or phone filter; density
+    colouring, future hemisphere), both undo histories empty, the events processed."""
+    s = window.state
+    s.set_playing(False)
+    s.set_utterance(None)
+    s.reset_view()
+    s.reset_settings()
+    window.view_undo_stack.clear()
+    window.editor.undo_stack.clear()
+    qapp.processEvents()
+
+
+@pytest.fixture
+def fresh_window(shared_window, qapp):
+    """The test module's ``shared_window`` (a module-scoped fixture the module declares: the window is
+    built once per module, its full rebuild tested there once), reset by :func:`reset_window` for
+    this test."""
+    reset_window(shared_window, qapp)
+    return shared_window
 
 
 @pytest.fixture(scope="session", autouse=True)

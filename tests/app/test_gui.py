@@ -8,25 +8,15 @@ pytestmark = pytest.mark.gui
 
 
 @pytest.fixture(scope="module")
-def window(qapp, app_manifold, main_window_factory):
+def shared_window(qapp, app_manifold, main_window_factory):
     with main_window_factory(qapp, app_manifold) as w:
         yield w
 
 
 @pytest.fixture
-def win(window, qapp):
-    """The shared window, its state reset for each test (the full rebuild is tested once, at creation)."""
-    s = window.state
-    s.set_playing(False)
-    s.set_utterance(None)
-    s.clear_selection()
-    s.set_visible_phones(())
-    s.set_component(None)
-    s.set_path_mode(False)
-    s.set_hemisphere("future")
-    s.set_color_mode("density")
-    qapp.processEvents()
-    return window
+def win(fresh_window):
+    """The shared window, reset for each test (conftest's ``fresh_window``)."""
+    return fresh_window
 
 
 def _points(manifold, row):

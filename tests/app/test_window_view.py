@@ -9,20 +9,15 @@ pytestmark = pytest.mark.gui
 
 
 @pytest.fixture(scope="module")
-def win(qapp, app_manifold, main_window_factory):
+def shared_window(qapp, app_manifold, main_window_factory):
     with main_window_factory(qapp, app_manifold, size=(1600, 1000)) as w:
         yield w
 
 
 @pytest.fixture
-def fresh(win, qapp):
-    s = win.state
-    s.clear_selection()
-    s.reset_settings()
-    win.view_undo_stack.clear()
-    win.editor.undo_stack.clear()
-    qapp.processEvents()
-    return win
+def fresh(fresh_window):
+    """The shared window, reset for each test (conftest's ``fresh_window``)."""
+    return fresh_window
 
 
 def test_ticked_phones_have_one_colour_in_view_legends_table_and_phone_colouring(fresh, qtbot):

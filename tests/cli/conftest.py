@@ -60,3 +60,74 @@ def run_cli(argv) -> tuple[int, str, str]:
 def cli():
     """:func:`run_cli`: run a ``lipspace`` command, capturing its exit code and output."""
     return run_cli
+
+
+class RunningBuild:
+    """``lipspace build ARGV`` in a child process, watched until it says it is fitting.
+
+    Its stdout is read line by line on a thread (unbuffered: ``PYTHONUNBUFFERED``), its stderr
+    goes to a file; :meth:`wait_until_fitting` returns once the build has printed its plan
+    (``lipspace build: N frames: embedding ...``), the line it prints when the corpus is
+    loaded and the fit starts. The timeout only bounds a failure, it is never the signal.
+    """
+
+    def __init__(self, argv, folder):
+        import os
+        import subprocess
+        import sys
+        import threading
+
+        self.stderr_path = folder / "build-stderr.txt"
+        self._err = open(self.stderr_path, "w", encoding="utf-8")  # closed in finish()
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        self.proc = subprocess.Popen([sys.executable, "-m", "app.cli", "build", *map(str, argv)],
+                                     stdout=subprocess.PIPE, stderr=self._err, text=True, env=env)
+        self.lines: list[str] = []
+        self._fitting = threading.Event()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self):
+        for line in self.proc.stdout:
+            self.lines.append(line)
+            if line.startswith("lipspace build: ") and " frames: embedding " in line:
+                self._fitting.set()
+        self._fitting.set()  # the output ended: wait_until_fitting says whether it was the plan
+
+    def wait_until_fitting(self, timeout_s: float = 600.0) -> None:
+        """Block until the build prints its plan; fail (with its output) if it ends or times out first."""
+        assert self._fitting.wait(timeout_s), f"no build plan within {timeout_s:g} s: {self.lines}"
+        assert self.proc.poll() is None, f"the build ended before fitting: {self.lines} {self.stderr()[-2000:]}"
+
+    def finish(self, timeout_s: float = 120.0) -> str:
+        """Wait for the exit; its stderr."""
+        try:
+            self.proc.wait(timeout_s)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+                self.proc.wait()
+            self._reader.join(timeout_s)
+            self.proc.stdout.close()
+            self._err.close()
+        return self.stderr()
+
+    def stderr(self) -> str:
+        return self.stderr_path.read_text(encoding="utf-8", errors="replace")
+
+
+@pytest.fixture
+def running_build(tmp_path_factory):
+    """``running_build(argv) -> RunningBuild``; any build still running at the test's end is killed."""
+    builds = []
+
+    def start(argv):
+        b = RunningBuild(argv, tmp_path_factory.mktemp("build-log"))
+        builds.append(b)
+        return b
+
+    yield start
+    for b in builds:
+        if b.proc.poll() is None:
+            b.proc.kill()
+        b.finish()

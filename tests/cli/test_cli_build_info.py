@@ -79,23 +79,17 @@ def test_cli_errors_are_clean(tmp_path, capsys):
     assert not (tmp_path / "m.npz").exists()
 
 
-def test_ctrl_c_stops_build_cleanly_and_writes_nothing(tmp_path):
+def test_ctrl_c_stops_build_cleanly_and_writes_nothing(tmp_path, running_build):
     """A real SIGINT to `lipspace build` mid-fit: exit 130, one line, no traceback, no file."""
-    import os
     import signal
-    import subprocess
-    import sys
-    import time
 
     out = tmp_path / "m.npz"
-    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "build", "--preset", "default", "-o", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
-    time.sleep(3.0)  # importing, generating the talker or fitting: in each case nothing may be left
-    assert proc.poll() is None, proc.communicate()
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    build = running_build(["--preset", "default", "-o", out])
+    build.wait_until_fitting()  # it has said its plan: the fit is under way
+    build.proc.send_signal(signal.SIGINT)
+    err = build.finish(timeout_s=60)
     err_head = err[-2000:]
-    assert proc.returncode == 130, err_head
+    assert build.proc.returncode == 130, err_head
     assert "interrupted; nothing was written" in err and "Traceback" not in err, err_head
     assert not out.exists() and not list(tmp_path.glob(".*part*"))
 
@@ -201,23 +195,17 @@ def test_interrupted_mesh_export_leaves_nothing(tmp_path, built, capsys, monkeyp
 
 
 @pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP"])
-def test_sigterm_and_sighup_stop_build_like_ctrl_c(tmp_path, signame):
+def test_sigterm_and_sighup_stop_build_like_ctrl_c(tmp_path, running_build, signame):
     """They used to kill the process and leave 130-190 MB hidden .part files."""
-    import os
     import signal
-    import subprocess
-    import sys
-    import time
 
     out = tmp_path / "m.npz"
-    proc = subprocess.Popen([sys.executable, "-m", "app.cli", "build", "--preset", "default", "-o", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
-    time.sleep(3.0)
-    assert proc.poll() is None, proc.communicate()
+    build = running_build(["--preset", "default", "-o", out])
+    build.wait_until_fitting()
     sig = getattr(signal, signame)
-    proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 128 + sig, err[-2000:]
+    build.proc.send_signal(sig)
+    err = build.finish(timeout_s=60)
+    assert build.proc.returncode == 128 + sig, err[-2000:]
     assert f"stopped by {signame}; nothing was written" in err and "Traceback" not in err, err[-2000:]
     assert list(tmp_path.iterdir()) == []
 

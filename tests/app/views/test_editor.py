@@ -49,17 +49,19 @@ def test_time_ticks_are_whole_milliseconds_spaced_for_the_width():
 # ------------------------------------------------------------------ the widget
 
 @pytest.fixture(scope="module")
-def editor_window(qapp, app_manifold, main_window_factory):
+def shared_window(qapp, app_manifold, main_window_factory):
     with main_window_factory(qapp, app_manifold) as w:
         yield w
 
 
 @pytest.fixture
+def editor_window(fresh_window):
+    """The shared window, reset for each test (conftest's ``fresh_window``)."""
+    return fresh_window
+
+
+@pytest.fixture
 def ed(editor_window, qapp):
-    s = editor_window.state
-    s.set_playing(False)
-    s.set_utterance(None)
-    s.clear_selection()
     e = editor_window.editor
     assert e.set_text(PHONES, source="phones")
     e.set_zoom(1.0)
@@ -277,7 +279,7 @@ def test_default_method_is_the_one_best_on_this_corpus_validation_and_is_named(e
         else:
             assert ed.set_text(text, source=source)
         runner = ed.synthesize()
-        qtbot.waitUntil(lambda runner=runner: runner.state != "running", timeout=240000)
+        qtbot.waitUntil(lambda r=runner: r.state != "running", timeout=240000)
         best = choice["best"][protocol]
         syn = editor_window.state.synthetic
         assert syn.extra["method"] == best
