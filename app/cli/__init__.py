@@ -25,7 +25,8 @@ __all__ = ["main", "SUBCOMMANDS"]
 
 #: name -> (module, one-line help)
 SUBCOMMANDS = {
-    "explore": ("app.cli.explore", "open the explorer GUI (default; the embedded synthetic corpus if no file is given)"),
+    "explore": ("app.cli.explore",
+                "open the explorer GUI (default; the embedded synthetic corpus if no file is given)"),
     "build": ("app.cli.build", "fit a manifold from a corpus (or the synthetic talker) and save it"),
     "info": ("app.cli.info", "summarise a corpus or manifold file"),
     "synthesize": ("app.cli.synthesize", "synthesise a lip trajectory from phones, a TextGrid or text"),
@@ -347,7 +348,9 @@ def signals_deferred():
 
 
 def caught_signum(caught) -> int | None:
-    return {"SIGINT": signal.SIGINT, "SIGTERM": signal.SIGTERM, "SIGHUP": signal.SIGHUP}.get(caught[-1]) if caught else None
+    if not caught:
+        return None
+    return {"SIGINT": signal.SIGINT, "SIGTERM": signal.SIGTERM, "SIGHUP": signal.SIGHUP}.get(caught[-1])
 
 
 @contextlib.contextmanager
@@ -431,7 +434,7 @@ def _check_paths(args, typed=None) -> None:
     def opt(name):
         return typed.get(name, "--" + name.replace("_", "-"))
 
-    for name, p in inputs:
+    for _name, p in inputs:
         try:
             st = os.stat(p)
         except (OSError, ValueError):

@@ -18,7 +18,7 @@ protocols, and the options now stop with an error that says where
 (:data:`RETIRED_METHODS`).
 
 Input: corpus files in any importable format (several are joined, one utterance
-each), ``--haskins`` (the two Haskins IEEE samples beside the project), or nothing
+each), ``--haskins DIR`` (a folder of Haskins IEEE recordings), or nothing
 (the synthetic talker, ``--preset``).
 """
 from __future__ import annotations
@@ -37,14 +37,13 @@ RETIRED_METHODS = {
     "linear-phones": "phones/linear",
     "cubic-phones": "phones/linear (no cubic through the phones' means)",
 }
-HASKINS_DIR = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "haskins-ieee"
 
 
 def add_arguments(p):
     p.add_argument("corpus", nargs="*", metavar="CORPUS",
                    help="corpus file(s): native .npz or any importable format; omit for the synthetic talker")
-    p.add_argument("--haskins", action="store_true",
-                   help=f"evaluate on the Haskins IEEE sample pair ({HASKINS_DIR})")
+    p.add_argument("--haskins", metavar="DIR", default=None,
+                   help="evaluate on a folder of Haskins IEEE .mat recordings (every *.mat in DIR)")
     add_talker_options(p, default="small")
     p.add_argument("--test-fraction", type=float, default=0.1,
                    help="fraction of utterances held out, at least one (default: %(default)s)")
@@ -86,9 +85,9 @@ def _corpus(args, progress):
 
     if args.haskins and args.corpus:
         raise CliError("give corpus files or --haskins, not both")
-    paths = sorted(HASKINS_DIR.glob("*.mat")) if args.haskins else [Path(p) for p in args.corpus]
+    paths = sorted(Path(args.haskins).glob("*.mat")) if args.haskins else [Path(p) for p in args.corpus]
     if args.haskins and not paths:
-        raise CliError(f"no Haskins samples (*.mat) found in {HASKINS_DIR}")
+        raise CliError(f"--haskins {args.haskins}: no Haskins recordings (*.mat) found in that folder")
     if not paths:
         return load_corpus_arg(None, synthetic_preset=args.preset, progress=progress)
     from engine.io import ImportFormatError, read_corpus

@@ -24,7 +24,7 @@ def _corpus_lines(c):
         f"frames      {c.n_frames} at {c.rate:g} Hz ({c.duration:.1f} s), {n_utt} utterance{'s' * (n_utt != 1)}"
         + ("" if abs(c.rate - ANALYSIS_RATE) <= 0.05 * ANALYSIS_RATE else
            f" (the method's analysis rate is {ANALYSIS_RATE:g} Hz: 'lipspace import --resample {ANALYSIS_RATE:g}')"),
-        f"points      {c.n_points} ({c.dims}-D){', mesh with %d faces' % len(c.faces) if c.faces is not None else ''}",
+        f"points      {c.n_points} ({c.dims}-D){f', mesh with {len(c.faces)} faces' if c.faces is not None else ''}",
         f"phones      {len(labels)} intervals, {len(uniq)} labels" + (f"; most frequent: {top}" if top else ""),
         f"latent      {', '.join(sorted(k for k in c.latent if not k.startswith('quality_'))) or '-'}",
     ] + _recording_lines(c)
@@ -109,7 +109,7 @@ def _opening_lines(m):
     warnings.warn(CorpusWarning(f"the tangent classes agree with the lip aperture less than expected (opening "
                                 f"{100 * agree.opening:.1f}%, expected >= {100 * OPENING_BOUND:.0f}%; accelerating "
                                 f"{100 * agree.accelerating:.1f}%, expected >= {100 * ACCELERATING_BOUND:.0f}%); "
-                                f"cause: {'; '.join(causes)}"))
+                                f"cause: {'; '.join(causes)}"), stacklevel=2)
     return lines
 
 

@@ -54,7 +54,7 @@ def _tables() -> dict:
     return json.loads(resources.files("app.models").joinpath(_TABLE_FILE).read_text(encoding="utf-8"))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def colour_table(name: str) -> np.ndarray:
     """RGB entries (n, 3) float64 of colour map ``name``, read from the shipped ``colour_tables.json``
     (written by :mod:`app.figures.colour_tables`; no matplotlib import here)."""

@@ -97,7 +97,7 @@ class ComparisonShown:
         a, b = self.result.contrasts_[self.contrast]
         return str(a), str(b)
 
-    def with_contrast(self, i: int) -> "ComparisonShown":
+    def with_contrast(self, i: int) -> ComparisonShown:
         """The same comparison showing contrast ``i``."""
         if not 0 <= int(i) < len(self.result.contrasts_):
             raise IndexError(f"contrast {i} out of range 0..{len(self.result.contrasts_) - 1}")

@@ -246,7 +246,7 @@ class LiveSession:
         self._threads = []
 
     # ---------------------------------------------------------------- threads
-    def start(self) -> "LiveSession":
+    def start(self) -> LiveSession:
         import av
 
         try:

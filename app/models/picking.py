@@ -178,7 +178,8 @@ def _screen_reach(centres, rad, M, size) -> np.ndarray:
     w = centres @ M[3, :3] + M[3, 3]
     ndc = (centres @ M[:2, :3].T + M[:2, 3]) / np.where(w == 0, 1e-300, w)[:, None]
     m = np.linalg.norm(M[3, :3])
-    # x_ndc(c + d) - x_ndc(c) = (a.d - x_ndc m.d) / (w + m.d) for a row a of M: bounded by (|a| + |x_ndc||m|) r / (w - |m| r)
+    # x_ndc(c + d) - x_ndc(c) = (a.d - x_ndc m.d) / (w + m.d) for a row a of M:
+    # bounded by (|a| + |x_ndc||m|) r / (w - |m| r)
     ax, ay = np.linalg.norm(M[0, :3]), np.linalg.norm(M[1, :3])
     margin = w - m * rad
     px = np.hypot(0.5 * W * (ax + np.abs(ndc[:, 0]) * m), 0.5 * H * (ay + np.abs(ndc[:, 1]) * m)) * rad

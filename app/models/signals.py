@@ -136,7 +136,7 @@ class Signals:
         return d
 
     @classmethod
-    def from_settings(cls, corpus, d: dict) -> "Signals":
+    def from_settings(cls, corpus, d: dict) -> Signals:
         """The signals a session's :meth:`settings` describe (edited landmarks: :meth:`gestures_from_settings`)."""
         have = TrackPanel(corpus, channels=(), lowpass_hz=None).available
         chans = [c for c in d.get("channels", []) if c in have]  # a channel the corpus lacks: left out, not fatal

@@ -34,7 +34,7 @@ COLUMNS = (
 _SWATCH_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
 
 
-def _swatch(rgb) -> "QtGui.QIcon":
+def _swatch(rgb) -> QtGui.QIcon:
     pm = QtGui.QPixmap(12, 12)
     pm.fill(QtGui.QColor.fromRgbF(*[float(c) for c in rgb]))
     return QtGui.QIcon(pm)

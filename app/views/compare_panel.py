@@ -57,11 +57,11 @@ class ComparisonTableModel(QtCore.QAbstractTableModel):
     def row(self, k: int) -> dict:
         return self.rows[k]
 
-    def rowCount(self, parent=QtCore.QModelIndex()):
-        return 0 if parent.isValid() else len(self.rows)
+    def rowCount(self, parent=None):
+        return 0 if parent is not None and parent.isValid() else len(self.rows)
 
-    def columnCount(self, parent=QtCore.QModelIndex()):
-        return 0 if parent.isValid() else len(self.cols)
+    def columnCount(self, parent=None):
+        return 0 if parent is not None and parent.isValid() else len(self.cols)
 
     def data(self, index, role=QtCore.Qt.ItemDataRole.DisplayRole):
         if not index.isValid():

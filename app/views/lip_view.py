@@ -129,7 +129,8 @@ class LipView(QtWidgets.QWidget):
         from app.models.lip_drawing import lip_drawing
         from engine.recordings.orientation import anatomical_frame
 
-        self.orientation = anatomical_frame(c, m.shape_.mean_)  # points drawn in the talker's frame, seen from the front
+        # points drawn in the talker's frame, seen from the front
+        self.orientation = anatomical_frame(c, m.shape_.mean_)
         mean = self._points(m.shape_.mean_)
         # what is drawn: a measured surface as a surface, sensors as sensors (app.models.lip_drawing, as the figures)
         self.drawing = lip_drawing(c, mean, frame=self.orientation)

@@ -89,7 +89,8 @@ class SoundPanel(TimeKeys, QtWidgets.QWidget):
             self._peak = peak if peak > 0 else 1.0
             spec = display.spectrogram
             self.setToolTip(f"{display.source}: {display.duration:.3f} s at {display.sample_rate:g} Hz. "
-                            f"Spectrogram 0–{spec.max_frequency:.0f} Hz, {1000 * spec.window_length:g} ms Gaussian window, "
+                            f"Spectrogram 0–{spec.max_frequency:.0f} Hz, "
+                            f"{1000 * spec.window_length:g} ms Gaussian window, "
                             f"{1000 * spec.time_step:g} ms steps, 50 dB dynamic range, +6 dB/octave pre-emphasis "
                             "(Praat's wide-band defaults)")
         else:

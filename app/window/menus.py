@@ -87,7 +87,7 @@ class MenuActions:
         e.addAction(self.undo_action)
         e.addAction(self.redo_action)
         v = mb.addMenu("&View")
-        for key, dock in self.docks.items():
+        for dock in self.docks.values():
             v.addAction(dock.toggleViewAction())
         v.addSeparator()
         self.frame_action = self._act(v, "&Frame the selection", self.manifold_view.frame_selection,

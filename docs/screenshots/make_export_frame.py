@@ -23,7 +23,7 @@ with tempfile.TemporaryDirectory() as tmp:
         raise SystemExit(rc)
     with av.open(str(mp4)) as f:
         rate = f.streams.video[0].average_rate
-        for k, frame in enumerate(f.decode(video=0)):
+        for k, frame in enumerate(f.decode(video=0)):  # noqa: B007 (the frame is used after the loop)
             if k >= round(at * rate):
                 break
     with atomic_write(outdir / "export_frame.png") as png:

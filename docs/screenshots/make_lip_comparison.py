@@ -18,8 +18,8 @@ import pyvista as pv
 from skimage import data as skdata
 
 from app.scene.lips import add_lips
-from engine.io.video.facemesh import LIP_NAMES, LIP_RINGS
 from engine.io.video.clips import read_video
+from engine.io.video.facemesh import LIP_NAMES, LIP_RINGS
 from engine.io.video.synth import moving_image_frames, write_video
 from engine.talker.lipmodel import vermilion_weight
 from engine.talker.synthetic import load_synthetic
@@ -66,8 +66,8 @@ def main(out):
         Pv, fv, uv, lv = facemesh_lips(tmp)
     Pt, ft, ut, lt, names = talker_lips()
     rows = []
-    for label, P, u, l in (("video (FaceMesh)", Pv, uv, lv), ("synthetic talker", Pt, ut, lt)):
-        W, hu, hl = lip_heights(P[u | l], u[u | l], l[u | l])
+    for label, P, u, lo in (("video (FaceMesh)", Pv, uv, lv), ("synthetic talker", Pt, ut, lt)):
+        W, hu, hl = lip_heights(P[u | lo], u[u | lo], lo[u | lo])
         rows.append((label, W, hu, hl))
         print(f"{label:18s} mouth width {W:5.1f} mm, upper lip {hu:4.1f} mm, lower lip {hl:4.1f} mm, "
               f"upper/lower {hu / hl:4.2f}, width/(upper+lower) {W / (hu + hl):4.2f}")

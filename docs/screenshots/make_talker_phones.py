@@ -1,7 +1,12 @@
-import sys, numpy as np, pyvista as pv
+import sys
+
+import numpy as np
+import pyvista as pv
+
 sys.path.insert(0, '/work/main')
-from engine.talker.synthetic import SyntheticTalker
 from app.scene.lips import add_lips
+from engine.talker.synthetic import SyntheticTalker
+
 c = SyntheticTalker(preset="small", resolution="default", duration=120).generate()
 mids, labels, *_ = c.phone_table()
 ap = c.latent["aperture"]
@@ -14,6 +19,10 @@ for i, (p, title) in enumerate(picks):
     pl.subplot(i // 4, i % 4)
     add_lips(pl, c.frames[k].reshape(-1, 3), c.faces, color=(0.78, 0.32, 0.34), names=c.point_names)
     pl.add_text(title, font_size=11, color="black")
-    pl.view_xy(); pl.camera.azimuth = 25 if i % 2 else 0; pl.camera.elevation = 8; pl.reset_camera(); pl.camera.zoom(1.25)
+    pl.view_xy()
+    pl.camera.azimuth = 25 if i % 2 else 0
+    pl.camera.elevation = 8
+    pl.reset_camera()
+    pl.camera.zoom(1.25)
 pl.set_background("white")
 pl.screenshot(sys.argv[1])

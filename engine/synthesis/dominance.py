@@ -128,7 +128,8 @@ class DominanceModel(BaseEstimator):
         R = X - Xh
         N = X.shape[0]
         loss = (float((R ** 2).sum()) + penalty) / N  # the targets' own objective: its optimum profiles them out
-        # dE/dw_tj (w normalised): -2 R_t . (T_j - Xh_t); through the normalisation, dE/dlogD_tj = w_tj (g_tj - sum_k w_tk g_tk).
+        # dE/dw_tj (w normalised): -2 R_t . (T_j - Xh_t); through the normalisation,
+        # dE/dlogD_tj = w_tj (g_tj - sum_k w_tk g_tk).
         # R_t . T_j is (R T^T)[t, type j]: (N, K) instead of the (N, W, m) of T[types] (1.8 GB at a million frames)
         RT = R @ T.T
         g = -2.0 * (np.take_along_axis(RT, types, axis=1) - np.einsum("tm,tm->t", R, Xh)[:, None]) / N

@@ -75,7 +75,8 @@ class _StateModelSynthesizer(BaseEstimator):
         K = int(g.centroids_.shape[0])
         n = np.maximum(np.bincount(lab, minlength=K), 1)
         Fy = np.asarray(manifold.Fy_, dtype=np.float64)
-        self._graph_y = np.stack([np.bincount(lab, weights=Fy[:, j], minlength=K) for j in range(Fy.shape[1])], 1) / n[:, None]
+        sums = [np.bincount(lab, weights=Fy[:, j], minlength=K) for j in range(Fy.shape[1])]
+        self._graph_y = np.stack(sums, 1) / n[:, None]
         self._manifold = manifold
         return self
 

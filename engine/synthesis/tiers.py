@@ -29,10 +29,9 @@ class Timeline:
 
 def input_timeline(path, *, tier: str | None = None) -> Timeline:
     """The span and phone tier of an alignment file (a TextGrid's own xmin / xmax; a .lab: 0 to its last end)."""
+    from engine.files.bounded import input_limit, read_bounded
     from engine.io import read_alignment
     from engine.io.readers.alignment import _parse_textgrid, _pick_tier
-
-    from engine.files.bounded import input_limit, read_bounded
 
     phones = tuple(read_alignment(path, tier=tier))  # a regular file of bounded size, or refused
     data = read_bounded(path, limit=input_limit()[0])[:64].lstrip(b"\xef\xbb\xbf").replace(b"\x00", b"")

@@ -27,8 +27,8 @@ if TYPE_CHECKING:
     from engine.phonetics.targets import TargetSequence
     from engine.recordings.corpus import Corpus, PhoneInterval, Utterance
 
-__all__ = ["phone_mids", "Trajectory", "Synthesizer", "check_fitted_manifold", "target_frames", "smooth", "phone_sequences",
-           "PhoneModelSynthesizer", "interpolate_targets", "INTERPOLATIONS"]
+__all__ = ["phone_mids", "Trajectory", "Synthesizer", "check_fitted_manifold", "target_frames", "smooth",
+           "phone_sequences", "PhoneModelSynthesizer", "interpolate_targets", "INTERPOLATIONS"]
 
 #: kinds of :func:`interpolate_targets`
 INTERPOLATIONS = ("linear", "cubic", "pchip", "hermite")
@@ -88,7 +88,8 @@ def check_fitted_manifold(manifold: Any) -> None:
     """ValueError naming the first missing attribute unless ``manifold`` is a fitted Manifold."""
     for attr in ("Fy_", "Fx_", "states_", "shape_", "corpus_"):
         if not hasattr(manifold, attr):
-            raise ValueError(f"synthesis needs a fitted engine.manifold.model.Manifold (missing {attr}); call fit first")
+            raise ValueError(f"synthesis needs a fitted engine.manifold.model.Manifold (missing {attr}); "
+                             "call fit first")
 
 
 def target_frames(targets: TargetSequence) -> np.ndarray:

@@ -71,7 +71,8 @@ def overlap_fraction(forward: str, backward: str) -> float:
     try:
         return OVERLAP_TABLE[(forward, backward)] / 100.0
     except KeyError:
-        raise ValueError(f"unknown lip-reading classes ({forward!r}, {backward!r}); expected two of {_CLASSES}") from None
+        raise ValueError(f"unknown lip-reading classes ({forward!r}, {backward!r}); "
+                         f"expected two of {_CLASSES}") from None
 
 
 def crossfade_weights(t, mid_a: float, mid_b: float, fraction: float) -> np.ndarray:

@@ -39,7 +39,8 @@ from engine.synthesis.statepaths import StateModel, anchor
 from engine.synthesis.trajectory import phone_mids
 
 __all__ = ["STATE_DIM_CANDIDATES", "FRAMES_PER_STATE_CANDIDATES", "SMOOTHING_CANDIDATES", "Y_DIMS",
-           "MIN_VALIDATION_UTTERANCES", "MIN_SPLIT_UTTERANCES", "select_settings", "default_fit_frames", "manifold_y", "mid_frames"]
+           "MIN_VALIDATION_UTTERANCES", "MIN_SPLIT_UTTERANCES", "select_settings", "default_fit_frames", "manifold_y",
+           "mid_frames"]
 
 STATE_DIM_CANDIDATES = (3, 5, 8)
 #: K candidates: one state per this many training frames (30: the state graph's default)
@@ -80,7 +81,8 @@ def _check_fit_frames(max_fit_frames, frames_per_state):
         v = float("nan")
     if isinstance(max_fit_frames, bool) or not v >= 2:
         raise ValueError(f"max_fit_frames must be a number of frames >= 2 (math.inf: no bound), got "
-                         f"{max_fit_frames!r}; pass None for the default budget of {default_fit_frames(frames_per_state)} "
+                         f"{max_fit_frames!r}; pass None for the default budget of "
+                         f"{default_fit_frames(frames_per_state)} "
                          f"frames (MAX_DEFAULT_STATES {MAX_DEFAULT_STATES} x the smallest frames per state)")
     return v
 

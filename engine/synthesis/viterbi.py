@@ -54,7 +54,8 @@ from engine.synthesis.trajectory import target_frames as _target_frames
 from engine.threads import single_blas_thread
 
 __all__ = [
-    "NoPathError", "MaxProductGraph", "log_transitions", "observed_transitions", "viterbi_path", "Trajectory", "Synthesizer",
+    "NoPathError", "MaxProductGraph", "log_transitions", "observed_transitions", "viterbi_path", "Trajectory",
+    "Synthesizer",
     "ViterbiSynthesizer", "InterpolationSynthesizer", "phone_lattice", "phone_state_table", "join_states",
 ]
 
@@ -149,7 +150,8 @@ def phone_state_table(states, labels) -> dict:
 
 
 class ViterbiSynthesizer(BaseEstimator):
-    """The paper's synthesiser (method ``"viterbi"``): maximum-probability paths between timed targets on the state graph.
+    """The paper's synthesiser (method ``"viterbi"``): maximum-probability paths between timed targets on the
+    state graph.
 
     Parameters
     ----------

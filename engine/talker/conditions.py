@@ -34,8 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine.talker.lipmodel import CONTROL_NAMES, LipModel
 from engine.talker.gestures import gesture_phases
+from engine.talker.lipmodel import CONTROL_NAMES, LipModel
 from engine.talker.synthetic_talker import PRESETS, SyntheticTalker
 
 __all__ = ["EFFECTS", "DEFAULT_SIZE", "ConditionCorpus", "condition_corpus", "apply_effect"]

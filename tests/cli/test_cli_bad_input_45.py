@@ -37,8 +37,8 @@ def test_the_praat_table_and_o_naming_one_file_are_refused(mfile, tmp_path, caps
     tg = tmp_path / "in.lab"
     tg.write_text("0 0.1 p\n0.1 0.3 aa\n")
     out = tmp_path / "out.csv"
-    assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(tg), "--praat", str(tmp_path / "out.TextGrid"),
-                 "-o", str(out), "--method", "linear", "-q"]) == 2
+    assert main(["synthesize", "--manifold", str(mfile), "--textgrid", str(tg),
+                 "--praat", str(tmp_path / "out.TextGrid"), "-o", str(out), "--method", "linear", "-q"]) == 2
     assert "would be written twice (by -o and by --praat)" in _one_line(capsys)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.lab"]
 
@@ -130,7 +130,8 @@ def test_a_6_gb_input_is_refused_naming_the_file(tmp_path, capsys):
     (["import", "{m}", "-o", "{tmp}/c.npz", "--points", "UL,UL"], "--points UL,UL: names UL twice"),
     (["import", "{m}", "-o", "{tmp}/c.npz", "--points", ""], "--points '': expected a comma-separated list"),
     (["evaluate", "{m}", "--test-ids", "a,a"], "--test-ids a,a: names a twice"),
-    (["synthesize", "--manifold", "{m}", "--utterance", "u", "--key-frames", "0,,5"], "--key-frames 0,,5: holds an empty"),
+    (["synthesize", "--manifold", "{m}", "--utterance", "u", "--key-frames", "0,,5"],
+     "--key-frames 0,,5: holds an empty"),
     (["build", "-o", "{tmp}/m.npz", "--states", "0"], "--states 0: must be at least 1"),
     (["build", "-o", "{tmp}/m.npz", "--seed", "-1"], "--seed -1: must be from 0 to 4294967295"),
     (["build", "-o", "{tmp}/m.npz", "--seed", str(2**70)], f"--seed {2**70}: must be from 0 to 4294967295"),
@@ -261,7 +262,8 @@ def test_a_session_restored_from_a_damaged_autosave_is_set_aside_once(mfile, tmp
     a = tmp_path / "autosave"
     a.mkdir()
     (a / f"running-{p.pid}-5.json").write_text(json.dumps({"pid": p.pid, "started": 1.0}))
-    (a / f"autosave-{p.pid}-5.lipspace.json").write_text(json.dumps({"lipspace_session": 2, "source": {"path": str(mfile)},
+    (a / f"autosave-{p.pid}-5.lipspace.json").write_text(json.dumps({"lipspace_session": 2,
+                                                                     "source": {"path": str(mfile)},
                                                                      "selection": "x"}))
     saver = Autosaver(a)
     rec = saver.begin()

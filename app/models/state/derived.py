@@ -14,15 +14,15 @@ __all__ = ["corpus_palette", "knn_density", "frame_phones", "frame_phone_codes",
            "PREPARED", "DerivedCaches"]
 
 #: derived data computed ahead of time per manifold object (see prepare_derived)
-PREPARED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+PREPARED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def prepare_derived(manifold, progress=None) -> None:
     """Compute what the views derive from ``manifold`` ahead of showing it (Qt-free, any thread).
 
     The level of detail of the drawn cloud (:func:`app.models.lod.cloud_detail`: every frame up to
-    ``app.models.lod.DEFAULT_MAX_POINTS``, groups of frames above), the k-NN density of every frame (only while every frame
-    is drawn: a grouped cloud carries its own density), the phone of every frame, the phone
+    ``app.models.lod.DEFAULT_MAX_POINTS``, groups of frames above), the k-NN density of every frame
+    (only while every frame is drawn: a grouped cloud carries its own density), the phone of every frame, the phone
     clusters and the state graph's cached forms for hemisphere and path queries are
     computed here, e.g. in the loading worker, and picked up by :meth:`AppState.set_manifold`,
     so that showing a manifold does not freeze the window. Reports stage ``"preparing the views"``.
@@ -38,7 +38,8 @@ def prepare_derived(manifold, progress=None) -> None:
     report(progress, stage, 1, 4)
     if out["cloud"].whole:
         out["density"] = knn_density(manifold.Fy_)
-    manifold.states_.prepare_queries()  # the state graph's csr forms, so the first click's hemisphere does not build them
+    # the state graph's csr forms, so the first click's hemisphere does not build them
+    manifold.states_.prepare_queries()
     report(progress, stage, 2, 4)
     out["phone_codes"] = frame_phone_codes(manifold.corpus_)
     report(progress, stage, 3, 4)
@@ -213,7 +214,7 @@ class DerivedCaches:
     @property
     def phone_names(self) -> list[str]:
         """The phone labels covering at least one frame, sorted."""
-        self.phone_codes
+        _ = self.phone_codes  # computes and caches both
         return self._phone_codes[1]
 
     @property
@@ -256,13 +257,13 @@ class DerivedCaches:
     @property
     def cluster_kind(self) -> str:
         """What the clusters are of: ``"phones"`` or ``"kinematic"`` (landmarks)."""
-        self.clusters
+        _ = self.clusters  # computed with the clusters
         return self._cluster_kind
 
     @property
     def cluster_note(self) -> str | None:
         """For landmark clusters, the sentence saying what the labels are (None for phones)."""
-        self.clusters
+        _ = self.clusters  # computed with the clusters
         return self._cluster_note
 
     def cluster_rows(self) -> list[dict]:

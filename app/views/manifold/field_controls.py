@@ -84,7 +84,7 @@ class FieldControls:
         clear = menu.addAction("Show every level", lambda: s.set_field_filter(()))
         clear.setEnabled(bool(s.field_filter))
         menu.addSeparator()
-        for name, values in utterance_field_values(s).items():
+        for name, _values in utterance_field_values(s).items():
             levels = field_levels(s, name)
             if not levels:
                 continue

@@ -246,7 +246,8 @@ def _column_rate(native, rate, column, path) -> float:
     """The rate the time column gives; an explicit ``rate`` that disagrees is refused."""
     if rate is not None and abs(float(rate) - native) > 1e-3 * native:
         raise ImportFormatError(path, f"the time column {column!r} gives {native:g} Hz but a rate of "
-                                f"{float(rate):g} Hz was given (--rate); leave the rate out to use the column's times, or resample "
+                                f"{float(rate):g} Hz was given (--rate); leave the rate out to use the column's times, "
+                                "or resample "
                                 "('lipspace import --resample') to change it")
     return float(native)
 

@@ -360,7 +360,7 @@ def _read_ascii_element(el, data, lines, li, path):
         raw = data[int(begins[li + r]):int(ends[li + r])].decode("utf-8", "replace")
         tok, j = raw.split(), 0
         try:
-            for name, ct, it in props:
+            for name, _ct, it in props:
                 if it is None:
                     cols[name].append(float(tok[j]))
                     j += 1
@@ -377,7 +377,7 @@ def _read_ascii_element(el, data, lines, li, path):
                                     f"expected values for {[p[0] for p in props]}",
                                     line=int(lineno[li + r])) from None
     out = {}
-    for name, ct, it in props:
+    for name, _ct, it in props:
         if it is None:
             out[name] = np.asarray(cols[name], np.float64)
         else:

@@ -165,7 +165,7 @@ def test_a_folder_of_ndi_wave_exports_with_state_and_error_columns(tmp_path, cli
 
     d = tmp_path / "wave"
     d.mkdir()
-    for k, s in enumerate(lab_sweeps(speakers=(("S01", "F"), ("S02", "M")), emotions=("NE",), texts=2,
+    for _k, s in enumerate(lab_sweeps(speakers=(("S01", "F"), ("S02", "M")), emotions=("NE",), texts=2,
                                      duration_s=(0.8, 0.9), seed=4)):
         X = s.positions[::2, 5:9]  # UL LL LC RC at 125 Hz
         err = np.full(X.shape[:2], 0.3)

@@ -78,7 +78,8 @@ def test_text_and_textgrid_inputs_with_ply(mfile, tmp_path, capsys):
 
 
 def test_bad_inputs_fail_cleanly(mfile, tmp_path, capsys):
-    assert main(["synthesize", "--manifold", str(mfile), "--phones", "p 0.1 qx 0.1", "-o", str(tmp_path / "a.csv")]) == 2
+    assert main(["synthesize", "--manifold", str(mfile), "--phones", "p 0.1 qx 0.1",
+                 "-o", str(tmp_path / "a.csv")]) == 2
     err = capsys.readouterr().err
     assert "'qx'" in err and "known phones" in err
     assert not (tmp_path / "a.csv").exists()

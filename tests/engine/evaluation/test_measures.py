@@ -7,7 +7,7 @@ from engine.evaluation.measures import trajectory_errors, trajectory_y
 def test_trajectories_in_y(small_manifold):
     from engine.manifold.model import project_x
     from engine.phonetics.targets import targets_from_utterance
-    from engine.synthesis.viterbi import InterpolationSynthesizer, ViterbiSynthesizer, Trajectory
+    from engine.synthesis.viterbi import InterpolationSynthesizer, Trajectory, ViterbiSynthesizer
 
     m = small_manifold
     u = m.corpus_.utterances[1]

@@ -18,11 +18,11 @@ from engine.phonetics.targets import (
 )
 from engine.synthesis.methods import make_synthesizer
 from engine.synthesis.viterbi import (
-    ViterbiSynthesizer,
     MaxProductGraph,
     NoPathError,
     Synthesizer,
     Trajectory,
+    ViterbiSynthesizer,
     log_transitions,
     observed_transitions,
     viterbi_path,
