@@ -36,7 +36,9 @@ templates_path = ["_templates"]
 # API reference: one page per public name and per module, generated at build time
 autosummary_generate = True
 autosummary_imported_members = False
-autodoc_default_options = {"members": True, "show-inheritance": False}
+# a module documents the members it defines, not the names it re-exports (an old import path):
+# those have their page where they are defined
+autodoc_default_options = {"members": True, "show-inheritance": False, "ignore-module-all": True}
 autodoc_typehints = "none"           # numpydoc's Parameters sections give the types
 numpydoc_show_class_members = False  # autosummary lists members
 numpydoc_class_members_toctree = False
@@ -58,6 +60,10 @@ _INHERITED = {"get_params", "set_params", "get_metadata_routing"}
 def _skip_estimator_plumbing(app, what, name, obj, skip, options):
     if name in _INHERITED or (name.startswith("set_") and name.endswith("_request")):
         return True
+    home = getattr(obj, "__module__", None)
+    if what == "module" and isinstance(obj, type) and not (isinstance(home, str) and home.split(".")[0] in ("engine",
+                                                                                                              "app")):
+        return True  # a library's class imported into a module (compiled ones hide where they come from)
     return None
 
 

@@ -23,8 +23,8 @@ __all__ = ["GestureTier"]
 class GestureTier(StripRow):
     """The landmarks of one utterance's gestures (module docstring).
 
-    Signals
-    -------
+    .. rubric:: Signals
+
     landmarkMoved(gesture, landmark, time_s)
         A drag ended with the landmark at another time.
     clearRequested(gesture, landmark), removeRequested(gesture)
