@@ -60,11 +60,12 @@ def test_geometry_and_dock_layout_are_remembered(qapp, tmp_path):
         assert (w2.width(), w2.height()) == size
         assert w2.docks["clusters"].isHidden() and not w2.docks["scree"].isHidden()
         assert w2.dockWidgetArea(w2.docks["lips"]) == QtCore.Qt.DockWidgetArea.LeftDockWidgetArea
-        # View > Reset layout: every dock back where it started, shown
+        # View > Reset layout: every dock back where it started, shown (the small multiples start hidden)
         reset = next(a for a in w2.menuBar().actions()[2].menu().actions() if a.text() == "Reset &layout")
         reset.trigger()
         qapp.processEvents()
-        assert all(not d.isHidden() and not d.isFloating() for d in w2.docks.values())
+        assert all(not d.isHidden() and not d.isFloating() for k, d in w2.docks.items() if k != "multiples")
+        assert w2.docks["multiples"].isHidden()
         assert w2.dockWidgetArea(w2.docks["lips"]) == QtCore.Qt.DockWidgetArea.RightDockWidgetArea
         assert w2.dockWidgetArea(w2.docks["editor"]) == QtCore.Qt.DockWidgetArea.BottomDockWidgetArea
         assert w2.docks["scree"] in w2.tabifiedDockWidgets(w2.docks["clusters"])
@@ -83,12 +84,13 @@ def test_at_its_minimum_size_every_dock_keeps_a_usable_size(qapp, app_manifold, 
         mn = w.minimumSize()
         assert (w.width(), w.height()) == (mn.width(), mn.height())
         assert mn.width() <= 1600 and mn.height() <= 1000  # still fits an ordinary screen
-        for key in ("clusters", "scree"):  # the tabbed pair: each in turn
+        tabbed = [k for k in ("clusters", "scree", "compare") if k in w.docks]
+        for key in tabbed:  # the tabbed docks: each in turn
             w.docks[key].raise_()
             for _ in range(3):
                 qapp.processEvents()
             for k, dock in w.docks.items():
-                if k in ("clusters", "scree") and k != key:
+                if (k in tabbed and k != key) or k == "multiples":  # the small multiples start hidden
                     continue
                 view = dock.widget()
                 assert dock.isVisible() and view.isVisible(), k
