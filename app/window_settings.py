@@ -18,18 +18,25 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from PySide6 import QtCore
+from PySide6 import QtCore, QtWidgets
 
-__all__ = ["CONFIG_DIR_ENV", "MAX_RECENT", "LAYOUT_VERSION", "open_settings", "WindowSettings"]
+__all__ = ["CONFIG_DIR_ENV", "MAX_RECENT", "LAYOUT_VERSION", "dock_names", "open_settings", "WindowSettings"]
 
 CONFIG_DIR_ENV = "LIPSPACE_CONFIG_DIR"
 MAX_RECENT = 10
-#: bump when the docks change, so that an old saved layout is not restored over new docks
-LAYOUT_VERSION = 1
+#: bump when the docks change, so that an old saved layout is not restored over new docks (a layout is
+#: also kept only for the set of docks it was saved with: :func:`dock_names`)
+LAYOUT_VERSION = 2
 
 
 #: the largest settings file read (one is a few kB: two saved layouts and ten file names)
 MAX_SETTINGS_BYTES = 4 * 2**20
+
+
+def dock_names(window) -> str:
+    """The object names of ``window``'s docks, sorted and joined: a saved layout is restored only over the
+    same docks (a layout saved before a dock existed would leave the new one wherever Qt put it)."""
+    return " ".join(sorted(d.objectName() for d in window.findChildren(QtWidgets.QDockWidget)))
 
 
 def settings_file() -> Path:
@@ -158,6 +165,7 @@ class WindowSettings:
         s.setValue("window/geometry", window.saveGeometry())
         s.setValue("window/state", window.saveState(LAYOUT_VERSION))
         s.setValue("window/layout_version", LAYOUT_VERSION)
+        s.setValue("window/docks", dock_names(window))
         s.sync()
 
     def restore_layout(self, window) -> bool:
@@ -170,7 +178,7 @@ class WindowSettings:
             version = -1
         if not isinstance(geometry, QtCore.QByteArray) or not isinstance(state, QtCore.QByteArray):
             return False
-        if version != LAYOUT_VERSION:
+        if version != LAYOUT_VERSION or s.value("window/docks") != dock_names(window):
             return False
         ok = window.restoreGeometry(geometry)
         return bool(window.restoreState(state, LAYOUT_VERSION)) and bool(ok)

@@ -45,6 +45,7 @@ for p in (ROOT, HERE):
     if p not in sys.path:
         sys.path.insert(0, p)
 from _common import blas_kernel, peak_rss_mb, run_child_json  # noqa: E402
+from _harness import Harness  # noqa: E402
 from floor_build import ISSUE_WIDTHS, work  # noqa: E402
 
 
@@ -111,6 +112,7 @@ def main(argv=None) -> int:
                                                            "after the fit (printed apart, not in the ratios)")
     ap.add_argument("--child-build", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--root", help=argparse.SUPPRESS)
+    Harness.add_arguments(ap)
     args = ap.parse_args(argv)
     if args.child_build:
         if args.root:
@@ -185,6 +187,16 @@ def main(argv=None) -> int:
               f"min {min(choices):.1f} s, median {med(choices):.1f} s")
     print(f"load average (1/5/15 min) before {'/'.join(f'{x:.1f}' for x in load_before)}, after "
           f"{'/'.join(f'{x:.1f}' for x in os.getloadavg())}; {os.cpu_count()} cores\nBLAS: {b0['blas']}")
+    bench = Harness("bench_build_floor", args, quiet=True)  # the record of the figures printed above
+    bench.figure(f"{args.preset} build (fresh process each)", builds, cold=True, headline=True,
+                 peak_rss_mib=max(r[0]["max_rss_mib"] for r in rows), show=False)
+    for k in rows[0][2]:
+        bench.figure(f"build / {_label(k)}", [r[2][k] for r in rows], unit="x", cold=True, headline=k == "own",
+                     show=False)
+    if choices:
+        bench.figure("synthesis choice after the fit", choices, cold=True, show=False)
+    bench.fact(corpus_shape=list(b0["shape"]), widths=b0["widths"], child_blas=str(b0["blas"]))
+    bench.finish()
     return 0
 
 

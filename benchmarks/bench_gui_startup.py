@@ -52,6 +52,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _gui_bench as gb  # noqa: E402
+from _harness import Harness  # noqa: E402
 
 
 def child(t0: float, preset: str, path=None) -> None:
@@ -243,11 +244,14 @@ def main():
     ap.add_argument("--no-floor", dest="floor", action="store_false",
                     help=f"leave out the floor process ({FLOOR_CODE!r}) run before every start-up")
     ap.add_argument("--child-path", default=None, help=argparse.SUPPRESS)
+    Harness.add_arguments(ap)
     args, cap = gb.parse_bench_args(ap)
     if args.child is not None:
         child(float(args.child), args.preset, args.child_path)
         return
     import numpy as np
+
+    bench = Harness("bench_gui_startup", args, quiet=True)  # its own table below; the record for the history
 
     specs = gb.manifold_specs(args)
     gb.header(f"start-up of the explorer on {', '.join(gb.spec_label(s) for s in specs)} (fresh process per run)")
@@ -298,10 +302,19 @@ def main():
                   f"median {np.median(inter):.2f} s (goal < {goal:g} s); "
                   f"manifold drawn (usable) min {min(shown):.2f} s, "
                   f"median {np.median(shown):.2f} s; peak RSS max {max(rss):.0f} MiB (n={len(rs)})")
+            label = gb.spec_label(spec)
+            bench.figure(f"window usable, {kind} [{label}]", [usable(r) for r in rs], cold=kind == "cold",
+                         peak_rss_mib=max(rss) or None, headline=True, show=False)
             floors = [r["floor"] for r in rs if r.get("floor")]
             if floors:
                 ratios = [usable(r) / r["floor"] for r in rs if r.get("floor")]
                 cpu = [r["cpu_shown"] / r["floor_cpu"] for r in rs if r.get("floor_cpu") and r.get("cpu_shown")]
+                bench.figure(f"floor ({FLOOR_CODE}), {kind} [{label}]", floors, cold=True, show=False)
+                bench.figure(f"window usable / floor, {kind} [{label}]", ratios, unit="x", cold=kind == "cold",
+                             headline=True, show=False)
+                if cpu:
+                    bench.figure(f"CPU until usable / floor CPU, {kind} [{label}]", cpu, unit="x",
+                                 cold=kind == "cold", show=False)
                 print(f"   {kind} [{gb.spec_label(spec)}]: floor ({FLOOR_CODE!r}) min {min(floors):.2f} s, median "
                       f"{np.median(floors):.2f} s; usable / floor min {min(ratios):.2f}, median {np.median(ratios):.2f}"
                       + (f"; CPU until usable / the floor's CPU min {min(cpu):.2f}, median {np.median(cpu):.2f}"
@@ -315,6 +328,10 @@ def main():
     first = next(r for s in specs for k in ("warm", "cold") for r in runs[s][k])
     print(f"   OpenGL renderer: {first.get('gl')}; wall {time.perf_counter() - t_all:.0f} s; "
           f"load average {os.getloadavg()[0]:.1f} at end")
+    bench.fact(gl_renderer=first.get("gl"), stages_cold=next((r["stages"] for s in specs for r in runs[s]["cold"]), []))
+    rec = bench.finish()
+    print(f"(record {'appended to ' + str(bench.history) if bench.history else 'not kept'}; "
+          f"load {rec['load']['min1']:.1f}-{rec['load']['max1']:.1f}; BLAS of the parent only)")
 
 
 if __name__ == "__main__":

@@ -13,13 +13,17 @@ The views are drawn only while the dock shows them.
 from __future__ import annotations
 
 import numpy as np
-from PySide6 import QtWidgets
+from PySide6 import QtCore, QtWidgets
 
 from app import scene
 from app.models.colour_maps import RESERVED_COLOURS
 from app.views._common import RenderScheduler, close_plotter, connect_all, disconnect_all, elided_label, make_plotter
 
-__all__ = ["SmallMultiples", "MAX_MULTIPLES", "MAX_POINTS", "GRID"]
+__all__ = ["SmallMultiples", "MAX_MULTIPLES", "MAX_POINTS", "GRID", "NO_FIELD"]
+
+#: what the dock says while no field is chosen
+NO_FIELD = ("No field chosen. Colour › Field … (or the Compare panel) chooses a per-utterance field, "
+            "such as speaker or condition: one view per level then appears here, all turned by one camera.")
 
 #: views at most (a field with more levels shows its first ones; filter it to choose)
 MAX_MULTIPLES = 6
@@ -62,12 +66,19 @@ class SmallMultiples(QtWidgets.QWidget):
         self._stale = True
         self.plotter = make_plotter(self, shape=GRID)
         self.renderer = RenderScheduler(self.plotter)
-        self.caption = elided_label("Choose a field to compare (Colour: Field …, or the Compare panel)")
+        self.caption = elided_label("")
+        # no field chosen: this says how to choose one, in place of an empty (black) 3-D view
+        self.placeholder = QtWidgets.QLabel(NO_FIELD)
+        self.placeholder.setWordWrap(True)
+        self.placeholder.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        self.placeholder.setStyleSheet("color: #555")
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
         lay.setSpacing(1)
         lay.addWidget(self.plotter.interactor, 1)
+        lay.addWidget(self.placeholder, 1)
         lay.addWidget(self.caption)
+        self._show_placeholder(True)
         self._connections = [(state.events.changed, self._on_changed)]
         connect_all(self._connections)
 
@@ -156,9 +167,8 @@ class SmallMultiples(QtWidgets.QWidget):
             self.views.append({"points": pts, "marker": marker})
         if getattr(self, "_camera", None) is not None:
             self.link_camera(self._camera)
-        if self.field is None:
-            self.caption.setText("Choose a field to compare (Colour: Field …, or the Compare panel)")
-        else:
+        self._show_placeholder(self.field is None)
+        if self.field is not None:
             more = len(self.wanted()[1]) < len(self._all_levels())
             self.caption.setText(f"{self.field}: {', '.join(self.levels)}" + (
                 f" (the first {MAX_MULTIPLES}; Filter chooses)" if more else "")
@@ -166,6 +176,11 @@ class SmallMultiples(QtWidgets.QWidget):
         self._recolour()
         self._mark_selection()
         self.renderer.request()
+
+    def _show_placeholder(self, on: bool) -> None:
+        self.plotter.interactor.setVisible(not on)
+        self.caption.setVisible(not on)
+        self.placeholder.setVisible(on)
 
     def _all_levels(self) -> list:
         from app.models.field_colouring import field_levels

@@ -1,7 +1,7 @@
 """The sound under the trajectory editor's timeline: waveform and a Praat-style wide-band spectrogram.
 
-Drawing, and the timeline's time input: a click sets the cursor, a drag selects a stretch,
-Praat's keys work here as in the timeline (:class:`app.views.phone_timeline.TimeKeys`).
+Drawing; the time input (a click sets the cursor, a drag selects a stretch, Praat's keys) is the
+time strip's, as every row under the timeline takes it (:class:`app.views.strip_row.StripRow`).
 The arrays come from :mod:`engine.phonetics.spectrogram` (computed in a worker
 thread by the editor, :mod:`app.views.trajectory_editor`); this widget maps time to
 pixels exactly as :class:`app.views.phone_timeline.PhoneTimeline` maps frames (same
@@ -16,15 +16,15 @@ import math
 import time
 
 import numpy as np
-from PySide6 import QtCore, QtGui, QtWidgets
+from PySide6 import QtCore, QtGui
 
-from app.views.phone_timeline import PhoneTimeline, TimeKeys
+from app.views.strip_row import StripRow
 
 __all__ = ["SoundPanel"]
 
 
-class SoundPanel(TimeKeys, QtWidgets.QWidget):
-    """Waveform over spectrogram, time-aligned with a :class:`PhoneTimeline` of the same width.
+class SoundPanel(StripRow):
+    """Waveform over spectrogram, time-aligned with a :class:`app.views.phone_timeline.PhoneTimeline` of the same width.
 
     Attributes
     ----------
@@ -35,13 +35,6 @@ class SoundPanel(TimeKeys, QtWidgets.QWidget):
         benchmarks.
     """
 
-    pressed = QtCore.Signal(float, float)
-    dragged = QtCore.Signal(float, float)
-    released = QtCore.Signal(float, float)
-    keyCommand = QtCore.Signal(str)
-    playToggled = QtCore.Signal()
-
-    MARGIN = PhoneTimeline.MARGIN
     WAVE_HEIGHT = 44
     SPEC_HEIGHT = 112
     GAP = 2
@@ -53,18 +46,13 @@ class SoundPanel(TimeKeys, QtWidgets.QWidget):
         super().__init__(parent)
         self.display = None
         self.message = ""
-        self.n_frames, self.rate, self.phones = 1, 60.0, ()
-        self.cursor = None
-        self.time_selection = None  # (first, last) frame of the selected stretch, or None
-        self._pressing = False
+        self.phones = ()
         self.shown_at = None
         self._image = None
         self._grey = None
         self._peak = 1.0
         self.setFixedHeight(self.HEIGHT)
-        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Fixed, QtWidgets.QSizePolicy.Policy.Fixed)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_OpaquePaintEvent)
-        self.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
 
     # ------------------------------------------------------------------ data
     def set_span(self, n_frames: int, rate: float, phones=()) -> None:
@@ -111,51 +99,6 @@ class SoundPanel(TimeKeys, QtWidgets.QWidget):
         self.HEIGHT = self.WAVE_HEIGHT + self.GAP + self.SPEC_HEIGHT
         self.setFixedHeight(self.HEIGHT)
         self.update()
-
-    def set_time_selection(self, span) -> None:
-        """Shade the selected stretch ``(first, last)`` frame (None: none)."""
-        self.time_selection = None if span is None else (min(span), max(span))
-        self.update()
-
-    # ------------------------------------------------------------------ input
-    def frame_at(self, x: float) -> float:
-        return self.x_time(x) * self.rate
-
-    def mousePressEvent(self, ev):
-        self.setFocus(QtCore.Qt.FocusReason.MouseFocusReason)
-        if ev.button() == QtCore.Qt.MouseButton.LeftButton:
-            self._pressing = True
-            self.pressed.emit(self.frame_at(ev.position().x()), ev.position().x())
-
-    def mouseMoveEvent(self, ev):
-        if self._pressing:
-            self.dragged.emit(self.frame_at(ev.position().x()), ev.position().x())
-
-    def mouseReleaseEvent(self, ev):
-        if self._pressing:
-            self._pressing = False
-            self.released.emit(self.frame_at(ev.position().x()), ev.position().x())
-
-    def keyPressEvent(self, ev):
-        if ev.key() == QtCore.Qt.Key.Key_Space:
-            self.playToggled.emit()
-            ev.accept()
-            return
-        super().keyPressEvent(ev)
-
-    # ------------------------------------------------------------------ geometry
-    def frame_x(self, frame: float) -> float:
-        """Pixel x of frame ``frame`` (:meth:`PhoneTimeline._x`'s mapping)."""
-        n = max(self.n_frames - 1, 1)
-        return self.MARGIN + (self.width() - 2 * self.MARGIN) * frame / n
-
-    def time_x(self, t: float) -> float:
-        """Pixel x of time ``t`` (s from the utterance start; the sound starts with its first frame)."""
-        return self.frame_x(t * self.rate)
-
-    def x_time(self, x: float) -> float:
-        n = max(self.n_frames - 1, 1)
-        return (x - self.MARGIN) / max(self.width() - 2 * self.MARGIN, 1) * n / self.rate
 
     # ------------------------------------------------------------------ painting
     def paintEvent(self, event):

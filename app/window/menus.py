@@ -1,11 +1,19 @@
 """The main window's menus: File (open, recent files, the synthetic talkers, sessions, exports), Edit, View, Help."""
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 from PySide6 import QtGui, QtWidgets
 
 __all__ = ["MenuActions"]
+
+
+def _raise_if_shown(dock, *_checked) -> None:
+    if not dock.isHidden():  # once the layout has placed it: raised at once, it went back behind the tab in front
+        from PySide6 import QtCore
+
+        QtCore.QTimer.singleShot(0, dock.raise_)
 
 
 class MenuActions:
@@ -89,6 +97,8 @@ class MenuActions:
         v = mb.addMenu("&View")
         for dock in self.docks.values():
             v.addAction(dock.toggleViewAction())
+            # shown from the menu, a dock comes to the front of its tab group (not behind the one in front)
+            dock.toggleViewAction().triggered.connect(functools.partial(_raise_if_shown, dock))
         v.addSeparator()
         self.frame_action = self._act(v, "&Frame the selection", self.manifold_view.frame_selection,
                                       QtGui.QKeySequence("F"))

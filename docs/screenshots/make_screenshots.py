@@ -11,7 +11,9 @@ opens it, for the timeline with its word tier, waveform and spectrogram (left ou
 Each picture is taken at 1600 x 1000 (``<name>.png``) and at a laptop's 1280 x 720
 (``<name>_1280x720.png``).
 """
+import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -50,6 +52,8 @@ def wait(runner, timeout=600):
 
 
 for W, H, suffix in SIZES:
+    # the default layout, not the one this machine's (or the last size's) window left
+    os.environ["LIPSPACE_CONFIG_DIR"] = tempfile.mkdtemp(prefix="lipspace-shots-")
     w = MainWindow(m, source={"path": None, "preset": preset})
     w.resize(W, H)
     w.show()

@@ -210,3 +210,22 @@ def condition_comparison(field_manifold):
 
     return run_comparison(field_manifold, ComparisonRequest(field="condition", levels=("a", "b", "c"),
                                                             paired_by="text", n_permutations=199, n_bootstrap=99))
+
+
+def _tab_bars_name_shown_docks(w) -> None:
+    """Every tab bar drawn in ``w`` names shown docks only: a bar Qt left over a hidden dock's tab drew
+    "ltiples" beside the lips."""
+    from PySide6 import QtWidgets
+
+    shown = {d.windowTitle() for d in w.docks.values() if not d.isHidden()}
+    for t in w.findChildren(QtWidgets.QTabBar):
+        if not t.isVisible() or t.parentWidget() is not w or t.count() < 2 or not t.geometry().intersects(w.rect()):
+            continue
+        names = {t.tabText(i) for i in range(t.count())}
+        assert names <= shown, (names - shown, t.geometry().getRect())
+
+
+@pytest.fixture
+def tab_bar_probe():
+    """:func:`_tab_bars_name_shown_docks`: the window's dock tab bars name only shown docks."""
+    return _tab_bars_name_shown_docks

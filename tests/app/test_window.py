@@ -73,6 +73,53 @@ def test_geometry_and_dock_layout_are_remembered(qapp, tmp_path):
         w2.close()
 
 
+def test_a_layout_saved_over_other_docks_is_not_restored(qapp, tmp_path):
+    """A layout saved by a release with other docks (before the small multiples and the Compare panel
+    existed) is left alone: restored, it showed the small multiples as an empty box under the clusters."""
+    from PySide6 import QtCore
+
+    ini = tmp_path / "lipspace.ini"
+    w1 = _window(qapp, _settings(ini))
+    w1.docks["multiples"].show()  # as the old release left it
+    qapp.processEvents()
+    w1.close()
+    raw = QtCore.QSettings(str(ini), QtCore.QSettings.Format.IniFormat)
+    assert raw.value("window/docks").split() == sorted(f"dock_{k}" for k in w1.docks)
+    raw.setValue("window/docks", "dock_clusters dock_editor dock_lips dock_scree")
+    raw.sync()
+
+    w2 = _window(qapp, _settings(ini))
+    try:
+        assert not w2.layout_restored
+        assert w2.docks["multiples"].isHidden()
+    finally:
+        w2.close()
+    w3 = _window(qapp, _settings(ini))  # saved again by w2 over the docks it has: restored
+    try:
+        assert w3.layout_restored
+    finally:
+        w3.close()
+
+
+@pytest.mark.parametrize("size", [(1600, 1000), (1280, 720)])
+def test_a_first_window_draws_no_tab_of_a_hidden_dock(qapp, tmp_path, app_manifold, size, tab_bar_probe):
+    """A new window (nothing saved) shows the small multiples nowhere, not even as a stray tab."""
+    from PySide6 import QtWidgets
+
+    w = _window(qapp, _settings(tmp_path / "s.ini"), app_manifold)
+    try:
+        w.resize(*size)
+        for _ in range(10):
+            qapp.processEvents()
+        assert w.docks["multiples"].isHidden()
+        tab_bar_probe(w)
+        names = [[t.tabText(i) for i in range(t.count())] for t in w.findChildren(QtWidgets.QTabBar)
+                 if t.isVisible() and t.geometry().intersects(w.rect())]
+        assert all("Small multiples" not in n for n in names), names
+    finally:
+        w.close()
+
+
 def test_at_its_minimum_size_every_dock_keeps_a_usable_size(qapp, app_manifold, tmp_path):
     w = _window(qapp, _settings(tmp_path / "s.ini"), app_manifold)
     try:

@@ -151,9 +151,10 @@ class SignalsControl:
         if sig is None or tg is None:
             self.channels.set_view(None)
             self.gesture_tier.set_gestures(None, None, None)
-        elif uid is None:
+        elif uid is None:  # said once: on the channels' strip when there is one, else on the gesture tier
             self.channels.set_view(None, none if sig.panel.channels else "")
-            self.gesture_tier.set_gestures(None, None, None, none if sig.gesture_track else "")
+            self.gesture_tier.set_gestures(None, None, None, none if sig.gesture_track and not sig.panel.channels
+                                           else "")
         else:
             self.channels.set_view(sig.panel.view(uid) if sig.panel.channels else None)
             message = tier_message or ("" if sig.gesture_track is None else "no gestures found")
@@ -163,7 +164,8 @@ class SignalsControl:
                 marks[ed.gestures.track] = [(t, landmark_colour(self.state.palette, name), name)
                                             for t, name, _g, _j in ed.points(uid)]
             self.channels.set_marks(marks)
-        self.gesture_tier.setVisible(sig is not None and sig.gesture_track is not None)
+        self.gesture_tier.setVisible(sig is not None and sig.gesture_track is not None
+                                     and not (uid is None and sig.panel.channels))
         self.channels.setVisible(self.channels.wanted_height() > 0)
         self._layout_tracks()
 

@@ -84,12 +84,17 @@ def test_a_comparison_can_be_cancelled(win, qapp):
 
 def test_small_multiples_show_one_view_per_level_through_one_camera(win, qapp):
     s, sm = win.state, win.small_multiples
+    s.set_color_field(None)  # no field: the dock says how to choose one instead of an empty 3-D view
+    win.show_compare()
+    _settle(qapp, 20)
+    assert sm.field is None and sm.placeholder.isVisible() and not sm.plotter.interactor.isVisible()
+    assert "Colour › Field" in sm.placeholder.text()
     with s.batch():
         s.colour_by_field("condition")
         s.set_field_filter(())
-    win.show_compare()
     _settle(qapp, 20)
     assert sm.isVisible() and sm.field == "condition" and sorted(sm.levels) == ["a", "b", "c"]
+    assert sm.plotter.interactor.isVisible() and not sm.placeholder.isVisible() and "condition: " in sm.caption.text()
     values = s.manifold.corpus_.utterance_index
     fields = {u: dict(x.fields)["condition"] for u, x in enumerate(s.manifold.corpus_.utterances)}
     for lv, f in zip(sm.levels, sm.frames):
@@ -205,6 +210,29 @@ def test_channels_chosen_in_the_signals_menu_stack_under_the_timeline(win, qapp)
     assert settings["channels"] == ["lip_aperture", "lip_protrusion"]
     ed.toggle_channel("lip_protrusion", False)
     assert ed.signals.panel.channels == ("lip_aperture",)
+
+
+def test_typed_text_says_once_that_channels_are_of_an_utterance(win, qapp):
+    """Typed text has no utterance: the channels' strip says why it is empty, and the gesture tier, which
+    would say the same, is hidden (both said it, one above the other)."""
+    ed = _load_utterance(win, qapp)
+    assert ed.gesture_tier.isVisible() and ed.channels.names == ["lip_aperture"]
+    try:
+        assert ed.set_text("bob meets mum", source="text")
+        _settle(qapp)
+        assert ed.targets.utterance is None
+        assert ed.channels.isVisible() and ed.channels.message.startswith("no utterance")
+        assert ed.gesture_tier.isHidden()
+        shown = [w for w in (ed.channels, ed.gesture_tier) if w.isVisible() and w.message.startswith("no utterance")]
+        assert shown == [ed.channels]
+        ed.toggle_channel("lip_aperture", False)  # no channel chosen: the gesture tier says it instead
+        _settle(qapp)
+        assert not ed.channels.isVisible()
+        assert ed.gesture_tier.isVisible() and ed.gesture_tier.message.startswith("no utterance")
+    finally:
+        ed.toggle_channel("lip_aperture", True)
+        ed.set_source("utterance")
+        _load_utterance(win, qapp)
 
 
 def test_a_session_keeps_the_channels_and_the_edited_landmarks(win, qapp):

@@ -227,7 +227,8 @@ def test_the_editor_keeps_no_room_for_a_sound_that_is_off_or_absent(window, qtbo
 
 
 @pytest.mark.parametrize("size", [(1280, 720), (1600, 1000)])
-def test_a_laptops_screen_keeps_the_3d_view_tall_and_clips_nothing(window, qtbot, qapp, sound_manifold, size):
+def test_a_laptops_screen_keeps_the_3d_view_tall_and_clips_nothing(window, qtbot, qapp, sound_manifold, size,
+                                                                   tab_bar_probe):
     """1280 x 720 with an utterance's sound shown (the tallest editor): the manifold view keeps half the
     window's height, the clusters table five rows, the lips a usable view; no button, box or combo is cut,
     every combo shows its whole text, the clusters' note clear of the tab bar, no empty room in the editor."""
@@ -273,4 +274,25 @@ def test_a_laptops_screen_keeps_the_3d_view_tall_and_clips_nothing(window, qtbot
         if t.isVisible():
             corner = t.parentWidget().mapTo(w, t.parentWidget().rect().topLeft())
             assert not box.intersects(t.geometry().translated(corner))
+    tab_bar_probe(w)
+    # View > Small multiples: a tab beside the lips, in front, its text inside its dock (it overprinted the
+    # editor's toolbar as a third dock in the column); hidden again, no tab is left naming it
+    multiples = w.docks["multiples"]
+    multiples.toggleViewAction().trigger()
+    for _ in range(10):
+        qapp.processEvents()
+    assert multiples.isVisible() and w.docks["lips"] in w.tabifiedDockWidgets(multiples)
+    assert multiples.geometry().intersects(w.rect())  # the tab in front
+    sm = w.small_multiples
+    label = sm.placeholder if sm.field is None else sm.caption
+    top, box = label.mapTo(w, label.rect().topLeft()), multiples.geometry()
+    assert label.isVisible() and box.contains(top) and top.y() + label.height() <= box.bottom() + 1
+    assert w.manifold_view.plotter.interactor.height() >= size[1] / 2
+    tab_bar_probe(w)
+    multiples.toggleViewAction().trigger()
+    w.docks["lips"].raise_()
+    for _ in range(10):
+        qapp.processEvents()
+    assert multiples.isHidden()
+    tab_bar_probe(w)
     w.resize(1300, 850)
