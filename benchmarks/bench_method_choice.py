@@ -121,6 +121,9 @@ def child_first(spec, preset, protocol):
 
 
 def first(args):
+    from _harness import Harness
+
+    bench = Harness("bench_method_choice", args, quiet=True)  # the record of the figures printed below
     print(f"BLAS (parent): {blas_kernel()}\nload average before: "
           f"{'/'.join(f'{x:.1f}' for x in os.getloadavg())}; {os.cpu_count()} cores", flush=True)
     here = str(Path(__file__).resolve().parents[1])
@@ -146,8 +149,13 @@ def first(args):
         ld = [o["load_s"] for o in outs]
         print(f"  {spec} {protocol}: {min(v):.2f} / {statistics.median(v):.2f} s ({outs[0]['method']}); load "
               f"{min(ld):.2f} / {statistics.median(ld):.2f} s; n={len(v)}")
+        label = f"{Path(spec).name if spec != 'talker' else 'talker'}, {outs[0]['frames']} frames, {protocol}"
+        bench.figure(f"first synthesis with 'best' [{label}]", v, cold=True, headline=True,
+                     peak_rss_mib=max(o["rss"] for o in outs), show=False, method=outs[0]["method"])
+        bench.figure(f"manifold load [{label}]", ld, cold=True, show=False)
     print(f"BLAS (child): {next(iter(runs.values()))[0]['blas'] if runs else '-'}")
     print(f"load average after: {'/'.join(f'{x:.1f}' for x in os.getloadavg())}")
+    bench.finish()
 
 
 def cold(args):
@@ -205,6 +213,9 @@ def main():
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--child-first", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--root", default=None, help=argparse.SUPPRESS)
+    from _harness import Harness
+
+    Harness.add_arguments(ap)
     args = ap.parse_args()
     if args.repeats < 1:
         ap.error(f"--repeats must be >= 1, got {args.repeats}")

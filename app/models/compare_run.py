@@ -33,8 +33,8 @@ DEFAULT_BOOTSTRAP = 1000
 
 
 def columns() -> tuple:
-    """The table's columns: those of ``lipspace compare --csv`` (:data:`engine.comparison.compare.COLUMNS`)."""
-    from engine.comparison.compare import COLUMNS
+    """The table's columns: those of ``lipspace compare --csv`` (:data:`engine.comparison.table.COLUMNS`)."""
+    from engine.comparison.table import COLUMNS
 
     return COLUMNS
 

@@ -19,11 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine.manifold.tangent import CLASS_NAMES as CLASS_TARGETS
-
 __all__ = ["PUOR", "NEUTRAL_RGB", "UNKNOWN_LEVEL_RGB", "DifferenceColouring", "diverging_rgb",
-           "difference_colours", "level_frames", "field_colours", "RowSelection", "row_selection",
-           "CLASS_TARGETS"]
+           "difference_colours", "level_frames", "field_colours", "RowSelection", "row_selection"]
 
 #: ColorBrewer PuOr (11 classes), orange (negative: more of level a) to purple (positive: more of level b);
 #: readable with every common colour-vision deficiency
@@ -164,8 +161,11 @@ def row_selection(row) -> RowSelection:
         return RowSelection("cluster", frozenset({target}), None, None, levels)
     if family == "state":
         return RowSelection("state", frozenset(), int(target), None, levels)
-    if family == "dynamics" and target in CLASS_TARGETS:
-        return RowSelection("class", frozenset(), None, CLASS_TARGETS.index(target), levels)
+    from engine.manifold.tangent import CLASS_NAMES as classes  # (scikit-learn: not before the window is up)
+
+    if family == "dynamics" and target in classes:
+        return RowSelection("class", frozenset(), None, classes.index(target), levels)
     if family == "dynamics":
         return RowSelection("dynamics", frozenset(), None, None, levels)
     raise ValueError(f"row family {family!r}: expected 'cluster', 'dynamics' or 'state'")
+

@@ -24,16 +24,11 @@ from engine.comparison.dynamics import dynamics_family, utterance_dynamics
 from engine.comparison.enrichment import enrichment_family, state_counts
 from engine.comparison.fields import level_counts
 from engine.comparison.statistics import bh_qvalues, run_families
+from engine.comparison.table import COLUMNS, FAMILIES
 from engine.constraints import Interval, StrOptions, validate_params
 
 __all__ = ["ConditionComparison", "COLUMNS", "FAMILIES", "default_contrasts"]
 
-#: columns of a result row, in the order of the CSV table
-COLUMNS = ("field", "level_a", "level_b", "family", "measure", "target", "space", "estimate", "unit", "ci_low",
-           "ci_high", "p", "q", "value_a", "value_b", "n_utterances", "n_utterances_a", "n_utterances_b",
-           "n_speakers", "design")
-#: the families, each corrected for its own number of comparisons
-FAMILIES = ("cluster", "dynamics", "state")
 
 
 def default_contrasts(values, by: str, levels=None) -> list[tuple[str, str]]:

@@ -300,6 +300,26 @@ def test_started_and_closed_window_leaves_the_console_quiet(manifold_file, tmp_p
     assert (tmp_path / "config" / "lipspace.ini").is_file()  # it did open and close a window
 
 
+def test_the_window_is_built_before_scikit_learn_is_imported(tmp_path):
+    """Building and showing the window imports neither scikit-learn nor SciPy's statistics (1.3 s at start-up,
+    which the manifold's load pays in its worker once the window answers)."""
+    code = textwrap.dedent("""
+        import sys
+        from PySide6 import QtWidgets
+        app = QtWidgets.QApplication([])
+        from app.main_window import MainWindow
+        w = MainWindow()
+        w.show()
+        app.processEvents()
+        print("LOADED", sorted(m for m in ("sklearn", "scipy.stats", "engine.manifold.tangent") if m in sys.modules))
+        w.close()
+    """)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_explore_env(tmp_path),
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip().splitlines()[-1] == "LOADED []", r.stdout
+
+
 def test_reset_layout_gives_every_dock_its_first_size(qapp, tmp_path):
     """View > Reset layout applies MainWindow.DOCK_SIZES, the sizes the window is built with, whatever was
     moved before (a window on screen: the Lips dock 480 px wide, Lips over the phone clusters 380 : 420,
