@@ -174,8 +174,9 @@ def main(argv=None) -> int:
         r = run_child_json(scale + ["--one", path] + (["--dask", args.dask] if args.dask else []))
         wall = ", ".join(f"{k} {v:.1f}" for k, v in r["stages"].items())
         cpu = ", ".join(f"{k} {v:.1f}" for k, v in r.get("stage_cpu", {}).items())
-        peaks = ", ".join(f"{w:.0f}" for w in r["worker_peak_mb"])
-        wk = f"; workers' peak RSS {peaks} MB" if r["worker_peak_mb"] else ""
+        workers = r.get("worker_peak_mb") or []  # None: built in this process, no workers
+        peaks = ", ".join(f"{w:.0f}" for w in workers)
+        wk = f"; workers' peak RSS {peaks} MB" if workers else ""
         print(f"   {r['plan']}\n   build {r['wall_s']:.1f} s wall, client CPU {r['cpu_s']:.1f} s; per stage, wall (s): "
               f"{wall}\n   client CPU per stage (s): {cpu or 'n/a'}\n   client peak RSS {r['rss_peak_mb']:.0f} MB{wk}; "
               f"saved {r['saved']['mb']:.0f} MB in {r['saved']['s']:.1f} s; load average {r['load_before'][0]:.1f} "
