@@ -45,7 +45,11 @@ def main() -> int:
     launch(path, restore=False)
     if not state["ok"]:
         print("the window did not show the manifold within 300 s", file=sys.stderr)
-    return 0 if state["ok"] else 1
+    from app.workers import exit_if_tasks_run
+
+    code = 0 if state["ok"] else 1
+    exit_if_tasks_run(code)  # as `lipspace explore` leaves a task still inside an engine step
+    return code
 
 
 if __name__ == "__main__":

@@ -326,6 +326,34 @@ def running() -> bool:
     return any(r.thread.isRunning() for r in list(_RUNNING))
 
 
+def exit_if_tasks_run(code: int, *, wait_s: float = 60.0) -> None:
+    """End the process now with ``code`` when a task's thread still runs after the window closed.
+
+    A task cancelled inside a long engine step (the method choice's validation, the gestures of a
+    large corpus) stops only at its next progress call, and Qt aborts the process (a core dump,
+    "QThread: Destroyed while thread is still running") when the interpreter exits first. Called
+    after the event loop: everything the window keeps is written by then (the settings, the
+    autosave); the other non-daemon threads (a cache file being written) get ``wait_s`` seconds to
+    finish, and the output streams are flushed. Returns when no task runs.
+    """
+    import contextlib
+    import os
+    import sys
+    import threading
+    import time
+
+    if not running():
+        return
+    end = time.monotonic() + wait_s
+    for t in threading.enumerate():
+        if t is not threading.current_thread() and not t.daemon and not isinstance(t, threading._DummyThread):
+            t.join(max(0.0, end - time.monotonic()))
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            stream.flush()
+    os._exit(code)
+
+
 def cancel_all(timeout_ms: int = 5000) -> None:
     """Cancel every task started by :func:`run_task` and wait for their threads (on quit)."""
     for r in list(_RUNNING):

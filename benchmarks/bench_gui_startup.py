@@ -121,7 +121,10 @@ def child(t0: float, preset: str, path=None) -> None:
     from app.main_window import launch
 
     launch(path, preset=preset, restore=False)
-    print("RESULT " + json.dumps(out))
+    print("RESULT " + json.dumps(out), flush=True)
+    from app.workers import exit_if_tasks_run
+
+    exit_if_tasks_run(0)  # as `lipspace explore` leaves a task still inside an engine step
 
 
 FLOOR_CODE = "import PySide6.QtWidgets, pyvista"

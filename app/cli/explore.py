@@ -11,7 +11,6 @@ Qt is imported only when the window is really opened. What is shown is loaded by
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
 import sys
 
@@ -105,24 +104,10 @@ def run(args) -> int:
 
     code = launch(args.file, preset=args.preset, session=session, restore=args.restore, kinematics=args.kinematics,
                   notes=notes)
-    if code >= 128:  # stopped by a signal
-        _leave_if_a_task_still_runs(code)
+    from app.workers import exit_if_tasks_run
+
+    exit_if_tasks_run(code)  # closed (by the user or a stop signal) while a task was inside an engine step
     return code
-
-
-def _leave_if_a_task_still_runs(code: int) -> None:
-    """End the process now, with ``code``, when a loading task is still inside an engine step after a
-    stop signal closed the window (while the talker was being built): it was cancelled and would stop
-    at its next progress call, but Qt aborts the process (a core dump, "QThread: Destroyed while
-    thread is still running") when the interpreter exits first. Everything the window keeps is
-    written by then (the autosave, the settings)."""
-    from app.workers import running
-
-    if running():
-        for stream in (sys.stdout, sys.stderr):
-            with contextlib.suppress(OSError, ValueError, AttributeError):
-                stream.flush()
-        os._exit(code)
 
 
 def run_live(manifold_path, source, *, interocular_mm: float = 63.0) -> int:

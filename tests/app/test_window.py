@@ -320,6 +320,21 @@ def test_the_window_is_built_before_scikit_learn_is_imported(tmp_path):
     assert r.stdout.strip().splitlines()[-1] == "LOADED []", r.stdout
 
 
+def test_a_window_closed_while_a_task_is_inside_an_engine_step_exits_cleanly(manifold_file, tmp_path):
+    """Closed while a background task works without a progress call for longer than the close waits (the
+    method choice's validation on a large corpus did), ``lipspace explore`` exits 0 with its settings
+    written, instead of Qt aborting the process ("QThread: Destroyed while thread is still running")."""
+    script = _explore_script("import time\n"
+                             "from app.workers import run_task\n"
+                             "self._slow = run_task(lambda progress: time.sleep(7), title='slow', dialog=False)\n"
+                             "QtCore.QTimer.singleShot(100, self.close)")
+    r = subprocess.run([sys.executable, "-c", script, str(manifold_file)], capture_output=True, text=True,
+                       env=_explore_env(tmp_path), timeout=180)
+    assert r.returncode == 0, r.stderr
+    assert "QThread" not in r.stderr, r.stderr
+    assert (tmp_path / "config" / "lipspace.ini").is_file()
+
+
 def test_reset_layout_gives_every_dock_its_first_size(qapp, tmp_path):
     """View > Reset layout applies MainWindow.DOCK_SIZES, the sizes the window is built with, whatever was
     moved before (a window on screen: the Lips dock 480 px wide, Lips over the phone clusters 380 : 420,
