@@ -168,4 +168,3 @@ def row_selection(row) -> RowSelection:
     if family == "dynamics":
         return RowSelection("dynamics", frozenset(), None, None, levels)
     raise ValueError(f"row family {family!r}: expected 'cluster', 'dynamics' or 'state'")
-

@@ -30,7 +30,6 @@ from engine.constraints import Interval, StrOptions, validate_params
 __all__ = ["ConditionComparison", "COLUMNS", "FAMILIES", "default_contrasts"]
 
 
-
 def default_contrasts(values, by: str, levels=None) -> list[tuple[str, str]]:
     """The contrasts to fit: ``levels`` (a reference then one or more others: each against the
     reference), or the field's two levels in alphabetical order. Raises ComparisonError for a field with

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import os
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -229,3 +230,28 @@ def _tab_bars_name_shown_docks(w) -> None:
 def tab_bar_probe():
     """:func:`_tab_bars_name_shown_docks`: the window's dock tab bars name only shown docks."""
     return _tab_bars_name_shown_docks
+
+
+def _signal_when_ready(cmd, env, *, ready: str, signum, delay: float, timeout: float):
+    """Start ``cmd``, wait for its stdout line ``ready``, wait ``delay`` s more, send ``signum``.
+
+    Returns ``(returncode, stdout, stderr, seconds from the signal to the exit)``; the process is killed if
+    it outlives the test."""
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        assert proc.stdout.readline().strip() == ready
+        time.sleep(delay)
+        proc.send_signal(signum)
+        sent = time.monotonic()
+        out, err = proc.communicate(timeout=timeout)
+        return proc.returncode, out, err, time.monotonic() - sent
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+@pytest.fixture
+def signal_when_ready():
+    """:func:`_signal_when_ready`: a stop signal sent to a started explorer once it says it is ready."""
+    return _signal_when_ready

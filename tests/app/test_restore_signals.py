@@ -31,6 +31,13 @@ SCRIPT = textwrap.dedent("""
 """)
 
 
+def _env(tmp_path) -> dict:
+    """The explorer's environment: state and settings under ``tmp_path``, Qt's logging as set."""
+    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
+    env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"))
+    return env
+
+
 @pytest.fixture
 def crashed_run(tmp_path, app_manifold):
     """A manifold file and a state folder holding a dead run's marker and autosave of it."""
@@ -46,23 +53,12 @@ def crashed_run(tmp_path, app_manifold):
 
 
 @pytest.mark.parametrize("signame", ["SIGINT", "SIGTERM"])
-def test_a_stop_signal_during_the_restore_question_ends_the_explorer(crashed_run, tmp_path, signame):
-    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
-    env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"))
-    proc = subprocess.Popen([sys.executable, "-c", SCRIPT, str(crashed_run)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert proc.stdout.readline().strip() == "asking"
-        time.sleep(1.5)  # the question's own event loop is running (and the autosave timer with it)
-        proc.send_signal(getattr(signal, signame))
-        sent = time.monotonic()
-        _, err = proc.communicate(timeout=30)
-        took = time.monotonic() - sent
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    assert proc.returncode == 128 + getattr(signal, signame), err
+def test_a_stop_signal_during_the_restore_question_ends_the_explorer(crashed_run, tmp_path, signame,
+                                                                    signal_when_ready):
+    # 1.5 s after "asking": the question's own event loop is running (and the autosave timer with it)
+    code, _, err, took = signal_when_ready([sys.executable, "-c", SCRIPT, str(crashed_run)], _env(tmp_path),
+                                           ready="asking", signum=getattr(signal, signame), delay=1.5, timeout=30)
+    assert code == 128 + getattr(signal, signame), err
     assert took < 10 and "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert err.strip().endswith(f"lipspace explore: stopped by {signame}; the window was closed (nothing was "
                                 "autosaved yet)."), err
@@ -92,27 +88,15 @@ BUSY = textwrap.dedent("""
 """)
 
 
-def test_a_stop_signal_while_a_task_is_inside_an_engine_step_exits_with_its_code(tmp_path, app_manifold):
+def test_a_stop_signal_while_a_task_is_inside_an_engine_step_exits_with_its_code(tmp_path, app_manifold,
+                                                                                 signal_when_ready):
     """Closing the window cancels the loading task, but one inside a long engine step cannot stop at once:
     the process must still end with 128 + signal (before: Qt aborted it, 'QThread: Destroyed while thread
     is still running', a core dump)."""
     m = app_manifold.save(tmp_path / "m.npz")
-    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
-    env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"))
-    proc = subprocess.Popen([sys.executable, "-c", BUSY, str(m)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=env)
-    try:
-        assert proc.stdout.readline().strip() == "busy"
-        time.sleep(1.0)
-        proc.send_signal(signal.SIGTERM)
-        sent = time.monotonic()
-        _, err = proc.communicate(timeout=60)
-        took = time.monotonic() - sent
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    assert proc.returncode == 128 + signal.SIGTERM, err
+    code, _, err, took = signal_when_ready([sys.executable, "-c", BUSY, str(m)], _env(tmp_path), ready="busy",
+                                           signum=signal.SIGTERM, delay=1.0, timeout=60)
+    assert code == 128 + signal.SIGTERM, err
     assert took < 20 and "QThread: Destroyed" not in err and "Traceback" not in err, err
     assert err.strip().endswith("lipspace explore: stopped by SIGTERM; the window was closed (nothing was "
                                 "autosaved yet)."), err

@@ -367,31 +367,22 @@ def test_reset_layout_gives_every_dock_its_first_size(qapp, tmp_path):
 
 
 @pytest.mark.parametrize("signame", ["SIGTERM", "SIGINT"])
-def test_a_stop_signal_closes_the_explorer_and_keeps_its_session(manifold_file, tmp_path, signame):
+def test_a_stop_signal_closes_the_explorer_and_keeps_its_session(manifold_file, tmp_path, signame,
+                                                                 signal_when_ready):
     """`kill` or Ctrl-C in the terminal stops `lipspace explore`: exit 128 + signal within seconds, one
     line and no traceback, and the session autosaved then is offered back by the next start (before,
     the KeyboardInterrupt was raised inside a Qt slot, printed as a traceback and swallowed)."""
     import signal
-    import time
 
     from app.files.autosave import Autosaver
 
     script = _explore_script("self.state.select_frame(7)\nprint('ready', flush=True)")
     state = tmp_path / "state"
-    proc = subprocess.Popen([sys.executable, "-c", script, str(manifold_file)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=_explore_env(tmp_path))
-    try:
-        assert proc.stdout.readline().strip() == "ready"
-        time.sleep(0.5)  # the event loop is idle, waiting in Qt
-        proc.send_signal(getattr(signal, signame))
-        sent = time.monotonic()
-        out, err = proc.communicate(timeout=30)
-        took = time.monotonic() - sent
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    assert proc.returncode == 128 + getattr(signal, signame), err
+    # 0.5 s after "ready": the event loop is idle, waiting in Qt
+    code, _, err, took = signal_when_ready([sys.executable, "-c", script, str(manifold_file)],
+                                           _explore_env(tmp_path), ready="ready", signum=getattr(signal, signame),
+                                           delay=0.5, timeout=30)
+    assert code == 128 + getattr(signal, signame), err
     assert took < 10
     assert "Traceback" not in err and "KeyboardInterrupt" not in err
     assert err.strip() == (f"lipspace explore: stopped by {signame}; the window was closed (the session was "
