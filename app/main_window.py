@@ -81,6 +81,7 @@ class MainWindow(MenuActions, SessionActions, ExportActions, ConditionDocks, QtW
         ed.setFeatures(ed.features() | QtWidgets.QDockWidget.DockWidgetFeature.DockWidgetVerticalTitleBar)
         self.tabifyDockWidget(self.docks["clusters"], self.docks["scree"])
         self.docks["clusters"].raise_()
+        self.docks["scree"].visibilityChanged.connect(self.scree.set_on_screen)  # its plot made when first seen
         self._make_condition_docks()  # the small multiples and the Compare panel
         self._size_docks()
         self._set_minimum_sizes()

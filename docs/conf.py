@@ -53,7 +53,7 @@ html_title = f"Lipspace {release}"
 html_theme_options = {"navigation_depth": 2, "show_toc_level": 2}
 html_static_path: list[str] = []
 
-#: what scikit-learn's BaseEstimator gives every estimator: documented there, not on each page
+#: what engine.estimator.Estimator gives every estimator (its API is scikit-learn's): documented there, not on each page
 _INHERITED = {"get_params", "set_params", "get_metadata_routing"}
 
 

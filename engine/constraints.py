@@ -339,7 +339,7 @@ def validate_params(estimator, names=None) -> None:
 
     Parameters
     ----------
-    estimator : BaseEstimator
+    estimator : engine.estimator.Estimator
     names : iterable of str, optional
         Only these parameters (default: every declared one).
 

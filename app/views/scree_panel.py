@@ -1,9 +1,12 @@
-"""Scree panel: explained variance of X and Y, and each X component as a lip deformation."""
+"""Scree panel: explained variance of X and Y, and each X component as a lip deformation.
+
+Its plot (matplotlib's Qt canvas) is made when the panel first comes on screen
+(:meth:`ScreePanel.set_on_screen`; the window calls it when the panel's dock tab is raised): the
+panel starts as a tab behind the clusters table, and making the plot cost the window 0.3-0.5 s.
+"""
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
-from matplotlib.figure import Figure
 from PySide6 import QtWidgets
 
 from app.models.scree import scree_series
@@ -20,10 +23,7 @@ class ScreePanel(QtWidgets.QWidget):
     def __init__(self, state, parent=None):
         super().__init__(parent)
         self.state = state
-        self.figure = Figure(figsize=(4, 3))
-        self.figure.subplots_adjust(left=0.16, right=0.97, bottom=0.2, top=0.95)
-        self.canvas = FigureCanvasQTAgg(self.figure)
-        self.canvas.mpl_connect("resize_event", lambda _e: self._fit_layout())
+        self.figure = self.canvas = None  # made on first show (_make_plot)
         self.show_box = QtWidgets.QCheckBox("Show X component")
         self.show_box.setToolTip("Show the component as the mean lip shape −2 s.d. and +2 s.d. in the lip view")
         self.spin = QtWidgets.QSpinBox()
@@ -33,9 +33,9 @@ class ScreePanel(QtWidgets.QWidget):
         row.addWidget(self.show_box)
         row.addWidget(self.spin)
         row.addWidget(self.readout, 1)
-        lay = QtWidgets.QVBoxLayout(self)
+        self._layout = lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(2, 2, 2, 2)
-        lay.addWidget(self.canvas, 1)
+        lay.addStretch(1)  # the plot's place until it is made
         lay.addLayout(row)
         self.show_box.toggled.connect(lambda _on: self._push())
         self.spin.valueChanged.connect(lambda _v: self._push())
@@ -44,8 +44,35 @@ class ScreePanel(QtWidgets.QWidget):
         connect_all(self._connections)
         self.rebuild()
 
+    def _make_plot(self) -> None:
+        """Put the plot in the panel (in the place the stretch held)."""
+        from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+        from matplotlib.figure import Figure
+
+        self.figure = Figure(figsize=(4, 3))
+        self.figure.subplots_adjust(left=0.16, right=0.97, bottom=0.2, top=0.95)
+        self.canvas = FigureCanvasQTAgg(self.figure)
+        self.canvas.mpl_connect("resize_event", lambda _e: self._fit_layout())
+        self._layout.takeAt(0)
+        self._layout.insertWidget(0, self.canvas, 1)
+
+    def set_on_screen(self, on_screen: bool) -> None:
+        """The panel came on screen (its dock's tab raised, its dock shown) or left it: the plot is made
+        the first time. (Qt shows a dock's widget behind another tab too, so showEvent cannot tell.)"""
+        if on_screen and self.canvas is None:
+            self._make_plot()
+            self.rebuild()
+
     def rebuild(self) -> None:
         m = self.state.manifold
+        if m is not None:
+            n = int(m.shape_.n_components_)
+            with blocked(self.spin):
+                self.spin.setMaximum(n)
+            self.spin.setSuffix(f" / {n}")
+            self._on_component(self.state.component)
+        if self.figure is None:
+            return  # drawn on first show
         self.figure.clear()
         if m is None:
             self.canvas.draw_idle()
@@ -64,14 +91,11 @@ class ScreePanel(QtWidgets.QWidget):
         ax.legend(fontsize=8, frameon=False)
         self._fit_layout()
         self.canvas.draw_idle()
-        n = int(m.shape_.n_components_)
-        with blocked(self.spin):
-            self.spin.setMaximum(n)
-        self.spin.setSuffix(f" / {n}")
-        self._on_component(self.state.component)
 
     def _fit_layout(self):
         """Tight margins for the current size (skipped while the panel is hidden or tiny)."""
+        if self.canvas is None:
+            return
         w, h = self.canvas.get_width_height()
         if self.figure.axes and w > 150 and h > 120:
             self.figure.tight_layout(pad=0.5)

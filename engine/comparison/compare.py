@@ -15,8 +15,6 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.comparison.cluster_shift import SPACES, cluster_family
 from engine.comparison.design import ComparisonError, resolve_design
@@ -26,6 +24,7 @@ from engine.comparison.fields import level_counts
 from engine.comparison.statistics import bh_qvalues, run_families
 from engine.comparison.table import COLUMNS, FAMILIES
 from engine.constraints import Interval, StrOptions, validate_params
+from engine.estimator import Estimator, check_is_fitted
 
 __all__ = ["ConditionComparison", "COLUMNS", "FAMILIES", "default_contrasts"]
 
@@ -54,7 +53,7 @@ def default_contrasts(values, by: str, levels=None) -> list[tuple[str, str]]:
     return [(a, b)]
 
 
-class ConditionComparison(BaseEstimator):
+class ConditionComparison(Estimator):
     """Compare levels of a per-utterance field on one fitted manifold.
 
     Parameters

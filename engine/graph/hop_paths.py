@@ -30,7 +30,6 @@ is a vectorised gather over the rows of the current frontier.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse.csgraph import breadth_first_order
 
 __all__ = ["hop_distances", "fewest_hop_path", "grow_balls", "csr_rows", "concat_ranges", "mark_level"]
 
@@ -44,6 +43,8 @@ def hop_distances(G, source: int) -> np.ndarray:
     by pointer jumping (log2 K vectorised steps, each node's hop count doubled along
     its ancestors) instead of a heap.
     """
+    from scipy.sparse.csgraph import breadth_first_order  # on use: loading a state graph needs none of it
+
     order, pred = breadth_first_order(G, source, directed=True, return_predecessors=True)
     K = G.shape[0]
     reached = np.zeros(K, bool)

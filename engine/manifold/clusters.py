@@ -32,10 +32,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.phonetics import phonesets
 from engine.recordings.corpus import label_codes
 
@@ -119,7 +118,7 @@ def _sphere(resolution: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ------------------------------------------------------------------ the estimator
-class PhoneClusters(BaseEstimator):
+class PhoneClusters(Estimator):
     """Per-phone statistics of phone mid-point frames in F^y and F^x.
 
     Parameters

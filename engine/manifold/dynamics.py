@@ -19,10 +19,9 @@ import re
 import warnings
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Condition, StrOptions, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.recordings.bounds import velocities
 from engine.recordings.corpus import CorpusWarning
 
@@ -55,7 +54,7 @@ def _scale_quantile(scale) -> float | None:
     return None if scale == "max" else _percentile(scale)
 
 
-class DynamicFeatures(BaseEstimator):
+class DynamicFeatures(Estimator):
     """Scaled shape + velocity features.
 
     Parameters

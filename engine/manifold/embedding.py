@@ -21,10 +21,9 @@ from concurrent.futures import ThreadPoolExecutor
 from numbers import Integral
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, StrOptions, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.manifold.shape import orthonormal_basis, thin_svd
 from engine.progress import ProgressFn, report
 from engine.threads import one_blas_thread
@@ -172,7 +171,7 @@ def _add(a, b):
     return a + b
 
 
-class Embedding(BaseEstimator):
+class Embedding(Estimator):
     """Low-dimensional embedding of the dynamic features.
 
     Parameters

@@ -38,10 +38,9 @@ from numbers import Integral
 
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, cKDTree
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.threads import single_blas_thread
 
 __all__ = ["InverseMap", "barycentric_transforms", "delaunay_at"]
@@ -110,7 +109,7 @@ def barycentric_transforms(points, simplices):
     return T
 
 
-class InverseMap(BaseEstimator):
+class InverseMap(Estimator):
     """Piecewise-linear map from the embedding Y back to the shape space X (or to frames).
 
     Parameters

@@ -22,10 +22,9 @@ from numbers import Integral, Real
 
 import numpy as np
 from scipy.spatial import cKDTree
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.threads import single_blas_thread
 
 __all__ = ["StateMeanInverse", "LocalLinearInverse", "select_neighbors", "NEIGHBOR_CANDIDATES"]
@@ -49,7 +48,7 @@ def _check_2d(A, name, cols=None) -> np.ndarray:
     return A
 
 
-class StateMeanInverse(BaseEstimator):
+class StateMeanInverse(Estimator):
     """X of each state: the mean F^x (and mean velocity F^x') of its training frames.
 
     Use ``fit(labels, Fx, Fxv)`` then ``transform(states)``.
@@ -99,7 +98,7 @@ class StateMeanInverse(BaseEstimator):
         return self.means_[s]
 
 
-class LocalLinearInverse(BaseEstimator):
+class LocalLinearInverse(Estimator):
     """Local-linear regression of F^x on the first ``n_dims`` of F^y over the k nearest frames.
 
     Parameters

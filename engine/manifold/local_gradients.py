@@ -30,7 +30,6 @@ nearest anchor, so the cost stops growing with k times N.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 __all__ = ["central_difference", "neighbor_candidates", "local_gradients", "gradients_block",
            "select_neighbors", "MAX_NEIGHBORS", "MAX_ANCHORS", "MARGIN_S", "N_FOLDS"]
@@ -173,6 +172,8 @@ def local_gradients(Y, Z, F, k, *, executor=None, random_state=0):
     n_anchors : int
         Frames the gradients were fitted at (N up to :data:`MAX_ANCHORS`).
     """
+    from scipy.spatial import cKDTree  # on use: loading a fitted manifold needs none of SciPy's spatial package
+
     N = Y.shape[0]
     Y = np.ascontiguousarray(Y, dtype=np.float32)
     k = int(min(k, N))
@@ -256,6 +257,8 @@ def select_neighbors(Y, Z, F, bounds, rate, *, candidates, dims=None, random_sta
 
 def _validate(Y, Z, F, bounds, rate, candidates, random_state):
     """``[(k, opening, acceleration)]``: held-out agreements per candidate k (see :func:`select_neighbors`)."""
+    from scipy.spatial import cKDTree
+
     N = Y.shape[0]
     Y = np.ascontiguousarray(Y, dtype=np.float32)
     fold = _folds(bounds, N_FOLDS)

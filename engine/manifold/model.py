@@ -16,10 +16,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, StrOptions, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.files.atomic import atomic_write
 from engine.files.persist import NpzReadError, dump_estimator, read_npz, source_fingerprint
 from engine.manifold.dynamics import SCALES, DynamicFeatures
@@ -108,7 +107,7 @@ class ManifoldFileError(ValueError):
     """A manifold file cannot be read; the message names the file and the fault."""
 
 
-class Manifold(BaseEstimator):
+class Manifold(Estimator):
     """The visual speech manifold of a corpus.
 
     Parameters

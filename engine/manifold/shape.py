@@ -16,10 +16,9 @@ from contextlib import nullcontext
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.progress import ProgressFn, report
 from engine.recordings.frame_blocks import BlockFrames
 from engine.threads import one_blas_thread
@@ -164,7 +163,7 @@ class FrameProducts:
         return total
 
 
-class ShapeSpace(BaseEstimator):
+class ShapeSpace(Estimator):
     """PCA shape space of lip frames.
 
     Parameters

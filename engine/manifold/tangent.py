@@ -35,10 +35,9 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.manifold.local_gradients import central_difference, local_gradients, neighbor_candidates, select_neighbors
 from engine.recordings.bounds import check_bounds
 
@@ -69,7 +68,7 @@ def _finite(name, a, n_rows=None):
     return a
 
 
-class TangentFrames(BaseEstimator):
+class TangentFrames(Estimator):
     """Local tangent frames, the four movement classes and the drawn global frame.
 
     Parameters

@@ -20,10 +20,9 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Condition, Interval, validate_params
+from engine.estimator import Estimator, check_is_fitted
 
 __all__ = ["similarity_fit", "HeadPose", "DEFAULT_INTEROCULAR_MM", "check_interocular"]
 
@@ -83,7 +82,7 @@ def _apply(s, R, t, X):
     return s[:, None, None] * np.einsum("nij,npj->npi", R, X) + t[:, None]
 
 
-class HeadPose(BaseEstimator):
+class HeadPose(Estimator):
     """Per-speaker reference template and per-frame similarity head-pose removal.
 
     Parameters

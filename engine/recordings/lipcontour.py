@@ -15,10 +15,9 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
+from engine.estimator import Estimator, check_is_fitted
 
 __all__ = ["LipContour", "mesh_geometry", "MIN_POINTS", "MAX_POINTS"]
 
@@ -37,7 +36,7 @@ def _as_points(P, name="points"):
     return P
 
 
-class LipContour(BaseEstimator):
+class LipContour(Estimator):
     """Closed outer lip contour through sparse lip points, and a tube mesh around it.
 
     Parameters

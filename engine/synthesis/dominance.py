@@ -23,10 +23,9 @@ from numbers import Integral, Real
 
 import numpy as np
 import scipy.sparse as sp
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.threads import single_blas_thread
 
 __all__ = ["DominanceModel"]
@@ -37,7 +36,7 @@ _LOG_THETA = (np.log(0.1), np.log(500.0))
 _LOG_C = (np.log(0.5), np.log(3.0))
 
 
-class DominanceModel(BaseEstimator):
+class DominanceModel(Estimator):
     """Phone targets in X blended by Cohen-Massaro dominance functions.
 
     Parameters

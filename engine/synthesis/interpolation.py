@@ -7,10 +7,9 @@ state graph: the trivial baseline the manifold's paths are compared with.
 from __future__ import annotations
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import StrOptions, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.phonetics.targets import TargetSequence
 from engine.phonetics.targets import resolve_phone as _resolve_phone
 from engine.synthesis.trajectory import Trajectory, interpolate_targets
@@ -21,7 +20,7 @@ from engine.threads import single_blas_thread
 __all__ = ["InterpolationSynthesizer"]
 
 
-class InterpolationSynthesizer(BaseEstimator):
+class InterpolationSynthesizer(Estimator):
     """Direct interpolation of the phone targets in X ("linear" or "cubic" spline).
 
     A target's X is its oracle F^x when the target carries one, else the mean F^x of

@@ -36,10 +36,9 @@ from numbers import Integral, Real
 
 import numpy as np
 from scipy.spatial import cKDTree
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Interval, validate_params
+from engine.estimator import Estimator, check_is_fitted
 
 __all__ = ["prior_blend", "LearntPaths", "NEIGHBOR_STEPS", "BASES", "PRIOR_BASE", "blend", "fit_blend",
            "BlendAccumulator"]
@@ -53,7 +52,7 @@ BASES = ("hermite", "pchip", "linear", "calibrated")
 PRIOR_BASE = BASES.index("calibrated")
 
 
-class LearntPaths(BaseEstimator):
+class LearntPaths(Estimator):
     """Training sub-trajectories between the neighbourhoods of two points of F^y.
 
     Parameters

@@ -17,10 +17,9 @@ from numbers import Integral, Real
 
 import numpy as np
 import scipy.sparse as sp
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Condition, Interval, StrOptions, validate_params
+from engine.estimator import Estimator, check_is_fitted
 
 __all__ = ["SlidingWindowRegressor", "REGRESSORS"]
 
@@ -28,7 +27,7 @@ REGRESSORS = ("ridge", "mlp")
 _BOUNDARY = "#"
 
 
-class SlidingWindowRegressor(BaseEstimator):
+class SlidingWindowRegressor(Estimator):
     """Phone-label windows -> shape windows, overlap-averaged.
 
     Parameters

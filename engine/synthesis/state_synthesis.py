@@ -21,10 +21,9 @@ spline alone.
 from __future__ import annotations
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.synthesis.learnt_paths import prior_blend
 from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, target_frames
 from engine.threads import single_blas_thread
@@ -32,7 +31,7 @@ from engine.threads import single_blas_thread
 __all__ = ["LearntPathSynthesizer", "StateHermiteSynthesizer"]
 
 
-class _StateModelSynthesizer(BaseEstimator):
+class _StateModelSynthesizer(Estimator):
     """Shared fitting and target resolution; see the module docstring.
 
     Parameters

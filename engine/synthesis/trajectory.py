@@ -15,10 +15,9 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.ndimage import gaussian_filter1d
-from sklearn.base import BaseEstimator, clone
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import HasMethods, validate_params
+from engine.estimator import Estimator, check_is_fitted, clone
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -157,7 +156,7 @@ def phone_sequences(utterances: Sequence[Utterance],
     return [(np.asarray(Fx[u.start:u.stop], dtype=np.float64), tuple(u.phones)) for u in utterances if u.phones]
 
 
-class PhoneModelSynthesizer(BaseEstimator):
+class PhoneModelSynthesizer(Estimator):
     """A model of shape from phones and their times behind the :class:`Synthesizer` interface.
 
     Parameters

@@ -33,10 +33,9 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine.constraints import Condition, Interval, Options, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.phonetics.targets import TargetSequence
 from engine.synthesis.trajectory import Trajectory, check_fitted_manifold, target_frames
 from engine.threads import single_blas_thread
@@ -86,7 +85,7 @@ def crossfade_weights(t, mid_a: float, mid_b: float, fraction: float) -> np.ndar
     return np.interp(t, [mid_a, c, mid_b], [0.0, 0.5, 1.0])
 
 
-class UnitSelectionSynthesizer(BaseEstimator):
+class UnitSelectionSynthesizer(Estimator):
     """Concatenative unit selection over the training corpus's phone instances.
 
     Parameters

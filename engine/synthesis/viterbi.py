@@ -31,11 +31,10 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from engine._deprecated import deprecated_names
 from engine.constraints import Interval, StrOptions, validate_params
+from engine.estimator import Estimator, check_is_fitted
 from engine.graph.bridges import bridge, forward_to
 from engine.graph.max_product import (
     MaxProductGraph,
@@ -149,7 +148,7 @@ def phone_state_table(states, labels) -> dict:
     return table
 
 
-class ViterbiSynthesizer(BaseEstimator):
+class ViterbiSynthesizer(Estimator):
     """The paper's synthesiser (method ``"viterbi"``): maximum-probability paths between timed targets on the
     state graph.
 

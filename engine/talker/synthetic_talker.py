@@ -34,9 +34,9 @@ from numbers import Integral, Real
 from typing import Any
 
 import numpy as np
-from sklearn.base import BaseEstimator
 
 from engine.constraints import Condition, Interval, StrOptions, validate_params
+from engine.estimator import Estimator
 from engine.files.assets import asset_path
 from engine.phonetics.phones import PAUSE, DurationModel, pronounce
 from engine.progress import ProgressFn, report
@@ -128,7 +128,7 @@ def _lexicon() -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
 
 
 # ---------------------------------------------------------------- the talker
-class SyntheticTalker(BaseEstimator):
+class SyntheticTalker(Estimator):
     """Deterministic synthetic talker producing a phone-aligned 3D lip corpus.
 
     Parameters

@@ -483,9 +483,13 @@ def test_exports_round_trip(win, qtbot, tmp_path, app_manifold):
 
 
 def test_scree_panel_and_component_deformation(win, app_manifold):
+    from PySide6 import QtWidgets
+
     from app.models.scree import scree_series
 
     m, s, sc = app_manifold, win.state, win.scree
+    win.docks["scree"].raise_()  # its tab, behind the clusters table: the plot is made when first raised
+    QtWidgets.QApplication.processEvents()
     lines = sc.figure.axes[0].get_lines()
     d = scree_series(m)
     np.testing.assert_allclose(lines[1].get_ydata(), 100 * (1 - d["y_cum"]))
@@ -497,6 +501,8 @@ def test_scree_panel_and_component_deformation(win, app_manifold):
     np.testing.assert_allclose(win.lip_view.second.points, _points(m, m.shape_.component_deformation(1, 2.0)),
                                atol=1e-4)
     assert "component 2" in win.lip_view.caption.text()
+    win.docks["clusters"].raise_()  # as the window starts
+    QtWidgets.QApplication.processEvents()
 
 
 def test_worker_reports_progress_cancels_and_fails(qapp, qtbot):

@@ -120,6 +120,20 @@ def test_a_first_window_draws_no_tab_of_a_hidden_dock(qapp, tmp_path, app_manifo
         w.close()
 
 
+def test_the_scree_plot_is_made_when_its_tab_is_raised(qapp, tmp_path, app_manifold):
+    """The scree panel starts behind the clusters table without its plot; raising its tab draws it."""
+    w = _window(qapp, _settings(tmp_path / "s.ini"), app_manifold)
+    try:
+        assert w.scree.canvas is None and w.docks["clusters"].isVisible()
+        w.docks["scree"].raise_()
+        for _ in range(5):
+            qapp.processEvents()
+        assert w.scree.canvas is not None and w.scree.canvas.isVisible()
+        assert len(w.scree.figure.axes[0].get_lines()) == 2
+    finally:
+        w.close()
+
+
 def test_at_its_minimum_size_every_dock_keeps_a_usable_size(qapp, app_manifold, tmp_path):
     w = _window(qapp, _settings(tmp_path / "s.ini"), app_manifold)
     try:
@@ -301,8 +315,9 @@ def test_started_and_closed_window_leaves_the_console_quiet(manifold_file, tmp_p
 
 
 def test_the_window_is_built_before_scikit_learn_is_imported(tmp_path):
-    """Building and showing the window imports neither scikit-learn nor SciPy's statistics (1.3 s at start-up,
-    which the manifold's load pays in its worker once the window answers)."""
+    """Building and showing the window imports neither scikit-learn nor SciPy's statistics (1.3 s at start-up)
+    nor matplotlib's Qt canvas (0.3-0.5 s with the scree plot; the panel, a tab behind the clusters, makes
+    its plot when first raised)."""
     code = textwrap.dedent("""
         import sys
         from PySide6 import QtWidgets
@@ -311,11 +326,29 @@ def test_the_window_is_built_before_scikit_learn_is_imported(tmp_path):
         w = MainWindow()
         w.show()
         app.processEvents()
-        print("LOADED", sorted(m for m in ("sklearn", "scipy.stats", "engine.manifold.tangent") if m in sys.modules))
+        print("LOADED", sorted(m for m in ("sklearn", "scipy.stats", "engine.manifold.tangent",
+                                           "matplotlib.backends.backend_qtagg") if m in sys.modules))
         w.close()
     """)
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_explore_env(tmp_path),
                        timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip().splitlines()[-1] == "LOADED []", r.stdout
+
+
+def test_a_manifold_is_loaded_and_prepared_for_the_views_without_scikit_learn(manifold_file, tmp_path):
+    """What the explorer's worker does to show a manifold file imports neither scikit-learn nor SciPy's
+    statistics (the engine's estimators take scikit-learn's API from engine.estimator): a first window
+    shows its manifold 1.2-1.5 s sooner."""
+    code = textwrap.dedent("""
+        import sys
+        from app.files.source_loading import load_source
+        m, src = load_source(sys.argv[1])
+        assert src["kind"] == "manifold" and m.Fy_.shape[0] > 0
+        print("LOADED", sorted(m for m in ("sklearn", "scipy.stats", "pandas") if m in sys.modules))
+    """)
+    r = subprocess.run([sys.executable, "-c", code, str(manifold_file)], capture_output=True, text=True,
+                       env=_explore_env(tmp_path), timeout=120)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip().splitlines()[-1] == "LOADED []", r.stdout
 

@@ -1,7 +1,7 @@
 """Checks every engine estimator passes (after scikit-learn's common estimator checks).
 
 The estimators are found in the source: every class under ``engine/`` deriving from
-``sklearn.base.BaseEstimator``, directly or through another engine estimator. For each:
+``engine.estimator.Estimator``, directly or through another engine estimator. For each:
 a keyword-only ``__init__``; ``_parameter_constraints`` naming exactly its parameters and
 accepting the defaults; a ``get_params`` / ``clone`` round trip; ``fit`` returning self; a
 ``NotFittedError`` from every method that needs a fit, before one; and every bad value
@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sklearn.base import BaseEstimator, clone
-from sklearn.exceptions import NotFittedError
+from sklearn.base import clone as sklearn_clone
 
 from engine.constraints import InvalidParameterError, invalid_values
+from engine.estimator import Estimator, NotFittedError, clone
 
 ENGINE = Path(__file__).resolve().parents[2] / "engine"
 
@@ -39,13 +39,13 @@ def _estimator_classes() -> dict[str, tuple[str, str]]:
             if isinstance(node, ast.ClassDef):
                 bases[node.name] = {b.id if isinstance(b, ast.Name) else getattr(b, "attr", "") for b in node.bases}
                 where[node.name] = module
-    found = {"BaseEstimator"}
+    found = {"Estimator"}
     while True:
         more = {name for name, b in bases.items() if b & found} - found
         if not more:
             break
         found |= more
-    found.discard("BaseEstimator")
+    found.discard("Estimator")
     return {name: (where[name], name) for name in sorted(found)}
 
 
@@ -56,7 +56,7 @@ PUBLIC = sorted(name for name in CLASSES if not name.startswith("_"))
 def _cls(name):
     module, attr = CLASSES[name]
     cls = getattr(importlib.import_module(module), attr)
-    assert issubclass(cls, BaseEstimator), f"{module}.{attr} is no BaseEstimator"
+    assert issubclass(cls, Estimator), f"{module}.{attr} is no engine Estimator"
     return cls
 
 
@@ -173,16 +173,17 @@ def test_defaults_satisfy_the_constraints_and_clone_round_trips(name):
     est = _make(name)
     validate_params(est)  # the defaults (and CONSTRUCT's values) are valid
     params = est.get_params(deep=False)
-    copy = clone(est)
-    assert copy is not est and type(copy) is type(est)
-    again = copy.get_params(deep=False)
-    assert again.keys() == params.keys()
-    for k, v in params.items():
-        if isinstance(v, BaseEstimator):
-            assert again[k] is not v and again[k].get_params() == v.get_params(), k
-        else:
-            assert again[k] == v, k
-    assert copy.set_params(**params) is copy and copy.get_params(deep=False) == params
+    for copier in (clone, sklearn_clone):  # the engine's own, and scikit-learn's (which takes them as its own)
+        copy = copier(est)
+        assert copy is not est and type(copy) is type(est)
+        again = copy.get_params(deep=False)
+        assert again.keys() == params.keys()
+        for k, v in params.items():
+            if isinstance(v, Estimator):
+                assert again[k] is not v and again[k].get_params() == v.get_params(), k
+            else:
+                assert again[k] == v, k
+        assert copy.set_params(**params) is copy and copy.get_params(deep=False) == params
 
 
 @pytest.mark.parametrize("name", PUBLIC)
@@ -213,7 +214,7 @@ def test_fit_returns_self(name, tiny):
 
 def _needs_fit(cls, name):
     """Public methods of ``cls`` (its own and its engine bases') that need a fit."""
-    skip = {"get_params", "set_params", "get_metadata_routing", "set_output"} | BEFORE_FIT.get(name, set())
+    skip = {"get_params", "set_params"} | BEFORE_FIT.get(name, set())
     out = []
     for klass in cls.__mro__:
         if not klass.__module__.startswith("engine."):

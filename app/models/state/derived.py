@@ -51,6 +51,9 @@ def prepare_derived(manifold, progress=None) -> None:
     except ValueError:
         pass  # the panel computes (and reports) it when shown
     out["palette"] = corpus_palette(manifold.corpus_)
+    from app.models.palette import qualitative_colours
+
+    qualitative_colours(1)  # the palette's colour sequence, made once per process: here, not in the window's thread
     report(progress, stage, 4, 4)
     PREPARED[manifold] = out
 

@@ -177,6 +177,11 @@ def test_leaving_the_component_panel_returns_the_lips_to_the_selection(qapp, app
     panel = ScreePanel(s)
     panel.show()
     qapp.processEvents()
+    assert panel.canvas is None  # the plot waits until the panel is on screen (its dock tab raised)
+    assert panel.spin.maximum() == app_manifold.shape_.n_components_
+    panel.set_on_screen(True)
+    lines = panel.figure.axes[0].get_lines()  # drawn then: the X and Y residual curves
+    assert [ln.get_label() for ln in lines] == ["X residual (shape)", "Y residual (shape + velocity)"]
     panel.show_box.setChecked(True)
     assert s.component == 0
     panel.hide()  # another dock tab raised, or the dock closed
