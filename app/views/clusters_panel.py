@@ -83,7 +83,7 @@ class ClustersPanel(QtWidgets.QWidget):
         self.opacity_slider.valueChanged.connect(lambda v: state.set_ellipsoid_opacity(v / 100.0))
         ev = state.events
         self._connections = [(ev.manifold, lambda _m: self.rebuild()), (ev.visible_phones, self._sync_checks),
-                             (ev.palette, lambda _p: self.rebuild()), (ev.ellipsoid_opacity, self._sync_opacity)]
+                             (ev.palette, lambda _p: self._recolour()), (ev.ellipsoid_opacity, self._sync_opacity)]
         connect_all(self._connections)
         self._sync_opacity(state.ellipsoid_opacity)
         self.rebuild()
@@ -145,6 +145,19 @@ class ClustersPanel(QtWidgets.QWidget):
                     self.table.setItem(i, j, item)
             self.table.setSortingEnabled(True)
             self.table.sortItems(1, QtCore.Qt.SortOrder.DescendingOrder)  # most frequent first (Table 1)
+
+    def _recolour(self) -> None:
+        """The palette changed (not the rows): each swatch takes its label's new colour."""
+        pal = self.state.palette
+        if self.state.manifold is None or pal is None:
+            return
+        kind = "landmark" if self.kind == "kinematic" else "phone"
+        self._palette = pal.colours(kind, [r["phone"] for r in self.rows])
+        with blocked(self.table):
+            for i in range(self.table.rowCount()):
+                it = self.table.item(i, 0)
+                if it is not None:
+                    self._set_swatch(it, self._palette.get(it.text()))
 
     def _on_item(self, item):
         if item.column() != 0:

@@ -56,6 +56,31 @@ def test_ticked_phones_have_one_colour_in_view_legends_table_and_phone_colouring
     assert d["ranking"]["phone"][:3] == s.palette.levels("phone")[:3]
 
 
+def test_a_new_palette_recolours_the_cluster_swatches(fresh):
+    """A palette set on its own (a session's, restored) gives every swatch its label's new colour."""
+    from PySide6 import QtGui
+
+    from app.models.palette import SessionPalette
+    from app.views.clusters_panel import _SWATCH_ROLE
+
+    w = fresh
+    s, panel = w.state, w.clusters
+    items = {panel.table.item(i, 0).text(): panel.table.item(i, 0) for i in range(panel.table.rowCount())}
+    d = s.palette.to_dict()
+    ranking = d["ranking"]["phone"]
+    i, j = [k for k, ph in enumerate(ranking) if ph in items][:2]     # two phones the table shows
+    first, second = ranking[i], ranking[j]
+    ranking[i], ranking[j] = second, first                             # their colours swapped
+    old = {ph: QtGui.QColor.fromRgbF(*s.palette.colour("phone", ph)).name() for ph in (first, second)}
+    before = s.palette
+    s.set_palette(SessionPalette.from_dict(d))
+    try:
+        assert items[first].data(_SWATCH_ROLE) == old[second] and items[second].data(_SWATCH_ROLE) == old[first]
+        assert panel.table.rowCount() == len(panel.rows) > 2           # the rows stayed
+    finally:
+        s.set_palette(before)                                          # the shared window's own palette back
+
+
 def test_view_settings_join_undo_and_esc_touches_none_of_them(fresh, qtbot, app_manifold):
     from PySide6 import QtCore, QtGui
 
