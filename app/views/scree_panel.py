@@ -23,7 +23,7 @@ class ScreePanel(QtWidgets.QWidget):
     def __init__(self, state, parent=None):
         super().__init__(parent)
         self.state = state
-        self.figure = self.canvas = None  # made on first show (_make_plot)
+        self.figure = self.canvas = None  # made when the panel is first on screen (set_on_screen)
         self.show_box = QtWidgets.QCheckBox("Show X component")
         self.show_box.setToolTip("Show the component as the mean lip shape −2 s.d. and +2 s.d. in the lip view")
         self.spin = QtWidgets.QSpinBox()
@@ -72,7 +72,7 @@ class ScreePanel(QtWidgets.QWidget):
             self.spin.setSuffix(f" / {n}")
             self._on_component(self.state.component)
         if self.figure is None:
-            return  # drawn on first show
+            return  # drawn when the panel is first on screen
         self.figure.clear()
         if m is None:
             self.canvas.draw_idle()
