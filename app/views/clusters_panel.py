@@ -121,9 +121,7 @@ class ClustersPanel(QtWidgets.QWidget):
         item.setText(header)
         item.setToolTip(COLUMNS[0][2] if self.kind == "phones" else
                         "kinematic landmark of the lip aperture: open, closed, opening, closing")
-        pal, kind = self.state.palette, ("landmark" if self.kind == "kinematic" else "phone")
-        palette = pal.colours(kind, [r["phone"] for r in self.rows]) if (m is not None and pal is not None) else {}
-        self._palette = palette
+        self._palette = palette = self._row_colours()
         with blocked(self.table):
             self.table.setSortingEnabled(False)
             self.table.setRowCount(len(self.rows))
@@ -146,13 +144,16 @@ class ClustersPanel(QtWidgets.QWidget):
             self.table.setSortingEnabled(True)
             self.table.sortItems(1, QtCore.Qt.SortOrder.DescendingOrder)  # most frequent first (Table 1)
 
-    def _recolour(self) -> None:
-        """The palette changed (not the rows): each swatch takes its label's new colour."""
+    def _row_colours(self) -> dict:
+        """``{label: (r, g, b)}`` of the rows in the session palette ({} without a manifold or palette)."""
         pal = self.state.palette
         if self.state.manifold is None or pal is None:
-            return
-        kind = "landmark" if self.kind == "kinematic" else "phone"
-        self._palette = pal.colours(kind, [r["phone"] for r in self.rows])
+            return {}
+        return pal.colours("landmark" if self.kind == "kinematic" else "phone", [r["phone"] for r in self.rows])
+
+    def _recolour(self) -> None:
+        """The palette changed (not the rows): each swatch takes its label's new colour."""
+        self._palette = self._row_colours()
         with blocked(self.table):
             for i in range(self.table.rowCount()):
                 it = self.table.item(i, 0)
