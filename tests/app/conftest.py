@@ -255,3 +255,13 @@ def _signal_when_ready(cmd, env, *, ready: str, signum, delay: float, timeout: f
 def signal_when_ready():
     """:func:`_signal_when_ready`: a stop signal sent to a started explorer once it says it is ready."""
     return _signal_when_ready
+
+
+@pytest.fixture
+def explore_env(tmp_path) -> dict:
+    """The environment of an explorer started in a subprocess: its state, settings and cache under the
+    test's ``tmp_path``, Qt's logging as set (no QT_LOGGING_RULES inherited)."""
+    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
+    env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"),
+               LIPSPACE_CACHE_DIR=str(tmp_path / "cache"))
+    return env

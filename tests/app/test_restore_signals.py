@@ -4,7 +4,6 @@ left running (before, only kill -9 ended it)."""
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -31,13 +30,6 @@ SCRIPT = textwrap.dedent("""
 """)
 
 
-def _env(tmp_path) -> dict:
-    """The explorer's environment: state and settings under ``tmp_path``, Qt's logging as set."""
-    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
-    env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"))
-    return env
-
-
 @pytest.fixture
 def crashed_run(tmp_path, app_manifold):
     """A manifold file and a state folder holding a dead run's marker and autosave of it."""
@@ -54,9 +46,9 @@ def crashed_run(tmp_path, app_manifold):
 
 @pytest.mark.parametrize("signame", ["SIGINT", "SIGTERM"])
 def test_a_stop_signal_during_the_restore_question_ends_the_explorer(crashed_run, tmp_path, signame,
-                                                                    signal_when_ready):
+                                                                    signal_when_ready, explore_env):
     # 1.5 s after "asking": the question's own event loop is running (and the autosave timer with it)
-    code, _, err, took = signal_when_ready([sys.executable, "-c", SCRIPT, str(crashed_run)], _env(tmp_path),
+    code, _, err, took = signal_when_ready([sys.executable, "-c", SCRIPT, str(crashed_run)], explore_env,
                                            ready="asking", signum=getattr(signal, signame), delay=1.5, timeout=30)
     assert code == 128 + getattr(signal, signame), err
     assert took < 10 and "Traceback" not in err and "KeyboardInterrupt" not in err, err
@@ -89,12 +81,12 @@ BUSY = textwrap.dedent("""
 
 
 def test_a_stop_signal_while_a_task_is_inside_an_engine_step_exits_with_its_code(tmp_path, app_manifold,
-                                                                                 signal_when_ready):
+                                                                                 signal_when_ready, explore_env):
     """Closing the window cancels the loading task, but one inside a long engine step cannot stop at once:
     the process must still end with 128 + signal (before: Qt aborted it, 'QThread: Destroyed while thread
     is still running', a core dump)."""
     m = app_manifold.save(tmp_path / "m.npz")
-    code, _, err, took = signal_when_ready([sys.executable, "-c", BUSY, str(m)], _env(tmp_path), ready="busy",
+    code, _, err, took = signal_when_ready([sys.executable, "-c", BUSY, str(m)], explore_env, ready="busy",
                                            signum=signal.SIGTERM, delay=1.0, timeout=60)
     assert code == 128 + signal.SIGTERM, err
     assert took < 20 and "QThread: Destroyed" not in err and "Traceback" not in err, err

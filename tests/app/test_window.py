@@ -3,7 +3,6 @@ dock collapses, the user guide, the shortcut sheet, About, sessions that keep th
 quiet console (needs a display: Xvfb is started if absent)."""
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 import textwrap
@@ -298,23 +297,15 @@ def _explore_script(when_shown: str) -> str:
     """).format(actions="\n                    ".join(when_shown.strip().splitlines())))
 
 
-def _explore_env(tmp_path) -> dict:
-    """The environment of such a script: state, settings and cache under ``tmp_path``, Qt's logging as set."""
-    env = {k: v for k, v in os.environ.items() if k != "QT_LOGGING_RULES"}
-    env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"),
-               LIPSPACE_CACHE_DIR=str(tmp_path / "cache"))
-    return env
-
-
-def test_started_and_closed_window_leaves_the_console_quiet(manifold_file, tmp_path):
+def test_started_and_closed_window_leaves_the_console_quiet(manifold_file, tmp_path, explore_env):
     r = subprocess.run([sys.executable, "-c", _explore_script("self.close()"), str(manifold_file)],
-                       capture_output=True, text=True, env=_explore_env(tmp_path), timeout=120)
+                       capture_output=True, text=True, env=explore_env, timeout=120)
     assert r.returncode == 0, r.stderr
     assert r.stderr == ""
     assert (tmp_path / "config" / "lipspace.ini").is_file()  # it did open and close a window
 
 
-def test_the_window_is_built_before_scikit_learn_is_imported(tmp_path):
+def test_the_window_is_built_before_scikit_learn_is_imported(explore_env):
     """Building and showing the window imports neither scikit-learn nor SciPy's statistics (1.3 s at start-up)
     nor matplotlib's Qt canvas (0.3-0.5 s with the scree plot; the panel, a tab behind the clusters, makes
     its plot when first raised)."""
@@ -330,13 +321,13 @@ def test_the_window_is_built_before_scikit_learn_is_imported(tmp_path):
                                            "matplotlib.backends.backend_qtagg") if m in sys.modules))
         w.close()
     """)
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_explore_env(tmp_path),
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=explore_env,
                        timeout=120)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip().splitlines()[-1] == "LOADED []", r.stdout
 
 
-def test_a_manifold_is_loaded_and_prepared_for_the_views_without_scikit_learn(manifold_file, tmp_path):
+def test_a_manifold_is_loaded_and_prepared_for_the_views_without_scikit_learn(manifold_file, explore_env):
     """What the explorer's worker does to show a manifold file imports neither scikit-learn nor SciPy's
     statistics (the engine's estimators take scikit-learn's API from engine.estimator): a first window
     shows its manifold 1.2-1.5 s sooner."""
@@ -348,12 +339,12 @@ def test_a_manifold_is_loaded_and_prepared_for_the_views_without_scikit_learn(ma
         print("LOADED", sorted(m for m in ("sklearn", "scipy.stats", "pandas") if m in sys.modules))
     """)
     r = subprocess.run([sys.executable, "-c", code, str(manifold_file)], capture_output=True, text=True,
-                       env=_explore_env(tmp_path), timeout=120)
+                       env=explore_env, timeout=120)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip().splitlines()[-1] == "LOADED []", r.stdout
 
 
-def test_a_window_closed_while_a_task_is_inside_an_engine_step_exits_cleanly(manifold_file, tmp_path):
+def test_a_window_closed_while_a_task_is_inside_an_engine_step_exits_cleanly(manifold_file, tmp_path, explore_env):
     """Closed while a background task works without a progress call for longer than the close waits (the
     method choice's validation on a large corpus did), ``lipspace explore`` exits 0 with its settings
     written, instead of Qt aborting the process ("QThread: Destroyed while thread is still running")."""
@@ -362,7 +353,7 @@ def test_a_window_closed_while_a_task_is_inside_an_engine_step_exits_cleanly(man
                              "self._slow = run_task(lambda progress: time.sleep(7), title='slow', dialog=False)\n"
                              "QtCore.QTimer.singleShot(100, self.close)")
     r = subprocess.run([sys.executable, "-c", script, str(manifold_file)], capture_output=True, text=True,
-                       env=_explore_env(tmp_path), timeout=180)
+                       env=explore_env, timeout=180)
     assert r.returncode == 0, r.stderr
     assert "QThread" not in r.stderr, r.stderr
     assert (tmp_path / "config" / "lipspace.ini").is_file()
@@ -401,7 +392,7 @@ def test_reset_layout_gives_every_dock_its_first_size(qapp, tmp_path):
 
 @pytest.mark.parametrize("signame", ["SIGTERM", "SIGINT"])
 def test_a_stop_signal_closes_the_explorer_and_keeps_its_session(manifold_file, tmp_path, signame,
-                                                                 signal_when_ready):
+                                                                 signal_when_ready, explore_env):
     """`kill` or Ctrl-C in the terminal stops `lipspace explore`: exit 128 + signal within seconds, one
     line and no traceback, and the session autosaved then is offered back by the next start (before,
     the KeyboardInterrupt was raised inside a Qt slot, printed as a traceback and swallowed)."""
@@ -413,7 +404,7 @@ def test_a_stop_signal_closes_the_explorer_and_keeps_its_session(manifold_file, 
     state = tmp_path / "state"
     # 0.5 s after "ready": the event loop is idle, waiting in Qt
     code, _, err, took = signal_when_ready([sys.executable, "-c", script, str(manifold_file)],
-                                           _explore_env(tmp_path), ready="ready", signum=getattr(signal, signame),
+                                           explore_env, ready="ready", signum=getattr(signal, signame),
                                            delay=0.5, timeout=30)
     assert code == 128 + getattr(signal, signame), err
     assert took < 10
