@@ -3,14 +3,11 @@
 Every view observes one :class:`app.models.state.AppState`; the window only wires its docks,
 loading (in a worker thread, progress in the status bar) and layout here; its menus
 (:mod:`app.window.menus`), sessions (:mod:`app.window.sessions`) and File › Export dialogs
-(:mod:`app.window.exports`) are parts of it; :func:`launch` starts it, and stops it on a
-signal (:mod:`app.window.signals`).
+(:mod:`app.window.exports`) are parts of it; :func:`app.launching.launch` starts it, and
+stops it on a signal (:mod:`app.window.signals`).
 """
 from __future__ import annotations
 
-import contextlib
-import signal
-import sys
 from pathlib import Path
 
 from PySide6 import QtCore, QtGui, QtWidgets
@@ -20,10 +17,8 @@ from app.window.conditions import ConditionDocks
 from app.window.exports import ANIMATION_FILTERS, FIGURE_FILTERS, TRAJECTORY_FILTERS, ExportActions
 from app.window.menus import MenuActions
 from app.window.sessions import SessionActions
-from app.window.signals import STOP_SIGNALS, stop_on_signals
 
-__all__ = ["MainWindow", "launch", "stop_on_signals", "ask_restore", "STOP_SIGNALS", "TRAJECTORY_FILTERS",
-           "ANIMATION_FILTERS", "FIGURE_FILTERS"]
+__all__ = ["MainWindow", "TRAJECTORY_FILTERS", "ANIMATION_FILTERS", "FIGURE_FILTERS"]
 
 
 class MainWindow(MenuActions, SessionActions, ExportActions, ConditionDocks, QtWidgets.QMainWindow):
@@ -149,29 +144,32 @@ class MainWindow(MenuActions, SessionActions, ExportActions, ConditionDocks, QtW
         self.setWindowTitle(f"Lipspace — {name}")
 
     def open_source(self, path=None, *, preset: str = "default", kinematics: str = "classic",
-                    session: dict | None = None):
+                    session: dict | None = None, started=None):
         """Load a manifold / corpus file (or the synthetic talker ``preset`` with ``kinematics``,
-        ``"classic"`` or ``"calibrated"``) in a worker; returns the runner."""
-        from app.files.source_loading import check_kinematics, load_source, talker_name
-        from app.user_messages import plain_errors
-        from app.views.task_progress import attach_status_progress
-        from app.workers import run_task
+        ``"classic"`` or ``"calibrated"``) in a worker; returns the runner.
 
-        check_kinematics(kinematics)  # a programming error, before anything is cancelled or started
+        ``started``: a :class:`app.workers.TaskRunner` already loading this source (begun by
+        :func:`app.launching.launch` before the window was built), taken over instead of a new one.
+        """
+        from app.files.source_loading import loading_task
+        from app.views.task_progress import attach_status_progress
+        from app.workers import connect_outcome, run_task
+
+        what, task = loading_task(path, preset, kinematics)  # a wrong kinematics: before anything is cancelled
         if self._runner is not None and self._runner.state == "running":
             self._runner.cancel()  # a newer choice replaces a load still running
         self._pending_session = session
-        what = Path(path).name if path else f"the {talker_name(preset, kinematics)}"
         self.statusBar().showMessage(f"loading {what}…")
         # no modal dialog: the window stays usable; progress and Cancel sit in the status bar
-        task = plain_errors(lambda progress: load_source(path, preset, progress, kinematics=kinematics,
-                                                         speech_audio="background"),
-                            doing=f"open {what}", path=path)
-        self._runner = run_task(task, parent=self,
-                                title=f"Loading {what}", on_done=self._on_loaded, on_error=self._on_load_error,
-                                on_cancel=lambda: self.statusBar().showMessage("loading cancelled", 5000),
-                                dialog=False)
+        handlers = dict(on_done=self._on_loaded, on_error=self._on_load_error,
+                        on_cancel=lambda: self.statusBar().showMessage("loading cancelled", 5000))
+        if started is None:
+            self._runner = run_task(task, parent=self, title=f"Loading {what}", dialog=False, **handlers)
+        else:
+            self._runner = connect_outcome(started, parent=self, **handlers)
         attach_status_progress(self, self._runner, f"loading {what}")
+        if started is not None:  # what it reported while the window was built (its outcome too): before the first paint
+            QtCore.QCoreApplication.sendPostedEvents(started)
         return self._runner
 
     def _on_loaded(self, result):
@@ -297,86 +295,3 @@ class MainWindow(MenuActions, SessionActions, ExportActions, ConditionDocks, QtW
         for view in (self.manifold_view, self.lip_view, self.editor, self.clusters, self.scree):
             view.close_view()
         super().closeEvent(event)
-
-
-def ask_restore(recovery, parent=None) -> str:
-    """Ask whether to reopen a crashed run's autosave: "restore", "discard" or "later"."""
-    box = QtWidgets.QMessageBox(parent)
-    box.setIcon(QtWidgets.QMessageBox.Icon.Question)
-    box.setWindowTitle("Lipspace")
-    box.setText(recovery.describe())
-    box.setInformativeText("Restore that session now?")
-    yes = box.addButton("Restore", QtWidgets.QMessageBox.ButtonRole.AcceptRole)
-    no = box.addButton("Discard", QtWidgets.QMessageBox.ButtonRole.DestructiveRole)
-    box.addButton("Not now", QtWidgets.QMessageBox.ButtonRole.RejectRole)
-    box.setDefaultButton(yes)
-    box.exec()
-    clicked = box.clickedButton()
-    return "restore" if clicked is yes else "discard" if clicked is no else "later"
-
-
-def launch(path=None, preset: str = "default", session: dict | None = None, restore: bool | None = None, *,
-           kinematics: str = "classic", notes=()) -> int:
-    """Open the explorer on ``path`` (or the synthetic talker ``preset`` with ``kinematics``)
-    and run the event loop; a session's (or a restored autosave's) source overrides them.
-
-    ``restore`` answers the autosave question after an abnormal exit (None: ask in a
-    dialog); see :mod:`app.files.autosave`. Damaged state files (autosave markers and sessions,
-    the window settings) are moved aside and said, on stderr and in one dialog, with
-    ``notes`` (e.g. a --session file that could not be opened); the window opens anyway.
-    """
-    from app.files.autosave import Autosaver, resolve_recovery
-    from app.files.session import SessionError, source_kinematics
-    from app.qt_app import make_application
-    from app.user_messages import user_message
-
-    app = make_application(sys.argv[:1])
-    autosaver = Autosaver()
-    try:
-        recovery = autosaver.begin()
-    except OSError as exc:
-        print(f"lipspace explore: warning: autosave is off ({autosaver.directory}: {exc})", file=sys.stderr)
-        autosaver, recovery = None, None
-    win = MainWindow(autosave=autosaver)
-    signals = contextlib.ExitStack()  # from here on (the restore question too) a stop signal closes the window
-    stopped = signals.enter_context(stop_on_signals(app, win))
-    win.show()
-    said = list(notes)
-    for note in (autosaver.set_aside if autosaver is not None else []) + win.settings.set_aside:
-        print(f"lipspace explore: warning: {note}", file=sys.stderr)
-        said.append(note)
-    if said:
-        win.show_error("\n\n".join(said))
-    if autosaver is not None and session is None:
-        try:
-            restored = resolve_recovery(autosaver, recovery, restore=restore, ask=lambda r: ask_restore(r, win))
-        except SessionError as exc:
-            print(f"lipspace explore: warning: {exc}", file=sys.stderr)
-            win.show_error(user_message(exc, doing="restore the autosaved session"))  # not modal: the window runs
-            restored = None
-        if restored is not None:
-            session, path = restored, None
-    if session is not None and path is None and session.get("source", {}).get("path"):
-        path = session["source"]["path"]
-        preset = session["source"].get("preset", preset)
-        kinematics = "classic"
-    elif session is not None and path is None:
-        preset = session.get("source", {}).get("preset", preset)
-        kinematics = source_kinematics(session)
-    code = 0
-    if not stopped:  # else a signal came during the restore question: the window is closed already
-        win.open_source(path, preset=preset, kinematics=kinematics, session=session)
-        code = int(app.exec())
-    signals.close()
-    if stopped:
-        # not a chosen Quit: no finish(), so a saved session (or a restored one not yet saved
-        # again) stays and the next start offers it back; a marker without one is pruned then
-        if autosaver is not None and autosaver.session.is_file():
-            kept = "the session was autosaved and is offered back at the next start"
-        else:
-            kept = "nothing was autosaved yet" if autosaver is not None else "autosave is off"
-        print(f"lipspace explore: stopped by {stopped[-1]}; the window was closed ({kept}).", file=sys.stderr)
-        return 128 + int(getattr(signal, stopped[-1]))
-    if autosaver is not None:
-        autosaver.finish()  # a clean exit: nothing to offer next time
-    return code

@@ -24,7 +24,8 @@ from app.user_messages import UserError
 from engine.progress import Cancelled
 from engine.recordings.corpus import CorpusWarning
 
-__all__ = ["Worker", "TaskRunner", "run_task", "run_blocking", "cancel_all", "running", "WarningRouter", "WARNINGS"]
+__all__ = ["Worker", "TaskRunner", "run_task", "start_task", "connect_outcome", "run_blocking", "cancel_all", "running",
+           "WarningRouter", "WARNINGS"]
 
 
 class WarningRouter:
@@ -168,14 +169,18 @@ class Worker(QtCore.QObject):
 class TaskRunner(QtCore.QObject):
     """Owns one worker thread and (optionally) a progress dialog for it.
 
-    Signals ``finished(result)``, ``failed(message, traceback)``, ``cancelled()`` are
-    emitted on the GUI thread. Keep a reference until one of them fires.
+    Signals ``finished(result)``, ``failed(message, traceback)``, ``cancelled()`` and
+    ``progressed(stage, done, total)`` are emitted on the GUI thread. Keep a reference until one
+    of the first three fires. Progress reported before a view connects to ``progressed`` (a task
+    started before its window, :func:`start_task`) reaches it still: the worker's reports are
+    queued to the runner from the start and relayed when the GUI thread's event loop runs.
     """
 
     finished = QtCore.Signal(object)
     failed = QtCore.Signal(str, str)
     cancelled = QtCore.Signal()
     warned = QtCore.Signal(str)
+    progressed = QtCore.Signal(str, int, int)
 
     def __init__(self, task, *, parent=None, title: str = "Working", dialog: bool = True):
         super().__init__(parent)
@@ -191,6 +196,7 @@ class TaskRunner(QtCore.QObject):
         self.worker.cancelled.connect(self._on_cancelled)
         self.warnings: list[str] = []
         self.worker.warned.connect(self._on_warned)
+        self.worker.progress.connect(self._relay_progress)
         self.dialog = None
         self._progress = (title, 0, 0)  # the latest (stage, done, total), shown once the dialog opens
         from app.models.task_status import ProgressEstimate
@@ -205,7 +211,6 @@ class TaskRunner(QtCore.QObject):
             self.dialog.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
             self.dialog.canceled.connect(self.cancel)
             self.dialog.reset()  # Qt's own show-after-minimumDuration timer is never started: _show_dialog
-            self.worker.progress.connect(self._on_progress)
             self._show_timer = QtCore.QTimer(self)
             self._show_timer.setSingleShot(True)
             self._show_timer.setInterval(DIALOG_DELAY_MS)
@@ -214,9 +219,15 @@ class TaskRunner(QtCore.QObject):
             self._tick.setInterval(1000)
             self._tick.timeout.connect(lambda: self._on_progress(*self._progress))
 
-    def start(self) -> TaskRunner:
+    def start(self, *, after_events: bool = False) -> TaskRunner:
+        """Start the worker thread; ``after_events``: at the GUI event loop's next turn, once the events
+        waiting now (a redraw of what was just shown) are handled. Until then the task counts as
+        running; cancelled before it starts, it ends cancelled at its first progress report."""
         WARNINGS.install()
-        self.thread.start()
+        if after_events:
+            QtCore.QTimer.singleShot(0, self, self.thread.start)
+        else:
+            self.thread.start()
         if self.dialog is not None:
             self._show_timer.start()
         return self
@@ -225,6 +236,10 @@ class TaskRunner(QtCore.QObject):
         self.worker.cancel()
         if self.dialog is not None:
             self.dialog.setLabelText("Cancelling…")
+
+    def _relay_progress(self, stage, done, total):
+        self._on_progress(stage, done, total)
+        self.progressed.emit(stage, done, total)
 
     def _on_progress(self, stage, done, total):
         """Keep the latest progress; the dialog shows it once it is open. A modal QProgressDialog's
@@ -293,29 +308,60 @@ class TaskRunner(QtCore.QObject):
 
 
 def run_task(task, *, parent=None, title: str = "Working", on_done=None, on_error=None, on_cancel=None,
-             dialog: bool = True) -> TaskRunner:
+             dialog: bool = True, after_events: bool = False) -> TaskRunner:
     """Start ``task(progress)`` in a worker thread with a progress dialog; returns the runner.
 
     ``on_done(result)``, ``on_error(message, traceback)`` and ``on_cancel()`` run on the
-    GUI thread. Without ``on_error`` a failure is shown in a message box.
+    GUI thread. Without ``on_error`` a failure is shown in a message box. ``after_events``: the
+    thread starts at the event loop's next turn (:meth:`TaskRunner.start`).
     """
-    runner = TaskRunner(task, parent=parent, title=title, dialog=dialog)
-    if on_done is not None:
-        runner.finished.connect(on_done)
-    if on_error is not None:
-        runner.failed.connect(on_error)
-    else:
-        runner.failed.connect(lambda msg, _tb: QtWidgets.QMessageBox.critical(
-            parent if isinstance(parent, QtWidgets.QWidget) else None, "Lipspace", msg))
-    if on_cancel is not None:
-        runner.cancelled.connect(on_cancel)
+    runner = _kept(TaskRunner(task, parent=parent, title=title, dialog=dialog))
+    connect_outcome(runner, parent=parent, on_done=on_done, on_error=on_error, on_cancel=on_cancel)
+    return runner.start(after_events=after_events)
+
+
+def start_task(task, *, title: str = "Working") -> TaskRunner:
+    """Start ``task(progress)`` in a worker thread now, before the window that shows its outcome exists
+    (no dialog); that window takes it over with :func:`connect_outcome`."""
+    return _kept(TaskRunner(task, title=title, dialog=False)).start()
+
+
+def connect_outcome(runner: TaskRunner, *, parent=None, on_done=None, on_error=None, on_cancel=None) -> TaskRunner:
+    """Send ``runner``'s outcome to ``on_done(result)`` / ``on_error(message, traceback)`` / ``on_cancel()``
+    on the GUI thread (without ``on_error`` a failure is shown in a message box), and its data warnings to
+    ``parent``'s status bar when ``parent`` is a main window. A runner started before its window
+    (:func:`start_task`) that has ended already sends its outcome again at the event loop's next turn,
+    to everything connected by then."""
+    if on_error is None:
+        def on_error(msg, _tb):
+            QtWidgets.QMessageBox.critical(parent if isinstance(parent, QtWidgets.QWidget) else None, "Lipspace", msg)
+    for signal, handler in ((runner.finished, on_done), (runner.failed, on_error), (runner.cancelled, on_cancel)):
+        if handler is not None:
+            signal.connect(handler)
     if isinstance(parent, QtWidgets.QMainWindow):
-        runner.warned.connect(lambda msg: parent.statusBar().showMessage(f"warning: {msg}", 15000))
-    # keep the runner alive while it runs
+        def warn(msg):
+            parent.statusBar().showMessage(f"warning: {msg}", 15000)
+
+        runner.warned.connect(warn)
+        for msg in runner.warnings[-1:]:  # warned before the window took the task over
+            warn(msg)
+    if parent is not None and runner.parent() is None:
+        runner.setParent(parent)
+    if runner.state == "done":
+        QtCore.QTimer.singleShot(0, lambda: runner.finished.emit(runner.result))
+    elif runner.state == "failed":
+        QtCore.QTimer.singleShot(0, lambda: runner.failed.emit(*runner.error))
+    elif runner.state == "cancelled":
+        QtCore.QTimer.singleShot(0, runner.cancelled.emit)
+    return runner
+
+
+def _kept(runner: TaskRunner) -> TaskRunner:
+    """Keep ``runner`` alive while it runs (a Qt object without a parent would be collected)."""
     _RUNNING.add(runner)
     for sig in (runner.finished, runner.failed, runner.cancelled):
         sig.connect(lambda *_a, r=runner: _RUNNING.discard(r))
-    return runner.start()
+    return runner
 
 
 _RUNNING: set = set()

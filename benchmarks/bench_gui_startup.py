@@ -4,7 +4,7 @@ Usage: python benchmarks/bench_gui_startup.py [--cold 1] [--warm 3] [--preset de
        [--manifold FILE|talker ...]
 
 Each run is a fresh process executing what ``lipspace explore`` / ``make run`` executes
-(``app.main_window.launch`` on the synthetic talker, or on a manifold file given with
+(``app.launching.launch`` on the synthetic talker, or on a manifold file given with
 ``--manifold``: any size, blocked corpora included; ``talker`` names the default talker,
 so several can be measured side by side, alternating), under an X server (re-runs itself
 under ``xvfb-run`` without one; software OpenGL), with its own autosave state dir.
@@ -118,7 +118,7 @@ def child(t0: float, preset: str, path=None) -> None:
     timer.setInterval(20)
     timer.timeout.connect(tick)
     timer.start()
-    from app.main_window import launch
+    from app.launching import launch
 
     launch(path, preset=preset, restore=False)
     print("RESULT " + json.dumps(out), flush=True)

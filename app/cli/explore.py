@@ -100,7 +100,7 @@ def run(args) -> int:
         except SessionError as exc:  # the user's file stays where it is; the window opens without it
             notes.append(f"--session {args.session} was not opened: {exc}")
             print(f"lipspace explore: warning: {notes[-1]}", file=sys.stderr)
-    from app.main_window import launch
+    from app.launching import launch
 
     code = launch(args.file, preset=args.preset, session=session, restore=args.restore, kinematics=args.kinematics,
                   notes=notes)

@@ -25,8 +25,8 @@ from pathlib import Path
 from app.files.cache import CACHE_DIR_ENV, cache_dir
 
 __all__ = ["PRESETS", "KINEMATICS_CHOICES", "KINEMATICS_LABELS", "CACHE_DIR_ENV", "cache_dir", "cached_manifold_path",
-           "check_kinematics", "talker_name", "prune_talker_cache", "source_kind", "load_source", "read_corpus_file",
-           "read_recording", "ANALYSIS_RATE", "wait_for_background"]
+           "check_kinematics", "talker_name", "prune_talker_cache", "source_kind", "load_source", "loading_task",
+           "read_corpus_file", "read_recording", "ANALYSIS_RATE", "wait_for_background"]
 
 #: synthetic talker presets (engine.talker.synthetic)
 PRESETS = ("small", "default", "paper")
@@ -163,6 +163,19 @@ def load_source(path=None, preset: str = "default", progress=None, *, kinematics
     if later is not None:
         later.start()
     return m, src
+
+
+def loading_task(path=None, preset: str = "default", kinematics: str = "classic"):
+    """``(what, task)``: the window's name for the source (``m.npz``, ``the synthetic talker (default)``) and
+    the worker task ``task(progress)`` that loads it (:func:`load_source` with the speech audio made in the
+    background; its failures are plain-language :class:`app.user_messages.UserError`)."""
+    from app.user_messages import plain_errors
+
+    check_kinematics(kinematics)
+    what = Path(path).name if path else f"the {talker_name(preset, kinematics)}"
+    task = plain_errors(lambda progress: load_source(path, preset, progress, kinematics=kinematics,
+                                                     speech_audio="background"), doing=f"open {what}", path=path)
+    return what, task
 
 
 _BACKGROUND: list = []

@@ -62,7 +62,7 @@ class TaskProgress(QtWidgets.QWidget):
         self._last = (title or "starting", 0, 0)
         self.estimate = ProgressEstimate()
         self.estimate.report(title or "starting", 0, 0)
-        runner.worker.progress.connect(self._on_progress)
+        runner.progressed.connect(self._on_progress)
         for sig in (runner.finished, runner.failed, runner.cancelled):
             sig.connect(self._on_end)
         self.cancel_btn.setEnabled(True)
@@ -104,7 +104,7 @@ class TaskProgress(QtWidgets.QWidget):
 
     def _disconnect(self) -> None:
         r = self.runner
-        for sig, slot in ((r.worker.progress, self._on_progress), (r.finished, self._on_end),
+        for sig, slot in ((r.progressed, self._on_progress), (r.finished, self._on_end),
                           (r.failed, self._on_end), (r.cancelled, self._on_end)):
             try:
                 sig.disconnect(slot)

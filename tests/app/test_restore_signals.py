@@ -16,7 +16,7 @@ pytestmark = pytest.mark.gui
 
 SCRIPT = textwrap.dedent("""
     import sys
-    import app.main_window as mw
+    import app.launching as mw
 
     ask = mw.ask_restore
 

@@ -58,10 +58,10 @@ def test_bad_file_is_a_user_error(monkeypatch, tmp_path, fake_display):
         run_explore([str(junk)])
     bad_session = tmp_path / "s.json"
     bad_session.write_text("{}")
-    import app.main_window
+    import app.launching
 
     opened = []  # a session that cannot be opened is said, and the window opens without it
-    monkeypatch.setattr(app.main_window, "launch", lambda *a, **k: opened.append((a, k)) or 0)
+    monkeypatch.setattr(app.launching, "launch", lambda *a, **k: opened.append((a, k)) or 0)
     assert run_explore(["--session", str(bad_session)]) == 0
     (args, kw), = opened
     assert kw["session"] is None and len(kw["notes"]) == 1
@@ -117,7 +117,7 @@ def test_lipspace_alone_is_explore(no_display, capsys):
 def test_kinematics_argument_reaches_the_window_and_is_refused_with_a_file(monkeypatch, tmp_path, small_manifold):
     """``lipspace explore --kinematics calibrated`` opens the calibrated synthetic talker; with a
     file it is refused with the reason before anything is opened."""
-    import app.main_window
+    import app.launching
 
     p = argparse.ArgumentParser(prog="lipspace explore")
     explore.add_arguments(p)
@@ -129,7 +129,7 @@ def test_kinematics_argument_reaches_the_window_and_is_refused_with_a_file(monke
     monkeypatch.setenv("DISPLAY", ":0")  # inputs are checked before any window is opened
     monkeypatch.setattr("app.display_check.display_problem", lambda *a, **k: None)
     opened = []
-    monkeypatch.setattr(app.main_window, "launch", lambda *a, **k: opened.append((a, k)) or 0)
+    monkeypatch.setattr(app.launching, "launch", lambda *a, **k: opened.append((a, k)) or 0)
     assert run_explore(["--preset", "small", "--kinematics", "calibrated"]) == 0
     assert opened == [((None,), {"preset": "small", "session": None, "restore": None, "kinematics": "calibrated",
                                  "notes": []})]

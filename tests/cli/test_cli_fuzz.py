@@ -416,9 +416,9 @@ def headless_explore(monkeypatch):
     import types
 
     launched = []
-    fake = types.ModuleType("app.main_window")
+    fake = types.ModuleType("app.launching")
     fake.launch = lambda path, **kw: launched.append((path, kw)) or 0
-    monkeypatch.setitem(sys.modules, "app.main_window", fake)
+    monkeypatch.setitem(sys.modules, "app.launching", fake)
     monkeypatch.setattr("app.cli.explore.has_display", lambda *a, **k: True)
     return launched
 
@@ -483,9 +483,9 @@ import io, json, os, resource, signal, sys, time, types, traceback
 cap, budget, cases = float(sys.argv[1]), float(sys.argv[2]), json.loads(sys.argv[3])
 resource.setrlimit(resource.RLIMIT_AS, (int(cap), int(cap)))
 os.environ.pop("DISPLAY", None)
-fake = types.ModuleType("app.main_window")
+fake = types.ModuleType("app.launching")
 fake.launch = lambda path, **kw: 0
-sys.modules["app.main_window"] = fake
+sys.modules["app.launching"] = fake
 import app.cli.explore
 app.cli.explore.has_display = lambda *a, **k: True
 from app.cli import main

@@ -91,10 +91,13 @@ class SignalsControl:
             self.signals = Signals(m.corpus_)
             d = None
         self.signals.panel.changed.connect(self._on_channels_changed)
-        self._find_gestures(restore=d)
+        # after the window has drawn the new manifold: the finder's imports (SciPy's signal package, half a
+        # second) would otherwise share the interpreter with that first frame
+        self._find_gestures(restore=d, after_events=True)
 
-    def _find_gestures(self, restore=None) -> None:
-        """Find the gestures of the chosen track over the corpus in a worker; then restore a session's edits."""
+    def _find_gestures(self, restore=None, *, after_events: bool = False) -> None:
+        """Find the gestures of the chosen track over the corpus in a worker (started at the event loop's next
+        turn with ``after_events``); then restore a session's edits."""
         from app.user_messages import plain_errors
         from app.workers import run_task
 
@@ -124,6 +127,7 @@ class SignalsControl:
 
         self._finder = run_task(plain_errors(sig.find, doing=f"find the gestures of {sig.gesture_track}"),
                                 parent=self, title="Finding gestures", on_done=done, dialog=False,
+                                after_events=after_events,
                                 on_error=lambda msg, _tb: self._show_signals(tier_message=msg))
 
     def _on_channels_changed(self, why: str) -> None:
