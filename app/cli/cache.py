@@ -3,7 +3,7 @@ from __future__ import annotations
 
 _KINDS = (("corpus", "synthetic talker corpora"), ("audio", "their speech audio"),
           ("manifold", "manifolds fitted to them"), ("method choice", "synthesis methods measured"),
-          ("partial", "unfinished writes"))
+          ("sound", "the explorer's sound"), ("density", "densities of drawn clouds"), ("partial", "unfinished writes"))
 
 
 def add_arguments(p):

@@ -4,7 +4,8 @@ The cache holds the synthetic talker's generated corpora (``synthetic-<preset>-<
 with their speech audio in ``synthetic-<preset>-<key>-audio/``), the manifolds
 fitted to them (``manifolds/synthetic-<preset>-...npz``), each corpus's measured
 choice of synthesis method (``method-choice/<data key>-<code key>.json``,
-:mod:`engine.synthesis.method_choice`) and the explorer's sound (``sound/recording-<key>/``,
+:mod:`engine.synthesis.method_choice`), the densities of the point clouds the explorer drew
+(``density/<key>.npy``, :mod:`app.files.density_cache`) and the explorer's sound (``sound/recording-<key>/``,
 a recording's extracted audio; ``sound/speech-<key>.wav``, synthesised text spoken:
 :mod:`app.files.sound`). Every entry's name carries a
 key made from the code and parameters that produced it (generator, fitting
@@ -38,6 +39,8 @@ _ENTRY = re.compile(r"^(?:synthetic-(?P<preset>[A-Za-z0-9_]+)-.+?(?:\.npz|-audio
 _CHOICE = re.compile(r"^[0-9a-f]{16}-[0-9a-f]{16}\.json$")
 #: the explorer's sound (app.files.sound): a recording's extracted audio, synthesised speech
 _SOUND = re.compile(r"^(?:recording-[0-9a-f]{16}|speech-[0-9a-f]{16}\.wav)$")
+#: a drawn cloud's k-NN densities (app.files.density_cache)
+_DENSITY = re.compile(r"^[0-9a-f]{16}\.npy$")
 
 #: environment variable that moves the cache folder
 CACHE_DIR_ENV = "LIPSPACE_CACHE_DIR"
@@ -52,9 +55,9 @@ def cache_dir() -> Path:
 
 @dataclass(frozen=True)
 class CacheEntry:
-    """One cached item: its path, kind (``"corpus"``, ``"audio"``, ``"manifold"``,
-    ``"partial"``), synthetic talker preset ("" if unknown), size in bytes, and whether
-    Lipspace wrote it (``owned``; only owned entries are ever deleted)."""
+    """One cached item: its path, kind (``"corpus"``, ``"audio"``, ``"manifold"``, ``"method choice"``,
+    ``"sound"``, ``"density"``, ``"partial"``), synthetic talker preset ("" if unknown), size in bytes,
+    and whether Lipspace wrote it (``owned``; only owned entries are ever deleted)."""
 
     path: Path
     kind: str
@@ -96,10 +99,11 @@ def entries(folder=None) -> list[CacheEntry]:
     if sub.is_dir():
         out += [CacheEntry(p, "method choice", "", _size(p), _owned(p, "method choice", root)) for p in sub.iterdir()
                 if _CHOICE.match(p.name) and p.is_file() and not p.is_symlink()]
-    sub = root / "sound"
-    if sub.is_dir():
-        out += [CacheEntry(p, "sound", "", _size(p), _owned(p, "sound", root)) for p in sub.iterdir()
-                if _SOUND.match(p.name) and not p.is_symlink()]
+    for name, kind, pattern in (("sound", "sound", _SOUND), ("density", "density", _DENSITY)):
+        sub = root / name
+        if sub.is_dir():
+            out += [CacheEntry(p, kind, "", _size(p), _owned(p, kind, root)) for p in sub.iterdir()
+                    if pattern.match(p.name) and not p.is_symlink() and (kind == "sound" or p.is_file())]
     for sub, kind in ((root, "corpus"), (root / "manifolds", "manifold")):
         if not sub.is_dir():
             continue
@@ -191,7 +195,7 @@ def clear(folder=None) -> list[CacheEntry]:
         _remove(e.path, root)
         if not e.path.exists():
             gone.append(e)
-    for name in ("manifolds", "method-choice", "sound", MARKS):
+    for name in ("manifolds", "method-choice", "sound", "density", MARKS):
         sub = root / name
         if sub.is_dir() and not any(sub.iterdir()):
             sub.rmdir()

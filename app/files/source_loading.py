@@ -133,7 +133,8 @@ def load_source(path=None, preset: str = "default", progress=None, *, kinematics
     prepare_views : bool, default=True
         Also compute what the views derive from the manifold (density, phone of every
         frame, phone clusters: :func:`app.models.state.prepare_derived`), here in the worker, so
-        that showing the manifold costs the window's thread little.
+        that showing the manifold costs the window's thread little; the density is read from the
+        cache when this cloud was shown before (:mod:`app.files.density_cache`).
     speech_audio : {"now", "background"}, default="now"
         When the synthetic talker's speech audio is made (espeak-ng; only with ``path`` None):
         before returning, or in a background thread started just before returning (the
@@ -157,9 +158,10 @@ def load_source(path=None, preset: str = "default", progress=None, *, kinematics
     later = _Later() if speech_audio == "background" else None
     m, src = _load_manifold(path, preset, progress, use_cache, kinematics, later)
     if prepare_views:
+        from app.files.density_cache import cached_knn_density
         from app.models.state import prepare_derived
 
-        prepare_derived(m, progress)
+        prepare_derived(m, progress, density=cached_knn_density)  # the density as stored when last shown
     if later is not None:
         later.start()
     return m, src

@@ -17,13 +17,16 @@ __all__ = ["corpus_palette", "knn_density", "frame_phones", "frame_phone_codes",
 PREPARED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def prepare_derived(manifold, progress=None) -> None:
+def prepare_derived(manifold, progress=None, *, density=None) -> None:
     """Compute what the views derive from ``manifold`` ahead of showing it (Qt-free, any thread).
 
     The level of detail of the drawn cloud (:func:`app.models.lod.cloud_detail`: every frame up to
     ``app.models.lod.DEFAULT_MAX_POINTS``, groups of frames above), the k-NN density of every frame
-    (only while every frame is drawn: a grouped cloud carries its own density), the phone of every frame, the phone
-    clusters and the state graph's cached forms for hemisphere and path queries are
+    (only while every frame is drawn: a grouped cloud carries its own density; ``density(Y)``
+    computes it, :func:`knn_density` by default: the loader passes one that keeps it in the cache
+    folder for the next time the cloud is shown, :func:`app.files.density_cache.cached_knn_density`),
+    the phone of every frame, the phone clusters and the state graph's cached forms for hemisphere
+    and path queries are
     computed here, e.g. in the loading worker, and picked up by :meth:`AppState.set_manifold`,
     so that showing a manifold does not freeze the window. Reports stage ``"preparing the views"``.
     A corpus whose phone clusters cannot be fitted is left for the clusters panel to
@@ -37,7 +40,7 @@ def prepare_derived(manifold, progress=None) -> None:
     out = {"cloud": cloud_detail(manifold.Fy_, manifold.states_.labels_)}
     report(progress, stage, 1, 4)
     if out["cloud"].whole:
-        out["density"] = knn_density(manifold.Fy_)
+        out["density"] = (density or knn_density)(manifold.Fy_)
     # the state graph's csr forms, so the first click's hemisphere does not build them
     manifold.states_.prepare_queries()
     report(progress, stage, 2, 4)
