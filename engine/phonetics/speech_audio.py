@@ -191,7 +191,7 @@ def phone_mnemonics(utterance, spans=None) -> list[str]:
     -------
     list of str, one per phone of ``utterance.phones``
     """
-    from engine.phonetics.phones import _cmu
+    from engine.phonetics.phones import _cmu_entry
 
     words = iter(word_spans(utterance) if spans is None else spans)
     out: list[str] = []
@@ -205,7 +205,7 @@ def phone_mnemonics(utterance, spans=None) -> list[str]:
             w = next(words)[0]
             pron = pronounce(w)
             word_left = len(pron)
-            marks = _stress_marks(pron, _cmu().get(w, ""))
+            marks = _stress_marks(pron, _cmu_entry(w) or "")
         out.append(marks[len(marks) - word_left] + espeak_phones.ESPEAK_PHONE[p.label])
         word_left -= 1
     return out

@@ -131,3 +131,20 @@ def test_word_list_phone_frequencies_resemble_table_1():
     paper = np.array(list(PAPER_COUNTS.values()), float)
     assert (ours > 0).all()
     assert np.corrcoef(ours, paper)[0, 1] > 0.9
+
+
+def test_the_dictionary_lookup_gives_what_a_full_parse_keeps_for_every_word():
+    """The binary search over the dictionary's lines (a handful out of order) finds, for each of its words, the
+    first pronunciation a full parse keeps; variant marks, other cases and absent words find nothing."""
+    import re
+
+    from engine.phonetics.phones import _cmu_entry, _cmu_text
+
+    full: dict[str, str] = {}
+    for w, pron in re.findall(r"^([^ (\n]+) ([^#\n]+)", _cmu_text(), flags=re.M):
+        full.setdefault(w, pron)
+    assert len(full) > 120_000
+    wrong = [w for w in full if _cmu_entry(w) != full[w]]
+    assert wrong == []
+    for absent in ("", "a(2)", "Bob", "zzqx", "bob meets", "#"):
+        assert _cmu_entry(absent) is None, absent
