@@ -34,6 +34,14 @@ def app_manifold(small_manifold):
     return small_manifold
 
 
+@pytest.fixture(scope="session")
+def manifold_file(app_manifold, tmp_path_factory):
+    """:func:`app_manifold` saved as a manifold file, for the explorer opened on a file."""
+    path = tmp_path_factory.mktemp("manifold-file") / "small.npz"
+    app_manifold.save(path)
+    return path
+
+
 @contextlib.contextmanager
 def shown_main_window(qapp, manifold, size=(1300, 850)):
     """The explorer window on ``manifold`` (the small preset), shown at ``size``; closed on exit."""

@@ -13,13 +13,6 @@ import pytest
 pytestmark = pytest.mark.gui
 
 
-@pytest.fixture(scope="module")
-def manifold_file(app_manifold, tmp_path_factory):
-    path = tmp_path_factory.mktemp("early") / "m.npz"
-    app_manifold.save(path)
-    return path
-
-
 def _ended(task):
     """``task`` that sets ``ended`` as it returns or raises, and ``ended``: a test waits for it without running
     the GUI thread's event loop (as while a window is being built), so the task's outcome stays queued."""

@@ -13,13 +13,6 @@ import pytest
 pytestmark = pytest.mark.gui
 
 
-@pytest.fixture(scope="module")
-def manifold_file(app_manifold, tmp_path_factory):
-    path = tmp_path_factory.mktemp("window") / "small.npz"
-    app_manifold.save(path)
-    return path
-
-
 def _settings(path):
     from PySide6 import QtCore
 
