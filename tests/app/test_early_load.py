@@ -172,3 +172,33 @@ def test_the_gestures_of_a_new_manifold_are_found_after_the_event_loop_turns(qap
         assert win.state.gestures is not None and win.state.gestures.times.shape[0] > 0
     finally:
         win.close()
+
+
+def test_a_load_that_ended_while_the_window_was_built_is_shown_at_once(manifold_file, explore_env):
+    """A load done before the window takes it over reaches the window inside open_source, before the event loop
+    (and the window's first paint) runs."""
+    script = textwrap.dedent("""
+        import sys, time
+        from PySide6 import QtCore
+        import app.main_window as mw
+
+        init, open_source = mw.MainWindow.__init__, mw.MainWindow.open_source
+
+        def slow_init(self, *a, **k):
+            init(self, *a, **k)
+            time.sleep(3)  # the small file's load ends meanwhile
+
+        def open_and_report(self, *a, **k):
+            runner = open_source(self, *a, **k)
+            print("SHOWN", self.state.manifold is not None, runner.state, flush=True)
+            QtCore.QTimer.singleShot(100, self.close)
+            return runner
+
+        mw.MainWindow.__init__, mw.MainWindow.open_source = slow_init, open_and_report
+        from app.cli import main
+        sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
+    """)
+    r = subprocess.run([sys.executable, "-c", script, str(manifold_file)], capture_output=True, text=True,
+                       env=explore_env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "SHOWN True done" in r.stdout, r.stdout
