@@ -22,7 +22,8 @@ def main() -> int:
             return 1
     from PySide6 import QtCore, QtWidgets
 
-    from app.main_window import MainWindow, launch
+    from app.launching import launch
+    from app.main_window import MainWindow
 
     path = sys.argv[1] if len(sys.argv) > 1 else None
     t0, state = time.monotonic(), {"ok": False}
