@@ -223,9 +223,7 @@ class MainWindow(MenuActions, SessionActions, ExportActions, ConditionDocks, QtW
     # ------------------------------------------------------------------ misc
     def reset_cameras(self):
         self.manifold_view.standard_view("default")  # both halves of the manifold, the plane slightly from above
-        self.lip_view.plotter.view_xy()
-        self.lip_view.plotter.reset_camera()
-        self.lip_view.plotter.render()
+        self.lip_view.reset_camera()
 
     #: the docks' first sizes (pixels), given at construction and again by View > Reset layout:
     #: (docks, their sizes, the direction measured)

@@ -151,19 +151,28 @@ class LipView(QtWidgets.QWidget):
         p.camera_set = True
         self.refresh()
 
+    def reset_camera(self) -> None:
+        """Look at the lips from the front again, framed as when they were first drawn."""
+        if self.main is None:
+            return
+        self.plotter.view_xy(render=False)
+        self._frame_camera()
+        self.renderer.request()
+
     def _frame_camera(self) -> None:
         """Frame the lips shown (one or both) with room for what stands beside the sensors: their labels,
         the aperture's value, a profile's face direction."""
         handles = [h for h in (self.main, self.second) if h is not None and h.visible]
         if not handles:
-            self.plotter.reset_camera(render=False)
+            self.plotter.renderer.reset_camera(render=False)
             return
         P = np.concatenate([np.asarray(h.points, np.float64) + np.asarray(h.offset, np.float64) for h in handles])
         lo, hi = P.min(axis=0), P.max(axis=0)
         ext = float(np.ptp(P[:, :2], axis=0).max()) or 1.0
         pad = (0.12 if self.drawing.kind == "surface" else 0.55) * ext
-        self.plotter.reset_camera(render=False, bounds=[lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad, lo[2],
-                                                        hi[2]])
+        # the renderer's, not the plotter's: pyvista's Plotter.reset_camera renders whatever ``render`` says
+        self.plotter.renderer.reset_camera(render=False, bounds=[lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad,
+                                                                 lo[2], hi[2]])
 
     def _points(self, row) -> np.ndarray:
         """One frame row (C,) as points (V, 3) in the talker's view coordinates (engine.recordings.orientation)."""

@@ -282,8 +282,14 @@ def test_window_reset_camera_and_export_dialog(qapp, qtbot, app_manifold, tmp_pa
         qapp.processEvents()
         view = w.manifold_view
         cam = view.plotter.renderer.GetActiveCamera()
+        lips = w.lip_view.plotter.renderer.GetActiveCamera()
+        framed = np.array([lips.GetPosition(), lips.GetFocalPoint()])
+        lips.Zoom(2.0)
+        lips.Azimuth(30.0)
         view.standard_view("top")
         w.reset_cameras()
+        # the lips as first framed (from the front, room for the sensors' labels), not a bare fit to their bounds
+        np.testing.assert_allclose([lips.GetPosition(), lips.GetFocalPoint()], framed, rtol=1e-6, atol=1e-9)
         V = app_manifold.tangent_.plane_normal_ / np.linalg.norm(app_manifold.tangent_.plane_normal_)
         d = np.subtract(cam.GetFocalPoint(), cam.GetPosition()) / cam.GetDistance()
         assert -0.6 < d @ V < -0.2     # from slightly above the plane, not looking down on it
