@@ -16,6 +16,10 @@ __all__ = ["AudioPlayer", "resolve_audio_path"]
 class AudioPlayer:
     """Plays WAV files through QtMultimedia when a device exists; otherwise does nothing.
 
+    The device is looked for, and the player made, when sound is first asked for (``play``,
+    ``available`` or ``reason``), not when the window is built: QtMultimedia's import and its
+    backend's device query take tens of milliseconds that the window's first frame need not wait for.
+
     Attributes
     ----------
     available : bool
@@ -24,32 +28,49 @@ class AudioPlayer:
     """
 
     def __init__(self, parent=None):
-        self.available = False
-        self.reason = ""
+        self._parent = parent
+        self._ready = False
+        self._available, self._reason = False, ""
         self._player = self._output = None
         self._playing_state = None
+
+    @property
+    def available(self) -> bool:
+        self._set_up()
+        return self._available
+
+    @property
+    def reason(self) -> str:
+        self._set_up()
+        return self._reason
+
+    def _set_up(self) -> None:
+        """Find the output device and make the player, once."""
+        if self._ready:
+            return
+        self._ready = True
         try:
             from PySide6.QtMultimedia import QAudioOutput, QMediaDevices, QMediaPlayer
         except ImportError as exc:  # missing libpulse / Addons
-            self.reason = f"QtMultimedia cannot load ({exc})"
+            self._reason = f"QtMultimedia cannot load ({exc})"
             return
         try:
             if not QMediaDevices.audioOutputs():
-                self.reason = "no audio output device"
+                self._reason = "no audio output device"
                 return
-            self._output = QAudioOutput(parent)
-            self._player = QMediaPlayer(parent)
+            self._output = QAudioOutput(self._parent)
+            self._player = QMediaPlayer(self._parent)
             self._player.setAudioOutput(self._output)
             self._playing_state = QMediaPlayer.PlaybackState.PlayingState
         except Exception as exc:  # noqa: BLE001 - any backend failure means no sound, not a crash
-            self.reason = f"audio backend failed ({exc})"
+            self._reason = f"audio backend failed ({exc})"
             self._player = self._output = None
             return
-        self.available = True
+        self._available = True
 
     def play(self, path, start_s: float = 0.0, rate: float = 1.0) -> bool:
         """Start playing ``path`` from ``start_s`` seconds; returns whether sound started."""
-        if not self.available or path is None:
+        if path is None or not self.available:
             return False
         from PySide6.QtCore import QUrl
 
@@ -61,7 +82,7 @@ class AudioPlayer:
 
     def set_rate(self, rate: float) -> None:
         """Change the playback speed of the sound that plays (media seconds per second)."""
-        if self.available:
+        if self._available:  # nothing plays before the player is made
             self._player.setPlaybackRate(float(rate))
 
     def position_s(self) -> float | None:
@@ -70,10 +91,10 @@ class AudioPlayer:
         This is the position QtMultimedia reports (``QMediaPlayer.position``, whole
         milliseconds, updated in steps); :class:`app.models.playback.PlaybackClock` follows it.
         """
-        if not self.available or self._player.playbackState() != self._playing_state:
+        if not self._available or self._player.playbackState() != self._playing_state:
             return None
         return self._player.position() / 1000.0
 
     def stop(self) -> None:
-        if self.available:
+        if self._available:
             self._player.stop()

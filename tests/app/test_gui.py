@@ -1,6 +1,12 @@
 """The explorer window on the small synthetic manifold (needs a display: Xvfb is started if absent)."""
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -545,6 +551,27 @@ def test_audio_is_guarded(qapp, tmp_path):
     assert resolve_audio_path("u.wav", tmp_path / "corpus.npz") == wav
     assert resolve_audio_path("missing.wav", tmp_path / "corpus.npz") is None
     assert resolve_audio_path(None) is None
+
+
+def test_audio_device_is_looked_for_on_first_use():
+    """Building the window's player touches no sound device (QtMultimedia stays unimported); stopping or
+    asking the position of a player never used does nothing; the first question about sound sets it up."""
+    script = textwrap.dedent("""
+        import sys
+        from PySide6 import QtWidgets
+        app = QtWidgets.QApplication([])
+        from app.audio import AudioPlayer
+        a = AudioPlayer()
+        a.stop(); a.set_rate(2.0)
+        before = ("PySide6.QtMultimedia" in sys.modules, a.position_s())
+        ok = a.available or bool(a.reason)
+        print("RESULT", before, ok, "PySide6.QtMultimedia" in sys.modules or "cannot load" in a.reason)
+    """)
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=120,
+                       cwd=str(Path(__file__).resolve().parents[2]))
+    assert r.returncode == 0, r.stderr
+    assert "RESULT (False, None) True True" in r.stdout, r.stdout + r.stderr
 
 
 def test_clusters_panel_shows_ellipsoids_and_exports_table(win, tmp_path, app_manifold):
