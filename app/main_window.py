@@ -173,14 +173,20 @@ class MainWindow(MenuActions, SessionActions, ExportActions, ConditionDocks, QtW
         return self._runner
 
     def _on_loaded(self, result):
+        from app.models.trajectories import stale_choice_note
+
         manifold, source = result
         self.set_manifold(manifold, source=source)
         if source.get("path"):
             self.settings.add_recent(source["path"])
             self._fill_recent_menu()
         warned = self._runner.warnings
+        # a file whose stored synthesis choice older code measured: say what the first synthesis will cost
+        stale = stale_choice_note(manifold, Path(source["path"]).name) if source.get("path") else None
         if warned:  # e.g. a disconnected state graph: keep it on screen, not "ready"
             self.statusBar().showMessage(f"loaded with a warning: {warned[-1]}", 30000)
+        elif stale is not None:
+            self.statusBar().showMessage(stale, 30000)
         else:
             self.statusBar().showMessage("ready", 3000)
         if self._pending_session is not None:

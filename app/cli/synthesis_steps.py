@@ -15,7 +15,8 @@ from pathlib import Path
 from engine.synthesis.methods import SYNTHESIS_METHODS
 
 __all__ = ["METHODS", "BEST", "INVERSES", "MAX_SMOOTHING_FRAMES", "add_synthesis_options", "load_manifold",
-           "make_targets", "key_frames", "make_synthesizer", "validation_progress", "check_synthesis_options"]
+           "make_targets", "key_frames", "make_synthesizer", "note_stale_choice", "validation_progress",
+           "check_synthesis_options"]
 
 #: the registry's methods (engine.synthesis.methods.SYNTHESIS_METHODS); "best" resolves to one of them
 METHODS = tuple(SYNTHESIS_METHODS)
@@ -129,6 +130,7 @@ def make_synthesizer(args, manifold, targets=None):
     cache = getattr(args, "_synth_cache", None)
     if cache is None:
         cache = args._synth_cache = {}
+    note_stale_choice(args, manifold)
     progress = validation_progress(args)
     method, note = resolve_method(manifold, targets, args.method, cache, progress=progress)
     args.method, args.method_note = method, note
@@ -136,6 +138,22 @@ def make_synthesizer(args, manifold, targets=None):
         return make("viterbi", manifold, strict=args.strict, n_candidates=args.candidates,
                                 inverse_dims=args.inverse_dims, inverse=args.inverse, smoothing=args.smoothing)
     return make(method, manifold, **method_params(manifold, method, cache, progress=progress))
+
+
+def note_stale_choice(args, manifold) -> None:
+    """Say once (stderr, not with ``-q``) when ``args.method`` reads a validated choice and the manifold file
+    holds one other code measured (:func:`app.models.trajectories.stale_choice_note`)."""
+    from pathlib import Path
+
+    from app.models.trajectories import needs_choice, stale_choice_note
+
+    if getattr(args, "quiet", False) or getattr(args, "_stale_said", False) or not needs_choice(args.method):
+        return
+    path = getattr(args, "manifold", None)
+    note = stale_choice_note(manifold, Path(path).name if path else "the synthetic talker")
+    if note is not None:
+        args._stale_said = True
+        print(f"lipspace synthesize: note: {note}", file=sys.stderr, flush=True)
 
 
 def validation_progress(args):

@@ -15,12 +15,30 @@ import numpy as np
 from engine.synthesis.methods import SYNTHESIS_METHODS
 
 __all__ = ["lip_frames", "trajectory_table", "export_trajectory", "synthesize_targets", "trajectory_error",
-           "METHOD_LABELS", "resolve_method", "method_params"]
+           "METHOD_LABELS", "resolve_method", "method_params", "needs_choice", "stale_choice_note"]
 
 #: the method menu's entries: "best", then each method of the registry (engine.synthesis.methods)
 METHOD_LABELS = {"best": "Best on validation (per corpus)", **{name: m.label for name, m in SYNTHESIS_METHODS.items()}}
 #: methods that need the corpus's validated settings (engine.synthesis.method_choice)
 _VALIDATED = tuple(name for name, m in SYNTHESIS_METHODS.items() if m.build == "validated")
+
+
+def needs_choice(method: str) -> bool:
+    """Whether ``method`` (a method name or ``"best"``) reads the corpus's validated choice."""
+    return method == "best" or method in _VALIDATED or method == "sliding-window"
+
+
+def stale_choice_note(manifold, name: str) -> str | None:
+    """What to tell about a manifold file whose stored synthesis choice other code measured (an older
+    Lipspace; :func:`engine.synthesis.method_choice.stored_choice` ignores it), or None when its choice is
+    current or none is stored. ``name`` names the file in the note."""
+    from engine.synthesis.stored_choice import stored_choice
+
+    if not isinstance(getattr(manifold, "synthesis_choice_", None), dict) or stored_choice(manifold) is not None:
+        return None
+    return (f"{name} stores a synthesis choice that other code measured (an older Lipspace): the first "
+            "synthesis measures it again (then it is cached) and the chosen synthesiser is fitted anew each time; "
+            "build the manifold again ('lipspace build') to store current ones in the file")
 
 
 def _choice(manifold, cache, progress=None):
