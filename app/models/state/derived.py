@@ -175,8 +175,10 @@ class DerivedCaches:
         if manifold is None:
             return None
         pre = PREPARED.get(manifold, {})
-        if "palette" in pre:
-            return pre["palette"]
+        if "palette" in pre:  # a copy: each state's colours are its own (another state of this manifold keeps its)
+            import copy
+
+            return copy.deepcopy(pre["palette"])
         return corpus_palette(manifold.corpus_)
 
     def _require(self):

@@ -281,6 +281,10 @@ def test_derived_data_prepared_ahead_is_used_by_every_state(app_manifold):
     assert a.phone_codes is b.phone_codes and a.cloud.whole  # every frame of the small talker is drawn
     np.testing.assert_array_equal(a.density, knn_density(m.Fy_))
     np.testing.assert_array_equal(a.phones, frame_phones(m.corpus_))
+    # the prepared palette is each state's own copy: a colour one session gives stays out of another's
+    assert a.palette is not b.palette and a.palette.levels("phone") == b.palette.levels("phone")
+    a.palette.colour("phone", "zz-only-in-a")
+    assert "zz-only-in-a" not in b.palette.levels("phone") and "zz-only-in-a" not in AppState(m).palette.levels("phone")
 
 
 # ----------------------------------------------------------------------------- targets from clicked states
