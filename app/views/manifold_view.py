@@ -95,6 +95,7 @@ class ManifoldView(ManifoldControls, FieldControls, ManifoldLayers, GestureMarks
             (ev.hidden_layers, lambda _h: self._sync_layer_boxes()),
         ]
         self.n_recolors = 0
+        self.query_prep = None  # the worker building the state graph's query forms (see _prepare_queries)
         connect_all(self._connections)
         self._sync_horizon()
         if state.manifold is not None:
@@ -130,6 +131,19 @@ class ManifoldView(ManifoldControls, FieldControls, ManifoldLayers, GestureMarks
         M, size = view_transform(self.plotter)
         return self.locator.locate(display_xy, M, size, radius=radius)
 
+    def _prepare_queries(self) -> None:
+        """Build the state graph's forms for hemisphere and path queries in a worker once the new manifold's
+        first frame is drawn (:meth:`engine.graph.states.StateGraph.prepare_queries`), so that neither the load
+        nor the first click waits for them; a failure only leaves them to the first query."""
+        from app.workers import run_task
+
+        if self.state.manifold is None:
+            return
+        graph = self.state.manifold.states_
+        self.query_prep = run_task(lambda _progress: graph.prepare_queries(), parent=self,
+                                   title="Preparing the state graph", dialog=False, after_events=True,
+                                   on_error=lambda _msg, _tb: None)
+
     # --------------------------------------------------------------- events
     def _on_pick(self, frame, _xyz, shift):
         handle_pick(self.state, frame, as_target=True if shift else None)
@@ -146,6 +160,7 @@ class ManifoldView(ManifoldControls, FieldControls, ManifoldLayers, GestureMarks
             self._fill_colour_box()  # the corpus's fields
             self._sync_filter_btn()
             self.rebuild()
+            self._prepare_queries()
             return
         if "palette" in names:  # a session's palette: every category colour may change
             names = names | {"color_mode", "visible_phones"}

@@ -2,7 +2,9 @@
 
 An estimator is saved as its constructor parameters (JSON) and its fitted
 attributes (names ending in ``_``). Fitted attributes may be ndarrays, Python or
-numpy scalars, strings, lists of str, ``scipy.sparse`` matrices or None.
+numpy scalars, strings, lists of str, ``scipy.sparse`` matrices or None. A class that sets
+``_csr_on_use`` gets its csr attributes back as their saved arrays (``_csr_parts``) and makes each
+matrix when it is first used: reading such an object imports no SciPy.
 
 :func:`read_npz` reads a file's arrays, large ones memory-mapped where the archive
 stores them uncompressed (as ``np.savez`` does): a manifold of ten million frames is
@@ -15,7 +17,6 @@ import json
 import os
 
 import numpy as np
-import scipy.sparse as sp
 
 __all__ = ["dump_estimator", "load_estimator", "read_npz", "NpzReadError", "MMAP_MIN_BYTES"]
 
@@ -136,11 +137,16 @@ def _member_data(fh, info) -> int:
 
 
 def _fitted_names(obj):
-    return [k for k in vars(obj) if k.endswith("_") and not k.startswith("_")]
+    """The fitted attributes of ``obj``: those set (names ending in ``_``) and the csr ones an object read
+    from a file still holds as their saved arrays (see :func:`load_estimator`)."""
+    names = [k for k in vars(obj) if k.endswith("_") and not k.startswith("_")]
+    return names + [k for k in vars(obj).get("_csr_parts", {}) if k not in names]
 
 
 def dump_estimator(obj, prefix: str) -> dict:
     """Flatten ``obj`` (a scikit-learn style estimator) to ``{prefix/...: array}``."""
+    import scipy.sparse as sp
+
     out = {f"{prefix}/__class__": np.array(type(obj).__qualname__),
            f"{prefix}/__params__": np.array(json.dumps(obj.get_params(deep=False)))}
     kinds = {}
@@ -243,6 +249,9 @@ def load_estimator(cls, d, prefix: str, *, source="<arrays>", schema=None, dims=
             data, ind, ptr, shape = check_csr(d, key, source=source, shape=spec.get("shape", ("_r", "_c")),
                                               dims=dims if spec else {}, kind=spec.get("dtype", "number"),
                                               low=spec.get("low"))
+            if getattr(cls, "_csr_on_use", False):  # the class makes the matrix on first use (no SciPy yet)
+                obj.__dict__.setdefault("_csr_parts", {})[name] = (data, ind, ptr, tuple(shape))
+                continue
             import scipy.sparse as sp
 
             val = sp.csr_matrix((data, ind, ptr), shape=shape)

@@ -11,8 +11,9 @@ hemisphere* of a state — and over A^T — its *past hemisphere*: Dijkstra's di
 with unit weights, found by a breadth-first search (:func:`engine.graph.hop_paths.hop_distances`).
 Unreachable is ``inf``. There is no transition across an utterance boundary.
 
-SciPy's graph and spatial packages are imported where they are used: loading a fitted state
-graph needs neither (0.4 s of the explorer's start).
+SciPy's sparse, graph and spatial packages are imported where they are used: loading a fitted
+state graph needs none of them (0.6 s of the explorer's start). A graph read from a file keeps its
+saved csr matrices as their arrays until one is first used (:meth:`StateGraph.__getattr__`).
 """
 from __future__ import annotations
 
@@ -21,7 +22,6 @@ from numbers import Integral
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
 from engine.constraints import Interval, validate_params
@@ -91,6 +91,7 @@ def assign_and_count(start: int, stop: int, centroids: np.ndarray, Y: np.ndarray
         Transitions ``i -> i + 1`` for i in the block with ``has_next[i]`` (the last
         one may end in the next block), self-transitions included.
     """
+    import scipy.sparse as sp
     from scipy.spatial import cKDTree
 
     N, K = len(Y), len(centroids)
@@ -170,12 +171,31 @@ class StateGraph(Estimator):
         "largest_scc_": dict(kind="int", low=0),
     }
 
+    #: :func:`engine.files.persist.load_estimator` leaves the csr attributes as their saved arrays
+    #: (``_csr_parts``) until first used: loading a manifold imports no SciPy
+    _csr_on_use = True
+
     def __init__(self, *, n_states: int | None = None, n_dims: int = 3, random_state: int | None = 0,
                  batch_size: int = 4096) -> None:
         self.n_states = n_states
         self.n_dims = n_dims
         self.random_state = random_state
         self.batch_size = batch_size
+
+    def __getattr__(self, name: str) -> Any:
+        """A csr attribute read from a file, made from its saved arrays on first use (then kept)."""
+        part = (self.__dict__.get("_csr_parts") or {}).get(name)
+        if part is None:
+            if name in self.__dict__:  # made by another thread since this lookup began
+                return self.__dict__[name]
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        import scipy.sparse as sp
+
+        data, indices, indptr, shape = part
+        value = sp.csr_matrix((data, indices, indptr), shape=shape)
+        setattr(self, name, value)
+        self.__dict__["_csr_parts"].pop(name, None)
+        return value
 
     # ------------------------------------------------------------------ input
     def _check_Y(self, Y: ArrayLike, name: str = "Y") -> np.ndarray:
@@ -262,6 +282,8 @@ class StateGraph(Estimator):
             parts = executor.map_row_blocks(assign_and_count, N, centroids, Y, has_next)
             labels = np.concatenate([p[0] for p in parts])
             counts = sum((p[1] for p in parts[1:]), parts[0][1])
+        import scipy.sparse as sp
+
         counts = sp.csr_matrix(counts, dtype=np.int64)
         used = np.bincount(labels, minlength=len(centroids)) > 0
         if not used.all():  # an unused state has no frame, so no count: dropping it renumbers the rest
@@ -293,6 +315,7 @@ class StateGraph(Estimator):
 
         self.centroids_, self.labels_ = centroids, labels
         self.counts_, self.adjacency_, self.transition_ = counts, adjacency, P
+        self.__dict__.pop("_csr_parts", None)  # a refit of a graph read from a file: its saved arrays go
         self.n_scc_, self.scc_labels_ = int(n_scc), scc.astype(np.int32)
         self.largest_scc_ = int(np.bincount(scc).argmax())
         self._reset_cache()
@@ -343,6 +366,8 @@ class StateGraph(Estimator):
         cache = self.__dict__.setdefault("_cache", {})
         key = "AT" if transpose else "A"
         if key not in cache:
+            import scipy.sparse as sp
+
             G = sp.csr_matrix(self._graph(False).T) if transpose else sp.csr_matrix(self.adjacency_, dtype=np.float64)
             G.sort_indices()
             cache[key] = G

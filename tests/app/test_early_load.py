@@ -8,6 +8,7 @@ import sys
 import textwrap
 import time
 
+import numpy as np
 import pytest
 
 pytestmark = pytest.mark.gui
@@ -170,6 +171,29 @@ def test_the_gestures_of_a_new_manifold_are_found_after_the_event_loop_turns(qap
         assert win.state.gestures is None
         assert finder.wait(60_000) and finder.state == "done"
         assert win.state.gestures is not None and win.state.gestures.times.shape[0] > 0
+    finally:
+        win.close()
+
+
+def test_the_state_graph_of_a_loaded_manifold_is_prepared_for_queries_after_its_first_frame(qapp, manifold_file):
+    """A manifold read from a file keeps its graph's csr matrices as arrays (no SciPy in the load); once shown,
+    a worker started after the event loop turns builds what the first click's hemisphere needs."""
+    from app.main_window import MainWindow
+    from engine.manifold.model import Manifold
+
+    m = Manifold.load(manifold_file)
+    graph = m.states_
+    assert "adjacency_" in graph.__dict__["_csr_parts"]
+    win = MainWindow()
+    try:
+        win.set_manifold(m, source={"path": str(manifold_file), "preset": "small", "kind": "manifold"})
+        prep = win.manifold_view.query_prep
+        assert prep is not None and prep.state == "running" and not prep.thread.isRunning()
+        assert "A" not in graph.__dict__.get("_cache", {})  # not built while the manifold was being shown
+        assert prep.wait(60_000) and prep.state == "done"
+        assert {"A", "AT"} <= set(graph.__dict__["_cache"]) and "adjacency_" not in graph.__dict__["_csr_parts"]
+        fut, past = graph.hemispheres(0)
+        assert fut[0] == 0 and past[0] == 0 and np.isfinite(fut).sum() > 1
     finally:
         win.close()
 

@@ -25,10 +25,11 @@ def prepare_derived(manifold, progress=None, *, density=None) -> None:
     (only while every frame is drawn: a grouped cloud carries its own density; ``density(Y)``
     computes it, :func:`knn_density` by default: the loader passes one that keeps it in the cache
     folder for the next time the cloud is shown, :func:`app.files.density_cache.cached_knn_density`),
-    the phone of every frame, the phone clusters and the state graph's cached forms for hemisphere
-    and path queries are
-    computed here, e.g. in the loading worker, and picked up by :meth:`AppState.set_manifold`,
-    so that showing a manifold does not freeze the window. Reports stage ``"preparing the views"``.
+    the phone of every frame and the phone clusters are computed here, e.g. in the loading worker, and
+    picked up by :meth:`AppState.set_manifold`, so that showing a manifold does not freeze the window.
+    The state graph's forms for hemisphere and path queries are not (they need SciPy's sparse package,
+    0.2 s of import the manifold's first frame need not wait for): the manifold view builds them in a
+    worker once that frame is drawn. Reports stage ``"preparing the views"``.
     A corpus whose phone clusters cannot be fitted is left for the clusters panel to
     report, as without this step.
     """
@@ -41,8 +42,6 @@ def prepare_derived(manifold, progress=None, *, density=None) -> None:
     report(progress, stage, 1, 4)
     if out["cloud"].whole:
         out["density"] = (density or knn_density)(manifold.Fy_)
-    # the state graph's csr forms, so the first click's hemisphere does not build them
-    manifold.states_.prepare_queries()
     report(progress, stage, 2, 4)
     out["phone_codes"] = frame_phone_codes(manifold.corpus_)
     report(progress, stage, 3, 4)

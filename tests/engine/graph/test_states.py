@@ -5,6 +5,8 @@ most one hop apart, distances are asymmetric) and from small hand-made graphs wh
 states are well-separated point clouds, so K-means recovers them exactly and every
 distance is known.
 """
+import json
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -291,6 +293,36 @@ def test_saved_and_loaded_graph_answers_queries(graph):
     far = int(np.argmax(np.where(np.isfinite(graph.future(0)), graph.future(0), -1)))
     np.testing.assert_array_equal(g2.min_path(0, far), graph.min_path(0, far))
     assert g2.connectivity_report() == graph.connectivity_report()
+
+
+def test_a_loaded_graph_makes_its_csr_matrices_on_first_use(graph):
+    """Read back, the csr attributes wait as their saved arrays (no SciPy needed to load a manifold); each is
+    made, equal to the fitted one, when first used; saving again writes the same arrays; a refit drops them."""
+    d = dump_estimator(graph, "states")
+    g2 = load_estimator(StateGraph, d, "states")
+    assert sorted(g2.__dict__["_csr_parts"]) == ["adjacency_", "counts_", "transition_"]
+    assert "adjacency_" not in vars(g2)
+    A = g2.adjacency_
+    assert sp.issparse(A) and A.format == "csr" and "adjacency_" in vars(g2)
+    assert (A != graph.adjacency_).nnz == 0 and g2.adjacency_ is A  # made once, then kept
+    assert sorted(g2.__dict__["_csr_parts"]) == ["counts_", "transition_"]
+    d2 = dump_estimator(g2, "states")  # the ones never used are written too
+    assert sorted(d2) == sorted(d)
+    for key in d:
+        if key.endswith("__kinds__"):  # the same kinds (those made on use are listed last)
+            assert json.loads(str(d2[key])) == json.loads(str(d[key]))
+        else:
+            np.testing.assert_array_equal(np.asarray(d2[key]), np.asarray(d[key]), err_msg=key)
+    with pytest.raises(AttributeError, match="no attribute 'nothing_'"):
+        g2.nothing_  # noqa: B018 - an attribute neither set nor saved is still missing
+    g3 = load_estimator(StateGraph, d, "states")
+    g3.__dict__["counts_"] = graph.counts_  # made by another thread between the lookup and the part's use
+    del g3.__dict__["_csr_parts"]["counts_"]
+    assert g3.__getattr__("counts_") is graph.counts_
+    g4 = load_estimator(StateGraph, dump_estimator(_fit_handmade([[0, 0, 1, 1, 2, 2, 0]], 3)[0], "s"), "s")
+    Fy, bounds, _centres = _handmade([[0, 0, 1, 1, 2, 2, 3, 3, 0]], 4)
+    g4.set_params(n_states=4).fit(Fy, bounds)  # a refit: the 3-state file's arrays must not come back
+    assert "_csr_parts" not in vars(g4) and g4.adjacency_.shape == (4, 4) and g4.counts_.shape == (4, 4)
 
 
 # ------------------------------------------------------------------ bad input
