@@ -182,7 +182,7 @@ class MainWindow(MenuActions, SessionActions, ExportActions, ConditionDocks, QtW
             self._fill_recent_menu()
         warned = self._runner.warnings
         # a file whose stored synthesis choice older code measured: say what the first synthesis will cost
-        stale = stale_choice_note(manifold, Path(source["path"]).name) if source.get("path") else None
+        stale = stale_choice_note(manifold, Path(source["path"]).name, short=True) if source.get("path") else None
         if warned:  # e.g. a disconnected state graph: keep it on screen, not "ready"
             self.statusBar().showMessage(f"loaded with a warning: {warned[-1]}", 30000)
         elif stale is not None:

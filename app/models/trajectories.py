@@ -28,14 +28,17 @@ def needs_choice(method: str) -> bool:
     return method == "best" or method in _VALIDATED or method == "sliding-window"
 
 
-def stale_choice_note(manifold, name: str) -> str | None:
+def stale_choice_note(manifold, name: str, *, short: bool = False) -> str | None:
     """What to tell about a manifold file whose stored synthesis choice other code measured (an older
     Lipspace; :func:`engine.synthesis.method_choice.stored_choice` ignores it), or None when its choice is
-    current or none is stored. ``name`` names the file in the note."""
+    current or none is stored. ``name`` names the file in the note; ``short``: a line that fits a status
+    bar beside the window's summary."""
     from engine.synthesis.stored_choice import stored_choice
 
     if not isinstance(getattr(manifold, "synthesis_choice_", None), dict) or stored_choice(manifold) is not None:
         return None
+    if short:
+        return f"{name}: synthesis choice from older code: rebuild with 'lipspace build'"
     return (f"{name} stores a synthesis choice that other code measured (an older Lipspace): the first "
             "synthesis measures it again (then it is cached) and the chosen synthesiser is fitted anew each time; "
             "build the manifold again ('lipspace build') to store current ones in the file")
