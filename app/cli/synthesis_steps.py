@@ -143,8 +143,6 @@ def make_synthesizer(args, manifold, targets=None):
 def note_stale_choice(args, manifold) -> None:
     """Say once (stderr, not with ``-q``) when ``args.method`` reads a validated choice and the manifold file
     holds one other code measured (:func:`app.models.trajectories.stale_choice_note`)."""
-    from pathlib import Path
-
     from app.models.trajectories import needs_choice, stale_choice_note
 
     if getattr(args, "quiet", False) or getattr(args, "_stale_said", False) or not needs_choice(args.method):

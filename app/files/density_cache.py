@@ -103,10 +103,11 @@ def cached_knn_density(Y, k: int = 10, n_dims: int = 3, *, folder=None) -> np.nd
     -------
     ndarray of shape (N,) float32
     """
+    from app.files.cache import cache_dir
     from app.models.state.derived import knn_density
 
     Y = np.asarray(Y)
-    root = Path(folder) if folder is not None else density_dir().parent
+    root = Path(folder) if folder is not None else cache_dir()
     path = density_dir(root) / f"{density_key(Y, k, n_dims)}.npy"
     d = _read(path, Y.shape[0], root) if path.is_file() else None
     if d is not None:
