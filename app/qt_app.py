@@ -8,12 +8,19 @@ it is for the user: playback without a sound device is already handled by
 :class:`app.audio.AudioPlayer`. :func:`quiet_qt_messages` switches those categories off
 (a ``QT_LOGGING_RULES`` the user sets still takes precedence, to debug) and filters the
 uncategorised PulseAudio line; every other Qt message still reaches stderr.
+
+:func:`make_application` also brings up Qt's accessibility bridge at once, not when the first
+widget is made. On Linux the bridge connects to the session's D-Bus, and without one (a virtual X
+server, a remote shell) D-Bus forks to launch it, from its own thread. The window's first widget is
+made while the manifold loads in a worker; a fork while that worker's BLAS threads are running
+deadlocked the process (OpenBLAS joins its threads before a fork; 3 of 10 warm starts hung). Made
+with the application, before any worker starts, the fork finds BLAS idle.
 """
 from __future__ import annotations
 
 import sys
 
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 __all__ = ["quiet_qt_messages", "make_application", "NOISY_CATEGORIES", "NOISY_PREFIXES"]
 
@@ -39,10 +46,12 @@ def quiet_qt_messages() -> None:
 
 
 def make_application(argv=None) -> QtWidgets.QApplication:
-    """The running QApplication, or a new one named "Lipspace", with :func:`quiet_qt_messages` applied."""
+    """The running QApplication, or a new one named "Lipspace", with :func:`quiet_qt_messages` applied
+    and its accessibility bridge up (call before starting worker threads)."""
     quiet_qt_messages()
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(list(argv if argv is not None
                                                                             else sys.argv[:1]))
     app.setApplicationName("Lipspace")
     app.setOrganizationName("Lipspace")
+    QtGui.QAccessible.isActive()  # connects the bridge now, a D-Bus launch (a fork) included
     return app
