@@ -29,7 +29,10 @@ from app.scene.manifold import (
                                 to_rgb8,
 )
 from app.scene.pick import ClickPicker, enable_click_picking, pick_display_point
+from app.scene.pyvista_import import import_plotting
 from app.scene.sensors import SensorsHandle, add_sensors
+
+import_plotting()  # the scene modules read pyvista's plotting package only when they draw
 
 __all__ = ["Handle", "PointsHandle", "LipsHandle", "SensorsHandle", "add_sensors", "ClickPicker",
            "add_manifold_points", "add_zero_velocity_plane",

@@ -72,6 +72,9 @@ def elided_label(text: str = ""):
 def make_plotter(parent, shape=(1, 1)):
     """A pyvistaqt QtInteractor with the explorer's look (white background, paper style); ``shape``: its grid
     of renderers (the small multiples')."""
+    from app.scene.pyvista_import import import_plotting
+
+    import_plotting()  # before pyvistaqt, which imports pyvista's plotting package
     from pyvistaqt import QtInteractor
 
     # no auto-update timer: views render on demand (RenderScheduler), so an idle window costs nothing.

@@ -67,14 +67,11 @@ class MenuActions:
         self._act(exp, "Manifold view (PNG, SVG, PDF)…", lambda: self.export_view_dialog("manifold"))
         self._act(exp, "Lip view (PNG, SVG, PDF)…", lambda: self.export_view_dialog("lips"))
         exp.addSeparator()
-        try:
-            from app.figures import DESCRIPTIONS, FIGURES
-        except ImportError:
-            FIGURES, DESCRIPTIONS = {}, {}
-        for name in FIGURES:
-            a = self._act(exp, f"{name}: {DESCRIPTIONS.get(name, '')[:60]}…",
-                          lambda _=False, n=name: self.export_figure_dialog(n))
-            a.setToolTip(DESCRIPTIONS.get(name, ""))
+        from app.figures import DESCRIPTIONS  # the names alone: no matplotlib until a figure is made
+
+        for name, description in DESCRIPTIONS.items():
+            a = self._act(exp, f"{name}: {description[:60]}…", lambda _=False, n=name: self.export_figure_dialog(n))
+            a.setToolTip(description)
         self._act(f, "Export &trajectory (CSV, NPY, OBJ, PLY)…", self.export_trajectory_dialog)
         self._act(f, "Export synthesis as TextGrid…", self.export_textgrid_dialog)
         self._act(f, "Export &animation (glTF, MP4)…", self.export_animation_dialog)

@@ -706,3 +706,27 @@ def test_vector_export_shades_a_smooth_surface_with_the_windows_normals(can_rend
 def test_fig4_without_any_of_its_phones_is_refused_not_drawn_empty(m):
     with pytest.raises(ValueError, match=r"none of /zz/, /qq/ has 3 or more mid-points .*choose phones"):
         F.make_fig4(m, phones=("zz", "qq"))
+
+
+def test_the_figure_names_and_descriptions_import_no_matplotlib():
+    """The window's menus read the names and descriptions; the figure modules load when a figure is asked for."""
+    import textwrap
+
+    script = textwrap.dedent("""
+        import sys
+        from app.figures import DESCRIPTIONS, UTTERANCE_FIGURES
+        print("BEFORE", any(m.startswith("matplotlib") for m in sys.modules))
+        import app.figures as F
+        print("FIGURES", list(F.FIGURES) == list(DESCRIPTIONS), F.make_fig3.__module__, F.save_figure.__module__)
+        print("AFTER", "matplotlib.figure" in sys.modules, set(UTTERANCE_FIGURES) <= set(DESCRIPTIONS))
+        try:
+            F.no_such_figure
+        except AttributeError as exc:
+            print("MISSING", exc)
+    """)
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "BEFORE False" in r.stdout
+    assert "FIGURES True app.figures.synthesis app.figures.export" in r.stdout
+    assert "AFTER True True" in r.stdout
+    assert "MISSING module 'app.figures' has no attribute 'no_such_figure'" in r.stdout
