@@ -10,6 +10,8 @@ from __future__ import annotations
 import contextlib
 import os
 import subprocess
+import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -273,3 +275,48 @@ def explore_env(tmp_path) -> dict:
     env.update(LIPSPACE_STATE_DIR=str(tmp_path / "state"), LIPSPACE_CONFIG_DIR=str(tmp_path / "config"),
                LIPSPACE_CACHE_DIR=str(tmp_path / "cache"))
     return env
+
+
+#: an explorer on the file in argv[1] that runs REPORT (with ``self``, the window) once its manifold is on
+#: screen, then closes; SETUP runs first (it may wrap the window's methods)
+_EXPLORE_REPORTING = """
+import sys
+from PySide6 import QtCore
+import app.main_window as mw
+SETUP
+_show = mw.MainWindow.show
+
+
+def _show_then_report(self):
+    _show(self)
+
+    def poll():
+        if self.state.manifold is None:
+            QtCore.QTimer.singleShot(50, poll)
+            return
+REPORT
+        self.close()
+
+    QtCore.QTimer.singleShot(50, poll)
+
+
+mw.MainWindow.show = _show_then_report
+from app.cli import main
+sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
+"""
+
+
+def _explore_reporting(path, env: dict, report: str, setup: str = "") -> str:
+    script = (_EXPLORE_REPORTING.replace("SETUP", textwrap.dedent(setup))
+              .replace("REPORT", textwrap.indent(textwrap.dedent(report).strip(), " " * 8)))
+    r = subprocess.run([sys.executable, "-c", script, str(path)], capture_output=True, text=True, env=env,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    return r.stdout
+
+
+@pytest.fixture
+def explore_reporting():
+    """``explore_reporting(path, env, report, setup="")``: ``lipspace explore path`` in a subprocess that runs
+    the code ``report`` (``self`` is the window) once the manifold is shown, then closes; its stdout."""
+    return _explore_reporting

@@ -111,48 +111,33 @@ def test_a_window_that_takes_over_an_ended_task_still_gets_its_outcome(qapp, out
         win.close()
 
 
-def test_the_explorer_starts_loading_its_file_before_it_builds_its_window(manifold_file, explore_env):
+def test_the_explorer_starts_loading_its_file_before_it_builds_its_window(manifold_file, explore_env,
+                                                                           explore_reporting):
     """``lipspace explore m.npz``: the load runs while the window is being built (the window's imports and
     construction take about as long as loading the talker), the window takes it over and shows it; the
     status bar saw the load's stages from its start."""
-    script = textwrap.dedent("""
-        import sys
-        from PySide6 import QtCore
-        import app.main_window as mw
+    setup = """
         import app.workers as workers
 
-        init, show = mw.MainWindow.__init__, mw.MainWindow.show
+        init = mw.MainWindow.__init__
         seen = {}
 
         def recording_init(self, *a, **k):
             seen["loading while built"] = workers.running()
             init(self, *a, **k)
 
-        def show_then_report(self):
-            show(self)
+        mw.MainWindow.__init__ = recording_init
+    """
+    report = """
+        from app.views.task_progress import TaskProgress
 
-            def poll():
-                if self.state.manifold is None:
-                    QtCore.QTimer.singleShot(50, poll)
-                    return
-                from app.views.task_progress import TaskProgress
-
-                bar = self.findChild(TaskProgress, "task_progress")
-                print("SEEN", seen["loading while built"], self.state.source["kind"],
-                      "|".join(name for name, _t in bar.stages), flush=True)
-                self.close()
-
-            QtCore.QTimer.singleShot(50, poll)
-
-        mw.MainWindow.__init__, mw.MainWindow.show = recording_init, show_then_report
-        from app.cli import main
-        sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
-    """)
-    r = subprocess.run([sys.executable, "-c", script, str(manifold_file)], capture_output=True, text=True,
-                       env=explore_env, timeout=120)
-    assert r.returncode == 0, r.stderr
-    line = [ln for ln in r.stdout.splitlines() if ln.startswith("SEEN ")]
-    assert line, r.stdout
+        bar = self.findChild(TaskProgress, "task_progress")
+        print("SEEN", seen["loading while built"], self.state.source["kind"],
+              "|".join(name for name, _t in bar.stages), flush=True)
+    """
+    out = explore_reporting(manifold_file, explore_env, report, setup)
+    line = [ln for ln in out.splitlines() if ln.startswith("SEEN ")]
+    assert line, out
     _, running, kind, stages = line[0].split(" ", 3)
     assert running == "True" and kind == "manifold"
     assert stages.split("|")[:3] == [f"loading {manifold_file.name}", "loading manifold", "preparing the views"]

@@ -11,36 +11,15 @@ import pytest
 pytestmark = pytest.mark.gui
 
 
-def test_the_explorer_draws_its_manifold_without_matplotlibs_figure_package(manifold_file, explore_env):
-    script = textwrap.dedent("""
-        import sys
-        from PySide6 import QtCore
-        import app.main_window as mw
-
-        show = mw.MainWindow.show
-
-        def show_then_report(self):
-            show(self)
-
-            def poll():
-                if self.state.manifold is None:
-                    QtCore.QTimer.singleShot(50, poll)
-                    return
-                self.manifold_view.plotter.render()
-                heavy = ("matplotlib.pyplot", "matplotlib.figure", "matplotlib.backends.backend_agg")
-                print("LOADED", [m for m in heavy if m in sys.modules], "pyvista.plotting" in sys.modules, flush=True)
-                self.close()
-
-            QtCore.QTimer.singleShot(50, poll)
-
-        mw.MainWindow.show = show_then_report
-        from app.cli import main
-        sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
-    """)
-    r = subprocess.run([sys.executable, "-c", script, str(manifold_file)], capture_output=True, text=True,
-                       env=explore_env, timeout=120)
-    assert r.returncode == 0, r.stderr
-    assert "LOADED [] True" in r.stdout, r.stdout
+def test_the_explorer_draws_its_manifold_without_matplotlibs_figure_package(manifold_file, explore_env,
+                                                                          explore_reporting):
+    report = """
+        self.manifold_view.plotter.render()
+        heavy = ("matplotlib.pyplot", "matplotlib.figure", "matplotlib.backends.backend_agg")
+        print("LOADED", [m for m in heavy if m in sys.modules], "pyvista.plotting" in sys.modules, flush=True)
+    """
+    out = explore_reporting(manifold_file, explore_env, report)
+    assert "LOADED [] True" in out, out
 
 
 def test_the_figure_menu_lists_every_figure_by_its_description(qapp, app_manifold):
