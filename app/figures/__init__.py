@@ -19,10 +19,13 @@ never disturbs a Qt event loop.
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING
+import importlib.util
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the names below are imported on first use (see __getattr__)
-    from pathlib import Path
+    from collections.abc import Callable
 
     from app.figures.classes import make_classes
     from app.figures.clusters import make_fig4
@@ -56,6 +59,10 @@ _LAZY = {
                      "save_plotter_image", "save_plotter_vector", "vector_export_available"), "export"),
 }
 
+#: name -> figure function, in the paper's order, extras last (the figure modules are imported
+#: when it is first read)
+FIGURES: dict[str, Callable[..., Any]]
+
 #: figure name -> the name of its function, in the paper's order, extras last
 _FUNCTIONS = {"fig1a": "make_fig1a", "fig1b": "make_fig1b", "fig2a": "make_fig2a", "fig2b": "make_fig2b",
               "fig2c": "make_fig2c", "fig3": "make_fig3", "fig4": "make_fig4", "scree": "make_scree",
@@ -63,11 +70,14 @@ _FUNCTIONS = {"fig1a": "make_fig1a", "fig1b": "make_fig1b", "fig2a": "make_fig2a
 
 
 def __getattr__(name: str):
-    """The figure functions, the export helpers and :data:`FIGURES`, imported on first use."""
-    if name == "FIGURES":  # name -> figure function, in the paper's order, extras last
-        value: object = {fig: __getattr__(fn) for fig, fn in _FUNCTIONS.items()}
+    """The figure functions, the export helpers, :data:`FIGURES` and the package's modules, imported on
+    first use."""
+    if name == "FIGURES":
+        value: object = {fig: getattr(sys.modules[__name__], fn) for fig, fn in _FUNCTIONS.items()}
     elif name in _LAZY:
         value = getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+    elif not name.startswith("__") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        return importlib.import_module(f"{__name__}.{name}")  # a module of the package (the import binds it)
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     globals()[name] = value
@@ -99,7 +109,7 @@ def make_figure(name: str, manifold, **opts):
     """Render figure ``name`` (a key of :data:`FIGURES`) from a fitted manifold."""
     if name not in _FUNCTIONS:
         raise ValueError(f"no figure {name!r}; choose from {', '.join(_FUNCTIONS)}")
-    return __getattr__(_FUNCTIONS[name])(manifold, **opts)
+    return getattr(sys.modules[__name__], _FUNCTIONS[name])(manifold, **opts)
 
 
 def export_figure(name: str, manifold, path, *, dpi: float = 200, **opts) -> Path:

@@ -13,8 +13,11 @@ work as before, only later. The stand-ins are taken out of ``sys.modules`` as so
 package is imported, so any other ``import matplotlib.pyplot`` (Lipspace's figures) gets the
 real module. While the package is being imported, the one name pyvista takes from the Agg module
 by ``from ... import`` (``FigureCanvasAgg``, which it only calls) is handed out as a function that
-imports and calls the real class; any other name read then ends the deferral (the real modules
-are imported there and then), so a pyvista that needs more at import time is slower, not broken.
+imports and calls the real class; any other name read then ends the deferral (both stand-ins are
+taken out, the module read is imported there and then), so a pyvista that needs more at import
+time is slower, not broken. Only the importing thread is handed such a function: another thread
+that meets a stand-in meanwhile ends the deferral the same way and gets the real module's
+attribute. Call :func:`import_plotting` before other threads draw with matplotlib.
 """
 from __future__ import annotations
 
@@ -29,7 +32,9 @@ __all__ = ["import_plotting"]
 # while it is imported (each only called, inside functions)
 DEFERRED = {"matplotlib.pyplot": (), "matplotlib.backends.backend_agg": ("FigureCanvasAgg",)}
 
-_lock = threading.Lock()
+_lock = threading.Lock()  # one import of pyvista's plotting package at a time
+_release_lock = threading.Lock()
+_importing = {"thread": None}  # the thread importing pyvista's plotting package with stand-ins
 
 
 class _DeferredModule(types.ModuleType):
@@ -39,7 +44,7 @@ class _DeferredModule(types.ModuleType):
         if attr.startswith("__") and attr.endswith("__"):  # the import system's questions
             raise AttributeError(attr)
         if sys.modules.get(self.__name__) is self:  # pyvista's plotting package is being imported
-            if attr in DEFERRED[self.__name__]:
+            if attr in DEFERRED[self.__name__] and _importing["thread"] == threading.get_ident():
                 return _deferred_callable(self.__name__, attr)
             _release()
         return getattr(importlib.import_module(self.__name__), attr)
@@ -56,9 +61,10 @@ def _deferred_callable(module: str, name: str):
 
 def _release() -> None:
     """Take the stand-ins out of ``sys.modules`` (the real modules are imported when next asked for)."""
-    for name in DEFERRED:
-        if isinstance(sys.modules.get(name), _DeferredModule):
-            del sys.modules[name]
+    with _release_lock:
+        for name in DEFERRED:
+            if isinstance(sys.modules.get(name), _DeferredModule):
+                del sys.modules[name]
 
 
 def import_plotting() -> types.ModuleType:
@@ -67,16 +73,19 @@ def import_plotting() -> types.ModuleType:
     Nothing is put off when pyvista's plotting package or one of the two modules is imported
     already. Returns the plotting package.
     """
-    if "pyvista.plotting" in sys.modules:
-        return sys.modules["pyvista.plotting"]
+    if "pyvista.plotting" in sys.modules:  # (import_module waits for an import still running)
+        return importlib.import_module("pyvista.plotting")
     with _lock:
         if "pyvista.plotting" in sys.modules or any(name in sys.modules for name in DEFERRED):
             return importlib.import_module("pyvista.plotting")
         import matplotlib  # noqa: F401  (the parent package, imported by pyvista anyway)
 
-        for name in DEFERRED:
-            sys.modules[name] = _DeferredModule(name)
+        with _release_lock:
+            for name in DEFERRED:
+                sys.modules[name] = _DeferredModule(name)
+        _importing["thread"] = threading.get_ident()
         try:
             return importlib.import_module("pyvista.plotting")
         finally:
+            _importing["thread"] = None
             _release()

@@ -277,13 +277,13 @@ def explore_env(tmp_path) -> dict:
     return env
 
 
-#: an explorer on the file in argv[1] that runs REPORT (with ``self``, the window) once its manifold is on
-#: screen, then closes; SETUP runs first (it may wrap the window's methods)
+#: an explorer on the file in argv[1] that runs the report (with ``self``, the window) once its manifold is
+#: on screen, then closes; the setup runs first (it may wrap the window's methods)
 _EXPLORE_REPORTING = """
 import sys
 from PySide6 import QtCore
 import app.main_window as mw
-SETUP
+{setup}
 _show = mw.MainWindow.show
 
 
@@ -294,7 +294,7 @@ def _show_then_report(self):
         if self.state.manifold is None:
             QtCore.QTimer.singleShot(50, poll)
             return
-REPORT
+{report}
         self.close()
 
     QtCore.QTimer.singleShot(50, poll)
@@ -307,8 +307,8 @@ sys.exit(main(["explore", sys.argv[1], "--no-restore"]))
 
 
 def _explore_reporting(path, env: dict, report: str, setup: str = "") -> str:
-    script = (_EXPLORE_REPORTING.replace("SETUP", textwrap.dedent(setup))
-              .replace("REPORT", textwrap.indent(textwrap.dedent(report).strip(), " " * 8)))
+    script = _EXPLORE_REPORTING.format(setup=textwrap.dedent(setup),
+                                       report=textwrap.indent(textwrap.dedent(report).strip(), " " * 8))
     r = subprocess.run([sys.executable, "-c", script, str(path)], capture_output=True, text=True, env=env,
                        timeout=120)
     assert r.returncode == 0, r.stderr

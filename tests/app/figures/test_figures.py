@@ -723,6 +723,7 @@ def test_the_figure_names_and_descriptions_import_no_matplotlib():
             F.no_such_figure
         except AttributeError as exc:
             print("MISSING", exc)
+        print("MODULE", F.hops.__name__)
     """)
     r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
@@ -730,3 +731,9 @@ def test_the_figure_names_and_descriptions_import_no_matplotlib():
     assert "FIGURES True app.figures.synthesis app.figures.export" in r.stdout
     assert "AFTER True True" in r.stdout
     assert "MISSING module 'app.figures' has no attribute 'no_such_figure'" in r.stdout
+    assert "MODULE app.figures.hops" in r.stdout
+
+
+def test_make_figure_calls_the_function_the_package_holds(monkeypatch):
+    monkeypatch.setattr(F, "make_fig2b", lambda manifold, **opts: ("drawn", manifold, opts))
+    assert F.make_figure("fig2b", "m", width=90) == ("drawn", "m", {"width": 90})

@@ -3,9 +3,11 @@
 and pyvista's functions that use them work as before."""
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import textwrap
+import threading
 import types
 
 import pytest
@@ -14,7 +16,9 @@ FIGURE_MODULES = ("matplotlib.pyplot", "matplotlib.figure", "matplotlib.backends
 
 
 def _run(script: str) -> str:
-    r = subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True, text=True, timeout=120)
+    env = dict(os.environ, MPLBACKEND="Agg")  # pyplot's figures off screen, whatever the display
+    r = subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True, text=True, timeout=120,
+                       env=env)
     assert r.returncode == 0, r.stderr
     return r.stdout
 
@@ -79,6 +83,7 @@ def test_a_stand_in_hands_out_its_listed_names_as_callables_while_importing(fake
     from app.scene import pyvista_import as pi
 
     monkeypatch.setattr(pi, "DEFERRED", {fake_module: ("Canvas",)})
+    monkeypatch.setitem(pi._importing, "thread", threading.get_ident())  # this thread is importing
     stand_in = pi._DeferredModule(fake_module)
     sys.modules[fake_module] = stand_in
     Canvas = stand_in.Canvas  # a listed name while the stand-in is in sys.modules: not imported yet
@@ -93,3 +98,17 @@ def test_a_stand_in_hands_out_its_listed_names_as_callables_while_importing(fake
     assert stand_in.Canvas is real.Canvas  # after the import: the real attribute
     with pytest.raises(AttributeError):
         getattr(stand_in, "__wrapped__")  # noqa: B009 - the import system's dunder questions are not forwarded
+
+
+def test_another_thread_meeting_a_stand_in_gets_the_real_module(fake_module, monkeypatch):
+    """Only the thread importing pyvista's plotting package is handed deferred callables; any other ends the
+    deferral and reads the real module."""
+    from app.scene import pyvista_import as pi
+
+    monkeypatch.setattr(pi, "DEFERRED", {fake_module: ("Canvas",)})
+    monkeypatch.setitem(pi._importing, "thread", -1)  # another thread is importing
+    stand_in = pi._DeferredModule(fake_module)
+    sys.modules[fake_module] = stand_in
+    Canvas = stand_in.Canvas
+    real = sys.modules[fake_module]
+    assert real is not stand_in and Canvas is real.Canvas and isinstance(Canvas, type)
